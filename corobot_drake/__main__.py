@@ -1,0 +1,5 @@
+import sys
+
+from corobot_drake.cli import main
+
+sys.exit(main())

@@ -1,0 +1,106 @@
+"""`python -m corobot_drake [SCENARIO]`: run a scenario in Meshcat or headless.
+
+Exit status: 0 on success, 2 for a bad scenario or bad arguments (one line on stderr).
+"""
+
+import argparse
+import json
+import math
+import sys
+import time
+from pathlib import Path
+
+from corobot_drake.scenario import ScenarioError, load_scenario
+from corobot_drake.simulation import Simulation, quiet_drake_warnings
+
+DEFAULT_SCENARIO = Path(__file__).resolve().parent.parent / "scenarios" / "corobot.yaml"
+HEADLESS_DEFAULT_DURATION = 10.0
+PROGRESS_AFTER = 3.0
+"""Wall-clock seconds after which a headless run starts printing progress."""
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="python -m corobot_drake", description=__doc__.splitlines()[0])
+    p.add_argument("scenario", nargs="?", default=str(DEFAULT_SCENARIO),
+                   help="scenario YAML (default: scenarios/corobot.yaml)")
+    p.add_argument("--headless", action="store_true",
+                   help="no Meshcat; run as fast as possible")
+    p.add_argument("--duration", type=float, default=None,
+                   help="simulated seconds (default: the scenario's simulation_duration; "
+                   f"headless with none: {HEADLESS_DEFAULT_DURATION:g})")
+    p.add_argument("--override", action="append", default=[], metavar="YAML_TEXT",
+                   help="YAML merged over the scenario (repeatable)")
+    p.add_argument("--summary", metavar="PATH", help="write the run's summary JSON here")
+    return p
+
+
+def _headless_progress(total: float):
+    start = time.perf_counter()
+    last = [start]
+
+    def report(sim: Simulation) -> None:
+        now = time.perf_counter()
+        if now - start < PROGRESS_AFTER or now - last[0] < 1.0:
+            return
+        last[0] = now
+        print(f"\rt = {sim.time:7.2f} / {total:.2f} s  ({sim.realtime_factor:.1f}x real time)",
+              end="", file=sys.stderr, flush=True)
+
+    return report
+
+
+def _run_interactive(sim: Simulation, meshcat, duration: float) -> None:
+    from corobot_drake.teleop import MeshcatTeleop
+
+    teleop = MeshcatTeleop(meshcat, sim)
+    sim.simulator.set_target_realtime_rate(1.0)
+    print(f"Meshcat: {meshcat.web_url()}  (arrows drive, Space stops, E enables; Ctrl-C quits)",
+          flush=True)
+    end = sim.time + duration
+    try:
+        while sim.time < end:
+            teleop.poll()
+            sim.advance_to(min(end, sim.time + 1.0 / 30.0))
+    except KeyboardInterrupt:
+        print("\nstopped", file=sys.stderr)
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = _parser().parse_args(argv)
+    try:
+        scenario = load_scenario(args.scenario, overrides=args.override)
+    except ScenarioError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    if args.duration is not None and not (args.duration >= 0):
+        print(f"error: --duration must be >= 0, got {args.duration}", file=sys.stderr)
+        return 2
+    duration = args.duration if args.duration is not None else scenario.simulation_duration
+    quiet_drake_warnings()
+    meshcat = None
+    if not args.headless:
+        from pydrake.geometry import StartMeshcat
+
+        meshcat = StartMeshcat()
+    try:
+        sim = Simulation(scenario, meshcat)
+    except ValueError as e:  # e.g. a command with a non-finite number
+        print(f"error: {args.scenario}: {e}", file=sys.stderr)
+        return 2
+    if args.headless:
+        if math.isinf(duration):
+            duration = HEADLESS_DEFAULT_DURATION
+        sim.run(duration, progress=_headless_progress(duration))
+        print(file=sys.stderr) if sim.realtime_factor and sim._wall_seconds > PROGRESS_AFTER \
+            else None
+    else:
+        _run_interactive(sim, meshcat, duration)
+    summary = sim.summary()
+    print(f"simulated {summary['time']:.2f} s at {summary['realtime_factor']:.1f}x real time")
+    if args.summary:
+        Path(args.summary).write_text(json.dumps(summary, indent=2) + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

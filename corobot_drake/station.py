@@ -1,0 +1,220 @@
+"""Builds the simulation diagram from a Scenario: world, robots, their drives, visualization.
+
+One function, `build_station`, in the style of Drake's hardware_sim and the manipulation
+station: every robot's systems are named `<robot>.<system>` and its ports are exported as
+`<robot>.<port>`.
+"""
+
+import dataclasses as dc
+import math
+
+import numpy as np
+from pydrake.geometry import (
+    AddCompliantHydroelasticProperties,
+    AddContactMaterial,
+    AddRigidHydroelasticProperties,
+    Box,
+    Capsule,
+    Cylinder,
+    Ellipsoid,
+    HalfSpace,
+    ProximityProperties,
+    Sphere,
+)
+from pydrake.math import RigidTransform, RollPitchYaw
+from pydrake.multibody.parsing import Parser
+from pydrake.multibody.plant import AddMultibodyPlant, CoulombFriction, MultibodyPlant
+from pydrake.multibody.tree import SpatialInertia, UnitInertia
+from pydrake.systems.framework import Diagram, DiagramBuilder
+from pydrake.systems.primitives import MatrixGain
+
+from corobot_drake import dimensions as dim
+from corobot_drake import scenario as sc
+from corobot_drake.drive import CommandSource, DriveController
+from corobot_drake.model import MODELS_DIR, corobot_sdf
+from corobot_drake.monitor import TiltMonitor
+
+TILT_SAMPLE_PERIOD = 0.01
+"""s. Tilt changes over tenths of a second even in a flip; 100 Hz catches its peak."""
+
+
+def pose_to_transform(pose: sc.Pose) -> RigidTransform:
+    rpy = RollPitchYaw(*(math.radians(a) for a in (pose.roll_deg, pose.pitch_deg, pose.yaw_deg)))
+    return RigidTransform(rpy, [pose.x, pose.y, pose.z])
+
+
+def transform_to_pose(X: RigidTransform) -> sc.Pose:
+    rpy = RollPitchYaw(X.rotation())
+    x, y, z = X.translation()
+    r, p, yw = (math.degrees(a) for a in rpy.vector())
+    return sc.Pose(float(x), float(y), float(z), r, p, yw)
+
+
+def _geometry(shape):
+    if isinstance(shape, sc.Box):
+        return Box(*shape.size)
+    if isinstance(shape, sc.Sphere):
+        return Sphere(shape.radius)
+    if isinstance(shape, sc.Cylinder):
+        return Cylinder(shape.radius, shape.length)
+    if isinstance(shape, sc.Capsule):
+        return Capsule(shape.radius, shape.length)
+    if isinstance(shape, sc.Ellipsoid):
+        return Ellipsoid(shape.a, shape.b, shape.c)
+    raise TypeError(f"unsupported shape {shape!r}")
+
+
+_HYDRO_RESOLUTION_FRACTION = 0.1
+"""A world body's hydroelastic mesh size as a fraction of its size (boxes ignore it)."""
+
+
+def _size(shape) -> float:
+    """A shape's characteristic size, m."""
+    if isinstance(shape, sc.Box):
+        return min(shape.size)
+    if isinstance(shape, sc.Ellipsoid):
+        return 2 * min(shape.a, shape.b, shape.c)
+    return 2 * shape.radius
+
+
+def _unit_inertia(shape) -> UnitInertia:
+    if isinstance(shape, sc.Box):
+        return UnitInertia.SolidBox(*shape.size)
+    if isinstance(shape, sc.Sphere):
+        return UnitInertia.SolidSphere(shape.radius)
+    if isinstance(shape, sc.Cylinder):
+        return UnitInertia.SolidCylinder(shape.radius, shape.length, [0, 0, 1])
+    if isinstance(shape, sc.Capsule):
+        return UnitInertia.SolidCapsule(shape.radius, shape.length, [0, 0, 1])
+    return UnitInertia.SolidEllipsoid(shape.a, shape.b, shape.c)
+
+
+def _add_world(plant: MultibodyPlant, world: sc.World) -> dict:
+    """Ground and world bodies; returns {name: body} of the free bodies."""
+    ground = ProximityProperties()
+    AddContactMaterial(friction=CoulombFriction(world.ground.friction, world.ground.friction),
+                       properties=ground)
+    # Rigid, so the compliant tyres meet it hydroelastically (compliant-compliant with a
+    # half-space would fall back to point contact).
+    AddRigidHydroelasticProperties(properties=ground)
+    plant.RegisterCollisionGeometry(plant.world_body(), RigidTransform(), HalfSpace(), "ground",
+                                    ground)
+    plant.RegisterVisualGeometry(plant.world_body(), RigidTransform([0, 0, -0.005]),
+                                 Box(40, 40, 0.01), "ground",
+                                 np.asarray(world.ground.color, dtype=float))
+    bodies = {}
+    for name, spec in world.bodies.items():
+        instance = plant.AddModelInstance(name)
+        shape = _geometry(spec.shape)
+        if spec.fixed:
+            body = plant.AddRigidBody(name, instance, SpatialInertia.Zero())
+            plant.WeldFrames(plant.world_frame(), body.body_frame(), pose_to_transform(spec.pose))
+        else:
+            body = plant.AddRigidBody(name, instance, SpatialInertia(
+                spec.mass, np.zeros(3), _unit_inertia(spec.shape)))
+            plant.SetDefaultFloatingBaseBodyPose(body, pose_to_transform(spec.pose))
+        props = ProximityProperties()
+        AddContactMaterial(friction=CoulombFriction(spec.friction, spec.friction),
+                           properties=props)
+        if spec.hydroelastic_modulus > 0:
+            AddCompliantHydroelasticProperties(
+                resolution_hint=_HYDRO_RESOLUTION_FRACTION * _size(spec.shape),
+                hydroelastic_modulus=spec.hydroelastic_modulus, properties=props)
+        plant.RegisterCollisionGeometry(body, RigidTransform(), shape, name, props)
+        plant.RegisterVisualGeometry(body, RigidTransform(), shape, name,
+                                     np.asarray(spec.color, dtype=float))
+        bodies[name] = body
+    return bodies
+
+
+@dc.dataclass
+class RobotParts:
+    """Handles to one robot's pieces of the diagram."""
+
+    name: str
+    model_instance: object
+    chassis: object
+    wheel_joints: list
+    command_source: CommandSource
+    drive_controller: DriveController
+    tilt_monitor: TiltMonitor
+
+
+@dc.dataclass
+class Station:
+    """The built diagram and handles into it."""
+
+    diagram: Diagram
+    plant: MultibodyPlant
+    scene_graph: object
+    robots: dict[str, RobotParts]
+    bodies: dict
+    meshcat: object = None
+
+
+def _add_robot(plant: MultibodyPlant, name: str, robot: sc.Robot):
+    parser = Parser(plant)
+    parser.package_map().AddPackageXml(str(MODELS_DIR / "package.xml"))
+    (instance,) = parser.AddModelsFromString(corobot_sdf(name, robot.contact, robot.visual), "sdf")
+    chassis = plant.GetBodyByName("chassis", instance)
+    plant.SetDefaultFloatingBaseBodyPose(chassis, pose_to_transform(robot.pose))
+    joints = [plant.GetJointByName(f"{w}_axle", instance) for w in dim.WHEEL_NAMES]
+    return instance, chassis, joints
+
+
+def build_station(scenario: sc.Scenario, meshcat=None) -> Station:
+    """Builds the whole diagram for `scenario`; with `meshcat`, adds its visualizers."""
+    builder = DiagramBuilder()
+    plant, scene_graph = AddMultibodyPlant(scenario.plant_config, builder)
+    bodies = _add_world(plant, scenario.world)
+    added = {name: _add_robot(plant, name, robot) for name, robot in scenario.robots.items()}
+    plant.Finalize()
+
+    robots = {}
+    for name, robot in scenario.robots.items():
+        instance, chassis, joints = added[name]
+        source = builder.AddNamedSystem(
+            f"{name}.commands", CommandSource(robot.commands, robot.drive.control_period))
+        controller = builder.AddNamedSystem(
+            f"{name}.drive_controller", DriveController(robot.drive))
+        selector = builder.AddNamedSystem(
+            f"{name}.wheel_state", MatrixGain(plant.MakeStateSelectorMatrix(
+                [j.index() for j in joints])))
+        builder.Connect(plant.get_state_output_port(), selector.get_input_port())
+        builder.Connect(selector.get_output_port(), controller.GetInputPort("wheel_state"))
+        builder.Connect(source.GetOutputPort("request"), controller.GetInputPort("request"))
+        builder.Connect(controller.GetOutputPort("desired_state"),
+                        plant.get_desired_state_input_port(instance))
+        tilt = builder.AddNamedSystem(f"{name}.tilt_monitor", TiltMonitor(
+            plant.num_multibody_states(), chassis.floating_positions_start(),
+            TILT_SAMPLE_PERIOD))
+        builder.Connect(plant.get_state_output_port(), tilt.get_input_port())
+        for port in ("drive_status", "axle_speed_command", "axle_speed"):
+            builder.ExportOutput(controller.GetOutputPort(port), f"{name}.{port}")
+        builder.ExportOutput(plant.get_state_output_port(instance), f"{name}.state")
+        robots[name] = RobotParts(name, instance, chassis, joints, source, controller, tilt)
+
+    builder.ExportOutput(plant.get_body_poses_output_port(), "body_poses")
+    builder.ExportOutput(scene_graph.get_query_output_port(), "query_object")
+    if meshcat is not None:
+        _add_meshcat(builder, plant, scene_graph, meshcat, scenario.world)
+    diagram = builder.Build()
+    diagram.set_name("corobot_station")
+    return Station(diagram, plant, scene_graph, robots, bodies, meshcat)
+
+
+def _add_meshcat(builder, plant, scene_graph, meshcat, world: sc.World) -> None:
+    from pydrake.visualization import ApplyVisualizationConfig, VisualizationConfig
+
+    ApplyVisualizationConfig(VisualizationConfig(publish_contacts=True), builder,
+                             plant=plant, scene_graph=scene_graph, meshcat=meshcat)
+    sky = list(world.sky_color)
+    meshcat.SetProperty("/Background", "top_color", sky)
+    meshcat.SetProperty("/Background", "bottom_color", [min(1.0, c * 1.15) for c in sky])
+    meshcat.SetProperty("/Grid", "visible", False)
+    # Meshcat's default lights stay; the sun's direction shapes the directional light.
+    d = -np.asarray(world.sun.direction, dtype=float)
+    d = d / np.linalg.norm(d)
+    meshcat.SetProperty("/Lights/DirectionalLight/<object>", "position", list(d * 10.0))
+    meshcat.SetProperty("/Lights/DirectionalLight/<object>", "intensity",
+                        float(world.sun.intensity))

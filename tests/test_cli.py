@@ -1,0 +1,109 @@
+"""The command line and scenario files: every scenario runs; bad files give one clear line."""
+
+import json
+import subprocess
+import sys
+
+import pytest
+from conftest import REPO
+
+from corobot_drake.cli import main
+
+SCENARIOS = sorted((REPO / "scenarios").glob("*.yaml"))
+
+
+@pytest.mark.parametrize("scenario", SCENARIOS, ids=lambda p: p.name)
+def test_every_scenario_runs_headless(scenario, tmp_path):
+    summary = tmp_path / "summary.json"
+    assert main([str(scenario), "--headless", "--duration", "0.5",
+                 "--summary", str(summary)]) == 0
+    data = json.loads(summary.read_text())
+    assert data["time"] == pytest.approx(0.5)
+    for robot in data["robots"].values():
+        assert {"pose", "velocity", "max_tilt_deg", "wheels", "commands"} <= robot.keys()
+        assert robot["max_tilt_deg"] < 5.0
+
+
+def _summary(tmp_path, name, *extra):
+    path = tmp_path / name
+    assert main([str(REPO / "scenarios" / "corobot.yaml"), "--headless", "--duration", "2",
+                 "--summary", str(path), *extra]) == 0
+    data = json.loads(path.read_text())
+    for key in ("realtime_factor", "wall_seconds"):
+        data.pop(key)
+    return data
+
+
+def test_same_scenario_twice_gives_identical_summaries(tmp_path):
+    script = ("--override", "robots: {corobot: {commands: [!SetPower {left: 0.5, right: 1.0}, "
+              "!Wait {seconds: 1.0}, !SetSpeed {left: -0.2, right: 0.2}]}}")
+    first = _summary(tmp_path, "a.json", *script)
+    second = _summary(tmp_path, "b.json", *script)
+    assert json.dumps(first, sort_keys=True) == json.dumps(second, sort_keys=True)
+    assert first["robots"]["corobot"]["pose"]["x"] > 0.2  # it did drive
+    commands = [c["command"] for c in first["robots"]["corobot"]["commands"]]
+    assert commands == ["SetPower", "Wait", "SetSpeed"]
+
+
+def test_script_runs_in_order(tmp_path):
+    data = _summary(tmp_path, "s.json", "--override",
+                    "robots: {corobot: {commands: [!Wait {seconds: 1.0}, "
+                    "!SetPower {left: 1.0, right: 1.0}]}}")
+    set_power = data["robots"]["corobot"]["commands"][1]
+    assert set_power["start_time"] == pytest.approx(1.0)
+    # 1 s at full power after the wait, less the 0.34 s ramp: ~0.5 m.
+    assert data["robots"]["corobot"]["pose"]["x"] == pytest.approx(0.51, abs=0.03)
+
+
+def test_several_robots(tmp_path):
+    path = tmp_path / "s.json"
+    two = ("robots: {corobot: {commands: [!SetPower {left: 1, right: 1}]}, "
+           "second: {pose: {y: 1.5}, commands: [!SetPower {left: -1, right: -1}]}}")
+    assert main(["--headless", "--duration", "1.5", "--override", two,
+                 "--summary", str(path)]) == 0
+    robots = json.loads(path.read_text())["robots"]
+    assert robots["corobot"]["pose"]["x"] > 0.3
+    assert robots["second"]["pose"]["x"] < -0.3
+    assert robots["second"]["pose"]["y"] == pytest.approx(1.5, abs=0.01)
+
+
+BAD_FILES = {
+    "unknown_field.yaml": ("robots:\n  corobot:\n    colour: red\n",
+                           ":3: robots.corobot.colour: unknown field"),
+    "wrong_type.yaml": ("robots:\n  corobot:\n    drive: {slew_rate: fast}\n",
+                        ":3: robots.corobot.drive.slew_rate: expected a number, got 'fast'"),
+    "bad_yaml.yaml": ("robots: [\n", "not valid YAML"),
+    "duplicate.yaml": ("robots:\n  corobot: {}\n  corobot: {}\n",
+                       ":3: robots.corobot: duplicate name"),
+    "bad_tag.yaml": ("robots:\n  corobot:\n    commands: [!Fly {}]\n",
+                     "robots.corobot.commands[0]: unknown tag !Fly"),
+}
+
+
+@pytest.mark.parametrize("name", BAD_FILES)
+def test_bad_scenario_gives_one_clear_line(name, tmp_path, capsys):
+    text, expected = BAD_FILES[name]
+    path = tmp_path / name
+    path.write_text(text)
+    assert main([str(path), "--headless"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1
+    assert str(path) in err[0] and expected in err[0]
+
+
+def test_missing_file(tmp_path, capsys):
+    path = tmp_path / "nowhere.yaml"
+    assert main([str(path), "--headless"]) == 2
+    (line,) = capsys.readouterr().err.strip().splitlines()
+    assert str(path) in line and "cannot read" in line
+
+
+def test_bad_file_has_no_traceback(tmp_path):
+    path = tmp_path / "bad.yaml"
+    path.write_text("robots: {corobot: {drive: {slew_rate: [1, 2]}}}\n")
+    result = subprocess.run([sys.executable, "-m", "corobot_drake", str(path), "--headless"],
+                            capture_output=True, text=True, cwd=REPO)
+    assert result.returncode == 2
+    assert "Traceback" not in result.stderr
+    assert result.stderr.strip() == (f"error: {path}:1: robots.corobot.drive.slew_rate: "
+                                     "expected a number, got a list")

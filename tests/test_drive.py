@@ -1,0 +1,134 @@
+"""Drive behaviour measured from the simulation of the default scene."""
+
+import math
+
+import numpy as np
+import pytest
+from conftest import make_sim
+
+R = 0.060325  # wheel radius, m (SPEC)
+A, B = 0.092075, 0.11176  # half wheelbase, half track, m (SPEC)
+
+
+def steady_speed(sim, seconds=1.0, samples=10):
+    """Mean forward speed (m/s) over `seconds`, from the chassis velocity."""
+    v = []
+    for _ in range(samples):
+        sim.advance(seconds / samples)
+        v.append(sim.robot().velocity().forward)
+    return float(np.mean(v))
+
+
+def test_rests_on_ground_and_stays_still(sim):
+    robot = sim.robot()
+    sim.advance(0.5)
+    start = robot.pose()
+    # Hydroelastic tyres sink under 4 kg by ~0.5 mm.
+    assert abs(start.z) < 1e-3
+    assert robot.max_tilt_deg() < 0.1
+    sim.advance(9.5)
+    end = robot.pose()
+    assert math.dist((start.x, start.y, start.z), (end.x, end.y, end.z)) < 1e-3
+
+
+def test_top_speed_tuned_scaling(sim):
+    sim.robot().set_power(1.0, 1.0)
+    sim.advance(2.0)  # the 30 rad/s^2 ramp to 10.16 rad/s takes 0.34 s
+    assert steady_speed(sim) == pytest.approx(0.613, rel=0.03)
+
+
+def test_top_speed_untuned_scaling():
+    sim = make_sim("robots: {corobot: {drive: {motor_torque_scaling: 20.0}}}")
+    sim.robot().set_power(1.0, 1.0)
+    sim.advance(2.0)
+    assert steady_speed(sim) == pytest.approx(1.21, rel=0.03)
+
+
+def test_set_speed(sim):
+    sim.robot().set_speed(0.3, 0.3)
+    sim.advance(1.5)
+    # Tyres slip a little under the servo: 1% covers it (measured 0.2%).
+    assert steady_speed(sim) == pytest.approx(0.3, rel=0.01)
+
+
+def test_set_speed_clamps_axle_speed(sim):
+    robot = sim.robot()
+    robot.set_speed(5.0, -5.0)  # 83 rad/s asked
+    sim.advance(2.0)
+    command = sim.station.diagram.GetOutputPort("corobot.axle_speed_command").Eval(sim.context)
+    np.testing.assert_allclose(command, [20.0, -20.0])
+
+
+def test_power_is_clamped(sim):
+    robot = sim.robot()
+    robot.set_power(3.0, -7.0)
+    sim.advance(1.0)
+    command = sim.station.diagram.GetOutputPort("corobot.axle_speed_command").Eval(sim.context)
+    np.testing.assert_allclose(command, [10.16, -10.16])
+
+
+@pytest.mark.parametrize("value", [math.nan, math.inf, -math.inf])
+def test_non_finite_power_is_rejected(sim, value):
+    with pytest.raises(ValueError, match="finite"):
+        sim.robot().set_power(value, 0.0)
+
+
+def test_slew_limit_holds(sim):
+    robot = sim.robot()
+    robot.set_power(1.0, -1.0)
+    port = sim.station.diagram.GetOutputPort("corobot.axle_speed_command")
+    commands = []
+    for _ in range(30):
+        sim.advance(1.0 / 60.0)
+        commands.append(port.Eval(sim.context).copy())
+    steps = np.abs(np.diff(np.array(commands), axis=0))
+    assert steps.max() <= 0.5 + 1e-9  # 30 rad/s^2 x 1/60 s
+    assert commands[-1] == pytest.approx([10.16, -10.16])  # reached in 21 frames
+    measured = robot.axle_speeds()
+    assert measured["front_left"] == pytest.approx(10.16, rel=0.02)
+    assert measured["rear_right"] == pytest.approx(-10.16, rel=0.02)
+
+
+def test_disabled_drive_does_not_move(sim):
+    robot = sim.robot()
+    robot.enable(False)
+    sim.advance(0.1)
+    robot.set_power(1.0, 1.0)
+    sim.advance(2.0)
+    assert not robot.is_enabled()
+    assert abs(robot.pose().x) < 1e-3
+    robot.enable(True)
+    sim.advance(0.1)
+    robot.set_power(1.0, 1.0)
+    sim.advance(1.0)
+    assert robot.pose().x > 0.3
+
+
+@pytest.mark.parametrize("wheel_speed", [5.0, -5.0])
+def test_spin_in_place_matches_isotropic_coulomb(sim, wheel_speed):
+    """Skid-steer spin with isotropic friction: yaw rate = b u / (a^2 + b^2)."""
+    rim = wheel_speed * R
+    sim.robot().set_speed(-rim, rim)
+    sim.advance(1.5)
+    yaw_rates = []
+    for _ in range(20):
+        sim.advance(0.05)
+        yaw_rates.append(sim.robot().velocity().yaw_rate)
+    predicted = B * rim / (A**2 + B**2)
+    assert np.mean(yaw_rates) == pytest.approx(predicted, rel=0.05)
+
+
+@pytest.mark.parametrize("direction", ["forwards", "backwards"])
+def test_driving_into_the_giant_box_does_not_flip(direction):
+    # The box is behind the robot: turn it round to drive in forwards.
+    if direction == "forwards":
+        sim = make_sim("robots: {corobot: {pose: {yaw_deg: 180}}}")
+        sim.robot().set_power(1.0, 1.0)
+    else:
+        sim = make_sim()
+        sim.robot().set_power(-1.0, -1.0)
+    sim.advance(8.0)
+    robot = sim.robot()
+    # It reached the box: the tyres (0.1524 m from the centre) touch the face at x = -0.7366.
+    assert robot.pose().x < -0.57
+    assert robot.max_tilt_deg() < 20.0

@@ -1,0 +1,28 @@
+"""Writes models/corobot.sdf from corobot_drake/dimensions.py at the default parameters.
+
+Usage: python tools/make_model.py [--check]
+"""
+
+import argparse
+import sys
+
+from corobot_drake.model import MODELS_DIR, corobot_sdf
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--check", action="store_true", help="exit 1 if the file is stale")
+    args = parser.parse_args()
+    path = MODELS_DIR / "corobot.sdf"
+    text = corobot_sdf()
+    if args.check:
+        stale = not path.exists() or path.read_text() != text
+        print(f"{path}: {'stale' if stale else 'up to date'}")
+        return 1 if stale else 0
+    path.write_text(text)
+    print(f"wrote {path}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
