@@ -1,0 +1,536 @@
+"""Exact, vectorised ray casting against the proximity geometry of a Drake SceneGraph.
+
+Drake's ``QueryObject`` has no ray-cast query (drake issue 15260), so the IR distance sensors
+cast their rays here, analytically, against the shapes that ``SceneGraphInspector`` exposes,
+posed by ``QueryObject.GetPoseInWorld``.
+
+Supported shapes (all intersections are exact, closed form):
+
+- ``Box``, ``Sphere``, ``Cylinder``, ``Capsule``, ``Ellipsoid``, ``HalfSpace``;
+- ``Convex`` and ``Mesh``: the convex hull SceneGraph itself reports for the geometry
+  (``SceneGraphInspector.GetConvexHull``, scale included). For ``Convex`` this is the shape;
+  for a concave ``Mesh`` it is the same approximation Drake's own point-contact and
+  signed-distance queries make, and it is logged (INFO) once per geometry.
+
+Anything else (e.g. ``MeshcatCone``, deformable geometries, a mesh whose hull can't be built) is
+reported once, when the :class:`RayCaster` is built, with a ``logging`` WARNING naming the
+geometry and its shape type, and is listed in :attr:`RayCaster.unsupported`.
+
+Conventions:
+
+- Rays are ``origin + t * direction`` with unit ``direction`` and ``0 <= t <= max_range``;
+  ``t`` is therefore a distance in metres.
+- Solids are closed sets. **A ray whose origin is inside (or on the surface of) a solid hits it
+  at distance 0.** A half-space is the solid ``z <= 0`` of its frame.
+- A ray that hits nothing within ``max_range`` reports distance ``inf``, hit point ``nan``
+  and geometry index ``-1``.
+
+A :class:`RayCaster` holds only data precomputed from the inspector at construction; a cast is a
+pure function of the ``QueryObject`` and the rays, so it can run inside a LeafSystem's periodic
+update (no caches, no global state).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass, field
+from typing import NamedTuple
+
+import numpy as np
+from pydrake.geometry import (
+    Box,
+    Capsule,
+    Convex,
+    Cylinder,
+    Ellipsoid,
+    GeometryId,
+    HalfSpace,
+    Mesh,
+    QueryObject,
+    Role,
+    SceneGraphInspector,
+    Sphere,
+)
+from pydrake.math import RigidTransform
+
+_log = logging.getLogger(__name__)
+
+DEFAULT_DISPERSION_CONE_ANGLE = 8.0
+"""Degrees: the IR sensor's dispersion cone (SPEC, Sensors)."""
+
+
+# --------------------------------------------------------------------------------------------
+# Polytopes (Box, HalfSpace, Convex/Mesh hulls): Cyrus-Beck clipping against the face planes
+# n . x <= h (outward normals), all polytopes of a scan in one matrix product.
+#
+# t = num / denom with num = h - n . o (>= 0 on the inner side) and denom = n . d. denom < 0: the
+# ray enters through that plane at t; denom > 0: it leaves at t. Parallel rays need no branch:
+# _TINY is added to every denominator (it changes none that isn't 0 or subnormal), so a ray
+# parallel to a plane "leaves" it at t = num / _TINY, about +1e300 when inside (no constraint),
+# -1e300 when outside (empty interval: a miss), and 0 when on the plane (it touches it at the
+# origin only). No division by zero, no nan, no numpy warnings, for |num| < 1e8 m.
+# --------------------------------------------------------------------------------------------
+
+_TINY = 1e-300
+
+
+def _polytope_distances(
+    origins: np.ndarray,
+    directions: np.ndarray,
+    normals: np.ndarray,
+    offsets: np.ndarray,
+    starts: list[int],
+    max_range: float,
+) -> np.ndarray:
+    """(N, K) first-hit distance of every ray against K polytopes, inf for a miss.
+
+    normals (3, F) and offsets (F,) hold the world-frame face planes of all K polytopes; polytope
+    k owns columns starts[k]:starts[k+1].
+    """
+    denom = directions @ normals + _TINY
+    t = (offsets - origins @ normals) / denom
+    entering = denom < 0.0
+    # Entering planes bound the hit from below, leaving planes from above. Seeding the masked
+    # entries with 0 and max_range folds "t >= 0" and "t <= max_range" into the reductions
+    # (every polytope has a leaving plane for every ray: half-spaces get a null one).
+    t_in = np.where(entering, t, 0.0)
+    t_out = np.where(entering, max_range, t)
+    if len(starts) > 1:
+        t_in = np.maximum.reduceat(t_in, starts, axis=1)
+        t_out = np.minimum.reduceat(t_out, starts, axis=1)
+    else:
+        t_in = t_in.max(axis=1, keepdims=True)
+        t_out = t_out.min(axis=1, keepdims=True)
+    return np.where(t_in <= t_out, t_in, np.inf)
+
+
+def _first_hit(t_in: np.ndarray, t_out: np.ndarray, max_range: float) -> np.ndarray:
+    """First hit at 0 <= t <= max_range of the line-in-solid interval [t_in, t_out] (empty when
+    t_in > t_out): 0 when the origin is inside, inf when there is none."""
+    t0 = np.maximum(t_in, 0.0)
+    return np.where(t0 <= np.minimum(t_out, max_range), t0, np.inf)
+
+
+# --------------------------------------------------------------------------------------------
+# Curved shapes, one geometry at a time, in the geometry frame G.
+#
+# Each convex piece yields, per ray, the parameter interval [t_in, t_out] over which the line lies
+# inside the solid. o and d are (M, 3) in G; d is unit length (rotations preserve it).
+# --------------------------------------------------------------------------------------------
+
+
+def _quadric_interval(a: np.ndarray, b: np.ndarray, c: np.ndarray):
+    """Interval where a t^2 + 2 b t + c <= 0, for a > 0; empty when the discriminant is < 0."""
+    disc = b * b - a * c
+    root = np.sqrt(np.maximum(disc, 0.0))
+    t_in = (-b - root) / a
+    t_out = (-b + root) / a
+    empty = disc < 0.0
+    return np.where(empty, np.inf, t_in), np.where(empty, -np.inf, t_out)
+
+
+def _sphere_interval(o: np.ndarray, d: np.ndarray, radius: float):
+    b = (o * d).sum(axis=1)
+    c = (o * o).sum(axis=1) - radius * radius
+    return _quadric_interval(np.ones_like(b), b, c)
+
+
+def _cylinder_interval(o: np.ndarray, d: np.ndarray, radius: float, half_length: float):
+    """Cylinder about the z axis, z in [-half_length, half_length]."""
+    oxy, dxy = o[:, :2], d[:, :2]
+    # _TINY keeps a > 0 for a ray along the axis: its interval becomes about (-1e150, 1e150)
+    # when inside the infinite cylinder, empty when outside.
+    a = (dxy * dxy).sum(axis=1) + _TINY
+    b = (oxy * dxy).sum(axis=1)
+    c = (oxy * oxy).sum(axis=1) - radius * radius
+    t_in, t_out = _quadric_interval(a, b, c)
+    # The end caps: the slab |z| <= half_length (same _TINY reasoning as the polytopes).
+    oz, dz = o[:, 2], d[:, 2] + _TINY
+    t1 = (-half_length - oz) / dz
+    t2 = (half_length - oz) / dz
+    return np.maximum(t_in, np.minimum(t1, t2)), np.minimum(t_out, np.maximum(t1, t2))
+
+
+def _hit_sphere(o, d, p, max_range):
+    return _first_hit(*_sphere_interval(o, d, p["radius"]), max_range)
+
+
+def _hit_ellipsoid(o, d, p, max_range):
+    # Scale to the unit sphere; t keeps its meaning because the same t parametrises both lines.
+    inv = p["inv_axes"]
+    os, ds = o * inv, d * inv
+    a = (ds * ds).sum(axis=1)
+    b = (os * ds).sum(axis=1)
+    c = (os * os).sum(axis=1) - 1.0
+    return _first_hit(*_quadric_interval(a, b, c), max_range)
+
+
+def _hit_cylinder(o, d, p, max_range):
+    return _first_hit(*_cylinder_interval(o, d, p["radius"], p["half_length"]), max_range)
+
+
+def _hit_capsule(o, d, p, max_range):
+    """A capsule is the union of a cylinder and two spheres: the first hit is the nearest."""
+    r, h = p["radius"], p["half_length"]
+    t = _first_hit(*_cylinder_interval(o, d, r, h), max_range)
+    for z in (h, -h):
+        cap = _first_hit(*_sphere_interval(o - np.array([0.0, 0.0, z]), d, r), max_range)
+        t = np.minimum(t, cap)
+    return t
+
+
+_CurvedHit = Callable[[np.ndarray, np.ndarray, dict, float], np.ndarray]
+
+
+@dataclass(frozen=True)
+class _Target:
+    """Precomputed data for one geometry (all in its frame G)."""
+
+    geometry_id: GeometryId
+    name: str
+    shape_type: str
+    center: np.ndarray
+    """Bounding-sphere centre in G (for a half-space: a point on its boundary)."""
+    radius: float
+    """Bounding-sphere radius; inf for a half-space."""
+    normals: np.ndarray | None = None
+    """Polytopes: (3, F) outward face normals in G."""
+    offsets: np.ndarray | None = None
+    """Polytopes: (F,) plane offsets, the solid is normals.T @ x <= offsets."""
+    hit: _CurvedHit | None = None
+    """Curved shapes: first-hit distances of rays expressed in G."""
+    params: dict | None = None
+    centered: bool = True
+    """The bounding sphere is centred on G's origin."""
+
+
+def _make_target(inspector: SceneGraphInspector, gid: GeometryId) -> _Target | str:
+    """The target for a geometry, or a reason string when it can't be ray cast."""
+    shape = inspector.GetShape(gid)
+    name = inspector.GetName(gid)
+    shape_type = type(shape).__name__
+    zero = np.zeros(3)
+
+    def curved(hit, params, radius):
+        return _Target(gid, name, shape_type, zero, radius, hit=hit, params=params)
+
+    def polytope(normals, offsets, center, radius):
+        normals = np.ascontiguousarray(np.asarray(normals, float).T)
+        center = np.asarray(center, float)
+        return _Target(
+            gid, name, shape_type, center, radius, normals, offsets, centered=not center.any()
+        )
+
+    if isinstance(shape, Box):
+        half = 0.5 * np.array([shape.width(), shape.depth(), shape.height()])
+        normals = np.vstack([np.eye(3), -np.eye(3)])
+        return polytope(normals, np.concatenate([half, half]), zero, float(np.linalg.norm(half)))
+    if isinstance(shape, HalfSpace):
+        # The boundary plane, plus a null plane (0 . x <= 1) that every ray "leaves" at ~1e300:
+        # _polytope_distances needs a leaving plane in every polytope to clamp t_in at 0.
+        return polytope([[0.0, 0.0, 1.0], [0.0, 0.0, 0.0]], np.array([0.0, 1.0]), zero, math.inf)
+    if isinstance(shape, Sphere):
+        r = shape.radius()
+        return curved(_hit_sphere, {"radius": r}, r)
+    if isinstance(shape, Ellipsoid):
+        axes = np.array([shape.a(), shape.b(), shape.c()])
+        return curved(_hit_ellipsoid, {"inv_axes": 1.0 / axes}, float(axes.max()))
+    if isinstance(shape, Cylinder):
+        r, h = shape.radius(), 0.5 * shape.length()
+        return curved(_hit_cylinder, {"radius": r, "half_length": h}, math.hypot(r, h))
+    if isinstance(shape, Capsule):
+        r, h = shape.radius(), 0.5 * shape.length()
+        return curved(_hit_capsule, {"radius": r, "half_length": h}, r + h)
+    if isinstance(shape, (Mesh, Convex)):
+        try:
+            hull = inspector.GetConvexHull(gid)
+        except Exception as e:  # Drake raises RuntimeError for unreadable/degenerate meshes.
+            return f"its convex hull could not be computed ({e})"
+        if hull is None or hull.num_faces() == 0:
+            return "SceneGraph reports no convex hull for it"
+        vertices = np.array([hull.vertex(i) for i in range(hull.num_vertices())])
+        normals = np.array([hull.face_normal(f) for f in range(hull.num_faces())])
+        offsets = np.array(
+            [normals[f] @ vertices[hull.element(f).vertex(0)] for f in range(hull.num_faces())]
+        )
+        center = 0.5 * (vertices.min(axis=0) + vertices.max(axis=0))
+        radius = float(np.linalg.norm(vertices - center, axis=1).max())
+        if isinstance(shape, Mesh):
+            _log.info(
+                "RayCaster: geometry '%s' (id %s, Mesh %s) is ray cast as its convex hull "
+                "(%d faces), as Drake's point-contact queries treat it.",
+                name, gid, shape.source().description(), hull.num_faces(),
+            )  # fmt: skip
+        return polytope(normals, offsets, center, radius)
+    return "there is no ray intersection for this shape type"
+
+
+class _Posed(NamedTuple):
+    """A target's world-frame data for one pose (precomputed once for anchored geometry)."""
+
+    R: np.ndarray
+    p: np.ndarray
+    center: list[float]
+    """Bounding-sphere centre in the world frame (a plain list: scalar math is cheaper)."""
+    normals: np.ndarray | None
+    """Polytopes: (3, F) world-frame face normals."""
+    offsets: np.ndarray | None
+    plane: list[float] | None
+    """Half-spaces: [nx, ny, nz, h] of the boundary plane n . x = h in the world frame."""
+
+
+def _pose(target: _Target, X34: np.ndarray) -> _Posed:
+    R, p = X34[:, :3], X34[:, 3]
+    center = (p if target.centered else R @ target.center + p).tolist()
+    if target.normals is None:
+        return _Posed(R, p, center, None, None, None)
+    normals = R @ target.normals
+    offsets = target.offsets + p @ normals
+    plane = None
+    if target.radius == math.inf:
+        plane = [*normals[:, 0].tolist(), float(offsets[0])]
+    return _Posed(R, p, center, normals, offsets, plane)
+
+
+@dataclass(frozen=True)
+class RayHits:
+    """The result of a cast, one entry per ray. ``point`` and ``geometry_index`` are computed
+    on access (a sensor that only needs distances doesn't pay for them)."""
+
+    distance: np.ndarray
+    """(N,) metres to the nearest hit, inf when nothing is hit within max_range."""
+    origins: np.ndarray
+    directions: np.ndarray
+    _per_column: np.ndarray = field(repr=False)
+    """(N, K) distance of each ray to each geometry that wasn't rejected."""
+    _column_target: tuple[int, ...] = field(repr=False)
+    """The geometry index of each column of _per_column."""
+
+    @property
+    def point(self) -> np.ndarray:
+        """(N, 3) world-frame hit points, nan where nothing is hit."""
+        t = np.where(np.isfinite(self.distance), self.distance, np.nan)
+        return self.origins + t[:, None] * self.directions
+
+    @property
+    def geometry_index(self) -> np.ndarray:
+        """(N,) index into RayCaster.geometry_ids of the geometry hit, -1 where none."""
+        lookup = np.array((*self._column_target, -1))
+        column = self._per_column.argmin(axis=1)
+        return lookup[np.where(np.isfinite(self.distance), column, -1)]
+
+
+class RayCaster:
+    """Casts batches of rays against the proximity geometries of a SceneGraph.
+
+    Build it once (e.g. in a LeafSystem's constructor) from the SceneGraph's model inspector;
+    call :meth:`cast` with the current ``QueryObject`` at every scan. Rebuild it if proximity
+    geometries are added, removed or reshaped after construction. Anchored geometries (fixed
+    to the world frame) can't move, so their world-frame data is computed here, once; every
+    other geometry is posed by ``QueryObject.GetPoseInWorld`` at each cast.
+    """
+
+    def __init__(
+        self,
+        inspector: SceneGraphInspector,
+        exclude: Iterable[GeometryId] = (),
+    ) -> None:
+        """Precomputes per-geometry data for every proximity geometry not in ``exclude``.
+
+        Geometries that can't be ray cast are logged (WARNING, once, here) and listed in
+        :attr:`unsupported`.
+        """
+        excluded = set(exclude)
+        targets: list[_Target] = []
+        unsupported: list[tuple[GeometryId, str, str]] = []
+        deformable = set(inspector.GetAllDeformableGeometryIds())
+        for gid in inspector.GetAllGeometryIds(Role.kProximity):
+            if gid in excluded:
+                continue
+            if gid in deformable:
+                made: _Target | str = "it is a deformable geometry"
+            else:
+                made = _make_target(inspector, gid)
+            if isinstance(made, str):
+                name, shape_type = inspector.GetName(gid), type(inspector.GetShape(gid)).__name__
+                unsupported.append((gid, name, shape_type))
+                _log.warning(
+                    "RayCaster: geometry '%s' (id %s, shape %s) is IGNORED by ray casting: %s.",
+                    name, gid, shape_type, made,
+                )  # fmt: skip
+            else:
+                targets.append(made)
+        world = inspector.world_frame_id()
+        self._targets: tuple[_Target, ...] = tuple(targets)
+        self._anchored: tuple[_Posed | None, ...] = tuple(
+            _pose(t, inspector.GetPoseInFrame(t.geometry_id).GetAsMatrix34())
+            if inspector.GetFrameId(t.geometry_id) == world
+            else None
+            for t in targets
+        )
+        self.geometry_ids: tuple[GeometryId, ...] = tuple(t.geometry_id for t in targets)
+        """The geometries rays are cast against, in the order RayHits.geometry_index uses."""
+        self.unsupported: tuple[tuple[GeometryId, str, str], ...] = tuple(unsupported)
+        """(id, name, shape type) of the proximity geometries that can't be ray cast."""
+        self.excluded: frozenset[GeometryId] = frozenset(excluded)
+
+    def geometry_name(self, index: int) -> str:
+        """Name of the geometry with the given RayHits.geometry_index ('' for -1)."""
+        return "" if index < 0 else self._targets[index].name
+
+    def cast(
+        self,
+        query_object: QueryObject,
+        origins: np.ndarray,
+        directions: np.ndarray,
+        max_range: float,
+    ) -> RayHits:
+        """Nearest hit of each ray ``origins[i] + t directions[i]``, ``0 <= t <= max_range``.
+
+        origins, directions: (N, 3) world-frame arrays; directions must be unit vectors (not
+        checked, for speed: :func:`cross_of_rays_directions` makes them). Poses of non-anchored
+        geometries come from ``query_object.GetPoseInWorld``.
+        """
+        o = np.asarray(origins, dtype=float)
+        d = np.asarray(directions, dtype=float)
+        if o.ndim != 2 or o.shape[1] != 3 or d.shape != o.shape:
+            raise ValueError(
+                f"origins and directions must both be (N, 3); got {o.shape} and {d.shape}"
+            )
+        if not max_range >= 0.0:
+            raise ValueError(f"max_range must be >= 0, got {max_range}")
+
+        # Bounding sphere of the whole scan (every ray segment): a geometry whose bounding
+        # sphere doesn't meet it is skipped with one comparison.
+        lo, hi = o.min(axis=0).tolist(), o.max(axis=0).tolist()
+        scan_center = [0.5 * (a + b) for a, b in zip(lo, hi, strict=True)]
+        scan_radius = 0.5 * math.dist(lo, hi) + max_range
+
+        normals, offsets, starts, columns = [], [], [], []
+        curved: list[np.ndarray] = []
+        curved_columns: list[int] = []
+        n_planes = 0
+        for k, target in enumerate(self._targets):
+            posed = self._anchored[k]
+            if posed is None:
+                X34 = query_object.GetPoseInWorld(target.geometry_id).GetAsMatrix34()
+                posed = _pose(target, X34)
+            if posed.plane is not None:  # half-space: is the scan entirely outside it?
+                nx, ny, nz, h = posed.plane
+                cx, cy, cz = scan_center
+                if nx * cx + ny * cy + nz * cz - h > scan_radius:
+                    continue
+            elif math.dist(posed.center, scan_center) > scan_radius + target.radius:
+                continue
+            if target.normals is not None:
+                normals.append(posed.normals)
+                offsets.append(posed.offsets)
+                starts.append(n_planes)
+                columns.append(k)
+                n_planes += posed.offsets.shape[0]
+            else:
+                o_G = (o - posed.p) @ posed.R  # row-wise R^T (x - p)
+                d_G = d @ posed.R
+                curved.append(target.hit(o_G, d_G, target.params, max_range))
+                curved_columns.append(k)
+        blocks = []
+        if normals:
+            if len(normals) == 1:
+                normals_W, offsets_W = normals[0], offsets[0]
+            else:
+                normals_W = np.concatenate(normals, axis=1)
+                offsets_W = np.concatenate(offsets)
+            blocks.append(_polytope_distances(o, d, normals_W, offsets_W, starts, max_range))
+        if curved:
+            blocks.append(np.column_stack(curved))
+        columns += curved_columns
+        if not blocks:
+            n = o.shape[0]
+            return RayHits(np.full(n, np.inf), o, d, np.full((n, 1), np.inf), ())
+        t = blocks[0] if len(blocks) == 1 else np.hstack(blocks)
+        distance = t.min(axis=1) if t.shape[1] > 1 else t[:, 0]
+        return RayHits(distance, o, d, t, tuple(columns))
+
+
+# --------------------------------------------------------------------------------------------
+# The IR sensor's cross of rays.
+# --------------------------------------------------------------------------------------------
+
+
+def cross_of_rays_in_sensor_frame(
+    samples: int = 3, dispersion_cone_angle: float = DEFAULT_DISPERSION_CONE_ANGLE
+) -> np.ndarray:
+    """Unit ray directions (2*samples, 3) in the sensor frame S (the sensor looks along +x).
+
+    Rows 0..samples-1: the horizontal fan (in the S x-y plane, yaw from -angle/2 to +angle/2);
+    rows samples..2*samples-1: the vertical fan (in the S x-z plane, pitch up from -angle/2 to
+    +angle/2). With an odd ``samples`` both fans contain the centre ray (+x), as in the original.
+    """
+    if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or samples < 2:
+        raise ValueError(
+            f"IR sensor 'samples' must be an integer >= 2 (rays per fan of the cross); "
+            f"got {samples!r}"
+        )
+    if not 0.0 <= dispersion_cone_angle < 180.0:
+        raise ValueError(
+            f"dispersion_cone_angle must be in [0, 180) degrees; got {dispersion_cone_angle!r}"
+        )
+    half = math.radians(dispersion_cone_angle) / 2.0
+    angles = np.linspace(-half, half, samples)
+    c, s, z = np.cos(angles), np.sin(angles), np.zeros(samples)
+    horizontal = np.column_stack([c, s, z])
+    vertical = np.column_stack([c, z, s])
+    return np.vstack([horizontal, vertical])
+
+
+def cross_of_rays_directions(
+    X_WS: RigidTransform,
+    samples: int = 3,
+    dispersion_cone_angle: float = DEFAULT_DISPERSION_CONE_ANGLE,
+) -> np.ndarray:
+    """Unit ray directions (2*samples, 3) in the world frame for a sensor posed at X_WS.
+
+    See :func:`cross_of_rays_in_sensor_frame` for the layout; all rays start at
+    ``X_WS.translation()``. Raises ValueError if samples < 2.
+    """
+    d_S = cross_of_rays_in_sensor_frame(samples, dispersion_cone_angle)
+    return d_S @ X_WS.rotation().matrix().T
+
+
+@dataclass(frozen=True)
+class BodyFixedRays:
+    """Rays fixed in a body frame B (sensors mounted on a body): ``origins`` and
+    ``directions`` are (N, 3) in B. :meth:`in_world` poses all of them with one matrix product."""
+
+    origins: np.ndarray
+    directions: np.ndarray
+
+    @staticmethod
+    def cross_of_rays(
+        X_BS: Sequence[RigidTransform],
+        samples: int = 3,
+        dispersion_cone_angle: float = DEFAULT_DISPERSION_CONE_ANGLE,
+    ) -> BodyFixedRays:
+        """The IR cross of rays of each sensor S posed at X_BS[i] (rows grouped per sensor:
+        rows 2*samples*i .. 2*samples*(i+1)-1 belong to sensor i)."""
+        d_S = cross_of_rays_in_sensor_frame(samples, dispersion_cone_angle)
+        origins = np.vstack([np.tile(X.translation(), (len(d_S), 1)) for X in X_BS])
+        directions = np.vstack([d_S @ X.rotation().matrix().T for X in X_BS])
+        return BodyFixedRays(origins, directions)
+
+    def in_world(self, X_WB: RigidTransform) -> tuple[np.ndarray, np.ndarray]:
+        """(origins, directions) in the world frame for the body pose X_WB."""
+        X = X_WB.GetAsMatrix34()
+        R_T = X[:, :3].T
+        return self.origins @ R_T + X[:, 3], self.directions @ R_T
+
+
+def model_instance_geometry_ids(plant, model_instance) -> set[GeometryId]:
+    """The collision (proximity) geometry ids of every body of a model instance: the set a
+    sensor mounted on that robot passes as ``RayCaster(..., exclude=...)``."""
+    ids: set[GeometryId] = set()
+    for body_index in plant.GetBodyIndices(model_instance):
+        ids.update(plant.GetCollisionGeometriesForBody(plant.get_body(body_index)))
+    return ids

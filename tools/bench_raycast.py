@@ -1,0 +1,142 @@
+"""Benchmark: the IR sensors' ray cast, 2 sensors x 6 rays, in a scene like the default one.
+
+Scene: ground HalfSpace (anchored), the 2 m giant box (a free 100 kg body, so it is posed through
+``QueryObject.GetPoseInWorld`` at every scan) and a stand-in robot (chassis + platform boxes
+and four wheel cylinders at the sizes in dimensions.py) whose own geometries are excluded. The
+robot sits at the origin facing +x, so the rear sensor sees the box face at 0.62865 m and the
+front sensor sees nothing (SPEC, Sensors).
+
+Run: ``.venv/bin/python tools/bench_raycast.py``. Importable: ``scan_cost_seconds()`` returns the
+median cost of one scan in seconds (for tools/bench.py).
+"""
+
+from __future__ import annotations
+
+import statistics
+import time
+
+import numpy as np
+from pydrake.geometry import Box, Cylinder, HalfSpace
+from pydrake.math import RigidTransform, RotationMatrix
+from pydrake.multibody.plant import AddMultibodyPlantSceneGraph, CoulombFriction
+from pydrake.multibody.tree import SpatialInertia
+from pydrake.systems.framework import DiagramBuilder
+
+from corobot_drake import dimensions as dim
+from corobot_drake.raycast import BodyFixedRays, RayCaster, model_instance_geometry_ids
+
+SAMPLES = 3
+MAXIMUM_RANGE = 30 * dim.INCH
+
+
+def build_scene():
+    """Returns (diagram, context, plant, scene_graph, chassis body, robot model instance)."""
+    builder = DiagramBuilder()
+    plant, scene_graph = AddMultibodyPlantSceneGraph(builder, time_step=0.001)
+    friction = CoulombFriction(dim.GROUND_FRICTION, dim.GROUND_FRICTION)
+    world = plant.world_body()
+    plant.RegisterCollisionGeometry(world, RigidTransform(), HalfSpace(), "ground", friction)
+    size = dim.GIANT_BOX_SIZE
+    box_model = plant.AddModelInstance("giant_box")
+    giant_box = plant.AddRigidBody(
+        "giant_box",
+        box_model,
+        SpatialInertia.SolidBoxWithMass(dim.GIANT_BOX_MASS, size, size, size),
+    )
+    plant.RegisterCollisionGeometry(
+        giant_box, RigidTransform(), Box(size, size, size), "giant_box", friction
+    )
+    robot = plant.AddModelInstance("corobot")
+    chassis = plant.AddRigidBody(
+        "chassis", robot, SpatialInertia.SolidBoxWithMass(dim.TOTAL_BODY_MASS, *dim.CHASSIS.size)
+    )
+    for name, part in (("chassis", dim.CHASSIS), ("platform", dim.PLATFORM)):
+        plant.RegisterCollisionGeometry(
+            chassis, RigidTransform(part.center), Box(*part.size), name, friction
+        )
+    R_axle_y = RotationMatrix.MakeXRotation(np.pi / 2)  # cylinder axis z -> y
+    for wheel in dim.WHEEL_NAMES:
+        plant.RegisterCollisionGeometry(
+            chassis,
+            RigidTransform(R_axle_y, dim.wheel_center(wheel)),
+            Cylinder(dim.WHEEL_RADIUS, dim.WHEEL_WIDTH),
+            wheel,
+            friction,
+        )
+    plant.Finalize()
+    diagram = builder.Build()
+    context = diagram.CreateDefaultContext()
+    plant.SetFreeBodyPose(
+        plant.GetMyMutableContextFromRoot(context), giant_box, RigidTransform(dim.GIANT_BOX_CENTER)
+    )
+    return diagram, context, plant, scene_graph, chassis, robot
+
+
+def sensor_poses_in_body():
+    """X_BS of the front and rear IR sensors (sensor looks along its +x)."""
+    return [
+        RigidTransform(RotationMatrix.MakeZRotation(m.yaw), m.position)
+        for m in (dim.FRONT_IR, dim.REAR_IR)
+    ]
+
+
+def make_scan(plant, scene_graph, chassis, robot, context):
+    """Returns (caster, scan): scan() does one full 2-sensor scan as a sensor system would
+    (evaluate the QueryObject and the chassis pose, pose the 12 rays, cast) and returns RayHits."""
+    exclude = model_instance_geometry_ids(plant, robot)
+    caster = RayCaster(scene_graph.model_inspector(), exclude=exclude)
+    plant_context = plant.GetMyContextFromRoot(context)
+    sg_context = scene_graph.GetMyContextFromRoot(context)
+    query_port = scene_graph.get_query_output_port()
+    rays = BodyFixedRays.cross_of_rays(sensor_poses_in_body(), SAMPLES)
+
+    def scan():
+        query_object = query_port.Eval(sg_context)
+        X_WB = plant.EvalBodyPoseInWorld(plant_context, chassis)
+        origins, directions = rays.in_world(X_WB)
+        return caster.cast(query_object, origins, directions, MAXIMUM_RANGE)
+
+    return caster, scan
+
+
+def _median_seconds(fn, repeats: int, batch: int = 50) -> float:
+    fn()  # warm up
+    samples = []
+    for _ in range(max(1, repeats // batch)):
+        start = time.perf_counter()
+        for _ in range(batch):
+            fn()
+        samples.append((time.perf_counter() - start) / batch)
+    return statistics.median(samples)
+
+
+def scan_cost_seconds(repeats: int = 5000) -> float:
+    """Median wall time of one full scan (both sensors' ray generation + one 12-ray cast)."""
+    _, context, plant, scene_graph, chassis, robot = build_scene()
+    _, scan = make_scan(plant, scene_graph, chassis, robot, context)
+    return _median_seconds(scan, repeats)
+
+
+def main() -> None:
+    _, context, plant, scene_graph, chassis, robot = build_scene()
+    caster, scan = make_scan(plant, scene_graph, chassis, robot, context)
+    hits = scan()
+    n = 2 * SAMPLES
+    front, rear = hits.distance[:n].min(), hits.distance[n:].min()
+    print(f"targets: {[caster.geometry_name(i) for i in range(len(caster.geometry_ids))]}")
+    print(f"front reads {front:.5f} m (inf = nothing within range), rear reads {rear:.5f} m")
+
+    query_object = scene_graph.get_query_output_port().Eval(
+        scene_graph.GetMyContextFromRoot(context)
+    )
+    origins, directions = hits.origins, hits.directions
+    cast_only = _median_seconds(
+        lambda: caster.cast(query_object, origins, directions, MAXIMUM_RANGE), 5000
+    )
+    full = _median_seconds(scan, 5000)
+    print(f"cast only (12 rays):                            median {cast_only * 1e6:6.1f} us")
+    print(f"full scan (query, chassis pose, rays, cast):    median {full * 1e6:6.1f} us")
+
+
+if __name__ == "__main__":
+    main()
