@@ -5,8 +5,8 @@ import subprocess
 import sys
 
 import pytest
-from conftest import REPO
 
+from conftest import REPO
 from corobot_drake.cli import main
 
 SCENARIOS = sorted((REPO / "scenarios").glob("*.yaml"))

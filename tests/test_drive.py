@@ -4,6 +4,7 @@ import math
 
 import numpy as np
 import pytest
+
 from conftest import make_sim
 
 R = 0.060325  # wheel radius, m (SPEC)

@@ -5,12 +5,13 @@ import sys
 
 import numpy as np
 import pytest
-from conftest import REPO
 from pydrake.geometry import Box, Cylinder, Role
 from pydrake.multibody.parsing import Parser
 from pydrake.multibody.plant import AddMultibodyPlantSceneGraph
 from pydrake.multibody.tree import JointActuatorIndex
 from pydrake.systems.framework import DiagramBuilder
+
+from conftest import REPO
 
 SPEC_TOL = 1e-9  # the SPEC's figures are exact conversions from inches
 
