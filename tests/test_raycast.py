@@ -438,6 +438,12 @@ def test_cross_of_rays_needs_at_least_two_samples(samples):
         cross_of_rays_directions(RigidTransform(), samples=samples)
 
 
+@pytest.mark.parametrize("angle", [-1.0, 180.0, math.nan])
+def test_cross_of_rays_rejects_bad_cone_angles(angle):
+    with pytest.raises(ValueError, match="dispersion_cone_angle"):
+        cross_of_rays_directions(RigidTransform(), samples=3, dispersion_cone_angle=angle)
+
+
 @pytest.mark.parametrize("samples", [2, 3, 4, 7])
 @pytest.mark.parametrize("angle", [8.0, 30.0])
 def test_cross_of_rays_spans_exactly_the_cone(samples, angle):
