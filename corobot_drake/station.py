@@ -203,10 +203,23 @@ def build_station(scenario: sc.Scenario, meshcat=None) -> Station:
     return Station(diagram, plant, scene_graph, robots, bodies, meshcat)
 
 
-def _add_meshcat(builder, plant, scene_graph, meshcat, world: sc.World) -> None:
-    from pydrake.visualization import ApplyVisualizationConfig, VisualizationConfig
+def visualization_config():
+    """Meshcat layers: the visual meshes (`illustration`), contact forces, and the collision
+    shapes (`proximity`, translucent red). Drake adds the proximity layer hidden
+    (`visible_by_default = false`); tick drake > proximity in Meshcat's Scene panel (and
+    untick illustration) for the physics view. (`initial_proximity_alpha` only seeds Drake's
+    optional alpha slider, so the translucency is in the colour.)"""
+    from pydrake.geometry import Rgba
+    from pydrake.visualization import VisualizationConfig
 
-    ApplyVisualizationConfig(VisualizationConfig(publish_contacts=True), builder,
+    return VisualizationConfig(publish_contacts=True, publish_proximity=True,
+                               default_proximity_color=Rgba(0.8, 0.0, 0.0, 0.6))
+
+
+def _add_meshcat(builder, plant, scene_graph, meshcat, world: sc.World) -> None:
+    from pydrake.visualization import ApplyVisualizationConfig
+
+    ApplyVisualizationConfig(visualization_config(), builder,
                              plant=plant, scene_graph=scene_graph, meshcat=meshcat)
     sky = list(world.sky_color)
     meshcat.SetProperty("/Background", "top_color", sky)

@@ -1,0 +1,122 @@
+"""Rendering a built station with Drake's VTK renderer: lit by the scenario's sun, sky behind.
+
+Used by `tools/snapshot.py` (README pictures) and `tools/camera_cost.py` (camera frame cost).
+The renderer is added to a running simulation's SceneGraph context, so any `Simulation` can be
+photographed after it has been driven:
+
+    sim = Simulation.from_file("scenarios/corobot.yaml")
+    add_renderer(sim)
+    image = render(sim, look_at([1, 1, 0.6], [0, 0, 0.1]), 640, 480)   # H x W x 3 uint8
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from pydrake.geometry import (
+    ClippingRange,
+    ColorRenderCamera,
+    LightParameter,
+    MakeRenderEngineVtk,
+    RenderCameraCore,
+    RenderEngineVtkParams,
+    Rgba,
+)
+from pydrake.math import RigidTransform, RollPitchYaw, RotationMatrix
+from pydrake.systems.sensors import CameraInfo
+
+from corobot_drake import dimensions as dim
+from corobot_drake import scenario as sc
+
+RENDERER = "corobot_vtk"
+"""Name under which `add_renderer` registers its VTK engine."""
+
+FILL_INTENSITY = 0.5
+"""A dim light from the camera (the sky's scattered light) so faces away from the sun are
+shaded, not black. The sun itself is the scenario's directional light. With shadows on, this
+light casts them too (straight away from the camera, mostly hidden behind what casts them), so
+views from the robot itself render without shadows."""
+
+R_BC = RotationMatrix(np.array([[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]]))
+"""A camera frame (+z forward, +x right, +y down) looking along the body's +x, level."""
+
+
+def render_params(world: sc.World, shadows: bool = True) -> RenderEngineVtkParams:
+    """VTK parameters: the scenario's sun (directional, world frame), sky as background."""
+    sun = np.asarray(world.sun.direction, dtype=float)
+    sun = sun / np.linalg.norm(sun)
+    return RenderEngineVtkParams(
+        default_clear_color=[float(c) for c in world.sky_color[:3]],
+        lights=[
+            LightParameter(type="directional", frame="world", direction=sun,
+                           intensity=float(world.sun.intensity), color=Rgba(1, 1, 1, 1)),
+            LightParameter(type="directional", frame="camera", direction=[0.0, 0.0, 1.0],
+                           intensity=FILL_INTENSITY, color=Rgba(1, 1, 1, 1)),
+        ],
+        cast_shadows=shadows,
+        shadow_map_size=2048 if shadows else 256,
+    )
+
+
+def add_renderer(sim, shadows: bool = True, name: str = RENDERER) -> str:
+    """Adds the VTK engine to `sim`'s SceneGraph (in its context); returns the engine name."""
+    scene_graph = sim.station.scene_graph
+    context = scene_graph.GetMyMutableContextFromRoot(sim.context)
+    if not scene_graph.HasRenderer(context, name):
+        scene_graph.AddRenderer(context, name, MakeRenderEngineVtk(
+            render_params(sim.scenario.world, shadows)))
+    return name
+
+
+def color_camera(width: int, height: int, fov_y_deg: float, near: float = 0.01,
+                 far: float = 50.0, name: str = RENDERER) -> ColorRenderCamera:
+    return ColorRenderCamera(RenderCameraCore(
+        name, CameraInfo(width, height, math.radians(fov_y_deg)), ClippingRange(near, far),
+        RigidTransform()), False)
+
+
+def render(sim, X_WC: RigidTransform, width: int = 640, height: int = 480,
+           fov_y_deg: float = 40.0, near: float = 0.01, name: str = RENDERER) -> np.ndarray:
+    """An RGB image (height x width x 3, uint8) from camera pose X_WC (Drake camera axes)."""
+    query = sim.station.diagram.GetOutputPort("query_object").Eval(sim.context)
+    image = query.RenderColorImage(color_camera(width, height, fov_y_deg, near, name=name),
+                                   sim.station.scene_graph.world_frame_id(), X_WC)
+    return np.array(image.data[:, :, :3], dtype=np.uint8)
+
+
+def look_at(eye, target) -> RigidTransform:
+    """Drake camera pose (+z forward, +x right, +y down) at `eye` looking at `target`, z up."""
+    eye, target = np.asarray(eye, float), np.asarray(target, float)
+    z = (target - eye) / np.linalg.norm(target - eye)
+    x = np.cross(z, [0.0, 0.0, 1.0])
+    x /= np.linalg.norm(x)
+    return RigidTransform(RotationMatrix(np.column_stack([x, np.cross(z, x), z])), eye)
+
+
+def chassis_pose(sim, robot: str | None = None) -> RigidTransform:
+    parts = sim.robot(robot)._parts
+    plant = sim.station.plant
+    return plant.EvalBodyPoseInWorld(plant.GetMyContextFromRoot(sim.context), parts.chassis)
+
+
+def heading_frame(X_WB: RigidTransform) -> RigidTransform:
+    """The chassis pose with roll and pitch removed (a chase camera should not rock)."""
+    yaw = RollPitchYaw(X_WB.rotation()).yaw_angle()
+    return RigidTransform(RollPitchYaw(0, 0, yaw), X_WB.translation())
+
+
+def chase_view(X_WB: RigidTransform, back: float = 0.95, up: float = 0.5,
+               ahead: float = 0.4) -> RigidTransform:
+    """Behind and above the robot, looking at a point ahead of it."""
+    X_WH = heading_frame(X_WB)
+    return look_at(X_WH @ np.array([-back, 0.25 * back, up]),
+                   X_WH @ np.array([ahead, 0.0, 0.0]))
+
+
+def robot_camera_view(X_WB: RigidTransform) -> RigidTransform:
+    """The robot's own camera (SPEC mount `dimensions.CAMERA`), in the world."""
+    mount = dim.CAMERA
+    X_BC = RigidTransform(RollPitchYaw(0, 0, mount.yaw).ToRotationMatrix() @ R_BC,
+                          mount.position)
+    return X_WB @ X_BC

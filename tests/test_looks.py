@@ -1,0 +1,100 @@
+"""How the robot looks while it runs: turning wheels, the collision-shape view, rendering."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+from pydrake.geometry import Role
+
+from conftest import make_sim
+from corobot_drake import dimensions as dim
+from corobot_drake import render
+
+
+def wheel_visual_ids(sim, wheel: str) -> list:
+    """Geometry ids of the wheel body's illustration (visual) geometry."""
+    station = sim.station
+    inspector = station.scene_graph.model_inspector()
+    parts = sim.robot()._parts
+    body = station.plant.GetBodyByName(f"{wheel}_wheel", parts.model_instance)
+    frame_id = station.plant.GetBodyFrameIdOrThrow(body.index())
+    return list(inspector.GetGeometries(frame_id, Role.kIllustration))
+
+
+def wheel_angle(sim, geometry_id) -> float:
+    """Rotation of a wheel's visual geometry about its axle (chassis +y) from where it was
+    registered on the wheel, radians in (-pi, pi]."""
+    query = sim.station.diagram.GetOutputPort("query_object").Eval(sim.context)
+    X_WG = query.GetPoseInWorld(geometry_id)
+    X_FG = sim.station.scene_graph.model_inspector().GetPoseInFrame(geometry_id)
+    X_WB = render.chassis_pose(sim)
+    R_BG = (X_WB.rotation().inverse() @ X_WG.rotation() @ X_FG.rotation().inverse()).matrix()
+    # Rotation about y: R = [[c, 0, s], [0, 1, 0], [-s, 0, c]].
+    return math.atan2(R_BG[0, 2], R_BG[0, 0])
+
+
+@pytest.mark.parametrize("visual", ["meshes", "boxes"])
+def test_wheels_visibly_turn_by_distance_over_radius(visual):
+    sim = make_sim(f"robots: {{corobot: {{visual: {visual}}}}}")
+    ids = {w: wheel_visual_ids(sim, w) for w in dim.WHEEL_NAMES}
+    assert all(ids.values()), "every wheel body carries visual geometry"
+    sim.advance(0.3)  # settle
+    robot = sim.robot()
+    robot.set_speed(0.3, 0.3)
+    start = robot.pose()
+    last = {w: wheel_angle(sim, ids[w][0]) for w in dim.WHEEL_NAMES}
+    turned = dict.fromkeys(dim.WHEEL_NAMES, 0.0)
+    for _ in range(60):  # 1.5 s in steps far shorter than a half turn (~0.12 rad at 0.3 m/s)
+        sim.advance(0.025)
+        for w in dim.WHEEL_NAMES:
+            now = wheel_angle(sim, ids[w][0])
+            turned[w] += math.remainder(now - last[w], 2 * math.pi)
+            last[w] = now
+            # All of a wheel's visual pieces turn together (they ride on one body).
+            for other in ids[w][1:]:
+                assert math.remainder(wheel_angle(sim, other) - now, 2 * math.pi) == \
+                    pytest.approx(0.0, abs=1e-9)
+    end = robot.pose()
+    distance = math.hypot(end.x - start.x, end.y - start.y)
+    assert distance > 0.3
+    for w in dim.WHEEL_NAMES:
+        # Forward motion turns the wheel positively about +y (axle to the left); the
+        # compliant tyre rolls on a slightly smaller radius (measured ~0.9% more turn).
+        assert turned[w] == pytest.approx(distance / dim.WHEEL_RADIUS, rel=0.02), w
+
+
+def test_wheel_visual_follows_the_wheel_body():
+    """The visual geometry is the wheel body's pose: what Meshcat and the camera draw."""
+    sim = make_sim("robots: {corobot: {commands: [!SetPower {left: 0.8, right: 0.2}]}}")
+    sim.advance(1.0)
+    plant = sim.station.plant
+    plant_context = plant.GetMyContextFromRoot(sim.context)
+    query = sim.station.diagram.GetOutputPort("query_object").Eval(sim.context)
+    inspector = sim.station.scene_graph.model_inspector()
+    for w in dim.WHEEL_NAMES:
+        body = plant.GetBodyByName(f"{w}_wheel", sim.robot()._parts.model_instance)
+        X_WW = plant.EvalBodyPoseInWorld(plant_context, body)
+        for gid in wheel_visual_ids(sim, w):
+            X_WG = query.GetPoseInWorld(gid)
+            X_WG_expected = X_WW @ inspector.GetPoseInFrame(gid)
+            assert X_WG.IsNearlyEqualTo(X_WG_expected, 1e-9)
+
+
+def test_meshcat_publishes_collision_shapes_hidden_by_default():
+    """The proximity (collision) geometry is in Meshcat's scene tree under /drake/proximity,
+    next to the visual meshes under /drake/illustration (Drake adds it invisible: the user
+    ticks `proximity` in the Scene panel)."""
+    from pydrake.geometry import StartMeshcat
+
+    from corobot_drake.simulation import Simulation
+    from corobot_drake.station import visualization_config
+
+    config = visualization_config()
+    assert config.publish_proximity and config.publish_illustration
+    meshcat = StartMeshcat()
+    sim = Simulation(make_sim().scenario, meshcat=meshcat)
+    sim.advance(0.05)
+    for layer in ("illustration", "proximity"):
+        for path in ("corobot/chassis", "corobot/front_left_wheel", "giant_box"):
+            assert meshcat.HasPath(f"/drake/{layer}/{path}"), (layer, path)

@@ -1,0 +1,70 @@
+"""Camera frame cost, visual meshes vs collision boxes (run: python tools/camera_cost.py).
+
+The robot drives a circle beside the giant box; between frames the simulation advances one
+camera period (1/30 s) and only the render call is timed: one 320x240 colour frame (the SPEC
+camera) rendered by VTK with the camera's lighting (sun + fill, no shadows). Views: the
+robot's own camera (`robot-camera`: the robot itself is out of its view, so this is the cost
+the robot pays) and a 320x240 chase camera that looks at the robot (`chase`: the worst case
+for the meshes, every robot triangle drawn).
+
+`camera_frame_ms(visual, view)` is the importable figure (tools/bench.py uses it).
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import time
+from pathlib import Path
+
+from corobot_drake import dimensions as dim
+from corobot_drake import render
+from corobot_drake.scenario import load_scenario
+from corobot_drake.simulation import Simulation, quiet_drake_warnings
+
+DEFAULT_SCENARIO = Path(__file__).resolve().parent.parent / "scenarios" / "corobot.yaml"
+CIRCLE = "robots: {corobot: {pose: {x: 0.6, y: 0.8, yaw_deg: 150}, " \
+         "commands: [!SetPower {left: 0.3, right: 0.7}]}}"
+VIEWS = ("robot-camera", "chase")
+RENDERER = "camera_cost_vtk"
+
+
+def camera_frame_ms(visual: str = "meshes", view: str = "robot-camera", frames: int = 120,
+                    warmup: int = 10, scenario: Path = DEFAULT_SCENARIO) -> float:
+    """Median wall-clock ms to render one 320x240 frame of `view` with the robot drawn as
+    `visual` (`meshes` or `boxes`)."""
+    quiet_drake_warnings()
+    sim = Simulation(load_scenario(scenario, overrides=[
+        CIRCLE, f"robots: {{corobot: {{visual: {visual}}}}}"]))
+    # The robot's camera renders without shadows (camera.py): so does this.
+    name = render.add_renderer(sim, shadows=False, name=RENDERER)
+    times = []
+    for i in range(warmup + frames):
+        sim.advance(1.0 / 30.0)
+        X_WB = render.chassis_pose(sim)
+        X_WC = (render.robot_camera_view(X_WB) if view == "robot-camera"
+                else render.chase_view(X_WB))
+        start = time.perf_counter()
+        render.render(sim, X_WC, dim.CAMERA_WIDTH, dim.CAMERA_HEIGHT, dim.CAMERA_FOV_Y_DEG,
+                      name=name)
+        if i >= warmup:
+            times.append(time.perf_counter() - start)
+    return 1000.0 * statistics.median(times)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--frames", type=int, default=120)
+    parser.add_argument("--repeats", type=int, default=3, help="median of this many runs")
+    args = parser.parse_args()
+    print("| view (320x240) | boxes, ms/frame | meshes, ms/frame | meshes / boxes |")
+    print("|---|---|---|---|")
+    for view in VIEWS:
+        ms = {v: statistics.median(camera_frame_ms(v, view, args.frames)
+                                   for _ in range(args.repeats)) for v in ("boxes", "meshes")}
+        print(f"| {view} | {ms['boxes']:.2f} | {ms['meshes']:.2f} | "
+              f"{ms['meshes'] / ms['boxes']:.2f} |", flush=True)
+
+
+if __name__ == "__main__":
+    main()
