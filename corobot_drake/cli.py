@@ -31,6 +31,9 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--override", action="append", default=[], metavar="YAML_TEXT",
                    help="YAML merged over the scenario (repeatable)")
     p.add_argument("--summary", metavar="PATH", help="write the run's summary JSON here")
+    p.add_argument("--log", metavar="CSV",
+                   help="write the run log (time, power, encoder ticks, pose; docs/tuning.md) "
+                   "here; with several robots, one file per robot: CSV with the name inserted")
     return p
 
 
@@ -65,6 +68,13 @@ def _run_interactive(sim: Simulation, meshcat, duration: float) -> None:
         print("\nstopped", file=sys.stderr)
 
 
+def _write_logs(sim: Simulation, path: Path) -> None:
+    """One robot: `path`; several: `path` with `.<robot>` before the suffix."""
+    for name, robot in sim.robots.items():
+        robot.write_log(path if len(sim.robots) == 1
+                        else path.with_name(f"{path.stem}.{name}{path.suffix}"))
+
+
 def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     try:
@@ -97,6 +107,8 @@ def main(argv: list[str] | None = None) -> int:
         _run_interactive(sim, meshcat, duration)
     summary = sim.summary()
     print(f"simulated {summary['time']:.2f} s at {summary['realtime_factor']:.1f}x real time")
+    if args.log:
+        _write_logs(sim, Path(args.log))
     if args.summary:
         Path(args.summary).write_text(json.dumps(summary, indent=2) + "\n")
     return 0

@@ -21,6 +21,7 @@ from pydrake.systems.analysis import ApplySimulatorConfig, Simulator
 from corobot_drake import dimensions as dim
 from corobot_drake import scenario as sc
 from corobot_drake.drive import CommandRecord
+from corobot_drake.runlog import log_rows, write_csv
 from corobot_drake.station import RobotParts, Station, build_station
 
 
@@ -108,6 +109,16 @@ class Robot:
         monitor = self._parts.tilt_monitor
         return float(monitor.get_output_port().Eval(monitor.GetMyContextFromRoot(
             self._sim.context))[0])
+
+    def run_log(self):
+        """The run log so far (numpy rows; columns `runlog.COLUMNS`: time, left_power,
+        right_power, left_ticks, right_ticks, x, y, yaw), sampled every `runlog.LOG_PERIOD` s."""
+        sink = self._sim.station.diagram.GetSubsystemByName(f"{self.name}.run_log")
+        return log_rows(sink, self._sim.context)
+
+    def write_log(self, path: str | Path) -> None:
+        """Writes the run log as CSV (columns in docs/tuning.md; read by corobot_drake.sysid)."""
+        write_csv(self.run_log(), path)
 
     def command_log(self) -> list[CommandRecord]:
         source = self._parts.command_source

@@ -33,6 +33,7 @@ from corobot_drake import scenario as sc
 from corobot_drake.drive import CommandSource, DriveController
 from corobot_drake.model import MODELS_DIR, corobot_sdf
 from corobot_drake.monitor import TiltMonitor
+from corobot_drake.runlog import add_run_log
 
 TILT_SAMPLE_PERIOD = 0.01
 """s. Tilt changes over tenths of a second even in a flip; 100 Hz catches its peak."""
@@ -189,6 +190,8 @@ def build_station(scenario: sc.Scenario, meshcat=None) -> Station:
             plant.num_multibody_states(), chassis.floating_positions_start(),
             TILT_SAMPLE_PERIOD))
         builder.Connect(plant.get_state_output_port(), tilt.get_input_port())
+        add_run_log(builder, plant, name, chassis, joints,
+                    controller.GetOutputPort("drive_status"))
         for port in ("drive_status", "axle_speed_command", "axle_speed"):
             builder.ExportOutput(controller.GetOutputPort(port), f"{name}.{port}")
         builder.ExportOutput(plant.get_state_output_port(instance), f"{name}.state")

@@ -1,0 +1,261 @@
+"""System identification of the drive from a run log (CSV), by least squares.
+
+The drive model (SPEC "Drive"): each side's axle speed command moves toward
+power x MotorTorqueScaling at no more than the slew limit (rad/s^2), and the wheels follow it.
+`fit_drive` finds MotorTorqueScaling S, the slew limit L and a small time offset tau (the
+controller's frame and the servo's lag) that make the modelled front-wheel speeds match the ones
+measured by the encoders, by Gauss-Newton (Levenberg-Marquardt damped) on the speed residuals,
+started from a coarse grid. numpy only.
+
+The CSV is what `Robot.write_log` / `python -m corobot_drake --log` write, or what a real
+robot's logger writes with the same header (docs/tuning.md):
+time, left_power, right_power, left_ticks, right_ticks[, x, y, yaw, anything else].
+"""
+
+import csv
+import dataclasses as dc
+import math
+from pathlib import Path
+
+import numpy as np
+
+from corobot_drake import dimensions as dim
+
+REQUIRED = ("time", "left_power", "right_power", "left_ticks", "right_ticks")
+
+
+class LogError(ValueError):
+    """A log that cannot be used; the message names the file and line."""
+
+
+@dc.dataclass
+class DriveLog:
+    """A run log: time (s), power [n, 2] (left, right), wheel angle [n, 2] (rad, from ticks)."""
+
+    time: np.ndarray
+    power: np.ndarray
+    angle: np.ndarray
+    source: str = ""
+
+
+def read_log(path: str | Path, ticks_per_revolution: int = dim.ENCODER_TICKS_PER_REVOLUTION
+             ) -> DriveLog:
+    """Reads and checks a run-log CSV; raises LogError naming the line of the first problem."""
+    path = Path(path)
+    try:
+        text = path.read_text()
+    except OSError as e:
+        raise LogError(f"{path}: cannot read the file ({e.strerror})") from None
+    rows = list(csv.reader(text.splitlines()))
+    if not rows:
+        raise LogError(f"{path}:1: empty file; expected a header line "
+                       f"({', '.join(REQUIRED)}, ...)")
+    header = [h.strip() for h in rows[0]]
+    missing = [c for c in REQUIRED if c not in header]
+    if missing:
+        raise LogError(f"{path}:1: header lacks column(s) {', '.join(missing)}; "
+                       f"expected {', '.join(REQUIRED)} (got {', '.join(header)})")
+    index = [header.index(c) for c in REQUIRED]
+    data = []
+    previous_time = -math.inf
+    for line, row in enumerate(rows[1:], start=2):
+        if not row or all(not f.strip() for f in row):
+            continue  # blank line
+        if len(row) != len(header):
+            raise LogError(f"{path}:{line}: expected {len(header)} fields like the header, "
+                           f"got {len(row)}")
+        values = []
+        for column, i in zip(REQUIRED, index, strict=True):
+            try:
+                value = float(row[i])
+            except ValueError:
+                raise LogError(f"{path}:{line}: {column} is not a number: {row[i]!r}") from None
+            if not math.isfinite(value):
+                raise LogError(f"{path}:{line}: {column} is not finite: {row[i]!r}")
+            values.append(value)
+        if values[0] <= previous_time:
+            raise LogError(f"{path}:{line}: time {values[0]:g} does not increase "
+                           f"(previous {previous_time:g})")
+        if abs(values[1]) > 1 + 1e-9 or abs(values[2]) > 1 + 1e-9:
+            raise LogError(f"{path}:{line}: power must be in [-1, 1], got "
+                           f"{values[1]:g}, {values[2]:g}")
+        previous_time = values[0]
+        data.append(values)
+    if len(data) < 10:
+        raise LogError(f"{path}:{len(rows)}: only {len(data)} samples; a fit needs at least 10")
+    a = np.array(data)
+    return DriveLog(time=a[:, 0], power=a[:, 1:3],
+                    angle=a[:, 3:5] * (2 * math.pi / ticks_per_revolution), source=str(path))
+
+
+def _central_speed(t: np.ndarray, angle: np.ndarray) -> np.ndarray:
+    """Speed at the interior samples by central differences (rad/s), [n - 2, 2]."""
+    return (angle[2:] - angle[:-2]) / (t[2:] - t[:-2])[:, None]
+
+
+def model_angle(log: DriveLog, scaling: float, slew: float, delay: float,
+                substeps: int = 4) -> np.ndarray:
+    """Modelled wheel angle [n, 2] at the log's times: rate-limited power x scaling, delayed.
+
+    The power is held from each sample to the next (zero-order hold); the limiter is integrated
+    on a grid `substeps` times finer than the log."""
+    t = log.time
+    n = len(t)
+    frac = np.arange(substeps) / substeps
+    dts = np.repeat(np.diff(t) / substeps, substeps)
+    grid = np.append((t[:-1, None] + np.diff(t)[:, None] * frac[None, :]).ravel(), t[-1])
+    held = np.clip(np.searchsorted(t, grid[:-1], side="right") - 1, 0, n - 1)
+    out = np.empty_like(log.angle)
+    for side in (0, 1):
+        targets = (log.power[held, side] * scaling).tolist()
+        steps = (dts * slew).tolist()
+        w = 0.0
+        speeds = []
+        for target, step in zip(targets, steps, strict=True):
+            w += min(step, max(-step, target - w))
+            speeds.append(w)
+        theta = np.concatenate([[0.0], np.cumsum(np.array(speeds) * dts)])
+        # The wheels follow the command `delay` s late: smooth in the delay (linear interp.).
+        out[:, side] = log.angle[0, side] + np.interp(t - delay, grid, theta, left=0.0)
+    return out
+
+
+@dc.dataclass
+class DriveFit:
+    """The fitted drive parameters and how well they explain the log."""
+
+    motor_torque_scaling: float
+    slew_rate: float
+    delay: float
+    residual_rms: float
+    """rad/s: RMS of measured minus modelled front-wheel speed."""
+    stderr: tuple[float, float, float]
+    """Approximate standard errors of (scaling, slew, delay) from the Gauss-Newton Hessian."""
+    samples: int
+    iterations: int
+
+    def describe(self) -> str:
+        s_err, l_err, d_err = self.stderr
+        return (f"motor_torque_scaling: {self.motor_torque_scaling:.4f} (+- {s_err:.4f})\n"
+                f"slew_rate: {self.slew_rate:.3f} rad/s^2 (+- {l_err:.3f})\n"
+                f"delay: {self.delay * 1000:.2f} ms (+- {d_err * 1000:.2f})\n"
+                f"residual: {self.residual_rms:.4f} rad/s RMS over {self.samples} speed samples "
+                f"({self.iterations} Gauss-Newton iterations)")
+
+
+def _residuals(log: DriveLog, measured: np.ndarray, p) -> np.ndarray:
+    angle = model_angle(log, *p)
+    return (_central_speed(log.time, angle) - measured).ravel()
+
+
+def fit_drive(log: DriveLog, max_iterations: int = 30, progress=None) -> DriveFit:
+    """Least-squares MotorTorqueScaling, slew limit and delay from the log's encoder speeds."""
+    measured = _central_speed(log.time, log.angle)
+    p_mid = log.power[1:-1]
+    driven = np.abs(p_mid) > 0.1
+    if not driven.any():
+        raise LogError(f"{log.source}: the log never commands more than 10% power: nothing to fit")
+    # Start: scaling from the median ratio of speed to power, slew from a coarse grid.
+    scaling0 = float(np.median(measured[driven] / p_mid[driven]))
+    best = None
+    for slew in np.geomspace(2.0, 300.0, 13):
+        r = _residuals(log, measured, (scaling0, slew, 0.0))
+        sse = float(r @ r)
+        if best is None or sse < best[0]:
+            best = (sse, slew)
+    p = np.array([scaling0, best[1], 0.0])
+    r = _residuals(log, measured, p)
+    sse = float(r @ r)
+    damping = 1e-3
+    iterations = 0
+    J = None
+    for iterations in range(1, max_iterations + 1):
+        J = np.empty((r.size, 3))
+        for j in range(3):
+            h = 1e-4 if j == 2 else 1e-3 * max(abs(p[j]), 1.0)
+            dp = np.zeros(3)
+            dp[j] = h
+            J[:, j] = (_residuals(log, measured, p + dp) - r) / h
+        JtJ = J.T @ J
+        g = J.T @ r
+        improved = False
+        for _ in range(8):
+            A = JtJ + damping * np.diag(np.diag(JtJ) + 1e-12)
+            step = -np.linalg.lstsq(A, g, rcond=None)[0]
+            candidate = p + step
+            candidate[0] = max(candidate[0], 1e-3)
+            candidate[1] = max(candidate[1], 1e-3)
+            rc = _residuals(log, measured, candidate)
+            sse_c = float(rc @ rc)
+            if sse_c < sse:
+                improved = True
+                relative = (sse - sse_c) / max(sse, 1e-300)
+                p, r, sse = candidate, rc, sse_c
+                damping = max(damping / 3, 1e-9)
+                break
+            damping *= 10
+        if progress is not None:
+            progress(iterations, p, math.sqrt(sse / r.size))
+        if not improved or relative < 1e-10:
+            break
+    sigma2 = sse / max(r.size - 3, 1)
+    try:
+        cov = np.linalg.inv(J.T @ J) * sigma2
+        stderr = tuple(float(math.sqrt(max(v, 0.0))) for v in np.diag(cov))
+    except np.linalg.LinAlgError:
+        stderr = (math.nan, math.nan, math.nan)
+    return DriveFit(float(p[0]), float(p[1]), float(p[2]), math.sqrt(sse / r.size), stderr,
+                    int(r.size), iterations)
+
+
+# --- editing a scenario file in place ----------------------------------------------------
+
+_NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
+
+
+def _indent(line: str) -> int:
+    return len(line) - len(line.lstrip(" "))
+
+
+def _is_content(line: str) -> bool:
+    stripped = line.strip()
+    return bool(stripped) and not stripped.startswith("#")
+
+
+def set_motor_torque_scaling(text: str, robot: str, value: float) -> str:
+    """`text` (a scenario YAML) with robot `robot`'s drive.motor_torque_scaling set to `value`.
+
+    Only the number on that robot's `motor_torque_scaling:` line changes: comments, layout and
+    every other line stay as they are. Raises ValueError if the robot or the field is absent.
+    """
+    import re
+
+    lines = text.splitlines(keepends=True)
+    robots_line = next((i for i, ln in enumerate(lines)
+                        if re.match(r"^robots\s*:\s*(#.*)?$", ln.rstrip("\n"))), None)
+    if robots_line is None:
+        raise ValueError("no block-style `robots:` section at the top level")
+    start = None
+    robot_re = re.compile(rf"^(\s+)(['\"]?){re.escape(robot)}\2\s*:(.*)$")
+    for i in range(robots_line + 1, len(lines)):
+        line = lines[i].rstrip("\n")
+        if _is_content(line) and _indent(line) == 0:
+            break
+        if robot_re.match(line):
+            start = i
+            break
+    if start is None:
+        raise ValueError(f"robot {robot!r} not found under `robots:`")
+    depth = _indent(lines[start])
+    end = start + 1
+    while end < len(lines) and not (_is_content(lines[end]) and _indent(lines[end]) <= depth):
+        end += 1
+    field = re.compile(rf"(\bmotor_torque_scaling\s*:\s*)({_NUMBER})")
+    for i in range(start, end):
+        code, hash_, comment = lines[i].partition("#")
+        if field.search(code):
+            code = field.sub(lambda m: m.group(1) + f"{value:.4g}", code, count=1)
+            lines[i] = code + hash_ + comment
+            return "".join(lines)
+    raise ValueError(f"robot {robot!r} has no `motor_torque_scaling:` line; add one under its "
+                     "`drive:` (e.g. `drive: {motor_torque_scaling: 10.16}`)")

@@ -1,0 +1,133 @@
+"""System identification and tuning tools (issue 5): run log, log fit, scaling tuner."""
+
+import importlib.util
+import math
+
+import numpy as np
+import pytest
+
+from conftest import DEFAULT_SCENARIO, REPO, make_sim
+from corobot_drake import cli, runlog, sysid
+
+
+def _tool(name: str):
+    spec = importlib.util.spec_from_file_location(name, REPO / "tools" / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_run_log_columns_and_ticks(tmp_path):
+    sim = make_sim()
+    robot = sim.robot()
+    robot.set_power(0.5, -0.25)
+    sim.advance(1.0)
+    rows = robot.run_log()
+    assert rows.shape[1] == len(runlog.COLUMNS) == 8
+    np.testing.assert_allclose(np.diff(rows[:, 0]), runlog.LOG_PERIOD, atol=1e-9)
+    assert rows[-1, 1:3] == pytest.approx([0.5, -0.25])
+    # Ticks are floor(600 q / 2 pi) of the front wheels' angles.
+    plant = sim.station.plant
+    context = plant.GetMyContextFromRoot(sim.context)
+    joints = sim.station.robots["corobot"].wheel_joints
+    q = [joints[i].get_angle(context) for i in (0, 1)]
+    assert rows[-1, 3:5] == pytest.approx([runlog.ticks(q[0]), runlog.ticks(q[1])], abs=1)
+    assert rows[-1, 3] > 0 > rows[-1, 4]
+    pose = robot.pose()
+    # Within one 5 ms physics step of motion (the sample and the read are a step apart).
+    assert rows[-1, 5:8] == pytest.approx([pose.x, pose.y, pose.yaw], abs=0.01)
+    path = tmp_path / "log.csv"
+    robot.write_log(path)
+    lines = path.read_text().splitlines()
+    assert lines[0] == "time,left_power,right_power,left_ticks,right_ticks,x,y,yaw"
+    assert len(lines) == len(rows) + 1
+
+
+def test_cli_writes_log(tmp_path):
+    path = tmp_path / "run.csv"
+    status = cli.main([str(DEFAULT_SCENARIO), "--headless", "--duration", "0.5", "--log",
+                       str(path), "--override",
+                       "robots: {corobot: {commands: [!SetPower {left: 1, right: 1}]}}"])
+    assert status == 0
+    log = sysid.read_log(path)
+    assert log.time[-1] == pytest.approx(0.5)
+    assert log.angle[-1, 0] > 1.0  # the wheels turned
+
+
+def test_log_fit_recovers_known_scaling_and_slew(tmp_path):
+    """A simulator log made at scaling 12 and slew 20 rad/s^2 is fitted back within 1%."""
+    tool = _tool("fit_drive_log")
+    path = tmp_path / "sim.csv"
+    tool.simulate_log(path, 12.0, 20.0)
+    fit = sysid.fit_drive(sysid.read_log(path))
+    assert fit.motor_torque_scaling == pytest.approx(12.0, rel=0.01)
+    assert fit.slew_rate == pytest.approx(20.0, rel=0.01)
+    assert fit.residual_rms < 0.5  # rad/s: the encoder's quantization at 100 Hz
+
+
+GOOD_HEADER = "time,left_power,right_power,left_ticks,right_ticks,x,y,yaw\n"
+
+
+@pytest.mark.parametrize("text, line, words", [
+    ("", 1, "empty"),
+    ("time,left_power,right_power,x\n0,0,0,0\n", 1, "left_ticks, right_ticks"),
+    (GOOD_HEADER + "0,0,0,0,0,0,0,0\n0.01,1,1,3,3,0,0\n", 3, "expected 8 fields"),
+    (GOOD_HEADER + "0,0,0,0,0,0,0,0\n0.01,1,fast,3,3,0,0,0\n", 3, "right_power is not a number"),
+    (GOOD_HEADER + "0,0,0,0,0,0,0,0\n0.01,1,1,3,3,0,0,0\n0.01,1,1,5,5,0,0,0\n", 4,
+     "does not increase"),
+    (GOOD_HEADER + "0,0,0,0,0,0,0,0\n0.01,2,1,3,3,0,0,0\n", 3, "power must be in"),
+    (GOOD_HEADER + "0,0,0,0,0,0,0,0\n0.01,1,1,nan,3,0,0,0\n", 3, "not finite"),
+])
+def test_malformed_log_is_rejected_naming_the_line(tmp_path, text, line, words):
+    path = tmp_path / "bad.csv"
+    path.write_text(text)
+    with pytest.raises(sysid.LogError) as e:
+        sysid.read_log(path)
+    assert f"{path}:{line}:" in str(e.value)
+    assert words in str(e.value)
+
+
+def test_fit_tool_reports_bad_csv(tmp_path, capsys):
+    path = tmp_path / "bad.csv"
+    path.write_text(GOOD_HEADER + "0,0,0,0,0,0,0,0\n0.01,1,1,x,3,0,0,0\n")
+    assert _tool("fit_drive_log").main([str(path)]) == 2
+    assert f"{path}:3: left_ticks is not a number" in capsys.readouterr().err
+
+
+def test_set_motor_torque_scaling_keeps_the_file():
+    text = DEFAULT_SCENARIO.read_text()
+    updated = sysid.set_motor_torque_scaling(text, "corobot", 10.07)
+    changed = [(a, b) for a, b in zip(text.splitlines(), updated.splitlines(), strict=True)
+               if a != b]
+    assert len(changed) == 1
+    before, after = changed[0]
+    assert "motor_torque_scaling: 10.07" in after
+    assert after.split("#")[1] == before.split("#")[1]  # the comment survives
+    two = ("robots:\n  a:\n    drive: {motor_torque_scaling: 5.0, slew_rate: 3}  # a\n"
+           "  b:\n    drive:\n      motor_torque_scaling: 7  # b's\n")
+    assert sysid.set_motor_torque_scaling(two, "b", 9.5) == two.replace("7  # b's", "9.5  # b's")
+    assert sysid.set_motor_torque_scaling(two, "a", 6.25) == two.replace("5.0,", "6.25,")
+    with pytest.raises(ValueError, match="not found"):
+        sysid.set_motor_torque_scaling(two, "c", 1.0)
+    with pytest.raises(ValueError, match="no `motor_torque_scaling:`"):
+        sysid.set_motor_torque_scaling("robots:\n  a:\n    pose: {x: 1}\n", "a", 1.0)
+
+
+def test_tuner_steps_toward_the_target(tmp_path, capsys):
+    """Two short iterations from the untuned 20: the second lands near 10.1."""
+    scenario = tmp_path / "s.yaml"
+    scenario.write_text(DEFAULT_SCENARIO.read_text())
+    plot = tmp_path / "tune.png"
+    status = _tool("tune_motor_torque_scaling").main([
+        "--scenario", str(scenario), "--scaling", "20", "--settle", "1.0", "--measure", "0.3",
+        "--max-iterations", "2", "--tolerance", "0.01", "--plot", str(plot), "--write"])
+    out = capsys.readouterr().out.strip().splitlines()
+    assert status == 0, out
+    assert plot.stat().st_size > 10_000
+    assert "converged in 2 iteration(s)" in "\n".join(out)
+    last = out[-1]
+    assert last.startswith("motor_torque_scaling: ")
+    value = float(last.split()[1])
+    assert value == pytest.approx(10.1, rel=0.01)
+    assert f"motor_torque_scaling: {value:.4g}" in scenario.read_text()
+    assert math.isclose(float(last.split("top speed ")[1].split()[0]), 0.6096, rel_tol=0.01)
