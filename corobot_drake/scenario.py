@@ -20,6 +20,12 @@ from pydrake.multibody.plant import MultibodyPlantConfig
 from pydrake.systems.analysis import SimulatorConfig
 
 from corobot_drake import dimensions as dim
+from corobot_drake.ir_sensor import (
+    IrSensorConfig,
+    check_ir_sensor_config,
+    check_ir_sensor_name,
+    default_ir_sensors,
+)
 from corobot_drake.model import VISUALS, WheelContact
 
 # --- poses and shapes -------------------------------------------------------------------
@@ -188,6 +194,9 @@ class Robot:
     visual: str = "meshes"
     """How the robot looks: `meshes` (the detailed model) or `boxes` (its collision shapes)."""
     commands: list[Command] = dc.field(default_factory=list)
+    ir_sensors: dict[str, IrSensorConfig] = dc.field(default_factory=default_ir_sensors)
+    """IR distance sensors by name (`corobot_drake/ir_sensor.py`); defaults `front` and `rear`
+    at the SPEC positions; `{enabled: false}` removes one."""
 
 
 def _default_plant_config() -> MultibodyPlantConfig:
@@ -405,6 +414,14 @@ def _validate(s: Scenario, source: str) -> None:
                       "servo_damping"):
             if not getattr(c, field) > 0:
                 raise ScenarioError(source, f"{path}.contact.{field}", "must be > 0")
+        for sensor, ir in robot.ir_sensors.items():
+            problem = check_ir_sensor_name(sensor)
+            if problem is not None:
+                raise ScenarioError(source, f"{path}.ir_sensors.{sensor}", problem)
+            problem = check_ir_sensor_config(ir)
+            if problem is not None:
+                raise ScenarioError(source, f"{path}.ir_sensors.{sensor}.{problem[0]}",
+                                    problem[1])
         for i, cmd in enumerate(robot.commands):
             if isinstance(cmd, Wait) and not cmd.seconds >= 0:
                 raise ScenarioError(source, f"{path}.commands[{i}].seconds", "must be >= 0")

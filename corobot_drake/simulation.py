@@ -21,6 +21,7 @@ from pydrake.systems.analysis import ApplySimulatorConfig, Simulator
 from corobot_drake import dimensions as dim
 from corobot_drake import scenario as sc
 from corobot_drake.drive import CommandRecord
+from corobot_drake.ir_sensor import IrReading
 from corobot_drake.runlog import log_rows, write_csv
 from corobot_drake.station import RobotParts, Station, build_station
 
@@ -110,6 +111,20 @@ class Robot:
         return float(monitor.get_output_port().Eval(monitor.GetMyContextFromRoot(
             self._sim.context))[0])
 
+    def ir(self, name: str) -> IrReading:
+        """The latest scan of the named IR sensor (`front`, `rear`, ...): raw distance (m),
+        range (m), normalized = raw / range, and the scan's time (s)."""
+        try:
+            sensor = self._parts.ir_sensors[name]
+        except KeyError:
+            raise KeyError(f"robot {self.name!r} has no IR sensor {name!r}; it has "
+                           f"{', '.join(self._parts.ir_sensors) or 'none'}") from None
+        return sensor.reading(sensor.GetMyContextFromRoot(self._sim.context))
+
+    def ir_distances(self) -> dict[str, float]:
+        """The latest raw reading of every IR sensor, metres, by name."""
+        return {name: self.ir(name).raw for name in self._parts.ir_sensors}
+
     def run_log(self):
         """The run log so far (numpy rows; columns `runlog.COLUMNS`: time, left_power,
         right_power, left_ticks, right_ticks, x, y, yaw), sampled every `runlog.LOG_PERIOD` s."""
@@ -130,6 +145,7 @@ class Robot:
             "pose": dc.asdict(pose),
             "velocity": dc.asdict(velocity),
             "max_tilt_deg": self.max_tilt_deg(),
+            "ir": self.ir_distances(),
             "wheels": self.axle_speeds(),
             "commands": [
                 {"command": r.command, "status": r.status, "reason": r.reason,

@@ -31,6 +31,7 @@ from pydrake.systems.primitives import MatrixGain
 from corobot_drake import dimensions as dim
 from corobot_drake import scenario as sc
 from corobot_drake.drive import CommandSource, DriveController
+from corobot_drake.ir_sensor import add_ir_sensors
 from corobot_drake.model import MODELS_DIR, corobot_sdf
 from corobot_drake.monitor import TiltMonitor
 from corobot_drake.runlog import add_run_log
@@ -139,6 +140,8 @@ class RobotParts:
     command_source: CommandSource
     drive_controller: DriveController
     tilt_monitor: TiltMonitor
+    ir_sensors: dict = dc.field(default_factory=dict)
+    """{sensor name: `ir_sensor.IrSensor`}."""
 
 
 @dc.dataclass
@@ -196,6 +199,9 @@ def build_station(scenario: sc.Scenario, meshcat=None) -> Station:
             builder.ExportOutput(controller.GetOutputPort(port), f"{name}.{port}")
         builder.ExportOutput(plant.get_state_output_port(instance), f"{name}.state")
         robots[name] = RobotParts(name, instance, chassis, joints, source, controller, tilt)
+        robots[name].ir_sensors = add_ir_sensors(
+            builder, plant, scene_graph, name, robot.ir_sensors, model_instance=instance,
+            chassis=chassis, random_seed=scenario.random_seed, meshcat=meshcat)
 
     builder.ExportOutput(plant.get_body_poses_output_port(), "body_poses")
     builder.ExportOutput(scene_graph.get_query_output_port(), "query_object")

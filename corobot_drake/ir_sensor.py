@@ -1,0 +1,457 @@
+"""The IR distance sensors: one LeafSystem per sensor, casting a cross of rays at a fixed rate.
+
+Each sensor (SPEC, Sensors) is fixed to its robot's chassis and reads SceneGraph's
+``query_object`` port, its only input: the chassis pose comes from
+``QueryObject.GetPoseInWorld(chassis frame)`` and the rays are cast exactly against every
+proximity geometry except the robot's own (:class:`corobot_drake.raycast.RayCaster`, built on the
+first scan from the QueryObject's inspector and rebuilt only if the proximity geometry changes).
+
+Scans are discrete updates: one at initialization (so a freshly initialized simulation already
+has a reading at its start time) and then every ``1 / scan_rate_hz`` s, never at every physics
+step. All the sensor's memory is discrete state (replayable, cheap to copy):
+
+- ``reading`` = [distance, scan_time, previous_distance, changed, scan_index, true_distance,
+  voltage, adc_counts];
+- ``ray_origin`` (3), ``ray_end`` (3 N), ``ray_hit`` (N): where each of the N = 2 x samples rays
+  started, where it stopped (its hit point, or its end at maximum_range) and whether it hit.
+
+Output models (``model``, :mod:`corobot_drake.ir_models`):
+
+``ideal``
+    distance = the nearest hit, ``maximum_range`` when nothing is hit (the book's sensor).
+``sharp_gp2d12``
+    the ADC voltage of a Sharp GP2D12 at the true distance, with Gaussian noise, and distance =
+    the distance a robot program would compute from that voltage (the inverse law, clamped to the
+    usable 10-80 cm, capped at maximum_range). The noise of scan k is a pure function of
+    (the sensor's noise key, k) (a splitmix64 counter-based generator), so runs are deterministic
+    and a restored context replays the same noise: there is no generator object in the state.
+
+Output ports (vectors): ``distance`` (raw, m), ``range`` (maximum_range, m), ``normalized``
+(raw / range), ``scan_time`` (s), ``changed`` (1 when the reading moved by more than
+``change_threshold`` since the previous scan, else 0), ``reading`` ([raw, range, normalized,
+time]), ``true_distance`` (m, the geometric nearest hit capped at range), ``hit_points``
+(3 N, world frame, nan for a ray that hit nothing), ``ray_origin``, ``ray_end``, ``ray_hit``,
+``reading_state`` (the `reading` group above); with ``sharp_gp2d12`` also ``voltage`` (V) and
+``adc_counts``.
+
+A scan due at time t is taken when the simulator steps away from t (Drake's discrete-update
+semantics): right after ``AdvanceTo(t)`` the latest reading is the previous scan's.
+
+:class:`IrMeshcatVisualizer` draws each sensor's rays and hit points in Meshcat under
+``/ir/<robot>/<sensor>`` (toggle them with the scene tree's checkboxes).
+"""
+
+
+import dataclasses as dc
+import math
+import zlib
+
+import numpy as np
+from pydrake.geometry import Meshcat, Rgba, Role, Sphere
+from pydrake.math import RigidTransform, RollPitchYaw
+from pydrake.systems.framework import BasicVector, LeafSystem
+
+from corobot_drake import dimensions as dim
+from corobot_drake.ir_models import MODELS, SharpGP2D12
+from corobot_drake.raycast import (
+    BodyFixedRays,
+    RayCaster,
+    cross_of_rays_in_sensor_frame,
+    model_instance_geometry_ids,
+)
+
+# --- configuration (the scenario's `robots.<name>.ir_sensors.<sensor>`) -----------------------
+
+
+@dc.dataclass
+class IrSensorConfig:
+    """One IR distance sensor on a robot's chassis (SPEC, Sensors)."""
+
+    position: list[float] = dc.field(default_factory=lambda: list(dim.FRONT_IR.position))
+    """m, in the chassis frame (origin on the ground midway between the axles, +x forward)."""
+    yaw_deg: float = 0.0
+    """Look direction: yaw about the chassis z axis (0 = forward, 180 = backward)."""
+    pitch_deg: float = 0.0
+    """Look direction: pitch, positive looking down (about the sensor's y axis)."""
+    samples: int = 3
+    """Rays per fan of the cross (one horizontal fan, one vertical), at least 2."""
+    dispersion_cone_angle: float = 8.0
+    """Degrees: each fan spreads its rays evenly over this angle."""
+    maximum_range: float = 30 * dim.INCH
+    """m: the reading when nothing is hit (0.762 m)."""
+    scan_rate_hz: float = 20.0
+    """Scans per second (a periodic discrete update, independent of the physics step)."""
+    model: str = "ideal"
+    """Output model: `ideal` (the book's) or `sharp_gp2d12` (datasheet voltage, ADC, noise)."""
+    change_threshold: float = 1e-4
+    """m: `changed` is set when the reading moves by more than this from the previous scan
+    (a robot standing still creeps by nanometres; subscribers want real changes)."""
+    noise_std: float = 0.01
+    """V: Gaussian noise on the sharp_gp2d12 voltage (0: none)."""
+    noise_seed: int = 0
+    """Mixed with the scenario's random_seed and the robot and sensor names."""
+    enabled: bool = True
+    """False: no sensor (a default sensor can't otherwise be removed from the mapping)."""
+
+
+def default_ir_sensors() -> dict[str, IrSensorConfig]:
+    """The Corobot's two sensors at the SPEC positions."""
+    return {
+        "front": IrSensorConfig(list(dim.FRONT_IR.position), math.degrees(dim.FRONT_IR.yaw)),
+        "rear": IrSensorConfig(list(dim.REAR_IR.position), math.degrees(dim.REAR_IR.yaw)),
+    }
+
+
+def check_ir_sensor_name(name: str) -> str | None:
+    """A problem with a sensor name (it appears in port names and Meshcat paths), or None."""
+    if not name or any(c in name for c in "./: "):
+        return "a sensor name must be non-empty, without '.', '/', ':' or spaces"
+    return None
+
+
+def check_ir_sensor_config(config: IrSensorConfig) -> tuple[str, str] | None:
+    """The first (field, message) problem with a sensor's configuration, or None."""
+    c = config
+    if isinstance(c.samples, bool) or not isinstance(c.samples, int) or c.samples < 2:
+        return ("samples", f"must be an integer of at least 2 (rays per fan of the IR cross of "
+                f"rays: one horizontal and one vertical fan); got {c.samples!r}")
+    if len(c.position) != 3:
+        return "position", f"needs 3 numbers [x, y, z] (m, chassis frame); got {len(c.position)}"
+    if not all(math.isfinite(v) for v in c.position):
+        return "position", "must be finite"
+    if not 0.0 <= c.dispersion_cone_angle < 180.0:
+        return ("dispersion_cone_angle",
+                f"must be in [0, 180) degrees; got {c.dispersion_cone_angle}")
+    if not 0.0 < c.maximum_range < math.inf:
+        return "maximum_range", f"must be > 0 m and finite; got {c.maximum_range}"
+    if not 0.0 < c.scan_rate_hz < math.inf:
+        return "scan_rate_hz", f"must be > 0 and finite; got {c.scan_rate_hz}"
+    if c.model not in MODELS:
+        return "model", f"{c.model!r} is not one of {', '.join(MODELS)}"
+    if not 0.0 <= c.change_threshold < math.inf:
+        return "change_threshold", f"must be >= 0 m and finite; got {c.change_threshold}"
+    if not c.noise_std >= 0.0:
+        return "noise_std", f"must be >= 0 V; got {c.noise_std}"
+    for field in ("yaw_deg", "pitch_deg"):
+        if not math.isfinite(getattr(c, field)):
+            return field, "must be finite"
+    return None
+
+
+def sensor_pose_in_chassis(config: IrSensorConfig) -> RigidTransform:
+    """X_BS: the sensor frame S (looking along its +x) in the chassis frame B."""
+    rpy = RollPitchYaw(0.0, math.radians(config.pitch_deg), math.radians(config.yaw_deg))
+    return RigidTransform(rpy, np.asarray(config.position, dtype=float))
+
+
+# --- counter-based noise -------------------------------------------------------------------
+
+_MASK64 = (1 << 64) - 1
+
+
+def _splitmix64(x: int) -> int:
+    x = (x + 0x9E3779B97F4A7C15) & _MASK64
+    x = ((x ^ (x >> 30)) * 0xBF58476D1CE4E5B9) & _MASK64
+    x = ((x ^ (x >> 27)) * 0x94D049BB133111EB) & _MASK64
+    return x ^ (x >> 31)
+
+
+def counter_normal(key: int, counter: int) -> float:
+    """A standard normal sample that is a pure function of (key, counter) (splitmix64 hashes
+    of the pair, Box-Muller): the noise of scan `counter` of the sensor with `key`."""
+    h1 = _splitmix64((key ^ _splitmix64(2 * counter)) & _MASK64)
+    h2 = _splitmix64((key ^ _splitmix64(2 * counter + 1)) & _MASK64)
+    u1 = ((h1 >> 11) + 1) * 2.0**-53  # (0, 1]: log is finite
+    u2 = (h2 >> 11) * 2.0**-53
+    return math.sqrt(-2.0 * math.log(u1)) * math.cos(2.0 * math.pi * u2)
+
+
+def noise_key(random_seed: int, robot: str, sensor: str, noise_seed: int) -> int:
+    """The 64-bit noise key of a sensor: stable across runs and Python versions."""
+    entropy = [random_seed & _MASK64, noise_seed & _MASK64,
+               zlib.crc32(robot.encode()), zlib.crc32(sensor.encode())]
+    return int(np.random.SeedSequence(entropy).generate_state(1, np.uint64)[0])
+
+
+# --- the sensor system ---------------------------------------------------------------------
+
+# Indices into the `reading` discrete state group.
+DISTANCE, SCAN_TIME, PREVIOUS, CHANGED, SCAN_INDEX, TRUE_DISTANCE, VOLTAGE, ADC_COUNTS = range(8)
+_READING_SIZE = 8
+
+
+@dc.dataclass(frozen=True)
+class IrReading:
+    """An analog-sensor view of one scan (MRDS AnalogSensorState): metres and seconds."""
+
+    raw: float
+    """The reading: the distance to the nearest hit, maximum_range when nothing is hit."""
+    range: float
+    """maximum_range."""
+    normalized: float
+    """raw / range, in [0, 1]."""
+    time: float
+    """Simulated time of the scan."""
+
+
+class IrSensor(LeafSystem):
+    """One IR distance sensor (see the module docstring for its state and ports).
+
+    chassis_frame_id: the SceneGraph FrameId of the body the sensor is fixed to;
+    exclude: the robot's own geometry ids (never hit); key: the noise key (sharp_gp2d12).
+    """
+
+    def __init__(self, config: IrSensorConfig, chassis_frame_id, exclude, key: int = 0,
+                 name: str = "ir"):
+        super().__init__()
+        problem = check_ir_sensor_config(config)
+        if problem is not None:
+            raise ValueError(f"IR sensor '{name}': {problem[0]}: {problem[1]}")
+        self.config = config
+        self.sensor_name = name
+        self._frame_id = chassis_frame_id
+        self._exclude = frozenset(exclude)
+        self._key = int(key)
+        self._range = float(config.maximum_range)
+        self._threshold = float(config.change_threshold)
+        self._sharp = SharpGP2D12(noise_std=config.noise_std) if config.model == "sharp_gp2d12" \
+            else None
+        X_BS = sensor_pose_in_chassis(config)
+        self._rays = BodyFixedRays.cross_of_rays([X_BS], config.samples,
+                                                 config.dispersion_cone_angle)
+        self.num_rays = n = 2 * config.samples
+        self.period = 1.0 / config.scan_rate_hz
+        self._caster: RayCaster | None = None
+        self._caster_version = None
+
+        self._query_port = self.DeclareAbstractInputPort(
+            "query_object", self._query_model_value())
+        initial = np.zeros(_READING_SIZE)
+        initial[[DISTANCE, PREVIOUS, TRUE_DISTANCE]] = self._range
+        initial[SCAN_TIME] = math.nan
+        self._reading = self.DeclareDiscreteState(initial)
+        self._origin = self.DeclareDiscreteState(3)
+        self._end = self.DeclareDiscreteState(3 * n)
+        self._hit = self.DeclareDiscreteState(n)
+
+        self.DeclareInitializationDiscreteUpdateEvent(self._initial_scan)
+        self.DeclarePeriodicDiscreteUpdateEvent(self.period, self.period, self._periodic_scan)
+
+        state = {self.discrete_state_ticket(self._reading)}
+        rays = {self.discrete_state_ticket(g) for g in (self._origin, self._end, self._hit)}
+
+        def scalar(port_name, fn):
+            return self.DeclareVectorOutputPort(
+                port_name, 1, lambda c, out: out.SetAtIndex(0, fn(self._value(c))),
+                prerequisites_of_calc=state)
+
+        scalar("distance", lambda r: r[DISTANCE])
+        scalar("range", lambda r: self._range)
+        scalar("normalized", lambda r: r[DISTANCE] / self._range)
+        scalar("scan_time", lambda r: r[SCAN_TIME])
+        scalar("changed", lambda r: r[CHANGED])
+        scalar("true_distance", lambda r: r[TRUE_DISTANCE])
+        if self._sharp is not None:
+            scalar("voltage", lambda r: r[VOLTAGE])
+            scalar("adc_counts", lambda r: r[ADC_COUNTS])
+        self.DeclareVectorOutputPort("reading", 4, self._calc_reading,
+                                     prerequisites_of_calc=state)
+        self.DeclareVectorOutputPort("hit_points", 3 * n, self._calc_hit_points,
+                                     prerequisites_of_calc=rays)
+        self.DeclareStateOutputPort("ray_origin", self._origin)
+        self.DeclareStateOutputPort("ray_end", self._end)
+        self.DeclareStateOutputPort("ray_hit", self._hit)
+        self.DeclareStateOutputPort("reading_state", self._reading)
+
+    @staticmethod
+    def _query_model_value():
+        from pydrake.common.value import AbstractValue
+        from pydrake.geometry import QueryObject
+
+        return AbstractValue.Make(QueryObject())
+
+    # -- reading the state ------------------------------------------------------------------
+
+    def _value(self, context) -> np.ndarray:
+        return context.get_discrete_state(self._reading).value()
+
+    def reading(self, context) -> IrReading:
+        """The latest scan as an analog reading (context: this system's)."""
+        r = self._value(context)
+        return IrReading(float(r[DISTANCE]), self._range, float(r[DISTANCE] / self._range),
+                         float(r[SCAN_TIME]))
+
+    def _calc_reading(self, context, output: BasicVector) -> None:
+        r = self._value(context)
+        output.SetFromVector([r[DISTANCE], self._range, r[DISTANCE] / self._range, r[SCAN_TIME]])
+
+    def _calc_hit_points(self, context, output: BasicVector) -> None:
+        ends = context.get_discrete_state(self._end).value().reshape(-1, 3).copy()
+        ends[context.get_discrete_state(self._hit).value() < 0.5] = np.nan
+        output.SetFromVector(ends.ravel())
+
+    # -- scanning ---------------------------------------------------------------------------
+
+    def caster(self, query_object) -> RayCaster:
+        """The RayCaster for the QueryObject's geometry, built on first use and rebuilt only
+        when the proximity geometry changes (the robot's own geometry excluded)."""
+        inspector = query_object.inspector()
+        version = inspector.geometry_version()
+        if self._caster is None or not version.IsSameAs(self._caster_version, Role.kProximity):
+            self._caster = RayCaster(inspector, exclude=self._exclude)
+            self._caster_version = version
+        return self._caster
+
+    def scan(self, query_object):
+        """One cast of the cross of rays: (origin (3,), ray distances (N,) inf for a miss,
+        directions (N, 3)) in the world frame."""
+        X_WB = query_object.GetPoseInWorld(self._frame_id)
+        origins, directions = self._rays.in_world(X_WB)
+        hits = self.caster(query_object).cast(query_object, origins, directions, self._range)
+        return origins[0], hits.distance, directions
+
+    def _initial_scan(self, context, discrete_state) -> None:
+        self._do_scan(context, discrete_state, 0, self._range)
+
+    def _periodic_scan(self, context, discrete_state) -> None:
+        r = self._value(context)
+        self._do_scan(context, discrete_state, int(r[SCAN_INDEX]) + 1, float(r[DISTANCE]))
+
+    def _do_scan(self, context, discrete_state, index: int, previous: float) -> None:
+        origin, t, directions = self.scan(self._query_port.Eval(context))
+        hit = np.isfinite(t)
+        t_capped = np.where(hit, t, self._range)
+        true_distance = float(t_capped.min())
+        voltage = counts = 0.0
+        if self._sharp is None:
+            raw = true_distance
+        else:
+            s = self._sharp
+            v = float(s.voltage(true_distance if hit.any() else math.inf))
+            if s.noise_std > 0.0:
+                v += s.noise_std * counter_normal(self._key, index)
+            counts = int(s.counts(v))
+            voltage = counts * s.adc_step
+            raw = min(float(s.distance_from_voltage(voltage)), self._range)
+        r = discrete_state.get_mutable_value(self._reading)
+        changed = float(abs(raw - previous) > self._threshold)
+        r[:] = (raw, context.get_time(), previous, changed, index, true_distance, voltage, counts)
+        discrete_state.set_value(self._origin, origin)
+        discrete_state.set_value(self._end, (origin + t_capped[:, None] * directions).ravel())
+        discrete_state.set_value(self._hit, hit.astype(float))
+
+
+# --- Meshcat -------------------------------------------------------------------------------
+
+HIT_RADIUS = 0.006
+"""m: the radius of the spheres drawn where rays land."""
+_RAY_COLOR = Rgba(1.0, 0.15, 0.1, 0.6)
+_HIT_COLORS = (Rgba(1.0, 0.05, 0.05, 1.0), Rgba(1.0, 0.85, 0.1, 1.0))
+"""Hit marks alternate between these on successive scans: they flash, as in the book."""
+
+
+class IrMeshcatVisualizer(LeafSystem):
+    """Draws one IR sensor's rays (line segments) and hit points (small spheres) in Meshcat.
+
+    Everything lives under ``path`` (``/ir/<robot>/<sensor>``): ``rays`` and ``hits/<i>``;
+    the Meshcat scene tree's checkbox on ``/ir``, a robot or a sensor shows or hides it.
+    Inputs ``ray_origin``, ``ray_end``, ``ray_hit``, ``scan_index`` are wired from an IrSensor;
+    it redraws once per scan, right after the scan (it checks for a new scan at every step).
+    """
+
+    def __init__(self, meshcat: Meshcat, path: str, num_rays: int):
+        super().__init__()
+        self._meshcat = meshcat
+        self.path = path
+        self._n = num_rays
+        self._origin = self.DeclareVectorInputPort("ray_origin", 3)
+        self._end = self.DeclareVectorInputPort("ray_end", 3 * num_rays)
+        self._hit = self.DeclareVectorInputPort("ray_hit", num_rays)
+        self._reading = self.DeclareVectorInputPort("reading", _READING_SIZE)
+        self._last_index = None
+        self._last_time = None
+        self.draws = 0
+        """How many times it has redrawn (for tests)."""
+        self.DeclareInitializationPublishEvent(self._draw)
+        # Per step, not periodic: a periodic publish at the scan times would run before the
+        # scan due at the same time (Drake takes that update at the start of the next step)
+        # and show every scan one period late. A step with no new scan costs one comparison.
+        self.DeclarePerStepPublishEvent(self._draw)
+        for i in range(num_rays):
+            meshcat.SetObject(f"{path}/hits/{i}", Sphere(HIT_RADIUS), _HIT_COLORS[0])
+            meshcat.SetProperty(f"{path}/hits/{i}", "visible", False)
+
+    def _draw(self, context) -> None:
+        reading = self._reading.Eval(context)
+        key = (reading[SCAN_INDEX], reading[SCAN_TIME])
+        if key == (self._last_index, self._last_time):
+            return
+        self._last_index, self._last_time = key
+        origin = self._origin.Eval(context)
+        ends = self._end.Eval(context).reshape(-1, 3)
+        hits = self._hit.Eval(context) > 0.5
+        starts = np.asfortranarray(np.tile(origin, (self._n, 1)).T)
+        self._meshcat.SetLineSegments(f"{self.path}/rays", starts, np.asfortranarray(ends.T),
+                                      2.0, _RAY_COLOR)
+        color = _HIT_COLORS[int(reading[SCAN_INDEX]) % 2]
+        for i in range(self._n):
+            path = f"{self.path}/hits/{i}"
+            self._meshcat.SetProperty(path, "visible", bool(hits[i]))
+            if hits[i]:
+                self._meshcat.SetTransform(path, RigidTransform(ends[i]))
+                self._meshcat.SetProperty(path, "color", [color.r(), color.g(), color.b(), 1.0])
+        self.draws += 1
+
+
+# --- wiring into a station -----------------------------------------------------------------
+
+
+def add_ir_sensors(builder, plant, scene_graph, robot_name: str, configs: dict,
+                   *, model_instance, chassis, random_seed: int = 0,
+                   meshcat: Meshcat | None = None) -> dict[str, IrSensor]:
+    """Adds one IrSensor per enabled config to `builder` (named `<robot>.ir.<sensor>`),
+    connected to SceneGraph's query output, and exports its ports as `<robot>.<sensor>.<port>`.
+    With `meshcat`, adds an IrMeshcatVisualizer per sensor under /ir/<robot>/<sensor>.
+
+    The plant must be finalized. Returns {sensor name: IrSensor}.
+    """
+    exclude = model_instance_geometry_ids(plant, model_instance)
+    frame_id = plant.GetBodyFrameIdOrThrow(chassis.index())
+    sensors = {}
+    for sensor_name, config in configs.items():
+        if not config.enabled:
+            continue
+        problem = check_ir_sensor_name(sensor_name)
+        if problem is not None:
+            raise ValueError(f"IR sensor {sensor_name!r}: {problem}")
+        sensor = builder.AddNamedSystem(
+            f"{robot_name}.ir.{sensor_name}",
+            IrSensor(config, frame_id, exclude,
+                     noise_key(random_seed, robot_name, sensor_name, config.noise_seed),
+                     sensor_name))
+        builder.Connect(scene_graph.get_query_output_port(), sensor.get_input_port(0))
+        for i in range(sensor.num_output_ports()):
+            port = sensor.get_output_port(i)
+            builder.ExportOutput(port, f"{robot_name}.{sensor_name}.{port.get_name()}")
+        if meshcat is not None:
+            viz = builder.AddNamedSystem(
+                f"{robot_name}.ir.{sensor_name}.meshcat",
+                IrMeshcatVisualizer(meshcat, f"/ir/{robot_name}/{sensor_name}",
+                                    sensor.num_rays))
+            for port in ("ray_origin", "ray_end", "ray_hit"):
+                builder.Connect(sensor.GetOutputPort(port), viz.GetInputPort(port))
+            builder.Connect(sensor.GetOutputPort("reading_state"), viz.GetInputPort("reading"))
+        sensors[sensor_name] = sensor
+    return sensors
+
+
+__all__ = [
+    "IrMeshcatVisualizer",
+    "IrReading",
+    "IrSensor",
+    "IrSensorConfig",
+    "add_ir_sensors",
+    "check_ir_sensor_config",
+    "cross_of_rays_in_sensor_frame",
+    "default_ir_sensors",
+]
