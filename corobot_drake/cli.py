@@ -31,6 +31,12 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--override", action="append", default=[], metavar="YAML_TEXT",
                    help="YAML merged over the scenario (repeatable)")
     p.add_argument("--summary", metavar="PATH", help="write the run's summary JSON here")
+    p.add_argument("--save-camera", metavar="DIR",
+                   help="write each robot's camera frames as PNG: "
+                   "DIR/<robot>/frame_000000.png, ...")
+    p.add_argument("--camera-rate", type=float, metavar="HZ",
+                   help="render (and save) camera frames at this rate (default: the scenario's "
+                   "camera fps, 30)")
     p.add_argument("--log", metavar="CSV",
                    help="write the run log (time, power, encoder ticks, pose; docs/tuning.md) "
                    "here; with several robots, one file per robot: CSV with the name inserted")
@@ -85,6 +91,12 @@ def main(argv: list[str] | None = None) -> int:
     if args.duration is not None and not (args.duration >= 0):
         print(f"error: --duration must be >= 0, got {args.duration}", file=sys.stderr)
         return 2
+    if args.camera_rate is not None:
+        if not (args.camera_rate > 0 and math.isfinite(args.camera_rate)):
+            print(f"error: --camera-rate must be > 0, got {args.camera_rate}", file=sys.stderr)
+            return 2
+        for robot in scenario.robots.values():
+            robot.camera.fps = args.camera_rate
     duration = args.duration if args.duration is not None else scenario.simulation_duration
     quiet_drake_warnings()
     meshcat = None
@@ -93,7 +105,7 @@ def main(argv: list[str] | None = None) -> int:
 
         meshcat = StartMeshcat()
     try:
-        sim = Simulation(scenario, meshcat)
+        sim = Simulation(scenario, meshcat, save_camera=args.save_camera)
     except ValueError as e:  # e.g. a command with a non-finite number
         print(f"error: {args.scenario}: {e}", file=sys.stderr)
         return 2

@@ -18,8 +18,10 @@ import yaml
 from pydrake.common.yaml import yaml_dump_typed, yaml_load_typed
 from pydrake.multibody.plant import MultibodyPlantConfig
 from pydrake.systems.analysis import SimulatorConfig
+from pydrake.systems.sensors import CameraConfig
 
 from corobot_drake import dimensions as dim
+from corobot_drake.camera import check_camera_config, default_camera_config
 from corobot_drake.ir_sensor import (
     IrSensorConfig,
     check_ir_sensor_config,
@@ -194,6 +196,9 @@ class Robot:
     visual: str = "meshes"
     """How the robot looks: `meshes` (the detailed model) or `boxes` (its collision shapes)."""
     commands: list[Command] = dc.field(default_factory=list)
+    camera: CameraConfig = dc.field(default_factory=default_camera_config)
+    """The front camera, Drake's CameraConfig (SPEC defaults; `corobot_drake/camera.py`).
+    `X_PB.base_frame` names a frame of this robot (`chassis`); `{rgb: false}`: no camera."""
     ir_sensors: dict[str, IrSensorConfig] = dc.field(default_factory=default_ir_sensors)
     """IR distance sensors by name (`corobot_drake/ir_sensor.py`); defaults `front` and `rear`
     at the SPEC positions; `{enabled: false}` removes one."""
@@ -422,6 +427,11 @@ def _validate(s: Scenario, source: str) -> None:
             if problem is not None:
                 raise ScenarioError(source, f"{path}.ir_sensors.{sensor}.{problem[0]}",
                                     problem[1])
+        problem = check_camera_config(robot.camera)
+        if problem is not None:
+            field, message = problem
+            raise ScenarioError(source, f"{path}.camera" + (f".{field}" if field else ""),
+                                message)
         for i, cmd in enumerate(robot.commands):
             if isinstance(cmd, Wait) and not cmd.seconds >= 0:
                 raise ScenarioError(source, f"{path}.commands[{i}].seconds", "must be >= 0")

@@ -15,6 +15,7 @@ import math
 import time
 from pathlib import Path
 
+import numpy as np
 from pydrake.math import RollPitchYaw
 from pydrake.systems.analysis import ApplySimulatorConfig, Simulator
 
@@ -135,6 +136,32 @@ class Robot:
         """Writes the run log as CSV (columns in docs/tuning.md; read by corobot_drake.sysid)."""
         write_csv(self.run_log(), path)
 
+    # --- camera ---------------------------------------------------------------------------
+    @property
+    def has_camera(self) -> bool:
+        return self._parts.camera_hold is not None
+
+    def _camera_port(self, which: str):
+        if not self.has_camera:
+            raise RuntimeError(f"robot {self.name!r} has no camera "
+                               f"(robots.{self.name}.camera.rgb is false)")
+        return self._sim.station.diagram.GetOutputPort(f"{self.name}.camera.{which}")
+
+    def camera_image(self):
+        """The latest camera frame: a numpy array height x width x 4 (RGBA), uint8, a copy.
+        Frames are rendered at the camera's fps (and at initialization)."""
+        image = self._camera_port("rgb_image").Eval(self._sim.context)
+        return np.array(image.data, dtype=np.uint8, copy=True)
+
+    def camera_image_time(self) -> float:
+        """Simulated time (s) at which the latest camera frame was rendered."""
+        return float(self._camera_port("image_time").Eval(self._sim.context)[0])
+
+    def camera_frames_saved(self) -> int:
+        """How many frames were written as PNG (0 unless saving, `--save-camera`)."""
+        saver = self._parts.camera_saver
+        return saver.frames_saved if saver is not None else 0
+
     def command_log(self) -> list[CommandRecord]:
         source = self._parts.command_source
         return list(source.get_state(source.GetMyContextFromRoot(self._sim.context)).log)
@@ -145,6 +172,7 @@ class Robot:
             "pose": dc.asdict(pose),
             "velocity": dc.asdict(velocity),
             "max_tilt_deg": self.max_tilt_deg(),
+            "camera_frames": self.camera_frames_saved(),
             "ir": self.ir_distances(),
             "wheels": self.axle_speeds(),
             "commands": [
@@ -158,9 +186,10 @@ class Robot:
 class Simulation:
     """A scenario built into a Drake diagram with its Simulator and Context."""
 
-    def __init__(self, scenario: sc.Scenario, meshcat=None):
+    def __init__(self, scenario: sc.Scenario, meshcat=None, save_camera=None):
+        """`save_camera`: a directory; each robot's camera frames go to `<dir>/<robot>/`."""
         self.scenario = scenario
-        self.station: Station = build_station(scenario, meshcat)
+        self.station: Station = build_station(scenario, meshcat, save_camera)
         self.simulator = Simulator(self.station.diagram)
         ApplySimulatorConfig(scenario.simulator_config, self.simulator)
         self.context = self.simulator.get_mutable_context()
@@ -169,8 +198,9 @@ class Simulation:
         self._wall_seconds = 0.0
 
     @classmethod
-    def from_file(cls, filename: str | Path, overrides: list[str] = (), meshcat=None):
-        return cls(sc.load_scenario(filename, overrides=overrides), meshcat)
+    def from_file(cls, filename: str | Path, overrides: list[str] = (), meshcat=None,
+                  save_camera=None):
+        return cls(sc.load_scenario(filename, overrides=overrides), meshcat, save_camera)
 
     @property
     def time(self) -> float:

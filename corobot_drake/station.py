@@ -30,6 +30,7 @@ from pydrake.systems.primitives import MatrixGain
 
 from corobot_drake import dimensions as dim
 from corobot_drake import scenario as sc
+from corobot_drake.camera import add_camera, render_engine_params
 from corobot_drake.drive import CommandSource, DriveController
 from corobot_drake.ir_sensor import add_ir_sensors
 from corobot_drake.model import MODELS_DIR, corobot_sdf
@@ -140,6 +141,10 @@ class RobotParts:
     command_source: CommandSource
     drive_controller: DriveController
     tilt_monitor: TiltMonitor
+    camera_hold: object = None
+    """`camera.CameraHold` (the latest frame), None without a camera."""
+    camera_saver: object = None
+    """`camera.CameraFrameSaver` when frames are saved."""
     ir_sensors: dict = dc.field(default_factory=dict)
     """{sensor name: `ir_sensor.IrSensor`}."""
 
@@ -166,8 +171,9 @@ def _add_robot(plant: MultibodyPlant, name: str, robot: sc.Robot):
     return instance, chassis, joints
 
 
-def build_station(scenario: sc.Scenario, meshcat=None) -> Station:
-    """Builds the whole diagram for `scenario`; with `meshcat`, adds its visualizers."""
+def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None) -> Station:
+    """Builds the whole diagram for `scenario`; with `meshcat`, adds its visualizers; with
+    `save_camera` (a directory), each robot's camera frames are saved there as PNG."""
     builder = DiagramBuilder()
     plant, scene_graph = AddMultibodyPlant(scenario.plant_config, builder)
     bodies = _add_world(plant, scenario.world)
@@ -199,6 +205,10 @@ def build_station(scenario: sc.Scenario, meshcat=None) -> Station:
             builder.ExportOutput(controller.GetOutputPort(port), f"{name}.{port}")
         builder.ExportOutput(plant.get_state_output_port(instance), f"{name}.state")
         robots[name] = RobotParts(name, instance, chassis, joints, source, controller, tilt)
+        robots[name].camera_hold, robots[name].camera_saver = add_camera(
+            builder, plant, scene_graph, name, instance, robot.camera, render_engine_params(
+                scenario.world.sun.direction, scenario.world.sun.intensity,
+                scenario.world.sky_color), save_camera)
         robots[name].ir_sensors = add_ir_sensors(
             builder, plant, scene_graph, name, robot.ir_sensors, model_instance=instance,
             chassis=chassis, random_seed=scenario.random_seed, meshcat=meshcat)

@@ -13,9 +13,18 @@ DEFAULT_SCENARIO = REPO / "scenarios" / "corobot.yaml"
 quiet_drake_warnings()
 
 
-def make_sim(*overrides: str, scenario: Path = DEFAULT_SCENARIO) -> Simulation:
-    """The default scene (or `scenario`) with YAML overrides merged on top."""
-    return Simulation(load_scenario(scenario, overrides=list(overrides)))
+def make_sim(*overrides: str, scenario: Path = DEFAULT_SCENARIO,
+             camera: bool = False) -> Simulation:
+    """The default scene (or `scenario`) with YAML overrides merged on top.
+
+    The robots' cameras are off unless `camera` (rendering 30 frames per simulated second
+    made the drive tests 3x slower); tests of the camera ask for it.
+    """
+    scenario = load_scenario(scenario, overrides=list(overrides))
+    if not camera:
+        for robot in scenario.robots.values():
+            robot.camera.rgb = False
+    return Simulation(scenario)
 
 
 @pytest.fixture

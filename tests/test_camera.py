@@ -1,0 +1,191 @@
+"""The front camera, measured through the simulation (SPEC, Sensors; issue 4).
+
+The box test compares the share of the image the giant box covers with a pinhole projection
+of its near face, from the camera's pose in the simulation (the robot has settled on its
+tyres) and the camera's intrinsics. Tolerance: one pixel along every edge of the projected
+face inside the image (rasterisation puts an edge pixel on either side): 0.4% of the image
+for the horizon edge across the full width. Measured differences: 0.0-0.25%.
+"""
+
+import json
+import math
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from conftest import DEFAULT_SCENARIO, make_sim
+from corobot_drake import dimensions as dim
+from corobot_drake.cli import main
+from corobot_drake.scenario import ScenarioError, load_scenario
+
+BOX_RGB = np.array([0.8, 0.45, 0.15])
+SKY_RGB = np.array([0.53, 0.73, 0.92])
+GROUND_RGB = np.array([0.45, 0.5, 0.4])
+
+
+def box_mask(image: np.ndarray) -> np.ndarray:
+    """Pixels of the box's orange (any brightness): R > 1.4 G and G > 1.5 B. The ground
+    (R/G 0.9) and the sky (R/G 0.7) fail the first test."""
+    rgb = image[:, :, :3].astype(float)
+    r, g, b = rgb[..., 0], rgb[..., 1], rgb[..., 2]
+    return (r > 1.4 * g) & (g > 1.5 * b)
+
+
+def clip_polygon(poly: list, inside, intersect) -> list:
+    """One Sutherland-Hodgman pass."""
+    out = []
+    for i, p in enumerate(poly):
+        q = poly[i - 1]
+        if inside(p):
+            if not inside(q):
+                out.append(intersect(q, p))
+            out.append(p)
+        elif inside(q):
+            out.append(intersect(q, p))
+    return out
+
+
+def clip_to_image(poly: list, width: int, height: int) -> list:
+    for axis, bound, keep_below in ((0, 0, False), (0, width, True), (1, 0, False),
+                                    (1, height, True)):
+        def inside(p, a=axis, c=bound, below=keep_below):
+            return p[a] <= c if below else p[a] >= c
+
+        def intersect(p, q, a=axis, c=bound):
+            t = (c - p[a]) / (q[a] - p[a])
+            return p + t * (q - p)
+
+        poly = clip_polygon(poly, inside, intersect)
+        if not poly:
+            return []
+    return poly
+
+
+def area_and_edge_length(poly: list, width: int, height: int) -> tuple[float, float]:
+    """The polygon's area and the length of its edges that are not on the image border."""
+    if len(poly) < 3:
+        return 0.0, 0.0
+    area = edges = 0.0
+    for i, p in enumerate(poly):
+        q = poly[i - 1]
+        area += q[0] * p[1] - p[0] * q[1]
+        on_border = any(abs(p[a] - c) < 1e-9 and abs(q[a] - c) < 1e-9
+                        for a, c in ((0, 0), (0, width), (1, 0), (1, height)))
+        if not on_border:
+            edges += float(np.linalg.norm(p - q))
+    return abs(area) / 2, edges
+
+
+def expected_box_share(sim) -> tuple[float, float]:
+    """(share of the image, tolerance) for the box's +x face, by pinhole projection."""
+    config = sim.scenario.robots["corobot"].camera
+    W, H = config.width, config.height
+    f = (H / 2) / math.tan(math.radians(config.focal.y) / 2)
+    sensor = sim.station.diagram.GetSubsystemByName("corobot.camera")
+    X_WC = sensor.body_pose_in_world_output_port().Eval(sensor.GetMyContextFromRoot(
+        sim.context))
+    plant = sim.station.plant
+    X_WBox = plant.EvalBodyPoseInWorld(plant.GetMyContextFromRoot(sim.context),
+                                       sim.station.bodies["giant_box"])
+    half = dim.GIANT_BOX_SIZE / 2
+    # The face's corners; the ground (z = 0) hides anything of it below z = 0.
+    corners_W = [X_WBox @ np.array([half, y, z]) for y, z in
+                 ((-half, -half), (half, -half), (half, half), (-half, half))]
+    corners_W = [np.array([c[0], c[1], max(c[2], 0.0)]) for c in corners_W]
+    X_CW = X_WC.inverse()
+    poly = []
+    for c in corners_W:
+        x, y, z = X_CW @ c  # Drake camera frame: +z forward, +x right, +y down
+        assert z > 0.05, "the whole face must be in front of the camera for this projection"
+        poly.append(np.array([W / 2 + f * x / z, H / 2 + f * y / z]))
+    area, edges = area_and_edge_length(clip_to_image(poly, W, H), W, H)
+    return area / (W * H), edges / (W * H)
+
+
+@pytest.mark.parametrize("x, y", [(0.0, 0.0), (0.0, 0.9), (0.8, 0.0), (0.4, -1.0)],
+                         ids=["facing", "edge_left", "farther", "edge_right"])
+def test_box_fills_the_share_the_geometry_predicts(x, y):
+    """The robot faces the giant box (yaw 180 deg, as after turning round at the origin)."""
+    sim = make_sim(f"robots: {{corobot: {{pose: {{x: {x}, y: {y}, yaw_deg: 180}}}}}}",
+                   camera=True)
+    sim.advance(0.5)  # settle on the tyres; the latest frame is from t = 14/30 s
+    image = sim.robot().camera_image()
+    assert image.shape == (dim.CAMERA_HEIGHT, dim.CAMERA_WIDTH, 4)
+    assert image.dtype == np.uint8
+    share = box_mask(image).mean()
+    expected, tolerance = expected_box_share(sim)
+    assert expected > 0.2
+    assert share == pytest.approx(expected, abs=tolerance), (share, expected, tolerance)
+
+
+def test_frames_are_lit_not_black():
+    """Facing away from the box: sky above the horizon, sunlit ground below; facing the box:
+    its face (turned from the sun) is lit by the fill light."""
+    sim = make_sim(camera=True)
+    sim.advance(0.2)
+    image = sim.robot().camera_image()[:, :, :3].astype(float)
+    H = image.shape[0]
+    sky, ground = image[: H // 4], image[3 * H // 4:]
+    # The sky is the renderer's background: the scenario's colour exactly.
+    np.testing.assert_allclose(sky.mean(axis=(0, 1)), SKY_RGB * 255, atol=2)
+    # The ground: its own hue, lit by the sun and the fill light (> 40% of its colour).
+    g = ground.mean(axis=(0, 1))
+    assert np.all(g > 0.4 * GROUND_RGB * 255), g
+    assert g[1] > g[0] > g[2]
+
+    sim = make_sim("robots: {corobot: {pose: {yaw_deg: 180}}}", camera=True)
+    sim.advance(0.2)
+    image = sim.robot().camera_image()
+    face = image[:100, :, :3].reshape(-1, 3).astype(float)
+    assert box_mask(image[:100]).all()
+    assert np.all(face.mean(axis=0) > 0.3 * BOX_RGB * 255)
+
+
+def test_frames_come_at_the_camera_rate():
+    sim = make_sim("robots: {corobot: {camera: {fps: 10}}}", camera=True)
+    robot = sim.robot()
+    assert robot.has_camera
+    assert robot.camera_image_time() == 0.0  # rendered at initialization
+    first = robot.camera_image()
+    assert first[:, :, :3].max() > 0
+    sim.advance(0.35)
+    assert robot.camera_image_time() == pytest.approx(0.3)
+
+
+def test_no_camera():
+    sim = make_sim("robots: {corobot: {camera: {rgb: false}}}", camera=True)
+    robot = sim.robot()
+    assert not robot.has_camera
+    assert not sim.station.diagram.HasSubsystemNamed("corobot.camera")
+    with pytest.raises(RuntimeError, match="has no camera"):
+        robot.camera_image()
+    assert sim.summary()["robots"]["corobot"]["camera_frames"] == 0
+
+
+@pytest.mark.parametrize("override, field", [
+    ("{depth: true}", "robots.corobot.camera.depth"),
+    ("{output_delay: 0.01}", "robots.corobot.camera.output_delay"),
+    ("{fps: 0}", "robots.corobot.camera.fps"),
+    ("{renderer_class: RenderEngineGl}", "robots.corobot.camera.renderer_class"),
+    ("{clipping_near: 2.0, clipping_far: 1.0}", "robots.corobot.camera"),
+])
+def test_bad_camera_is_a_clear_error(override, field):
+    with pytest.raises(ScenarioError, match=field.replace(".", r"\.") + ":"):
+        load_scenario(DEFAULT_SCENARIO,
+                      overrides=[f"robots: {{corobot: {{camera: {override}}}}}"])
+
+
+def test_cli_saves_numbered_frames(tmp_path, capsys):
+    summary = tmp_path / "summary.json"
+    assert main([str(DEFAULT_SCENARIO), "--headless", "--duration", "0.5",
+                 "--save-camera", str(tmp_path / "frames"), "--camera-rate", "10",
+                 "--summary", str(summary)]) == 0
+    files = sorted((tmp_path / "frames" / "corobot").glob("*.png"))
+    assert [f.name for f in files] == [f"frame_{i:06d}.png" for i in range(5)]
+    assert json.loads(summary.read_text())["robots"]["corobot"]["camera_frames"] == 5
+    image = np.asarray(Image.open(files[-1]))
+    assert image.shape == (dim.CAMERA_HEIGHT, dim.CAMERA_WIDTH, 3)
+    assert image.mean() > 50
+    assert main([str(DEFAULT_SCENARIO), "--headless", "--camera-rate", "0"]) == 2
+    assert "--camera-rate" in capsys.readouterr().err
