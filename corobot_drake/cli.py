@@ -31,6 +31,13 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--override", action="append", default=[], metavar="YAML_TEXT",
                    help="YAML merged over the scenario (repeatable)")
     p.add_argument("--summary", metavar="PATH", help="write the run's summary JSON here")
+    p.add_argument("--serve", action="store_true",
+                   help="run in real time with the HTTP services, dashboard and webcam page "
+                   "(Meshcat too unless --headless); Ctrl-C stops")
+    p.add_argument("--port", type=int, default=50000,
+                   help="--serve: TCP port (default 50000; 0 picks a free one)")
+    p.add_argument("--host", default="127.0.0.1",
+                   help="--serve: address to listen on (default 127.0.0.1)")
     p.add_argument("--save-camera", metavar="DIR",
                    help="write each robot's camera frames as PNG: "
                    "DIR/<robot>/frame_000000.png, ...")
@@ -104,6 +111,13 @@ def main(argv: list[str] | None = None) -> int:
         from pydrake.geometry import StartMeshcat
 
         meshcat = StartMeshcat()
+    if args.serve:
+        from corobot_drake.serve import serve, serve_camera_rate
+
+        if getattr(args, "camera_rate", None) is None:
+            serve_camera_rate(scenario)
+        return serve(lambda: Simulation(scenario, meshcat), host=args.host, port=args.port,
+                     meshcat=meshcat, label=args.scenario)
     try:
         sim = Simulation(scenario, meshcat, save_camera=args.save_camera)
     except ValueError as e:  # e.g. a command with a non-finite number

@@ -1,0 +1,242 @@
+// The dashboard: drive pad (drag or keys), stop/enable, IR gauges, pose, encoders, camera.
+// State arrives by Server-Sent Events from /robots/<name>/subscribe; commands are POSTs to
+// the drive contract. No framework, no build step.
+"use strict";
+
+const $ = (id) => document.getElementById(id);
+const state = { robot: null, services: [], events: null, enabled: true, pad: [0, 0],
+                keys: new Set(), lastSent: "", sendTimer: null, cameraTimer: null,
+                frames: 0 };
+window.dashboard = state;  // for tests and the curious
+
+async function api(path, body) {
+  const init = body === undefined ? {} : {
+    method: "POST", headers: { "Content-Type": "application/json" }, body: JSON.stringify(body) };
+  const response = await fetch(path, init);
+  const data = await response.json().catch(() => ({}));
+  if (!response.ok) throw new Error(data.detail || response.statusText);
+  return data;
+}
+
+function fmt(x, digits = 3) { return x === null || x === undefined ? "-" : Number(x).toFixed(digits); }
+
+// --- commands -----------------------------------------------------------------------------
+function base() { return `/robots/${encodeURIComponent(state.robot)}`; }
+
+async function send(command, body) {
+  try {
+    const result = await api(`${base()}/drive/${command}`, body || {});
+    $("sent").textContent = `${command} ${body ? JSON.stringify(body) : ""}`;
+    return result;
+  } catch (e) {
+    $("sent").textContent = `${command} failed: ${e.message}`;
+  }
+}
+
+function powers() {
+  // Pad (or keys): forward in [-1, 1], turn in [-1, 1] (positive = right); arcade mix.
+  let [turn, forward] = state.pad;
+  if (state.keys.size) {
+    forward = (state.keys.has("up") ? 1 : 0) - (state.keys.has("down") ? 1 : 0);
+    turn = (state.keys.has("right") ? 1 : 0) - (state.keys.has("left") ? 1 : 0);
+    if (forward === 0) turn *= 0.6;
+  }
+  const max = Number($("max-power").value);
+  const clamp = (v) => Math.max(-1, Math.min(1, v));
+  return [clamp(forward + turn * 0.5) * max, clamp(forward - turn * 0.5) * max];
+}
+
+function drive() {
+  const [left, right] = powers().map((p) => Math.round(p * 100) / 100);
+  const key = `${left},${right}`;
+  if (key === state.lastSent) return;
+  state.lastSent = key;
+  if (left === 0 && right === 0) send("all_stop");
+  else send("set_power", { left, right });
+}
+
+function startDriving() {
+  if (!state.sendTimer) state.sendTimer = setInterval(drive, 100);
+  drive();
+}
+
+function stopDriving() {
+  clearInterval(state.sendTimer);
+  state.sendTimer = null;
+  state.pad = [0, 0];
+  state.lastSent = "";
+  placeKnob(0, 0);
+  send("all_stop");
+}
+
+// --- the pad --------------------------------------------------------------------------------
+const pad = $("pad");
+function placeKnob(x, y) {
+  const knob = pad.querySelector(".knob");
+  knob.style.left = `${92 + x * 92}px`;
+  knob.style.top = `${92 - y * 92}px`;
+}
+
+function padPoint(event) {
+  const r = pad.getBoundingClientRect();
+  let x = (event.clientX - r.left - r.width / 2) / (r.width / 2);
+  let y = -(event.clientY - r.top - r.height / 2) / (r.height / 2);
+  const n = Math.hypot(x, y);
+  if (n > 1) { x /= n; y /= n; }
+  return [x, y];
+}
+
+pad.addEventListener("pointerdown", (e) => {
+  pad.setPointerCapture(e.pointerId);
+  state.pad = padPoint(e);
+  placeKnob(...state.pad);
+  startDriving();
+});
+pad.addEventListener("pointermove", (e) => {
+  if (!state.sendTimer || !pad.hasPointerCapture(e.pointerId)) return;
+  state.pad = padPoint(e);
+  placeKnob(...state.pad);
+});
+const release = () => { if (state.sendTimer && !state.keys.size) stopDriving(); };
+pad.addEventListener("pointerup", release);
+pad.addEventListener("pointercancel", release);
+
+const KEYS = { ArrowUp: "up", KeyW: "up", ArrowDown: "down", KeyS: "down", ArrowLeft: "left",
+               KeyA: "left", ArrowRight: "right", KeyD: "right" };
+document.addEventListener("keydown", (e) => {
+  if (e.target.tagName === "INPUT" && e.target.type === "number") return;
+  if (KEYS[e.code]) {
+    e.preventDefault();
+    if (!state.keys.has(KEYS[e.code])) { state.keys.add(KEYS[e.code]); startDriving(); }
+  } else if (e.code === "Space") {
+    e.preventDefault();
+    state.keys.clear();
+    stopDriving();
+  } else if (e.code === "KeyE" && !e.repeat) {
+    toggleEnable();
+  }
+});
+document.addEventListener("keyup", (e) => {
+  if (!KEYS[e.code]) return;
+  state.keys.delete(KEYS[e.code]);
+  if (!state.keys.size) stopDriving();
+});
+
+$("stop").addEventListener("click", () => { state.keys.clear(); stopDriving(); });
+function toggleEnable() { send("enable", { enabled: !state.enabled }); }
+$("enable").addEventListener("click", toggleEnable);
+$("max-power").addEventListener("input", () => {
+  $("max-power-value").textContent = $("max-power").value;
+});
+$("drive-distance").addEventListener("click", () =>
+  send("drive_distance", { distance: Number($("dd-distance").value), power: 0.3, wait: false }));
+$("rotate-degrees").addEventListener("click", () =>
+  send("rotate_degrees", { degrees: Number($("rd-degrees").value), power: 0.3, wait: false }));
+
+// --- state ----------------------------------------------------------------------------------
+function showDrive(d) {
+  $("sim-time").textContent = fmt(d.time_stamp, 2);
+  $("pos-x").textContent = fmt(d.position.x);
+  $("pos-y").textContent = fmt(d.position.y);
+  $("heading").textContent = fmt(d.heading_deg, 1);
+  $("speed").textContent = fmt(d.velocity.forward, 3);
+  $("enc-fl").textContent = d.wheels.front_left.encoder_ticks;
+  $("enc-fr").textContent = d.wheels.front_right.encoder_ticks;
+  $("axle-l").textContent = fmt(d.wheels.front_left.axle_speed, 2);
+  $("axle-r").textContent = fmt(d.wheels.front_right.axle_speed, 2);
+  $("power-l").textContent = fmt(d.wheels.front_left.commanded_power, 2);
+  $("power-r").textContent = fmt(d.wheels.front_right.commanded_power, 2);
+  state.enabled = d.is_enabled;
+  const en = $("enabled");
+  en.textContent = d.is_enabled ? "enabled" : "disabled";
+  en.className = `enabled-${d.is_enabled}`;
+  $("enable").textContent = d.is_enabled ? "Disable (E)" : "Enable (E)";
+  // SVG rotation is clockwise; heading is counter-clockwise from +x (drawn pointing up).
+  $("compass-needle").setAttribute("transform", `rotate(${-d.heading_deg})`);
+  const c = d.command;
+  $("command").textContent = c ? `#${c.seq} ${c.command} ${c.status}${c.reason ? ` (${c.reason})` : ""}` : "-";
+}
+
+function showIr(name, s) {
+  let gauge = $(`ir-${name}`);
+  if (!gauge) {
+    const box = $("ir-gauges");
+    if (box.querySelector(".muted")) box.innerHTML = "";
+    box.insertAdjacentHTML("beforeend",
+      `<div>${name}: <b id="ir-${name}-raw">-</b> m <span class="muted">(<span id="ir-${name}-norm">-</span>)</span>` +
+      `<div class="gauge" id="ir-${name}"><div></div></div></div>`);
+    gauge = $(`ir-${name}`);
+  }
+  $(`ir-${name}-raw`).textContent = fmt(s.raw);
+  $(`ir-${name}-norm`).textContent = fmt(s.normalized, 2);
+  gauge.firstElementChild.style.width = `${Math.max(0, Math.min(1, s.normalized)) * 100}%`;
+}
+
+function subscribe() {
+  if (state.events) state.events.close();
+  const names = state.services.filter((s) => s.subscribe_url).map((s) => s.name);
+  const es = new EventSource(`${base()}/subscribe?services=${names.join(",")}`);
+  state.events = es;
+  es.addEventListener("drive", (e) => showDrive(JSON.parse(e.data)));
+  for (const name of names.filter((n) => n.endsWith("_ir"))) {
+    es.addEventListener(name, (e) => showIr(name, JSON.parse(e.data)));
+  }
+}
+
+// --- camera: fetch each frame (so we see its time stamp), then wait, then the next ----------
+async function nextFrame() {
+  try {
+    const response = await fetch(`${base()}/camera/frame.jpg?t=${Date.now()}`, { cache: "no-store" });
+    if (response.ok) {
+      const url = URL.createObjectURL(await response.blob());
+      const img = $("camera");
+      const old = img.src;
+      img.src = url;
+      if (old.startsWith("blob:")) URL.revokeObjectURL(old);
+      state.frames += 1;
+      img.dataset.frames = state.frames;
+      img.dataset.frameTime = response.headers.get("X-Frame-Time");
+      $("camera-info").textContent = `frame at t = ${img.dataset.frameTime} s (${state.frames} shown)`;
+    }
+  } catch (e) { /* the server may be restarting; try again */ }
+  state.cameraTimer = setTimeout(nextFrame, 200);
+}
+
+async function refreshStats() {
+  try {
+    const s = await api("/simulation");
+    $("rtf").textContent = s.recent_realtime_factor === null ? "-" : fmt(s.recent_realtime_factor, 2);
+    if (s.meshcat_url) {
+      $("meshcat-link").href = s.meshcat_url;
+      $("meshcat-link").hidden = false;
+      $("meshcat-none").hidden = true;
+    }
+  } catch (e) { /* ignore */ }
+}
+
+async function selectRobot(name) {
+  state.robot = name;
+  const info = await api(base());
+  state.services = info.services;
+  showDrive(info.state.drive);
+  for (const [n, s] of Object.entries(info.state.ir)) showIr(n, s);
+  $("completing").hidden = !(info.capabilities.drive_distance && info.capabilities.rotate_degrees);
+  const hasCamera = state.services.some((s) => s.name === "camera");
+  $("webcam-link").href = hasCamera ? `${base()}/camera/page` : "#";
+  clearTimeout(state.cameraTimer);
+  if (hasCamera) nextFrame();
+  subscribe();
+}
+
+async function main() {
+  const { robots } = await api("/robots");
+  const select = $("robot");
+  for (const r of robots) select.add(new Option(r, r));
+  select.addEventListener("change", () => selectRobot(select.value));
+  await selectRobot(robots[0]);
+  refreshStats();
+  setInterval(refreshStats, 2000);
+  document.body.dataset.ready = "1";
+}
+
+main();

@@ -1,0 +1,439 @@
+"""The live services (issue 6): a real server (`python -m corobot_drake --serve --headless
+--port 0`) in a child process, driven over HTTP.
+
+One server serves the whole module (building the simulation takes seconds); tests that change
+the robot's state put it back (set_pose / all_stop / enable) so they don't depend on order.
+"""
+
+import concurrent.futures
+import io
+import itertools
+import json
+import math
+import threading
+import time
+
+import httpx
+import pytest
+
+from corobot_drake.serve import ServerProcess
+
+ROBOT = "/robots/corobot"
+
+
+@pytest.fixture(scope="module")
+def server(tmp_path_factory):
+    log = tmp_path_factory.mktemp("server") / "stderr.log"
+    with ServerProcess(["--headless"], stderr_path=str(log)) as s:
+        yield s
+    if s.process.returncode not in (0, None):
+        print(log.read_text()[-3000:])
+
+
+@pytest.fixture(scope="module")
+def http(server):
+    with httpx.Client(base_url=server.url, timeout=60) as client:
+        yield client
+
+
+@pytest.fixture(scope="module")
+def caps(http):
+    return http.get(ROBOT).json()["capabilities"]
+
+
+def need(caps, capability):
+    if not caps[capability]:
+        pytest.skip(f"{capability} is not in this build yet")
+
+
+def sim_time(http) -> float:
+    return http.get("/simulation").json()["time"]
+
+
+def wait_sim(http, seconds: float) -> None:
+    """Waits until the server's simulation has advanced `seconds`."""
+    end = sim_time(http) + seconds
+    deadline = time.monotonic() + 10 * seconds + 5
+    while sim_time(http) < end:
+        assert time.monotonic() < deadline, "the simulation stopped advancing"
+        time.sleep(0.05)
+
+
+def reset(http, caps):
+    http.post(f"{ROBOT}/drive/enable", json={"enabled": True})
+    if caps["set_pose"]:
+        r = http.post(f"{ROBOT}/drive/set_pose", json={"x": 0, "y": 0, "yaw_deg": 0})
+        assert r.json()["status"] == "succeeded", r.json()
+    else:
+        http.post(f"{ROBOT}/drive/all_stop")
+        wait_sim(http, 0.5)
+
+
+# --- directory and documents ----------------------------------------------------------------
+
+
+def test_service_directory_lists_services_with_contracts_and_working_urls(http, caps):
+    directory = http.get("/services").json()
+    services = {s["name"]: s for s in directory["services"] if s["robot"] == "corobot"}
+    expected = {"drive", "encoders", "compass", "gps"}
+    if caps["ir"]:
+        expected |= {"front_ir", "rear_ir"}
+    if caps["camera"]:
+        expected.add("camera")
+    assert expected <= set(services)
+    assert services["drive"]["contract"] == "corobot-drake/drive/v1"
+    for s in services.values():
+        assert s["contract"].startswith("corobot-drake/")
+        r = http.get(s["state_url"])
+        assert r.status_code == 200, (s, r.text)
+        assert r.headers["content-type"].startswith("application/json")
+    html = http.get("/services", headers={"Accept": "text/html"})
+    assert html.headers["content-type"].startswith("text/html")
+    assert "<table" in html.text and "corobot-drake/drive/v1" in html.text
+    assert http.get("/services?format=html").text == html.text
+
+
+def test_openapi_document_is_served_and_valid(http):
+    from openapi_spec_validator import validate
+
+    doc = http.get("/openapi.json").json()
+    validate(doc)
+    paths = doc["paths"]
+    for command in ("set_power", "set_speed", "all_stop", "enable", "drive_distance",
+                    "rotate_degrees", "set_pose"):
+        assert f"/robots/{{robot}}/drive/{command}" in paths
+    assert "/robots/{robot}/drive" in paths and "/services" in paths
+    power = doc["components"]["schemas"]["PowerRequest"]["properties"]["left"]
+    assert power["minimum"] == -1 and power["maximum"] == 1
+    assert http.get("/docs").status_code == 200
+
+
+def test_pages_are_served(http):
+    for path in ("/dashboard", "/static/dashboard.js", "/static/style.css"):
+        assert http.get(path).status_code == 200, path
+    assert http.get("/", follow_redirects=False).status_code in (302, 307)
+
+
+# --- drive contract -----------------------------------------------------------------------------
+
+
+def test_drive_state_four_wheel_and_two_wheel(http):
+    d = http.get(f"{ROBOT}/drive").json()
+    assert set(d["wheels"]) == {"front_left", "front_right", "rear_left", "rear_right"}
+    assert d["distance_between_wheels"] == pytest.approx(0.22352)
+    assert d["power_scaling_factor"] > 0 and d["encoder_ticks_per_revolution"] == 600
+    assert isinstance(d["is_enabled"], bool) and d["time_stamp"] >= 0
+    assert set(d["position"]) == {"x", "y", "z"} and "heading" in d
+    assert d["wheels"]["front_left"]["encoder_ticks"] is not None
+    assert d["wheels"]["rear_left"]["encoder_ticks"] is None
+    two = http.get(f"{ROBOT}/drive/two_wheel").json()
+    assert set(two["left"]) == set(d["wheels"]["front_left"])
+    assert two["distance_between_wheels"] == d["distance_between_wheels"]
+    encoders = http.get(f"{ROBOT}/encoders").json()
+    assert encoders["ticks_per_revolution"] == 600 and "front_left" in encoders
+    assert "heading" in http.get(f"{ROBOT}/compass").json()
+    assert {"x", "y", "z"} <= set(http.get(f"{ROBOT}/gps").json())
+
+
+def test_set_power_drives_forward_and_all_stop_stops(http, caps):
+    reset(http, caps)
+    x0 = http.get(f"{ROBOT}/drive").json()["position"]["x"]
+    r = http.post(f"{ROBOT}/drive/set_power", json={"left": 0.5, "right": 0.5})
+    assert r.status_code == 200 and r.json()["status"] == "accepted"
+    wait_sim(http, 1.5)
+    d = http.get(f"{ROBOT}/drive").json()
+    assert d["position"]["x"] - x0 > 0.2
+    assert d["wheels"]["front_left"]["commanded_power"] == 0.5
+    assert d["wheels"]["front_left"]["encoder_ticks"] > 100
+    assert http.post(f"{ROBOT}/drive/all_stop").status_code == 200
+    wait_sim(http, 1.0)
+    assert abs(http.get(f"{ROBOT}/drive").json()["velocity"]["forward"]) < 0.01
+
+
+def test_set_speed(http, caps):
+    reset(http, caps)
+    assert http.post(f"{ROBOT}/drive/set_speed", json={"left": 0.2, "right": 0.2}).is_success
+    wait_sim(http, 1.5)
+    v = http.get(f"{ROBOT}/drive").json()["velocity"]["forward"]
+    assert v == pytest.approx(0.2, abs=0.03)
+    http.post(f"{ROBOT}/drive/all_stop", json={})
+
+
+def test_disabled_drive_ignores_power(http, caps):
+    reset(http, caps)
+    assert http.post(f"{ROBOT}/drive/enable", json={"enabled": False}).is_success
+    http.post(f"{ROBOT}/drive/set_power", json={"left": 1, "right": 1})
+    wait_sim(http, 0.5)
+    d = http.get(f"{ROBOT}/drive").json()
+    assert d["is_enabled"] is False
+    assert abs(d["velocity"]["forward"]) < 0.01
+    assert http.post(f"{ROBOT}/drive/enable", json={"enabled": True}).is_success
+    wait_sim(http, 0.1)  # the drive acts on it at its next update (60 Hz)
+    assert http.get(f"{ROBOT}/drive").json()["is_enabled"] is True
+    http.post(f"{ROBOT}/drive/all_stop")
+
+
+def test_completing_commands_wait_or_answer_at_once(http, caps):
+    need(caps, "drive_distance")
+    reset(http, caps)
+    r = http.post(f"{ROBOT}/drive/drive_distance", json={"distance": 0.3, "power": 0.4})
+    assert r.status_code == 200, r.text
+    op = r.json()
+    assert op["status"] == "succeeded" and op["end_time"] > op["start_time"]
+    assert http.get(f"{ROBOT}/drive").json()["position"]["x"] == pytest.approx(0.3, abs=0.03)
+
+    r = http.post(f"{ROBOT}/drive/rotate_degrees",
+                  json={"degrees": 30, "power": 0.3, "wait": False})
+    assert r.status_code == 202 and r.json()["status"] == "running"
+    url = r.json()["status_url"]
+    assert r.headers["location"] == url
+    deadline = time.monotonic() + 30
+    while (op := http.get(url).json())["status"] == "running":
+        assert time.monotonic() < deadline
+        time.sleep(0.1)
+    assert op["status"] == "succeeded", op
+    heading = http.get(f"{ROBOT}/drive").json()["heading_deg"]
+    assert heading == pytest.approx(30, abs=2)
+
+
+def test_a_new_command_supersedes_a_running_one(http, caps):
+    need(caps, "drive_distance")
+    reset(http, caps)
+    r = http.post(f"{ROBOT}/drive/drive_distance",
+                  json={"distance": 2.0, "power": 0.2, "wait": False})
+    url = r.json()["status_url"]
+    wait_sim(http, 0.3)
+    http.post(f"{ROBOT}/drive/all_stop")
+    wait_sim(http, 0.1)
+    op = http.get(url).json()
+    assert op["status"] == "failed" and op["reason"] == "superseded"
+
+
+def test_set_pose_teleports(http, caps):
+    need(caps, "set_pose")
+    r = http.post(f"{ROBOT}/drive/set_pose", json={"x": 0.5, "y": -0.4, "yaw_deg": 90})
+    assert r.status_code == 200 and r.json()["status"] == "succeeded", r.text
+    d = http.get(f"{ROBOT}/drive").json()
+    assert d["position"]["x"] == pytest.approx(0.5, abs=0.01)
+    assert d["position"]["y"] == pytest.approx(-0.4, abs=0.01)
+    assert d["heading_deg"] == pytest.approx(90, abs=1)
+    reset(http, caps)
+
+
+# --- sensors ----------------------------------------------------------------------------------
+
+
+def test_ir_analog_sensor_contract(http, caps):
+    need(caps, "ir")
+    reset(http, caps)
+    wait_sim(http, 0.3)
+    front = http.get(f"{ROBOT}/front_ir").json()
+    rear = http.get(f"{ROBOT}/rear_ir").json()
+    assert set(front) == {"raw", "range", "normalized", "time_stamp"}
+    assert front["raw"] == pytest.approx(0.762) and front["normalized"] == pytest.approx(1.0)
+    assert rear["raw"] == pytest.approx(0.62865, abs=0.002)
+    assert rear["normalized"] == pytest.approx(rear["raw"] / rear["range"])
+
+
+def read_events(lines, want: int, timeout: float) -> list[tuple[str, dict, float]]:
+    """Up to `want` events from an SSE line iterator: (name, data, arrival time)."""
+    events, name, deadline = [], None, time.monotonic() + timeout
+    for line in lines:
+        if line.startswith("event: "):
+            name = line[7:]
+        elif line.startswith("data: "):
+            events.append((name, json.loads(line[6:]), time.monotonic()))
+            if len(events) >= want:
+                break
+        if time.monotonic() > deadline:
+            break
+    return events
+
+
+def test_subscription_sends_changes(http, server, caps):
+    reset(http, caps)
+    services = "drive,front_ir,rear_ir" if caps["ir"] else "drive"
+    with httpx.Client(base_url=server.url, timeout=30) as client, client.stream(
+            "GET", f"{ROBOT}/subscribe?services={services}&limit=6") as response:
+        assert response.headers["content-type"].startswith("text/event-stream")
+        lines = response.iter_lines()
+        first = read_events(lines, 3 if caps["ir"] else 1, 5)
+        names = {e[0] for e in first}
+        assert "drive" in names
+        if caps["ir"]:
+            assert {"front_ir", "rear_ir"} <= names
+        http.post(f"{ROBOT}/drive/set_power", json={"left": -0.4, "right": -0.4})
+        events = read_events(lines, 30, 4)
+    http.post(f"{ROBOT}/drive/all_stop")
+    drive = [e for e in events if e[0] == "drive"]
+    assert len(drive) >= 5  # the robot moves, so its state changes at every check
+    assert any(e[1]["wheels"]["front_left"]["commanded_power"] == -0.4 for e in drive)
+    gaps = [b[2] - a[2] for a, b in itertools.pairwise(drive)]
+    assert max(gaps[1:]) < 0.35  # checked every 0.1 s (contract: at most 0.2 s)
+    if caps["ir"]:  # backing toward the box: the rear reading falls, so it is sent
+        rear = [e[1]["raw"] for e in events if e[0] == "rear_ir"]
+        assert len(rear) >= 2 and rear[-1] < rear[0]
+
+
+def test_single_service_subscription_and_unknown(http, server):
+    with httpx.Client(base_url=server.url, timeout=30) as client, client.stream(
+            "GET", f"{ROBOT}/compass/subscribe?limit=1") as response:
+        events = read_events(response.iter_lines(), 1, 5)
+    assert events[0][0] == "compass" and "heading" in events[0][1]
+    r = http.get(f"{ROBOT}/nothing/subscribe")
+    assert r.status_code == 404 and "nothing" in r.json()["detail"]
+
+
+# --- webcam -------------------------------------------------------------------------------------
+
+
+def test_webcam_frames_and_page(http, caps):
+    need(caps, "camera")
+    from PIL import Image
+
+    png = http.get(f"{ROBOT}/camera/frame.png")
+    assert png.status_code == 200 and png.headers["content-type"] == "image/png"
+    image = Image.open(io.BytesIO(png.content))
+    assert image.size == (320, 240)
+    assert max(image.convert("L").getextrema()) > 0  # not black
+    jpg = http.get(f"{ROBOT}/camera/frame.jpg")
+    assert jpg.headers["content-type"] == "image/jpeg"
+    assert Image.open(io.BytesIO(jpg.content)).size == (320, 240)
+    assert float(jpg.headers["x-frame-time"]) >= 0
+    info = http.get(f"{ROBOT}/camera").json()
+    assert info["frame_png_url"].endswith("frame.png")
+    page = http.get(f"{ROBOT}/camera/page?interval=250")
+    assert page.status_code == 200 and 'value="250"' in page.text
+    assert http.get(f"{ROBOT}/camera/page?interval=1").status_code == 422
+
+
+# --- bad input ------------------------------------------------------------------------------------
+
+BAD = [
+    # (method, path, raw body, status, words the message must contain)
+    ("POST", "/drive/set_power", "{left: 1", 400, "malformed JSON"),
+    ("POST", "/drive/set_power", "[1, 2", 400, "malformed JSON"),
+    ("POST", "/drive/set_power", '{"left": NaN, "right": 0}', 422, "left: Input should be a fin"),
+    ("POST", "/drive/set_power", '{"left": Infinity, "right": 0}', 422, "finite"),
+    ("POST", "/drive/set_power", '{"left": 1.5, "right": 0}', 422, "less than or equal to 1"),
+    ("POST", "/drive/set_power", '{"left": -3, "right": 0}', 422, "greater than or equal to -1"),
+    ("POST", "/drive/set_power", '{"left": "fast", "right": 0}', 422, "valid number"),
+    ("POST", "/drive/set_power", '{"left": true, "right": 0}', 422, "valid number"),
+    ("POST", "/drive/set_power", '{"left": 0.5}', 422, "right: required"),
+    ("POST", "/drive/set_power", '{"left": 0, "right": 0, "turbo": 1}', 422, "turbo: unknown"),
+    ("POST", "/drive/set_power", "[0.5, 0.5]", 422, "valid dictionary"),
+    ("POST", "/drive/set_power", "", 422, "required"),
+    ("POST", "/drive/set_speed", '{"left": 1e308, "right": 0}', 422, "less than or equal"),
+    ("POST", "/drive/enable", '{"enabled": "yes"}', 422, "valid boolean"),
+    ("POST", "/drive/drive_distance", '{"distance": 1, "power": 0}', 422, "power"),
+    ("POST", "/drive/drive_distance", '{"distance": NaN}', 422, "finite"),
+    ("POST", "/drive/rotate_degrees", '{"degrees": 90, "power": 2}', 422, "power"),
+    ("POST", "/drive/rotate_degrees", '{"degrees": 90, "wait": 3}', 422, "wait"),
+    ("POST", "/drive/set_pose", '{"x": 1}', 422, "y: required"),
+    ("POST", "/drive/fly", "{}", 404, "no command 'fly'"),
+    ("GET", "/drive/operations/999999", None, 404, "no operation 999999"),
+    ("GET", "/drive/operations/abc", None, 422, "valid integer"),
+    ("GET", "/sonar", None, 404, "no service 'sonar'"),
+    ("GET", "/camera/page?interval=abc", None, 422, "interval"),
+    ("PUT", "/drive", "{}", 405, "not allowed"),
+]
+
+
+@pytest.mark.parametrize(("method", "path", "body", "status", "words"), BAD,
+                         ids=[f"{m} {p} {b}" for m, p, b, *_ in BAD])
+def test_bad_input_gets_a_clear_4xx(http, method, path, body, status, words):
+    r = http.request(method, ROBOT + path, content=body,
+                     headers={"Content-Type": "application/json"})
+    assert r.status_code == status, r.text
+    assert words in r.json()["detail"], r.json()
+
+
+@pytest.mark.parametrize("path", ["/robots/nobody/drive", "/robots/nobody/front_ir",
+                                  "/robots/nobody/drive/two_wheel"])
+def test_unknown_robot_is_404_naming_the_robots(http, path):
+    r = http.get(path)
+    assert r.status_code == 404
+    assert r.json()["detail"] == "no robot named 'nobody'; robots: corobot"
+    r = http.post("/robots/nobody/drive/set_power", json={"left": 0, "right": 0})
+    assert r.status_code == 404 and "nobody" in r.json()["detail"]
+
+
+def test_unknown_path_is_404_pointing_at_the_directory(http):
+    r = http.get("/nowhere")
+    assert r.status_code == 404 and "/services" in r.json()["detail"]
+
+
+# --- load -----------------------------------------------------------------------------------------
+
+
+def test_malformed_flood_and_pollers_keep_real_time(http, server, caps):
+    """1000 malformed requests and 20 clients polling state at once: every bad request gets
+    a 4xx, every poll a 200, the server survives, and the simulation keeps real time."""
+    reset(http, caps)
+    http.post(f"{ROBOT}/drive/set_power", json={"left": 0.3, "right": -0.3})  # spin in place
+    stop = threading.Event()
+    polls = {"ok": 0, "bad": 0}
+    lock = threading.Lock()
+    paths = [f"{ROBOT}/drive", f"{ROBOT}/drive/two_wheel", f"{ROBOT}/encoders", "/services"]
+    if caps["ir"]:
+        paths += [f"{ROBOT}/front_ir", f"{ROBOT}/rear_ir"]
+
+    def poller(i: int) -> None:
+        with httpx.Client(base_url=server.url, timeout=30) as client:
+            n = 0
+            while not stop.is_set():
+                r = client.get(paths[(i + n) % len(paths)])
+                n += 1
+                with lock:
+                    polls["ok" if r.status_code == 200 else "bad"] += 1
+                time.sleep(0.1)
+
+    malformed = [
+        ("POST", f"{ROBOT}/drive/set_power", "{"),
+        ("POST", f"{ROBOT}/drive/set_power", '{"left": NaN, "right": 0}'),
+        ("POST", f"{ROBOT}/drive/set_power", '{"left": 7, "right": 0}'),
+        ("POST", f"{ROBOT}/drive/set_speed", '{"left": "x"}'),
+        ("POST", "/robots/ghost/drive/set_power", '{"left": 0, "right": 0}'),
+        ("GET", f"{ROBOT}/warp_drive", None),
+        ("POST", f"{ROBOT}/drive/enable", "\x00\xff garbage"),
+        ("DELETE", f"{ROBOT}/drive", None),
+    ]
+
+    def flood(k: int) -> list[int]:
+        codes = []
+        with httpx.Client(base_url=server.url, timeout=30) as client:
+            for j in range(500):
+                method, path, body = malformed[(k * 500 + j) % len(malformed)]
+                codes.append(client.request(method, path, content=body, headers={
+                    "Content-Type": "application/json"}).status_code)
+                time.sleep(0.005)
+        return codes
+
+    # The machine may be busy with other work: the baseline is the real-time factor the
+    # simulation keeps here without our load (normally 1.0).
+    t0, wall0 = sim_time(http), time.monotonic()
+    time.sleep(3.0)
+    baseline = (sim_time(http) - t0) / (time.monotonic() - wall0)
+
+    t0, wall0 = sim_time(http), time.monotonic()
+    pollers = [threading.Thread(target=poller, args=(i,)) for i in range(20)]
+    for p in pollers:
+        p.start()
+    with concurrent.futures.ThreadPoolExecutor(2) as pool:
+        codes = [c for chunk in pool.map(flood, range(2)) for c in chunk]
+    time.sleep(max(0.0, 6.0 - (time.monotonic() - wall0)))  # at least 6 s under load
+    stop.set()
+    for p in pollers:
+        p.join()
+    t1, wall1 = sim_time(http), time.monotonic()
+    rtf = (t1 - t0) / (wall1 - wall0)
+    print(f"\n1000 malformed + 20 pollers ({polls['ok']} polls) for {wall1 - wall0:.1f} s: "
+          f"real-time factor {rtf:.3f} (without the load: {baseline:.3f})")
+    assert len(codes) == 1000 and all(400 <= c < 500 for c in codes), set(codes)
+    assert polls["bad"] == 0 and polls["ok"] > 20 * 10
+    assert rtf >= 0.9 * min(1.0, baseline / 0.98), (rtf, baseline)
+    stats = http.get("/simulation").json()
+    assert stats["running"] and stats["error"] is None
+    http.post(f"{ROBOT}/drive/all_stop")
+    assert server.process.poll() is None
+    assert math.isfinite(http.get(f"{ROBOT}/drive").json()["heading"])
