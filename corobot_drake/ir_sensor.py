@@ -10,6 +10,8 @@ Scans are discrete updates: one at initialization (so a freshly initialized simu
 has a reading at its start time) and then every ``1 / scan_rate_hz`` s, never at every physics
 step. All the sensor's memory is discrete state (replayable, cheap to copy):
 
+one vector (written once per scan) holding
+
 - ``reading`` = [distance, scan_time, previous_distance, changed, scan_index, true_distance,
   voltage, adc_counts];
 - ``ray_origin`` (3), ``ray_end`` (3 N), ``ray_hit`` (N): where each of the N = 2 x samples rays
@@ -31,7 +33,7 @@ Output ports (vectors): ``distance`` (raw, m), ``range`` (maximum_range, m), ``n
 ``change_threshold`` since the previous scan, else 0), ``reading`` ([raw, range, normalized,
 time]), ``true_distance`` (m, the geometric nearest hit capped at range), ``hit_points``
 (3 N, world frame, nan for a ray that hit nothing), ``ray_origin``, ``ray_end``, ``ray_hit``,
-``reading_state`` (the `reading` group above); with ``sharp_gp2d12`` also ``voltage`` (V) and
+``scan_state`` (the whole state vector above); with ``sharp_gp2d12`` also ``voltage`` (V) and
 ``adc_counts``.
 
 A scan due at time t is taken when the simulator steps away from t (Drake's discrete-update
@@ -229,16 +231,17 @@ class IrSensor(LeafSystem):
         initial = np.zeros(_READING_SIZE)
         initial[[DISTANCE, PREVIOUS, TRUE_DISTANCE]] = self._range
         initial[SCAN_TIME] = math.nan
-        self._reading = self.DeclareDiscreteState(initial)
-        self._origin = self.DeclareDiscreteState(3)
-        self._end = self.DeclareDiscreteState(3 * n)
-        self._hit = self.DeclareDiscreteState(n)
+        self.state_size = _READING_SIZE + 3 + 4 * n
+        self._origin = slice(_READING_SIZE, _READING_SIZE + 3)
+        self._end = slice(_READING_SIZE + 3, _READING_SIZE + 3 + 3 * n)
+        self._hit = slice(_READING_SIZE + 3 + 3 * n, self.state_size)
+        self._state = self.DeclareDiscreteState(
+            np.concatenate([initial, np.zeros(self.state_size - _READING_SIZE)]))
 
         self.DeclareInitializationDiscreteUpdateEvent(self._initial_scan)
         self.DeclarePeriodicDiscreteUpdateEvent(self.period, self.period, self._periodic_scan)
 
-        state = {self.discrete_state_ticket(self._reading)}
-        rays = {self.discrete_state_ticket(g) for g in (self._origin, self._end, self._hit)}
+        state = {self.discrete_state_ticket(self._state)}
 
         def scalar(port_name, fn):
             return self.DeclareVectorOutputPort(
@@ -257,11 +260,14 @@ class IrSensor(LeafSystem):
         self.DeclareVectorOutputPort("reading", 4, self._calc_reading,
                                      prerequisites_of_calc=state)
         self.DeclareVectorOutputPort("hit_points", 3 * n, self._calc_hit_points,
-                                     prerequisites_of_calc=rays)
-        self.DeclareStateOutputPort("ray_origin", self._origin)
-        self.DeclareStateOutputPort("ray_end", self._end)
-        self.DeclareStateOutputPort("ray_hit", self._hit)
-        self.DeclareStateOutputPort("reading_state", self._reading)
+                                     prerequisites_of_calc=state)
+        for port_name, part in (("ray_origin", self._origin), ("ray_end", self._end),
+                                ("ray_hit", self._hit)):
+            self.DeclareVectorOutputPort(
+                port_name, part.stop - part.start,
+                lambda c, out, part=part: out.SetFromVector(self._all(c)[part]),
+                prerequisites_of_calc=state)
+        self.DeclareStateOutputPort("scan_state", self._state)
 
     @staticmethod
     def _query_model_value():
@@ -272,8 +278,11 @@ class IrSensor(LeafSystem):
 
     # -- reading the state ------------------------------------------------------------------
 
+    def _all(self, context) -> np.ndarray:
+        return context.get_discrete_state(self._state).value()
+
     def _value(self, context) -> np.ndarray:
-        return context.get_discrete_state(self._reading).value()
+        return self._all(context)[:_READING_SIZE]
 
     def reading(self, context) -> IrReading:
         """The latest scan as an analog reading (context: this system's)."""
@@ -286,8 +295,9 @@ class IrSensor(LeafSystem):
         output.SetFromVector([r[DISTANCE], self._range, r[DISTANCE] / self._range, r[SCAN_TIME]])
 
     def _calc_hit_points(self, context, output: BasicVector) -> None:
-        ends = context.get_discrete_state(self._end).value().reshape(-1, 3).copy()
-        ends[context.get_discrete_state(self._hit).value() < 0.5] = np.nan
+        x = self._all(context)
+        ends = x[self._end].reshape(-1, 3).copy()
+        ends[x[self._hit] < 0.5] = np.nan
         output.SetFromVector(ends.ravel())
 
     # -- scanning ---------------------------------------------------------------------------
@@ -319,26 +329,28 @@ class IrSensor(LeafSystem):
 
     def _do_scan(self, context, discrete_state, index: int, previous: float) -> None:
         origin, t, directions = self.scan(self._query_port.Eval(context))
-        hit = np.isfinite(t)
-        t_capped = np.where(hit, t, self._range)
-        true_distance = float(t_capped.min())
+        # Six-odd numbers: plain Python is cheaper than numpy calls here.
+        t_capped = np.minimum(t, self._range)  # a miss (inf) ends at maximum_range
+        true_distance = min(t_capped.tolist())
         voltage = counts = 0.0
         if self._sharp is None:
             raw = true_distance
         else:
             s = self._sharp
-            v = float(s.voltage(true_distance if hit.any() else math.inf))
+            v = float(s.voltage(true_distance if true_distance < self._range or
+                                (t <= self._range).any() else math.inf))
             if s.noise_std > 0.0:
                 v += s.noise_std * counter_normal(self._key, index)
             counts = int(s.counts(v))
             voltage = counts * s.adc_step
             raw = min(float(s.distance_from_voltage(voltage)), self._range)
-        r = discrete_state.get_mutable_value(self._reading)
-        changed = float(abs(raw - previous) > self._threshold)
-        r[:] = (raw, context.get_time(), previous, changed, index, true_distance, voltage, counts)
-        discrete_state.set_value(self._origin, origin)
-        discrete_state.set_value(self._end, (origin + t_capped[:, None] * directions).ravel())
-        discrete_state.set_value(self._hit, hit.astype(float))
+        changed = 1.0 if abs(raw - previous) > self._threshold else 0.0
+        x = discrete_state.get_mutable_value(self._state)
+        x[:_READING_SIZE] = (raw, context.get_time(), previous, changed, index, true_distance,
+                             voltage, counts)
+        x[self._origin] = origin
+        x[self._end] = (origin + t_capped[:, None] * directions).ravel()
+        x[self._hit] = t <= self._range
 
 
 # --- Meshcat -------------------------------------------------------------------------------
@@ -355,7 +367,7 @@ class IrMeshcatVisualizer(LeafSystem):
 
     Everything lives under ``path`` (``/ir/<robot>/<sensor>``): ``rays`` and ``hits/<i>``;
     the Meshcat scene tree's checkbox on ``/ir``, a robot or a sensor shows or hides it.
-    Inputs ``ray_origin``, ``ray_end``, ``ray_hit``, ``scan_index`` are wired from an IrSensor;
+    Its input ``scan_state`` is an IrSensor's output of that name;
     it redraws once per scan, right after the scan (it checks for a new scan at every step).
     """
 
@@ -364,10 +376,7 @@ class IrMeshcatVisualizer(LeafSystem):
         self._meshcat = meshcat
         self.path = path
         self._n = num_rays
-        self._origin = self.DeclareVectorInputPort("ray_origin", 3)
-        self._end = self.DeclareVectorInputPort("ray_end", 3 * num_rays)
-        self._hit = self.DeclareVectorInputPort("ray_hit", num_rays)
-        self._reading = self.DeclareVectorInputPort("reading", _READING_SIZE)
+        self._scan = self.DeclareVectorInputPort("scan_state", _READING_SIZE + 3 + 4 * num_rays)
         self._last_index = None
         self._last_time = None
         self.draws = 0
@@ -382,14 +391,16 @@ class IrMeshcatVisualizer(LeafSystem):
             meshcat.SetProperty(f"{path}/hits/{i}", "visible", False)
 
     def _draw(self, context) -> None:
-        reading = self._reading.Eval(context)
+        x = self._scan.Eval(context)
+        reading = x[:_READING_SIZE]
         key = (reading[SCAN_INDEX], reading[SCAN_TIME])
         if key == (self._last_index, self._last_time):
             return
         self._last_index, self._last_time = key
-        origin = self._origin.Eval(context)
-        ends = self._end.Eval(context).reshape(-1, 3)
-        hits = self._hit.Eval(context) > 0.5
+        n = self._n
+        origin = x[_READING_SIZE:_READING_SIZE + 3]
+        ends = x[_READING_SIZE + 3:_READING_SIZE + 3 + 3 * n].reshape(-1, 3)
+        hits = x[_READING_SIZE + 3 + 3 * n:] > 0.5
         starts = np.asfortranarray(np.tile(origin, (self._n, 1)).T)
         self._meshcat.SetLineSegments(f"{self.path}/rays", starts, np.asfortranarray(ends.T),
                                       2.0, _RAY_COLOR)
@@ -438,9 +449,7 @@ def add_ir_sensors(builder, plant, scene_graph, robot_name: str, configs: dict,
                 f"{robot_name}.ir.{sensor_name}.meshcat",
                 IrMeshcatVisualizer(meshcat, f"/ir/{robot_name}/{sensor_name}",
                                     sensor.num_rays))
-            for port in ("ray_origin", "ray_end", "ray_hit"):
-                builder.Connect(sensor.GetOutputPort(port), viz.GetInputPort(port))
-            builder.Connect(sensor.GetOutputPort("reading_state"), viz.GetInputPort("reading"))
+            builder.Connect(sensor.GetOutputPort("scan_state"), viz.get_input_port())
         sensors[sensor_name] = sensor
     return sensors
 
