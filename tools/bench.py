@@ -1,12 +1,13 @@
 """Real-time factors of the default scene, headless (run: python tools/bench.py).
 
-One run prints a markdown table: rows are the stacks (physics only; + 2 IR at 20 Hz; + camera
-at 30 Hz; full stack = both), columns the plant settings (hydroelastic at 5, 2 and 1 ms; point
-contact at 5 ms). Each cell simulates `--seconds` of the robot driving a figure of eight,
-`--repeats` times, and reports the median wall-clock real-time factor (the CPU-time one in
-parentheses: the machine may be shared). Then the IR cost per scan and the camera cost per
-frame, both measured in place (the extra wall time per scan or frame over physics only) and by
-their micro-benchmarks (tools/bench_raycast.py, tools/camera_cost.py) where those exist.
+One run prints a markdown table: rows are the stacks (physics only; + 2 IR at 20 Hz; + camera at
+30 Hz; full stack = both), columns the plant settings (hydroelastic at 10 ms, the tire-grip
+sweep's pick, and at 5 (the default), 2 and 1 ms; point contact at 10 ms). Each cell simulates
+`--seconds` of the robot driving a figure of eight, `--repeats` times, and reports the median
+wall-clock real-time factor (the CPU-time one in parentheses: the machine may be shared). Then
+the IR cost per scan and the camera cost per frame, both measured in place (the extra wall time
+per scan or frame over physics only) and by their micro-benchmarks (tools/bench_ir.py,
+tools/bench_raycast.py, tools/camera_cost.py) where those exist.
 
 A sensor row appears only when the scenario schema has the sensor (`robots.<r>.ir_sensors`,
 `robots.<r>.camera`); physics only turns every sensor off.
@@ -87,14 +88,17 @@ STACKS = {
     "full stack (IR + camera)": dict(ir=True, camera=True),
 }
 PLANTS = {
-    "hydroelastic 5 ms": "plant_config: {time_step: 0.005, contact_model: "
-                         "hydroelastic_with_fallback}",
+    "hydroelastic 10 ms (recommended)": "plant_config: {time_step: 0.01, contact_model: "
+                                        "hydroelastic_with_fallback}",
+    "hydroelastic 5 ms (default)": "plant_config: {time_step: 0.005, contact_model: "
+                                   "hydroelastic_with_fallback}",
     "hydroelastic 2 ms": "plant_config: {time_step: 0.002, contact_model: "
                          "hydroelastic_with_fallback}",
     "hydroelastic 1 ms": "plant_config: {time_step: 0.001, contact_model: "
                          "hydroelastic_with_fallback}",
-    "point 5 ms": "plant_config: {time_step: 0.005, contact_model: point}",
+    "point 10 ms": "plant_config: {time_step: 0.01, contact_model: point}",
 }
+DEFAULT_PLANT = "hydroelastic 5 ms (default)"
 
 
 def available_stacks() -> dict:
@@ -118,8 +122,7 @@ def _load_tool(name: str):
 
 def machine() -> str:
     import os
-
-    import pydrake
+    from importlib.metadata import version
 
     cpu = "unknown CPU"
     try:
@@ -130,7 +133,7 @@ def machine() -> str:
     except OSError:
         pass
     return (f"{os.cpu_count()} cores ({cpu}), no GPU, {platform.system()} {platform.release()}, "
-            f"Python {platform.python_version()}, pydrake {getattr(pydrake, '__version__', '?')}")
+            f"Python {platform.python_version()}, drake {version('drake')}")
 
 
 def main() -> None:
@@ -166,15 +169,15 @@ def main() -> None:
         print(line, flush=True)
 
     print()
-    base = results.get(("physics only", "hydroelastic 5 ms"))
+    base = results.get(("physics only", DEFAULT_PLANT))
     for stack, per_second, unit in (
             (f"+ 2 IR at {IR_RATE_HZ:g} Hz", IR_RATE_HZ, "scan (2 sensors)"),
             (f"+ camera at {CAMERA_FPS:g} Hz", CAMERA_FPS, "frame")):
-        rtf = results.get((stack, "hydroelastic 5 ms"))
+        rtf = results.get((stack, DEFAULT_PLANT))
         if base and rtf:
             extra = (1 / rtf - 1 / base) / per_second
             print(f"in place: {extra * 1000:.2f} ms wall per {unit} "
-                  f"(extra wall time over physics only at 5 ms)")
+                  f"(extra wall time over physics only, {DEFAULT_PLANT})")
     if args.no_micro:
         return
     ir = _load_tool("bench_ir")
