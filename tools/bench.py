@@ -7,7 +7,7 @@ sweep's pick, and at 5 (the default), 2 and 1 ms; point contact at 10 ms). Each 
 wall-clock real-time factor (the CPU-time one in parentheses: the machine may be shared). Then
 the IR cost per scan and the camera cost per frame, both measured in place (the extra wall time
 per scan or frame over physics only) and by their micro-benchmarks (tools/bench_ir.py,
-tools/bench_raycast.py, tools/camera_cost.py) where those exist.
+tools/bench_raycast.py, tools/bench_camera.py) where those exist.
 
 A sensor row appears only when the scenario schema has the sensor (`robots.<r>.ir_sensors`,
 `robots.<r>.camera`); physics only turns every sensor off.
@@ -188,6 +188,11 @@ def main() -> None:
     if raycast is not None and hasattr(raycast, "scan_cost_seconds"):
         print(f"micro-benchmark: IR scan, 2 sensors x 6 rays: "
               f"{raycast.scan_cost_seconds() * 1000:.4f} ms (tools/bench_raycast.py)", flush=True)
+    camera = _load_tool("bench_camera")
+    if camera is not None and hasattr(camera, "camera_frame_ms"):
+        print(f"micro-benchmark: the robot's camera, one 320x240 frame: "
+              f"{camera.camera_frame_ms():.2f} ms (tools/bench_camera.py)", flush=True)
+        return
     camera = _load_tool("camera_cost")
     if camera is not None and hasattr(camera, "camera_frame_ms"):
         print(f"micro-benchmark: camera frame 320x240: {camera.camera_frame_ms():.2f} ms "
