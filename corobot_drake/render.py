@@ -38,6 +38,10 @@ shaded, not black. The sun itself is the scenario's directional light. With shad
 light casts them too (straight away from the camera, mostly hidden behind what casts them), so
 views from the robot itself render without shadows."""
 
+SKY_INTENSITY = 0.35
+"""With shadows: light from straight above (the sky), so the ground in the sun's shadow is
+shaded, not black (the camera's fill reaches the ground at a grazing angle)."""
+
 R_BC = RotationMatrix(np.array([[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]]))
 """A camera frame (+z forward, +x right, +y down) looking along the body's +x, level."""
 
@@ -53,6 +57,9 @@ def render_params(world: sc.World, shadows: bool = True) -> RenderEngineVtkParam
                            intensity=float(world.sun.intensity), color=Rgba(1, 1, 1, 1)),
             LightParameter(type="directional", frame="camera", direction=[0.0, 0.0, 1.0],
                            intensity=FILL_INTENSITY, color=Rgba(1, 1, 1, 1)),
+            *([LightParameter(type="directional", frame="world", direction=[0.0, 0.0, -1.0],
+                              intensity=SKY_INTENSITY, color=Rgba(1, 1, 1, 1))]
+              if shadows else []),
         ],
         cast_shadows=shadows,
         shadow_map_size=2048 if shadows else 256,
@@ -66,6 +73,12 @@ def add_renderer(sim, shadows: bool = True, name: str = RENDERER) -> str:
     if not scene_graph.HasRenderer(context, name):
         scene_graph.AddRenderer(context, name, MakeRenderEngineVtk(
             render_params(sim.scenario.world, shadows)))
+        # If the geometry poses were already evaluated (a sensor read the QueryObject), the
+        # new engine would keep its registration poses: rewriting the plant's positions with
+        # the same values invalidates the pose cache (the state itself is unchanged).
+        plant = sim.station.plant
+        plant_context = plant.GetMyMutableContextFromRoot(sim.context)
+        plant.SetPositions(plant_context, plant.GetPositions(plant_context))
     return name
 
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import pytest
 from pydrake.geometry import Role
 
@@ -98,3 +99,33 @@ def test_meshcat_publishes_collision_shapes_hidden_by_default():
     for layer in ("illustration", "proximity"):
         for path in ("corobot/chassis", "corobot/front_left_wheel", "giant_box"):
             assert meshcat.HasPath(f"/drake/{layer}/{path}"), (layer, path)
+
+
+def _fraction(image, rgb, tol=30) -> float:
+    return float(np.mean(np.all(np.abs(image.astype(int) - np.array(rgb)) <= tol, axis=2)))
+
+
+def test_chase_view_follows_the_driven_robot():
+    """Rendered after driving (and after the QueryObject was already evaluated): the robot is
+    in the middle of the chase view, lit (its black tyres and silver plates are there)."""
+    sim = make_sim("robots: {corobot: {commands: [!SetPower {left: 0.7, right: 0.4}]}}")
+    sim.advance(2.0)
+    sim.station.diagram.GetOutputPort("query_object").Eval(sim.context)
+    render.add_renderer(sim, shadows=False)
+    image = render.render(sim, render.chase_view(render.chassis_pose(sim)), 320, 200)
+    middle = image[60:180, 100:220]
+    sky = np.array(sim.scenario.world.sky_color) * 255
+    assert _fraction(image[:4], sky, tol=3) > 0.5, "sky colour behind"
+    assert _fraction(middle, (15, 15, 15), tol=25) > 0.03, "tyres in the middle"
+    assert image.mean() > 60, "lit, not black"
+
+
+def test_robot_camera_view_sees_the_box_ahead():
+    sim = make_sim("robots: {corobot: {pose: {yaw_deg: 180}}}")
+    image = render.render(sim, render.robot_camera_view(render.chassis_pose(sim)),
+                          dim.CAMERA_WIDTH, dim.CAMERA_HEIGHT, dim.CAMERA_FOV_Y_DEG,
+                          name=render.add_renderer(sim, shadows=False))
+    assert image.shape == (dim.CAMERA_HEIGHT, dim.CAMERA_WIDTH, 3)
+    # 0.74 m from a 2 m box with a 30 deg fov: the box fills the view; its lit face is brown.
+    r, g, b = image.reshape(-1, 3).mean(axis=0)
+    assert r > g > b and r > 60

@@ -7,7 +7,9 @@ robot's own camera (`robot-camera`: the robot itself is out of its view, so this
 the robot pays) and a 320x240 chase camera that looks at the robot (`chase`: the worst case
 for the meshes, every robot triangle drawn).
 
-`camera_frame_ms(visual, view)` is the importable figure (tools/bench.py uses it).
+`camera_frame_ms(visual, view)` and `meshes_vs_boxes_ms(view)` are importable (for
+tools/bench.py). The two visuals are rendered alternately, frame by frame, so load from other
+processes slows both alike; the median of each is reported.
 """
 
 from __future__ import annotations
@@ -29,39 +31,60 @@ VIEWS = ("robot-camera", "chase")
 RENDERER = "camera_cost_vtk"
 
 
+class _Camera:
+    """One simulation of the circle drive with its robot drawn as `visual`, rendering frames."""
+
+    def __init__(self, visual: str, view: str, scenario: Path):
+        quiet_drake_warnings()
+        self.sim = Simulation(load_scenario(scenario, overrides=[
+            CIRCLE, f"robots: {{corobot: {{visual: {visual}}}}}"]))
+        # The robot's camera renders without shadows (camera.py): so does this.
+        self.renderer = render.add_renderer(self.sim, shadows=False, name=RENDERER)
+        self.view = view
+
+    def frame_seconds(self) -> float:
+        """Advances one camera period, then times one frame's render (wall-clock s)."""
+        self.sim.advance(1.0 / 30.0)
+        X_WB = render.chassis_pose(self.sim)
+        X_WC = (render.robot_camera_view(X_WB) if self.view == "robot-camera"
+                else render.chase_view(X_WB))
+        start = time.perf_counter()
+        render.render(self.sim, X_WC, dim.CAMERA_WIDTH, dim.CAMERA_HEIGHT,
+                      dim.CAMERA_FOV_Y_DEG, name=self.renderer)
+        return time.perf_counter() - start
+
+
 def camera_frame_ms(visual: str = "meshes", view: str = "robot-camera", frames: int = 120,
                     warmup: int = 10, scenario: Path = DEFAULT_SCENARIO) -> float:
     """Median wall-clock ms to render one 320x240 frame of `view` with the robot drawn as
     `visual` (`meshes` or `boxes`)."""
-    quiet_drake_warnings()
-    sim = Simulation(load_scenario(scenario, overrides=[
-        CIRCLE, f"robots: {{corobot: {{visual: {visual}}}}}"]))
-    # The robot's camera renders without shadows (camera.py): so does this.
-    name = render.add_renderer(sim, shadows=False, name=RENDERER)
-    times = []
-    for i in range(warmup + frames):
-        sim.advance(1.0 / 30.0)
-        X_WB = render.chassis_pose(sim)
-        X_WC = (render.robot_camera_view(X_WB) if view == "robot-camera"
-                else render.chase_view(X_WB))
-        start = time.perf_counter()
-        render.render(sim, X_WC, dim.CAMERA_WIDTH, dim.CAMERA_HEIGHT, dim.CAMERA_FOV_Y_DEG,
-                      name=name)
-        if i >= warmup:
-            times.append(time.perf_counter() - start)
+    camera = _Camera(visual, view, scenario)
+    times = [camera.frame_seconds() for _ in range(warmup + frames)][warmup:]
     return 1000.0 * statistics.median(times)
+
+
+def meshes_vs_boxes_ms(view: str = "robot-camera", frames: int = 300, warmup: int = 10,
+                       scenario: Path = DEFAULT_SCENARIO) -> dict[str, float]:
+    """{"boxes": ms, "meshes": ms}: median per frame, the two rendered alternately (so a busy
+    machine slows both alike)."""
+    cameras = {v: _Camera(v, view, scenario) for v in ("boxes", "meshes")}
+    times = {v: [] for v in cameras}
+    for i in range(warmup + frames):
+        for v, camera in cameras.items():
+            t = camera.frame_seconds()
+            if i >= warmup:
+                times[v].append(t)
+    return {v: 1000.0 * statistics.median(t) for v, t in times.items()}
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--frames", type=int, default=120)
-    parser.add_argument("--repeats", type=int, default=3, help="median of this many runs")
+    parser.add_argument("--frames", type=int, default=300, help="frames of each, alternated")
     args = parser.parse_args()
     print("| view (320x240) | boxes, ms/frame | meshes, ms/frame | meshes / boxes |")
     print("|---|---|---|---|")
     for view in VIEWS:
-        ms = {v: statistics.median(camera_frame_ms(v, view, args.frames)
-                                   for _ in range(args.repeats)) for v in ("boxes", "meshes")}
+        ms = meshes_vs_boxes_ms(view, args.frames)
         print(f"| {view} | {ms['boxes']:.2f} | {ms['meshes']:.2f} | "
               f"{ms['meshes'] / ms['boxes']:.2f} |", flush=True)
 

@@ -2,7 +2,8 @@
 
 Usage:
     python tools/snapshot.py [--scenario YAML] [--output PNG] [--view chase|overview|robot-camera]
-                             [--pose X,Y,YAW_DEG] [--drive LEFT,RIGHT] [--time S]
+                             [--eye X,Y,Z [--target X,Y,Z]] [--pose X,Y,YAW_DEG]
+                             [--drive LEFT,RIGHT] [--time S]
                              [--width W] [--height H] [--visual meshes|boxes] [--override YAML]
 
 The scene is lit by the scenario's sun (a directional light in the world frame) with the sky
@@ -58,8 +59,10 @@ def overview_view(sim, fov_y_deg: float, aspect: float):
     return render.look_at(center + distance * direction, center)
 
 
-def take(sim, view: str, width: int, height: int, robot: str | None = None) -> np.ndarray:
-    """Renders `sim` now from `view`; returns an H x W x 3 uint8 image."""
+def take(sim, view: str, width: int, height: int, robot: str | None = None,
+         eye=None, target=None) -> np.ndarray:
+    """Renders `sim` now from `view` (or from `eye` looking at `target`, world metres);
+    returns an H x W x 3 uint8 image."""
     X_WB = render.chassis_pose(sim, robot)
     if view == "robot-camera":
         # The fill light would cast the robot's own shadow ahead of it: no shadows here.
@@ -68,7 +71,9 @@ def take(sim, view: str, width: int, height: int, robot: str | None = None) -> n
                              dim.CAMERA_FOV_Y_DEG, near=0.001, name=name)
     render.add_renderer(sim)
     fov = 40.0
-    if view == "chase":
+    if eye is not None:
+        X_WC = render.look_at(eye, target if target is not None else X_WB.translation())
+    elif view == "chase":
         X_WC = render.chase_view(X_WB)
     elif view == "overview":
         X_WC = overview_view(sim, fov, width / height)
@@ -97,6 +102,10 @@ def main(argv: list[str] | None = None) -> int:
                         help="start pose X,Y,YAW_DEG of the robot (m, m, degrees)")
     parser.add_argument("--drive", type=lambda s: _pair(s, 2, "--drive"),
                         help="LEFT,RIGHT power in [-1, 1] from t = 0 (replaces its commands)")
+    parser.add_argument("--eye", type=lambda s: _pair(s, 3, "--eye"),
+                        help="X,Y,Z: a free camera here instead of --view (world, m)")
+    parser.add_argument("--target", type=lambda s: _pair(s, 3, "--target"),
+                        help="X,Y,Z the free camera looks at (default: the robot)")
     parser.add_argument("--time", type=float, default=0.0, help="simulate S seconds first")
     parser.add_argument("--width", type=int)
     parser.add_argument("--height", type=int)
@@ -130,7 +139,7 @@ def main(argv: list[str] | None = None) -> int:
     small = args.view == "robot-camera"
     width = args.width or (dim.CAMERA_WIDTH if small else 960)
     height = args.height or (dim.CAMERA_HEIGHT if small else 600)
-    image = take(sim, args.view, width, height, name)
+    image = take(sim, args.view, width, height, name, args.eye, args.target)
 
     import matplotlib.image
 
@@ -139,7 +148,8 @@ def main(argv: list[str] | None = None) -> int:
     X = render.chassis_pose(sim, name)
     x, y, _ = X.translation()
     yaw = math.degrees(render.RollPitchYaw(X.rotation()).yaw_angle())
-    print(f"{args.output}: {width}x{height} {args.view} view at t = {sim.time:.2f} s, "
+    view = "free (--eye)" if args.eye else args.view
+    print(f"{args.output}: {width}x{height} {view} view at t = {sim.time:.2f} s, "
           f"{name} at x = {x:.3f} m, y = {y:.3f} m, yaw = {yaw:.1f} deg")
     return 0
 
