@@ -73,7 +73,7 @@ def serve(make_sim, host: str = "127.0.0.1", port: int = 50000, meshcat=None,
     return 0 if runner.error is None else 1
 
 
-HTTP_NICENESS = 5
+HTTP_NICENESS = 10
 """The HTTP process's nice increment: under CPU contention the simulation comes first."""
 
 

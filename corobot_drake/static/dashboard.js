@@ -161,7 +161,8 @@ function showIr(name, s) {
   let gauge = $(`ir-${name}`);
   if (!gauge) {
     const box = $("ir-gauges");
-    if (box.querySelector(".muted")) box.innerHTML = "";
+    const placeholder = $("ir-none");
+    if (placeholder) placeholder.remove();
     box.insertAdjacentHTML("beforeend",
       `<div>${name}: <b id="ir-${name}-raw">-</b> m <span class="muted">(<span id="ir-${name}-norm">-</span>)</span>` +
       `<div class="gauge" id="ir-${name}"><div></div></div></div>`);

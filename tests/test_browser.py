@@ -1,0 +1,150 @@
+"""The dashboard and the webcam page in headless Chromium (Debian's `chromium` package, driven
+by Playwright; `tools/setup` installs both). Screenshots go to `out/` (git-ignored).
+"""
+
+import itertools
+import os
+import shutil
+import time
+from pathlib import Path
+
+import pytest
+
+from corobot_drake.serve import ServerProcess
+
+REPO = Path(__file__).resolve().parent.parent
+OUT = REPO / "out"
+CHROMIUM = os.environ.get("COROBOT_CHROMIUM", "/usr/bin/chromium")
+FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
+         "--disable-component-update", "--disable-sync", "--no-first-run"]
+
+playwright_api = pytest.importorskip("playwright.sync_api")
+if not (Path(CHROMIUM).exists() or shutil.which(CHROMIUM)):
+    pytest.skip(f"no Chromium at {CHROMIUM} (tools/setup installs it)", allow_module_level=True)
+
+
+@pytest.fixture(scope="module")
+def server(tmp_path_factory):
+    log = tmp_path_factory.mktemp("server") / "stderr.log"
+    with ServerProcess(["--headless"], stderr_path=str(log)) as s:
+        yield s
+
+
+@pytest.fixture(scope="module")
+def browser():
+    with playwright_api.sync_playwright() as p:
+        b = p.chromium.launch(executable_path=CHROMIUM, args=FLAGS, headless=True)
+        yield b
+        b.close()
+
+
+@pytest.fixture
+def page(browser):
+    context = browser.new_context(viewport={"width": 1280, "height": 900})
+    page = context.new_page()
+    errors = []
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    yield page
+    context.close()
+    assert not errors, errors
+
+
+def number(page, selector: str) -> float:
+    return float(page.locator(selector).inner_text())
+
+
+def wait_for(predicate, timeout: float, what: str):
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        value = predicate()
+        if value:
+            return value
+        time.sleep(0.1)
+    raise AssertionError(f"timed out waiting for {what}")
+
+
+def test_dashboard_drives_with_the_pad_and_shows_the_camera(page, server):
+    page.goto(f"{server.url}/dashboard")
+    page.wait_for_selector("body[data-ready='1']", timeout=30000)
+    wait_for(lambda: page.locator("#pos-x").inner_text() != "-", 10, "the first state")
+    x0 = number(page, "#pos-x")
+    camera = page.locator("#camera")
+    has_camera = "no camera" not in page.locator("#camera-info").inner_text() or \
+        wait_for(lambda: int(camera.get_attribute("data-frames")) > 0, 10, "a camera frame")
+    frames0 = int(camera.get_attribute("data-frames"))
+    frame_time0 = camera.get_attribute("data-frame-time")
+
+    # Drag the pad's knob forward (up) and hold it there.
+    box = page.locator("#pad").bounding_box()
+    cx, cy = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
+    page.mouse.move(cx, cy)
+    page.mouse.down()
+    page.mouse.move(cx, cy - box["height"] * 0.4, steps=5)
+    wait_for(lambda: number(page, "#pos-x") > x0 + 0.15, 15, "the robot to move forward")
+    assert float(page.locator("#power-l").inner_text()) > 0.2
+    page.mouse.up()  # releasing the pad stops the robot
+    wait_for(lambda: abs(float(page.locator("#speed").inner_text())) < 0.02, 10, "a stop")
+    x1 = number(page, "#pos-x")
+    assert x1 > x0 + 0.15
+    assert int(page.locator("#enc-fl").inner_text()) > 100
+
+    # The keyboard drives too: hold the up arrow.
+    page.locator("body").click(position={"x": 5, "y": 5})
+    page.keyboard.down("ArrowUp")
+    wait_for(lambda: number(page, "#pos-x") > x1 + 0.05, 15, "the arrow key to drive")
+    page.keyboard.up("ArrowUp")
+    page.keyboard.press("Space")
+
+    if has_camera:
+        wait_for(lambda: int(camera.get_attribute("data-frames")) > frames0 + 3, 15,
+                 "new camera frames")
+        assert camera.get_attribute("data-frame-time") != frame_time0
+        size = page.evaluate("() => [document.getElementById('camera').naturalWidth,"
+                             " document.getElementById('camera').naturalHeight]")
+        assert size == [320, 240]
+    ir = page.request.get(f"{server.url}/robots/corobot").json()["state"]["ir"]
+    for name in ir:  # every IR sensor has its gauge
+        assert 0 < float(page.locator(f"#ir-{name}-raw").inner_text()) <= ir[name]["range"]
+    OUT.mkdir(exist_ok=True)
+    page.screenshot(path=str(OUT / "dashboard.png"), full_page=True)
+
+
+def test_dashboard_stop_and_enable_buttons(page, server):
+    page.goto(f"{server.url}/dashboard")
+    page.wait_for_selector("body[data-ready='1']", timeout=30000)
+    page.locator("#enable").click()  # enabled -> disabled
+    wait_for(lambda: page.locator("#enabled").inner_text() == "disabled", 10, "disabled")
+    page.locator("#enable").click()
+    wait_for(lambda: page.locator("#enabled").inner_text() == "enabled", 10, "enabled")
+    page.locator("#stop").click()
+    wait_for(lambda: "all_stop" in page.locator("#sent").inner_text(), 5, "all_stop sent")
+
+
+def test_webcam_page_refreshes_at_the_chosen_interval(page, server):
+    status = page.request.get(f"{server.url}/robots/corobot/camera")
+    if status.status == 501:
+        pytest.skip("no camera in this build")
+    page.goto(f"{server.url}/robots/corobot/camera/page?interval=300")
+    wait_for(lambda: page.evaluate("() => window.webcam.frames") >= 8, 20, "8 frames")
+    starts = page.evaluate("() => window.webcam.starts")
+    gaps = [b - a for a, b in itertools.pairwise(starts)]
+    mean = sum(gaps) / len(gaps)
+    assert 270 <= mean <= 400, gaps
+    assert page.evaluate("() => document.getElementById('frame').naturalWidth") == 320
+
+    page.locator("#stop").click()
+    frames = page.evaluate("() => window.webcam.frames")
+    time.sleep(1.0)
+    assert page.evaluate("() => window.webcam.frames") <= frames + 1  # one may be in flight
+    assert page.locator("#status").inner_text() == "stopped"
+
+    page.locator("#interval").fill("100")
+    page.locator("#start").click()
+    time.sleep(0.3)
+    t0, f0 = time.monotonic(), page.evaluate("() => window.webcam.frames")
+    time.sleep(2.0)
+    rate = (page.evaluate("() => window.webcam.frames") - f0) / (time.monotonic() - t0)
+    assert 6 <= rate <= 11, rate  # about 10 frames a second
+    assert "interval=100" in page.url
+    OUT.mkdir(exist_ok=True)
+    page.screenshot(path=str(OUT / "webcam.png"))
