@@ -31,6 +31,9 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--override", action="append", default=[], metavar="YAML_TEXT",
                    help="YAML merged over the scenario (repeatable)")
     p.add_argument("--summary", metavar="PATH", help="write the run's summary JSON here")
+    p.add_argument("--save-scenario", metavar="PATH",
+                   help="at the end, write a scenario YAML of the current state (poses, "
+                   "velocities, settings, commands still to run): running it continues from there")
     p.add_argument("--serve", action="store_true",
                    help="run in real time with the HTTP services, dashboard and webcam page "
                    "(Meshcat too unless --headless); Ctrl-C stops")
@@ -137,6 +140,8 @@ def main(argv: list[str] | None = None) -> int:
         _write_logs(sim, Path(args.log))
     if args.summary:
         Path(args.summary).write_text(json.dumps(summary, indent=2) + "\n")
+    if args.save_scenario:
+        sim.save_scenario(args.save_scenario)
     return 0
 
 

@@ -13,7 +13,16 @@ from pydrake.common.value import Value
 from pydrake.systems.framework import BasicVector, LeafSystem
 
 from corobot_drake import dimensions as dim
-from corobot_drake.scenario import AllStop, Drive, Enable, SetPower, SetSpeed, Wait
+from corobot_drake.scenario import (
+    COMPLETING_COMMANDS,
+    AllStop,
+    Drive,
+    Enable,
+    SetPose,
+    SetPower,
+    SetSpeed,
+    Wait,
+)
 
 
 class _Immutable:
@@ -38,6 +47,22 @@ class DriveRequest(_Immutable):
     command: object = None
     time: float = 0.0
     """Simulation time (s) at which it was issued."""
+    enabled: bool = True
+    """The drive's enable level (the last `Enable` issued) at this request: a level, so an
+    Enable issued in the same instant as the next command is never lost."""
+
+
+@dc.dataclass(frozen=True)
+class CommandStatus(_Immutable):
+    """How a completing command (DriveDistance, RotateDegrees, SetPose) ended, reported by
+    `motion.MotionCommands`: its request's seq, status and reason, end time (s)."""
+
+    seq: int = 0
+    status: str = "running"
+    """running, succeeded or failed."""
+    reason: str = ""
+    """Why it failed: superseded, disabled, stalled (or not_applied for a SetPose)."""
+    time: float = 0.0
 
 
 @dc.dataclass(frozen=True)
@@ -62,6 +87,10 @@ class CommandSourceState(_Immutable):
     script_blocked_until: float = 0.0
     """Simulation time before which the script issues nothing (a running Wait)."""
     log: tuple[CommandRecord, ...] = ()
+    script_waits_for: int = 0
+    """seq of the scripted completing command the script waits for (0: none)."""
+    teleport: DriveRequest | None = None
+    """A SetPose not yet applied to the plant (the Simulation applies it, `TakeTeleport`)."""
 
 
 def command_name(command) -> str:
@@ -81,9 +110,13 @@ def check_finite(command) -> None:
 class CommandSource(LeafSystem):
     """Issues a robot's drive requests: its scenario script in order, and API commands.
 
-    Output `request` (DriveRequest). The script advances at `period`; a `Wait` holds it for
-    its duration. `Issue()` writes a command into the Context directly (what the Python API,
-    teleop and the server call between simulation steps).
+    Output `request` (DriveRequest). Input `command_status` (CommandStatus, from
+    `motion.MotionCommands`): how completing commands end, recorded in the log. Every `period`
+    s it records that status and advances the script; a `Wait` holds the script for its
+    duration and a completing command holds it until it ends. `Issue()` writes a command into
+    the Context directly (what the Python API, teleop and the server call between steps).
+    A new command ends a running completing one as failed: `superseded`, or `disabled` when
+    the new command is `Enable(false)`.
     """
 
     def __init__(self, script: list, period: float):
@@ -95,8 +128,14 @@ class CommandSource(LeafSystem):
         self.DeclareAbstractOutputPort(
             "request", lambda: Value(DriveRequest()), self._calc_request,
             {self.abstract_state_ticket(self._state_index)})
-        if self._script:
-            self.DeclarePeriodicUnrestrictedUpdateEvent(period, 0.0, self._run_script)
+        self._status_port = self.DeclareAbstractInputPort("command_status",
+                                                          Value(CommandStatus()))
+        self.DeclarePeriodicUnrestrictedUpdateEvent(period, 0.0, self._update)
+
+    @property
+    def script(self) -> tuple:
+        """The scenario's commands, in order."""
+        return self._script
 
     def _calc_request(self, context, output):
         output.set_value(self.get_state(context).request)
@@ -113,33 +152,96 @@ class CommandSource(LeafSystem):
         log = list(state.log)
         if log and log[-1].end_time is None:
             last = log[-1]
-            log[-1] = dc.replace(last, end_time=time, status="succeeded")
+            if last.command in _COMPLETING_NAMES:
+                reason = ("disabled" if isinstance(command, Enable) and not command.enabled
+                          else "superseded")
+                log[-1] = dc.replace(last, end_time=time, status="failed", reason=reason)
+            else:
+                log[-1] = dc.replace(last, end_time=time, status="succeeded")
         seq = state.request.seq + 1
         log.append(CommandRecord(seq=seq, command=command_name(command), start_time=time))
-        return dc.replace(state, request=DriveRequest(seq, command, time), log=tuple(log))
+        enabled = command.enabled if isinstance(command, Enable) else state.request.enabled
+        request = DriveRequest(seq, command, time, enabled)
+        teleport = request if isinstance(command, SetPose) else state.teleport
+        return dc.replace(state, request=request, log=tuple(log), teleport=teleport)
+
+    @staticmethod
+    def _with_status(state: CommandSourceState, status: CommandStatus) -> CommandSourceState:
+        """Records a completing command's end (if its record is still running)."""
+        if status.status == "running" or status.seq == 0:
+            return state
+        for i in range(len(state.log) - 1, -1, -1):
+            record = state.log[i]
+            if record.seq == status.seq:
+                if record.end_time is not None:
+                    return state
+                log = list(state.log)
+                log[i] = dc.replace(record, end_time=status.time, status=status.status,
+                                    reason=status.reason)
+                return dc.replace(state, log=tuple(log))
+        return state
+
+    def _status(self, context) -> CommandStatus:
+        if not self._status_port.HasValue(context):
+            return CommandStatus()
+        return self._status_port.Eval(context)
+
+    def current_state(self, context) -> CommandSourceState:
+        """The state with the latest reported command status recorded."""
+        return self._with_status(self.get_state(context), self._status(context))
+
+    def record(self, context, seq: int) -> CommandRecord | None:
+        """The log record of the command with this seq, as of now."""
+        for record in reversed(self.current_state(context).log):
+            if record.seq == seq:
+                return record
+        return None
 
     def Issue(self, context, command) -> int:
         """Issues `command` now (context time); returns its sequence number."""
-        state = self._with_command(self.get_state(context), command, context.get_time())
+        state = self._with_command(self.current_state(context), command, context.get_time())
         self._set_state(context, state)
         return state.request.seq
 
-    def _run_script(self, context, state):
+    def TakeTeleport(self, context) -> DriveRequest | None:
+        """The pending SetPose request, cleared (the caller applies it to the plant)."""
+        state = self.get_state(context)
+        if state.teleport is None:
+            return None
+        self._set_state(context, dc.replace(state, teleport=None))
+        return state.teleport
+
+    def has_teleport(self, context) -> bool:
+        return self.get_state(context).teleport is not None
+
+    def _update(self, context, state):
         now = context.get_time()
-        current = self.get_state(context)
-        if current.next_script_index >= len(self._script) or now < current.script_blocked_until:
-            return
-        command = self._script[current.next_script_index]
-        updated = dc.replace(current, next_script_index=current.next_script_index + 1)
-        if isinstance(command, Wait):
-            log = list(updated.log)
-            log.append(CommandRecord(seq=0, command="Wait", start_time=now,
-                                     end_time=now + command.seconds, status="succeeded"))
-            updated = dc.replace(updated, script_blocked_until=now + command.seconds,
-                                 log=tuple(log))
-        else:
-            updated = self._with_command(updated, command, now)
-        self._set_state(state, updated)
+        original = self.get_state(context)
+        current = self._with_status(original, self._status(context))
+        waiting = False
+        if current.script_waits_for:
+            record = next(r for r in reversed(current.log) if r.seq == current.script_waits_for)
+            waiting = record.end_time is None
+        if (current.next_script_index < len(self._script)
+                and now >= current.script_blocked_until and not waiting):
+            command = self._script[current.next_script_index]
+            current = dc.replace(current, next_script_index=current.next_script_index + 1)
+            if isinstance(command, Wait):
+                log = list(current.log)
+                log.append(CommandRecord(seq=0, command="Wait", start_time=now,
+                                         end_time=now + command.seconds, status="succeeded"))
+                current = dc.replace(current, script_blocked_until=now + command.seconds,
+                                     log=tuple(log))
+            else:
+                current = self._with_command(current, command, now)
+                completing = isinstance(command, COMPLETING_COMMANDS)
+                current = dc.replace(
+                    current, script_waits_for=current.request.seq if completing else 0)
+        if current is not original:
+            self._set_state(state, current)
+
+
+_COMPLETING_NAMES = tuple(c.__name__ for c in COMPLETING_COMMANDS)
 
 
 # Indices of the drive controller's discrete state.
@@ -196,11 +298,9 @@ class DriveController(LeafSystem):
         request = self._request_port.Eval(context)
         if request.seq != int(x[_SEQ]):
             x[_SEQ] = request.seq
-            command = request.command
-            if isinstance(command, Enable):
-                x[_ENABLED] = 1.0 if command.enabled else 0.0
-            elif x[_ENABLED]:
-                target = self.target_for(command, True)
+            x[_ENABLED] = 1.0 if request.enabled else 0.0
+            if x[_ENABLED]:
+                target = self.target_for(request.command, True)
                 if target is not None:
                     x[_POWER_L:_TARGET_R + 1] = target
         if not x[_ENABLED]:
@@ -209,6 +309,22 @@ class DriveController(LeafSystem):
         x[_AXLE_L:_AXLE_R + 1] += np.clip(
             x[_TARGET_L:_TARGET_R + 1] - x[_AXLE_L:_AXLE_R + 1], -step, step)
         discrete_state.set_value(self._state, x)
+
+    def Halt(self, context) -> None:
+        """Stops the wheels at once (powers, targets and slewed axle speeds to 0): what a
+        teleport does, so the robot lands at rest. `context` is this system's."""
+        x = context.get_discrete_state(self._state).get_value().copy()
+        x[_POWER_L:_AXLE_R + 1] = 0.0
+        context.SetDiscreteState(self._state, x)
+
+    def SetAxleSpeeds(self, context, left: float, right: float) -> None:
+        """Sets the commanded (slewed) axle speeds and their targets, rad/s: an initial
+        condition (a saved scene). `context` is this system's."""
+        x = context.get_discrete_state(self._state).get_value().copy()
+        x[_TARGET_L], x[_TARGET_R], x[_AXLE_L], x[_AXLE_R] = left, right, left, right
+        scaling = self._drive.motor_torque_scaling
+        x[_POWER_L], x[_POWER_R] = left / scaling, right / scaling
+        context.SetDiscreteState(self._state, x)
 
     def _calc_desired_state(self, context, output: BasicVector):
         x = context.get_discrete_state(self._state).get_value()

@@ -183,7 +183,55 @@ class Wait:
     seconds: float = 1.0
 
 
-Command = Union[SetPower, SetSpeed, AllStop, Enable, Wait]  # noqa: UP007
+@dc.dataclass
+class DriveDistance:
+    """Drive straight until |distance| m from the start pose (negative: backwards), at
+    `power` in (0, 1]; ends succeeded on arrival (SPEC "Commands that complete")."""
+
+    distance: float = 0.0
+    power: float = 0.5
+
+
+@dc.dataclass
+class RotateDegrees:
+    """Turn in place by `degrees` (positive: counter-clockwise seen from above, i.e. left),
+    at `power` in (0, 1]; ends succeeded on arrival."""
+
+    degrees: float = 0.0
+    power: float = 0.5
+
+
+@dc.dataclass
+class SetPose:
+    """Teleport the robot to (x, y) m facing `yaw_deg`: on the ground, at rest, wheels stopped."""
+
+    x: float = 0.0
+    y: float = 0.0
+    yaw_deg: float = 0.0
+
+
+Command = Union[SetPower, SetSpeed, AllStop, Enable, Wait,  # noqa: UP007
+                DriveDistance, RotateDegrees, SetPose]
+COMPLETING_COMMANDS = (DriveDistance, RotateDegrees, SetPose)
+"""Commands that run until they end (succeeded or failed); the script waits for each."""
+
+PROFILES = ("closed_loop", "seed")
+
+
+@dc.dataclass
+class Motion:
+    """How DriveDistance and RotateDegrees slow down, land and give up (`motion.py`)."""
+
+    profile: str = "closed_loop"
+    """`closed_loop`: speed from the measured distance/angle left, heading held while
+    driving; `seed`: the book's (last 6 samples at 60 Hz, halve the speed when < 6 frames
+    remain, stop when reached)."""
+    stall_time: float = 1.0
+    """s: a command that makes no progress for this long fails as `stalled`."""
+    stall_distance: float = 0.005
+    """m: progress a DriveDistance must make within `stall_time`."""
+    stall_angle_deg: float = 0.5
+    """deg: progress a RotateDegrees must make within `stall_time`."""
 
 
 @dc.dataclass
@@ -196,6 +244,14 @@ class Robot:
     visual: str = "meshes"
     """How the robot looks: `meshes` (the detailed model) or `boxes` (its collision shapes)."""
     commands: list[Command] = dc.field(default_factory=list)
+    motion: Motion = dc.field(default_factory=Motion)
+    velocity: list[float] = dc.field(default_factory=lambda: [0.0] * 6)
+    """Initial chassis spatial velocity in the world [wx, wy, wz, vx, vy, vz] (rad/s, m/s)."""
+    wheel_angles: list[float] = dc.field(default_factory=lambda: [0.0] * 4)
+    """Initial axle angles (rad, `dimensions.WHEEL_NAMES` order): the encoders start here."""
+    wheel_speeds: list[float] = dc.field(default_factory=lambda: [0.0] * 4)
+    """Initial axle speeds (rad/s, same order); the drive's commanded axle speeds start at the
+    front wheels' (a saved scene carries on without a jolt)."""
     camera: CameraConfig = dc.field(default_factory=default_camera_config)
     """The front camera, Drake's CameraConfig (SPEC defaults; `corobot_drake/camera.py`).
     `X_PB.base_frame` names a frame of this robot (`chassis`); `{rgb: false}`: no camera."""
@@ -432,9 +488,24 @@ def _validate(s: Scenario, source: str) -> None:
             field, message = problem
             raise ScenarioError(source, f"{path}.camera" + (f".{field}" if field else ""),
                                 message)
+        m = robot.motion
+        if m.profile not in PROFILES:
+            raise ScenarioError(source, f"{path}.motion.profile",
+                                f"{m.profile!r} is not one of " + ", ".join(PROFILES))
+        for field in ("stall_time", "stall_distance", "stall_angle_deg"):
+            if not getattr(m, field) > 0:
+                raise ScenarioError(source, f"{path}.motion.{field}", "must be > 0")
+        if len(robot.velocity) != 6:
+            raise ScenarioError(source, f"{path}.velocity", "needs 6 numbers [w, v]")
+        for field in ("wheel_angles", "wheel_speeds"):
+            if len(getattr(robot, field)) != 4:
+                raise ScenarioError(source, f"{path}.{field}", "needs 4 numbers")
         for i, cmd in enumerate(robot.commands):
             if isinstance(cmd, Wait) and not cmd.seconds >= 0:
                 raise ScenarioError(source, f"{path}.commands[{i}].seconds", "must be >= 0")
+            if isinstance(cmd, DriveDistance | RotateDegrees) and not 0 < cmd.power <= 1:
+                raise ScenarioError(source, f"{path}.commands[{i}].power",
+                                    f"must be in (0, 1], got {cmd.power:g}")
 
 
 def load_scenario(filename: str | Path | None = None, *, data: str | None = None,

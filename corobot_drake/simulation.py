@@ -16,15 +16,19 @@ import time
 from pathlib import Path
 
 import numpy as np
-from pydrake.math import RollPitchYaw
+from pydrake.common.yaml import yaml_dump_typed
+from pydrake.math import RigidTransform, RollPitchYaw
+from pydrake.multibody.math import SpatialVelocity
 from pydrake.systems.analysis import ApplySimulatorConfig, Simulator
+from pydrake.systems.framework import EventStatus
 
 from corobot_drake import dimensions as dim
 from corobot_drake import scenario as sc
 from corobot_drake.drive import CommandRecord
 from corobot_drake.ir_sensor import IrReading
+from corobot_drake.odometry import DriveState
 from corobot_drake.runlog import log_rows, write_csv
-from corobot_drake.station import RobotParts, Station, build_station
+from corobot_drake.station import RobotParts, Station, build_station, transform_to_pose
 
 
 @dc.dataclass(frozen=True)
@@ -46,6 +50,62 @@ class BodyVelocity:
     forward: float
     lateral: float
     yaw_rate: float
+
+
+@dc.dataclass(frozen=True)
+class CommandResult:
+    """How a command went: status running, succeeded or failed; reason when failed
+    (superseded, disabled, stalled; not_applied for a SetPose); times in simulated s."""
+
+    seq: int
+    command: str
+    status: str
+    reason: str
+    start_time: float
+    end_time: float | None
+
+    @property
+    def succeeded(self) -> bool:
+        return self.status == "succeeded"
+
+
+class CommandHandle:
+    """A command issued without waiting: poll `status()` / `done()` while the simulation
+    advances (and other commands are issued), or `wait()` for it to end."""
+
+    def __init__(self, robot: "Robot", seq: int):
+        self.robot, self.seq = robot, seq
+
+    def result(self) -> CommandResult:
+        source = self.robot._parts.command_source
+        r = source.record(source.GetMyContextFromRoot(self.robot._sim.context), self.seq)
+        return CommandResult(r.seq, r.command, r.status, r.reason, r.start_time, r.end_time)
+
+    def status(self) -> str:
+        return self.result().status
+
+    def done(self) -> bool:
+        return self.result().end_time is not None
+
+    def wait(self, timeout: float | None = 300.0) -> CommandResult:
+        """Advances the simulation (one control period at a time) until the command ends;
+        TimeoutError after `timeout` simulated seconds (None: no limit)."""
+        sim = self.robot._sim
+        period = self.robot._parts.motion.drive_period
+        end = math.inf if timeout is None else sim.time + timeout
+        while not self.done():
+            if sim.time >= end:
+                raise TimeoutError(f"{self.result().command} (seq {self.seq}) still running "
+                                   f"after {timeout} s")
+            sim.advance(period)
+        return self.result()
+
+
+def _check_power(power: float) -> float:
+    power = float(power)
+    if not 0.0 < power <= 1.0:
+        raise ValueError(f"power must be in (0, 1], got {power}")
+    return power
 
 
 class Robot:
@@ -76,6 +136,76 @@ class Robot:
     def enable(self, enabled: bool = True) -> int:
         return self.issue(sc.Enable(bool(enabled)))
 
+    def drive_distance_async(self, distance: float, power: float = 0.5) -> CommandHandle:
+        """Starts driving straight |distance| m (negative: backwards) at `power` in (0, 1]."""
+        return CommandHandle(self, self.issue(sc.DriveDistance(float(distance),
+                                                               _check_power(power))))
+
+    def drive_distance(self, distance: float, power: float = 0.5,
+                       timeout: float | None = 300.0) -> CommandResult:
+        """Drives straight |distance| m (negative: backwards) at `power`, advancing the
+        simulation until the command ends; returns how it ended."""
+        return self.drive_distance_async(distance, power).wait(timeout)
+
+    def rotate_degrees_async(self, degrees: float, power: float = 0.5) -> CommandHandle:
+        """Starts turning in place by `degrees` (positive: counter-clockwise, left)."""
+        return CommandHandle(self, self.issue(sc.RotateDegrees(float(degrees),
+                                                               _check_power(power))))
+
+    def rotate_degrees(self, degrees: float, power: float = 0.5,
+                       timeout: float | None = 300.0) -> CommandResult:
+        """Turns in place by `degrees` (positive: left), advancing the simulation until the
+        command ends; returns how it ended."""
+        return self.rotate_degrees_async(degrees, power).wait(timeout)
+
+    def set_pose(self, x: float, y: float, yaw_deg: float = 0.0) -> CommandHandle:
+        """Teleports the robot now to (x, y) m facing `yaw_deg`, on the ground, at rest, the
+        wheels stopped; a running command fails as superseded. The returned handle ends
+        (succeeded) once the robot has settled there (`motion.POSE_SETTLE_TIME`)."""
+        handle = CommandHandle(self, self.issue(sc.SetPose(float(x), float(y), float(yaw_deg))))
+        self._apply_teleport()
+        return handle
+
+    def _apply_teleport(self) -> bool:
+        """Applies a pending SetPose to the plant (and stops the drive); True if there was one."""
+        parts, root = self._parts, self._sim.context
+        source = parts.command_source
+        request = source.TakeTeleport(source.GetMyMutableContextFromRoot(root))
+        if request is None:
+            return False
+        pose = request.command
+        plant = self._sim.station.plant
+        plant_context = plant.GetMyMutableContextFromRoot(root)
+        plant.SetFreeBodyPose(plant_context, parts.chassis, RigidTransform(
+            RollPitchYaw(0.0, 0.0, math.radians(pose.yaw_deg)), [pose.x, pose.y, 0.0]))
+        plant.SetFreeBodySpatialVelocity(plant_context, parts.chassis, SpatialVelocity.Zero())
+        for joint in parts.wheel_joints:
+            joint.set_angular_rate(plant_context, 0.0)
+        controller = parts.drive_controller
+        controller.Halt(controller.GetMyMutableContextFromRoot(root))
+        return True
+
+    def continuation_commands(self) -> list:
+        """Commands that carry on from now: the enable level, the running command (what is
+        left of a DriveDistance/RotateDegrees, or the last SetPower/SetSpeed), then the
+        script's unissued rest (after what is left of a running Wait)."""
+        root = self._sim.context
+        source, motion = self._parts.command_source, self._parts.motion
+        state = source.current_state(source.GetMyContextFromRoot(root))
+        commands = [] if state.request.enabled else [sc.Enable(False)]
+        remaining = motion.remaining_command(motion.GetMyContextFromRoot(root))
+        if remaining is not None:
+            commands.append(remaining)
+        elif isinstance(state.request.command, sc.SetPower | sc.SetSpeed):
+            commands.append(state.request.command)
+        script = source.script
+        if state.next_script_index < len(script):
+            if state.script_blocked_until > self._sim.time:
+                commands.append(sc.Wait(state.script_blocked_until - self._sim.time))
+            commands += script[state.next_script_index:]
+        return commands
+
+
     # --- measurements ---------------------------------------------------------------------
     def _plant_context(self):
         return self._sim.station.plant.GetMyContextFromRoot(self._sim.context)
@@ -100,6 +230,28 @@ class Robot:
         v = self._sim.station.diagram.GetOutputPort(f"{self.name}.axle_speed").Eval(
             self._sim.context)
         return {w: float(x) for w, x in zip(dim.WHEEL_NAMES, v, strict=True)}
+
+    def drive_state(self) -> DriveState:
+        """The four-wheel drive state (`.two_wheel()`: the differential-drive view)."""
+        return self._sim.station.diagram.GetOutputPort(f"{self.name}.drive_state").Eval(
+            self._sim.context)
+
+    def encoders(self) -> dict[str, int]:
+        """Front-wheel encoder counts, 600 ticks per revolution, by wheel name."""
+        ticks = self._sim.station.diagram.GetOutputPort(f"{self.name}.encoder_ticks").Eval(
+            self._sim.context)
+        return {"front_left": round(ticks[0]), "front_right": round(ticks[1])}
+
+    def heading(self) -> float:
+        """Compass: chassis yaw about world z, rad in (-pi, pi]."""
+        return float(self._sim.station.diagram.GetOutputPort(f"{self.name}.heading").Eval(
+            self._sim.context)[0])
+
+    def position(self) -> tuple[float, float, float]:
+        """GPS: the chassis frame's origin in the world, m."""
+        p = self._sim.station.diagram.GetOutputPort(f"{self.name}.position").Eval(
+            self._sim.context)
+        return (float(p[0]), float(p[1]), float(p[2]))
 
     def is_enabled(self) -> bool:
         status = self._sim.station.diagram.GetOutputPort(f"{self.name}.drive_status").Eval(
@@ -164,7 +316,7 @@ class Robot:
 
     def command_log(self) -> list[CommandRecord]:
         source = self._parts.command_source
-        return list(source.get_state(source.GetMyContextFromRoot(self._sim.context)).log)
+        return list(source.current_state(source.GetMyContextFromRoot(self._sim.context)).log)
 
     def summary(self) -> dict:
         pose, velocity = self.pose(), self.velocity()
@@ -175,6 +327,9 @@ class Robot:
             "camera_frames": self.camera_frames_saved(),
             "ir": self.ir_distances(),
             "wheels": self.axle_speeds(),
+            "encoders": self.encoders(),
+            "heading": self.heading(),
+            "position": list(self.position()),
             "commands": [
                 {"command": r.command, "status": r.status, "reason": r.reason,
                  "start_time": r.start_time, "end_time": r.end_time}
@@ -194,6 +349,10 @@ class Simulation:
         ApplySimulatorConfig(scenario.simulator_config, self.simulator)
         self.context = self.simulator.get_mutable_context()
         self.robots = {name: Robot(self, parts) for name, parts in self.station.robots.items()}
+        self._set_initial_velocities()
+        if any(isinstance(c, sc.SetPose) for r in scenario.robots.values() for c in r.commands):
+            # A scripted SetPose: stop after the step that issued it, to teleport (advance_to).
+            self.simulator.set_monitor(self._teleport_monitor)
         self.simulator.Initialize()
         self._wall_seconds = 0.0
 
@@ -218,10 +377,79 @@ class Simulation:
         except KeyError:
             raise KeyError(f"no robot named {name!r}; robots: {', '.join(self.robots)}") from None
 
+    def _set_initial_velocities(self) -> None:
+        """The scenario's robot and free-body velocities, the robots' wheel angles and
+        speeds (and the drive's commanded axle speeds from the front wheels')."""
+        plant = self.station.plant
+        plant_context = plant.GetMyMutableContextFromRoot(self.context)
+        for name, parts in self.station.robots.items():
+            spec = self.scenario.robots[name]
+            plant.SetFreeBodySpatialVelocity(plant_context, parts.chassis, SpatialVelocity(
+                np.asarray(spec.velocity[:3]), np.asarray(spec.velocity[3:])))
+            for joint, angle, speed in zip(parts.wheel_joints, spec.wheel_angles,
+                                           spec.wheel_speeds, strict=True):
+                joint.set_angle(plant_context, angle)
+                joint.set_angular_rate(plant_context, speed)
+            if any(spec.wheel_speeds):
+                controller = parts.drive_controller
+                controller.SetAxleSpeeds(controller.GetMyMutableContextFromRoot(self.context),
+                                         *spec.wheel_speeds[:2])
+        for name, body in self.station.bodies.items():
+            spec = self.scenario.world.bodies[name]
+            if not spec.fixed:
+                plant.SetFreeBodySpatialVelocity(plant_context, body, SpatialVelocity(
+                    np.asarray(spec.velocity[:3]), np.asarray(spec.velocity[3:])))
+
+    def _teleport_monitor(self, root_context) -> EventStatus:
+        for parts in self.station.robots.values():
+            source = parts.command_source
+            if source.has_teleport(source.GetMyContextFromRoot(root_context)):
+                return EventStatus.ReachedTermination(source, "teleport")
+        return EventStatus.Succeeded()
+
     def advance_to(self, t: float) -> None:
+        """Advances to simulated time `t` (s), applying scripted SetPose teleports."""
         start = time.perf_counter()
-        self.simulator.AdvanceTo(t)
+        while True:
+            self.simulator.AdvanceTo(t)
+            applied = [robot._apply_teleport() for robot in self.robots.values()]
+            if not any(applied) or self.time >= t:
+                break
         self._wall_seconds += time.perf_counter() - start
+
+    def saved_scenario(self) -> sc.Scenario:
+        """This scenario with the current state: time, every robot's and free body's pose
+        and velocity, the wheels' angles, and each robot's commands from now on
+        (`Robot.continuation_commands`). Running it continues from here."""
+        saved = sc.load_scenario(data=yaml_dump_typed(self.scenario, schema=sc.Scenario),
+                                 defaults=sc.Scenario())
+        saved.simulator_config.start_time = self.time
+        plant = self.station.plant
+        plant_context = plant.GetMyContextFromRoot(self.context)
+
+        def velocity(body) -> list[float]:
+            V = plant.EvalBodySpatialVelocityInWorld(plant_context, body)
+            return [float(v) for v in (*V.rotational(), *V.translational())]
+
+        for name, robot in self.robots.items():
+            spec, parts = saved.robots[name], robot._parts
+            spec.pose = transform_to_pose(plant.EvalBodyPoseInWorld(plant_context, parts.chassis))
+            spec.velocity = velocity(parts.chassis)
+            spec.wheel_angles = [float(j.get_angle(plant_context)) for j in parts.wheel_joints]
+            spec.wheel_speeds = [float(j.get_angular_rate(plant_context))
+                                 for j in parts.wheel_joints]
+            spec.commands = robot.continuation_commands()
+        for name, body in self.station.bodies.items():
+            spec = saved.world.bodies[name]
+            if not spec.fixed:
+                spec.pose = transform_to_pose(plant.EvalBodyPoseInWorld(plant_context, body))
+                spec.velocity = velocity(body)
+        return saved
+
+    def save_scenario(self, filename: str | Path) -> None:
+        """Writes `saved_scenario()` as a scenario YAML file."""
+        sc.save_scenario(self.saved_scenario(), filename)
+
 
     def advance(self, seconds: float) -> None:
         self.advance_to(self.time + seconds)

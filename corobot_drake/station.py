@@ -35,6 +35,8 @@ from corobot_drake.drive import CommandSource, DriveController
 from corobot_drake.ir_sensor import add_ir_sensors
 from corobot_drake.model import MODELS_DIR, corobot_sdf
 from corobot_drake.monitor import TiltMonitor
+from corobot_drake.motion import MotionCommands
+from corobot_drake.odometry import add_odometry
 from corobot_drake.runlog import add_run_log
 
 TILT_SAMPLE_PERIOD = 0.01
@@ -145,6 +147,8 @@ class RobotParts:
     """`camera.CameraHold` (the latest frame), None without a camera."""
     camera_saver: object = None
     """`camera.CameraFrameSaver` when frames are saved."""
+    motion: MotionCommands | None = None
+    """DriveDistance / RotateDegrees / SetPose state machine (`motion.py`)."""
     ir_sensors: dict = dc.field(default_factory=dict)
     """{sensor name: `ir_sensor.IrSensor`}."""
 
@@ -192,7 +196,25 @@ def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None) -> Stat
                 [j.index() for j in joints])))
         builder.Connect(plant.get_state_output_port(), selector.get_input_port())
         builder.Connect(selector.get_output_port(), controller.GetInputPort("wheel_state"))
-        builder.Connect(source.GetOutputPort("request"), controller.GetInputPort("request"))
+        # Command source -> motion commands -> drive controller; status back to the source.
+        motion = builder.AddNamedSystem(f"{name}.motion", MotionCommands(robot.drive,
+                                                                          robot.motion))
+        odometry = add_odometry(
+            builder, name, plant.num_multibody_states(), chassis.floating_positions_start(),
+            plant.get_state_output_port(), selector.get_output_port(),
+            controller.GetOutputPort("drive_status"), controller.GetOutputPort("axle_speed"),
+            robot.drive.motor_torque_scaling)
+        builder.Connect(source.GetOutputPort("request"), motion.GetInputPort("request"))
+        builder.Connect(odometry.position, motion.GetInputPort("position"))
+        builder.Connect(odometry.heading, motion.GetInputPort("heading"))
+        builder.Connect(motion.GetOutputPort("drive_request"), controller.GetInputPort("request"))
+        builder.Connect(motion.GetOutputPort("command_status"),
+                        source.GetInputPort("command_status"))
+        for port_name, port in (("encoder_ticks", odometry.encoder_ticks),
+                                ("heading", odometry.heading), ("position", odometry.position),
+                                ("drive_state", odometry.drive_state),
+                                ("command_status", motion.GetOutputPort("command_status"))):
+            builder.ExportOutput(port, f"{name}.{port_name}")
         builder.Connect(controller.GetOutputPort("desired_state"),
                         plant.get_desired_state_input_port(instance))
         tilt = builder.AddNamedSystem(f"{name}.tilt_monitor", TiltMonitor(
@@ -204,7 +226,8 @@ def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None) -> Stat
         for port in ("drive_status", "axle_speed_command", "axle_speed"):
             builder.ExportOutput(controller.GetOutputPort(port), f"{name}.{port}")
         builder.ExportOutput(plant.get_state_output_port(instance), f"{name}.state")
-        robots[name] = RobotParts(name, instance, chassis, joints, source, controller, tilt)
+        robots[name] = RobotParts(name, instance, chassis, joints, source, controller, tilt,
+                                  motion=motion)
         robots[name].camera_hold, robots[name].camera_saver = add_camera(
             builder, plant, scene_graph, name, instance, robot.camera, render_engine_params(
                 scenario.world.sun.direction, scenario.world.sun.intensity,

@@ -1,0 +1,375 @@
+"""Commands that complete: DriveDistance, RotateDegrees and SetPose as one state machine.
+
+`MotionCommands` sits between the command source and the drive controller. It passes
+ordinary commands (SetPower, SetSpeed, AllStop, Enable) through; it turns a DriveDistance or
+RotateDegrees into a stream of SetPower requests computed every control period from the
+measured chassis position (GPS) and heading (compass), and reports how each one ends on its
+`command_status` output. Two landing profiles (SPEC "Commands that complete"):
+
+- `seed`, the book's: full power until the goal; keep the last 6 progress samples (one per
+  1/60 s frame), estimate the frames left from the progress over those 6 frames and halve the
+  speed when fewer than 6 remain; stop (and succeed) as soon as the goal is reached, the robot
+  still coasting. A rotation ends when less than 0.005 rad is left or it overshot.
+- `closed_loop`: a speed servo on the measured distance (along the start heading) or angle
+  left, predicted 2 frames ahead for the command's latency: the speed is the smallest of the
+  cruise speed, sqrt(2 a left) (braking within the slew limit) and k left, never under a creep
+  speed; inside the tolerance it stops, and succeeds once at rest there (it backs up if it
+  overshot). A drive also holds the start heading.
+
+Both fail `stalled` when progress stays under the scenario's stall distance/angle for its
+stall time, and `disabled` when issued to a disabled drive (a newer command ending one is
+recorded by the command source). A SetPose stops the wheels, waits until the Simulation has
+teleported the robot (its pose matches) and succeeds after `POSE_SETTLE_TIME`.
+"""
+
+import dataclasses as dc
+import math
+
+from pydrake.common.value import Value
+from pydrake.systems.framework import LeafSystem
+
+from corobot_drake import dimensions as dim
+from corobot_drake.drive import CommandStatus, DriveRequest, _Immutable
+from corobot_drake.scenario import (
+    AllStop,
+    Drive,
+    DriveDistance,
+    Motion,
+    RotateDegrees,
+    SetPose,
+    SetPower,
+)
+
+# The seed profile (the book's constants).
+SEED_KERNEL = 6
+"""Progress samples kept, one per frame."""
+SEED_DECELERATE_FRAMES = 6
+"""Halve the speed when fewer frames than this are estimated to remain."""
+SEED_ROTATION_TOLERANCE = 0.005
+"""rad: a rotation ends when less than this is left (or it overshot)."""
+
+# The closed-loop profile.
+LATENCY_FRAMES = 2
+"""Control periods between a measurement and the wheels acting on it (this system's update,
+then the drive controller's): the distance/angle left is predicted this far ahead."""
+BRAKE_FRACTION = 0.5
+"""Braking uses this fraction of the slew-limited deceleration, leaving room to correct."""
+DRIVE_GAIN = 3.0
+"""1/s: speed per metre left near the goal."""
+DRIVE_CREEP = 0.01
+"""m/s: slowest approach speed."""
+DRIVE_TOLERANCE = 0.0005
+"""m: a drive stops inside this of the goal."""
+DRIVE_STILL_SPEED = 0.002
+"""m/s: at rest below this."""
+HEADING_GAIN = 5.0
+"""Axle rad/s of left-right difference per radian of heading error while driving."""
+HEADING_CORRECTION_LIMIT = 1.0
+"""rad/s: the largest left-right axle difference the heading hold asks for."""
+TURN_GAIN = 3.0
+"""1/s: yaw rate per radian left near the goal."""
+TURN_CREEP = 0.05
+"""rad/s: slowest approach yaw rate."""
+TURN_TOLERANCE = 0.001
+"""rad: a rotation stops inside this of the goal (0.057 deg; the creep turns 0.8 mrad a
+frame, so it cannot step over the band)."""
+TURN_STILL_RATE = 0.01
+"""rad/s: at rest below this."""
+STILL_FRAMES = 3
+"""Frames in tolerance and at rest before a closed-loop command succeeds."""
+SPIN_YAW_PER_RIM_SPEED = dim.HALF_TRACK / (dim.HALF_WHEELBASE**2 + dim.HALF_TRACK**2)
+"""1/m: a skid-steer spin's yaw rate per rim speed with isotropic Coulomb friction,
+b / (a^2 + b^2) (DRAKE_NOTES: Drake matches it within 2%)."""
+
+# SetPose.
+POSE_LANDED_DISTANCE = 0.005
+"""m: the robot is where a SetPose put it when this close (and within POSE_LANDED_YAW)."""
+POSE_LANDED_YAW = 0.01
+"""rad."""
+POSE_SETTLE_TIME = 0.25
+"""s after landing before a SetPose succeeds (the tyres take the load in ~0.1 s)."""
+POSE_TIMEOUT = 1.0
+"""s: a SetPose not applied by then fails `not_applied` (a bare Simulator cannot teleport)."""
+
+
+def wrap(angle: float) -> float:
+    """The angle in [-pi, pi] (rad)."""
+    return math.remainder(angle, 2 * math.pi)
+
+
+@dc.dataclass(frozen=True)
+class ActiveCommand(_Immutable):
+    """A running command. Units: m, rad, s."""
+
+    seq: int
+    kind: str
+    """drive, rotate or pose."""
+    target: float
+    """drive: |distance| m; rotate: signed angle, rad; pose: unused."""
+    sign: float
+    """+1 or -1: forwards/backwards, or counter-clockwise/clockwise."""
+    power: float
+    start: tuple[float, float, float]
+    """(x, y, yaw) at the start; for a pose, the target pose."""
+    start_time: float
+    heading: float
+    """The compass at the last update (rad, wrapped); a rotation unwraps from it."""
+    progress: float = 0.0
+    """drive: m towards the goal; rotate: rad turned (unwrapped, signed)."""
+    samples: tuple[float, ...] = ()
+    """seed: the last progress samples, oldest first."""
+    scale: float = 1.0
+    """seed: the fraction of `power` commanded now."""
+    stall_progress: float = 0.0
+    stall_time: float = 0.0
+    """Progress and time when the command last made progress."""
+    still_frames: int = 0
+
+
+@dc.dataclass(frozen=True)
+class MotionState(_Immutable):
+    """MotionCommands' whole memory (abstract state in the Context)."""
+
+    handled_seq: int = 0
+    """seq of the last input request acted on."""
+    output: DriveRequest = dc.field(default_factory=DriveRequest)
+    active: ActiveCommand | None = None
+    status: CommandStatus = dc.field(default_factory=CommandStatus)
+    """How the last completing command ended."""
+
+
+class MotionCommands(LeafSystem):
+    """DriveDistance / RotateDegrees / SetPose state machine (module docstring).
+
+    Inputs: `request` (DriveRequest, from the command source), `position` (3, m, GPS),
+    `heading` (1, rad, compass). Outputs: `drive_request` (DriveRequest for the drive
+    controller, its own seq), `command_status` (CommandStatus). Updated every
+    `drive.control_period` s.
+    """
+
+    def __init__(self, drive: Drive, motion: Motion):
+        super().__init__()
+        self._drive, self._motion = drive, motion
+        self._period = drive.control_period
+        self._request_port = self.DeclareAbstractInputPort("request", Value(DriveRequest()))
+        self._position_port = self.DeclareVectorInputPort("position", 3)
+        self._heading_port = self.DeclareVectorInputPort("heading", 1)
+        self._state_index = self.DeclareAbstractState(Value(MotionState()))
+        ticket = {self.abstract_state_ticket(self._state_index)}
+        self.DeclareAbstractOutputPort("drive_request", lambda: Value(DriveRequest()),
+                                       lambda c, o: o.set_value(self.get_state(c).output),
+                                       ticket)
+        self.DeclareAbstractOutputPort("command_status", lambda: Value(CommandStatus()),
+                                       lambda c, o: o.set_value(self.get_state(c).status),
+                                       ticket)
+        self.DeclarePeriodicUnrestrictedUpdateEvent(self._period, 0.0, self._update)
+
+    @property
+    def drive_period(self) -> float:
+        """s: the update period (the drive's control period)."""
+        return self._period
+
+    def get_state(self, context) -> MotionState:
+        return context.get_abstract_state(self._state_index).get_value()
+
+    def remaining_command(self, context):
+        """The running DriveDistance/RotateDegrees with what is left of it (None if none)."""
+        a = self.get_state(context).active
+        if a is None or a.kind == "pose":
+            return None
+        if a.kind == "drive":
+            return DriveDistance(a.sign * (a.target - a.progress), a.power)
+        return RotateDegrees(math.degrees(a.target - a.progress), a.power)
+
+    # --- the state machine ----------------------------------------------------------------
+    def _update(self, context, state):
+        now = context.get_time()
+        original = self.get_state(context)
+        s = original
+        request = self._request_port.Eval(context)
+        x, y = self._position_port.Eval(context)[:2]
+        heading = float(self._heading_port.Eval(context)[0])
+        if request.seq != s.handled_seq:
+            s = dc.replace(s, handled_seq=request.seq, active=None)
+            command = request.command
+            if isinstance(command, DriveDistance | RotateDegrees):
+                if not request.enabled:
+                    s = self._finish(s, request, request.seq, "failed", "disabled", now)
+                else:
+                    s = self._start(s, request, command, (float(x), float(y), heading), now)
+            elif isinstance(command, SetPose):
+                target = (command.x, command.y, math.radians(command.yaw_deg))
+                s = dc.replace(s, active=ActiveCommand(
+                    request.seq, "pose", 0.0, 1.0, 0.0, target, now, heading))
+                s = self._emit(s, AllStop(), request, now)
+            else:
+                s = self._emit(s, command, request, now)
+        if s.active is not None:
+            step = {"drive": self._step_drive, "rotate": self._step_rotate,
+                    "pose": self._step_pose}[s.active.kind]
+            s = step(s, request, float(x), float(y), heading, now)
+        if s is not original:
+            state.get_mutable_abstract_state(self._state_index).set_value(s)
+
+    @staticmethod
+    def _emit(s: MotionState, command, request: DriveRequest, now: float) -> MotionState:
+        """Outputs `command` (a new seq only when it differs from the last one output)."""
+        out = s.output
+        if out.seq and out.command == command and out.enabled == request.enabled:
+            return s
+        return dc.replace(s, output=DriveRequest(out.seq + 1, command, now, request.enabled))
+
+    def _finish(self, s, request, seq, status, reason, now) -> MotionState:
+        s = dc.replace(s, active=None, status=CommandStatus(seq, status, reason, now))
+        return self._emit(s, AllStop(), request, now)
+
+    def _start(self, s, request, command, pose, now) -> MotionState:
+        if isinstance(command, DriveDistance):
+            kind, target, power = "drive", abs(command.distance), command.power
+            sign = math.copysign(1.0, command.distance)
+        else:
+            kind, target, power = "rotate", math.radians(command.degrees), command.power
+            sign = math.copysign(1.0, target)
+        if target == 0.0:
+            return self._finish(s, request, request.seq, "succeeded", "", now)
+        active = ActiveCommand(request.seq, kind, target, sign, min(abs(power), 1.0), pose,
+                               now, pose[2], stall_time=now)
+        return dc.replace(s, active=active)
+
+    def _check_stall(self, s, a: ActiveCommand, request, now, threshold: float, moving: bool):
+        """(state, active): failed `stalled` when progress < threshold for the stall time."""
+        if abs(a.progress - a.stall_progress) >= threshold or not moving:
+            return s, dc.replace(a, stall_progress=a.progress, stall_time=now)
+        if now - a.stall_time >= self._motion.stall_time - 1e-9:
+            return self._finish(s, request, a.seq, "failed", "stalled", now), None
+        return s, a
+
+    def _set_power(self, s, request, left_axle: float, right_axle: float, now):
+        k = self._drive.motor_torque_scaling
+        return self._emit(s, SetPower(left_axle / k, right_axle / k), request, now)
+
+    def _step_drive(self, s, request, x, y, heading, now) -> MotionState:
+        a = s.active
+        x0, y0, yaw0 = a.start
+        dx, dy = x - x0, y - y0
+        previous = a.progress
+        seed = self._motion.profile == "seed"
+        if seed:  # the book: straight-line distance from the start
+            progress = math.hypot(dx, dy)
+        else:  # signed, along the start heading: an overshoot shows as negative distance left
+            progress = a.sign * (dx * math.cos(yaw0) + dy * math.sin(yaw0))
+        a = dc.replace(a, progress=progress, heading=heading)
+        remaining = a.target - progress
+        cruise = a.power * self._drive.motor_torque_scaling  # axle rad/s
+        if seed:
+            if remaining <= 0.0:
+                return self._finish(s, request, a.seq, "succeeded", "", now)
+            a = self._seed_slowdown(a, remaining, progress)
+            s, a = self._check_stall(s, a, request, now, self._motion.stall_distance, True)
+            if a is None:
+                return s
+            axle = a.sign * a.scale * cruise
+            return self._set_power(dc.replace(s, active=a), request, axle, axle, now)
+        speed = (progress - previous) / self._period  # m/s towards the goal
+        v = self._servo(remaining, speed, DRIVE_TOLERANCE, DRIVE_STILL_SPEED,
+                        BRAKE_FRACTION * self._drive.slew_rate * dim.WHEEL_RADIUS, DRIVE_GAIN,
+                        DRIVE_CREEP, cruise * dim.WHEEL_RADIUS)
+        if v is None:
+            a = dc.replace(a, still_frames=a.still_frames + 1)
+            if a.still_frames >= STILL_FRAMES:
+                return self._finish(s, request, a.seq, "succeeded", "", now)
+            v = 0.0
+        else:
+            a = dc.replace(a, still_frames=0)
+        s, a = self._check_stall(s, a, request, now, self._motion.stall_distance,
+                                 abs(remaining) > self._motion.stall_distance)
+        if a is None:
+            return s
+        axle = a.sign * v / dim.WHEEL_RADIUS
+        correction = 0.0
+        if v != 0.0:
+            correction = max(-HEADING_CORRECTION_LIMIT, min(
+                HEADING_CORRECTION_LIMIT, HEADING_GAIN * wrap(yaw0 - heading)))
+        return self._set_power(dc.replace(s, active=a), request, axle - correction,
+                               axle + correction, now)
+
+    def _step_rotate(self, s, request, x, y, heading, now) -> MotionState:
+        a = s.active
+        delta = wrap(heading - a.heading)
+        previous = a.progress
+        progress = previous + delta
+        a = dc.replace(a, progress=progress, heading=heading)
+        remaining = a.target - progress
+        cruise = a.power * self._drive.motor_torque_scaling  # axle rad/s
+        if self._motion.profile == "seed":
+            error = remaining if a.target > 0 else -remaining
+            if error < SEED_ROTATION_TOLERANCE:
+                return self._finish(s, request, a.seq, "succeeded", "", now)
+            if delta != 0.0:
+                a = self._seed_slowdown(a, error, progress)
+            s, a = self._check_stall(s, a, request, now,
+                                     math.radians(self._motion.stall_angle_deg), True)
+            if a is None:
+                return s
+            axle = a.sign * a.scale * cruise
+            return self._set_power(dc.replace(s, active=a), request, -axle, axle, now)
+        rate = delta / self._period
+        to_axle = 1.0 / (SPIN_YAW_PER_RIM_SPEED * dim.WHEEL_RADIUS)  # axle rad/s per yaw rad/s
+        w = self._servo(remaining, rate, TURN_TOLERANCE, TURN_STILL_RATE,
+                        BRAKE_FRACTION * self._drive.slew_rate / to_axle, TURN_GAIN, TURN_CREEP,
+                        cruise / to_axle)
+        if w is None:
+            a = dc.replace(a, still_frames=a.still_frames + 1)
+            if a.still_frames >= STILL_FRAMES:
+                return self._finish(s, request, a.seq, "succeeded", "", now)
+            w = 0.0
+        else:
+            a = dc.replace(a, still_frames=0)
+        stall = math.radians(self._motion.stall_angle_deg)
+        s, a = self._check_stall(s, a, request, now, stall, abs(remaining) > stall)
+        if a is None:
+            return s
+        axle = w * to_axle
+        return self._set_power(dc.replace(s, active=a), request, -axle, axle, now)
+
+    @staticmethod
+    def _seed_slowdown(a: ActiveCommand, remaining: float, progress: float) -> ActiveCommand:
+        """The book's: over the last SEED_KERNEL frames, estimate the frames left; halve the
+        speed (and forget the samples) when fewer than SEED_DECELERATE_FRAMES remain."""
+        samples, scale = a.samples, a.scale
+        if len(samples) >= SEED_KERNEL:
+            moved = progress - samples[0]
+            samples = samples[1:]
+            frames = math.inf if moved == 0.0 else abs(remaining * SEED_KERNEL / moved)
+            if moved < 0.0 and a.kind == "drive":
+                frames = -frames  # the book's: moving away gives a negative estimate
+            if frames < SEED_DECELERATE_FRAMES:
+                scale *= 0.5
+                samples = ()
+        return dc.replace(a, samples=(*samples, progress), scale=scale)
+
+    def _servo(self, remaining, rate, tolerance, still, brake, gain, creep, cruise):
+        """The closed-loop profile's speed towards the goal (signed; None: in tolerance and
+        at rest, i.e. arrived). `remaining` and `rate` in m and m/s (or rad, rad/s)."""
+        predicted = remaining - rate * LATENCY_FRAMES * self._period
+        if abs(remaining) <= tolerance and abs(rate) < still:
+            return None
+        if abs(predicted) <= tolerance:
+            return 0.0
+        magnitude = min(cruise, math.sqrt(2.0 * brake * abs(predicted)), gain * abs(predicted))
+        return math.copysign(max(creep, magnitude) if cruise > creep else cruise, predicted)
+
+    def _step_pose(self, s, request, x, y, heading, now) -> MotionState:
+        a = s.active
+        tx, ty, tyaw = a.start
+        landed = (math.hypot(x - tx, y - ty) < POSE_LANDED_DISTANCE
+                  and abs(wrap(heading - tyaw)) < POSE_LANDED_YAW)
+        if landed:
+            if a.still_frames == 0:
+                a = dc.replace(a, stall_time=now)  # landing time
+            if now - a.stall_time >= POSE_SETTLE_TIME - 1e-9:
+                return self._finish(s, request, a.seq, "succeeded", "", now)
+            return dc.replace(s, active=dc.replace(a, still_frames=a.still_frames + 1))
+        if now - a.start_time >= POSE_TIMEOUT - 1e-9:
+            return self._finish(s, request, a.seq, "failed", "not_applied", now)
+        return s
