@@ -205,7 +205,6 @@ class Robot:
             commands += script[state.next_script_index:]
         return commands
 
-
     # --- measurements ---------------------------------------------------------------------
     def _plant_context(self):
         return self._sim.station.plant.GetMyContextFromRoot(self._sim.context)
@@ -449,7 +448,6 @@ class Simulation:
     def save_scenario(self, filename: str | Path) -> None:
         """Writes `saved_scenario()` as a scenario YAML file."""
         sc.save_scenario(self.saved_scenario(), filename)
-
 
     def advance(self, seconds: float) -> None:
         self.advance_to(self.time + seconds)
