@@ -54,7 +54,8 @@ class SimSide:
         runner.on_operation_end.append(
             lambda op: self._post(("op", op.public())))
         self._post(("hello", {"capabilities": runner.capabilities,
-                              "snapshot": runner.snapshot, "stats": runner.stats()}))
+                              "snapshot": runner.snapshot, "stats": runner.stats(),
+                              "meshcat_url": getattr(runner, "meshcat_url", None)}))
         threading.Thread(target=self._send_loop, name="bridge-send", daemon=True).start()
         threading.Thread(target=self._receive_loop, name="bridge-receive", daemon=True).start()
 
@@ -134,6 +135,7 @@ class RemoteRunner:
         self.capabilities: dict[str, dict[str, bool]] = hello["capabilities"]
         self.snapshot: dict = hello["snapshot"]
         self._stats: dict = hello["stats"]
+        self.meshcat_url: str | None = hello.get("meshcat_url")
         self._send_lock = threading.Lock()
         self._lock = threading.Lock()
         self._ids = itertools.count(1)
@@ -250,8 +252,7 @@ class RemoteRunner:
             f.set_result(op)
 
 
-def http_main(conn, host: str, port: int, meshcat_url: str | None, log_level: str,
-              niceness: int) -> None:
+def http_main(conn, host: str, port: int, log_level: str, niceness: int) -> None:
     """The HTTP process: listen, report the port, wait for the simulation, serve."""
     import os
     import socket
@@ -283,7 +284,7 @@ def http_main(conn, host: str, port: int, meshcat_url: str | None, log_level: st
         runner = RemoteRunner(conn, on_close=closed)
     except (TimeoutError, EOFError, OSError):
         return
-    app = create_app(runner, meshcat_url=meshcat_url)
+    app = create_app(runner, meshcat_url=runner.meshcat_url)
     config = uvicorn.Config(app, log_level=log_level, access_log=False, lifespan="off",
                             timeout_graceful_shutdown=1)
     server = uvicorn.Server(config)

@@ -109,18 +109,18 @@ def main(argv: list[str] | None = None) -> int:
             robot.camera.fps = args.camera_rate
     duration = args.duration if args.duration is not None else scenario.simulation_duration
     quiet_drake_warnings()
+    if args.serve:  # Meshcat is made in the simulation thread (it must be used from there)
+        from corobot_drake.serve import serve, serve_camera_rate
+
+        if getattr(args, "camera_rate", None) is None:
+            serve_camera_rate(scenario)
+        return serve(lambda meshcat: Simulation(scenario, meshcat), host=args.host,
+                     port=args.port, meshcat=not args.headless, label=args.scenario)
     meshcat = None
     if not args.headless:
         from pydrake.geometry import StartMeshcat
 
         meshcat = StartMeshcat()
-    if args.serve:
-        from corobot_drake.serve import serve, serve_camera_rate
-
-        if getattr(args, "camera_rate", None) is None:
-            serve_camera_rate(scenario)
-        return serve(lambda: Simulation(scenario, meshcat), host=args.host, port=args.port,
-                     meshcat=meshcat, label=args.scenario)
     try:
         sim = Simulation(scenario, meshcat, save_camera=args.save_camera)
     except ValueError as e:  # e.g. a command with a non-finite number

@@ -16,11 +16,12 @@ simulation's Python systems re-take the GIL many times a step; the bridge's thre
 mostly idle, but at the default 5 ms each of their wake-ups could hold the simulation up."""
 
 
-def serve(make_sim, host: str = "127.0.0.1", port: int = 50000, meshcat=None,
+def serve(make_sim, host: str = "127.0.0.1", port: int = 50000, meshcat: bool = False,
           log_level: str = "warning", label: str = "") -> int:
-    """Builds the simulation (`make_sim()`, in its own thread) and serves it until Ctrl-C.
-    The HTTP server runs in a child process (`corobot_drake.bridge` says why). Returns the
-    exit status: 2 when the port or the simulation cannot be had."""
+    """Builds the simulation (`make_sim(meshcat)`, in the simulation thread, with a Meshcat
+    made there too when `meshcat`: Meshcat must be used from the thread that made it) and
+    serves it until Ctrl-C. The HTTP server runs in a child process (`corobot_drake.bridge`
+    says why). Returns the exit status: 2 when the port or the simulation cannot be had."""
     import multiprocessing
 
     from corobot_drake.bridge import SimSide, http_main
@@ -28,9 +29,9 @@ def serve(make_sim, host: str = "127.0.0.1", port: int = 50000, meshcat=None,
 
     ctx = multiprocessing.get_context("spawn")
     conn, child_conn = ctx.Pipe()
-    meshcat_url = meshcat.web_url() if meshcat is not None else None
+    url_box: list = []
     http = ctx.Process(target=http_main, name="corobot-http", daemon=True, args=(
-        child_conn, host, port, meshcat_url, log_level, HTTP_NICENESS))
+        child_conn, host, port, log_level, HTTP_NICENESS))
     http.start()
     kind, value = conn.recv()
     if kind == "error":
@@ -39,18 +40,32 @@ def serve(make_sim, host: str = "127.0.0.1", port: int = 50000, meshcat=None,
         return 2
     bound = value
     sys.setswitchinterval(SWITCH_INTERVAL)
-    runner = SimRunner(make_sim)
+    runner: SimRunner
+
+    def build():
+        viewer = None
+        if meshcat:
+            from pydrake.geometry import StartMeshcat
+
+            viewer = StartMeshcat()
+            url_box.append(viewer.web_url())
+        sim = make_sim(viewer)
+        if viewer is not None:
+            from corobot_drake.teleop import MeshcatTeleop
+
+            teleop = MeshcatTeleop(viewer, sim)
+            runner.hooks.append(lambda s: teleop.poll())
+        return sim
+
+    runner = SimRunner(build)
     try:
         runner.start()
     except ValueError as e:  # e.g. a command with a non-finite number
         http.terminate()
         print(f"error: {label + ': ' if label else ''}{e}", file=sys.stderr)
         return 2
-    if meshcat is not None:
-        from corobot_drake.teleop import MeshcatTeleop
-
-        teleop = MeshcatTeleop(meshcat, runner.sim)  # polled in the simulation thread
-        runner.hooks.append(lambda s: teleop.poll())
+    meshcat_url = url_box[0] if url_box else None
+    runner.meshcat_url = meshcat_url
     bridge = SimSide(runner, conn)
     shown = f"http://[{host}]:{bound}" if ":" in host else f"http://{host}:{bound}"
     print(f"serving {shown}", flush=True)

@@ -307,6 +307,7 @@ class SimRunner:
         self.hooks: list[Callable[[Any], None]] = []
         """Called with the simulation between steps, in its thread (e.g. Meshcat teleop)."""
         self.capabilities: dict[str, dict[str, bool]] = {}
+        self.meshcat_url: str | None = None
 
     # --- life cycle ---
     def start(self, timeout: float = 300.0) -> SimRunner:

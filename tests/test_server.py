@@ -14,12 +14,14 @@ import math
 import os
 import threading
 import time
+from pathlib import Path
 
 import httpx
 import pytest
 
 from corobot_drake.serve import ServerProcess
 
+REPO = Path(__file__).resolve().parent.parent
 ROBOT = "/robots/corobot"
 
 
@@ -493,3 +495,47 @@ def test_client_has_the_python_apis_methods(server, http, caps):
         if caps["camera"]:
             image = bot.camera_image()
             assert image.shape == (240, 320, 4) and image.dtype.name == "uint8"
+
+
+# --- the command line and the in-process form ---------------------------------------------------
+
+
+def test_serve_reports_a_taken_port(server):
+    import subprocess
+    import sys
+
+    port = server.url.rsplit(":", 1)[1]
+    run = subprocess.run([sys.executable, "-m", "corobot_drake", "--serve", "--headless",
+                          "--port", port], capture_output=True, text=True, timeout=120)
+    assert run.returncode == 2
+    assert f"error: cannot listen on 127.0.0.1:{port}" in run.stderr
+
+
+@pytest.mark.filterwarnings("ignore:Using `httpx` with `starlette.testclient`")
+def test_in_process_runner_serves_from_a_thread():
+    """`create_app(SimRunner(...))`: the same app in one process (for embedding)."""
+    from fastapi.testclient import TestClient
+
+    from corobot_drake.scenario import load_scenario
+    from corobot_drake.services import SimRunner
+    from corobot_drake.simulation import Simulation
+    from corobot_drake.webapp import create_app
+
+    scenario = load_scenario(REPO / "scenarios" / "corobot.yaml")
+    runner = SimRunner(lambda: Simulation(scenario)).start()
+    try:
+        with TestClient(create_app(runner)) as client:
+            assert client.get(f"{ROBOT}/drive").status_code == 200
+            assert client.post(f"{ROBOT}/drive/set_power",
+                               json={"left": 2, "right": 0}).status_code == 422
+            if runner.capabilities["corobot"]["drive_distance"]:
+                r = client.post(f"{ROBOT}/drive/drive_distance",
+                                json={"distance": 0.1, "power": 0.5})
+                assert r.status_code == 200 and r.json()["status"] == "succeeded", r.text
+            else:
+                assert client.post(f"{ROBOT}/drive/set_power",
+                                   json={"left": 0.5, "right": 0.5}).json()["seq"] >= 1
+            assert client.get("/simulation").json()["running"]
+    finally:
+        runner.stop()
+    assert runner.error is None
