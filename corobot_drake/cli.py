@@ -31,9 +31,6 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--override", action="append", default=[], metavar="YAML_TEXT",
                    help="YAML merged over the scenario (repeatable)")
     p.add_argument("--summary", metavar="PATH", help="write the run's summary JSON here")
-    p.add_argument("--save-scenario", metavar="PATH",
-                   help="at the end, write a scenario YAML of the current state (poses, "
-                   "velocities, settings, commands still to run): running it continues from there")
     p.add_argument("--serve", action="store_true",
                    help="run in real time with the HTTP services, dashboard and webcam page "
                    "(Meshcat too unless --headless); Ctrl-C stops")
@@ -47,6 +44,9 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--camera-rate", type=float, metavar="HZ",
                    help="render (and save) camera frames at this rate (default: the scenario's "
                    "camera fps, 30)")
+    p.add_argument("--save-scenario", metavar="PATH",
+                   help="at the end, write a scenario YAML of the current state (poses, "
+                   "velocities, settings, commands still to run): running it continues from there")
     p.add_argument("--log", metavar="CSV",
                    help="write the run log (time, power, encoder ticks, pose; docs/tuning.md) "
                    "here; with several robots, one file per robot: CSV with the name inserted")

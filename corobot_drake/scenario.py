@@ -475,6 +475,11 @@ def _validate(s: Scenario, source: str) -> None:
                       "servo_damping"):
             if not getattr(c, field) > 0:
                 raise ScenarioError(source, f"{path}.contact.{field}", "must be > 0")
+        problem = check_camera_config(robot.camera)
+        if problem is not None:
+            field, message = problem
+            raise ScenarioError(source, f"{path}.camera" + (f".{field}" if field else ""),
+                                message)
         for sensor, ir in robot.ir_sensors.items():
             problem = check_ir_sensor_name(sensor)
             if problem is not None:
@@ -483,11 +488,6 @@ def _validate(s: Scenario, source: str) -> None:
             if problem is not None:
                 raise ScenarioError(source, f"{path}.ir_sensors.{sensor}.{problem[0]}",
                                     problem[1])
-        problem = check_camera_config(robot.camera)
-        if problem is not None:
-            field, message = problem
-            raise ScenarioError(source, f"{path}.camera" + (f".{field}" if field else ""),
-                                message)
         m = robot.motion
         if m.profile not in PROFILES:
             raise ScenarioError(source, f"{path}.motion.profile",
