@@ -262,7 +262,7 @@ class Robot:
 
 def _default_plant_config() -> MultibodyPlantConfig:
     return MultibodyPlantConfig(
-        time_step=0.005,
+        time_step=0.010,
         discrete_contact_approximation="lagged",
         contact_model="hydroelastic_with_fallback",
     )
