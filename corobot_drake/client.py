@@ -18,13 +18,14 @@ unknown robot or service). Needs only httpx (and numpy/Pillow for `camera_image`
 
 from __future__ import annotations
 
-import dataclasses as dc
 import io
 import math
 import time
 from typing import Any
 
 import httpx
+
+from corobot_drake.readings import BodyPose, BodyVelocity, CommandResult, IrReading
 
 
 class CorobotError(Exception):
@@ -44,49 +45,6 @@ class CorobotNotFoundError(CorobotError, KeyError):
 
     def __str__(self) -> str:  # KeyError would repr() the message
         return Exception.__str__(self)
-
-
-@dc.dataclass(frozen=True)
-class BodyPose:
-    x: float
-    y: float
-    z: float
-    roll: float
-    pitch: float
-    yaw: float
-
-
-@dc.dataclass(frozen=True)
-class BodyVelocity:
-    forward: float
-    lateral: float
-    yaw_rate: float
-
-
-@dc.dataclass(frozen=True)
-class CommandResult:
-    """How a command went: status running, succeeded or failed; reason when failed."""
-
-    seq: int | None
-    command: str
-    status: str
-    reason: str
-    start_time: float
-    end_time: float | None
-
-    @property
-    def succeeded(self) -> bool:
-        return self.status == "succeeded"
-
-
-@dc.dataclass(frozen=True)
-class IrReading:
-    """An analog-sensor reading: raw distance (m), range (m), normalized, scan time (s)."""
-
-    raw: float
-    range: float
-    normalized: float
-    time: float
 
 
 class CorobotClient:

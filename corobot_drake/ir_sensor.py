@@ -61,6 +61,7 @@ from corobot_drake.raycast import (
     cross_of_rays_in_sensor_frame,
     model_instance_geometry_ids,
 )
+from corobot_drake.readings import IrReading
 
 # --- configuration (the scenario's `robots.<name>.ir_sensors.<sensor>`) -----------------------
 
@@ -180,20 +181,6 @@ def noise_key(random_seed: int, robot: str, sensor: str, noise_seed: int) -> int
 # Indices into the `reading` discrete state group.
 DISTANCE, SCAN_TIME, PREVIOUS, CHANGED, SCAN_INDEX, TRUE_DISTANCE, VOLTAGE, ADC_COUNTS = range(8)
 _READING_SIZE = 8
-
-
-@dc.dataclass(frozen=True)
-class IrReading:
-    """An analog-sensor view of one scan (MRDS AnalogSensorState): metres and seconds."""
-
-    raw: float
-    """The reading: the distance to the nearest hit, maximum_range when nothing is hit."""
-    range: float
-    """maximum_range."""
-    normalized: float
-    """raw / range, in [0, 1]."""
-    time: float
-    """Simulated time of the scan."""
 
 
 class IrSensor(LeafSystem):

@@ -25,48 +25,10 @@ from pydrake.systems.framework import EventStatus
 from corobot_drake import dimensions as dim
 from corobot_drake import scenario as sc
 from corobot_drake.drive import CommandRecord
-from corobot_drake.ir_sensor import IrReading
 from corobot_drake.odometry import DriveState
+from corobot_drake.readings import BodyPose, BodyVelocity, CommandResult, IrReading
 from corobot_drake.runlog import log_rows, write_csv
 from corobot_drake.station import RobotParts, Station, build_station, transform_to_pose
-
-
-@dc.dataclass(frozen=True)
-class BodyPose:
-    """Chassis pose in the world: metres and radians (roll, pitch, yaw extrinsic x-y-z)."""
-
-    x: float
-    y: float
-    z: float
-    roll: float
-    pitch: float
-    yaw: float
-
-
-@dc.dataclass(frozen=True)
-class BodyVelocity:
-    """Chassis velocity in its own heading frame: forward, lateral (m/s), yaw_rate (rad/s)."""
-
-    forward: float
-    lateral: float
-    yaw_rate: float
-
-
-@dc.dataclass(frozen=True)
-class CommandResult:
-    """How a command went: status running, succeeded or failed; reason when failed
-    (superseded, disabled, stalled; not_applied for a SetPose); times in simulated s."""
-
-    seq: int
-    command: str
-    status: str
-    reason: str
-    start_time: float
-    end_time: float | None
-
-    @property
-    def succeeded(self) -> bool:
-        return self.status == "succeeded"
 
 
 class CommandHandle:
