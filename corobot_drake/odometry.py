@@ -73,8 +73,10 @@ def add_odometry(builder, name: str, num_states: int, positions_start: int, plan
 
 def yaw_from_quaternion(w: float, x: float, y: float, z: float) -> float:
     """Yaw (rad, (-pi, pi]) of the rotation given by a quaternion: the heading of body +x
-    projected on the world's x-y plane."""
-    return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+    projected on the world's x-y plane. The quaternion need not be unit length: the discrete
+    plant's state quaternion drifts from unit norm as it integrates (Drake normalizes only when
+    it makes a pose), and `1 - 2 (y^2 + z^2)` would then bias the heading (0.3 deg seen)."""
+    return math.atan2(2.0 * (w * z + x * y), w * w + x * x - y * y - z * z)
 
 
 class _ChassisSensor(LeafSystem):

@@ -14,6 +14,7 @@ import pytest
 from conftest import REPO, make_sim
 from corobot_drake import scenario as sc
 from corobot_drake.cli import main
+from corobot_drake.odometry import yaw_from_quaternion
 from corobot_drake.scenario import load_scenario
 from corobot_drake.simulation import Simulation
 
@@ -263,3 +264,15 @@ def test_drive_test_same_seed_same_numbers(tmp_path):
         assert (tmp_path / name).stat().st_size > 10_000
     assert outputs[0] == outputs[1]
     assert "0 failed commands" in outputs[0][-1]
+
+
+def test_compass_agrees_with_the_chassis_yaw_after_a_long_drive():
+    """The plant's state quaternion drifts from unit norm; the compass must not care."""
+    q = (0.9, 0.0, 0.0, -0.3)  # not unit: |q| = 0.949
+    assert yaw_from_quaternion(*q) == pytest.approx(2 * math.atan2(-0.3, 0.9), abs=1e-12)
+    sim = make_sim()
+    robot = sim.robot()
+    for degrees in (170, -100, 120, -150, 90):
+        robot.rotate_degrees(degrees, 0.5)
+        robot.drive_distance(0.3, 0.5)
+    assert robot.heading() == pytest.approx(robot.pose().yaw, abs=1e-6)
