@@ -22,6 +22,7 @@ from pydrake.systems.framework import BasicVector, LeafSystem
 from pydrake.systems.primitives import LogVectorOutput
 
 from corobot_drake import dimensions as dim
+from corobot_drake.odometry import yaw_from_quaternion
 
 LOG_PERIOD = 0.01
 """s: the run log's sample period (100 Hz)."""
@@ -54,7 +55,7 @@ class RunLogSample(LeafSystem):
         state = self._state_port.Eval(context)
         status = self._status_port.Eval(context)
         w, qx, qy, qz, x, y = state[self._q0:self._q0 + 6]
-        yaw = math.atan2(2 * (w * qz + qx * qy), 1 - 2 * (qy * qy + qz * qz))
+        yaw = yaw_from_quaternion(w, qx, qy, qz)
         left, right = (ticks(state[i]) for i in self._wheels)
         output.SetFromVector([status[1], status[2], left, right, x, y, yaw])
 
