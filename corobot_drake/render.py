@@ -28,15 +28,10 @@ from pydrake.systems.sensors import CameraInfo
 
 from corobot_drake import dimensions as dim
 from corobot_drake import scenario as sc
+from corobot_drake.camera import render_engine_params
 
 RENDERER = "corobot_vtk"
 """Name under which `add_renderer` registers its VTK engine."""
-
-FILL_INTENSITY = 0.5
-"""A dim light from the camera (the sky's scattered light) so faces away from the sun are
-shaded, not black. The sun itself is the scenario's directional light. With shadows on, this
-light casts them too (straight away from the camera, mostly hidden behind what casts them), so
-views from the robot itself render without shadows."""
 
 SKY_INTENSITY = 0.35
 """With shadows: light from straight above (the sky), so the ground in the sun's shadow is
@@ -47,23 +42,16 @@ R_BC = RotationMatrix(np.array([[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0
 
 
 def render_params(world: sc.World, shadows: bool = True) -> RenderEngineVtkParams:
-    """VTK parameters: the scenario's sun (directional, world frame), sky as background."""
-    sun = np.asarray(world.sun.direction, dtype=float)
-    sun = sun / np.linalg.norm(sun)
-    return RenderEngineVtkParams(
-        default_clear_color=[float(c) for c in world.sky_color[:3]],
-        lights=[
-            LightParameter(type="directional", frame="world", direction=sun,
-                           intensity=float(world.sun.intensity), color=Rgba(1, 1, 1, 1)),
-            LightParameter(type="directional", frame="camera", direction=[0.0, 0.0, 1.0],
-                           intensity=FILL_INTENSITY, color=Rgba(1, 1, 1, 1)),
-            *([LightParameter(type="directional", frame="world", direction=[0.0, 0.0, -1.0],
-                              intensity=SKY_INTENSITY, color=Rgba(1, 1, 1, 1))]
-              if shadows else []),
-        ],
-        cast_shadows=shadows,
-        shadow_map_size=2048 if shadows else 256,
-    )
+    """The robot camera's lighting (`camera.render_engine_params`: the scenario's sun, a fill
+    from the camera, sky background); with `shadows`, cast shadows and a sky light from above."""
+    params = render_engine_params(world.sun.direction, world.sun.intensity, world.sky_color)
+    if shadows:
+        params.lights = [*params.lights, LightParameter(
+            type="directional", frame="world", direction=[0.0, 0.0, -1.0],
+            intensity=SKY_INTENSITY, color=Rgba(1, 1, 1, 1))]
+        params.cast_shadows = True
+        params.shadow_map_size = 2048
+    return params
 
 
 def add_renderer(sim, shadows: bool = True, name: str = RENDERER) -> str:
