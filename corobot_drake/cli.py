@@ -53,19 +53,25 @@ def _parser() -> argparse.ArgumentParser:
     return p
 
 
-def _headless_progress(total: float):
-    start = time.perf_counter()
-    last = [start]
+class _HeadlessProgress:
+    """A progress line on stderr, once a run has taken PROGRESS_AFTER wall-clock seconds."""
 
-    def report(sim: Simulation) -> None:
+    def __init__(self, total: float):
+        self._total = total
+        self._start = self._last = time.perf_counter()
+        self._printed = False
+
+    def __call__(self, sim: Simulation) -> None:
         now = time.perf_counter()
-        if now - start < PROGRESS_AFTER or now - last[0] < 1.0:
+        if now - self._start < PROGRESS_AFTER or now - self._last < 1.0:
             return
-        last[0] = now
-        print(f"\rt = {sim.time:7.2f} / {total:.2f} s  ({sim.realtime_factor:.1f}x real time)",
-              end="", file=sys.stderr, flush=True)
+        self._last, self._printed = now, True
+        print(f"\rt = {sim.time:7.2f} / {self._total:.2f} s  ({sim.realtime_factor:.1f}x "
+              "real time)", end="", file=sys.stderr, flush=True)
 
-    return report
+    def finish(self) -> None:
+        if self._printed:
+            print(file=sys.stderr)
 
 
 def _run_interactive(sim: Simulation, meshcat, duration: float) -> None:
@@ -112,7 +118,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.serve:  # Meshcat is made in the simulation thread (it must be used from there)
         from corobot_drake.serve import serve, serve_camera_rate
 
-        if getattr(args, "camera_rate", None) is None:
+        if args.camera_rate is None:
             serve_camera_rate(scenario)
         return serve(lambda meshcat: Simulation(scenario, meshcat), host=args.host,
                      port=args.port, meshcat=not args.headless, label=args.scenario)
@@ -129,9 +135,9 @@ def main(argv: list[str] | None = None) -> int:
     if args.headless:
         if math.isinf(duration):
             duration = HEADLESS_DEFAULT_DURATION
-        sim.run(duration, progress=_headless_progress(duration))
-        print(file=sys.stderr) if sim.realtime_factor and sim._wall_seconds > PROGRESS_AFTER \
-            else None
+        progress = _HeadlessProgress(duration)
+        sim.run(duration, progress=progress)
+        progress.finish()
     else:
         _run_interactive(sim, meshcat, duration)
     summary = sim.summary()
