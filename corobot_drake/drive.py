@@ -288,7 +288,10 @@ class DriveController(LeafSystem):
         if isinstance(command, SetSpeed):
             al, ar = (float(np.clip(v / dim.WHEEL_RADIUS, -d.max_axle_speed, d.max_axle_speed))
                       for v in (command.left, command.right))
-            return al / d.motor_torque_scaling, ar / d.motor_torque_scaling, al, ar
+            # The power a SetSpeed amounts to; past full power (axle speed above the
+            # scaling) it reports 1: power is a fraction of the motor's range.
+            pl, pr = (float(np.clip(a / d.motor_torque_scaling, -1.0, 1.0)) for a in (al, ar))
+            return pl, pr, al, ar
         if isinstance(command, AllStop):
             return 0.0, 0.0, 0.0, 0.0
         return None

@@ -214,6 +214,11 @@ class Robot:
             self._sim.context)
         return (float(p[0]), float(p[1]), float(p[2]))
 
+    def enable_requested(self) -> bool:
+        """The enable level last commanded (is_enabled() follows it at the next control tick)."""
+        source = self._parts.command_source
+        return source.get_state(source.GetMyContextFromRoot(self._sim.context)).request.enabled
+
     def is_enabled(self) -> bool:
         status = self._sim.station.diagram.GetOutputPort(f"{self.name}.drive_status").Eval(
             self._sim.context)

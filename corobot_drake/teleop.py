@@ -52,7 +52,7 @@ class MeshcatTeleop:
             if label == _STOP:
                 robot.all_stop()
             elif label == _ENABLE:
-                robot.enable(not robot.is_enabled())
+                robot.enable(not robot.enable_requested())
             else:
                 left, right = _MOVES[label][1]
                 robot.set_power(left * power, right * power)

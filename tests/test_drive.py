@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from conftest import make_sim
+from corobot_drake import dimensions as dim
 
 R = 0.060325  # wheel radius, m (SPEC)
 A, B = 0.092075, 0.11176  # half wheelbase, half track, m (SPEC)
@@ -35,7 +36,11 @@ def test_rests_on_ground_and_stays_still(sim):
 def test_top_speed_tuned_scaling(sim):
     sim.robot().set_power(1.0, 1.0)
     sim.advance(2.0)  # the 30 rad/s^2 ramp to 10.16 rad/s takes 0.34 s
-    assert steady_speed(sim) == pytest.approx(0.613, rel=0.03)
+    speed = steady_speed(sim)
+    assert speed == pytest.approx(0.613, rel=0.03)  # the issue's figure
+    # The shipped scaling is tuned to the real robot's 2 ft/s; 1% tells it from a mistuned one
+    # (tools/tune_motor_torque_scaling.py converges to 0.5%).
+    assert speed == pytest.approx(dim.TARGET_TOP_SPEED, rel=0.01)
 
 
 def test_top_speed_untuned_scaling():
@@ -50,6 +55,16 @@ def test_set_speed(sim):
     sim.advance(1.5)
     # Tyres slip a little under the servo: 1% covers it (measured 0.2%).
     assert steady_speed(sim) == pytest.approx(0.3, rel=0.01)
+
+
+def test_set_speed_reports_power_within_full_range(sim):
+    """A SetSpeed past full power reports power 1: power is a fraction of the motor's range."""
+    robot = sim.robot()
+    robot.set_speed(1.0, 0.3)  # 16.6 rad/s on the left: above 10.16 rad/s = power 1
+    sim.advance(0.5)
+    state = robot.drive_state().two_wheel()
+    assert state.left.commanded_power == pytest.approx(1.0)
+    assert state.right.commanded_power == pytest.approx(0.3 / R / 10.16)
 
 
 def test_set_speed_clamps_axle_speed(sim):

@@ -44,9 +44,11 @@ def turned_deg(robot, start_heading: float, target_deg: float) -> float:
 
 
 # Landing errors measured at 1 m / power 0.2 (tools/landing_errors.py; docs/commands.md):
-# closed_loop -0.4 mm, seed +0.1 mm. The seed's error grows with power (44 mm for 0.25 m at
-# power 1), so its bound here is its measured error at this distance and power plus margin.
-@pytest.mark.parametrize("profile, tolerance", [("closed_loop", 0.005), ("seed", 0.002)])
+# closed_loop -0.45 mm (its worst over every distance and power: 0.49 mm), seed +0.07 mm.
+# closed_loop's bound is the README's claim, 1 mm (the issue asks for 5). The seed's error
+# grows with power (44 mm for 0.25 m at power 1), so its bound here is its measured error at
+# this distance and power plus margin.
+@pytest.mark.parametrize("profile, tolerance", [("closed_loop", 0.001), ("seed", 0.002)])
 def test_drive_one_metre_lands(profile, tolerance):
     sim = fast_sim(profile)
     robot = sim.robot()
@@ -59,7 +61,8 @@ def test_drive_one_metre_lands(profile, tolerance):
     assert robot.velocity().forward == pytest.approx(0.0, abs=1e-3)
 
 
-def test_rotate_both_ways_lands_within_half_a_degree():
+def test_rotate_both_ways_lands_within_a_tenth_of_a_degree():
+    """The issue asks for 0.5 deg; the README claims 0.1 (worst measured: 0.05 deg)."""
     sim = fast_sim()
     robot = sim.robot()
     for degrees in (90.0, -90.0):
@@ -67,7 +70,7 @@ def test_rotate_both_ways_lands_within_half_a_degree():
         result = robot.rotate_degrees(degrees, 0.2)
         assert result.succeeded
         sim.advance(0.3)
-        assert abs(turned_deg(robot, heading, degrees)) < 0.5
+        assert abs(turned_deg(robot, heading, degrees)) < 0.1
     # Turning in place: the centre stays within a few mm.
     assert math.hypot(*robot.position()[:2]) < 0.01
 
