@@ -82,47 +82,20 @@ def robot_capabilities(robot) -> dict[str, bool]:
     }
 
 
-def _wheel_angles(robot) -> list[float]:
-    """Axle angles (rad) of the four wheels, from the plant state."""
-    sim = robot._sim
-    plant = sim.station.plant
-    context = plant.GetMyContextFromRoot(sim.context)
-    return [float(j.get_angle(context)) for j in robot._parts.wheel_joints]
-
-
 def drive_state(robot, sim) -> dict:
     """The drive contract's four-wheel state (MRDS DriveDifferentialFourWheelState in SI
     units): the Python API's `drive_state()` fields, plus pose, velocity and the command."""
     pose = robot.pose()
     velocity = robot.velocity()
-    native = robot.drive_state() if hasattr(robot, "drive_state") else None
-    if native is not None:
-        wheels = {name: {"commanded_power": float(w.commanded_power),
-                         "axle_speed": float(w.axle_speed),
-                         "encoder_ticks": w.encoder_ticks}
-                  for name, w in native.wheels.items()}
-        x, y, z = native.position
-        heading, enabled = float(native.heading), bool(native.is_enabled)
-        scaling = float(native.power_scaling_factor)
-        track = float(native.distance_between_wheels)
-    else:  # before the odometry landed: the same figures from the plant and the drive
-        speeds = robot.axle_speeds()
-        status = sim.station.diagram.GetOutputPort(f"{robot.name}.drive_status").Eval(
-            sim.context)
-        angles = _wheel_angles(robot)
-        wheels = {}
-        for i, name in enumerate(dim.WHEEL_NAMES):
-            wheels[name] = {
-                "commanded_power": float(status[1] if name.endswith("left") else status[2]),
-                "axle_speed": speeds[name],
-                "encoder_ticks": math.floor(angles[i] / (2 * math.pi)
-                                            * dim.ENCODER_TICKS_PER_REVOLUTION)
-                if name.startswith("front") else None,
-            }
-        x, y, z = pose.x, pose.y, pose.z
-        heading, enabled = pose.yaw, bool(status[0])
-        scaling = sim.scenario.robots[robot.name].drive.motor_torque_scaling
-        track = dim.TRACK
+    native = robot.drive_state()
+    wheels = {name: {"commanded_power": float(w.commanded_power),
+                     "axle_speed": float(w.axle_speed),
+                     "encoder_ticks": w.encoder_ticks}
+              for name, w in native.wheels.items()}
+    x, y, z = native.position
+    heading, enabled = float(native.heading), bool(native.is_enabled)
+    scaling = float(native.power_scaling_factor)
+    track = float(native.distance_between_wheels)
     log_ = robot.command_log()
     last = log_[-1] if log_ else None
     return _jsonable({
