@@ -63,9 +63,10 @@ DRIVE_TOLERANCE = 0.0005
 DRIVE_STILL_SPEED = 0.002
 """m/s: at rest below this."""
 HEADING_GAIN = 5.0
-"""Axle rad/s of left-right difference per radian of heading error while driving."""
+"""Axle rad/s added to one side and taken from the other per radian of heading error while
+driving (a left-right difference of twice that)."""
 HEADING_CORRECTION_LIMIT = 1.0
-"""rad/s: the largest left-right axle difference the heading hold asks for."""
+"""rad/s: the largest correction per side the heading hold asks for (a difference of 2)."""
 TURN_GAIN = 3.0
 """1/s: yaw rate per radian left near the goal."""
 TURN_CREEP = 0.05
