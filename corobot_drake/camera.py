@@ -72,7 +72,7 @@ def default_camera_config() -> CameraConfig:
                                                   + float(np.degrees(dim.CAMERA.yaw))])),
         renderer_name=RENDERER_NAME,
         name="camera",
-        fps=30.0,
+        fps=dim.CAMERA_FPS,
         rgb=True,
         depth=False,
         label=False,

@@ -87,11 +87,20 @@ class SensorMount:
 FRONT_IR = SensorMount(position=(4.25 * INCH, 0.0, CHASSIS.center[2]), yaw=0.0)
 REAR_IR = SensorMount(position=(-4.25 * INCH, 0.0, CHASSIS.center[2]), yaw=math.pi)
 CAMERA = SensorMount(position=(4.25 * INCH, 0.0, CHASSIS.center[2] - 0.01), yaw=0.0)
+"""1 cm below the IR sensors on the front face: (0.10795, 0, 0.05985)."""
 CAMERA_WIDTH = 320
 CAMERA_HEIGHT = 240
 CAMERA_FOV_Y_DEG = 30.0
+CAMERA_FPS = 30.0
+"""Frames per second of the robot camera."""
 
 ENCODER_TICKS_PER_REVOLUTION = 600
+
+IR_MAXIMUM_RANGE = 30 * INCH
+"""m (0.762): an IR sensor's reading when nothing is within range."""
+IR_DISPERSION_CONE_ANGLE_DEG = 8.0
+IR_SAMPLES = 3
+"""Rays per fan of an IR sensor's cross of rays."""
 
 # Drive figures (defaults of the scenario's drive parameters).
 MOTOR_TORQUE_SCALING_UNTUNED = 20.0

@@ -76,11 +76,11 @@ class IrSensorConfig:
     """Look direction: yaw about the chassis z axis (0 = forward, 180 = backward)."""
     pitch_deg: float = 0.0
     """Look direction: pitch, positive looking down (about the sensor's y axis)."""
-    samples: int = 3
+    samples: int = dim.IR_SAMPLES
     """Rays per fan of the cross (one horizontal fan, one vertical), at least 2."""
-    dispersion_cone_angle: float = 8.0
+    dispersion_cone_angle: float = dim.IR_DISPERSION_CONE_ANGLE_DEG
     """Degrees: each fan spreads its rays evenly over this angle."""
-    maximum_range: float = 30 * dim.INCH
+    maximum_range: float = dim.IR_MAXIMUM_RANGE
     """m: the reading when nothing is hit (0.762 m)."""
     scan_rate_hz: float = 20.0
     """Scans per second (a periodic discrete update, independent of the physics step)."""

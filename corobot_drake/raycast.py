@@ -55,9 +55,11 @@ from pydrake.geometry import (
 )
 from pydrake.math import RigidTransform
 
+from corobot_drake import dimensions as dim
+
 _log = logging.getLogger(__name__)
 
-DEFAULT_DISPERSION_CONE_ANGLE = 8.0
+DEFAULT_DISPERSION_CONE_ANGLE = dim.IR_DISPERSION_CONE_ANGLE_DEG
 """Degrees: the IR sensor's dispersion cone (SPEC, Sensors)."""
 
 

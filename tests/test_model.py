@@ -101,3 +101,23 @@ def test_robot_does_not_collide_with_itself(parsed):
     for i, a in enumerate(ids):
         for b in ids[i + 1:]:
             assert inspector.CollisionFiltered(a, b)
+
+
+def test_default_scene_matches_the_spec():
+    """World objects come from the scenario file; they must be the chapter's (SPEC "The world")."""
+    from conftest import DEFAULT_SCENARIO
+    from corobot_drake import dimensions as dim
+    from corobot_drake.scenario import Box as BoxShape
+    from corobot_drake.scenario import load_scenario
+
+    scenario = load_scenario(DEFAULT_SCENARIO)
+    box = scenario.world.bodies["giant_box"]
+    assert isinstance(box.shape, BoxShape) and box.shape.size == [2.0, 2.0, 2.0]
+    assert box.mass == 100.0 and not box.fixed
+    assert (box.pose.x, box.pose.y, box.pose.z) == pytest.approx(dim.GIANT_BOX_CENTER)
+    # The near face 29 in behind the origin, so the rear IR reads 0.62865 m (SPEC).
+    assert box.pose.x + 1.0 == pytest.approx(-0.7366, abs=1e-12)
+    assert scenario.world.ground.friction == 0.5
+    (robot,) = scenario.robots.values()
+    assert (robot.pose.x, robot.pose.y, robot.pose.yaw_deg) == (0.0, 0.0, 0.0)
+    assert robot.drive.motor_torque_scaling == 10.16
