@@ -9,25 +9,22 @@ from pathlib import Path
 import numpy as np
 import pytest
 from pydrake.geometry import (
-    ClippingRange,
-    ColorRenderCamera,
     GeometryInstance,
     IllustrationProperties,
     MakeRenderEngineVtk,
     Mesh,
     PerceptionProperties,
     ReadObjToTriangleSurfaceMesh,
-    RenderCameraCore,
     RenderEngineVtkParams,
     RenderLabel,
     SceneGraph,
 )
 from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.systems.framework import DiagramBuilder
-from pydrake.systems.sensors import CameraInfo
 
 from corobot_drake import dimensions as dim
 from corobot_drake import meshes
+from corobot_drake.render import color_camera, look_at
 
 REPO = Path(__file__).resolve().parents[1]
 TOLERANCE = 0.005
@@ -199,20 +196,9 @@ class Scene:
             self.scene_graph.GetMyContextFromRoot(context))
 
     def render(self, X_WC: RigidTransform, width=320, height=240, fov_y_deg=40.0, near=0.01):
-        camera = ColorRenderCamera(RenderCameraCore(
-            "vtk", CameraInfo(width, height, np.radians(fov_y_deg)), ClippingRange(near, 10.0),
-            RigidTransform()), False)
+        camera = color_camera(width, height, fov_y_deg, near, far=10.0, name="vtk")
         image = self.query.RenderColorImage(camera, self.scene_graph.world_frame_id(), X_WC)
         return np.array(image.data[:, :, :3], dtype=np.int32)
-
-
-def look_at(eye, target) -> RigidTransform:
-    """Drake camera pose (+z forward, +x right, +y down) at eye looking at target, z up."""
-    eye, target = np.asarray(eye, float), np.asarray(target, float)
-    z = (target - eye) / np.linalg.norm(target - eye)
-    x = np.cross(z, [0.0, 0.0, 1.0])
-    x /= np.linalg.norm(x)
-    return RigidTransform(RotationMatrix(np.column_stack([x, np.cross(z, x), z])), eye)
 
 
 @pytest.fixture(scope="module")
