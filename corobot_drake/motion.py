@@ -139,6 +139,13 @@ class MotionState(_Immutable):
     """How the last completing command ended."""
 
 
+def _count_still(a, at_goal: bool):
+    """The active command with its count of frames at rest on the goal (reset when it moves);
+    True once it has held there for STILL_FRAMES frames."""
+    a = dc.replace(a, still_frames=a.still_frames + 1 if at_goal else 0)
+    return a, a.still_frames >= STILL_FRAMES
+
+
 class MotionCommands(LeafSystem):
     """DriveDistance / RotateDegrees / SetPose state machine (module docstring).
 
@@ -275,13 +282,10 @@ class MotionCommands(LeafSystem):
         v = self._servo(remaining, speed, DRIVE_TOLERANCE, DRIVE_STILL_SPEED,
                         BRAKE_FRACTION * self._drive.slew_rate * dim.WHEEL_RADIUS, DRIVE_GAIN,
                         DRIVE_CREEP, cruise * dim.WHEEL_RADIUS)
-        if v is None:
-            a = dc.replace(a, still_frames=a.still_frames + 1)
-            if a.still_frames >= STILL_FRAMES:
-                return self._finish(s, request, a.seq, "succeeded", "", now)
-            v = 0.0
-        else:
-            a = dc.replace(a, still_frames=0)
+        a, settled = _count_still(a, at_goal=v is None)
+        if settled:
+            return self._finish(s, request, a.seq, "succeeded", "", now)
+        v = 0.0 if v is None else v
         s, a = self._check_stall(s, a, request, now, self._motion.stall_distance,
                                  abs(remaining) > self._motion.stall_distance)
         if a is None:
@@ -319,13 +323,10 @@ class MotionCommands(LeafSystem):
         w = self._servo(remaining, rate, TURN_TOLERANCE, TURN_STILL_RATE,
                         BRAKE_FRACTION * self._drive.slew_rate / to_axle, TURN_GAIN, TURN_CREEP,
                         cruise / to_axle)
-        if w is None:
-            a = dc.replace(a, still_frames=a.still_frames + 1)
-            if a.still_frames >= STILL_FRAMES:
-                return self._finish(s, request, a.seq, "succeeded", "", now)
-            w = 0.0
-        else:
-            a = dc.replace(a, still_frames=0)
+        a, settled = _count_still(a, at_goal=w is None)
+        if settled:
+            return self._finish(s, request, a.seq, "succeeded", "", now)
+        w = 0.0 if w is None else w
         stall = math.radians(self._motion.stall_angle_deg)
         s, a = self._check_stall(s, a, request, now, stall, abs(remaining) > stall)
         if a is None:
