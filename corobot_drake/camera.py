@@ -24,6 +24,8 @@ A robot without a camera: `camera: {rgb: false}` (Drake's own convention: no ima
 
 from __future__ import annotations
 
+import copy
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -31,16 +33,22 @@ from pydrake.common.schema import Rotation, Transform
 from pydrake.common.value import AbstractValue
 from pydrake.geometry import (
     LightParameter,
+    MakeRenderEngineGl,
     MakeRenderEngineVtk,
+    RenderEngineGlParams,
     RenderEngineVtkParams,
     Rgba,
 )
 from pydrake.math import RigidTransform
 from pydrake.multibody.parsing import GetScopedFrameByName
-from pydrake.systems.framework import LeafSystem
+from pydrake.systems.framework import EventStatus, LeafSystem
 from pydrake.systems.sensors import CameraConfig, ImageRgba8U, RgbdSensor
 
 from corobot_drake import dimensions as dim
+from corobot_drake.xdisplay import stop_xvfb, x_display
+
+RENDERERS = ("", "RenderEngineGl", "RenderEngineVtk")
+"""`CameraConfig.renderer_class` names this project builds ("": the faster one available)."""
 
 RENDERER_NAME = "corobot_camera"
 """The default `renderer_name` of the robots' cameras (one VTK engine for all of them)."""
@@ -51,9 +59,8 @@ FILL_INTENSITY = 0.5
 CAMERA_ROTATION_RPY_DEG = (-90.0, 0.0, -90.0)
 """Drake camera axes (+z forward, +x right, +y down) looking along the body's +x, level."""
 
-SAVE_OFFSET = 1e-6
-"""s after each capture time at which the saver writes: a publish event at the capture time
-itself would run before the hold's update and save the previous frame."""
+TICK_TOLERANCE = 1e-9
+"""s: a frame tick this close to a plant step counts as on it (float sums of periods)."""
 
 
 def default_camera_config() -> CameraConfig:
@@ -93,8 +100,9 @@ def check_camera_config(config: CameraConfig) -> tuple[str, str] | None:
     if not config.capture_offset >= 0:
         return ("capture_offset", "must be >= 0")
     rc = config.renderer_class
-    if not (isinstance(rc, RenderEngineVtkParams) or rc in ("", "RenderEngineVtk")):
-        return ("renderer_class", "only RenderEngineVtk (the default) renders headless here")
+    if not (isinstance(rc, RenderEngineVtkParams | RenderEngineGlParams) or rc in RENDERERS):
+        return ("renderer_class", "must be RenderEngineGl, RenderEngineVtk or empty (the "
+                "faster one available)")
     try:
         config.MakeCameras()
         config.X_PB.GetDeterministicValue()
@@ -103,27 +111,102 @@ def check_camera_config(config: CameraConfig) -> tuple[str, str] | None:
     return None
 
 
-def render_engine_params(sun_direction, sun_intensity: float, sky_color) -> RenderEngineVtkParams:
-    """VTK: the sun (directional, world frame), a fill light from the camera, sky background."""
+class RendererUnavailableError(RuntimeError):
+    """The scenario asks for a renderer this machine cannot run."""
+
+
+def _lights(sun_direction, sun_intensity: float) -> list[LightParameter]:
     sun = np.asarray(sun_direction, dtype=float)
     sun = sun / np.linalg.norm(sun)
-    return RenderEngineVtkParams(
-        default_clear_color=[float(c) for c in sky_color[:3]],
-        lights=[
-            LightParameter(type="directional", frame="world", direction=sun,
-                           intensity=float(sun_intensity), color=Rgba(1, 1, 1, 1)),
-            LightParameter(type="directional", frame="camera", direction=[0.0, 0.0, 1.0],
-                           intensity=FILL_INTENSITY, color=Rgba(1, 1, 1, 1)),
-        ],
-    )
+    return [
+        LightParameter(type="directional", frame="world", direction=sun,
+                       intensity=float(sun_intensity), color=Rgba(1, 1, 1, 1)),
+        LightParameter(type="directional", frame="camera", direction=[0.0, 0.0, 1.0],
+                       intensity=FILL_INTENSITY, color=Rgba(1, 1, 1, 1)),
+    ]
+
+
+def render_engine_params(sun_direction, sun_intensity: float, sky_color) -> RenderEngineVtkParams:
+    """VTK: the sun (directional, world frame), a fill light from the camera, sky background."""
+    return RenderEngineVtkParams(default_clear_color=[float(c) for c in sky_color[:3]],
+                                 lights=_lights(sun_direction, sun_intensity))
+
+
+def render_engine_gl_params(sun_direction, sun_intensity: float, sky_color
+                            ) -> RenderEngineGlParams:
+    """GL: the same lights and background as `render_engine_params`."""
+    return RenderEngineGlParams(default_clear_color=Rgba(*[float(c) for c in sky_color[:3]]),
+                                lights=_lights(sun_direction, sun_intensity))
+
+
+def make_vtk_engine(params: RenderEngineVtkParams):
+    """A VTK engine that can share this process with the GL cameras: through GLX when an X
+    display is available (libglvnd lets a thread hold GLX or EGL contexts, not both), else
+    EGL (headless, no X server). A `backend` set in `params` is kept."""
+    if not params.backend:
+        params = copy.copy(params)
+        params.backend = "GLX" if x_display() is not None else "EGL"
+    return MakeRenderEngineVtk(params)
+
+
+def make_render_engine(renderer_class, sun_direction, sun_intensity: float, sky_color):
+    """(engine, class name) for a `CameraConfig.renderer_class`: "RenderEngineGl" (or its
+    params) needs an X display (`xdisplay.x_display`: the user's or a private Xvfb) and
+    raises RendererUnavailableError without one; "RenderEngineVtk" (or its params): VTK
+    (`make_vtk_engine`); "" (the default) picks GL when a display is available, else VTK with a
+    warning (a frame costs ~2x as much: see docs/performance.md)."""
+    if isinstance(renderer_class, RenderEngineVtkParams):
+        return make_vtk_engine(renderer_class), "RenderEngineVtk"
+    if renderer_class == "RenderEngineVtk":
+        return make_vtk_engine(render_engine_params(
+            sun_direction, sun_intensity, sky_color)), "RenderEngineVtk"
+    params = (renderer_class if isinstance(renderer_class, RenderEngineGlParams)
+              else render_engine_gl_params(sun_direction, sun_intensity, sky_color))
+    if x_display() is None:
+        problem = "no X display: set DISPLAY or install Xvfb (Debian: apt-get install xvfb)"
+    else:
+        try:
+            return MakeRenderEngineGl(params), "RenderEngineGl"
+        except RuntimeError as e:
+            problem = str(e).splitlines()[0]
+            stop_xvfb()
+    if renderer_class != "":
+        raise RendererUnavailableError(f"camera renderer RenderEngineGl: {problem}")
+    global _warned_vtk_fallback
+    if not _warned_vtk_fallback:
+        _warned_vtk_fallback = True
+        warnings.warn(f"camera: rendering with VTK, ~2x slower per frame ({problem})",
+                      stacklevel=2)
+    return make_vtk_engine(render_engine_params(
+        sun_direction, sun_intensity, sky_color)), "RenderEngineVtk"
+
+
+_warned_vtk_fallback = False
+"""The fallback is reported once per process."""
+
+
+def _last_tick(t: float, fps: float, offset: float) -> tuple[int, float]:
+    """(k, t_k): the last frame tick t_k = offset + k / fps at or before `t` (k = -1 before
+    the first)."""
+    k = int(np.floor((t - offset) * fps + TICK_TOLERANCE * fps))
+    return k, offset + k / fps
 
 
 class CameraHold(LeafSystem):
-    """Renders one colour frame at initialization and every 1/fps s (from `capture_offset`) and
-    holds it: outputs `rgb_image` (ImageRgba8U) and `image_time` (s, the capture time)."""
+    """Renders one colour frame at initialization and one per frame tick (every 1/fps s from
+    `capture_offset`) and holds it: outputs `rgb_image` (ImageRgba8U) and `image_time` (s,
+    when the frame was taken).
 
-    def __init__(self, width: int, height: int, fps: float, capture_offset: float = 0.0):
+    With a discrete plant (`step` > 0, its time step) frames are taken on the plant's steps:
+    at the first step at or after each tick. The scene only changes at steps, so the image is
+    the one an exact-time render at the tick would give, while the Simulator stops nowhere
+    but the plant's steps (a stop between steps costs about as much as a step here). At
+    most one frame per step. With `step` = 0, frames are taken at the ticks themselves."""
+
+    def __init__(self, width: int, height: int, fps: float, capture_offset: float = 0.0,
+                 step: float = 0.0):
         super().__init__()
+        self._fps, self._offset, self._step = float(fps), float(capture_offset), float(step)
         model = AbstractValue.Make(ImageRgba8U(width, height))
         self._input = self.DeclareAbstractInputPort("color_image", model)
         self._image = self.DeclareAbstractState(model)
@@ -131,7 +214,22 @@ class CameraHold(LeafSystem):
         self.DeclareStateOutputPort("rgb_image", self._image)
         self.DeclareStateOutputPort("image_time", self._time)
         self.DeclareInitializationUnrestrictedUpdateEvent(self._capture)
-        self.DeclarePeriodicUnrestrictedUpdateEvent(1.0 / fps, capture_offset, self._capture)
+        if step > 0:
+            self.DeclarePeriodicUnrestrictedUpdateEvent(step, 0.0, self._capture_if_due)
+        else:
+            self.DeclarePeriodicUnrestrictedUpdateEvent(1.0 / fps, capture_offset,
+                                                         self._capture)
+
+    def frame_due(self, t: float) -> bool:
+        """Whether the plant step at `t` takes a frame: a tick in (t - step, t]."""
+        k, t_k = _last_tick(t, self._fps, self._offset)
+        return k >= 0 and t_k > t - self._step + TICK_TOLERANCE
+
+    def _capture_if_due(self, context, state):
+        if not self.frame_due(context.get_time()):
+            return EventStatus.DidNothing()
+        self._capture(context, state)
+        return EventStatus.Succeeded()
 
     def _capture(self, context, state):
         state.get_mutable_abstract_state(int(self._image)).set_value(
@@ -140,18 +238,26 @@ class CameraHold(LeafSystem):
 
 
 class CameraFrameSaver(LeafSystem):
-    """Writes its `rgb_image` input as numbered PNG files (RGB) `<directory>/frame_NNNNNN.png`
-    every `period` s from `offset`; `frames_saved` counts them (a publish event cannot write
-    the Context, so the count is this object's)."""
+    """Writes the held frame (`rgb_image`, taken at `image_time`) as numbered PNG files (RGB)
+    `<directory>/frame_NNNNNN.png`, one per tick of its own `rate` (Hz, from `offset`): the
+    first frame taken at or after each tick. It looks every `period` s (the plant's step, so
+    it adds no Simulator stops; or 1/rate); a publish event runs before the updates at its
+    time, so each frame is saved one look after it was taken. `frames_saved` counts the files
+    and `last_saved_time` is the image_time of the last one (a publish event cannot write the
+    Context, so both are this object's: the saver is a file sink)."""
 
-    def __init__(self, directory: str | Path, width: int, height: int, period: float,
-                 offset: float = 0.0):
+    def __init__(self, directory: str | Path, width: int, height: int, rate: float,
+                 offset: float = 0.0, period: float | None = None):
         super().__init__()
         self.directory = Path(directory)
         self.directory.mkdir(parents=True, exist_ok=True)
         self.frames_saved = 0
-        self.DeclareAbstractInputPort("rgb_image", AbstractValue.Make(ImageRgba8U(width, height)))
-        self.DeclarePeriodicPublishEvent(period, offset, self._save)
+        self.last_saved_time = -np.inf
+        self._rate, self._offset = float(rate), float(offset)
+        self._image = self.DeclareAbstractInputPort(
+            "rgb_image", AbstractValue.Make(ImageRgba8U(width, height)))
+        self._image_time = self.DeclareVectorInputPort("image_time", 1)
+        self.DeclarePeriodicPublishEvent(period or 1.0 / rate, 0.0, self._save)
 
     def frame_path(self, index: int) -> Path:
         return self.directory / f"frame_{index:06d}.png"
@@ -159,12 +265,20 @@ class CameraFrameSaver(LeafSystem):
     def _save(self, context):
         from PIL import Image
 
-        image = self.get_input_port().Eval(context)
+        taken = float(self._image_time.Eval(context)[0])
+        if taken <= self.last_saved_time:
+            return
+        k, _ = _last_tick(taken, self._rate, self._offset)
+        if k < 0 or (self.frames_saved and
+                     _last_tick(self.last_saved_time, self._rate, self._offset)[0] >= k):
+            return  # this frame is within the tick already saved
+        image = self._image.Eval(context)
         if image.width() == 0:
             return
         Image.fromarray(np.array(image.data[:, :, :3])).save(
             self.frame_path(self.frames_saved), compress_level=1)
         self.frames_saved += 1
+        self.last_saved_time = taken
 
 
 def _sensor_pose(plant, instance, config: CameraConfig):
@@ -182,31 +296,34 @@ def _sensor_pose(plant, instance, config: CameraConfig):
 
 
 def add_camera(builder, plant, scene_graph, robot: str, instance, config: CameraConfig,
-               renderer_params: RenderEngineVtkParams, save_dir: str | Path | None = None,
+               world, renderers: dict, save_dir: str | Path | None = None,
                save_rate: float | None = None):
-    """Adds `robot`'s camera (see the module doc) and returns (hold, saver or None); nothing
-    when `config.rgb` is false."""
+    """Adds `robot`'s camera (see the module doc), lit by the scenario's `world` (sun, sky),
+    and returns (hold, saver or None); nothing when `config.rgb` is false. Cameras with the
+    same `renderer_name` share the engine the first of them makes; `renderers` (renderer
+    name -> engine class name) records the engines made. Frames are taken on the
+    plant's steps when it is discrete (see `CameraHold`)."""
+    step = plant.time_step()
     if not config.rgb:
         return None, None
     if not scene_graph.HasRenderer(config.renderer_name):
-        params = (config.renderer_class if isinstance(config.renderer_class,
-                                                      RenderEngineVtkParams)
-                  else renderer_params)
-        scene_graph.AddRenderer(config.renderer_name, MakeRenderEngineVtk(params))
+        engine, renderers[config.renderer_name] = make_render_engine(
+            config.renderer_class, world.sun.direction, world.sun.intensity, world.sky_color)
+        scene_graph.AddRenderer(config.renderer_name, engine)
     color, depth = config.MakeCameras()
     frame_id, X_AB = _sensor_pose(plant, instance, config)
     sensor = builder.AddNamedSystem(f"{robot}.camera", RgbdSensor(frame_id, X_AB, color, depth))
     builder.Connect(scene_graph.get_query_output_port(), sensor.query_object_input_port())
     hold = builder.AddNamedSystem(f"{robot}.camera_hold", CameraHold(
-        config.width, config.height, config.fps, config.capture_offset))
+        config.width, config.height, config.fps, config.capture_offset, step))
     builder.Connect(sensor.color_image_output_port(), hold.get_input_port())
     builder.ExportOutput(hold.GetOutputPort("rgb_image"), f"{robot}.camera.rgb_image")
     builder.ExportOutput(hold.GetOutputPort("image_time"), f"{robot}.camera.image_time")
     saver = None
     if save_dir is not None:
-        rate = save_rate or config.fps
         saver = builder.AddNamedSystem(f"{robot}.camera_saver", CameraFrameSaver(
-            Path(save_dir) / robot, config.width, config.height, 1.0 / rate,
-            config.capture_offset + SAVE_OFFSET))
-        builder.Connect(hold.GetOutputPort("rgb_image"), saver.get_input_port())
+            Path(save_dir) / robot, config.width, config.height, save_rate or config.fps,
+            config.capture_offset, step or None))
+        builder.Connect(hold.GetOutputPort("rgb_image"), saver.GetInputPort("rgb_image"))
+        builder.Connect(hold.GetOutputPort("image_time"), saver.GetInputPort("image_time"))
     return hold, saver

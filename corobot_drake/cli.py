@@ -10,6 +10,7 @@ import sys
 import time
 from pathlib import Path
 
+from corobot_drake.camera import RendererUnavailableError
 from corobot_drake.scenario import ScenarioError, load_scenario
 from corobot_drake.simulation import Simulation, quiet_drake_warnings
 
@@ -129,7 +130,7 @@ def main(argv: list[str] | None = None) -> int:
         meshcat = StartMeshcat()
     try:
         sim = Simulation(scenario, meshcat, save_camera=args.save_camera)
-    except ValueError as e:  # e.g. a command with a non-finite number
+    except (ValueError, RendererUnavailableError) as e:  # e.g. a non-finite number in a command
         print(f"error: {args.scenario}: {e}", file=sys.stderr)
         return 2
     if args.headless:

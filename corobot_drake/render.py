@@ -18,7 +18,6 @@ from pydrake.geometry import (
     ClippingRange,
     ColorRenderCamera,
     LightParameter,
-    MakeRenderEngineVtk,
     RenderCameraCore,
     RenderEngineVtkParams,
     Rgba,
@@ -28,7 +27,7 @@ from pydrake.systems.sensors import CameraInfo
 
 from corobot_drake import dimensions as dim
 from corobot_drake import scenario as sc
-from corobot_drake.camera import render_engine_params
+from corobot_drake.camera import make_vtk_engine, render_engine_params
 
 RENDERER = "corobot_vtk"
 """Name under which `add_renderer` registers its VTK engine."""
@@ -59,7 +58,7 @@ def add_renderer(sim, shadows: bool = True, name: str = RENDERER) -> str:
     scene_graph = sim.station.scene_graph
     context = scene_graph.GetMyMutableContextFromRoot(sim.context)
     if not scene_graph.HasRenderer(context, name):
-        scene_graph.AddRenderer(context, name, MakeRenderEngineVtk(
+        scene_graph.AddRenderer(context, name, make_vtk_engine(
             render_params(sim.scenario.world, shadows)))
         # If the geometry poses were already evaluated (a sensor read the QueryObject), the
         # new engine would keep its registration poses: rewriting the plant's positions with

@@ -30,7 +30,7 @@ from pydrake.systems.primitives import MatrixGain
 
 from corobot_drake import dimensions as dim
 from corobot_drake import scenario as sc
-from corobot_drake.camera import add_camera, render_engine_params
+from corobot_drake.camera import add_camera
 from corobot_drake.drive import CommandSource, DriveController
 from corobot_drake.ir_sensor import add_ir_sensors
 from corobot_drake.model import MODELS_DIR, corobot_sdf
@@ -163,6 +163,8 @@ class Station:
     robots: dict[str, RobotParts]
     bodies: dict
     meshcat: object = None
+    renderers: dict = dc.field(default_factory=dict)
+    """The cameras' render engines: renderer name -> "RenderEngineGl" or "RenderEngineVtk"."""
 
 
 def _add_robot(plant: MultibodyPlant, name: str, robot: sc.Robot):
@@ -184,7 +186,7 @@ def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None) -> Stat
     added = {name: _add_robot(plant, name, robot) for name, robot in scenario.robots.items()}
     plant.Finalize()
 
-    robots = {}
+    robots, renderers = {}, {}
     for name, robot in scenario.robots.items():
         instance, chassis, joints = added[name]
         source = builder.AddNamedSystem(
@@ -229,9 +231,8 @@ def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None) -> Stat
         robots[name] = RobotParts(name, instance, chassis, joints, source, controller, tilt,
                                   motion=motion)
         robots[name].camera_hold, robots[name].camera_saver = add_camera(
-            builder, plant, scene_graph, name, instance, robot.camera, render_engine_params(
-                scenario.world.sun.direction, scenario.world.sun.intensity,
-                scenario.world.sky_color), save_camera)
+            builder, plant, scene_graph, name, instance, robot.camera, scenario.world,
+            renderers, save_camera)
         robots[name].ir_sensors = add_ir_sensors(
             builder, plant, scene_graph, name, robot.ir_sensors, model_instance=instance,
             chassis=chassis, random_seed=scenario.random_seed, meshcat=meshcat)
@@ -242,7 +243,7 @@ def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None) -> Stat
         _add_meshcat(builder, plant, scene_graph, meshcat, scenario.world)
     diagram = builder.Build()
     diagram.set_name("corobot_station")
-    return Station(diagram, plant, scene_graph, robots, bodies, meshcat)
+    return Station(diagram, plant, scene_graph, robots, bodies, meshcat, renderers)
 
 
 def visualization_config():

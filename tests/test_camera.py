@@ -9,6 +9,8 @@ for the horizon edge across the full width. Measured differences: 0.0-0.25%.
 
 import json
 import math
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -167,7 +169,7 @@ def test_no_camera():
     ("{depth: true}", "robots.corobot.camera.depth"),
     ("{output_delay: 0.01}", "robots.corobot.camera.output_delay"),
     ("{fps: 0}", "robots.corobot.camera.fps"),
-    ("{renderer_class: RenderEngineGl}", "robots.corobot.camera.renderer_class"),
+    ("{renderer_class: RenderEngineGltfClient}", "robots.corobot.camera.renderer_class"),
     ("{clipping_near: 2.0, clipping_far: 1.0}", "robots.corobot.camera"),
 ])
 def test_bad_camera_is_a_clear_error(override, field):
@@ -189,3 +191,97 @@ def test_cli_saves_numbered_frames(tmp_path, capsys):
     assert image.mean() > 50
     assert main([str(DEFAULT_SCENARIO), "--headless", "--camera-rate", "0"]) == 2
     assert "--camera-rate" in capsys.readouterr().err
+
+
+CIRCLE = "robots: {corobot: {commands: [!SetPower {left: 0.4, right: 0.8}]}}"
+
+
+def test_frames_taken_on_plant_steps_are_the_exact_time_images():
+    """The 30 Hz tick at 16/30 s falls between the 10 ms plant steps; the frame is taken at
+    the step at 0.54 s and is, bit for bit, what the sensor renders at exactly 16/30 s (the
+    scene only changes at steps). The robot spins in front of the box's edge, so
+    consecutive frames differ."""
+    sim = make_sim("robots: {corobot: {pose: {x: 0.4, y: -1.0, yaw_deg: 180}, commands: "
+                   "[!SetPower {left: -0.5, right: 0.5}]}}", camera=True)
+    assert sim.station.plant.time_step() == pytest.approx(0.01)
+    sensor = sim.station.diagram.GetSubsystemByName("corobot.camera")
+    tick = 16.0 / 30.0
+    sim.advance_to(tick - 0.01)
+    previous = sim.robot().camera_image().copy()
+    assert sim.robot().camera_image_time() == pytest.approx(0.5)  # tick 15, on a step
+    sim.advance_to(tick)
+    exact = np.array(sensor.color_image_output_port().Eval(
+        sensor.GetMyContextFromRoot(sim.context)).data)
+    assert sim.robot().camera_image_time() == pytest.approx(0.5)  # not taken yet
+    sim.advance_to(0.545)
+    assert sim.robot().camera_image_time() == pytest.approx(0.54)
+    np.testing.assert_array_equal(sim.robot().camera_image(), exact)
+    assert np.abs(exact.astype(int) - previous.astype(int)).max() > 0
+
+
+def test_the_camera_adds_no_simulator_stops():
+    """Frames come on the plant's steps, so the Simulator stops at the same times with the
+    camera as without it (a stop between steps cost about as much as a step here)."""
+    steps = []
+    for camera in (False, True):
+        sim = make_sim(CIRCLE, camera=camera)
+        sim.advance(1.0)
+        steps.append(sim.simulator.get_num_steps_taken())
+    assert steps[0] == steps[1]
+    sim = make_sim(CIRCLE, "robots: {corobot: {camera: {fps: 30}}}", camera=True)
+    sim.advance(1.005)
+    assert sim.robot().camera_image_time() == pytest.approx(1.0)  # tick 30 on step 100
+
+
+def test_gl_and_vtk_render_the_same_picture():
+    """The two renderers, same lights and scene (facing the box from the default spot, so
+    box, ground and sky are all in view): the same box share (within the one-pixel edge
+    tolerance of the geometry test) and the same mean colour within 2 grey levels (measured:
+    under 0.01). Both images are compared with the geometry, too."""
+    images = {}
+    for renderer in ("RenderEngineGl", "RenderEngineVtk"):
+        sim = make_sim("robots: {corobot: {pose: {x: 0.8, yaw_deg: 180}, "
+                       f"camera: {{renderer_class: {renderer}}}}}}}", camera=True)
+        assert sim.station.renderers == {"corobot_camera": renderer}
+        sim.advance(0.3)
+        images[renderer] = image = sim.robot().camera_image()
+        expected, tolerance = expected_box_share(sim)
+        assert box_mask(image).mean() == pytest.approx(expected, abs=tolerance)
+    gl, vtk = (images[r][:, :, :3].reshape(-1, 3).astype(float).mean(axis=0)
+               for r in ("RenderEngineGl", "RenderEngineVtk"))
+    np.testing.assert_allclose(gl, vtk, atol=2)
+
+
+def test_the_default_renderer_is_gl_here():
+    """tools/setup installs Xvfb, so the default ("") renders with GL (about half the cost of
+    VTK per frame: docs/performance.md)."""
+    sim = make_sim(camera=True)
+    assert sim.station.renderers == {"corobot_camera": "RenderEngineGl"}, (
+        "no X display and no Xvfb: run tools/setup as root or apt-get install xvfb")
+
+
+NO_DISPLAY = """
+import sys, warnings
+import corobot_drake.camera as camera
+camera.x_display = lambda: None  # as on a machine with neither DISPLAY nor Xvfb
+from corobot_drake.cli import main
+sys.exit(main(sys.argv[1:]))
+"""
+
+
+def test_without_a_display_gl_is_a_clear_error_and_the_default_falls_back(tmp_path):
+    """In a child process: VTK's headless EGL contexts and GL's GLX ones cannot share a
+    thread (libglvnd), and this test process renders with GLX."""
+    def run(*args):
+        return subprocess.run([sys.executable, "-c", NO_DISPLAY, str(DEFAULT_SCENARIO),
+                               "--headless", "--duration", "0.1", *args],
+                              capture_output=True, text=True, timeout=120)
+
+    fallback = run("--save-camera", str(tmp_path))
+    assert fallback.returncode == 0, fallback.stderr
+    assert "camera: rendering with VTK" in fallback.stderr
+    image = np.asarray(Image.open(tmp_path / "corobot" / "frame_000000.png"))
+    assert image.mean() > 50
+    gl = run("--override", "robots: {corobot: {camera: {renderer_class: RenderEngineGl}}}")
+    assert gl.returncode == 2
+    assert "RenderEngineGl: no X display" in gl.stderr and "Traceback" not in gl.stderr

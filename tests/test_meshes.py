@@ -11,7 +11,6 @@ import pytest
 from pydrake.geometry import (
     GeometryInstance,
     IllustrationProperties,
-    MakeRenderEngineVtk,
     Mesh,
     PerceptionProperties,
     ReadObjToTriangleSurfaceMesh,
@@ -24,6 +23,7 @@ from pydrake.systems.framework import DiagramBuilder
 
 from corobot_drake import dimensions as dim
 from corobot_drake import meshes
+from corobot_drake.camera import make_vtk_engine
 from corobot_drake.render import color_camera, look_at
 
 REPO = Path(__file__).resolve().parents[1]
@@ -178,7 +178,7 @@ class Scene:
     def __init__(self):
         builder = DiagramBuilder()
         self.scene_graph = builder.AddSystem(SceneGraph())
-        self.scene_graph.AddRenderer("vtk", MakeRenderEngineVtk(RenderEngineVtkParams()))
+        self.scene_graph.AddRenderer("vtk", make_vtk_engine(RenderEngineVtkParams()))
         source = self.scene_graph.RegisterSource("corobot_meshes")
         placements = [(name, RigidTransform()) for name in CHASSIS_MOUNTED]
         placements += [("wheel", RigidTransform(dim.wheel_center(w))) for w in dim.WHEEL_NAMES]
