@@ -49,6 +49,7 @@ run is deterministic. All distances are in metres.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -137,6 +138,30 @@ class SharpGP2D12:
     def quantise(self, voltage: np.ndarray | float) -> np.ndarray:
         """The voltage the ADC reports (counts times the step)."""
         return self.counts(voltage) * self.adc_step
+
+    # -- one reading in plain floats (the same values; a sensor's scan calls these) ----------
+
+    def voltage_scalar(self, distance: float) -> float:
+        """:meth:`voltage` of one distance, as a float."""
+        if distance >= self.min_distance:
+            return self.a / (distance + self.b)
+        x = distance - self.peak_distance
+        near = self.peak_voltage - self._curvature * (x * x)
+        return near if near > 0.0 else 0.0
+
+    def counts_scalar(self, voltage: float) -> int:
+        """:meth:`counts` of one voltage, as an int."""
+        top = 2**self.adc_bits - 1
+        x = voltage / self.adc_step
+        if x >= top:
+            return top
+        return math.floor(x) if x > 0.0 else 0
+
+    def distance_from_voltage_scalar(self, voltage: float) -> float:
+        """:meth:`distance_from_voltage` of one voltage, as a float."""
+        if not voltage > 0.0:
+            return self.max_distance
+        return min(max(self.a / voltage - self.b, self.min_distance), self.max_distance)
 
     # -- the sensor -------------------------------------------------------------------------
 

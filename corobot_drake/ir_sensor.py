@@ -56,8 +56,8 @@ from pydrake.systems.framework import BasicVector, LeafSystem
 from corobot_drake import dimensions as dim
 from corobot_drake.ir_models import MODELS, SharpGP2D12
 from corobot_drake.raycast import (
-    BodyFixedRays,
     RayCaster,
+    RayFan,
     cross_of_rays_in_sensor_frame,
     model_instance_geometry_ids,
 )
@@ -206,8 +206,7 @@ class IrSensor(LeafSystem):
         self._sharp = SharpGP2D12(noise_std=config.noise_std) if config.model == "sharp_gp2d12" \
             else None
         X_BS = sensor_pose_in_chassis(config)
-        self._rays = BodyFixedRays.cross_of_rays([X_BS], config.samples,
-                                                 config.dispersion_cone_angle)
+        self._fan = RayFan.cross_of_rays(X_BS, config.samples, config.dispersion_cone_angle)
         self.num_rays = n = 2 * config.samples
         self.period = 1.0 / config.scan_rate_hz
         self._caster: RayCaster | None = None
@@ -302,42 +301,51 @@ class IrSensor(LeafSystem):
     def scan(self, query_object):
         """One cast of the cross of rays: (origin (3,), ray distances (N,) inf for a miss,
         directions (N, 3)) in the world frame."""
-        X_WB = query_object.GetPoseInWorld(self._frame_id)
-        origins, directions = self._rays.in_world(X_WB)
-        hits = self.caster(query_object).cast(query_object, origins, directions, self._range)
-        return origins[0], hits.distance, directions
+        origin, directions, t = self._cast(query_object)
+        return np.array(origin), np.array(t), np.array(directions)
+
+    def _cast(self, query_object):
+        """(origin, directions, distances) as plain floats (the scan's hot path)."""
+        X_WB = query_object.GetPoseInWorld(self._frame_id).GetAsMatrix34().tolist()
+        origin, directions, cone = self._fan.in_world(X_WB)
+        t = self.caster(query_object).cast_fan(query_object, origin, directions, self._range,
+                                               cone)
+        return origin, directions, t
 
     def _initial_scan(self, context, discrete_state) -> None:
         self._do_scan(context, discrete_state, 0, self._range)
 
     def _periodic_scan(self, context, discrete_state) -> None:
-        r = self._value(context)
-        self._do_scan(context, discrete_state, int(r[SCAN_INDEX]) + 1, float(r[DISTANCE]))
+        # The sensor's only discrete state group (index-free accessors are the cheaper calls).
+        r = context.get_discrete_state_vector()
+        self._do_scan(context, discrete_state, int(r.GetAtIndex(SCAN_INDEX)) + 1,
+                      r.GetAtIndex(DISTANCE))
 
     def _do_scan(self, context, discrete_state, index: int, previous: float) -> None:
-        origin, t, directions = self.scan(self._query_port.Eval(context))
-        # Six-odd numbers: plain Python is cheaper than numpy calls here.
-        t_capped = np.minimum(t, self._range)  # a miss (inf) ends at maximum_range
-        true_distance = min(t_capped.tolist())
+        # A dozen numbers: plain Python floats are cheaper than numpy calls here.
+        origin, directions, t = self._cast(self._query_port.Eval(context))
+        ox, oy, oz = origin
+        rng = self._range
+        hit = [1.0 if ti <= rng else 0.0 for ti in t]
+        t = [ti if ti <= rng else rng for ti in t]  # a miss (inf) ends at maximum_range
+        true_distance = min(t)
+        ends = [v for ti, (dx, dy, dz) in zip(t, directions, strict=True)
+                for v in (ox + ti * dx, oy + ti * dy, oz + ti * dz)]
         voltage = counts = 0.0
         if self._sharp is None:
             raw = true_distance
         else:
             s = self._sharp
-            v = float(s.voltage(true_distance if true_distance < self._range or
-                                (t <= self._range).any() else math.inf))
+            v = s.voltage_scalar(true_distance if 1.0 in hit else math.inf)
             if s.noise_std > 0.0:
                 v += s.noise_std * counter_normal(self._key, index)
-            counts = int(s.counts(v))
+            counts = s.counts_scalar(v)
             voltage = counts * s.adc_step
-            raw = min(float(s.distance_from_voltage(voltage)), self._range)
+            raw = min(s.distance_from_voltage_scalar(voltage), rng)
         changed = 1.0 if abs(raw - previous) > self._threshold else 0.0
-        x = discrete_state.get_mutable_value(self._state)
-        x[:_READING_SIZE] = (raw, context.get_time(), previous, changed, index, true_distance,
-                             voltage, counts)
-        x[self._origin] = origin
-        x[self._end] = (origin + t_capped[:, None] * directions).ravel()
-        x[self._hit] = t <= self._range
+        discrete_state.get_mutable_value()[:] = [
+            raw, context.get_time(), previous, changed, index, true_distance, voltage, counts,
+            ox, oy, oz, *ends, *hit]
 
 
 # --- Meshcat -------------------------------------------------------------------------------

@@ -152,3 +152,18 @@ def test_parameters_are_checked():
         SharpGP2D12(peak_voltage=2.0)
     with pytest.raises(ValueError, match="noise_std"):
         SharpGP2D12(noise_std=-1)
+
+
+def test_scalar_forms_equal_the_array_forms_exactly():
+    """The sensor's scan uses the float forms: they give the array forms' values bit for bit."""
+    sensor = SharpGP2D12(noise_std=0.0)
+    distances = [*np.linspace(-0.05, 1.5, 3001).tolist(), 0.0, 0.1, 0.0825, 0.8, math.inf]
+    for d in distances:
+        assert sensor.voltage_scalar(d) == float(sensor.voltage(d)), d
+    step = sensor.adc_step
+    voltages = [*np.linspace(-1.0, 6.0, 7001).tolist(), 0.0, -0.0, step, 1023 * step,
+                1024 * step, 5.0, 1e9]
+    for v in voltages:
+        counts = sensor.counts_scalar(v)
+        assert type(counts) is int and counts == int(sensor.counts(v)), v
+        assert sensor.distance_from_voltage_scalar(v) == float(sensor.distance_from_voltage(v)), v

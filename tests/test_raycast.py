@@ -33,6 +33,7 @@ from pydrake.systems.framework import DiagramBuilder
 from corobot_drake.raycast import (
     BodyFixedRays,
     RayCaster,
+    RayFan,
     cross_of_rays_directions,
     cross_of_rays_in_sensor_frame,
     model_instance_geometry_ids,
@@ -601,3 +602,120 @@ def test_bench_scene_reads_the_spec_figures():
     assert np.all(np.isinf(hits.distance[:6]))  # front: nothing within 30 in
     assert hits.distance[6:].min() == pytest.approx(0.62865, abs=1e-9)
     assert 0.0 < bench.scan_cost_seconds(repeats=100) < 0.05
+
+
+# --- cast_fan: the scalar path for one sensor's fan -----------------------------------------
+
+
+def fan_distance(scene, o_W, d_W, max_range):
+    """cast_fan for one ray (the cone computed by cast_fan itself)."""
+    caster = scene.caster()
+    return caster.cast_fan(scene.query_object, list(o_W), [list(d_W)], max_range)[0]
+
+
+@pytest.mark.parametrize("anchored", [True, False], ids=["anchored", "moving"])
+@pytest.mark.parametrize("pose", POSES)
+@pytest.mark.parametrize("case", CASES)
+def test_cast_fan_hits_at_analytic_distance(mesh_files, case, pose, anchored):
+    make, o_G, d_G, expected = CASES[case]
+    X_WG = POSES[pose]
+    scene = Scene([("target", make(mesh_files), X_WG)], anchored=anchored)
+    o_W = X_WG @ np.asarray(o_G, float)
+    d_W = X_WG.rotation() @ np.asarray(d_G, float)
+    assert fan_distance(scene, o_W, d_W, 100.0) == pytest.approx(expected, abs=1e-9)
+    assert fan_distance(scene, o_W, -d_W, 100.0) == math.inf
+    assert fan_distance(scene, o_W, d_W, expected - 1e-6) == math.inf
+
+
+@pytest.mark.parametrize("case", PASS_BY)
+def test_cast_fan_near_miss(mesh_files, case):
+    make, o_G, d_G = PASS_BY[case]
+    for X in POSES.values():
+        scene = Scene([("target", make(mesh_files), X)])
+        o_W, d_W = X @ np.asarray(o_G, float), X.rotation() @ np.asarray(d_G, float)
+        assert fan_distance(scene, o_W, d_W, 100.0) == math.inf, X
+
+
+@pytest.mark.parametrize("case", INSIDE)
+def test_cast_fan_origin_inside_is_a_hit_at_zero(mesh_files, case):
+    make, o_G = INSIDE[case]
+    X = POSES["rotated"]
+    scene = Scene([("target", make(mesh_files), X)])
+    for d_G in [(1, 0, 0), (0, 0, -1), unit(-1, 2, 0.5)]:
+        assert fan_distance(scene, X @ np.asarray(o_G, float), X.rotation() @ d_G, 10.0) == 0.0
+
+
+@pytest.mark.parametrize("case", ON_SURFACE)
+def test_cast_fan_origin_on_the_surface_is_a_hit_at_zero(mesh_files, case):
+    make, o_G = ON_SURFACE[case]
+    scene = Scene([("target", make(mesh_files), RigidTransform())])
+    for d_G in [(1, 0, 0), (0, 1, 0), (0, 0, 1), (-1, 0, 0), (0, -1, 0), (0, 0, -1)]:
+        assert fan_distance(scene, o_G, d_G, 10.0) == 0.0, d_G
+
+
+@pytest.mark.parametrize("anchored", [True, False], ids=["anchored", "moving"])
+def test_cast_fan_agrees_with_cast_in_a_random_scene(mesh_files, anchored):
+    """Fans of rays (each a sensor's cross of rays, with its precomputed cone, and a random
+    bundle with the cone cast_fan computes) read what cast() reads for the same rays."""
+    rng = np.random.default_rng(11)
+    makers = [
+        lambda: Box(*rng.uniform(0.2, 1.0, 3)),
+        lambda: Sphere(rng.uniform(0.1, 0.5)),
+        lambda: Cylinder(rng.uniform(0.1, 0.4), rng.uniform(0.2, 1.0)),
+        lambda: Capsule(rng.uniform(0.1, 0.3), rng.uniform(0.2, 0.8)),
+        lambda: Ellipsoid(*rng.uniform(0.2, 0.6, 3)),
+        lambda: Convex(str(mesh_files / "octahedron.obj"), rng.uniform(0.3, 0.7)),
+        lambda: Mesh(str(mesh_files / "cube.obj"), rng.uniform(0.2, 0.4)),
+    ]
+    ground = HalfSpace.MakePose(unit(0.05, -0.1, 1.0), [0, 0, -0.5])
+    shapes = [("ground", HalfSpace(), ground)]
+    for i in range(21):
+        X = RigidTransform(RollPitchYaw(*rng.uniform(-math.pi, math.pi, 3)), rng.uniform(-3, 3, 3))
+        shapes.append((f"s{i}", makers[i % len(makers)](), X))
+    scene = Scene(shapes, anchored=anchored)
+    caster = scene.caster()
+    n_hits = n_rays = 0
+    for trial in range(300):
+        origin = rng.uniform(-3.5, 3.5, 3)
+        origin[2] = rng.uniform(-0.8, 2.5)
+        if trial % 2:
+            look = shapes[1 + trial % 21][2].translation() - origin
+            X_WS = RigidTransform(
+                RotationMatrix.MakeFromOneVector(look, 0)
+                @ RotationMatrix.MakeXRotation(rng.uniform(-math.pi, math.pi)),
+                origin,
+            )
+            fan = RayFan.cross_of_rays(X_WS, int(rng.integers(2, 6)), rng.uniform(0, 60))
+            o, d, cone = fan.in_world(RigidTransform().GetAsMatrix34().tolist())
+        else:
+            d = rng.normal(size=(int(rng.integers(1, 9)), 3))
+            d = (d / np.linalg.norm(d, axis=1, keepdims=True)).tolist()
+            o, cone = origin.tolist(), None
+        max_range = rng.uniform(0.5, 6.0)
+        expected = caster.cast(scene.query_object, np.tile(o, (len(d), 1)), d, max_range)
+        got = caster.cast_fan(scene.query_object, o, d, max_range, cone)
+        np.testing.assert_allclose(got, expected.distance, rtol=0, atol=1e-9)
+        n_rays += len(d)
+        n_hits += int(np.isfinite(expected.distance).sum())
+    assert n_rays // 4 < n_hits < n_rays  # both hits and misses are exercised
+
+
+def test_cast_fan_skips_what_the_cone_cannot_reach():
+    """Culling by the fan's cone and range: what lies behind, beside or beyond is not hit; a
+    sphere only the outermost ray passes through (its centre outside the cone) is."""
+    scene = Scene(
+        [
+            ("behind", Box(1, 1, 1), RigidTransform([-3, 0, 0])),
+            ("aside", Sphere(0.5), RigidTransform([2, 2.5, 0])),
+            ("edge", Sphere(0.5), RigidTransform([4, 0.5 + 4 * math.tan(0.1), 0])),
+            ("far", Box(1, 1, 1), RigidTransform([9, 0, 0])),
+        ]
+    )
+    caster = scene.caster()
+    fan = RayFan((0, 0, 0), [(math.cos(a), math.sin(a), 0.0) for a in (-0.1, 0.0, 0.1)])
+    assert fan.half_angle == pytest.approx(0.1)
+    o, d, cone = fan.in_world(RigidTransform().GetAsMatrix34().tolist())
+    t = caster.cast_fan(scene.query_object, o, d, 8.0, cone)
+    assert t[:2] == [math.inf, math.inf]
+    assert t[2] < 8.0
+    assert caster.cast(scene.query_object, np.tile(o, (3, 1)), d, 8.0).distance[2] == t[2]
