@@ -1,10 +1,11 @@
-"""The robot's front camera: Drake's `CameraConfig` in the scenario, rendered by VTK headless.
+"""The robot's front camera: Drake's `CameraConfig` in the scenario, rendered by Drake's GL
+engine (or VTK headless).
 
 Each robot's `camera` (a `pydrake.systems.sensors.CameraConfig`, the scenario field
 `robots.<name>.camera`) becomes, in the diagram:
 
 - `<robot>.camera`: an `RgbdSensor` on the chassis (colour only; it renders when asked),
-- `<robot>.camera_hold`: `CameraHold`, which asks for one frame at `fps` (and one at
+- `<robot>.camera_hold`: `CameraHold`, which asks for one frame per tick of `fps` (and one at
   initialization) and holds it; its output is exported as `<robot>.camera.rgb_image`
   (ImageRgba8U) and `<robot>.camera.image_time` (s), the latest frame for any other system,
 - with `save_dir`, `<robot>.camera_saver`: `CameraFrameSaver`, writing that frame as numbered
@@ -13,11 +14,18 @@ Each robot's `camera` (a `pydrake.systems.sensors.CameraConfig`, the scenario fi
 This is `ApplyCameraConfig` without its LCM publisher and with a colour-only hold: Drake's
 `RgbdSensorDiscrete` also renders a depth image every frame (twice the cost), and
 `RgbdSensorAsync` (what `ApplyCameraConfig` picks when `output_delay > 0`) is documented as
-unsafe with VTK; here it failed with "Unable to eglMakeCurrent" from its worker thread.
+unsafe with VTK; here it failed with "Unable to eglMakeCurrent" from its worker thread. With a
+discrete plant, frames are taken on its steps (`CameraHold`): the same images, no extra
+Simulator stops.
 
-The renderer is VTK with the scenario's sun as a directional light in the world frame, a dim
-fill light from the camera (the sky's scattered light, so faces turned from the sun are shaded,
-not black) and the sky colour as background. Cameras of all robots share it.
+The renderer (`make_render_engine`, `renderer_class` in the config): by default Drake's
+`RenderEngineGl` when an X display is available (the user's, or a private Xvfb:
+`xdisplay.py`), since a 320 x 240 frame costs it about half what VTK's costs in software
+rendering here (VTK runs an anti-aliasing pass over every pixel); else VTK headless through
+EGL, with a warning. Both are lit alike: the scenario's sun as a directional light in the world
+frame, a dim fill light from the camera (the sky's scattered light, so faces turned from the
+sun are shaded, not black) and the sky colour as background. Cameras of all robots share one
+engine.
 
 A robot without a camera: `camera: {rgb: false}` (Drake's own convention: no image, no sensor).
 """

@@ -1,7 +1,9 @@
 """Cost of the robot's camera per frame (run: python tools/bench_camera.py).
 
-Two figures for the SPEC camera (320 x 240, 30 deg vertical fov, VTK headless, sun + fill
-light, no shadows), both in the default scene with the robot driving a circle:
+Two figures for the SPEC camera (320 x 240, 30 deg vertical fov, sun + fill light, no
+shadows) with each renderer (GL through an X display or a private Xvfb, the default here; VTK,
+through GLX when a display is available), both in the default scene with the robot driving a
+circle:
 
 - `camera_frame_ms()`: the render itself. The robot's own sensor (`<robot>.camera`, the
   station's RgbdSensor) is asked for its colour image once per 1/30 s of simulated time and
@@ -28,22 +30,27 @@ FPS = 30.0
 _CLOCKS = {"wall": time.perf_counter, "cpu": time.process_time}
 
 
-def _sim(camera: bool, fps: float = FPS, overrides=()) -> Simulation:
+RENDERERS = ("RenderEngineGl", "RenderEngineVtk")
+
+
+def _sim(camera: bool, fps: float = FPS, overrides=(), renderer: str = "") -> Simulation:
     scenario = load_scenario(DEFAULT_SCENARIO, overrides=[CIRCLE, *overrides])
     for robot in scenario.robots.values():
         robot.camera.rgb = camera
         robot.camera.fps = fps
+        robot.camera.renderer_class = renderer
     return Simulation(scenario)
 
 
-def camera_frame_ms(frames: int = 90, warmup: int = 5, overrides=(), clock: str = "wall"
-                    ) -> float:
+def camera_frame_ms(frames: int = 90, warmup: int = 5, overrides=(), clock: str = "wall",
+                    renderer: str = "") -> float:
     """Median ms for the robot's camera to render one frame: `clock` "wall" (wall-clock) or
-    "cpu" (this process's CPU time, all threads: steadier on a loaded machine)."""
+    "cpu" (this process's CPU time, all threads: steadier on a loaded machine); `renderer`
+    a `CameraConfig.renderer_class` ("" the default)."""
     now = _CLOCKS[clock]
     quiet_drake_warnings()
     # The hold renders at 1e-3 Hz (at t = 0 only): each timed frame is the only render.
-    sim = _sim(True, fps=1e-3, overrides=overrides)
+    sim = _sim(True, fps=1e-3, overrides=overrides, renderer=renderer)
     sensor = sim.station.diagram.GetSubsystemByName("corobot.camera")
     port = sensor.color_image_output_port()
     sensor_context = sensor.GetMyContextFromRoot(sim.context)
@@ -65,10 +72,11 @@ def _elapsed(sim: Simulation, seconds: float, clock: str) -> float:
     return now() - start
 
 
-def camera_overhead_ms(seconds: float = 3.0, overrides=(), clock: str = "wall") -> float:
+def camera_overhead_ms(seconds: float = 3.0, overrides=(), clock: str = "wall",
+                       renderer: str = "") -> float:
     """ms (`clock` "wall" or "cpu") the camera adds to the simulation per frame, at 30 Hz."""
     quiet_drake_warnings()
-    with_camera = _elapsed(_sim(True, overrides=overrides), seconds, clock)
+    with_camera = _elapsed(_sim(True, overrides=overrides, renderer=renderer), seconds, clock)
     without = _elapsed(_sim(False, overrides=overrides), seconds, clock)
     return 1000.0 * (with_camera - without) / (seconds * FPS)
 
@@ -78,19 +86,25 @@ def main() -> None:
     parser.add_argument("--frames", type=int, default=90)
     parser.add_argument("--seconds", type=float, default=3.0)
     parser.add_argument("--repeats", type=int, default=3, help="median of this many runs")
+    parser.add_argument("--renderers", nargs="+", default=list(RENDERERS), choices=RENDERERS)
     args = parser.parse_args()
-    render = statistics.median(camera_frame_ms(args.frames) for _ in range(args.repeats))
-    cpu = statistics.median(camera_frame_ms(args.frames, clock="cpu")
-                            for _ in range(args.repeats))
-    overhead = statistics.median(camera_overhead_ms(args.seconds) for _ in range(args.repeats))
-    overhead_cpu = statistics.median(camera_overhead_ms(args.seconds, clock="cpu")
-                                     for _ in range(args.repeats))
-    print("| camera, 320x240, VTK headless | ms per frame (median) |")
-    print("|---|---|")
-    print(f"| render (the sensor's colour image), wall clock | {render:.2f} |")
-    print(f"| render, CPU time (all threads) | {cpu:.2f} |")
-    print(f"| added to a simulation at 30 Hz, wall clock | {overhead:.2f} |")
-    print(f"| added to a simulation at 30 Hz, CPU time | {overhead_cpu:.2f} |")
+
+    def median(fn, **kwargs):
+        return statistics.median(fn(**kwargs) for _ in range(args.repeats))
+
+    print(f"| camera, 320x240, ms per frame (median of {args.repeats}) | "
+          + " | ".join(args.renderers) + " |")
+    print("|---|" + "---|" * len(args.renderers))
+    rows = (("render (the sensor's colour image), wall clock", camera_frame_ms, "wall",
+             {"frames": args.frames}),
+            ("render, CPU time (all threads)", camera_frame_ms, "cpu", {"frames": args.frames}),
+            ("added to a simulation at 30 Hz, wall clock", camera_overhead_ms, "wall",
+             {"seconds": args.seconds}),
+            ("added to a simulation at 30 Hz, CPU time", camera_overhead_ms, "cpu",
+             {"seconds": args.seconds}))
+    for label, fn, clock, kwargs in rows:
+        cells = [f"{median(fn, clock=clock, renderer=r, **kwargs):.2f}" for r in args.renderers]
+        print(f"| {label} | " + " | ".join(cells) + " |", flush=True)
 
 
 if __name__ == "__main__":
