@@ -1,26 +1,38 @@
 """Benchmark: what the IR sensors cost, per scan and inside the running default scene.
 
-Run: ``.venv/bin/python tools/bench_ir.py [--seconds 10] [--repeats 3]``. It prints
+Run: ``.venv/bin/python tools/bench_ir.py [--seconds 10] [--repeats 5]``. It prints
 
 1. the cost of one scan of both default sensors (2 sensors x 6 rays) in the built station:
    each IrSensor's own periodic-update handler (chassis pose from the QueryObject, posing the
-   rays, the exact cast, the output model, writing the state), called directly;
-2. the same 12 rays through ``tools/bench_raycast.py``'s stand-alone scene (one cast);
-3. the real-time factor of the default scene driving (tools/bench.py's figure of eight) with
-   no IR sensor and with the 2 default sensors at 20 Hz (the camera off in both, so the
-   difference is the sensors' whole in-diagram cost), median of ``--repeats``.
+   rays, the exact cast, the output model, writing the state), called directly in a loop
+   (median and best batch, CPU and wall);
+2. the same handlers timed in place: called by the Simulator in the default scene driving
+   (caches cold after each physics step), median per scan of both sensors, CPU;
+3. the ray cast alone (``tools/bench_raycast.py``'s stand-alone scene);
+4. the default scene driving (tools/bench.py's figure of eight, camera off) with no IR, with
+   two *no-op* IR sensors (the same events and ports, a handler that does nothing: what
+   Drake's event machinery costs), with the 2 default sensors at 20 Hz and at 200 Hz: the
+   real-time factor, CPU ms per simulated second and simulator steps per simulated second,
+   medians of ``--repeats`` runs taken in turn; and from those the in-place cost of one scan
+   of both sensors (extra CPU per simulated second / scans per second), split into Drake's
+   part (no-op minus no IR) and the handlers' (IR minus no-op).
+
+The no-op sensor lives here, not in the package: it is a measuring device.
 
 Importable (for tools/bench.py): :func:`station_scan_cost_seconds`,
 :func:`realtime_factor`, :data:`CONFIGURATIONS` (name -> scenario overrides).
 """
 
 import argparse
+import contextlib
 import dataclasses as dc
 import os
 import statistics
 import time
 from pathlib import Path
+from typing import ClassVar
 
+from corobot_drake import ir_sensor
 from corobot_drake import scenario as sc
 from corobot_drake.scenario import load_scenario
 from corobot_drake.simulation import Simulation, quiet_drake_warnings
@@ -32,18 +44,55 @@ DRIVING = ("robots: {corobot: {commands: [!SetPower {left: 1.0, right: 0.6}, !Wa
 NO_CAMERA = (["robots: {corobot: {camera: {rgb: false}}}"]
              if "camera" in {f.name for f in dc.fields(sc.Robot)} else [])
 NO_IR = "robots: {corobot: {ir_sensors: {front: {enabled: false}, rear: {enabled: false}}}}"
+IR_200_HZ = ("robots: {corobot: {ir_sensors: {front: {scan_rate_hz: 200}, "
+             "rear: {scan_rate_hz: 200}}}}")
 
 CONFIGURATIONS = {
     "physics + drive, no IR, no camera": [*NO_CAMERA, NO_IR],
     "physics + drive + 2 IR at 20 Hz, no camera": [*NO_CAMERA],
-    "physics + drive + 2 IR at 200 Hz, no camera": [
-        *NO_CAMERA, "robots: {corobot: {ir_sensors: {front: {scan_rate_hz: 200}, "
-        "rear: {scan_rate_hz: 200}}}}"],
+    "physics + drive + 2 IR at 200 Hz, no camera": [*NO_CAMERA, IR_200_HZ],
 }
 """Scenario overrides (on top of the default scene and DRIVING) of each RTF configuration."""
 
+NO_OP = "physics + drive + 2 no-op IR at 20 Hz, no camera"
 
-def station_scan_cost_seconds(repeats: int = 2000, batch: int = 50,
+
+class NoOpIrSensor(ir_sensor.IrSensor):
+    """An IrSensor whose scans do nothing: the same events, state and ports, so a run with it
+    measures what Drake's event dispatch (and the extra simulator steps the scan times add)
+    costs without any of the sensor's own work."""
+
+    def _initial_scan(self, context, discrete_state) -> None:
+        pass
+
+    def _periodic_scan(self, context, discrete_state) -> None:
+        pass
+
+
+class TimedIrSensor(ir_sensor.IrSensor):
+    """An IrSensor that records the CPU time of each periodic scan (time, seconds) in
+    `TimedIrSensor.log` (class-wide: both sensors of a station)."""
+
+    log: ClassVar[list] = []
+
+    def _periodic_scan(self, context, discrete_state) -> None:
+        start = time.thread_time()
+        super()._periodic_scan(context, discrete_state)
+        TimedIrSensor.log.append((context.get_time(), time.thread_time() - start))
+
+
+@contextlib.contextmanager
+def _sensor_class(cls):
+    """Builds stations with `cls` in place of IrSensor (add_ir_sensors looks it up)."""
+    real = ir_sensor.IrSensor
+    ir_sensor.IrSensor = cls
+    try:
+        yield
+    finally:
+        ir_sensor.IrSensor = real
+
+
+def station_scan_cost_seconds(repeats: int = 4000, batch: int = 50,
                               timer=time.process_time, best: bool = False) -> float:
     """Median (or, with `best`, smallest) cost per batch-averaged call of one scan of both
     default IR sensors (2 x 6 rays) in the built default station: each sensor's periodic-update
@@ -71,34 +120,97 @@ def station_scan_cost_seconds(repeats: int = 2000, batch: int = 50,
     return min(samples) if best else statistics.median(samples)
 
 
+def in_place_scan_cost_seconds(seconds: float = 10.0) -> float:
+    """Median CPU time of one scan of both default sensors as the Simulator calls their
+    handlers in the default scene driving (the handlers only, not Drake's dispatch)."""
+    TimedIrSensor.log = []
+    with _sensor_class(TimedIrSensor):
+        sim = Simulation(load_scenario(DEFAULT_SCENARIO, overrides=[DRIVING, *NO_CAMERA]))
+    sim.advance(seconds)
+    per_scan: dict[float, float] = {}
+    for t, cost in TimedIrSensor.log:
+        per_scan[t] = per_scan.get(t, 0.0) + cost
+    return statistics.median(per_scan.values())
+
+
+@dc.dataclass
+class Run:
+    realtime_factor: float
+    cpu_per_second: float
+    """CPU seconds (this process) per simulated second."""
+    steps_per_second: float
+
+
+def run_configuration(overrides: list[str], seconds: float = 10.0, sensor=None) -> Run:
+    """The default scene driving with `overrides` for `seconds` (sensor: an IrSensor
+    subclass to build the station with)."""
+    with _sensor_class(sensor or ir_sensor.IrSensor):
+        sim = Simulation(load_scenario(DEFAULT_SCENARIO, overrides=[DRIVING, *overrides]))
+    steps = sim.simulator.get_num_steps_taken()
+    wall, cpu = time.perf_counter(), time.process_time()
+    sim.advance(seconds)
+    cpu = time.process_time() - cpu
+    wall = time.perf_counter() - wall
+    steps = sim.simulator.get_num_steps_taken() - steps
+    return Run(seconds / wall, cpu / seconds, steps / seconds)
+
+
 def realtime_factor(overrides: list[str], seconds: float = 10.0) -> float:
     """Simulated seconds per wall second of the default scene driving with `overrides`."""
-    sim = Simulation(load_scenario(DEFAULT_SCENARIO, overrides=[DRIVING, *overrides]))
-    start = time.perf_counter()
-    sim.advance(seconds)
-    return seconds / (time.perf_counter() - start)
+    return run_configuration(overrides, seconds).realtime_factor
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seconds", type=float, default=10.0, help="simulated s per RTF run")
-    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--repeats", type=int, default=5)
     args = parser.parse_args()
     quiet_drake_warnings()
     from bench_raycast import scan_cost_seconds
 
     print(f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
-    print(f"IR scan, 2 sensors x 6 rays, in the station: "
+    print(f"IR scan, 2 sensors x 6 rays, both handlers called directly: "
           f"{station_scan_cost_seconds() * 1e6:.1f} us CPU (median batch), "
           f"{station_scan_cost_seconds(best=True) * 1e6:.1f} us CPU (best batch), "
           f"{station_scan_cost_seconds(timer=time.perf_counter) * 1e6:.1f} us wall (median)")
-    print(f"the same 12 rays, one cast (tools/bench_raycast.py): "
-          f"{scan_cost_seconds() * 1e6:.1f} us (median)")
-    print("| configuration | real-time factor (median) |")
-    print("|---|---|")
-    for name, overrides in CONFIGURATIONS.items():
-        rtfs = [realtime_factor(overrides, args.seconds) for _ in range(args.repeats)]
-        print(f"| {name} | {statistics.median(rtfs):.2f}x |", flush=True)
+    print(f"the same handlers in place (called by the Simulator, default scene driving): "
+          f"{in_place_scan_cost_seconds(args.seconds) * 1e6:.1f} us CPU (median per scan)")
+    print(f"the ray cast alone, both sensors (tools/bench_raycast.py): "
+          f"{scan_cost_seconds() * 1e6:.1f} us wall (median)", flush=True)
+
+    runs: dict[str, list[Run]] = {}
+    no_ir, ir_20, ir_200 = CONFIGURATIONS
+    named = {  # name: (overrides, sensor class)
+        no_ir: (CONFIGURATIONS[no_ir], None),
+        NO_OP: (CONFIGURATIONS[ir_20], NoOpIrSensor),
+        ir_20: (CONFIGURATIONS[ir_20], None),
+        ir_200: (CONFIGURATIONS[ir_200], None),
+    }
+    for _ in range(args.repeats):  # configurations in turn: slow drifts of the load spread
+        for name, (overrides, sensor) in named.items():
+            runs.setdefault(name, []).append(run_configuration(overrides, args.seconds, sensor))
+    print("| configuration | real-time factor | CPU ms per simulated s | steps per simulated s |")
+    print("|---|---|---|---|")
+    med = {}
+    for name, rs in runs.items():
+        med[name] = Run(*(statistics.median(getattr(r, f.name) for r in rs)
+                          for f in dc.fields(Run)))
+        m = med[name]
+        print(f"| {name} | {m.realtime_factor:.2f}x | {m.cpu_per_second * 1e3:.1f} | "
+              f"{m.steps_per_second:.1f} |")
+    base, noop, ir = med[no_ir], med[NO_OP], med[ir_20]
+    scans = 20.0  # scans of both sensors per simulated second
+
+    def per_scan_ms(a: Run, b: Run) -> str:
+        return f"{(a.cpu_per_second - b.cpu_per_second) / scans * 1e3:.3f} ms CPU"
+
+    print(f"in place, per scan of both sensors at 20 Hz (CPU per simulated s, medians): "
+          f"{per_scan_ms(ir, base)} (IR - no IR) = {per_scan_ms(noop, base)} Drake's events "
+          f"(no-op - no IR) + {per_scan_ms(ir, noop)} the handlers (IR - no-op); from the "
+          f"real-time factors (wall): "
+          f"{(1 / ir.realtime_factor - 1 / base.realtime_factor) / scans * 1e3:.3f} ms; "
+          f"the scan times add {ir.steps_per_second - base.steps_per_second:.1f} simulator "
+          f"steps per simulated s")
 
 
 if __name__ == "__main__":

@@ -7,8 +7,11 @@ robot's chassis and platform boxes and four wheel cylinders, which are excluded 
 own. The robot sits at the origin facing +x, so the rear sensor sees the box face at 0.62865 m
 and the front sensor sees nothing (SPEC, Sensors).
 
+Two ways to cast the same 12 rays: ``RayCaster.cast`` (numpy, one batch of 12) and
+``RayCaster.cast_fan`` (plain floats, one call per sensor's fan of 6, what the IR sensors use).
+
 Run: ``.venv/bin/python tools/bench_raycast.py``. Importable: ``scan_cost_seconds()`` returns the
-median cost of one scan in seconds (for tools/bench.py).
+median cost of one scan of both sensors in seconds, the sensors' way (for tools/bench.py).
 """
 
 from __future__ import annotations
@@ -24,7 +27,12 @@ from pydrake.multibody.tree import SpatialInertia
 from pydrake.systems.framework import DiagramBuilder
 
 from corobot_drake import dimensions as dim
-from corobot_drake.raycast import BodyFixedRays, RayCaster, model_instance_geometry_ids
+from corobot_drake.raycast import (
+    BodyFixedRays,
+    RayCaster,
+    RayFan,
+    model_instance_geometry_ids,
+)
 
 SAMPLES = 3
 MAXIMUM_RANGE = 30 * dim.INCH
@@ -100,6 +108,29 @@ def make_scan(plant, scene_graph, chassis, robot, context):
     return caster, scan
 
 
+def make_fan_scan(plant, scene_graph, chassis, robot, context):
+    """Returns (caster, scan): scan() does the same 2-sensor scan as the IR sensors do (the
+    QueryObject, the chassis pose, then per sensor: pose its fan of 6 rays, cast_fan) and
+    returns the 12 distances (front's 6, then rear's)."""
+    exclude = model_instance_geometry_ids(plant, robot)
+    caster = RayCaster(scene_graph.model_inspector(), exclude=exclude)
+    sg_context = scene_graph.GetMyContextFromRoot(context)
+    query_port = scene_graph.get_query_output_port()
+    fans = [RayFan.cross_of_rays(X_BS, SAMPLES) for X_BS in sensor_poses_in_body()]
+    frame = plant.GetBodyFrameIdOrThrow(chassis.index())
+
+    def scan():
+        query_object = query_port.Eval(sg_context)
+        distances = []
+        for fan in fans:
+            X_WB = query_object.GetPoseInWorld(frame).GetAsMatrix34().tolist()
+            origin, directions, cone = fan.in_world(X_WB)
+            distances += caster.cast_fan(query_object, origin, directions, MAXIMUM_RANGE, cone)
+        return distances
+
+    return caster, scan
+
+
 def _batch_seconds(fn, repeats: int, batch: int = 50) -> list[float]:
     """Mean seconds per call of each batch of `batch` calls."""
     fn()  # warm up
@@ -116,10 +147,11 @@ def _median_seconds(fn, repeats: int, batch: int = 50) -> float:
     return statistics.median(_batch_seconds(fn, repeats, batch))
 
 
-def scan_cost_seconds(repeats: int = 5000) -> float:
-    """Median wall time of one full scan (both sensors' ray generation + one 12-ray cast)."""
+def scan_cost_seconds(repeats: int = 5000, fan: bool = True) -> float:
+    """Median wall time of one full scan of both sensors (posing the rays and casting them):
+    two cast_fan calls as the IR sensors do, or (fan=False) one 12-ray numpy cast."""
     _, context, plant, scene_graph, chassis, robot = build_scene()
-    _, scan = make_scan(plant, scene_graph, chassis, robot, context)
+    _, scan = (make_fan_scan if fan else make_scan)(plant, scene_graph, chassis, robot, context)
     return _median_seconds(scan, repeats)
 
 
@@ -136,16 +168,19 @@ def main() -> None:
         scene_graph.GetMyContextFromRoot(context)
     )
     origins, directions = hits.origins, hits.directions
+    _, fan_scan = make_fan_scan(plant, scene_graph, chassis, robot, context)
+    np.testing.assert_allclose(fan_scan(), hits.distance, rtol=0, atol=1e-12)  # same reading
     for label, fn in (
         (
-            "cast only (12 rays)",
+            "cast only (12 rays, numpy)",
             lambda: caster.cast(query_object, origins, directions, MAXIMUM_RANGE),
         ),
-        ("full scan (query, chassis pose, rays, cast)", scan),
+        ("full scan, numpy cast (query, pose, rays, cast)", scan),
+        ("full scan, 2 x cast_fan (as the IR sensors)", fan_scan),
     ):
         samples = _batch_seconds(fn, 5000)
         print(
-            f"{label:45s} median {statistics.median(samples) * 1e6:6.1f} us"
+            f"{label:50s} median {statistics.median(samples) * 1e6:6.1f} us"
             f"   (best batch {min(samples) * 1e6:6.1f} us)"
         )
 
