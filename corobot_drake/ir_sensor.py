@@ -313,15 +313,19 @@ class IrSensor(LeafSystem):
         return origin, directions, t
 
     def _initial_scan(self, context, discrete_state) -> None:
-        self._do_scan(context, discrete_state, 0, self._range)
+        self._do_scan(context, discrete_state.get_mutable_value(), 0, self._range)
 
     def _periodic_scan(self, context, discrete_state) -> None:
-        # The sensor's only discrete state group (index-free accessors are the cheaper calls).
-        r = context.get_discrete_state_vector()
-        self._do_scan(context, discrete_state, int(r.GetAtIndex(SCAN_INDEX)) + 1,
-                      r.GetAtIndex(DISTANCE))
+        # Drake initialises the handler's output with the current discrete state
+        # (LeafSystem::DispatchDiscreteVariableUpdateHandler: "Must initialize the output
+        # argument with the current contents of the discrete state"), so the previous scan is
+        # read from it: one call instead of three (it matters in place, where every pybind
+        # call runs with cold caches after the physics step).
+        x = discrete_state.get_mutable_value()
+        self._do_scan(context, x, int(x[SCAN_INDEX]) + 1, float(x[DISTANCE]))
 
-    def _do_scan(self, context, discrete_state, index: int, previous: float) -> None:
+    def _do_scan(self, context, x, index: int, previous: float) -> None:
+        """Scans and writes the whole state vector `x` (the handler's output, mutable)."""
         # A dozen numbers: plain Python floats are cheaper than numpy calls here.
         origin, directions, t = self._cast(self._query_port.Eval(context))
         ox, oy, oz = origin
@@ -343,7 +347,7 @@ class IrSensor(LeafSystem):
             voltage = counts * s.adc_step
             raw = min(s.distance_from_voltage_scalar(voltage), rng)
         changed = 1.0 if abs(raw - previous) > self._threshold else 0.0
-        discrete_state.get_mutable_value()[:] = [
+        x[:] = [
             raw, context.get_time(), previous, changed, index, true_distance, voltage, counts,
             ox, oy, oz, *ends, *hit]
 
