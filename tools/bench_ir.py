@@ -28,11 +28,14 @@ Importable (for tools/bench.py): :func:`station_scan_cost_seconds`,
 import argparse
 import contextlib
 import dataclasses as dc
+import itertools
 import os
 import statistics
 import time
 from pathlib import Path
 from typing import ClassVar
+
+from pydrake.systems.framework import EventStatus
 
 from corobot_drake import ir_sensor
 from corobot_drake import scenario as sc
@@ -73,15 +76,16 @@ class NoOpIrSensor(ir_sensor.IrSensor):
 
 
 class TimedIrSensor(ir_sensor.IrSensor):
-    """An IrSensor that records the CPU time of each periodic scan (time, seconds) in
-    `TimedIrSensor.log` (class-wide: both sensors of a station)."""
+    """An IrSensor that records the CPU time of each periodic scan (sensor name, time,
+    seconds) in `TimedIrSensor.log` (class-wide: both sensors of a station)."""
 
     log: ClassVar[list] = []
 
     def _periodic_scan(self, context, discrete_state) -> None:
         start = time.thread_time()
         super()._periodic_scan(context, discrete_state)
-        TimedIrSensor.log.append((context.get_time(), time.thread_time() - start))
+        TimedIrSensor.log.append(
+            (self.sensor_name, context.get_time(), time.thread_time() - start))
 
 
 @contextlib.contextmanager
@@ -125,17 +129,51 @@ def station_scan_cost_seconds(repeats: int = 4000, batch: int = 50,
     return min(samples) if best else statistics.median(samples)
 
 
-def in_place_scan_cost_seconds(seconds: float = 10.0) -> float:
+def in_place_scan_cost_seconds(seconds: float = 10.0) -> tuple[float, dict[str, float]]:
     """Median CPU time of one scan of both default sensors as the Simulator calls their
-    handlers in the default scene driving (the handlers only, not Drake's dispatch)."""
+    handlers in the default scene driving (the handlers only, not Drake's dispatch), and the
+    median of each sensor's handler by name."""
     TimedIrSensor.log = []
     with _sensor_class(TimedIrSensor):
         sim = Simulation(load_scenario(DEFAULT_SCENARIO, overrides=[DRIVING, *NO_CAMERA]))
     sim.advance(seconds)
     per_scan: dict[float, float] = {}
-    for t, cost in TimedIrSensor.log:
+    per_sensor: dict[str, list[float]] = {}
+    for name, t, cost in TimedIrSensor.log:
         per_scan[t] = per_scan.get(t, 0.0) + cost
-    return statistics.median(per_scan.values())
+        per_sensor.setdefault(name, []).append(cost)
+    return (statistics.median(per_scan.values()),
+            {name: statistics.median(costs) for name, costs in per_sensor.items()})
+
+
+def pose_update_probe_seconds(seconds: float = 5.0) -> tuple[float, float]:
+    """Whether the SceneGraph pose update a scan triggers is the plant's own work done early:
+    the median wall time of ``query_object.GetPoseInWorld(chassis)`` probed at the end of
+    (steps that took a scan, plant steps that didn't). The first is a cache hit (the scan
+    computed the poses of the current plant state and nothing invalidated them, so the next
+    plant step reuses them); the second is the pose update itself."""
+    sim = Simulation(load_scenario(DEFAULT_SCENARIO, overrides=[DRIVING, *NO_CAMERA]))
+    sensor = sim.station.robots["corobot"].ir_sensors["front"]
+    period, h = sensor.period, sim.scenario.plant_config.time_step
+    probes: list[tuple[float, float]] = []
+
+    def monitor(root_context):
+        context = sensor.GetMyContextFromRoot(root_context)
+        start = time.perf_counter()
+        sensor.get_input_port(0).Eval(context).GetPoseInWorld(sensor._frame_id)
+        probes.append((root_context.get_time(), time.perf_counter() - start))
+        return EventStatus.Succeeded()
+
+    sim.simulator.set_monitor(monitor)
+    sim.advance(seconds)
+    after_scan, after_plant = [], []
+    for (t_events, _), (_, cost) in itertools.pairwise(probes):
+        # The step that ends at probe i+1 handled the events due at probe i's time.
+        if t_events > 0 and abs(t_events / period - round(t_events / period)) < 1e-9:
+            after_scan.append(cost)
+        elif round(t_events / h) * h == t_events:
+            after_plant.append(cost)
+    return statistics.median(after_scan), statistics.median(after_plant)
 
 
 @dc.dataclass
@@ -178,8 +216,14 @@ def main() -> None:
           f"{station_scan_cost_seconds() * 1e6:.1f} us CPU (median batch), "
           f"{station_scan_cost_seconds(best=True) * 1e6:.1f} us CPU (best batch), "
           f"{station_scan_cost_seconds(timer=time.perf_counter) * 1e6:.1f} us wall (median)")
+    both, each = in_place_scan_cost_seconds(args.seconds)
     print(f"the same handlers in place (called by the Simulator, default scene driving): "
-          f"{in_place_scan_cost_seconds(args.seconds) * 1e6:.1f} us CPU (median per scan)")
+          f"{both * 1e6:.1f} us CPU (median per scan; "
+          + ", ".join(f"{name} {cost * 1e6:.1f} us" for name, cost in each.items()) + ")")
+    hit, update = pose_update_probe_seconds()
+    print(f"SceneGraph pose query probed after a step: {hit * 1e6:.1f} us after a step that "
+          f"took a scan (cache hit: the next plant step reuses the scan's pose update), "
+          f"{update * 1e6:.1f} us after a plant step without one (the pose update itself)")
     print(f"the ray cast alone, both sensors (tools/bench_raycast.py): "
           f"{scan_cost_seconds() * 1e6:.1f} us wall (median)", flush=True)
 
