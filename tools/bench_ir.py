@@ -239,15 +239,17 @@ def main() -> None:
     for _ in range(args.repeats):  # configurations in turn: slow drifts of the load spread
         for name, (overrides, sensor) in named.items():
             runs.setdefault(name, []).append(run_configuration(overrides, args.seconds, sensor))
-    print("| configuration | real-time factor | CPU ms per simulated s | steps per simulated s |")
+    print("| configuration | real-time factor | CPU ms per simulated s (min-max) "
+          "| steps per simulated s |")
     print("|---|---|---|---|")
     med = {}
     for name, rs in runs.items():
         med[name] = Run(*(statistics.median(getattr(r, f.name) for r in rs)
                           for f in dc.fields(Run)))
         m = med[name]
-        print(f"| {name} | {m.realtime_factor:.2f}x | {m.cpu_per_second * 1e3:.1f} | "
-              f"{m.steps_per_second:.1f} |")
+        cpu = [r.cpu_per_second * 1e3 for r in rs]
+        print(f"| {name} | {m.realtime_factor:.2f}x | {m.cpu_per_second * 1e3:.1f} "
+              f"({min(cpu):.0f}-{max(cpu):.0f}) | {m.steps_per_second:.1f} |")
     for rate, noop, ir in ((20, med[NO_OP], med[ir_20]), (200, med[NO_OP_200], med[ir_200])):
         base = med[no_ir]
 
