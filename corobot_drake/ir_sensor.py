@@ -330,11 +330,21 @@ class IrSensor(LeafSystem):
         origin, directions, t = self._cast(self._query_port.Eval(context))
         ox, oy, oz = origin
         rng = self._range
-        hit = [1.0 if ti <= rng else 0.0 for ti in t]
-        t = [ti if ti <= rng else rng for ti in t]  # a miss (inf) ends at maximum_range
-        true_distance = min(t)
-        ends = [v for ti, (dx, dy, dz) in zip(t, directions, strict=True)
-                for v in (ox + ti * dx, oy + ti * dy, oz + ti * dz)]
+        # One pass: the state vector's tail (ray ends, then hit flags) and the nearest hit.
+        x_new = [0.0] * _READING_SIZE
+        x_new += origin
+        hit = []
+        true_distance = rng
+        for ti, (dx, dy, dz) in zip(t, directions, strict=True):
+            if ti <= rng:
+                hit.append(1.0)
+                if ti < true_distance:
+                    true_distance = ti
+            else:
+                ti = rng  # a miss (inf) ends at maximum_range
+                hit.append(0.0)
+            x_new += (ox + ti * dx, oy + ti * dy, oz + ti * dz)
+        x_new += hit
         voltage = counts = 0.0
         if self._sharp is None:
             raw = true_distance
@@ -347,9 +357,9 @@ class IrSensor(LeafSystem):
             voltage = counts * s.adc_step
             raw = min(s.distance_from_voltage_scalar(voltage), rng)
         changed = 1.0 if abs(raw - previous) > self._threshold else 0.0
-        x[:] = [
-            raw, context.get_time(), previous, changed, index, true_distance, voltage, counts,
-            ox, oy, oz, *ends, *hit]
+        x_new[:_READING_SIZE] = (raw, context.get_time(), previous, changed, index,
+                                 true_distance, voltage, counts)
+        x[:] = x_new
 
 
 # --- Meshcat -------------------------------------------------------------------------------
