@@ -398,6 +398,8 @@ class IrMeshcatVisualizer(LeafSystem):
         for i in range(num_rays):
             meshcat.SetObject(f"{path}/hits/{i}", Sphere(HIT_RADIUS), _HIT_COLORS[0])
             meshcat.SetProperty(f"{path}/hits/{i}", "visible", False)
+        self._visible = [False] * num_rays
+        """What each hit mark's Meshcat `visible` property was last set to."""
 
     def _draw(self, context) -> None:
         x = self._scan.Eval(context)
@@ -416,7 +418,9 @@ class IrMeshcatVisualizer(LeafSystem):
         color = _HIT_COLORS[int(reading[SCAN_INDEX]) % 2]
         for i in range(self._n):
             path = f"{self.path}/hits/{i}"
-            self._meshcat.SetProperty(path, "visible", bool(hits[i]))
+            if hits[i] != self._visible[i]:  # each Meshcat call is a message: send changes only
+                self._meshcat.SetProperty(path, "visible", bool(hits[i]))
+                self._visible[i] = bool(hits[i])
             if hits[i]:
                 self._meshcat.SetTransform(path, RigidTransform(ends[i]))
                 self._meshcat.SetProperty(path, "color", [color.r(), color.g(), color.b(), 1.0])
