@@ -377,10 +377,13 @@ class IrMeshcatVisualizer(LeafSystem):
     Everything lives under ``path`` (``/ir/<robot>/<sensor>``): ``rays`` and ``hits/<i>``;
     the Meshcat scene tree's checkbox on ``/ir``, a robot or a sensor shows or hides it.
     Its input ``scan_state`` is an IrSensor's output of that name;
-    it redraws once per scan, right after the scan (it checks for a new scan at every step).
+    it redraws once per scan, right after the scan (it checks for a new scan at every step;
+    given the sensor's scan ``period``, only at steps that end more than a period after the
+    last scan drawn, so most steps cost it one time comparison).
     """
 
-    def __init__(self, meshcat: Meshcat, path: str, num_rays: int):
+    def __init__(self, meshcat: Meshcat, path: str, num_rays: int,
+                 period: float | None = None):
         super().__init__()
         self._meshcat = meshcat
         self.path = path
@@ -393,13 +396,25 @@ class IrMeshcatVisualizer(LeafSystem):
         self.DeclareInitializationPublishEvent(self._draw)
         # Per step, not periodic: a periodic publish at the scan times would run before the
         # scan due at the same time (Drake takes that update at the start of the next step)
-        # and show every scan one period late. A step with no new scan costs one comparison.
-        self.DeclarePerStepPublishEvent(self._draw)
+        # and show every scan one period late.
+        self.DeclarePerStepPublishEvent(self._draw if period is None else self._draw_if_due)
+        self._due_after = (1.0 - 1e-9) * period if period is not None else 0.0
+        """s after the last scan drawn before the next one can be there (a hair under the
+        period: the scan times are sums and products of doubles)."""
         for i in range(num_rays):
             meshcat.SetObject(f"{path}/hits/{i}", Sphere(HIT_RADIUS), _HIT_COLORS[0])
             meshcat.SetProperty(f"{path}/hits/{i}", "visible", False)
         self._visible = [False] * num_rays
         """What each hit mark's Meshcat `visible` property was last set to."""
+
+    def _draw_if_due(self, context) -> None:
+        # A scan due at t is taken at the start of the step from t, so it can only be new at
+        # the end of a step past last_time + period (or after time went back: a restore).
+        t = context.get_time()
+        last = self._last_time
+        if last is not None and last <= t <= last + self._due_after:
+            return
+        self._draw(context)
 
     def _draw(self, context) -> None:
         x = self._scan.Eval(context)
@@ -461,7 +476,7 @@ def add_ir_sensors(builder, plant, scene_graph, robot_name: str, configs: dict,
             viz = builder.AddNamedSystem(
                 f"{robot_name}.ir.{sensor_name}.meshcat",
                 IrMeshcatVisualizer(meshcat, f"/ir/{robot_name}/{sensor_name}",
-                                    sensor.num_rays))
+                                    sensor.num_rays, sensor.period))
             builder.Connect(sensor.GetOutputPort("scan_state"), viz.get_input_port())
         sensors[sensor_name] = sensor
     return sensors

@@ -284,3 +284,20 @@ def test_meshcat_shows_rays_and_hit_points_under_a_toggleable_path():
         assert meshcat.HasPath(path), path
     sim.advance(0.5)
     assert 10 <= viz.draws <= 11  # one redraw per scan (20 Hz), not per step
+
+
+def test_meshcat_draws_every_scan_right_after_it():
+    """The visualizer skips its per-step check until a scan can be due, yet it has drawn
+    each scan by the end of the step that took it (at any stepping of advance)."""
+    from pydrake.geometry import Meshcat
+
+    from corobot_drake.simulation import Simulation
+
+    sim = Simulation(load_scenario(DEFAULT_SCENARIO, overrides=_NO_CAMERA), Meshcat())
+    viz = sim.station.diagram.GetSubsystemByName("corobot.ir.rear.meshcat")
+    rear = sensor(sim, "rear")
+    for step in [0.01] * 30 + [0.007] * 30 + [0.05] * 4:
+        sim.advance(step)
+        state = rear.GetOutputPort("scan_state").Eval(rear.GetMyContextFromRoot(sim.context))
+        assert viz._last_index == state[SCAN_INDEX], sim.time
+    assert viz.draws == int(state[SCAN_INDEX]) + 1
