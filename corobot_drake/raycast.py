@@ -470,10 +470,11 @@ class RayCaster:
     """Casts batches of rays against the proximity geometries of a SceneGraph.
 
     Build it once (e.g. in a LeafSystem's constructor) from the SceneGraph's model inspector;
-    call :meth:`cast` with the current ``QueryObject`` at every scan. Rebuild it if proximity
-    geometries are added, removed or reshaped after construction. Anchored geometries (fixed
-    to the world frame) can't move, so their world-frame data is computed here, once; every
-    other geometry is posed by ``QueryObject.GetPoseInWorld`` at each cast.
+    call :meth:`cast` (or, for rays from one origin, :meth:`cast_fan`) with the current
+    ``QueryObject`` at every scan. Rebuild it if proximity geometries are added, removed or
+    reshaped after construction. Anchored geometries (fixed to the world frame) can't move, so
+    their world-frame data is computed here, once; every other geometry is posed by
+    ``QueryObject.GetPoseInWorld`` at each cast (cast_fan: of its frame, once per frame).
     """
 
     def __init__(
