@@ -50,7 +50,7 @@ from pydrake.geometry import (
 from pydrake.math import RigidTransform
 from pydrake.multibody.parsing import GetScopedFrameByName
 from pydrake.systems.framework import EventStatus, LeafSystem
-from pydrake.systems.sensors import CameraConfig, ImageRgba8U, RgbdSensor
+from pydrake.systems.sensors import CameraConfig, ImageRgba8U, RgbdSensor, RgbdSensorAsync
 
 from corobot_drake import dimensions as dim
 from corobot_drake.xdisplay import stop_xvfb, x_display
@@ -66,6 +66,17 @@ FILL_INTENSITY = 0.5
 
 CAMERA_ROTATION_RPY_DEG = (-90.0, 0.0, -90.0)
 """Drake camera axes (+z forward, +x right, +y down) looking along the body's +x, level."""
+
+CAPTURE_OFFSET = 0.0005
+"""s: the default camera captures 0.5 ms past each 1/30 s tick, so that with plant steps of
+10, 5, 2 or 1 ms its capture and output events never fall within rounding distance of a step. Drake
+computes a periodic event's next time as offset + k * period, rounding (t - offset) / period
+up, so an event a few ulps after another stop can be skipped: a 10 Hz camera with a 30 ms
+delay captured at 0.30000000000000004 s, a plant step stopped at 0.33, and the output at
+0.33000000000000007 never came (its frame was lost)."""
+
+NEAR_STEP = 1e-6
+"""s: a camera event this close to a plant step risks the skip described at CAPTURE_OFFSET."""
 
 TICK_TOLERANCE = 1e-9
 """s: a frame tick this close to a plant step counts as on it (float sums of periods)."""
@@ -88,6 +99,8 @@ def default_camera_config() -> CameraConfig:
         renderer_name=RENDERER_NAME,
         name="camera",
         fps=dim.CAMERA_FPS,
+        capture_offset=CAPTURE_OFFSET,
+        output_delay=dim.CAMERA_OUTPUT_DELAY,
         rgb=True,
         depth=False,
         label=False,
@@ -101,10 +114,11 @@ def check_camera_config(config: CameraConfig) -> tuple[str, str] | None:
     if config.depth or config.label:
         return ("depth" if config.depth else "label",
                 "only the colour image is simulated; set it false")
-    if config.output_delay != 0:
-        return ("output_delay", "must be 0 (RgbdSensorAsync is not thread-safe with VTK)")
     if not (config.fps > 0 and np.isfinite(config.fps)):
         return ("fps", "must be a positive number")
+    if not 0 <= config.output_delay < 1.0 / config.fps:
+        return ("output_delay", f"must be >= 0 and less than one frame (1/fps = "
+                f"{1.0 / config.fps:.4g} s)")
     if not config.capture_offset >= 0:
         return ("capture_offset", "must be >= 0")
     rc = config.renderer_class
@@ -180,17 +194,19 @@ def make_render_engine(renderer_class, sun_direction, sun_intensity: float, sky_
             stop_xvfb()
     if renderer_class != "":
         raise RendererUnavailableError(f"camera renderer RenderEngineGl: {problem}")
-    global _warned_vtk_fallback
-    if not _warned_vtk_fallback:
-        _warned_vtk_fallback = True
-        warnings.warn(f"camera: rendering with VTK, ~2x slower per frame ({problem})",
-                      stacklevel=2)
+    _warn_once(f"camera: rendering with VTK, ~2x slower per frame ({problem})")
     return make_vtk_engine(render_engine_params(
         sun_direction, sun_intensity, sky_color)), "RenderEngineVtk"
 
 
-_warned_vtk_fallback = False
-"""The fallback is reported once per process."""
+_warned: set[str] = set()
+"""Warnings already given in this process (each is about the machine, not a scenario)."""
+
+
+def _warn_once(message: str) -> None:
+    if message not in _warned:
+        _warned.add(message)
+        warnings.warn(message, stacklevel=3)
 
 
 def _last_tick(t: float, fps: float, offset: float) -> tuple[int, float]:
@@ -274,7 +290,7 @@ class CameraFrameSaver(LeafSystem):
         from PIL import Image
 
         taken = float(self._image_time.Eval(context)[0])
-        if taken <= self.last_saved_time:
+        if not taken > self.last_saved_time:  # also NaN: no frame yet
             return
         k, _ = _last_tick(taken, self._rate, self._offset)
         if k < 0 or (self.frames_saved and
@@ -303,14 +319,30 @@ def _sensor_pose(plant, instance, config: CameraConfig):
     return plant.GetBodyFrameIdOrThrow(frame.body().index()), RigidTransform(X_AB)
 
 
+def events_near_steps(config: CameraConfig, step: float, ticks: int = 1000) -> bool:
+    """Whether any of the first `ticks` captures (or outputs, `output_delay` later) of an
+    asynchronous camera comes within NEAR_STEP of a plant step of `step` s."""
+    k = np.arange(ticks)
+    for offset in (config.capture_offset, config.capture_offset + config.output_delay):
+        t = offset + k / config.fps
+        if np.any(np.abs(t / step - np.round(t / step)) * step < NEAR_STEP):
+            return True
+    return False
+
+
 def add_camera(builder, plant, scene_graph, robot: str, instance, config: CameraConfig,
                world, renderers: dict, save_dir: str | Path | None = None,
                save_rate: float | None = None):
     """Adds `robot`'s camera (see the module doc), lit by the scenario's `world` (sun, sky),
-    and returns (hold, saver or None); nothing when `config.rgb` is false. Cameras with the
-    same `renderer_name` share the engine the first of them makes; `renderers` (renderer
-    name -> engine class name) records the engines made. Frames are taken on the
-    plant's steps when it is discrete (see `CameraHold`)."""
+    and returns (the system holding the latest frame, saver or None); nothing when
+    `config.rgb` is false. Cameras with the same `renderer_name` share the engine the first
+    of them makes; `renderers` (renderer name -> engine class name) records the engines made.
+
+    With `output_delay` > 0 and the GL engine, the camera is Drake's `RgbdSensorAsync`: each
+    frame renders on a worker thread (its own clone of the engine, which GL allows) while the
+    simulation goes on, and appears `output_delay` s after its capture. Otherwise (VTK cannot
+    render on that thread) it is an `RgbdSensor` and a `CameraHold` taking frames on the
+    plant's steps, with no delay."""
     step = plant.time_step()
     if not config.rgb:
         return None, None
@@ -320,18 +352,35 @@ def add_camera(builder, plant, scene_graph, robot: str, instance, config: Camera
         scene_graph.AddRenderer(config.renderer_name, engine)
     color, depth = config.MakeCameras()
     frame_id, X_AB = _sensor_pose(plant, instance, config)
-    sensor = builder.AddNamedSystem(f"{robot}.camera", RgbdSensor(frame_id, X_AB, color, depth))
-    builder.Connect(scene_graph.get_query_output_port(), sensor.query_object_input_port())
-    hold = builder.AddNamedSystem(f"{robot}.camera_hold", CameraHold(
-        config.width, config.height, config.fps, config.capture_offset, step))
-    builder.Connect(sensor.color_image_output_port(), hold.get_input_port())
-    builder.ExportOutput(hold.GetOutputPort("rgb_image"), f"{robot}.camera.rgb_image")
-    builder.ExportOutput(hold.GetOutputPort("image_time"), f"{robot}.camera.image_time")
+    if config.output_delay > 0 and renderers.get(config.renderer_name) == "RenderEngineGl":
+        if step > 0 and events_near_steps(config, step):
+            _warn_once(f"camera {robot}: capture or output times fall within {NEAR_STEP} s "
+                       "of plant steps; Drake may skip such events (lost frames): move "
+                       "capture_offset off the steps (the default is 0.0005 s)")
+        hold = builder.AddNamedSystem(f"{robot}.camera", RgbdSensorAsync(
+            scene_graph, frame_id, X_AB, config.fps, config.capture_offset,
+            config.output_delay, color, None, False))
+        builder.Connect(scene_graph.get_query_output_port(), hold.get_input_port())
+        image = hold.GetOutputPort("color_image")
+    else:
+        if config.output_delay > 0:
+            _warn_once("camera: output_delay is not simulated with RenderEngineVtk (it cannot "
+                       "render on RgbdSensorAsync's thread); frames come without delay")
+        sensor = builder.AddNamedSystem(f"{robot}.camera",
+                                        RgbdSensor(frame_id, X_AB, color, depth))
+        builder.Connect(scene_graph.get_query_output_port(), sensor.query_object_input_port())
+        hold = builder.AddNamedSystem(f"{robot}.camera_hold", CameraHold(
+            config.width, config.height, config.fps, config.capture_offset, step))
+        builder.Connect(sensor.color_image_output_port(), hold.get_input_port())
+        image = hold.GetOutputPort("rgb_image")
+    image_time = hold.GetOutputPort("image_time")
+    builder.ExportOutput(image, f"{robot}.camera.rgb_image")
+    builder.ExportOutput(image_time, f"{robot}.camera.image_time")
     saver = None
     if save_dir is not None:
         saver = builder.AddNamedSystem(f"{robot}.camera_saver", CameraFrameSaver(
             Path(save_dir) / robot, config.width, config.height, save_rate or config.fps,
             config.capture_offset, step or None))
-        builder.Connect(hold.GetOutputPort("rgb_image"), saver.GetInputPort("rgb_image"))
-        builder.Connect(hold.GetOutputPort("image_time"), saver.GetInputPort("image_time"))
+        builder.Connect(image, saver.GetInputPort("rgb_image"))
+        builder.Connect(image_time, saver.GetInputPort("image_time"))
     return hold, saver

@@ -15,6 +15,9 @@ from corobot_drake.scenario import ScenarioError, load_scenario
 from corobot_drake.simulation import Simulation, quiet_drake_warnings
 
 DEFAULT_SCENARIO = Path(__file__).resolve().parent.parent / "scenarios" / "corobot.yaml"
+CAMERA_DELAY_SHARE = 0.9
+"""--camera-rate HZ caps the cameras' output_delay at this share of a frame, 1/HZ."""
+
 HEADLESS_DEFAULT_DURATION = 10.0
 PROGRESS_AFTER = 3.0
 """Wall-clock seconds after which a headless run starts printing progress."""
@@ -44,7 +47,7 @@ def _parser() -> argparse.ArgumentParser:
                    "DIR/<robot>/frame_000000.png, ...")
     p.add_argument("--camera-rate", type=float, metavar="HZ",
                    help="render (and save) camera frames at this rate (default: the scenario's "
-                   "camera fps, 30)")
+                   "camera fps, 30); output delays are capped at 0.9 of a frame")
     p.add_argument("--save-scenario", metavar="PATH",
                    help="at the end, write a scenario YAML of the current state (poses, "
                    "velocities, settings, commands still to run): running it continues from there")
@@ -114,6 +117,9 @@ def main(argv: list[str] | None = None) -> int:
             return 2
         for robot in scenario.robots.values():
             robot.camera.fps = args.camera_rate
+            # A frame's output delay must stay under one frame (Drake's RgbdSensorAsync).
+            robot.camera.output_delay = min(robot.camera.output_delay,
+                                            CAMERA_DELAY_SHARE / args.camera_rate)
     duration = args.duration if args.duration is not None else scenario.simulation_duration
     quiet_drake_warnings()
     if args.serve:  # Meshcat is made in the simulation thread (it must be used from there)

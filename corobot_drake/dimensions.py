@@ -93,6 +93,10 @@ CAMERA_HEIGHT = 240
 CAMERA_FOV_Y_DEG = 30.0
 CAMERA_FPS = 30.0
 """Frames per second of the robot camera."""
+CAMERA_OUTPUT_DELAY = 0.03
+"""s from a frame's capture to its output: a USB webcam's latency, just under one frame at
+30 Hz (Drake's RgbdSensorAsync needs less than 1/fps). Rendering happens meanwhile on a worker
+thread, so the simulation goes on during it."""
 
 ENCODER_TICKS_PER_REVOLUTION = 600
 

@@ -178,11 +178,15 @@ def call_robot(robot: str, method: str, args: tuple, sim) -> tuple[int | None, f
 
 
 def grab_frame(robot: str, sim) -> tuple[float, float, Any]:
-    """(sim time, frame time, RGB uint8 image h x w x 3) of the robot's latest camera frame."""
+    """(sim time, frame time, RGB uint8 image h x w x 3) of the robot's latest camera frame;
+    (sim time, NaN, None) before the first."""
     import numpy as np
 
     r = sim.robot(robot)
-    image = np.asarray(r.camera_image())
+    image = r.camera_image()
+    if image is None:  # before the first frame has come out of the camera
+        return sim.time, math.nan, None
+    image = np.asarray(image)
     if image.ndim == 3 and image.shape[2] == 4:
         image = image[:, :, :3]
     stamp = getattr(r, "camera_image_time", None)

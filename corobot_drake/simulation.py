@@ -266,13 +266,18 @@ class Robot:
         return self._sim.station.diagram.GetOutputPort(f"{self.name}.camera.{which}")
 
     def camera_image(self):
-        """The latest camera frame: a numpy array height x width x 4 (RGBA), uint8, a copy.
-        Frames are rendered at the camera's fps (and at initialization)."""
+        """The latest camera frame: a numpy array height x width x 4 (RGBA), uint8, a copy;
+        None before the first. Frames are captured at the camera's fps and appear
+        `output_delay` s later (the default camera: 30 Hz, 0.03 s, so the first appears at
+        0.03 s); with no delay, the first is rendered at initialization."""
         image = self._camera_port("rgb_image").Eval(self._sim.context)
+        if image.width() == 0:
+            return None
         return np.array(image.data, dtype=np.uint8, copy=True)
 
     def camera_image_time(self) -> float:
-        """Simulated time (s) at which the latest camera frame was rendered."""
+        """Simulated time (s) at which the latest camera frame was captured (NaN before the
+        first)."""
         return float(self._camera_port("image_time").Eval(self._sim.context)[0])
 
     def camera_frames_saved(self) -> int:

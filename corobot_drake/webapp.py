@@ -507,6 +507,9 @@ def create_app(runner: SimRunner, meshcat_url: str | None = None) -> FastAPI:
             pending = asyncio.ensure_future(in_sim(partial(sv.grab_frame, robot)))
             camera_cache[f"{robot}/pending"] = pending
         checked, t, image = await asyncio.shield(pending)
+        if image is None:
+            raise HTTPException(503, f"robot {robot!r} has no camera frame yet (the first "
+                                "appears one output delay after the start)")
         cached = camera_cache.get(robot)
         if cached is None or cached["time"] != t:
             cached = {"time": t, "image": _rgb(image), "encoded": {}, "checked": checked}

@@ -144,15 +144,64 @@ def test_frames_are_lit_not_black():
     assert np.all(face.mean(axis=0) > 0.3 * BOX_RGB * 255)
 
 
-def test_frames_come_at_the_camera_rate():
+def test_frames_come_at_the_camera_rate_after_the_output_delay():
+    """The default camera is asynchronous: a frame captured at a tick (0.5 ms past each
+    1/fps, off the plant's steps) appears output_delay (0.03 s) later; before the first there
+    is none."""
     sim = make_sim("robots: {corobot: {camera: {fps: 10}}}", camera=True)
     robot = sim.robot()
     assert robot.has_camera
+    config = sim.scenario.robots["corobot"].camera
+    assert (config.capture_offset, config.output_delay) == (0.0005, 0.03)
+    assert robot.camera_image() is None and math.isnan(robot.camera_image_time())
+    sim.advance_to(0.03)
+    assert robot.camera_image() is None
+    sim.advance_to(0.035)  # the frame captured at 0.0005 s appeared at 0.0305 s
+    assert robot.camera_image_time() == pytest.approx(0.0005)
+    assert robot.camera_image()[:, :, :3].max() > 0
+    sim.advance_to(0.33)
+    assert robot.camera_image_time() == pytest.approx(0.2005)
+    sim.advance_to(0.335)
+    assert robot.camera_image_time() == pytest.approx(0.3005)
+    sim.advance_to(3.0)  # and every frame of 3 s (a lost frame would leave a gap)
+    assert robot.camera_image_time() == pytest.approx(2.9005)
+
+
+def test_without_delay_frames_come_at_the_camera_rate():
+    sim = make_sim("robots: {corobot: {camera: {fps: 10, output_delay: 0, capture_offset: 0}}}",
+                   camera=True)
+    robot = sim.robot()
     assert robot.camera_image_time() == 0.0  # rendered at initialization
     first = robot.camera_image()
     assert first[:, :, :3].max() > 0
     sim.advance(0.35)
     assert robot.camera_image_time() == pytest.approx(0.3)
+
+
+NO_DELAY = "robots: {corobot: {camera: {output_delay: 0, capture_offset: 0}}}"
+"""The synchronous camera with its ticks at multiples of 1/fps."""
+
+SPIN_BY_THE_EDGE = ("robots: {corobot: {pose: {x: 0.4, y: -1.0, yaw_deg: 180}, commands: "
+                    "[!SetPower {left: -0.5, right: 0.5}]}}")
+
+
+def test_delayed_frames_show_the_scene_at_their_capture():
+    """The asynchronous frame captured at the 16th tick (0.5 ms past 16/30 s, between plant
+    steps) is, bit for bit, the synchronous camera's frame for that tick, and it appears
+    0.03 s later. The robot spins in front of the box's edge, so consecutive frames differ."""
+    sync = make_sim(SPIN_BY_THE_EDGE, "robots: {corobot: {camera: {output_delay: 0}}}",
+                    camera=True)
+    sync.advance_to(0.545)
+    assert sync.robot().camera_image_time() == pytest.approx(0.54)  # tick 16, on the next step
+    delayed = make_sim(SPIN_BY_THE_EDGE, camera=True)
+    tick = 0.0005 + 16.0 / 30.0
+    delayed.advance_to(tick + 0.03 - 0.001)
+    assert delayed.robot().camera_image_time() == pytest.approx(0.0005 + 15.0 / 30.0)
+    previous = delayed.robot().camera_image()
+    delayed.advance_to(tick + 0.03 + 0.001)
+    assert delayed.robot().camera_image_time() == pytest.approx(tick)
+    np.testing.assert_array_equal(delayed.robot().camera_image(), sync.robot().camera_image())
+    assert np.abs(previous.astype(int) - sync.robot().camera_image().astype(int)).max() > 0
 
 
 def test_no_camera():
@@ -167,7 +216,7 @@ def test_no_camera():
 
 @pytest.mark.parametrize("override, field", [
     ("{depth: true}", "robots.corobot.camera.depth"),
-    ("{output_delay: 0.01}", "robots.corobot.camera.output_delay"),
+    ("{output_delay: 0.04}", "robots.corobot.camera.output_delay"),
     ("{fps: 0}", "robots.corobot.camera.fps"),
     ("{renderer_class: RenderEngineGltfClient}", "robots.corobot.camera.renderer_class"),
     ("{clipping_near: 2.0, clipping_far: 1.0}", "robots.corobot.camera"),
@@ -201,8 +250,7 @@ def test_frames_taken_on_plant_steps_are_the_exact_time_images():
     the step at 0.54 s and is, bit for bit, what the sensor renders at exactly 16/30 s (the
     scene only changes at steps). The robot spins in front of the box's edge, so
     consecutive frames differ."""
-    sim = make_sim("robots: {corobot: {pose: {x: 0.4, y: -1.0, yaw_deg: 180}, commands: "
-                   "[!SetPower {left: -0.5, right: 0.5}]}}", camera=True)
+    sim = make_sim(SPIN_BY_THE_EDGE, NO_DELAY, camera=True)
     assert sim.station.plant.time_step() == pytest.approx(0.01)
     sensor = sim.station.diagram.GetSubsystemByName("corobot.camera")
     tick = 16.0 / 30.0
@@ -219,16 +267,16 @@ def test_frames_taken_on_plant_steps_are_the_exact_time_images():
     assert np.abs(exact.astype(int) - previous.astype(int)).max() > 0
 
 
-def test_the_camera_adds_no_simulator_stops():
+def test_the_synchronous_camera_adds_no_simulator_stops():
     """Frames come on the plant's steps, so the Simulator stops at the same times with the
-    camera as without it (a stop between steps cost about as much as a step here)."""
+    camera as without it."""
     steps = []
     for camera in (False, True):
-        sim = make_sim(CIRCLE, camera=camera)
+        sim = make_sim(CIRCLE, NO_DELAY, camera=camera)
         sim.advance(1.0)
         steps.append(sim.simulator.get_num_steps_taken())
     assert steps[0] == steps[1]
-    sim = make_sim(CIRCLE, "robots: {corobot: {camera: {fps: 30}}}", camera=True)
+    sim = make_sim(CIRCLE, NO_DELAY, camera=True)
     sim.advance(1.005)
     assert sim.robot().camera_image_time() == pytest.approx(1.0)  # tick 30 on step 100
 
@@ -241,7 +289,8 @@ def test_gl_and_vtk_render_the_same_picture():
     images = {}
     for renderer in ("RenderEngineGl", "RenderEngineVtk"):
         sim = make_sim("robots: {corobot: {pose: {x: 0.8, yaw_deg: 180}, "
-                       f"camera: {{renderer_class: {renderer}}}}}}}", camera=True)
+                       f"camera: {{renderer_class: {renderer}, output_delay: 0}}}}}}",
+                       camera=True)
         assert sim.station.renderers == {"corobot_camera": renderer}
         sim.advance(0.3)
         images[renderer] = image = sim.robot().camera_image()
