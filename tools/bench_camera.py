@@ -1,15 +1,16 @@
 """Cost of the robot's camera per frame (run: python tools/bench_camera.py).
 
-Two figures for the SPEC camera (320 x 240, 30 deg vertical fov, sun + fill light, no
-shadows) with each renderer (GL through an X display or a private Xvfb, the default here; VTK,
-through GLX when a display is available), both in the default scene with the robot driving a
-circle:
+Figures for the SPEC camera (320 x 240, 30 deg vertical fov, sun + fill light, no shadows)
+with each renderer (GL through an X display or a private Xvfb, the default here; VTK, through
+GLX when a display is available), in the default scene with the robot driving a circle:
 
-- `camera_frame_ms()`: the render itself. The robot's own sensor (`<robot>.camera`, the
+- `camera_frame_ms()`: the render itself. The synchronous camera (`output_delay: 0`: the
   station's RgbdSensor) is asked for its colour image once per 1/30 s of simulated time and
   only that call is timed; median over `frames`.
-- `camera_overhead_ms()`: what the camera adds to a simulation: the wall time of `seconds`
-  simulated with the camera at 30 Hz minus the same run without it, per frame rendered.
+- `camera_overhead_ms()`: what the camera adds to a simulation: the time of `seconds`
+  simulated with the camera at 30 Hz minus the same run without it, per frame. `delay` is the
+  camera's output_delay: the default 0.03 renders on a worker thread (GL only), so the wall
+  clock pays less than the CPU; 0 renders in the simulation's thread.
 
 `tools/bench.py` can import either.
 """
@@ -33,12 +34,15 @@ _CLOCKS = {"wall": time.perf_counter, "cpu": time.process_time}
 RENDERERS = ("RenderEngineGl", "RenderEngineVtk")
 
 
-def _sim(camera: bool, fps: float = FPS, overrides=(), renderer: str = "") -> Simulation:
+def _sim(camera: bool, fps: float = FPS, overrides=(), renderer: str = "",
+         delay: float | None = None) -> Simulation:
     scenario = load_scenario(DEFAULT_SCENARIO, overrides=[CIRCLE, *overrides])
     for robot in scenario.robots.values():
         robot.camera.rgb = camera
         robot.camera.fps = fps
         robot.camera.renderer_class = renderer
+        if delay is not None:
+            robot.camera.output_delay = delay
     return Simulation(scenario)
 
 
@@ -50,7 +54,7 @@ def camera_frame_ms(frames: int = 90, warmup: int = 5, overrides=(), clock: str 
     now = _CLOCKS[clock]
     quiet_drake_warnings()
     # The hold renders at 1e-3 Hz (at t = 0 only): each timed frame is the only render.
-    sim = _sim(True, fps=1e-3, overrides=overrides, renderer=renderer)
+    sim = _sim(True, fps=1e-3, overrides=overrides, renderer=renderer, delay=0.0)
     sensor = sim.station.diagram.GetSubsystemByName("corobot.camera")
     port = sensor.color_image_output_port()
     sensor_context = sensor.GetMyContextFromRoot(sim.context)
@@ -73,10 +77,12 @@ def _elapsed(sim: Simulation, seconds: float, clock: str) -> float:
 
 
 def camera_overhead_ms(seconds: float = 3.0, overrides=(), clock: str = "wall",
-                       renderer: str = "") -> float:
-    """ms (`clock` "wall" or "cpu") the camera adds to the simulation per frame, at 30 Hz."""
+                       renderer: str = "", delay: float | None = None) -> float:
+    """ms (`clock` "wall" or "cpu") the camera adds to the simulation per frame, at 30 Hz,
+    with output_delay `delay` (None: the scenario's)."""
     quiet_drake_warnings()
-    with_camera = _elapsed(_sim(True, overrides=overrides, renderer=renderer), seconds, clock)
+    with_camera = _elapsed(_sim(True, overrides=overrides, renderer=renderer, delay=delay),
+                           seconds, clock)
     without = _elapsed(_sim(False, overrides=overrides), seconds, clock)
     return 1000.0 * (with_camera - without) / (seconds * FPS)
 
@@ -95,15 +101,21 @@ def main() -> None:
     print(f"| camera, 320x240, ms per frame (median of {args.repeats}) | "
           + " | ".join(args.renderers) + " |")
     print("|---|" + "---|" * len(args.renderers))
-    rows = (("render (the sensor's colour image), wall clock", camera_frame_ms, "wall",
-             {"frames": args.frames}),
-            ("render, CPU time (all threads)", camera_frame_ms, "cpu", {"frames": args.frames}),
-            ("added to a simulation at 30 Hz, wall clock", camera_overhead_ms, "wall",
-             {"seconds": args.seconds}),
-            ("added to a simulation at 30 Hz, CPU time", camera_overhead_ms, "cpu",
-             {"seconds": args.seconds}))
-    for label, fn, clock, kwargs in rows:
-        cells = [f"{median(fn, clock=clock, renderer=r, **kwargs):.2f}" for r in args.renderers]
+    frames, seconds = {"frames": args.frames}, {"seconds": args.seconds}
+    rows = [("render (the sensor's colour image), wall clock", camera_frame_ms,
+             dict(clock="wall", **frames), RENDERERS),
+            ("render, CPU time (all threads)", camera_frame_ms, dict(clock="cpu", **frames),
+             RENDERERS)]
+    for delay, label in ((0.0, "in the simulation's thread (output_delay 0)"),
+                         (None, "on a worker thread (the default, output_delay 0.03)")):
+        for clock in ("wall", "cpu"):
+            rows.append((f"added to a simulation at 30 Hz, {label}, "
+                         f"{'wall clock' if clock == 'wall' else 'CPU time'}",
+                         camera_overhead_ms, dict(clock=clock, delay=delay, **seconds),
+                         RENDERERS if delay == 0.0 else ("RenderEngineGl",)))
+    for label, fn, kwargs, renderers in rows:
+        cells = [f"{median(fn, renderer=r, **kwargs):.2f}" if r in renderers else "-"
+                 for r in args.renderers]
         print(f"| {label} | " + " | ".join(cells) + " |", flush=True)
 
 
