@@ -343,8 +343,8 @@ def test_the_webcam_service_has_no_frame_before_the_first_output():
 
     sim = make_sim(camera=True)
     t, frame_time, image = services.grab_frame("corobot", sim)
-    assert image is None and math.isnan(frame_time)
+    assert image is None and math.isnan(frame_time) and t == 0.0
     sim.advance_to(0.035)
     t, frame_time, image = services.grab_frame("corobot", sim)
-    assert frame_time == pytest.approx(0.0005)
+    assert t == pytest.approx(0.035) and frame_time == pytest.approx(0.0005)
     assert image.shape == (dim.CAMERA_HEIGHT, dim.CAMERA_WIDTH, 3) and image.mean() > 50
