@@ -59,7 +59,7 @@ RENDERERS = ("", "RenderEngineGl", "RenderEngineVtk")
 """`CameraConfig.renderer_class` names this project builds ("": the faster one available)."""
 
 RENDERER_NAME = "corobot_camera"
-"""The default `renderer_name` of the robots' cameras (one VTK engine for all of them)."""
+"""The default `renderer_name` of the robots' cameras (one engine for all of them)."""
 
 FILL_INTENSITY = 0.5
 """The fill light (from the camera, the sky's scattered light); the sun is the scenario's."""
@@ -69,11 +69,11 @@ CAMERA_ROTATION_RPY_DEG = (-90.0, 0.0, -90.0)
 
 CAPTURE_OFFSET = 0.0005
 """s: the default camera captures 0.5 ms past each 1/30 s tick, so that with plant steps of
-10, 5, 2 or 1 ms its capture and output events never fall within rounding distance of a step. Drake
-computes a periodic event's next time as offset + k * period, rounding (t - offset) / period
-up, so an event a few ulps after another stop can be skipped: a 10 Hz camera with a 30 ms
-delay captured at 0.30000000000000004 s, a plant step stopped at 0.33, and the output at
-0.33000000000000007 never came (its frame was lost)."""
+10, 5, 2 or 1 ms its capture and output events never fall within rounding distance of a
+step. Drake computes a periodic event's next time as offset + k * period, rounding
+(t - offset) / period up, so an event a few ulps after another stop can be skipped: a 10 Hz
+camera with a 30 ms delay captured at 0.30000000000000004 s, a plant step stopped at 0.33,
+and the output at 0.33000000000000007 never came (its frame was lost)."""
 
 NEAR_STEP = 1e-6
 """s: a camera event this close to a plant step risks the skip described at CAPTURE_OFFSET."""
@@ -224,8 +224,8 @@ class CameraHold(LeafSystem):
     With a discrete plant (`step` > 0, its time step) frames are taken on the plant's steps:
     at the first step at or after each tick. The scene only changes at steps, so the image is
     the one an exact-time render at the tick would give, while the Simulator stops nowhere
-    but the plant's steps (a stop between steps costs about as much as a step here). At
-    most one frame per step. With `step` = 0, frames are taken at the ticks themselves."""
+    but the plant's steps. At most one frame per step. With `step` = 0, frames are taken at
+    the ticks themselves."""
 
     def __init__(self, width: int, height: int, fps: float, capture_offset: float = 0.0,
                  step: float = 0.0):

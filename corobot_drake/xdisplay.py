@@ -3,7 +3,7 @@
 `x_display()` returns the display the GL renderer will use: the user's `$DISPLAY` when one is
 set, else a private `Xvfb` (Debian package `xvfb`; `tools/setup` installs it) started once for
 this process, which then exports its `DISPLAY`. Without either it returns None and the camera
-falls back to VTK (EGL, no X server needed, ~3x the cost per frame here).
+falls back to VTK (EGL, no X server needed, ~2x the cost per frame here).
 
 Drake opens the X display once per process and keeps the connection, so the private server
 must outlive it: it runs with `-terminate` and exits by itself when its last client (this
