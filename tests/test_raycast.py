@@ -85,7 +85,9 @@ class Scene:
 
     anchored: geometries fixed to the world (the caster precomputes their poses); otherwise
     each sits on its own moving frame F, posed through the source's FramePoseVector input, at
-    X_FG = Y (a fixed offset) so that the QueryObject composes X_WF * X_FG = X_WG.
+    X_FG = Y (a fixed offset) so that the QueryObject composes X_WF * X_FG = X_WG. Half-spaces
+    are always anchored: a half-space on a moving frame crashed (SIGSEGV) when SceneGraph
+    cloned its proximity engine for a context, in a few runs depending on memory layout.
     """
 
     Y = RigidTransform(RollPitchYaw(-0.2, 0.5, 0.3), [0.1, 0.2, -0.3])
@@ -96,10 +98,11 @@ class Scene:
         self.ids = {}
         poses = FramePoseVector()
         for name, shape, X_WG in shapes:
-            X_FG = RigidTransform() if anchored else self.Y
-            instance = GeometryInstance(X_WG if anchored else X_FG, shape, name)
+            fixed = anchored or isinstance(shape, HalfSpace)
+            X_FG = RigidTransform() if fixed else self.Y
+            instance = GeometryInstance(X_WG if fixed else X_FG, shape, name)
             instance.set_proximity_properties(ProximityProperties())
-            if anchored:
+            if fixed:
                 self.ids[name] = self.scene_graph.RegisterAnchoredGeometry(source, instance)
             else:
                 frame = self.scene_graph.RegisterFrame(source, GeometryFrame(name))
