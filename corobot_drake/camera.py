@@ -2,21 +2,26 @@
 engine (or VTK headless).
 
 Each robot's `camera` (a `pydrake.systems.sensors.CameraConfig`, the scenario field
-`robots.<name>.camera`) becomes, in the diagram:
+`robots.<name>.camera`) becomes, in the diagram, with the default `output_delay` (0.03 s) and
+the GL engine:
 
-- `<robot>.camera`: an `RgbdSensor` on the chassis (colour only; it renders when asked),
-- `<robot>.camera_hold`: `CameraHold`, which asks for one frame per tick of `fps` (and one at
-  initialization) and holds it; its output is exported as `<robot>.camera.rgb_image`
-  (ImageRgba8U) and `<robot>.camera.image_time` (s), the latest frame for any other system,
-- with `save_dir`, `<robot>.camera_saver`: `CameraFrameSaver`, writing that frame as numbered
-  PNG files `<save_dir>/<robot>/frame_000000.png`, ... at its own rate.
+- `<robot>.camera`: Drake's `RgbdSensorAsync` (colour only). At each tick (`capture_offset`
+  + k / `fps`) it captures the poses and renders on a worker thread, with its own clone of
+  the engine, while the simulation goes on; the frame comes out `output_delay` later,
 
-This is `ApplyCameraConfig` without its LCM publisher and with a colour-only hold: Drake's
-`RgbdSensorDiscrete` also renders a depth image every frame (twice the cost), and
-`RgbdSensorAsync` (what `ApplyCameraConfig` picks when `output_delay > 0`) is documented as
-unsafe with VTK; here it failed with "Unable to eglMakeCurrent" from its worker thread. With a
-discrete plant, frames are taken on its steps (`CameraHold`): the same images, no extra
-Simulator stops.
+and with `output_delay: 0`, or with VTK (which cannot render on that thread):
+
+- `<robot>.camera`: an `RgbdSensor` (colour only; it renders when asked) and
+- `<robot>.camera_hold`: `CameraHold`, which takes one frame at initialization and one per
+  tick, on the plant's steps, and holds it.
+
+Either way the latest frame is exported as `<robot>.camera.rgb_image` (ImageRgba8U; empty
+before the first) with `<robot>.camera.image_time` (s, its capture; NaN before the first).
+With `save_dir`, `<robot>.camera_saver` (`CameraFrameSaver`) writes the frames as numbered
+PNG files `<save_dir>/<robot>/frame_000000.png`, ... at its own rate.
+
+This is `ApplyCameraConfig` without its LCM publisher and colour only (Drake's
+`RgbdSensorDiscrete` also renders a depth image every frame, twice the cost).
 
 The renderer (`make_render_engine`, `renderer_class` in the config): by default Drake's
 `RenderEngineGl` when an X display is available (the user's, or a private Xvfb:
@@ -53,7 +58,7 @@ from pydrake.systems.framework import EventStatus, LeafSystem
 from pydrake.systems.sensors import CameraConfig, ImageRgba8U, RgbdSensor, RgbdSensorAsync
 
 from corobot_drake import dimensions as dim
-from corobot_drake.xdisplay import stop_xvfb, x_display
+from corobot_drake.xdisplay import x_display
 
 RENDERERS = ("", "RenderEngineGl", "RenderEngineVtk")
 """`CameraConfig.renderer_class` names this project builds ("": the faster one available)."""
@@ -161,14 +166,22 @@ def render_engine_gl_params(sun_direction, sun_intensity: float, sky_color
                                 lights=_lights(sun_direction, sun_intensity))
 
 
-def make_vtk_engine(params: RenderEngineVtkParams):
+def make_vtk_engine(params: RenderEngineVtkParams, backend: str | None = None):
     """A VTK engine that can share this process with the GL cameras: through GLX when an X
     display is available (libglvnd lets a thread hold GLX or EGL contexts, not both), else
-    EGL (headless, no X server). A `backend` set in `params` is kept."""
-    if not params.backend:
-        params = copy.copy(params)
+    EGL (headless, no X server). A `backend` given here or set in `params` is kept. Raises
+    RendererUnavailableError (one line) when VTK cannot start."""
+    params = copy.copy(params)
+    if backend:
+        params.backend = backend
+    elif not params.backend:
         params.backend = "GLX" if x_display() is not None else "EGL"
-    return MakeRenderEngineVtk(params)
+    try:
+        return MakeRenderEngineVtk(params)
+    except RuntimeError as e:
+        raise RendererUnavailableError(
+            f"camera renderer RenderEngineVtk ({params.backend}): "
+            f"{str(e).splitlines()[0]}") from e
 
 
 def make_render_engine(renderer_class, sun_direction, sun_intensity: float, sky_color):
@@ -191,12 +204,13 @@ def make_render_engine(renderer_class, sun_direction, sun_intensity: float, sky_
             return MakeRenderEngineGl(params), "RenderEngineGl"
         except RuntimeError as e:
             problem = str(e).splitlines()[0]
-            stop_xvfb()
     if renderer_class != "":
         raise RendererUnavailableError(f"camera renderer RenderEngineGl: {problem}")
-    _warn_once(f"camera: rendering with VTK, ~2x slower per frame ({problem})")
-    return make_vtk_engine(render_engine_params(
-        sun_direction, sun_intensity, sky_color)), "RenderEngineVtk"
+    _warn_once(f"camera: rendering with VTK, ~2x slower per frame and without output delay "
+               f"({problem})")
+    # Headless EGL: the display (if any) did not serve GL, so no GLX context is in the way.
+    return make_vtk_engine(render_engine_params(sun_direction, sun_intensity, sky_color),
+                           backend="EGL"), "RenderEngineVtk"
 
 
 _warned: set[str] = set()
@@ -262,47 +276,53 @@ class CameraHold(LeafSystem):
 
 
 class CameraFrameSaver(LeafSystem):
-    """Writes the held frame (`rgb_image`, taken at `image_time`) as numbered PNG files (RGB)
-    `<directory>/frame_NNNNNN.png`, one per tick of its own `rate` (Hz, from `offset`): the
-    first frame taken at or after each tick. It looks every `period` s (the plant's step, so
-    it adds no Simulator stops; or 1/rate); a publish event runs before the updates at its
-    time, so each frame is saved one look after it was taken. `frames_saved` counts the files
-    and `last_saved_time` is the image_time of the last one (a publish event cannot write the
-    Context, so both are this object's: the saver is a file sink)."""
+    """Writes the camera's frames (`rgb_image`, captured at `image_time`) as numbered PNG files
+    (RGB) `<directory>/frame_NNNNNN.png`, one per tick of its own `rate` (Hz, ticks from
+    `offset`) of the camera's `fps`.
 
-    def __init__(self, directory: str | Path, width: int, height: int, rate: float,
-                 offset: float = 0.0, period: float | None = None):
+    It looks every `period` s (the plant's step, so it adds no Simulator stops) and saves a
+    frame that came out since the previous look: one whose output time, capture plus `delay`,
+    lies in (t - period, t). A publish event runs before the updates at its own time, so a
+    frame that comes out at a look is saved at the next. Whether to save is decided from the
+    Context alone; only the file counter `frames_saved` is this object's (a publish event
+    cannot write the Context: the saver is a file sink)."""
+
+    def __init__(self, directory: str | Path, width: int, height: int, fps: float,
+                 rate: float, offset: float = 0.0, period: float | None = None,
+                 delay: float = 0.0):
         super().__init__()
         self.directory = Path(directory)
         self.directory.mkdir(parents=True, exist_ok=True)
         self.frames_saved = 0
-        self.last_saved_time = -np.inf
-        self._rate, self._offset = float(rate), float(offset)
+        self._fps, self._rate, self._offset = float(fps), float(rate), float(offset)
+        self._period, self._delay = float(period or 1.0 / rate), float(delay)
         self._image = self.DeclareAbstractInputPort(
             "rgb_image", AbstractValue.Make(ImageRgba8U(width, height)))
         self._image_time = self.DeclareVectorInputPort("image_time", 1)
-        self.DeclarePeriodicPublishEvent(period or 1.0 / rate, 0.0, self._save)
+        self.DeclarePeriodicPublishEvent(self._period, 0.0, self._save)
 
     def frame_path(self, index: int) -> Path:
         return self.directory / f"frame_{index:06d}.png"
 
+    def is_new(self, t: float, captured: float) -> bool:
+        """Whether the frame captured at `captured` came out since the look before `t` and
+        starts a new tick of `rate` (it is the first frame at or after that tick)."""
+        out = captured + self._delay
+        if not (t - self._period - TICK_TOLERANCE < out < t - TICK_TOLERANCE):
+            return False  # also NaN: no frame yet
+        k, _ = _last_tick(captured, self._rate, self._offset)
+        previous, _ = _last_tick(captured - 1.0 / self._fps, self._rate, self._offset)
+        return k >= 0 and k > previous
+
     def _save(self, context):
         from PIL import Image
 
-        taken = float(self._image_time.Eval(context)[0])
-        if not taken > self.last_saved_time:  # also NaN: no frame yet
+        if not self.is_new(context.get_time(), float(self._image_time.Eval(context)[0])):
             return
-        k, _ = _last_tick(taken, self._rate, self._offset)
-        if k < 0 or (self.frames_saved and
-                     _last_tick(self.last_saved_time, self._rate, self._offset)[0] >= k):
-            return  # this frame is within the tick already saved
         image = self._image.Eval(context)
-        if image.width() == 0:
-            return
         Image.fromarray(np.array(image.data[:, :, :3])).save(
             self.frame_path(self.frames_saved), compress_level=1)
         self.frames_saved += 1
-        self.last_saved_time = taken
 
 
 def _sensor_pose(plant, instance, config: CameraConfig):
@@ -334,7 +354,7 @@ def add_camera(builder, plant, scene_graph, robot: str, instance, config: Camera
                world, renderers: dict, save_dir: str | Path | None = None,
                save_rate: float | None = None):
     """Adds `robot`'s camera (see the module doc), lit by the scenario's `world` (sun, sky),
-    and returns (the system holding the latest frame, saver or None); nothing when
+    and returns (the system whose outputs are the latest frame, saver or None); nothing when
     `config.rgb` is false. Cameras with the same `renderer_name` share the engine the first
     of them makes; `renderers` (renderer name -> engine class name) records the engines made.
 
@@ -352,35 +372,41 @@ def add_camera(builder, plant, scene_graph, robot: str, instance, config: Camera
         scene_graph.AddRenderer(config.renderer_name, engine)
     color, depth = config.MakeCameras()
     frame_id, X_AB = _sensor_pose(plant, instance, config)
+    delay = 0.0
+    # The saver looks at every plant step, or at every frame if frames come faster.
+    look = step if step > 0 and config.fps * step <= 1.0 + TICK_TOLERANCE else 1.0 / config.fps
     if config.output_delay > 0 and renderers.get(config.renderer_name) == "RenderEngineGl":
+        delay = config.output_delay
         if step > 0 and events_near_steps(config, step):
             _warn_once(f"camera {robot}: capture or output times fall within {NEAR_STEP} s "
                        "of plant steps; Drake may skip such events (lost frames): move "
                        "capture_offset off the steps (the default is 0.0005 s)")
-        hold = builder.AddNamedSystem(f"{robot}.camera", RgbdSensorAsync(
+        camera = builder.AddNamedSystem(f"{robot}.camera", RgbdSensorAsync(
             scene_graph, frame_id, X_AB, config.fps, config.capture_offset,
             config.output_delay, color, None, False))
-        builder.Connect(scene_graph.get_query_output_port(), hold.get_input_port())
-        image = hold.GetOutputPort("color_image")
+        builder.Connect(scene_graph.get_query_output_port(), camera.get_input_port())
+        image = camera.GetOutputPort("color_image")
     else:
-        if config.output_delay > 0:
+        if config.output_delay > 0 and config.renderer_class != "":  # else said at fallback
             _warn_once("camera: output_delay is not simulated with RenderEngineVtk (it cannot "
                        "render on RgbdSensorAsync's thread); frames come without delay")
         sensor = builder.AddNamedSystem(f"{robot}.camera",
                                         RgbdSensor(frame_id, X_AB, color, depth))
         builder.Connect(scene_graph.get_query_output_port(), sensor.query_object_input_port())
-        hold = builder.AddNamedSystem(f"{robot}.camera_hold", CameraHold(
-            config.width, config.height, config.fps, config.capture_offset, step))
-        builder.Connect(sensor.color_image_output_port(), hold.get_input_port())
-        image = hold.GetOutputPort("rgb_image")
-    image_time = hold.GetOutputPort("image_time")
+        # Frames on the plant's steps, unless the camera is faster than the steps.
+        camera = builder.AddNamedSystem(f"{robot}.camera_hold", CameraHold(
+            config.width, config.height, config.fps, config.capture_offset,
+            look if look == step else 0.0))
+        builder.Connect(sensor.color_image_output_port(), camera.get_input_port())
+        image = camera.GetOutputPort("rgb_image")
+    image_time = camera.GetOutputPort("image_time")
     builder.ExportOutput(image, f"{robot}.camera.rgb_image")
     builder.ExportOutput(image_time, f"{robot}.camera.image_time")
     saver = None
     if save_dir is not None:
         saver = builder.AddNamedSystem(f"{robot}.camera_saver", CameraFrameSaver(
-            Path(save_dir) / robot, config.width, config.height, save_rate or config.fps,
-            config.capture_offset, step or None))
+            Path(save_dir) / robot, config.width, config.height, config.fps,
+            save_rate or config.fps, config.capture_offset, look, delay))
         builder.Connect(image, saver.GetInputPort("rgb_image"))
         builder.Connect(image_time, saver.GetInputPort("image_time"))
-    return hold, saver
+    return camera, saver

@@ -8,6 +8,7 @@ import json
 import math
 import sys
 import time
+import warnings
 from pathlib import Path
 
 from corobot_drake.camera import RendererUnavailableError
@@ -47,7 +48,7 @@ def _parser() -> argparse.ArgumentParser:
                    "DIR/<robot>/frame_000000.png, ...")
     p.add_argument("--camera-rate", type=float, metavar="HZ",
                    help="render (and save) camera frames at this rate (default: the scenario's "
-                   "camera fps, 30); output delays are capped at 0.9 of a frame")
+                   f"camera fps, 30); output delays are capped at {CAMERA_DELAY_SHARE} of a frame")
     p.add_argument("--save-scenario", metavar="PATH",
                    help="at the end, write a scenario YAML of the current state (poses, "
                    "velocities, settings, commands still to run): running it continues from there")
@@ -101,7 +102,12 @@ def _write_logs(sim: Simulation, path: Path) -> None:
                         else path.with_name(f"{path.stem}.{name}{path.suffix}"))
 
 
+def _one_line_warning(message, category, filename, lineno, line=None) -> str:
+    return f"warning: {message}\n"
+
+
 def main(argv: list[str] | None = None) -> int:
+    warnings.formatwarning = _one_line_warning  # for a user, not a developer: no source lines
     args = _parser().parse_args(argv)
     try:
         scenario = load_scenario(args.scenario, overrides=args.override)

@@ -298,12 +298,6 @@ class IrSensor(LeafSystem):
             self._caster_version = version
         return self._caster
 
-    def scan(self, query_object):
-        """One cast of the cross of rays: (origin (3,), ray distances (N,) inf for a miss,
-        directions (N, 3)) in the world frame."""
-        origin, directions, t = self._cast(query_object)
-        return np.array(origin), np.array(t), np.array(directions)
-
     def _cast(self, query_object):
         """(origin, directions, distances) as plain floats (the scan's hot path)."""
         X_WB = query_object.GetPoseInWorld(self._frame_id).GetAsMatrix34().tolist()

@@ -631,6 +631,8 @@ class RayCaster:
         ox, oy, oz = origin
         n = len(directions)
         best = [math.inf] * n
+        if not (math.isfinite(ox) and math.isfinite(oy) and math.isfinite(oz)):
+            return best  # as cast(): no hit from an undefined origin
         (ax, ay, az), half_angle = cone if cone is not None else fan_cone(directions)
         frame_poses: dict = {}
         others = []

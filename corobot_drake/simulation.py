@@ -257,7 +257,7 @@ class Robot:
     # --- camera ---------------------------------------------------------------------------
     @property
     def has_camera(self) -> bool:
-        return self._parts.camera_hold is not None
+        return self._parts.camera is not None
 
     def _camera_port(self, which: str):
         if not self.has_camera:

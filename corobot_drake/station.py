@@ -143,8 +143,9 @@ class RobotParts:
     command_source: CommandSource
     drive_controller: DriveController
     tilt_monitor: TiltMonitor
-    camera_hold: object = None
-    """`camera.CameraHold` (the latest frame), None without a camera."""
+    camera: object = None
+    """The system whose outputs are the latest frame: `RgbdSensorAsync` (the default) or
+    `camera.CameraHold`; None without a camera."""
     camera_saver: object = None
     """`camera.CameraFrameSaver` when frames are saved."""
     motion: MotionCommands | None = None
@@ -230,7 +231,7 @@ def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None) -> Stat
         builder.ExportOutput(plant.get_state_output_port(instance), f"{name}.state")
         robots[name] = RobotParts(name, instance, chassis, joints, source, controller, tilt,
                                   motion=motion)
-        robots[name].camera_hold, robots[name].camera_saver = add_camera(
+        robots[name].camera, robots[name].camera_saver = add_camera(
             builder, plant, scene_graph, name, instance, robot.camera, scenario.world,
             renderers, save_camera)
         robots[name].ir_sensors = add_ir_sensors(

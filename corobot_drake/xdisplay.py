@@ -1,21 +1,25 @@
 """An X display for Drake's `RenderEngineGl`, which renders through GLX.
 
-`x_display()` returns the display the GL renderer will use: the user's `$DISPLAY` when one is
-set, else a private `Xvfb` (Debian package `xvfb`; `tools/setup` installs it) started once for
-this process, which then exports its `DISPLAY`. Without either it returns None and the camera
+`x_display()` returns the display the GL renderer will use: the user's `$DISPLAY` when it can
+be opened, else a private `Xvfb` (Debian package `xvfb`; `tools/setup` installs it) started
+once for this process, which then exports its `DISPLAY` (a stale `$DISPLAY`, e.g. from an
+ended `ssh -X`, is replaced, with a warning). Without either it returns None and the camera
 falls back to VTK (EGL, no X server needed, ~2x the cost per frame here).
 
-Drake opens the X display once per process and keeps the connection, so the private server
-must outlive it: it runs with `-terminate` and exits by itself when its last client (this
-process, however it ends) disconnects. `stop_xvfb` stops one that nothing connected to.
+The private server lives exactly as long as this process: it runs with `-terminate` (it exits
+when its last client disconnects) and this module keeps a connection to it open until the
+process ends, however it ends. Drake also opens the display once per process and keeps it.
 """
 
 from __future__ import annotations
 
+import ctypes
+import ctypes.util
 import os
 import select
 import shutil
 import subprocess
+import warnings
 
 XVFB_ARGS = ("-nolisten", "tcp", "-screen", "0", "64x64x24", "-terminate")
 """GL renders into its own framebuffers, so the screen only has to exist; `-terminate`: exit
@@ -28,51 +32,32 @@ _xvfb: subprocess.Popen | None = None
 """The private X server of this process, once started (a process resource, like the display
 connection Drake keeps)."""
 
-_xvfb_display: str | None = None
+_keepalive = None
+"""This process's own connection to the private server (an Xlib Display*), held open so the
+server, which exits with its last client, outlives every other client of this process."""
 
 
-def stop_xvfb() -> None:
-    """Stops the private Xvfb (only safe while nothing is connected to it: Xlib ends a process
-    whose display goes away) and forgets its DISPLAY."""
-    global _xvfb
-    if _xvfb is None:
-        return
-    if _xvfb.poll() is None:
-        _xvfb.terminate()
-        try:
-            _xvfb.wait(timeout=5)
-        except subprocess.TimeoutExpired:
-            _xvfb.kill()
-            _xvfb.wait()
-    if os.environ.get("DISPLAY") == _xvfb_display:
-        del os.environ["DISPLAY"]
-    _xvfb = None
-
-
-def start_xvfb() -> str | None:
-    """Starts a private Xvfb (once per process) and returns its DISPLAY, or None when `Xvfb`
-    is not installed or does not start."""
-    global _xvfb, _xvfb_display
-    if _xvfb is not None and _xvfb.poll() is None:
-        return os.environ.get("DISPLAY")
-    executable = shutil.which("Xvfb")
-    if executable is None:
+def _xlib():
+    name = ctypes.util.find_library("X11")
+    if name is None:
         return None
-    read_end, write_end = os.pipe()
-    try:
-        process = subprocess.Popen(
-            [executable, "-displayfd", str(write_end), *XVFB_ARGS], pass_fds=(write_end,),
-            stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-            start_new_session=True)
-    finally:
-        os.close(write_end)
-    number = _read_display_number(read_end)
-    if number is None:
-        process.kill()
-        process.wait()
-        return None
-    _xvfb, _xvfb_display = process, f":{number}"
-    return _xvfb_display
+    lib = ctypes.CDLL(name)
+    lib.XOpenDisplay.argtypes = [ctypes.c_char_p]
+    lib.XOpenDisplay.restype = ctypes.c_void_p
+    lib.XCloseDisplay.argtypes = [ctypes.c_void_p]
+    return lib
+
+
+def can_open(display: str) -> bool:
+    """Whether X display `display` accepts a connection (opened and closed at once)."""
+    xlib = _xlib()
+    if xlib is None:
+        return False
+    connection = xlib.XOpenDisplay(display.encode())
+    if not connection:
+        return False
+    xlib.XCloseDisplay(connection)
+    return True
 
 
 def _read_display_number(fd: int) -> str | None:
@@ -90,12 +75,47 @@ def _read_display_number(fd: int) -> str | None:
     return number if number.isdigit() else None
 
 
+def start_xvfb() -> str | None:
+    """Starts a private Xvfb (once per process) and returns its DISPLAY, or None when `Xvfb`
+    or Xlib is not installed or the server does not start."""
+    global _xvfb, _keepalive
+    if _xvfb is not None and _xvfb.poll() is None:
+        return f":{_xvfb.display_number}"
+    executable, xlib = shutil.which("Xvfb"), _xlib()
+    if executable is None or xlib is None:
+        return None
+    read_end, write_end = os.pipe()
+    try:
+        process = subprocess.Popen(
+            [executable, "-displayfd", str(write_end), *XVFB_ARGS], pass_fds=(write_end,),
+            stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+            start_new_session=True)
+    except OSError:
+        os.close(read_end)
+        return None
+    finally:
+        os.close(write_end)
+    number = _read_display_number(read_end)
+    connection = xlib.XOpenDisplay(f":{number}".encode()) if number is not None else None
+    if not connection:
+        process.kill()
+        process.wait()
+        return None
+    process.display_number = number
+    _xvfb, _keepalive = process, connection
+    return f":{number}"
+
+
 def x_display() -> str | None:
-    """The X display GL rendering uses: `$DISPLAY` if set, else a private Xvfb's (exported to
-    `$DISPLAY`), else None."""
-    if os.environ.get("DISPLAY"):
-        return os.environ["DISPLAY"]
+    """The X display GL rendering uses: `$DISPLAY` if it can be opened, else a private Xvfb's
+    (exported to `$DISPLAY`), else None."""
+    user = os.environ.get("DISPLAY")
+    if user and ((_xvfb is not None and user == f":{_xvfb.display_number}") or can_open(user)):
+        return user
     display = start_xvfb()
     if display is not None:
+        if user:
+            warnings.warn(f"DISPLAY={user} cannot be opened; rendering on a private Xvfb "
+                          f"({display})", stacklevel=2)
         os.environ["DISPLAY"] = display
     return display

@@ -722,3 +722,18 @@ def test_cast_fan_skips_what_the_cone_cannot_reach():
     assert t[:2] == [math.inf, math.inf]
     assert t[2] < 8.0
     assert caster.cast(scene.query_object, np.tile(o, (3, 1)), d, 8.0).distance[2] == t[2]
+
+
+@pytest.mark.parametrize("axis", [0, 1, 2])
+def test_cast_fan_from_an_undefined_origin_hits_nothing(axis):
+    """A NaN coordinate is a miss for every ray, as in cast() (a slab test alone would read
+    the ray as starting on the box's face: a hit at 0)."""
+    scene = Scene([("box", Box(1.0, 1.0, 1.0), RigidTransform())])
+    origin = [0.0, 0.0, 0.0]
+    origin[axis] = math.nan
+    directions = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+    assert scene.caster().cast_fan(scene.query_object, origin, directions, 10.0) == [
+        math.inf] * 3
+    hits = scene.caster().cast(scene.query_object, np.array([origin] * 3), np.array(directions),
+                               10.0)
+    assert np.all(np.isinf(hits.distance))
