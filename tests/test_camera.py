@@ -9,6 +9,7 @@ for the horizon edge across the full width. Measured differences: 0.0-0.25%.
 
 import json
 import math
+import os
 import subprocess
 import sys
 
@@ -367,3 +368,15 @@ def test_the_webcam_service_has_no_frame_before_the_first_output():
     t, frame_time, image = services.grab_frame("corobot", sim)
     assert t == pytest.approx(0.035) and frame_time == pytest.approx(0.0005)
     assert image.shape == (dim.CAMERA_HEIGHT, dim.CAMERA_WIDTH, 3) and image.mean() > 50
+
+
+def test_a_stale_display_is_replaced_by_a_private_xvfb(tmp_path):
+    """DISPLAY naming no server (an ended ssh -X session): a warning, a private Xvfb, frames,
+    exit 0 (it used to end in a traceback from the renderer)."""
+    env = {**os.environ, "DISPLAY": ":987"}
+    run = subprocess.run([sys.executable, "-m", "corobot_drake", str(DEFAULT_SCENARIO),
+                          "--headless", "--duration", "0.1", "--save-camera", str(tmp_path)],
+                         capture_output=True, text=True, timeout=120, env=env)
+    assert run.returncode == 0, run.stderr
+    assert "DISPLAY=:987 cannot be opened" in run.stderr and "Traceback" not in run.stderr
+    assert len(list((tmp_path / "corobot").glob("*.png"))) == 3  # captures at 0.5, 33.8, 67.2 ms
