@@ -183,6 +183,15 @@ DISTANCE, SCAN_TIME, PREVIOUS, CHANGED, SCAN_INDEX, TRUE_DISTANCE, VOLTAGE, ADC_
 _READING_SIZE = 8
 
 
+def scan_state_layout(num_rays: int) -> tuple[int, slice, slice, slice]:
+    """(size, origin, ends, hits) of an IrSensor's state vector (`scan_state`) for `num_rays`
+    rays: the reading, then the rays' origin (3), ends (3 N) and hit flags (N)."""
+    ends = _READING_SIZE + 3
+    hits = ends + 3 * num_rays
+    return (hits + num_rays, slice(_READING_SIZE, ends), slice(ends, hits),
+            slice(hits, hits + num_rays))
+
+
 class IrSensor(LeafSystem):
     """One IR distance sensor (see the module docstring for its state and ports).
 
@@ -217,10 +226,7 @@ class IrSensor(LeafSystem):
         initial = np.zeros(_READING_SIZE)
         initial[[DISTANCE, PREVIOUS, TRUE_DISTANCE]] = self._range
         initial[SCAN_TIME] = math.nan
-        self.state_size = _READING_SIZE + 3 + 4 * n
-        self._origin = slice(_READING_SIZE, _READING_SIZE + 3)
-        self._end = slice(_READING_SIZE + 3, _READING_SIZE + 3 + 3 * n)
-        self._hit = slice(_READING_SIZE + 3 + 3 * n, self.state_size)
+        self.state_size, self._origin, self._end, self._hit = scan_state_layout(n)
         self._state = self.DeclareDiscreteState(
             np.concatenate([initial, np.zeros(self.state_size - _READING_SIZE)]))
 
@@ -324,7 +330,8 @@ class IrSensor(LeafSystem):
         origin, directions, t = self._cast(self._query_port.Eval(context))
         ox, oy, oz = origin
         rng = self._range
-        # One pass: the state vector's tail (ray ends, then hit flags) and the nearest hit.
+        # One pass: the state vector's tail in `scan_state_layout` order (origin, ray ends,
+        # hit flags) and the nearest hit.
         x_new = [0.0] * _READING_SIZE
         x_new += origin
         hit = []
@@ -382,7 +389,8 @@ class IrMeshcatVisualizer(LeafSystem):
         self._meshcat = meshcat
         self.path = path
         self._n = num_rays
-        self._scan = self.DeclareVectorInputPort("scan_state", _READING_SIZE + 3 + 4 * num_rays)
+        size, self._origin, self._ends, self._hits = scan_state_layout(num_rays)
+        self._scan = self.DeclareVectorInputPort("scan_state", size)
         self._last_index = None
         self._last_time = None
         self.draws = 0
@@ -417,10 +425,9 @@ class IrMeshcatVisualizer(LeafSystem):
         if key == (self._last_index, self._last_time):
             return
         self._last_index, self._last_time = key
-        n = self._n
-        origin = x[_READING_SIZE:_READING_SIZE + 3]
-        ends = x[_READING_SIZE + 3:_READING_SIZE + 3 + 3 * n].reshape(-1, 3)
-        hits = x[_READING_SIZE + 3 + 3 * n:] > 0.5
+        origin = x[self._origin]
+        ends = x[self._ends].reshape(-1, 3)
+        hits = x[self._hits] > 0.5
         starts = np.asfortranarray(np.tile(origin, (self._n, 1)).T)
         self._meshcat.SetLineSegments(f"{self.path}/rays", starts, np.asfortranarray(ends.T),
                                       2.0, _RAY_COLOR)
