@@ -25,6 +25,7 @@ def serve(make_sim, host: str = "127.0.0.1", port: int = 50000, meshcat: bool = 
     import multiprocessing
 
     from corobot_drake.bridge import SimSide, http_main
+    from corobot_drake.camera import RendererUnavailableError
     from corobot_drake.services import SimRunner
 
     ctx = multiprocessing.get_context("spawn")
@@ -60,7 +61,7 @@ def serve(make_sim, host: str = "127.0.0.1", port: int = 50000, meshcat: bool = 
     runner = SimRunner(build)
     try:
         runner.start()
-    except ValueError as e:  # e.g. a command with a non-finite number
+    except (ValueError, RendererUnavailableError) as e:  # e.g. a non-finite number
         http.terminate()
         print(f"error: {label + ': ' if label else ''}{e}", file=sys.stderr)
         return 2
