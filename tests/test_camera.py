@@ -351,9 +351,12 @@ def test_without_a_display_gl_is_a_clear_error_and_the_default_falls_back(tmp_pa
     assert "camera: rendering with VTK" in fallback.stderr
     image = np.asarray(Image.open(tmp_path / "corobot" / "frame_000000.png"))
     assert image.mean() > 50
-    gl = run("--override", "robots: {corobot: {camera: {renderer_class: RenderEngineGl}}}")
-    assert gl.returncode == 2
-    assert "RenderEngineGl: no X display" in gl.stderr and "Traceback" not in gl.stderr
+    gl = "robots: {corobot: {camera: {renderer_class: RenderEngineGl}}}"
+    for extra in ((), ("--serve", "--port", "0")):
+        result = run("--override", gl, *extra)
+        assert result.returncode == 2, (extra, result.stderr)
+        assert "RenderEngineGl: no X display" in result.stderr
+        assert "Traceback" not in result.stderr
 
 
 def test_the_webcam_service_has_no_frame_before_the_first_output():
