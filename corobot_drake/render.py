@@ -1,12 +1,16 @@
 """Rendering a built station with Drake's VTK renderer: lit by the scenario's sun, sky behind.
 
 Used by `tools/snapshot.py` (README pictures) and `tools/camera_cost.py` (camera frame cost).
-The renderer is added to a running simulation's SceneGraph context, so any `Simulation` can be
-photographed after it has been driven:
+Any `Simulation` can be photographed, before or after it has been driven:
 
     sim = Simulation.from_file("scenarios/corobot.yaml")
     add_renderer(sim)
     image = render(sim, look_at([1, 1, 0.6], [0, 0, 0.1]), 640, 480)   # H x W x 3 uint8
+
+The renderers live in a private SceneGraph context (the station's geometry), posed from the
+plant at each render, so taking a picture leaves the simulation as it was (adding a renderer to the
+simulation's own context would change its geometry, which Drake's asynchronous camera
+refuses to continue after).
 """
 
 from __future__ import annotations
@@ -53,20 +57,32 @@ def render_params(world: sc.World, shadows: bool = True) -> RenderEngineVtkParam
     return params
 
 
+def _photo_context(sim):
+    """The private SceneGraph context of `sim`'s pictures (made on first use; the renderers
+    added by `add_renderer` live there)."""
+    context = getattr(sim, "_photo_context", None)
+    if context is None:
+        context = sim._photo_context = sim.station.scene_graph.CreateDefaultContext()
+    return context
+
+
 def add_renderer(sim, shadows: bool = True, name: str = RENDERER) -> str:
-    """Adds the VTK engine to `sim`'s SceneGraph (in its context); returns the engine name."""
+    """Adds the VTK engine for pictures of `sim` (see the module doc); returns its name."""
     scene_graph = sim.station.scene_graph
-    context = scene_graph.GetMyMutableContextFromRoot(sim.context)
+    context = _photo_context(sim)
     if not scene_graph.HasRenderer(context, name):
         scene_graph.AddRenderer(context, name, make_vtk_engine(
             render_params(sim.scenario.world, shadows)))
-        # If the geometry poses were already evaluated (a sensor read the QueryObject), the
-        # new engine would keep its registration poses: rewriting the plant's positions with
-        # the same values invalidates the pose cache (the state itself is unchanged).
-        plant = sim.station.plant
-        plant_context = plant.GetMyMutableContextFromRoot(sim.context)
-        plant.SetPositions(plant_context, plant.GetPositions(plant_context))
     return name
+
+
+def _posed_query(sim):
+    """The QueryObject of the pictures' context, with the plant's current geometry poses."""
+    scene_graph, plant = sim.station.scene_graph, sim.station.plant
+    context = _photo_context(sim)
+    poses = plant.get_geometry_pose_output_port().Eval(plant.GetMyContextFromRoot(sim.context))
+    scene_graph.get_source_pose_port(plant.get_source_id()).FixValue(context, poses)
+    return scene_graph.get_query_output_port().Eval(context)
 
 
 def color_camera(width: int, height: int, fov_y_deg: float, near: float = 0.01,
@@ -79,9 +95,9 @@ def color_camera(width: int, height: int, fov_y_deg: float, near: float = 0.01,
 def render(sim, X_WC: RigidTransform, width: int = 640, height: int = 480,
            fov_y_deg: float = 40.0, near: float = 0.01, name: str = RENDERER) -> np.ndarray:
     """An RGB image (height x width x 3, uint8) from camera pose X_WC (Drake camera axes)."""
-    query = sim.station.diagram.GetOutputPort("query_object").Eval(sim.context)
-    image = query.RenderColorImage(color_camera(width, height, fov_y_deg, near, name=name),
-                                   sim.station.scene_graph.world_frame_id(), X_WC)
+    camera = color_camera(width, height, fov_y_deg, near, name=name)
+    image = _posed_query(sim).RenderColorImage(
+        camera, sim.station.scene_graph.world_frame_id(), X_WC)
     return np.array(image.data[:, :, :3], dtype=np.uint8)
 
 

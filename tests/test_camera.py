@@ -383,3 +383,25 @@ def test_a_stale_display_is_replaced_by_a_private_xvfb(tmp_path):
     assert run.returncode == 0, run.stderr
     assert "DISPLAY=:987 cannot be opened" in run.stderr and "Traceback" not in run.stderr
     assert len(list((tmp_path / "corobot").glob("*.png"))) == 3  # captures at 0.5, 33.8, 67.2 ms
+
+
+def test_a_picture_mid_run_leaves_the_simulation_as_it_was():
+    """render.py photographs a running simulation from its own SceneGraph context: the
+    asynchronous camera (which refuses a geometry change mid-run) goes on, and the run is
+    bit for bit the one without the picture."""
+    from corobot_drake import render
+
+    runs = []
+    for picture in (False, True):
+        sim = make_sim(CIRCLE, camera=True)
+        sim.advance(0.2)
+        if picture:
+            name = render.add_renderer(sim, shadows=False)
+            image = render.render(sim, render.chase_view(render.chassis_pose(sim)), 160, 120,
+                                  name=name)
+            assert image.shape == (120, 160, 3) and image.mean() > 50
+        sim.advance(0.2)
+        runs.append((sim.robot().pose(), sim.robot().camera_image_time(),
+                     sim.robot().camera_image()))
+    assert runs[0][:2] == runs[1][:2]
+    np.testing.assert_array_equal(runs[0][2], runs[1][2])
