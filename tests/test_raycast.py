@@ -499,9 +499,9 @@ def sphere_trace(query_object, ids, origin, direction, max_range):
     raise AssertionError("sphere tracing did not converge")
 
 
-@pytest.mark.parametrize("anchored", [True, False], ids=["anchored", "moving"])
-def test_random_scene_matches_drake_signed_distance_marching(mesh_files, anchored):
-    rng = np.random.default_rng(7)
+def random_shapes(rng, mesh_files, count: int, X_WGround: RigidTransform) -> list:
+    """A ground half-space at X_WGround and `count` shapes of every kind in turn, randomly
+    sized and posed within 3 m of the origin: (name, shape, X_WG) for `Scene`."""
     makers = [
         lambda: Box(*rng.uniform(0.2, 1.0, 3)),
         lambda: Sphere(rng.uniform(0.1, 0.5)),
@@ -511,10 +511,17 @@ def test_random_scene_matches_drake_signed_distance_marching(mesh_files, anchore
         lambda: Convex(str(mesh_files / "octahedron.obj"), rng.uniform(0.3, 0.7)),
         lambda: Mesh(str(mesh_files / "cube.obj"), rng.uniform(0.2, 0.4)),
     ]
-    shapes = [("ground", HalfSpace(), RigidTransform([0, 0, -1.0]))]
-    for i in range(14):
+    shapes = [("ground", HalfSpace(), X_WGround)]
+    for i in range(count):
         X = RigidTransform(RollPitchYaw(*rng.uniform(-math.pi, math.pi, 3)), rng.uniform(-3, 3, 3))
         shapes.append((f"s{i}", makers[i % len(makers)](), X))
+    return shapes
+
+
+@pytest.mark.parametrize("anchored", [True, False], ids=["anchored", "moving"])
+def test_random_scene_matches_drake_signed_distance_marching(mesh_files, anchored):
+    rng = np.random.default_rng(7)
+    shapes = random_shapes(rng, mesh_files, 14, RigidTransform([0, 0, -1.0]))
     scene = Scene(shapes, anchored=anchored)
     ellipsoids = {name for name, shape, _ in shapes if isinstance(shape, Ellipsoid)}
     caster = scene.caster()
@@ -661,20 +668,8 @@ def test_cast_fan_agrees_with_cast_in_a_random_scene(mesh_files, anchored):
     """Fans of rays (each a sensor's cross of rays, with its precomputed cone, and a random
     bundle with the cone cast_fan computes) read what cast() reads for the same rays."""
     rng = np.random.default_rng(11)
-    makers = [
-        lambda: Box(*rng.uniform(0.2, 1.0, 3)),
-        lambda: Sphere(rng.uniform(0.1, 0.5)),
-        lambda: Cylinder(rng.uniform(0.1, 0.4), rng.uniform(0.2, 1.0)),
-        lambda: Capsule(rng.uniform(0.1, 0.3), rng.uniform(0.2, 0.8)),
-        lambda: Ellipsoid(*rng.uniform(0.2, 0.6, 3)),
-        lambda: Convex(str(mesh_files / "octahedron.obj"), rng.uniform(0.3, 0.7)),
-        lambda: Mesh(str(mesh_files / "cube.obj"), rng.uniform(0.2, 0.4)),
-    ]
     ground = HalfSpace.MakePose(unit(0.05, -0.1, 1.0), [0, 0, -0.5])
-    shapes = [("ground", HalfSpace(), ground)]
-    for i in range(21):
-        X = RigidTransform(RollPitchYaw(*rng.uniform(-math.pi, math.pi, 3)), rng.uniform(-3, 3, 3))
-        shapes.append((f"s{i}", makers[i % len(makers)](), X))
+    shapes = random_shapes(rng, mesh_files, 21, ground)
     scene = Scene(shapes, anchored=anchored)
     caster = scene.caster()
     n_hits = n_rays = 0
