@@ -117,11 +117,9 @@ class SharpGP2D12:
         return slope / (2.0 * (self.min_distance - self.peak_distance))
 
     def voltage(self, distance: np.ndarray | float) -> np.ndarray:
-        """Noise-free, unquantised output voltage at the given distance(s); inf (no hit) -> 0."""
-        d = np.asarray(distance, dtype=float)
-        far = self.a / (np.maximum(d, self.min_distance) + self.b)
-        near = self.peak_voltage - self._curvature * (d - self.peak_distance) ** 2
-        return np.where(d >= self.min_distance, far, np.maximum(near, 0.0))
+        """Noise-free, unquantised output voltage at the given distance(s); inf (no hit) -> 0.
+        (`voltage_scalar` element by element: one statement of the curve.)"""
+        return np.vectorize(self.voltage_scalar, otypes=[float])(distance)
 
     # -- the ADC ----------------------------------------------------------------------------
 
@@ -131,15 +129,15 @@ class SharpGP2D12:
         return self.adc_reference / 2**self.adc_bits
 
     def counts(self, voltage: np.ndarray | float) -> np.ndarray:
-        """ADC counts (truncating converter, clamped to 0 .. 2^bits - 1)."""
-        raw = np.floor(np.asarray(voltage, dtype=float) / self.adc_step)
-        return np.clip(raw, 0, 2**self.adc_bits - 1).astype(np.int64)
+        """ADC counts (truncating converter, clamped to 0 .. 2^bits - 1): `counts_scalar`
+        element by element."""
+        return np.vectorize(self.counts_scalar, otypes=[np.int64])(voltage)
 
     def quantise(self, voltage: np.ndarray | float) -> np.ndarray:
         """The voltage the ADC reports (counts times the step)."""
         return self.counts(voltage) * self.adc_step
 
-    # -- one reading in plain floats (the same values; a sensor's scan calls these) ----------
+    # -- one reading in plain floats (the curve itself; a sensor's scan calls these) ---------
 
     def voltage_scalar(self, distance: float) -> float:
         """:meth:`voltage` of one distance, as a float."""
@@ -182,11 +180,8 @@ class SharpGP2D12:
         """Distance estimate from a voltage by inverting the inverse law, clamped to the usable
         range [min_distance, max_distance]: a voltage above the 10 cm output (the fold-back
         side is indistinguishable) reads min_distance; one below the 80 cm output (or <= 0)
-        reads max_distance."""
-        v = np.asarray(voltage, dtype=float)
-        with np.errstate(divide="ignore"):
-            d = self.a / np.maximum(v, 0.0) - self.b
-        return np.clip(d, self.min_distance, self.max_distance)
+        reads max_distance. `distance_from_voltage_scalar` element by element."""
+        return np.vectorize(self.distance_from_voltage_scalar, otypes=[float])(voltage)
 
 
 def sharp_gp2d12(
