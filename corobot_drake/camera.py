@@ -60,7 +60,10 @@ from pydrake.systems.sensors import CameraConfig, ImageRgba8U, RgbdSensor, RgbdS
 from corobot_drake import dimensions as dim
 from corobot_drake.xdisplay import x_display
 
-RENDERERS = ("", "RenderEngineGl", "RenderEngineVtk")
+ENGINES = ("RenderEngineGl", "RenderEngineVtk")
+"""The render engines a camera can use, the faster here first."""
+
+RENDERERS = ("", *ENGINES)
 """`CameraConfig.renderer_class` names this project builds ("": the faster one available)."""
 
 RENDERER_NAME = "corobot_camera"

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import ctypes
 import ctypes.util
+import functools
 import os
 import select
 import shutil
@@ -37,6 +38,7 @@ _keepalive = None
 server, which exits with its last client, outlives every other client of this process."""
 
 
+@functools.cache
 def _xlib():
     name = ctypes.util.find_library("X11")
     if name is None:

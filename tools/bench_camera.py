@@ -22,6 +22,7 @@ import statistics
 import time
 from pathlib import Path
 
+from corobot_drake.camera import ENGINES
 from corobot_drake.scenario import load_scenario
 from corobot_drake.simulation import Simulation, quiet_drake_warnings
 
@@ -31,7 +32,7 @@ FPS = 30.0
 _CLOCKS = {"wall": time.perf_counter, "cpu": time.process_time}
 
 
-RENDERERS = ("RenderEngineGl", "RenderEngineVtk")
+RENDERERS = ENGINES
 
 
 def _sim(camera: bool, fps: float = FPS, overrides=(), renderer: str = "",
