@@ -11,11 +11,11 @@ import time
 import warnings
 from pathlib import Path
 
-from corobot_drake.camera import RendererUnavailableError
-from corobot_drake.scenario import ScenarioError, load_scenario
+from corobot_drake.config.scenario import ScenarioError, load_scenario
+from corobot_drake.resources import DEFAULT_SCENARIO
+from corobot_drake.sensors.camera import RendererUnavailableError
 from corobot_drake.simulation import Simulation, quiet_drake_warnings
 
-DEFAULT_SCENARIO = Path(__file__).resolve().parent.parent / "scenarios" / "corobot.yaml"
 CAMERA_DELAY_SHARE = 0.9
 """--camera-rate HZ caps the cameras' output_delay at this share of a frame, 1/HZ."""
 
@@ -80,7 +80,7 @@ class _HeadlessProgress:
 
 
 def _run_interactive(sim: Simulation, meshcat, duration: float) -> None:
-    from corobot_drake.teleop import MeshcatTeleop
+    from corobot_drake.serving.teleop import MeshcatTeleop
 
     teleop = MeshcatTeleop(meshcat, sim)
     sim.simulator.set_target_realtime_rate(1.0)
@@ -129,7 +129,7 @@ def main(argv: list[str] | None = None) -> int:
     duration = args.duration if args.duration is not None else scenario.simulation_duration
     quiet_drake_warnings()
     if args.serve:  # Meshcat is made in the simulation thread (it must be used from there)
-        from corobot_drake.serve import serve, serve_camera_rate
+        from corobot_drake.serving.serve import serve, serve_camera_rate
 
         if args.camera_rate is None:
             serve_camera_rate(scenario)

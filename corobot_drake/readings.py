@@ -1,6 +1,6 @@
 """What the robot reports: plain values shared by the Python API and the HTTP client.
 
-No Drake import here, so `corobot_drake.client` works where pydrake is not installed.
+No Drake import here, so `corobot_drake.serving.client` works where pydrake is not installed.
 """
 
 import dataclasses as dc

@@ -22,13 +22,13 @@ from pydrake.multibody.math import SpatialVelocity
 from pydrake.systems.analysis import ApplySimulatorConfig, Simulator
 from pydrake.systems.framework import EventStatus
 
-from corobot_drake import dimensions as dim
-from corobot_drake import scenario as sc
-from corobot_drake.drive import CommandRecord
-from corobot_drake.odometry import DriveState
+from corobot_drake.config import scenario as sc
+from corobot_drake.model import dimensions as dim
 from corobot_drake.readings import BodyPose, BodyVelocity, CommandResult, IrReading
-from corobot_drake.runlog import log_rows, write_csv
 from corobot_drake.station import RobotParts, Station, build_station, transform_to_pose
+from corobot_drake.systems.drive import CommandRecord
+from corobot_drake.systems.odometry import DriveState
+from corobot_drake.systems.runlog import log_rows, write_csv
 
 
 class CommandHandle:
@@ -251,7 +251,7 @@ class Robot:
         return log_rows(sink, self._sim.context)
 
     def write_log(self, path: str | Path) -> None:
-        """Writes the run log as CSV (columns in docs/tuning.md; read by corobot_drake.sysid)."""
+        """Writes the run log as CSV (columns in docs/tuning.md; read by `analysis.sysid`)."""
         write_csv(self.run_log(), path)
 
     # --- camera ---------------------------------------------------------------------------

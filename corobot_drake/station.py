@@ -28,16 +28,17 @@ from pydrake.multibody.tree import SpatialInertia, UnitInertia
 from pydrake.systems.framework import Diagram, DiagramBuilder
 from pydrake.systems.primitives import MatrixGain
 
-from corobot_drake import dimensions as dim
-from corobot_drake import scenario as sc
-from corobot_drake.camera import add_camera
-from corobot_drake.drive import CommandSource, DriveController
-from corobot_drake.ir_sensor import add_ir_sensors
-from corobot_drake.model import MODELS_DIR, corobot_sdf
-from corobot_drake.monitor import TiltMonitor
-from corobot_drake.motion import MotionCommands
-from corobot_drake.odometry import add_odometry
-from corobot_drake.runlog import add_run_log
+from corobot_drake.config import scenario as sc
+from corobot_drake.model import dimensions as dim
+from corobot_drake.model.sdf import corobot_sdf
+from corobot_drake.resources import MODELS_DIR
+from corobot_drake.sensors.camera import add_camera
+from corobot_drake.sensors.ir_sensor import add_ir_sensors
+from corobot_drake.systems.drive import CommandSource, DriveController
+from corobot_drake.systems.monitor import TiltMonitor
+from corobot_drake.systems.motion import MotionCommands
+from corobot_drake.systems.odometry import add_odometry
+from corobot_drake.systems.runlog import add_run_log
 
 TILT_SAMPLE_PERIOD = 0.01
 """s. Tilt changes over tenths of a second even in a flip; 100 Hz catches its peak."""

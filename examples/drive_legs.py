@@ -21,7 +21,7 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
-from corobot_drake.client import CorobotClient  # noqa: E402
+from corobot_drake.serving.client import CorobotClient  # noqa: E402
 
 
 def legs(robot, loops: int, seed: int, power: float = 0.2, out=print) -> list[float]:
@@ -66,7 +66,7 @@ def main(argv=None) -> int:
         with CorobotClient(args.url) as sim:
             drift = legs(sim.robot(), args.loops, args.seed, args.power)
     else:
-        from corobot_drake.serve import ServerProcess
+        from corobot_drake.serving.serve import ServerProcess
 
         with ServerProcess(["--headless"]) as server:
             print(f"started {server.url}")

@@ -4,7 +4,7 @@ from pathlib import Path
 
 import pytest
 
-from corobot_drake.scenario import load_scenario
+from corobot_drake.config.scenario import load_scenario
 from corobot_drake.simulation import Simulation, quiet_drake_warnings
 
 REPO = Path(__file__).resolve().parent.parent

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from corobot_drake.serve import ServerProcess
+from corobot_drake.serving.serve import ServerProcess
 
 REPO = Path(__file__).resolve().parent.parent
 OUT = REPO / "out"

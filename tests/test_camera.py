@@ -18,9 +18,9 @@ import pytest
 from PIL import Image
 
 from conftest import DEFAULT_SCENARIO, make_sim
-from corobot_drake import dimensions as dim
 from corobot_drake.cli import main
-from corobot_drake.scenario import ScenarioError, load_scenario
+from corobot_drake.config.scenario import ScenarioError, load_scenario
+from corobot_drake.model import dimensions as dim
 from corobot_drake.simulation import Simulation
 
 BOX_RGB = np.array([0.8, 0.45, 0.15])
@@ -331,7 +331,7 @@ def test_the_default_renderer_is_gl_here():
 
 NO_DISPLAY = """
 import sys, warnings
-import corobot_drake.camera as camera
+import corobot_drake.sensors.camera as camera
 camera.x_display = lambda: None  # as on a machine with neither DISPLAY nor Xvfb
 from corobot_drake.cli import main
 sys.exit(main(sys.argv[1:]))
@@ -362,7 +362,7 @@ def test_without_a_display_gl_is_a_clear_error_and_the_default_falls_back(tmp_pa
 def test_the_webcam_service_has_no_frame_before_the_first_output():
     """What the HTTP webcam reads (`services.grab_frame`): nothing before the first frame
     (the server answers 503 then), the RGB frame and its capture time after."""
-    from corobot_drake import services
+    from corobot_drake.serving import services
 
     sim = make_sim(camera=True)
     t, frame_time, image = services.grab_frame("corobot", sim)
@@ -389,7 +389,7 @@ def test_a_picture_mid_run_leaves_the_simulation_as_it_was():
     """render.py photographs a running simulation from its own SceneGraph context: the
     asynchronous camera (which refuses a geometry change mid-run) goes on, and the run is
     bit for bit the one without the picture."""
-    from corobot_drake import render
+    from corobot_drake.sensors import render
 
     runs = []
     for picture in (False, True):

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from conftest import make_sim
-from corobot_drake import dimensions as dim
+from corobot_drake.model import dimensions as dim
 
 R = 0.060325  # wheel radius, m (SPEC)
 A, B = 0.092075, 0.11176  # half wheelbase, half track, m (SPEC)

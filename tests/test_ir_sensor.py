@@ -7,11 +7,11 @@ import numpy as np
 import pytest
 
 from conftest import DEFAULT_SCENARIO, make_sim
-from corobot_drake import dimensions as dim
-from corobot_drake import scenario as sc
-from corobot_drake.ir_models import SharpGP2D12
-from corobot_drake.ir_sensor import SCAN_INDEX, counter_normal
-from corobot_drake.scenario import ScenarioError, load_scenario
+from corobot_drake.config import scenario as sc
+from corobot_drake.config.scenario import ScenarioError, load_scenario
+from corobot_drake.model import dimensions as dim
+from corobot_drake.sensors.ir_models import SharpGP2D12
+from corobot_drake.sensors.ir_sensor import SCAN_INDEX, counter_normal
 
 MM = 1e-3
 RANGE = 30 * dim.INCH

@@ -9,8 +9,8 @@ import pytest
 from pydrake.geometry import Role
 
 from conftest import make_sim
-from corobot_drake import dimensions as dim
-from corobot_drake import render
+from corobot_drake.model import dimensions as dim
+from corobot_drake.sensors import render
 
 
 def wheel_visual_ids(sim, wheel: str) -> list:

@@ -106,9 +106,9 @@ def test_robot_does_not_collide_with_itself(parsed):
 def test_default_scene_matches_the_spec():
     """World objects come from the scenario file; they must be the chapter's (SPEC "The world")."""
     from conftest import DEFAULT_SCENARIO
-    from corobot_drake import dimensions as dim
-    from corobot_drake.scenario import Box as BoxShape
-    from corobot_drake.scenario import load_scenario
+    from corobot_drake.config.scenario import Box as BoxShape
+    from corobot_drake.config.scenario import load_scenario
+    from corobot_drake.model import dimensions as dim
 
     scenario = load_scenario(DEFAULT_SCENARIO)
     box = scenario.world.bodies["giant_box"]

@@ -12,11 +12,11 @@ import numpy as np
 import pytest
 
 from conftest import REPO, make_sim
-from corobot_drake import scenario as sc
 from corobot_drake.cli import main
-from corobot_drake.odometry import yaw_from_quaternion
-from corobot_drake.scenario import load_scenario
+from corobot_drake.config import scenario as sc
+from corobot_drake.config.scenario import load_scenario
 from corobot_drake.simulation import Simulation
+from corobot_drake.systems.odometry import yaw_from_quaternion
 
 
 def _robot_yaml(profile: str = "closed_loop", extra: str = "") -> str:

@@ -30,7 +30,7 @@ from pydrake.multibody.plant import AddMultibodyPlantSceneGraph, CoulombFriction
 from pydrake.multibody.tree import SpatialInertia
 from pydrake.systems.framework import DiagramBuilder
 
-from corobot_drake.raycast import (
+from corobot_drake.sensors.raycast import (
     BodyFixedRays,
     RayCaster,
     RayFan,
@@ -403,7 +403,7 @@ def test_unsupported_shape_is_reported_once_by_name(caplog):
         [("cone_like", Sphere(1), RigidTransform()), ("box", Box(1, 1, 1), RigidTransform())]
     )
     inspector = _InspectorWithCone(scene.inspector, scene.ids["cone_like"])
-    with caplog.at_level(logging.WARNING, logger="corobot_drake.raycast"):
+    with caplog.at_level(logging.WARNING, logger="corobot_drake.sensors.raycast"):
         caster = RayCaster(inspector)
         caster.cast(scene.query_object, [[5, 0, 0]], [[-1, 0, 0]], 10)
         caster.cast(scene.query_object, [[5, 0, 0]], [[-1, 0, 0]], 10)
@@ -421,7 +421,7 @@ def test_deformable_geometry_is_reported(caplog):
     instance = GeometryInstance(RigidTransform([0, 0, 1]), Sphere(0.5), "jelly")
     instance.set_proximity_properties(ProximityProperties())
     scene_graph.RegisterDeformableGeometry(source, scene_graph.world_frame_id(), instance, 0.2)
-    with caplog.at_level(logging.WARNING, logger="corobot_drake.raycast"):
+    with caplog.at_level(logging.WARNING, logger="corobot_drake.sensors.raycast"):
         caster = RayCaster(scene_graph.model_inspector())
     assert caster.geometry_ids == ()
     assert "jelly" in caplog.text and "deformable" in caplog.text

@@ -19,7 +19,7 @@ from pathlib import Path
 import httpx
 import pytest
 
-from corobot_drake.serve import ServerProcess
+from corobot_drake.serving.serve import ServerProcess
 
 REPO = Path(__file__).resolve().parent.parent
 ROBOT = "/robots/corobot"
@@ -464,7 +464,7 @@ def test_malformed_flood_and_pollers_keep_real_time(http, server, caps):
 
 
 def test_client_has_the_python_apis_methods(server, http, caps):
-    from corobot_drake.client import CorobotClient, CorobotValueError
+    from corobot_drake.serving.client import CorobotClient, CorobotValueError
     from corobot_drake.simulation import Robot, Simulation
 
     reset(http, caps)
@@ -523,10 +523,10 @@ def test_in_process_runner_serves_from_a_thread():
     """`create_app(SimRunner(...))`: the same app in one process (for embedding)."""
     from fastapi.testclient import TestClient
 
-    from corobot_drake.scenario import load_scenario
-    from corobot_drake.services import SimRunner
+    from corobot_drake.config.scenario import load_scenario
+    from corobot_drake.serving.services import SimRunner
+    from corobot_drake.serving.webapp import create_app
     from corobot_drake.simulation import Simulation
-    from corobot_drake.webapp import create_app
 
     scenario = load_scenario(REPO / "scenarios" / "corobot.yaml")
     runner = SimRunner(lambda: Simulation(scenario)).start()

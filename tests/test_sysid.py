@@ -7,7 +7,9 @@ import numpy as np
 import pytest
 
 from conftest import DEFAULT_SCENARIO, REPO, make_sim
-from corobot_drake import cli, runlog, sysid
+from corobot_drake import cli
+from corobot_drake.analysis import sysid
+from corobot_drake.systems import runlog
 
 
 def _tool(name: str):

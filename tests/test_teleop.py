@@ -4,7 +4,7 @@ import pytest
 from pydrake.geometry import StartMeshcat
 
 from conftest import make_sim
-from corobot_drake.teleop import MeshcatTeleop
+from corobot_drake.serving.teleop import MeshcatTeleop
 
 
 def _msgpack_str(text: str) -> bytes:

@@ -21,8 +21,8 @@ import statistics
 import time
 from pathlib import Path
 
-from corobot_drake import scenario as sc
-from corobot_drake.scenario import load_scenario
+from corobot_drake.config import scenario as sc
+from corobot_drake.config.scenario import load_scenario
 from corobot_drake.simulation import Simulation, quiet_drake_warnings
 
 TOOLS = Path(__file__).resolve().parent

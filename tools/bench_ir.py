@@ -37,9 +37,9 @@ from typing import ClassVar
 
 from pydrake.systems.framework import EventStatus
 
-from corobot_drake import ir_sensor
-from corobot_drake import scenario as sc
-from corobot_drake.scenario import load_scenario
+from corobot_drake.config import scenario as sc
+from corobot_drake.config.scenario import load_scenario
+from corobot_drake.sensors import ir_sensor
 from corobot_drake.simulation import Simulation, quiet_drake_warnings
 
 DEFAULT_SCENARIO = Path(__file__).resolve().parent.parent / "scenarios" / "corobot.yaml"

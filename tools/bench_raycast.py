@@ -26,8 +26,8 @@ from pydrake.multibody.plant import AddMultibodyPlantSceneGraph, CoulombFriction
 from pydrake.multibody.tree import SpatialInertia
 from pydrake.systems.framework import DiagramBuilder
 
-from corobot_drake import dimensions as dim
-from corobot_drake.raycast import (
+from corobot_drake.model import dimensions as dim
+from corobot_drake.sensors.raycast import (
     BodyFixedRays,
     RayCaster,
     RayFan,

@@ -19,9 +19,9 @@ import statistics
 import time
 from pathlib import Path
 
-from corobot_drake import dimensions as dim
-from corobot_drake import render
-from corobot_drake.scenario import load_scenario
+from corobot_drake.config.scenario import load_scenario
+from corobot_drake.model import dimensions as dim
+from corobot_drake.sensors import render
 from corobot_drake.simulation import Simulation, quiet_drake_warnings
 
 DEFAULT_SCENARIO = Path(__file__).resolve().parent.parent / "scenarios" / "corobot.yaml"

@@ -21,7 +21,7 @@ import numpy as np
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
-from corobot_drake import scenario as sc  # noqa: E402
+from corobot_drake.config import scenario as sc  # noqa: E402
 from corobot_drake.simulation import Simulation, quiet_drake_warnings  # noqa: E402
 
 SAMPLE_EVERY = 6

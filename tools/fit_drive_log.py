@@ -13,7 +13,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from corobot_drake import sysid
+from corobot_drake.analysis import sysid
 
 REPO = Path(__file__).resolve().parent.parent
 DEFAULT_SCENARIO = REPO / "scenarios" / "corobot.yaml"
@@ -27,7 +27,7 @@ for this fit, on a real robot too."""
 
 def simulate_log(path: Path, scaling: float, slew: float, scenario=DEFAULT_SCENARIO) -> None:
     """Runs `EXCITATION` in the simulator at the given drive parameters and writes its log."""
-    from corobot_drake.scenario import load_scenario
+    from corobot_drake.config.scenario import load_scenario
     from corobot_drake.simulation import Simulation, quiet_drake_warnings
 
     quiet_drake_warnings()

@@ -20,7 +20,7 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
-from corobot_drake import scenario as sc  # noqa: E402
+from corobot_drake.config import scenario as sc  # noqa: E402
 from corobot_drake.simulation import Simulation, quiet_drake_warnings  # noqa: E402
 
 DISTANCES = (0.25, 0.5, 1.0, 2.0)

@@ -11,7 +11,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from corobot_drake import meshes
+from corobot_drake.model import meshes
 
 
 def main() -> int:

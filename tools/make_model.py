@@ -1,4 +1,4 @@
-"""Writes models/corobot.sdf from corobot_drake/dimensions.py at the default parameters.
+"""Writes models/corobot.sdf from corobot_drake/model/dimensions.py at the default parameters.
 
 Usage: python tools/make_model.py [--check]
 """
@@ -6,7 +6,8 @@ Usage: python tools/make_model.py [--check]
 import argparse
 import sys
 
-from corobot_drake.model import MODELS_DIR, corobot_sdf
+from corobot_drake.model.sdf import corobot_sdf
+from corobot_drake.resources import MODELS_DIR
 
 
 def main() -> int:

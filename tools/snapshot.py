@@ -22,9 +22,9 @@ from pathlib import Path
 
 import numpy as np
 
-from corobot_drake import dimensions as dim
-from corobot_drake import render
-from corobot_drake.scenario import ScenarioError, load_scenario
+from corobot_drake.config.scenario import ScenarioError, load_scenario
+from corobot_drake.model import dimensions as dim
+from corobot_drake.sensors import render
 from corobot_drake.simulation import Simulation, quiet_drake_warnings
 
 DEFAULT_SCENARIO = Path(__file__).resolve().parent.parent / "scenarios" / "corobot.yaml"
@@ -127,7 +127,7 @@ def main(argv: list[str] | None = None) -> int:
         if args.visual:
             robot.visual = args.visual
         if args.drive:
-            from corobot_drake.scenario import SetPower
+            from corobot_drake.config.scenario import SetPower
             robot.commands = [SetPower(*args.drive)]
     except ScenarioError as e:
         print(f"error: {e}", file=sys.stderr)

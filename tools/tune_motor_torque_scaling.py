@@ -17,10 +17,10 @@ from pathlib import Path
 
 import numpy as np
 
-from corobot_drake import dimensions as dim
-from corobot_drake.scenario import ScenarioError, load_scenario
+from corobot_drake.analysis.sysid import set_motor_torque_scaling
+from corobot_drake.config.scenario import ScenarioError, load_scenario
+from corobot_drake.model import dimensions as dim
 from corobot_drake.simulation import Simulation, quiet_drake_warnings
-from corobot_drake.sysid import set_motor_torque_scaling
 
 REPO = Path(__file__).resolve().parent.parent
 DEFAULT_SCENARIO = REPO / "scenarios" / "corobot.yaml"

@@ -30,9 +30,9 @@ from pathlib import Path
 
 import numpy as np
 
-from corobot_drake import dimensions as dim
-from corobot_drake import scenario as sc
-from corobot_drake.model import WheelContact
+from corobot_drake.config import scenario as sc
+from corobot_drake.model import dimensions as dim
+from corobot_drake.model.sdf import WheelContact
 from corobot_drake.simulation import Simulation, quiet_drake_warnings
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from corobot_drake import dimensions as dim
+from corobot_drake.model import dimensions as dim
 
 REQUIRED = ("time", "left_power", "right_power", "left_ticks", "right_ticks")
 

@@ -2,7 +2,7 @@
 method names, so one orchestration script drives the in-process simulation or a server (or,
 one day, a real Corobot serving the same contracts):
 
-    from corobot_drake.client import CorobotClient
+    from corobot_drake.serving.client import CorobotClient
 
     sim = CorobotClient("http://127.0.0.1:50000")   # instead of Simulation.from_file(...)
     bot = sim.robot()

@@ -1,5 +1,5 @@
 """`python -m corobot_drake [SCENARIO] --serve`: the simulation in real time in one thread, the
-HTTP services (`corobot_drake.webapp`) beside it.
+HTTP services (`corobot_drake.serving.webapp`) beside it.
 
 Meshcat starts too unless `--headless`; its teleop buttons keep working, polled by the
 simulation thread. `--port 0` picks a free port; the first line printed to stdout is always
@@ -20,13 +20,13 @@ def serve(make_sim, host: str = "127.0.0.1", port: int = 50000, meshcat: bool = 
           log_level: str = "warning", label: str = "") -> int:
     """Builds the simulation (`make_sim(meshcat)`, in the simulation thread, with a Meshcat
     made there too when `meshcat`: Meshcat must be used from the thread that made it) and
-    serves it until Ctrl-C. The HTTP server runs in a child process (`corobot_drake.bridge`
+    serves it until Ctrl-C. The HTTP server runs in a child process (`corobot_drake.serving.bridge`
     says why). Returns the exit status: 2 when the port or the simulation cannot be had."""
     import multiprocessing
 
-    from corobot_drake.bridge import SimSide, http_main
-    from corobot_drake.camera import RendererUnavailableError
-    from corobot_drake.services import SimRunner
+    from corobot_drake.sensors.camera import RendererUnavailableError
+    from corobot_drake.serving.bridge import SimSide, http_main
+    from corobot_drake.serving.services import SimRunner
 
     ctx = multiprocessing.get_context("spawn")
     conn, child_conn = ctx.Pipe()
@@ -52,7 +52,7 @@ def serve(make_sim, host: str = "127.0.0.1", port: int = 50000, meshcat: bool = 
             url_box.append(viewer.web_url())
         sim = make_sim(viewer)
         if viewer is not None:
-            from corobot_drake.teleop import MeshcatTeleop
+            from corobot_drake.serving.teleop import MeshcatTeleop
 
             teleop = MeshcatTeleop(viewer, sim)
             runner.hooks.append(lambda s: teleop.poll())

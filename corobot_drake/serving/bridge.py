@@ -27,7 +27,7 @@ import threading
 from collections import deque
 from typing import Any
 
-from corobot_drake.services import Operation, SimRunner
+from corobot_drake.serving.services import Operation, SimRunner
 
 log = logging.getLogger(__name__)
 
@@ -259,7 +259,7 @@ def http_main(conn, host: str, port: int, log_level: str, niceness: int) -> None
 
     import uvicorn
 
-    from corobot_drake.webapp import create_app
+    from corobot_drake.serving.webapp import create_app
 
     if niceness:
         with contextlib.suppress(OSError):

@@ -3,8 +3,9 @@
 Each sensor (SPEC, Sensors) is fixed to its robot's chassis and reads SceneGraph's
 ``query_object`` port, its only input: the chassis pose comes from
 ``QueryObject.GetPoseInWorld(chassis frame)`` and the rays are cast exactly against every
-proximity geometry except the robot's own (:class:`corobot_drake.raycast.RayCaster`, built on the
-first scan from the QueryObject's inspector and rebuilt only if the proximity geometry changes).
+proximity geometry except the robot's own (:class:`corobot_drake.sensors.raycast.RayCaster`,
+built on the first scan from the QueryObject's inspector, rebuilt only if the proximity geometry
+changes).
 
 Scans are discrete updates: one at initialization (so a freshly initialized simulation already
 has a reading at its start time) and then every ``1 / scan_rate_hz`` s, never at every physics
@@ -17,7 +18,7 @@ one vector (written once per scan) holding
 - ``ray_origin`` (3), ``ray_end`` (3 N), ``ray_hit`` (N): where each of the N = 2 x samples rays
   started, where it stopped (its hit point, or its end at maximum_range) and whether it hit.
 
-Output models (``model``, :mod:`corobot_drake.ir_models`):
+Output models (``model``, :mod:`corobot_drake.sensors.ir_models`):
 
 ``ideal``
     distance = the nearest hit, ``maximum_range`` when nothing is hit (the book's sensor).
@@ -53,15 +54,15 @@ from pydrake.geometry import Meshcat, Rgba, Role, Sphere
 from pydrake.math import RigidTransform, RollPitchYaw
 from pydrake.systems.framework import BasicVector, LeafSystem
 
-from corobot_drake import dimensions as dim
-from corobot_drake.ir_models import MODELS, SharpGP2D12
-from corobot_drake.raycast import (
+from corobot_drake.model import dimensions as dim
+from corobot_drake.readings import IrReading
+from corobot_drake.sensors.ir_models import MODELS, SharpGP2D12
+from corobot_drake.sensors.raycast import (
     RayCaster,
     RayFan,
     cross_of_rays_in_sensor_frame,
     model_instance_geometry_ids,
 )
-from corobot_drake.readings import IrReading
 
 # --- configuration (the scenario's `robots.<name>.ir_sensors.<sensor>`) -----------------------
 

@@ -61,7 +61,7 @@ from pydrake.geometry import (
 )
 from pydrake.math import RigidTransform
 
-from corobot_drake import dimensions as dim
+from corobot_drake.model import dimensions as dim
 
 _log = logging.getLogger(__name__)
 

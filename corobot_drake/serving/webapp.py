@@ -2,7 +2,7 @@
 encoder, compass, GPS and webcam contracts, Server-Sent Event subscriptions, the dashboard.
 
 Every read is served from the runner's latest snapshot; every command goes through the
-runner's queue to the simulation thread (`corobot_drake.services.SimRunner`). The OpenAPI
+runner's queue to the simulation thread (`corobot_drake.serving.services.SimRunner`). The OpenAPI
 description is at /openapi.json, interactive docs at /docs.
 """
 
@@ -25,8 +25,8 @@ from fastapi.staticfiles import StaticFiles
 from pydantic import BaseModel, ConfigDict, Field
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
-from corobot_drake import services as sv
-from corobot_drake.services import SimRunner
+from corobot_drake.serving import services as sv
+from corobot_drake.serving.services import SimRunner
 
 STATIC_DIR = Path(__file__).resolve().parent / "static"
 SUBSCRIPTION_CHECK_PERIOD = 0.1

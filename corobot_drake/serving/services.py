@@ -24,7 +24,7 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from corobot_drake import dimensions as dim
+from corobot_drake.model import dimensions as dim
 
 log = logging.getLogger(__name__)
 

@@ -12,8 +12,7 @@ import numpy as np
 from pydrake.common.value import Value
 from pydrake.systems.framework import BasicVector, LeafSystem
 
-from corobot_drake import dimensions as dim
-from corobot_drake.scenario import (
+from corobot_drake.config.scenario import (
     COMPLETING_COMMANDS,
     AllStop,
     Drive,
@@ -23,6 +22,7 @@ from corobot_drake.scenario import (
     SetSpeed,
     Wait,
 )
+from corobot_drake.model import dimensions as dim
 
 
 class _Immutable:

@@ -20,7 +20,7 @@ from pydrake.systems.framework import LeafSystem
 from pydrake.systems.primitives import Gain
 from pydrake.systems.sensors import RotaryEncoders
 
-from corobot_drake import dimensions as dim
+from corobot_drake.model import dimensions as dim
 
 ENCODED_WHEELS = ("front_left", "front_right")
 """Wheels with an encoder (indices 0 and 1 in `dimensions.WHEEL_NAMES`)."""

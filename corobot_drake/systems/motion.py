@@ -28,9 +28,7 @@ import math
 from pydrake.common.value import Value
 from pydrake.systems.framework import LeafSystem
 
-from corobot_drake import dimensions as dim
-from corobot_drake.drive import CommandStatus, DriveRequest, _Immutable
-from corobot_drake.scenario import (
+from corobot_drake.config.scenario import (
     AllStop,
     Drive,
     DriveDistance,
@@ -39,6 +37,8 @@ from corobot_drake.scenario import (
     SetPose,
     SetPower,
 )
+from corobot_drake.model import dimensions as dim
+from corobot_drake.systems.drive import CommandStatus, DriveRequest, _Immutable
 
 # The seed profile (the book's constants).
 SEED_KERNEL = 6

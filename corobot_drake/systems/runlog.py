@@ -3,7 +3,7 @@
 Each robot of a station carries a `RunLogSample` system (named `<robot>.run_log_sample`)
 feeding a Drake `VectorLogSink` (`<robot>.run_log`) that samples it every `LOG_PERIOD` s. The
 log lives in the Context, like the rest of the run. `write_csv` writes it in the CSV format that
-`corobot_drake.sysid` reads (columns documented in docs/tuning.md):
+`corobot_drake.analysis.sysid` reads (columns documented in docs/tuning.md):
 
     time,left_power,right_power,left_ticks,right_ticks,x,y,yaw
 
@@ -21,8 +21,8 @@ import numpy as np
 from pydrake.systems.framework import BasicVector, LeafSystem
 from pydrake.systems.primitives import LogVectorOutput
 
-from corobot_drake import dimensions as dim
-from corobot_drake.odometry import yaw_from_quaternion
+from corobot_drake.model import dimensions as dim
+from corobot_drake.systems.odometry import yaw_from_quaternion
 
 LOG_PERIOD = 0.01
 """s: the run log's sample period (100 Hz)."""

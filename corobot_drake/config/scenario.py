@@ -20,15 +20,15 @@ from pydrake.multibody.plant import MultibodyPlantConfig
 from pydrake.systems.analysis import SimulatorConfig
 from pydrake.systems.sensors import CameraConfig
 
-from corobot_drake import dimensions as dim
-from corobot_drake.camera import check_camera_config, default_camera_config
-from corobot_drake.ir_sensor import (
+from corobot_drake.model import dimensions as dim
+from corobot_drake.model.sdf import VISUALS, WheelContact
+from corobot_drake.sensors.camera import check_camera_config, default_camera_config
+from corobot_drake.sensors.ir_sensor import (
     IrSensorConfig,
     check_ir_sensor_config,
     check_ir_sensor_name,
     default_ir_sensors,
 )
-from corobot_drake.model import VISUALS, WheelContact
 
 # --- poses and shapes -------------------------------------------------------------------
 
@@ -253,11 +253,11 @@ class Robot:
     """Initial axle speeds (rad/s, same order); the drive's commanded axle speeds start at the
     front wheels' (a saved scene carries on without a jolt)."""
     camera: CameraConfig = dc.field(default_factory=default_camera_config)
-    """The front camera, Drake's CameraConfig (SPEC defaults; `corobot_drake/camera.py`).
+    """The front camera, Drake's CameraConfig (SPEC defaults; `corobot_drake/sensors/camera.py`).
     `X_PB.base_frame` names a frame of this robot (`chassis`); `{rgb: false}`: no camera."""
     ir_sensors: dict[str, IrSensorConfig] = dc.field(default_factory=default_ir_sensors)
-    """IR distance sensors by name (`corobot_drake/ir_sensor.py`); defaults `front` and `rear`
-    at the SPEC positions; `{enabled: false}` removes one."""
+    """IR distance sensors by name (`corobot_drake/sensors/ir_sensor.py`); defaults `front` and
+    `rear` at the SPEC positions; `{enabled: false}` removes one."""
 
 
 def _default_plant_config() -> MultibodyPlantConfig:

@@ -29,9 +29,9 @@ from pydrake.geometry import (
 from pydrake.math import RigidTransform, RollPitchYaw, RotationMatrix
 from pydrake.systems.sensors import CameraInfo
 
-from corobot_drake import dimensions as dim
-from corobot_drake import scenario as sc
-from corobot_drake.camera import make_vtk_engine, render_engine_params
+from corobot_drake.config import scenario as sc
+from corobot_drake.model import dimensions as dim
+from corobot_drake.sensors.camera import make_vtk_engine, render_engine_params
 
 RENDERER = "corobot_vtk"
 """Name under which `add_renderer` registers its VTK engine."""

@@ -57,8 +57,8 @@ from pydrake.multibody.parsing import GetScopedFrameByName
 from pydrake.systems.framework import EventStatus, LeafSystem
 from pydrake.systems.sensors import CameraConfig, ImageRgba8U, RgbdSensor, RgbdSensorAsync
 
-from corobot_drake import dimensions as dim
-from corobot_drake.xdisplay import x_display
+from corobot_drake.model import dimensions as dim
+from corobot_drake.sensors.xdisplay import x_display
 
 ENGINES = ("RenderEngineGl", "RenderEngineVtk")
 """The render engines a camera can use, the faster here first."""
