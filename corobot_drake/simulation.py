@@ -39,9 +39,7 @@ class CommandHandle:
         self.robot, self.seq = robot, seq
 
     def result(self) -> CommandResult:
-        source = self.robot._parts.command_source
-        r = source.record(source.GetMyContextFromRoot(self.robot._sim.context), self.seq)
-        return CommandResult(r.seq, r.command, r.status, r.reason, r.start_time, r.end_time)
+        return self.robot.command_result(self.seq)
 
     def status(self) -> str:
         return self.result().status
@@ -240,6 +238,11 @@ class Robot:
                            f"{', '.join(self._parts.ir_sensors) or 'none'}") from None
         return sensor.reading(sensor.GetMyContextFromRoot(self._sim.context))
 
+    @property
+    def ir_names(self) -> tuple[str, ...]:
+        """The IR sensors' names (`front`, `rear`, ...), in the scenario's order."""
+        return tuple(self._parts.ir_sensors)
+
     def ir_distances(self) -> dict[str, float]:
         """The latest raw reading of every IR sensor, metres, by name."""
         return {name: self.ir(name).raw for name in self._parts.ir_sensors}
@@ -284,6 +287,15 @@ class Robot:
         """How many frames were written as PNG (0 unless saving, `--save-camera`)."""
         saver = self._parts.camera_saver
         return saver.frames_saved if saver is not None else 0
+
+    def command_result(self, seq: int) -> CommandResult:
+        """How the command with sequence number `seq` has gone so far (its command-log
+        record); KeyError if this robot issued no such command."""
+        source = self._parts.command_source
+        r = source.record(source.GetMyContextFromRoot(self._sim.context), seq)
+        if r is None:
+            raise KeyError(f"robot {self.name!r} issued no command {seq}")
+        return CommandResult(r.seq, r.command, r.status, r.reason, r.start_time, r.end_time)
 
     def command_log(self) -> list[CommandRecord]:
         source = self._parts.command_source
