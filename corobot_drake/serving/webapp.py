@@ -22,17 +22,15 @@ from fastapi import FastAPI, HTTPException, Query, Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import HTMLResponse, RedirectResponse, Response
 from fastapi.staticfiles import StaticFiles
-from pydantic import BaseModel, ConfigDict, Field
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
+from corobot_drake.serving import schemas
 from corobot_drake.serving import services as sv
 from corobot_drake.serving.services import SimRunner
 
 STATIC_DIR = Path(__file__).resolve().parent / "static"
 SUBSCRIPTION_CHECK_PERIOD = 0.1
 """s between checks of a subscription's readings (the contract promises at most 0.2 s)."""
-DEFAULT_WAIT_TIMEOUT = 120.0
-"""s a completing command may hold its request open before answering 202 with a status URL."""
 CAMERA_MAX_RATE = 15.0
 """Hz: frames are rendered on request, at most this often (simulated time)."""
 
@@ -41,173 +39,7 @@ SubscribeLimit = Annotated[float | None, Query(gt=0, le=86400,
                                                description="close the stream after this many s")]
 CameraInterval = Annotated[int, Query(ge=20, le=60000, description="refresh interval, ms")]
 
-# --- request bodies ---------------------------------------------------------------------
-
-
-class _Body(BaseModel):
-    model_config = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False)
-
-
-Power = Annotated[float, Field(ge=-1.0, le=1.0, description="power in [-1, 1]")]
-DrivePower = Annotated[float, Field(gt=0.0, le=1.0, description="power in (0, 1]")]
-Speed = Annotated[float, Field(ge=-5.0, le=5.0, description="rim speed, m/s")]
-WaitTimeout = Annotated[float, Field(gt=0.0, le=600.0,
-                                     description="s to hold the request open (wall clock)")]
-
-
-class PowerRequest(_Body):
-    left: Power
-    right: Power
-
-
-class SpeedRequest(_Body):
-    left: Speed
-    right: Speed
-
-
-class EnableRequest(_Body):
-    enabled: bool = True
-
-
-class EmptyRequest(_Body):
-    pass
-
-
-class _Completing(_Body):
-    wait: bool = Field(True, description="hold the request until the command ends; false: "
-                       "answer 202 at once with the operation's status URL")
-    timeout: WaitTimeout = DEFAULT_WAIT_TIMEOUT
-
-
-class DriveDistanceRequest(_Completing):
-    distance: Annotated[float, Field(ge=-100.0, le=100.0, description="m; negative: backwards")]
-    power: DrivePower = 0.2
-
-
-class RotateDegreesRequest(_Completing):
-    degrees: Annotated[float, Field(ge=-3600.0, le=3600.0,
-                                    description="degrees; positive turns left (CCW)")]
-    power: DrivePower = 0.2
-
-
-class SetPoseRequest(_Completing):
-    x: Annotated[float, Field(ge=-1000.0, le=1000.0, description="m")]
-    y: Annotated[float, Field(ge=-1000.0, le=1000.0, description="m")]
-    yaw_deg: Annotated[float, Field(ge=-3600.0, le=3600.0)] = 0.0
-
-
-# --- response descriptions (for the OpenAPI document) --------------------------------------
-
-
-class Wheel(BaseModel):
-    commanded_power: float = Field(description="in [-1, 1]")
-    axle_speed: float = Field(description="measured, rad/s")
-    encoder_ticks: int | None = Field(None, description="front wheels only")
-
-
-class Position(BaseModel):
-    x: float
-    y: float
-    z: float
-
-
-class CommandStatus(BaseModel):
-    seq: int
-    command: str
-    status: str
-    reason: str
-    start_time: float
-    end_time: float | None
-
-
-class DriveState(BaseModel):
-    """Four-wheel drive state (MRDS DriveDifferentialFourWheelState in SI units)."""
-
-    time_stamp: float = Field(description="simulation time, s")
-    is_enabled: bool
-    power_scaling_factor: float = Field(description="MotorTorqueScaling: rad/s at power 1")
-    distance_between_wheels: float
-    wheel_radius: float
-    encoder_ticks_per_revolution: int
-    wheels: dict[str, Wheel] = Field(description="front_left, front_right, rear_left, rear_right")
-    position: Position
-    heading: float = Field(description="rad, counter-clockwise from +x")
-    heading_deg: float
-    pose: dict[str, float]
-    velocity: dict[str, float]
-    command: CommandStatus | None
-
-
-class TwoWheelState(BaseModel):
-    time_stamp: float
-    is_enabled: bool
-    distance_between_wheels: float
-    left: Wheel
-    right: Wheel
-    position: Position
-    heading: float
-    command: CommandStatus | None
-
-
-class AnalogSensorState(BaseModel):
-    raw: float = Field(description="distance, m")
-    range: float = Field(description="maximum range, m")
-    normalized: float = Field(description="raw / range")
-    time_stamp: float = Field(description="simulation time of the scan, s")
-
-
-class EncoderState(BaseModel):
-    time_stamp: float
-    ticks_per_revolution: int
-    front_left: int | None
-    front_right: int | None
-
-
-class Accepted(BaseModel):
-    robot: str
-    command: str
-    seq: int | None = None
-    status: str
-    time: float
-
-
-class OperationState(BaseModel):
-    id: int
-    robot: str
-    command: str
-    arguments: dict[str, Any]
-    seq: int | None
-    status: str = Field(description="running, succeeded or failed")
-    reason: str
-    start_time: float
-    end_time: float | None
-    status_url: str
-
-
-class ServiceEntry(BaseModel):
-    robot: str
-    name: str
-    contract: str
-    state_url: str
-    subscribe_url: str | None = None
-    operations: list[str] = []
-    page_url: str | None = None
-
-
-class Directory(BaseModel):
-    services: list[ServiceEntry]
-    simulation_url: str
-    dashboard_url: str
-    meshcat_url: str | None
-
-
-class ErrorMessage(BaseModel):
-    detail: str
-
-
-_ERRORS = {400: {"model": ErrorMessage}, 404: {"model": ErrorMessage},
-           422: {"model": ErrorMessage}, 501: {"model": ErrorMessage},
-           503: {"model": ErrorMessage}}
+_ERRORS = schemas.ERRORS
 
 
 def _json(content: Any, status_code: int = 200) -> Response:
@@ -335,7 +167,7 @@ def create_app(runner: SimRunner, meshcat_url: str | None = None) -> FastAPI:
     async def dashboard():
         return HTMLResponse((STATIC_DIR / "dashboard.html").read_text())
 
-    @app.get("/services", response_model=Directory, tags=["directory"],
+    @app.get("/services", response_model=schemas.Directory, tags=["directory"],
              summary="Every robot's services (JSON; HTML for browsers or with ?format=html)")
     async def services(request: Request, format: str | None = None):
         entries = [s for r in robot_names for s in services_of(r)]
@@ -366,12 +198,12 @@ def create_app(runner: SimRunner, meshcat_url: str | None = None) -> FastAPI:
                       "capabilities": caps[robot], "state": snapshot_of(robot)})
 
     # --- drive contract ---
-    @app.get("/robots/{robot}/drive", response_model=DriveState, responses=_ERRORS,
+    @app.get("/robots/{robot}/drive", response_model=schemas.DriveState, responses=_ERRORS,
              tags=["drive"], summary="Four-wheel drive state")
     async def get_drive(robot: str):
         return _json(snapshot_of(robot)["drive"])
 
-    @app.get("/robots/{robot}/drive/two_wheel", response_model=TwoWheelState,
+    @app.get("/robots/{robot}/drive/two_wheel", response_model=schemas.TwoWheelState,
              responses=_ERRORS, tags=["drive"],
              summary="Two-wheel view (left = front left, right = front right)")
     async def get_two_wheel(robot: str):
@@ -384,24 +216,24 @@ def create_app(runner: SimRunner, meshcat_url: str | None = None) -> FastAPI:
                       "seq": seq if isinstance(seq, int) else None,
                       "status": "accepted", "time": t})
 
-    @app.post("/robots/{robot}/drive/set_power", response_model=Accepted, responses=_ERRORS,
+    @app.post("/robots/{robot}/drive/set_power", response_model=schemas.Accepted, responses=_ERRORS,
               tags=["drive"], summary="Power per side in [-1, 1]")
-    async def set_power(robot: str, body: PowerRequest):
+    async def set_power(robot: str, body: schemas.PowerRequest):
         return await simple_command(robot, "set_power", body.left, body.right)
 
-    @app.post("/robots/{robot}/drive/set_speed", response_model=Accepted, responses=_ERRORS,
+    @app.post("/robots/{robot}/drive/set_speed", response_model=schemas.Accepted, responses=_ERRORS,
               tags=["drive"], summary="Rim speed per side, m/s")
-    async def set_speed(robot: str, body: SpeedRequest):
+    async def set_speed(robot: str, body: schemas.SpeedRequest):
         return await simple_command(robot, "set_speed", body.left, body.right)
 
-    @app.post("/robots/{robot}/drive/all_stop", response_model=Accepted, responses=_ERRORS,
+    @app.post("/robots/{robot}/drive/all_stop", response_model=schemas.Accepted, responses=_ERRORS,
               tags=["drive"], summary="Both sides to zero speed")
-    async def all_stop(robot: str, body: EmptyRequest | None = None):
+    async def all_stop(robot: str, body: schemas.EmptyRequest | None = None):
         return await simple_command(robot, "all_stop")
 
-    @app.post("/robots/{robot}/drive/enable", response_model=Accepted, responses=_ERRORS,
+    @app.post("/robots/{robot}/drive/enable", response_model=schemas.Accepted, responses=_ERRORS,
               tags=["drive"], summary="Enable or disable the drive")
-    async def enable(robot: str, body: EnableRequest):
+    async def enable(robot: str, body: schemas.EnableRequest):
         return await simple_command(robot, "enable", body.enabled)
 
     async def completing(robot: str, name: str, arguments: dict, wait: bool,
@@ -425,28 +257,28 @@ def create_app(runner: SimRunner, meshcat_url: str | None = None) -> FastAPI:
         return Response(json.dumps(sv._jsonable(body)), status_code=code,
                         media_type="application/json", headers={"Location": url})
 
-    @app.post("/robots/{robot}/drive/drive_distance", response_model=OperationState,
-              responses={**_ERRORS, 202: {"model": OperationState}}, tags=["drive"],
+    @app.post("/robots/{robot}/drive/drive_distance", response_model=schemas.OperationState,
+              responses={**_ERRORS, 202: {"model": schemas.OperationState}}, tags=["drive"],
               summary="Drive straight |distance| m (negative: backwards); completes")
-    async def drive_distance(robot: str, body: DriveDistanceRequest):
+    async def drive_distance(robot: str, body: schemas.DriveDistanceRequest):
         args = {"distance": body.distance, "power": body.power}
         return await completing(robot, "drive_distance", args, body.wait, body.timeout)
 
-    @app.post("/robots/{robot}/drive/rotate_degrees", response_model=OperationState,
-              responses={**_ERRORS, 202: {"model": OperationState}}, tags=["drive"],
+    @app.post("/robots/{robot}/drive/rotate_degrees", response_model=schemas.OperationState,
+              responses={**_ERRORS, 202: {"model": schemas.OperationState}}, tags=["drive"],
               summary="Turn in place (positive: left, counter-clockwise); completes")
-    async def rotate_degrees(robot: str, body: RotateDegreesRequest):
+    async def rotate_degrees(robot: str, body: schemas.RotateDegreesRequest):
         args = {"degrees": body.degrees, "power": body.power}
         return await completing(robot, "rotate_degrees", args, body.wait, body.timeout)
 
-    @app.post("/robots/{robot}/drive/set_pose", response_model=OperationState,
-              responses={**_ERRORS, 202: {"model": OperationState}}, tags=["drive"],
+    @app.post("/robots/{robot}/drive/set_pose", response_model=schemas.OperationState,
+              responses={**_ERRORS, 202: {"model": schemas.OperationState}}, tags=["drive"],
               summary="Teleport the robot to (x, y, yaw) on the ground; completes when settled")
-    async def set_pose(robot: str, body: SetPoseRequest):
+    async def set_pose(robot: str, body: schemas.SetPoseRequest):
         args = {"x": body.x, "y": body.y, "yaw_deg": body.yaw_deg}
         return await completing(robot, "set_pose", args, body.wait, body.timeout)
 
-    @app.get("/robots/{robot}/drive/operations/{op_id}", response_model=OperationState,
+    @app.get("/robots/{robot}/drive/operations/{op_id}", response_model=schemas.OperationState,
              responses=_ERRORS, tags=["drive"], summary="A completing command's status")
     async def operation(robot: str, op_id: int):
         robot_or_404(robot)
@@ -465,7 +297,7 @@ def create_app(runner: SimRunner, meshcat_url: str | None = None) -> FastAPI:
                             f"{', '.join(ops)}")
 
     # --- sensors ---
-    @app.get("/robots/{robot}/encoders", response_model=EncoderState, responses=_ERRORS,
+    @app.get("/robots/{robot}/encoders", response_model=schemas.EncoderState, responses=_ERRORS,
              tags=["sensors"], summary="Front-wheel encoder ticks")
     async def encoders(robot: str):
         return _json(snapshot_of(robot)["encoders"])
@@ -612,7 +444,7 @@ def create_app(runner: SimRunner, meshcat_url: str | None = None) -> FastAPI:
         return sse_response(event_stream(request, robot, [service], period, limit))
 
     @app.get("/robots/{robot}/{service}", responses=_ERRORS, tags=["sensors"],
-             response_model=AnalogSensorState,
+             response_model=schemas.AnalogSensorState,
              summary="Analog-sensor state of an IR sensor (front_ir, rear_ir)")
     async def analog_sensor(robot: str, service: str):
         snap = snapshot_of(robot)
