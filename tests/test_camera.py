@@ -360,15 +360,15 @@ def test_without_a_display_gl_is_a_clear_error_and_the_default_falls_back(tmp_pa
 
 
 def test_the_webcam_service_has_no_frame_before_the_first_output():
-    """What the HTTP webcam reads (`services.grab_frame`): nothing before the first frame
+    """What the HTTP webcam reads (`calls.grab_frame`): nothing before the first frame
     (the server answers 503 then), the RGB frame and its capture time after."""
-    from corobot_drake.serving import services
+    from corobot_drake.serving import calls
 
     sim = make_sim(camera=True)
-    t, frame_time, image = services.grab_frame("corobot", sim)
+    t, frame_time, image = calls.grab_frame("corobot", sim)
     assert image is None and math.isnan(frame_time) and t == 0.0
     sim.advance_to(0.035)
-    t, frame_time, image = services.grab_frame("corobot", sim)
+    t, frame_time, image = calls.grab_frame("corobot", sim)
     assert t == pytest.approx(0.035) and frame_time == pytest.approx(0.0005)
     assert image.shape == (dim.CAMERA_HEIGHT, dim.CAMERA_WIDTH, 3) and image.mean() > 50
 

@@ -524,7 +524,7 @@ def test_in_process_runner_serves_from_a_thread():
     from fastapi.testclient import TestClient
 
     from corobot_drake.config.scenario import load_scenario
-    from corobot_drake.serving.services import SimRunner
+    from corobot_drake.serving.runner import SimRunner
     from corobot_drake.serving.webapp import create_app
     from corobot_drake.simulation import Simulation
 
@@ -535,14 +535,61 @@ def test_in_process_runner_serves_from_a_thread():
             assert client.get(f"{ROBOT}/drive").status_code == 200
             assert client.post(f"{ROBOT}/drive/set_power",
                                json={"left": 2, "right": 0}).status_code == 422
-            if runner.capabilities["corobot"]["drive_distance"]:
-                r = client.post(f"{ROBOT}/drive/drive_distance",
-                                json={"distance": 0.1, "power": 0.5})
-                assert r.status_code == 200 and r.json()["status"] == "succeeded", r.text
-            else:
-                assert client.post(f"{ROBOT}/drive/set_power",
-                                   json={"left": 0.5, "right": 0.5}).json()["seq"] >= 1
+            r = client.post(f"{ROBOT}/drive/drive_distance",
+                            json={"distance": 0.1, "power": 0.5})
+            assert r.status_code == 200 and r.json()["status"] == "succeeded", r.text
             assert client.get("/simulation").json()["running"]
     finally:
         runner.stop()
     assert runner.error is None
+
+
+def test_transport_carries_calls_watches_and_snapshots():
+    """`RemoteRunner` over a pipe to `SimSide` is the `Runner` that `SimRunner` is: same
+    robots, calls answered (exceptions too), watches resolved when the command log says the
+    command ended, a cancelled watch dropped, snapshots kept up to date."""
+    import multiprocessing
+    from functools import partial
+
+    from conftest import make_sim
+    from corobot_drake.serving import calls
+    from corobot_drake.serving.runner import Runner, SimRunner
+    from corobot_drake.serving.transport import RemoteRunner, SimSide
+
+    runner = SimRunner(make_sim()).start()
+    sim_end, http_end = multiprocessing.Pipe()
+    try:
+        side = SimSide(runner, sim_end)
+        remote = RemoteRunner(http_end, timeout=30)
+        assert isinstance(runner, Runner) and isinstance(remote, Runner)
+        assert remote.robots == runner.robots and remote.alive
+        start = partial(calls.start_operation, "corobot", "drive_distance",
+                        {"distance": 0.05, "power": 0.5})
+        started = remote.submit(start).result(10)
+        assert started.status == "running" and started.end_time is None
+        ended = remote.watch(partial(calls.ended_command, "corobot", started.seq)).result(30)
+        assert ended.status == "succeeded" and ended.end_time > started.start_time
+        assert ended == remote.submit(partial(calls.command_result, "corobot",
+                                              started.seq)).result(10)
+        with pytest.raises(KeyError, match="no command 99999"):
+            remote.submit(partial(calls.command_result, "corobot", 99999)).result(10)
+        started = remote.submit(partial(calls.start_operation, "corobot", "drive_distance",
+                                        {"distance": 2.0, "power": 0.2})).result(10)
+        watch = remote.watch(partial(calls.ended_command, "corobot", started.seq))
+        assert watch.cancel()  # long before the 2 m are driven
+        t0 = remote.snapshot["time"]
+        deadline = time.monotonic() + 10
+        while remote.snapshot["time"] < t0 + 0.5:
+            assert time.monotonic() < deadline, "no new snapshots"
+            time.sleep(0.05)
+        assert not runner._watches  # the cancelled watch was dropped in the simulation
+        http_end.send(("stop",))
+        assert side.closed.wait(5)
+    finally:
+        runner.stop()
+        sim_end.close()
+    deadline = time.monotonic() + 5
+    while remote.alive:
+        assert time.monotonic() < deadline, "the remote runner did not see the pipe close"
+        time.sleep(0.05)
+    assert remote.submit(start).exception(1) is not None

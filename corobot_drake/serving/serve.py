@@ -1,36 +1,52 @@
-"""`python -m corobot_drake [SCENARIO] --serve`: the simulation in real time in one thread, the
-HTTP services (`corobot_drake.serving.webapp`) beside it.
+"""`python -m corobot_drake [SCENARIO] --serve`: the processes. The simulation process runs the
+simulation in real time in one thread (`runner.SimRunner`); the HTTP server (`webapp`) runs in
+a child process of its own, joined by a pipe (`transport`).
+
+Why a second process: the simulation's Python systems give up and re-take Python's GIL many
+times per step, so in one process a busy HTTP thread makes the simulation wait at every one
+of those hand-overs (measured: 20 polling clients and a flood of bad requests cut the
+real-time factor from 1.0 to 0.7). With the server in its own process the simulation thread
+shares its GIL with nothing busy, and the HTTP process runs at a lower priority (nice), so under
+load the pages slow down, not the simulation.
 
 Meshcat starts too unless `--headless`; its teleop buttons keep working, polled by the
 simulation thread. `--port 0` picks a free port; the first line printed to stdout is always
 `serving http://HOST:PORT` once the server listens (tests and scripts read it).
+`ServerProcess` runs all of it as a child process, for tests and scripts.
 """
 
 from __future__ import annotations
 
+import contextlib
 import sys
 
 SWITCH_INTERVAL = 0.001
 """s. Python's GIL hand-over interval in the simulation process while serving. The
-simulation's Python systems re-take the GIL many times a step; the bridge's threads are
+simulation's Python systems re-take the GIL many times a step; the transport's threads are
 mostly idle, but at the default 5 ms each of their wake-ups could hold the simulation up."""
+
+HTTP_NICENESS = 10
+"""The HTTP process's nice increment: under CPU contention the simulation comes first."""
+
+SERVE_CAMERA_FPS = 10.0
+"""Hz: the camera's render rate when serving, unless --camera-rate says otherwise. The
+dashboard and the webcam page show a few frames a second; rendering 30 would cost a
+third of the simulation's time budget."""
 
 
 def serve(make_sim, host: str = "127.0.0.1", port: int = 50000, meshcat: bool = False,
           log_level: str = "warning", label: str = "") -> int:
     """Builds the simulation (`make_sim(meshcat)`, in the simulation thread, with a Meshcat
     made there too when `meshcat`: Meshcat must be used from the thread that made it) and
-    serves it until Ctrl-C. The HTTP server runs in a child process (`corobot_drake.serving.bridge`
-    says why). Returns the exit status: 2 when the port or the simulation cannot be had."""
+    serves it until Ctrl-C. The HTTP server runs in a child process (see the module
+    docstring). Returns the exit status: 2 when the port or the simulation cannot be had."""
     import multiprocessing
 
     from corobot_drake.sensors.camera import RendererUnavailableError
-    from corobot_drake.serving.bridge import SimSide, http_main
-    from corobot_drake.serving.services import SimRunner
+    from corobot_drake.serving.transport import SimSide
 
     ctx = multiprocessing.get_context("spawn")
     conn, child_conn = ctx.Pipe()
-    url_box: list = []
     http = ctx.Process(target=http_main, name="corobot-http", daemon=True, args=(
         child_conn, host, port, log_level, HTTP_NICENESS))
     http.start()
@@ -39,39 +55,19 @@ def serve(make_sim, host: str = "127.0.0.1", port: int = 50000, meshcat: bool = 
         http.join(5)
         print(f"error: {value}", file=sys.stderr)
         return 2
-    bound = value
     sys.setswitchinterval(SWITCH_INTERVAL)
-    runner: SimRunner
-
-    def build():
-        viewer = None
-        if meshcat:
-            from pydrake.geometry import StartMeshcat
-
-            viewer = StartMeshcat()
-            url_box.append(viewer.web_url())
-        sim = make_sim(viewer)
-        if viewer is not None:
-            from corobot_drake.serving.teleop import MeshcatTeleop
-
-            teleop = MeshcatTeleop(viewer, sim)
-            runner.hooks.append(lambda s: teleop.poll())
-        return sim
-
-    runner = SimRunner(build)
+    runner = _sim_runner(make_sim, meshcat)
     try:
         runner.start()
     except (ValueError, RendererUnavailableError) as e:  # e.g. a non-finite number
         http.terminate()
         print(f"error: {label + ': ' if label else ''}{e}", file=sys.stderr)
         return 2
-    meshcat_url = url_box[0] if url_box else None
-    runner.meshcat_url = meshcat_url
     bridge = SimSide(runner, conn)
-    shown = f"http://[{host}]:{bound}" if ":" in host else f"http://{host}:{bound}"
+    shown = f"http://[{host}]:{value}" if ":" in host else f"http://{host}:{value}"
     print(f"serving {shown}", flush=True)
     print(f"  dashboard {shown}/dashboard  services {shown}/services  API {shown}/docs"
-          + (f"  Meshcat {meshcat_url}" if meshcat_url else ""), flush=True)
+          + (f"  Meshcat {runner.meshcat_url}" if runner.meshcat_url else ""), flush=True)
     stats = runner.stats()
     try:
         while http.is_alive() and runner.alive and not bridge.closed.is_set():
@@ -89,22 +85,85 @@ def serve(make_sim, host: str = "127.0.0.1", port: int = 50000, meshcat: bool = 
     return 0 if runner.error is None else 1
 
 
-HTTP_NICENESS = 10
-"""The HTTP process's nice increment: under CPU contention the simulation comes first."""
+def _sim_runner(make_sim, meshcat: bool):
+    """A `SimRunner` (not started) whose simulation thread makes the Meshcat (if `meshcat`),
+    the simulation (`make_sim(meshcat or None)`) and the Meshcat teleop."""
+    from corobot_drake.serving.runner import SimRunner
+
+    def build():
+        viewer = None
+        if meshcat:
+            from pydrake.geometry import StartMeshcat
+
+            viewer = StartMeshcat()
+            runner.meshcat_url = viewer.web_url()
+        sim = make_sim(viewer)
+        if viewer is not None:
+            from corobot_drake.serving.teleop import MeshcatTeleop
+
+            teleop = MeshcatTeleop(viewer, sim)
+            runner.hooks.append(lambda s: teleop.poll())
+        return sim
+
+    runner = SimRunner(build)
+    return runner
 
 
-SERVE_CAMERA_FPS = 10.0
-"""Hz: the camera's render rate when serving, unless --camera-rate says otherwise. The
-dashboard and the webcam page show a few frames a second; rendering 30 would cost a
-third of the simulation's time budget."""
+def http_main(conn, host: str, port: int, log_level: str, niceness: int) -> None:
+    """The HTTP process: listen, report the port, wait for the simulation, serve."""
+    import os
+
+    import uvicorn
+
+    from corobot_drake.serving.transport import RemoteRunner
+    from corobot_drake.serving.webapp import create_app
+
+    if niceness:
+        with contextlib.suppress(OSError):
+            os.nice(niceness)
+    sock = _listen(conn, host, port)
+    if sock is None:
+        return
+    server_box: list = []
+
+    def closed() -> None:  # the simulation process went away: stop serving
+        if server_box:
+            server_box[0].should_exit = True
+
+    try:
+        runner = RemoteRunner(conn, on_close=closed)
+    except (TimeoutError, EOFError, OSError):
+        return
+    config = uvicorn.Config(create_app(runner), log_level=log_level, access_log=False,
+                            lifespan="off", timeout_graceful_shutdown=1)
+    server = uvicorn.Server(config)
+    server_box.append(server)
+    with contextlib.suppress(KeyboardInterrupt):
+        server.run(sockets=[sock])
+
+
+def _listen(conn, host: str, port: int):
+    """A socket listening on host:port, its port reported on `conn` ("listening", port);
+    None, with ("error", message) reported, when the port cannot be had."""
+    import socket
+
+    family = socket.AF_INET6 if ":" in host else socket.AF_INET
+    sock = socket.socket(family, socket.SOCK_STREAM)
+    sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+    try:
+        sock.bind((host, port))
+        sock.listen(2048)
+    except OSError as e:
+        conn.send(("error", f"cannot listen on {host}:{port}: {e.strerror}"))
+        return None
+    conn.send(("listening", sock.getsockname()[1]))
+    return sock
 
 
 def serve_camera_rate(scenario, fps: float = SERVE_CAMERA_FPS) -> None:
-    """Caps each robot's camera rate at `fps` (robots without a camera are left alone)."""
+    """Caps each robot's camera rate at `fps`."""
     for robot in scenario.robots.values():
-        camera = getattr(robot, "camera", None)
-        if camera is not None and getattr(camera, "fps", 0) > fps:
-            camera.fps = fps
+        robot.camera.fps = min(robot.camera.fps, fps)
 
 
 class ServerProcess:

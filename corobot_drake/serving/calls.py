@@ -1,0 +1,63 @@
+"""What the HTTP side asks of the simulation: functions of `(..., sim)` that a `Runner` calls
+in the simulation thread (`submit`, `watch`). Module-level, so that bound with
+`functools.partial` they pickle across the pipe to the simulation process; their results are
+plain values (`readings.CommandResult`, numbers, numpy arrays) for the same reason.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from corobot_drake.readings import CommandResult
+
+SIMPLE_COMMANDS = ("set_power", "set_speed", "all_stop", "enable")
+"""Drive commands that take effect at once (no operation to follow)."""
+COMPLETING_COMMANDS = ("drive_distance", "rotate_degrees", "set_pose")
+"""Drive commands that complete: followed as operations."""
+
+
+def issue(robot: str, command: str, args: tuple, sim) -> tuple[int, float]:
+    """Issues a simple drive command (`Robot.set_power(*args)`, ...); returns (its sequence
+    number, the simulated time)."""
+    if command not in SIMPLE_COMMANDS:
+        raise ValueError(f"{command!r} is not a simple drive command")
+    seq = getattr(sim.robot(robot), command)(*args)
+    return seq, sim.time
+
+
+def start_operation(robot: str, command: str, arguments: dict, sim) -> CommandResult:
+    """Starts a command that completes, without waiting; returns its record as of now."""
+    r = sim.robot(robot)
+    if command == "drive_distance":
+        handle = r.drive_distance_async(**arguments)
+    elif command == "rotate_degrees":
+        handle = r.rotate_degrees_async(**arguments)
+    elif command == "set_pose":
+        handle = r.set_pose(**arguments)
+    else:
+        raise ValueError(f"{command!r} is not a completing drive command")
+    return handle.result()
+
+
+def command_result(robot: str, seq: int, sim) -> CommandResult:
+    """The command log's record of the robot's command `seq`, as of now."""
+    return sim.robot(robot).command_result(seq)
+
+
+def ended_command(robot: str, seq: int, sim) -> CommandResult | None:
+    """`command_result` once the command has ended; None while it runs (for `watch`)."""
+    result = sim.robot(robot).command_result(seq)
+    return None if result.end_time is None else result
+
+
+def grab_frame(robot: str, sim) -> tuple[float, float, Any]:
+    """(sim time, frame time, RGB uint8 image h x w x 3) of the robot's latest camera frame;
+    (sim time, NaN, None) before the first."""
+    import numpy as np
+
+    r = sim.robot(robot)
+    image = r.camera_image()
+    if image is None:  # before the first frame has come out of the camera
+        return sim.time, math.nan, None
+    return sim.time, r.camera_image_time(), np.ascontiguousarray(image[:, :, :3])

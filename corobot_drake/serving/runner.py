@@ -1,0 +1,297 @@
+"""The simulation, run live: the `Runner` protocol the HTTP routes depend on, and `SimRunner`,
+which owns the Drake Context in a thread of its own.
+
+Threads: `SimRunner`'s thread builds the simulation, advances it in real time and is the only
+one that touches the Context. Other threads `submit()` a function, which the runner calls
+between steps, or `watch()` one, which it calls after every step until it answers; results
+come back in `concurrent.futures.Future`s. Every `snapshot_period` s of simulated time, and
+after each submitted call, the runner publishes a `snapshot` (`snapshots.snapshot`, replaced
+whole, never mutated), so readers get a consistent state without waiting for the simulation,
+and the simulation never waits for them. `transport.RemoteRunner` is the same protocol in the
+HTTP process.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures
+import logging
+import math
+import queue
+import threading
+import time
+from collections.abc import Callable, Mapping
+from typing import TYPE_CHECKING, Any, Protocol, TypeVar, runtime_checkable
+
+from corobot_drake.serving.snapshots import RobotInfo, jsonable, snapshot
+
+if TYPE_CHECKING:  # the HTTP process imports this module without Drake
+    from corobot_drake.simulation import Simulation
+
+log = logging.getLogger(__name__)
+
+T = TypeVar("T")
+
+
+@runtime_checkable
+class Runner(Protocol):
+    """A running simulation as the HTTP routes see it (`SimRunner` in process,
+    `transport.RemoteRunner` across a pipe). Every member is safe to use from any thread."""
+
+    @property
+    def robots(self) -> Mapping[str, RobotInfo]:
+        """Each robot's fixed services, by name, in the scenario's order."""
+
+    @property
+    def snapshot(self) -> dict:
+        """The latest published state (`snapshots.snapshot`); never mutated."""
+
+    @property
+    def alive(self) -> bool:
+        """Whether the simulation still runs (and takes requests)."""
+
+    @property
+    def meshcat_url(self) -> str | None:
+        """Meshcat's URL when the simulation has a Meshcat."""
+
+    def submit(self, fn: Callable[[Simulation], T]) -> concurrent.futures.Future[T]:
+        """Calls `fn(sim)` in the simulation thread between steps; the future gets its result
+        or its exception."""
+
+    def watch(self, fn: Callable[[Simulation], T | None]) -> concurrent.futures.Future[T]:
+        """Calls `fn(sim)` now and after every step until it returns something other than
+        None; the future gets that. Cancel the future to stop watching."""
+
+    def stats(self) -> dict:
+        """Simulated time, real-time factors, steps, slips, requests served, error (JSON)."""
+
+
+def _resolve(future: concurrent.futures.Future, value: Any = None,
+             error: BaseException | None = None) -> None:
+    """Sets a future's result (or exception) unless it is done or cancelled meanwhile."""
+    try:
+        if error is not None:
+            future.set_exception(error)
+        else:
+            future.set_result(value)
+    except concurrent.futures.InvalidStateError:
+        pass
+
+
+class SimRunner:
+    """Runs a simulation in real time (x `rate`) in a thread of its own; implements `Runner`.
+    See the module docstring."""
+
+    def __init__(self, sim, *, rate: float = 1.0, tick: float = 1.0 / 120.0,
+                 max_step: float = 0.05, max_lag: float = 0.5,
+                 snapshot_period: float = 1.0 / 30.0):
+        """`sim`: a Simulation, or a function that builds one; `start()` then builds it in the
+        simulation thread, so that everything bound to a thread (the renderer's OpenGL
+        context) belongs to the thread that steps the simulation."""
+        self._factory = sim if callable(sim) else None
+        self.sim = None if callable(sim) else sim
+        self.rate = rate
+        self.tick = tick
+        self.max_step = max_step
+        self.max_lag = max_lag
+        """s of simulated time: when it falls further behind the clock than this (a slow
+        machine), the runner stops trying to catch up and counts a `slip`."""
+        self.snapshot_period = snapshot_period
+        self.robots: dict[str, RobotInfo] = {}
+        self.snapshot: dict = {}
+        self.meshcat_url: str | None = None
+        self.hooks: list[Callable[[Any], None]] = []
+        """Called with the simulation between steps, in its thread (e.g. Meshcat teleop)."""
+        self.on_publish: list[Callable[[dict], None]] = []
+        """Called in the simulation thread with each new snapshot (the transport sends it)."""
+        self.error: BaseException | None = None
+        self.started_wall = math.nan
+        self.started_sim = 0.0
+        self.steps = 0
+        self.slips = 0
+        self.requests_served = 0
+        self._inbox: queue.SimpleQueue = queue.SimpleQueue()
+        self._watches: list[tuple[Callable, concurrent.futures.Future]] = []
+        self._stop = threading.Event()
+        self._ready = threading.Event()
+        self._thread: threading.Thread | None = None
+        self._window: list[tuple[float, float]] = []
+
+    # --- life cycle ---
+    def start(self, timeout: float = 300.0) -> SimRunner:
+        """Starts the simulation thread; returns once the simulation is built and its first
+        snapshot published (re-raising what building it raised)."""
+        self._thread = threading.Thread(target=self._main, name="corobot-sim", daemon=True)
+        self._thread.start()
+        if not self._ready.wait(timeout):
+            raise TimeoutError("the simulation was not built in time")
+        if self.sim is None:
+            raise self.error
+        return self
+
+    def stop(self, timeout: float = 5.0) -> None:
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join(timeout)
+
+    @property
+    def alive(self) -> bool:
+        return self._thread is not None and self._thread.is_alive()
+
+    # --- requests from other threads ---
+    def submit(self, fn: Callable[[Any], T]) -> concurrent.futures.Future[T]:
+        return self._put(fn, watch=False)
+
+    def watch(self, fn: Callable[[Any], T | None]) -> concurrent.futures.Future[T]:
+        return self._put(fn, watch=True)
+
+    def call(self, fn: Callable[[Any], T], timeout: float = 10.0) -> T:
+        """`submit(fn)` and wait for its result."""
+        return self.submit(fn).result(timeout)
+
+    def _put(self, fn: Callable, watch: bool) -> concurrent.futures.Future:
+        future: concurrent.futures.Future = concurrent.futures.Future()
+        if self._stop.is_set() or (self._thread is not None and not self.alive):
+            future.set_exception(RuntimeError("the simulation is not running"))
+        else:
+            self._inbox.put((fn, future, watch))
+        return future
+
+    # --- measurements ---
+    def stats(self) -> dict:
+        elapsed = time.perf_counter() - self.started_wall if self.alive else math.nan
+        sim_elapsed = self.snapshot.get("time", self.started_sim) - self.started_sim
+        return jsonable({
+            "time": self.snapshot.get("time"),
+            "running": self.alive,
+            "rate": self.rate,
+            "wall_seconds": elapsed,
+            "realtime_factor": sim_elapsed / elapsed if elapsed and elapsed > 0 else None,
+            "recent_realtime_factor": self._recent_rate(),
+            "steps": self.steps,
+            "slips": self.slips,
+            "requests_served": self.requests_served,
+            "error": None if self.error is None else repr(self.error),
+        })
+
+    def _recent_rate(self) -> float:
+        """Simulated over wall seconds across the last few hundred loop turns."""
+        window = self._window
+        if len(window) >= 2 and window[-1][0] > window[0][0]:
+            return (window[-1][1] - window[0][1]) / (window[-1][0] - window[0][0])
+        return math.nan
+
+    # --- the simulation thread ---
+    def _main(self) -> None:
+        try:
+            if self.sim is None:
+                try:
+                    self.sim = self._factory()
+                except BaseException as e:
+                    self.error = e
+                    return
+            self.robots = {name: RobotInfo.of(r) for name, r in self.sim.robots.items()}
+            self._publish()
+            self._ready.set()
+            self._loop()
+        except BaseException as e:  # the runner must report, not vanish silently
+            log.exception("simulation thread stopped")
+            self.error = e
+        finally:
+            self._ready.set()
+            self._stop.set()
+            self._fail_pending(RuntimeError("the simulation stopped"))
+
+    def _loop(self) -> None:
+        sim, clock = self.sim, time.perf_counter
+        self.started_wall = wall0 = clock()
+        self.started_sim = t0 = sim.time
+        next_snapshot = sim.time
+        while not self._stop.is_set():
+            self._drain()
+            for hook in self.hooks:
+                hook(sim)
+            now = clock()
+            target = t0 + self.rate * (now - wall0)
+            if target - sim.time > self.max_lag:
+                self.slips += 1
+                wall0, t0 = now, sim.time
+                target = sim.time
+            if target > sim.time + 1e-9:
+                sim.advance_to(min(target, sim.time + self.max_step))
+                self.steps += 1
+                self._check_watches()
+            if sim.time >= next_snapshot - 1e-9:
+                self._publish()
+                next_snapshot = sim.time + self.snapshot_period
+            self._window.append((clock(), sim.time))
+            if len(self._window) > 240:
+                del self._window[:40]
+            self._idle(self.tick - (clock() - now))
+
+    def _idle(self, seconds: float) -> None:
+        """Waits up to `seconds` for a request, and serves it."""
+        if seconds > 0:
+            try:
+                item = self._inbox.get(timeout=seconds)
+            except queue.Empty:
+                return
+            self._run(item)
+
+    def _drain(self) -> None:
+        while True:
+            try:
+                item = self._inbox.get_nowait()
+            except queue.Empty:
+                return
+            self._run(item)
+
+    def _run(self, item) -> None:
+        fn, future, watch = item
+        if watch:
+            self._watches.append((fn, future))
+            self._check_watches()
+            return
+        if not future.set_running_or_notify_cancel():
+            return
+        try:
+            result = fn(self.sim)
+        except Exception as e:  # reported to the caller; the simulation goes on
+            future.set_exception(e)
+        else:
+            future.set_result(result)
+            self._publish()
+        self.requests_served += 1
+
+    def _check_watches(self) -> None:
+        if not self._watches:
+            return
+        remaining = []
+        for fn, future in self._watches:
+            if future.cancelled():
+                continue
+            try:
+                result = fn(self.sim)
+            except Exception as e:
+                _resolve(future, error=e)
+                continue
+            if result is None:
+                remaining.append((fn, future))
+            else:
+                _resolve(future, result)
+        self._watches = remaining
+
+    def _publish(self) -> None:
+        self.snapshot = snapshot(self.sim)
+        for callback in self.on_publish:
+            callback(self.snapshot)
+
+    def _fail_pending(self, error: Exception) -> None:
+        while True:
+            try:
+                _, future, _ = self._inbox.get_nowait()
+            except queue.Empty:
+                break
+            _resolve(future, error=error)
+        watches, self._watches = self._watches, []
+        for _, future in watches:
+            _resolve(future, error=error)

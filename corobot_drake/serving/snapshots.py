@@ -1,0 +1,141 @@
+"""What the simulation thread publishes for the HTTP side: each robot's services' state as
+JSON-ready dicts (`snapshot`), and what does not change while serving (`RobotInfo`).
+
+Called in the simulation thread (they read the Context through the Python API). The dicts they
+return are never mutated afterwards, so any thread, or the HTTP process, may read them.
+"""
+
+from __future__ import annotations
+
+import dataclasses as dc
+import math
+from typing import Any
+
+from corobot_drake.model import dimensions as dim
+from corobot_drake.readings import IrReading
+
+
+def jsonable(value: Any) -> Any:
+    """Dataclasses, numpy scalars/arrays and non-finite floats (None) made JSON-safe."""
+    if dc.is_dataclass(value) and not isinstance(value, type):
+        return {f.name: jsonable(getattr(value, f.name)) for f in dc.fields(value)}
+    if isinstance(value, dict):
+        return {str(k): jsonable(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [jsonable(v) for v in value]
+    if isinstance(value, bool | int | str) or value is None:
+        return value
+    if hasattr(value, "tolist"):  # numpy
+        return jsonable(value.tolist())
+    f = float(value)
+    return f if math.isfinite(f) else None
+
+
+@dc.dataclass(frozen=True)
+class RobotInfo:
+    """One robot's services that are fixed once the simulation is built."""
+
+    name: str
+    ir_services: tuple[str, ...]
+    """Its IR sensors' service names (`front_ir`, `rear_ir`, ...)."""
+    has_camera: bool
+
+    @classmethod
+    def of(cls, robot) -> RobotInfo:
+        """The info of a `simulation.Robot`."""
+        return cls(robot.name, tuple(f"{name}_ir" for name in robot.ir_names),
+                   robot.has_camera)
+
+    @property
+    def capabilities(self) -> dict[str, bool]:
+        """The HTTP contract's `capabilities`: every robot has the whole drive API and the IR
+        API (with the sensors its scenario gives it); the camera depends on the scenario."""
+        return {"drive_distance": True, "rotate_degrees": True, "set_pose": True,
+                "drive_state": True, "ir": True, "camera": self.has_camera}
+
+
+def command_json(record) -> dict:
+    """A command's life as the drive state reports it (`command`), from its command-log
+    record (`systems.drive.CommandRecord`) or the Python API's `CommandResult`."""
+    return {"seq": record.seq, "command": record.command, "status": record.status,
+            "reason": record.reason, "start_time": record.start_time,
+            "end_time": record.end_time}
+
+
+def drive_state(robot, time: float) -> dict:
+    """The drive contract's four-wheel state (MRDS DriveDifferentialFourWheelState in SI
+    units): the Python API's `drive_state()` fields, plus pose, velocity and the latest
+    command."""
+    native = robot.drive_state()
+    wheels = {name: {"commanded_power": float(w.commanded_power),
+                     "axle_speed": float(w.axle_speed),
+                     "encoder_ticks": w.encoder_ticks}
+              for name, w in native.wheels.items()}
+    x, y, z = native.position
+    heading = float(native.heading)
+    log = robot.command_log()
+    return jsonable({
+        "time_stamp": time,
+        "is_enabled": bool(native.is_enabled),
+        "power_scaling_factor": float(native.power_scaling_factor),
+        "distance_between_wheels": float(native.distance_between_wheels),
+        "wheel_radius": dim.WHEEL_RADIUS,
+        "encoder_ticks_per_revolution": dim.ENCODER_TICKS_PER_REVOLUTION,
+        "wheels": wheels,
+        "position": {"x": x, "y": y, "z": z},
+        "heading": heading,
+        "heading_deg": math.degrees(heading),
+        "pose": dc.asdict(robot.pose()),
+        "velocity": dc.asdict(robot.velocity()),
+        "command": command_json(log[-1]) if log else None,
+    })
+
+
+def two_wheel_view(state: dict) -> dict:
+    """The generic differential-drive view of `drive_state`: left = front left, right =
+    front right."""
+    w = state["wheels"]
+    return {
+        "time_stamp": state["time_stamp"],
+        "is_enabled": state["is_enabled"],
+        "distance_between_wheels": state["distance_between_wheels"],
+        "left": w["front_left"],
+        "right": w["front_right"],
+        "position": state["position"],
+        "heading": state["heading"],
+        "command": state["command"],
+    }
+
+
+def analog_sensor(reading: IrReading) -> dict:
+    """The analog-sensor contract's state of one IR scan: raw (m), range (m), normalized,
+    time_stamp (s, the scan's time)."""
+    return jsonable({"raw": float(reading.raw), "range": float(reading.range),
+                     "normalized": float(reading.normalized),
+                     "time_stamp": float(reading.time)})
+
+
+def robot_snapshot(robot, time: float) -> dict:
+    """Every service's state of one robot: drive, ir (by service name), encoders, compass,
+    gps."""
+    drive = drive_state(robot, time)
+    return {
+        "drive": drive,
+        "ir": {f"{name}_ir": analog_sensor(robot.ir(name)) for name in robot.ir_names},
+        "encoders": {
+            "time_stamp": drive["time_stamp"],
+            "ticks_per_revolution": dim.ENCODER_TICKS_PER_REVOLUTION,
+            "front_left": drive["wheels"]["front_left"]["encoder_ticks"],
+            "front_right": drive["wheels"]["front_right"]["encoder_ticks"],
+        },
+        "compass": {"time_stamp": drive["time_stamp"], "heading": drive["heading"],
+                    "heading_deg": drive["heading_deg"]},
+        "gps": {"time_stamp": drive["time_stamp"], **drive["position"]},
+    }
+
+
+def snapshot(sim) -> dict:
+    """The whole published state: simulated time and every robot's `robot_snapshot`."""
+    return {"time": sim.time,
+            "robots": {name: robot_snapshot(robot, sim.time)
+                       for name, robot in sim.robots.items()}}
