@@ -17,15 +17,16 @@ from pathlib import Path
 
 import numpy as np
 from pydrake.common.yaml import yaml_dump_typed
-from pydrake.math import RigidTransform, RollPitchYaw
+from pydrake.math import RollPitchYaw
 from pydrake.multibody.math import SpatialVelocity
 from pydrake.systems.analysis import ApplySimulatorConfig, Simulator
 from pydrake.systems.framework import EventStatus
 
 from corobot_drake.config import scenario as sc
+from corobot_drake.config.poses import ground_pose, transform_from
 from corobot_drake.model import dimensions as dim
 from corobot_drake.readings import BodyPose, BodyVelocity, CommandResult, IrReading
-from corobot_drake.station import RobotParts, Station, build_station, transform_to_pose
+from corobot_drake.station import RobotParts, Station, build_station
 from corobot_drake.systems.drive import CommandRecord
 from corobot_drake.systems.odometry import DriveState
 from corobot_drake.systems.runlog import log_rows, write_csv
@@ -136,8 +137,8 @@ class Robot:
         pose = request.command
         plant = self._sim.station.plant
         plant_context = plant.GetMyMutableContextFromRoot(root)
-        plant.SetFreeBodyPose(plant_context, parts.chassis, RigidTransform(
-            RollPitchYaw(0.0, 0.0, math.radians(pose.yaw_deg)), [pose.x, pose.y, 0.0]))
+        plant.SetFreeBodyPose(plant_context, parts.chassis,
+                              ground_pose(pose.x, pose.y, pose.yaw_deg).GetDeterministicValue())
         plant.SetFreeBodySpatialVelocity(plant_context, parts.chassis, SpatialVelocity.Zero())
         for joint in parts.wheel_joints:
             joint.set_angular_rate(plant_context, 0.0)
@@ -416,7 +417,7 @@ class Simulation:
 
         for name, robot in self.robots.items():
             spec, parts = saved.robots[name], robot._parts
-            spec.pose = transform_to_pose(plant.EvalBodyPoseInWorld(plant_context, parts.chassis))
+            spec.pose = transform_from(plant.EvalBodyPoseInWorld(plant_context, parts.chassis))
             spec.velocity = velocity(parts.chassis)
             spec.wheel_angles = [float(j.get_angle(plant_context)) for j in parts.wheel_joints]
             spec.wheel_speeds = [float(j.get_angular_rate(plant_context))
@@ -425,7 +426,7 @@ class Simulation:
         for name, body in self.station.bodies.items():
             spec = saved.world.bodies[name]
             if not spec.fixed:
-                spec.pose = transform_to_pose(plant.EvalBodyPoseInWorld(plant_context, body))
+                spec.pose = transform_from(plant.EvalBodyPoseInWorld(plant_context, body))
                 spec.velocity = velocity(body)
         return saved
 

@@ -6,7 +6,6 @@ station: every robot's systems are named `<robot>.<system>` and its ports are ex
 """
 
 import dataclasses as dc
-import math
 
 import numpy as np
 from pydrake.geometry import (
@@ -21,7 +20,7 @@ from pydrake.geometry import (
     ProximityProperties,
     Sphere,
 )
-from pydrake.math import RigidTransform, RollPitchYaw
+from pydrake.math import RigidTransform
 from pydrake.multibody.parsing import Parser
 from pydrake.multibody.plant import AddMultibodyPlant, CoulombFriction, MultibodyPlant
 from pydrake.multibody.tree import SpatialInertia, UnitInertia
@@ -42,18 +41,6 @@ from corobot_drake.systems.runlog import add_run_log
 
 TILT_SAMPLE_PERIOD = 0.01
 """s. Tilt changes over tenths of a second even in a flip; 100 Hz catches its peak."""
-
-
-def pose_to_transform(pose: sc.Pose) -> RigidTransform:
-    rpy = RollPitchYaw(*(math.radians(a) for a in (pose.roll_deg, pose.pitch_deg, pose.yaw_deg)))
-    return RigidTransform(rpy, [pose.x, pose.y, pose.z])
-
-
-def transform_to_pose(X: RigidTransform) -> sc.Pose:
-    rpy = RollPitchYaw(X.rotation())
-    x, y, z = X.translation()
-    r, p, yw = (math.degrees(a) for a in rpy.vector())
-    return sc.Pose(float(x), float(y), float(z), r, p, yw)
 
 
 def _geometry(shape):
@@ -114,11 +101,12 @@ def _add_world(plant: MultibodyPlant, world: sc.World) -> dict:
         shape = _geometry(spec.shape)
         if spec.fixed:
             body = plant.AddRigidBody(name, instance, SpatialInertia.Zero())
-            plant.WeldFrames(plant.world_frame(), body.body_frame(), pose_to_transform(spec.pose))
+            plant.WeldFrames(plant.world_frame(), body.body_frame(),
+                             spec.pose.GetDeterministicValue())
         else:
             body = plant.AddRigidBody(name, instance, SpatialInertia(
                 spec.mass, np.zeros(3), _unit_inertia(spec.shape)))
-            plant.SetDefaultFloatingBaseBodyPose(body, pose_to_transform(spec.pose))
+            plant.SetDefaultFloatingBaseBodyPose(body, spec.pose.GetDeterministicValue())
         props = ProximityProperties()
         AddContactMaterial(friction=CoulombFriction(spec.friction, spec.friction),
                            properties=props)
@@ -174,7 +162,7 @@ def _add_robot(plant: MultibodyPlant, name: str, robot: sc.Robot):
     parser.package_map().AddPackageXml(str(MODELS_DIR / "package.xml"))
     (instance,) = parser.AddModelsFromString(corobot_sdf(name, robot.contact, robot.visual), "sdf")
     chassis = plant.GetBodyByName("chassis", instance)
-    plant.SetDefaultFloatingBaseBodyPose(chassis, pose_to_transform(robot.pose))
+    plant.SetDefaultFloatingBaseBodyPose(chassis, robot.pose.GetDeterministicValue())
     joints = [plant.GetJointByName(f"{w}_axle", instance) for w in dim.WHEEL_NAMES]
     return instance, chassis, joints
 
@@ -237,7 +225,7 @@ def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None) -> Stat
             renderers, save_camera)
         robots[name].ir_sensors = add_ir_sensors(
             builder, plant, scene_graph, name, robot.ir_sensors, model_instance=instance,
-            chassis=chassis, random_seed=scenario.random_seed, meshcat=meshcat)
+            random_seed=scenario.random_seed, meshcat=meshcat)
 
     builder.ExportOutput(plant.get_body_poses_output_port(), "body_poses")
     builder.ExportOutput(scene_graph.get_query_output_port(), "query_object")

@@ -111,8 +111,8 @@ def expected_box_share(sim) -> tuple[float, float]:
                          ids=["facing", "edge_left", "farther", "edge_right"])
 def test_box_fills_the_share_the_geometry_predicts(x, y):
     """The robot faces the giant box (yaw 180 deg, as after turning round at the origin)."""
-    sim = make_sim(f"robots: {{corobot: {{pose: {{x: {x}, y: {y}, yaw_deg: 180}}}}}}",
-                   camera=True)
+    sim = make_sim(f"robots: {{corobot: {{pose: {{translation: [{x}, {y}, 0], "
+                   "rotation: !Rpy {deg: [0, 0, 180]}}}}", camera=True)
     sim.advance(0.5)  # settle on the tyres; the latest frame is from t = 14/30 s
     image = sim.robot().camera_image()
     assert image.shape == (dim.CAMERA_HEIGHT, dim.CAMERA_WIDTH, 4)
@@ -138,7 +138,7 @@ def test_frames_are_lit_not_black():
     assert np.all(g > 0.4 * GROUND_RGB * 255), g
     assert g[1] > g[0] > g[2]
 
-    sim = make_sim("robots: {corobot: {pose: {yaw_deg: 180}}}", camera=True)
+    sim = make_sim("robots: {corobot: {pose: {rotation: !Rpy {deg: [0, 0, 180]}}}}", camera=True)
     sim.advance(0.2)
     image = sim.robot().camera_image()
     face = image[:100, :, :3].reshape(-1, 3).astype(float)
@@ -197,8 +197,9 @@ def test_without_delay_frames_come_at_the_camera_rate():
 NO_DELAY = "robots: {corobot: {camera: {output_delay: 0, capture_offset: 0}}}"
 """The synchronous camera with its ticks at multiples of 1/fps."""
 
-SPIN_BY_THE_EDGE = ("robots: {corobot: {pose: {x: 0.4, y: -1.0, yaw_deg: 180}, commands: "
-                    "[!SetPower {left: -0.5, right: 0.5}]}}")
+SPIN_BY_THE_EDGE = ("robots: {corobot: {pose: {translation: [0.4, -1.0, 0], "
+                    "rotation: !Rpy {deg: [0, 0, 180]}}, "
+                    "commands: [!SetPower {left: -0.5, right: 0.5}]}}")
 
 
 def test_delayed_frames_show_the_scene_at_their_capture():
@@ -305,7 +306,8 @@ def test_gl_and_vtk_render_the_same_picture():
     of the image, the box's outline (measured: 0.07 %)."""
     images = {}
     for renderer in ("RenderEngineGl", "RenderEngineVtk"):
-        sim = make_sim("robots: {corobot: {pose: {x: 4.0, y: 1.0, yaw_deg: 185}, "
+        sim = make_sim("robots: {corobot: {pose: {translation: [4.0, 1.0, 0], "
+                       "rotation: !Rpy {deg: [0, 0, 185]}}, "
                        f"camera: {{renderer_class: {renderer}, output_delay: 0}}}}}}",
                        camera=True)
         assert sim.station.renderers == {"corobot_camera": renderer}

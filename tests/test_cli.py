@@ -57,8 +57,8 @@ def test_script_runs_in_order(tmp_path):
 
 def test_several_robots(tmp_path):
     path = tmp_path / "s.json"
-    two = ("robots: {corobot: {commands: [!SetPower {left: 1, right: 1}]}, "
-           "second: {pose: {y: 1.5}, commands: [!SetPower {left: -1, right: -1}]}}")
+    two = ("robots: {corobot: {commands: [!SetPower {left: 1, right: 1}]}, second: "
+           "{pose: {translation: [0, 1.5, 0]}, commands: [!SetPower {left: -1, right: -1}]}}")
     assert main(["--headless", "--duration", "1.5", "--override", two,
                  "--summary", str(path)]) == 0
     robots = json.loads(path.read_text())["robots"]
@@ -77,6 +77,22 @@ BAD_FILES = {
                        ":3: robots.corobot: duplicate name"),
     "bad_tag.yaml": ("robots:\n  corobot:\n    commands: [!Fly {}]\n",
                      "robots.corobot.commands[0]: unknown tag !Fly"),
+    "out_of_range.yaml": ("robots:\n  corobot:\n    drive:\n      slew_rate: -1\n",
+                          ":4: robots.corobot.drive.slew_rate: must be > 0"),
+    "old_pose.yaml": ("robots:\n  corobot:\n    pose: {x: 1.0, yaw_deg: 90}\n",
+                      ":3: robots.corobot.pose.x: unknown field; Transform has base_frame, "
+                      "translation, rotation"),
+    "short_translation.yaml": ("world:\n  bodies:\n    box:\n      pose:\n"
+                               "        translation: [1.0, 2.0]\n",
+                               ":5: world.bodies.box.pose.translation: needs 3 numbers, got 2"),
+    "body_base_frame.yaml": ("world:\n  bodies:\n    box:\n      pose: {base_frame: box}\n",
+                             ":4: world.bodies.box.pose.base_frame: a pose in the world has "
+                             "no base_frame"),
+    "random_pose.yaml": ("robots:\n  corobot:\n    pose: {rotation: !Uniform {}}\n",
+                         ":3: robots.corobot.pose: must be a fixed pose"),
+    "camera_frame.yaml": ("robots:\n  corobot:\n    camera:\n      X_PB:\n"
+                          "        base_frame: tail\n",
+                          ":5: robots.corobot.camera.X_PB.base_frame: 'tail' is not a link"),
 }
 
 

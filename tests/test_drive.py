@@ -138,7 +138,7 @@ def test_spin_in_place_matches_isotropic_coulomb(sim, wheel_speed):
 def test_driving_into_the_giant_box_does_not_flip(direction):
     # The box is behind the robot: turn it round to drive in forwards.
     if direction == "forwards":
-        sim = make_sim("robots: {corobot: {pose: {yaw_deg: 180}}}")
+        sim = make_sim("robots: {corobot: {pose: {rotation: !Rpy {deg: [0, 0, 180]}}}}")
         sim.robot().set_power(1.0, 1.0)
     else:
         sim = make_sim()

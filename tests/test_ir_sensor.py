@@ -40,7 +40,7 @@ def port(sim, name: str, port_name: str) -> np.ndarray:
 
 
 def at_pose(x: float) -> str:
-    return f"robots: {{corobot: {{pose: {{x: {x}}}}}}}"
+    return f"robots: {{corobot: {{pose: {{translation: [{x}, 0, 0]}}}}}}"
 
 
 # --- the default scene ---------------------------------------------------------------------
@@ -120,7 +120,7 @@ def _post(angle_deg: float, distance: float = 0.5, width: float = 0.02) -> str:
     depth = 0.05
     x = FRONT_X + distance + depth / 2
     return (f"world: {{bodies: {{post: {{shape: !Box {{size: [{depth}, {width}, 0.4]}}, "
-            f"fixed: true, pose: {{x: {x}, y: {y}, z: 0.2}}}}}}}}")
+            f"fixed: true, pose: {{translation: [{x}, {y}, 0.2]}}}}}}}}")
 
 
 def test_an_obstacle_off_axis_inside_the_cone_is_seen_outside_is_not():
@@ -149,8 +149,8 @@ def test_the_ground_is_out_of_range_at_the_default_mount_height():
 
 def test_the_robot_never_sees_itself():
     # A sensor inside the chassis, looking up through the platform: nothing of the robot counts.
-    sim = ir_sim("robots: {corobot: {ir_sensors: {up: {position: [0, 0, 0.07], "
-                 "pitch_deg: -90}}}}")
+    sim = ir_sim("robots: {corobot: {ir_sensors: {up: {X_PB: {translation: [0, 0, 0.07], "
+                 "rotation: !Rpy {deg: [0, -90, 0]}}}}}}")
     assert sim.robot().ir("up").raw == RANGE
     assert set(sim.robot().ir_distances()) == {"front", "rear", "up"}
 
@@ -176,7 +176,13 @@ def test_samples_below_two_is_a_clear_scenario_error():
     ("{rear: {model: laser}}", "rear.model", "not one of ideal, sharp_gp2d12"),
     ("{rear: {scan_rate_hz: 0}}", "rear.scan_rate_hz", "must be > 0"),
     ("{rear: {maximum_range: -1}}", "rear.maximum_range", "must be > 0"),
-    ("{rear: {position: [0, 0]}}", "rear.position", "needs 3 numbers"),
+    ("{rear: {X_PB: {translation: [0, 0]}}}", "rear.X_PB.translation", "needs 3 numbers"),
+    ("{rear: {X_PB: {translation: [.inf, 0, 0]}}}", "rear.X_PB.translation", "finite"),
+    ("{rear: {X_PB: {rotation: !Rpy {deg: [0, 0]}}}}", "rear.X_PB.rotation.deg",
+     "needs 3 numbers"),
+    ("{rear: {X_PB: {rotation: !Uniform {}}}}", "rear.X_PB", "fixed pose"),
+    ("{rear: {X_PB: {base_frame: wheel}}}", "rear.X_PB.base_frame", "not a link"),
+    ("{rear: {position: [0, 0, 0]}}", "rear.position", "unknown field"),
     ("{rear: {dispersion_cone_angle: 200}}", "rear.dispersion_cone_angle", "[0, 180)"),
     ("{rear: {samples: 2.5}}", "rear.samples", "expected an integer"),
     ("{a.b: {}}", "a.b", "without '.'"),

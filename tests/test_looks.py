@@ -121,7 +121,7 @@ def test_chase_view_follows_the_driven_robot():
 
 
 def test_robot_camera_view_sees_the_box_ahead():
-    sim = make_sim("robots: {corobot: {pose: {yaw_deg: 180}}}")
+    sim = make_sim("robots: {corobot: {pose: {rotation: !Rpy {deg: [0, 0, 180]}}}}")
     image = render.render(sim, render.robot_camera_view(render.chassis_pose(sim)),
                           dim.CAMERA_WIDTH, dim.CAMERA_HEIGHT, dim.CAMERA_FOV_Y_DEG,
                           name=render.add_renderer(sim, shadows=False))

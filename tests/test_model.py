@@ -114,10 +114,12 @@ def test_default_scene_matches_the_spec():
     box = scenario.world.bodies["giant_box"]
     assert isinstance(box.shape, BoxShape) and box.shape.size == [2.0, 2.0, 2.0]
     assert box.mass == 100.0 and not box.fixed
-    assert (box.pose.x, box.pose.y, box.pose.z) == pytest.approx(dim.GIANT_BOX_CENTER)
+    X_WB = box.pose.GetDeterministicValue()
+    assert X_WB.translation() == pytest.approx(dim.GIANT_BOX_CENTER)
+    assert X_WB.rotation().IsExactlyIdentity()
     # The near face 29 in behind the origin, so the rear IR reads 0.62865 m (SPEC).
-    assert box.pose.x + 1.0 == pytest.approx(-0.7366, abs=1e-12)
+    assert X_WB.translation()[0] + 1.0 == pytest.approx(-0.7366, abs=1e-12)
     assert scenario.world.ground.friction == 0.5
     (robot,) = scenario.robots.values()
-    assert (robot.pose.x, robot.pose.y, robot.pose.yaw_deg) == (0.0, 0.0, 0.0)
+    assert robot.pose.GetDeterministicValue().IsExactlyIdentity()  # at the origin, facing +x
     assert robot.drive.motor_torque_scaling == 10.16

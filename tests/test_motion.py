@@ -86,7 +86,7 @@ def test_negative_distance_drives_backwards():
 
 
 def test_heading_unwraps_across_180():
-    sim = fast_sim(extra="pose: {yaw_deg: 170}")
+    sim = fast_sim(extra="pose: {rotation: !Rpy {deg: [0, 0, 170]}}")
     robot = sim.robot()
     sim.advance(0.1)
     result = robot.rotate_degrees(20.0, 0.3)

@@ -112,7 +112,8 @@ def test_set_motor_torque_scaling_keeps_the_file():
     with pytest.raises(ValueError, match="not found"):
         sysid.set_motor_torque_scaling(two, "c", 1.0)
     with pytest.raises(ValueError, match="no `motor_torque_scaling:`"):
-        sysid.set_motor_torque_scaling("robots:\n  a:\n    pose: {x: 1}\n", "a", 1.0)
+        sysid.set_motor_torque_scaling("robots:\n  a:\n    pose: {translation: [1, 0, 0]}\n", "a",
+                                       1.0)
 
 
 def test_tuner_steps_toward_the_target(tmp_path, capsys):

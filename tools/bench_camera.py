@@ -23,7 +23,7 @@ import time
 from pathlib import Path
 
 from corobot_drake.config.scenario import load_scenario
-from corobot_drake.sensors.camera import ENGINES
+from corobot_drake.config.sensors import ENGINES
 from corobot_drake.simulation import Simulation, quiet_drake_warnings
 
 DEFAULT_SCENARIO = Path(__file__).resolve().parent.parent / "scenarios" / "corobot.yaml"

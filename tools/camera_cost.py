@@ -25,8 +25,8 @@ from corobot_drake.sensors import render
 from corobot_drake.simulation import Simulation, quiet_drake_warnings
 
 DEFAULT_SCENARIO = Path(__file__).resolve().parent.parent / "scenarios" / "corobot.yaml"
-CIRCLE = "robots: {corobot: {pose: {x: 0.6, y: 0.8, yaw_deg: 150}, " \
-         "commands: [!SetPower {left: 0.3, right: 0.7}]}}"
+CIRCLE = ("robots: {corobot: {pose: {translation: [0.6, 0.8, 0], "
+          "rotation: !Rpy {deg: [0, 0, 150]}}, commands: [!SetPower {left: 0.3, right: 0.7}]}}")
 VIEWS = ("robot-camera", "chase")
 RENDERER = "camera_cost_vtk"
 

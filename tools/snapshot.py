@@ -123,7 +123,8 @@ def main(argv: list[str] | None = None) -> int:
             parser.error(f"--robot: name one of {', '.join(scenario.robots)}")
         robot = scenario.robots[name]
         if args.pose:
-            robot.pose.x, robot.pose.y, robot.pose.yaw_deg = args.pose
+            from corobot_drake.config.poses import ground_pose
+            robot.pose = ground_pose(*args.pose)
         if args.visual:
             robot.visual = args.visual
         if args.drive:

@@ -158,8 +158,8 @@ def measure(scenario_path, robot: str, setting: Setting, time_step: float,
     }
     # Full power into the giant box (behind the robot): forwards (turned round), backwards.
     for direction, power, yaw_deg in (("forwards", 1.0, 180.0), ("backwards", -1.0, 0.0)):
-        sim = _make(scenario_path, robot, setting,
-                    [f"robots: {{{robot}: {{pose: {{yaw_deg: {yaw_deg}}}}}}}"])
+        turned = f"{{rotation: !Rpy {{deg: [0, 0, {yaw_deg}]}}}}"
+        sim = _make(scenario_path, robot, setting, [f"robots: {{{robot}: {{pose: {turned}}}}}"])
         sim.robot(robot).set_power(power, power)
         clock.advance(sim, box_seconds)
         out[f"tilt_{direction}_deg"] = sim.robot(robot).max_tilt_deg()

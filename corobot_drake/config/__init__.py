@@ -1,0 +1,7 @@
+"""The scenario, as a file describes it and as the rest of the package trusts it.
+
+- `scenario.py`: the schema (`Scenario` and its parts), `load_scenario`, `save_scenario`;
+- `sensors.py`: the sensors' configuration (`IrSensorConfig`, the camera's defaults);
+- `poses.py`: the one pose convention, Drake's schema `Transform`, and its helpers;
+- `validate.py`: the one validation pass `load_scenario` runs on every layer.
+"""

@@ -42,7 +42,6 @@ import warnings
 from pathlib import Path
 
 import numpy as np
-from pydrake.common.schema import Rotation, Transform
 from pydrake.common.value import AbstractValue
 from pydrake.geometry import (
     LightParameter,
@@ -52,93 +51,21 @@ from pydrake.geometry import (
     RenderEngineVtkParams,
     Rgba,
 )
-from pydrake.math import RigidTransform
-from pydrake.multibody.parsing import GetScopedFrameByName
 from pydrake.systems.framework import EventStatus, LeafSystem
 from pydrake.systems.sensors import CameraConfig, ImageRgba8U, RgbdSensor, RgbdSensorAsync
 
-from corobot_drake.model import dimensions as dim
+from corobot_drake.config.poses import mount_frame
 from corobot_drake.sensors.xdisplay import x_display
-
-ENGINES = ("RenderEngineGl", "RenderEngineVtk")
-"""The render engines a camera can use, the faster here first."""
-
-RENDERERS = ("", *ENGINES)
-"""`CameraConfig.renderer_class` names this project builds ("": the faster one available)."""
-
-RENDERER_NAME = "corobot_camera"
-"""The default `renderer_name` of the robots' cameras (one engine for all of them)."""
 
 FILL_INTENSITY = 0.5
 """The fill light (from the camera, the sky's scattered light); the sun is the scenario's."""
 
-CAMERA_ROTATION_RPY_DEG = (-90.0, 0.0, -90.0)
-"""Drake camera axes (+z forward, +x right, +y down) looking along the body's +x, level."""
-
-CAPTURE_OFFSET = 0.0005
-"""s: the default camera captures 0.5 ms past each 1/30 s tick, so that with plant steps of
-10, 5, 2 or 1 ms its capture and output events never fall within rounding distance of a
-step. Drake computes a periodic event's next time as offset + k * period, rounding
-(t - offset) / period up, so an event a few ulps after another stop can be skipped: a 10 Hz
-camera with a 30 ms delay captured at 0.30000000000000004 s, a plant step stopped at 0.33,
-and the output at 0.33000000000000007 never came (its frame was lost)."""
-
 NEAR_STEP = 1e-6
-"""s: a camera event this close to a plant step risks the skip described at CAPTURE_OFFSET."""
+"""s: a camera event this close to a plant step risks the skip described at
+`config.sensors.CAPTURE_OFFSET`."""
 
 TICK_TOLERANCE = 1e-9
 """s: a frame tick this close to a plant step counts as on it (float sums of periods)."""
-
-
-def default_camera_config() -> CameraConfig:
-    """The Corobot's camera (SPEC): 320 x 240, 30 deg vertical fov, 30 Hz, on the chassis at
-    `dimensions.CAMERA`, looking forward. `X_PB.base_frame` is `chassis`, resolved in the
-    robot's own model instance (a scoped name `model::frame` is used as given)."""
-    return CameraConfig(
-        width=dim.CAMERA_WIDTH,
-        height=dim.CAMERA_HEIGHT,
-        focal=CameraConfig.FovDegrees(y=dim.CAMERA_FOV_Y_DEG),
-        clipping_near=0.01,  # in front of the hollow lens barrel (8 mm) and its glass (0.5 mm)
-        clipping_far=100.0,
-        X_PB=Transform(base_frame="chassis", translation=list(dim.CAMERA.position),
-                       rotation=Rotation.Rpy(deg=[CAMERA_ROTATION_RPY_DEG[0], 0.0,
-                                                  CAMERA_ROTATION_RPY_DEG[2]
-                                                  + float(np.degrees(dim.CAMERA.yaw))])),
-        renderer_name=RENDERER_NAME,
-        name="camera",
-        fps=dim.CAMERA_FPS,
-        capture_offset=CAPTURE_OFFSET,
-        output_delay=dim.CAMERA_OUTPUT_DELAY,
-        rgb=True,
-        depth=False,
-        label=False,
-    )
-
-
-def check_camera_config(config: CameraConfig) -> tuple[str, str] | None:
-    """(field, problem) for a camera this project cannot build, else None."""
-    if not config.rgb:
-        return None
-    if config.depth or config.label:
-        return ("depth" if config.depth else "label",
-                "only the colour image is simulated; set it false")
-    if not (config.fps > 0 and np.isfinite(config.fps)):
-        return ("fps", "must be a positive number")
-    if not 0 <= config.output_delay < 1.0 / config.fps:
-        return ("output_delay", f"must be >= 0 and less than one frame (1/fps = "
-                f"{1.0 / config.fps:.4g} s)")
-    if not config.capture_offset >= 0:
-        return ("capture_offset", "must be >= 0")
-    rc = config.renderer_class
-    if not (isinstance(rc, RenderEngineVtkParams | RenderEngineGlParams) or rc in RENDERERS):
-        return ("renderer_class", "must be RenderEngineGl, RenderEngineVtk or empty (the "
-                "faster one available)")
-    try:
-        config.MakeCameras()
-        config.X_PB.GetDeterministicValue()
-    except Exception as e:  # Drake's own validation: one line
-        return ("", str(e).splitlines()[0])
-    return None
 
 
 class RendererUnavailableError(RuntimeError):
@@ -328,20 +255,6 @@ class CameraFrameSaver(LeafSystem):
         self.frames_saved += 1
 
 
-def _sensor_pose(plant, instance, config: CameraConfig):
-    """(geometry frame id, X_AB): the body frame the sensor rides on and the pose in it."""
-    name = config.X_PB.base_frame
-    if not name:
-        frame = plant.world_frame()
-    elif "::" in name:
-        frame = GetScopedFrameByName(plant, name)
-    else:
-        frame = plant.GetFrameByName(name, instance)
-    X_FB = config.X_PB.GetDeterministicValue()
-    X_AB = frame.GetFixedPoseInBodyFrame() @ X_FB
-    return plant.GetBodyFrameIdOrThrow(frame.body().index()), RigidTransform(X_AB)
-
-
 def events_near_steps(config: CameraConfig, step: float, ticks: int = 1000) -> bool:
     """Whether any of the first `ticks` captures (or outputs, `output_delay` later) of an
     asynchronous camera comes within NEAR_STEP of a plant step of `step` s."""
@@ -374,7 +287,8 @@ def add_camera(builder, plant, scene_graph, robot: str, instance, config: Camera
             config.renderer_class, world.sun.direction, world.sun.intensity, world.sky_color)
         scene_graph.AddRenderer(config.renderer_name, engine)
     color, depth = config.MakeCameras()
-    frame_id, X_AB = _sensor_pose(plant, instance, config)
+    body, X_AB = mount_frame(plant, instance, config.X_PB)
+    frame_id = plant.GetBodyFrameIdOrThrow(body.index())
     delay = 0.0
     # The saver looks at every plant step, or at every frame if frames come faster.
     look = step if step > 0 and config.fps * step <= 1.0 + TICK_TOLERANCE else 1.0 / config.fps

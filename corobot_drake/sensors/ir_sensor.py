@@ -1,8 +1,9 @@
 """The IR distance sensors: one LeafSystem per sensor, casting a cross of rays at a fixed rate.
 
-Each sensor (SPEC, Sensors) is fixed to its robot's chassis and reads SceneGraph's
-``query_object`` port, its only input: the chassis pose comes from
-``QueryObject.GetPoseInWorld(chassis frame)`` and the rays are cast exactly against every
+Each sensor (SPEC, Sensors) is fixed to a link of its robot, the chassis by default (its
+``X_PB``, :class:`corobot_drake.config.sensors.IrSensorConfig`), and reads SceneGraph's
+``query_object`` port, its only input: the link's pose comes from
+``QueryObject.GetPoseInWorld(link frame)`` and the rays are cast exactly against every
 proximity geometry except the robot's own (:class:`corobot_drake.sensors.raycast.RayCaster`,
 built on the first scan from the QueryObject's inspector, rebuilt only if the proximity geometry
 changes).
@@ -45,108 +46,24 @@ semantics): right after ``AdvanceTo(t)`` the latest reading is the previous scan
 """
 
 
-import dataclasses as dc
 import math
 import zlib
 
 import numpy as np
 from pydrake.geometry import Meshcat, Rgba, Role, Sphere
-from pydrake.math import RigidTransform, RollPitchYaw
+from pydrake.math import RigidTransform
 from pydrake.systems.framework import BasicVector, LeafSystem
 
-from corobot_drake.model import dimensions as dim
+from corobot_drake.config.poses import mount_frame
+from corobot_drake.config.sensors import IrSensorConfig
 from corobot_drake.readings import IrReading
-from corobot_drake.sensors.ir_models import MODELS, SharpGP2D12
+from corobot_drake.sensors.ir_models import SharpGP2D12
 from corobot_drake.sensors.raycast import (
     RayCaster,
     RayFan,
     cross_of_rays_in_sensor_frame,
     model_instance_geometry_ids,
 )
-
-# --- configuration (the scenario's `robots.<name>.ir_sensors.<sensor>`) -----------------------
-
-
-@dc.dataclass
-class IrSensorConfig:
-    """One IR distance sensor on a robot's chassis (SPEC, Sensors)."""
-
-    position: list[float] = dc.field(default_factory=lambda: list(dim.FRONT_IR.position))
-    """m, in the chassis frame (origin on the ground midway between the axles, +x forward)."""
-    yaw_deg: float = 0.0
-    """Look direction: yaw about the chassis z axis (0 = forward, 180 = backward)."""
-    pitch_deg: float = 0.0
-    """Look direction: pitch, positive looking down (about the sensor's y axis)."""
-    samples: int = dim.IR_SAMPLES
-    """Rays per fan of the cross (one horizontal fan, one vertical), at least 2."""
-    dispersion_cone_angle: float = dim.IR_DISPERSION_CONE_ANGLE_DEG
-    """Degrees: each fan spreads its rays evenly over this angle."""
-    maximum_range: float = dim.IR_MAXIMUM_RANGE
-    """m: the reading when nothing is hit (0.762 m)."""
-    scan_rate_hz: float = 20.0
-    """Scans per second (a periodic discrete update, independent of the physics step)."""
-    model: str = "ideal"
-    """Output model: `ideal` (the book's) or `sharp_gp2d12` (datasheet voltage, ADC, noise)."""
-    change_threshold: float = 1e-4
-    """m: `changed` is set when the reading moves by more than this from the previous scan
-    (a robot standing still creeps by nanometres; subscribers want real changes)."""
-    noise_std: float = 0.01
-    """V: Gaussian noise on the sharp_gp2d12 voltage (0: none)."""
-    noise_seed: int = 0
-    """Mixed with the scenario's random_seed and the robot and sensor names."""
-    enabled: bool = True
-    """False: no sensor (a default sensor can't otherwise be removed from the mapping)."""
-
-
-def default_ir_sensors() -> dict[str, IrSensorConfig]:
-    """The Corobot's two sensors at the SPEC positions."""
-    return {
-        "front": IrSensorConfig(list(dim.FRONT_IR.position), math.degrees(dim.FRONT_IR.yaw)),
-        "rear": IrSensorConfig(list(dim.REAR_IR.position), math.degrees(dim.REAR_IR.yaw)),
-    }
-
-
-def check_ir_sensor_name(name: str) -> str | None:
-    """A problem with a sensor name (it appears in port names and Meshcat paths), or None."""
-    if not name or any(c in name for c in "./: "):
-        return "a sensor name must be non-empty, without '.', '/', ':' or spaces"
-    return None
-
-
-def check_ir_sensor_config(config: IrSensorConfig) -> tuple[str, str] | None:
-    """The first (field, message) problem with a sensor's configuration, or None."""
-    c = config
-    if isinstance(c.samples, bool) or not isinstance(c.samples, int) or c.samples < 2:
-        return ("samples", f"must be an integer of at least 2 (rays per fan of the IR cross of "
-                f"rays: one horizontal and one vertical fan); got {c.samples!r}")
-    if len(c.position) != 3:
-        return "position", f"needs 3 numbers [x, y, z] (m, chassis frame); got {len(c.position)}"
-    if not all(math.isfinite(v) for v in c.position):
-        return "position", "must be finite"
-    if not 0.0 <= c.dispersion_cone_angle < 180.0:
-        return ("dispersion_cone_angle",
-                f"must be in [0, 180) degrees; got {c.dispersion_cone_angle}")
-    if not 0.0 < c.maximum_range < math.inf:
-        return "maximum_range", f"must be > 0 m and finite; got {c.maximum_range}"
-    if not 0.0 < c.scan_rate_hz < math.inf:
-        return "scan_rate_hz", f"must be > 0 and finite; got {c.scan_rate_hz}"
-    if c.model not in MODELS:
-        return "model", f"{c.model!r} is not one of {', '.join(MODELS)}"
-    if not 0.0 <= c.change_threshold < math.inf:
-        return "change_threshold", f"must be >= 0 m and finite; got {c.change_threshold}"
-    if not c.noise_std >= 0.0:
-        return "noise_std", f"must be >= 0 V; got {c.noise_std}"
-    for field in ("yaw_deg", "pitch_deg"):
-        if not math.isfinite(getattr(c, field)):
-            return field, "must be finite"
-    return None
-
-
-def sensor_pose_in_chassis(config: IrSensorConfig) -> RigidTransform:
-    """X_BS: the sensor frame S (looking along its +x) in the chassis frame B."""
-    rpy = RollPitchYaw(0.0, math.radians(config.pitch_deg), math.radians(config.yaw_deg))
-    return RigidTransform(rpy, np.asarray(config.position, dtype=float))
-
 
 # --- counter-based noise -------------------------------------------------------------------
 
@@ -196,26 +113,26 @@ def scan_state_layout(num_rays: int) -> tuple[int, slice, slice, slice]:
 class IrSensor(LeafSystem):
     """One IR distance sensor (see the module docstring for its state and ports).
 
-    chassis_frame_id: the SceneGraph FrameId of the body the sensor is fixed to;
+    config: as validated by the scenario loader (`config/validate.py`), trusted here;
+    frame_id: the SceneGraph FrameId of the body the sensor is fixed to; X_BS: the sensor
+    frame in that body's frame (default: `config.X_PB`, its base frame being the body's);
     exclude: the robot's own geometry ids (never hit); key: the noise key (sharp_gp2d12).
     """
 
-    def __init__(self, config: IrSensorConfig, chassis_frame_id, exclude, key: int = 0,
-                 name: str = "ir"):
+    def __init__(self, config: IrSensorConfig, frame_id, exclude, key: int = 0,
+                 name: str = "ir", X_BS: RigidTransform | None = None):
         super().__init__()
-        problem = check_ir_sensor_config(config)
-        if problem is not None:
-            raise ValueError(f"IR sensor '{name}': {problem[0]}: {problem[1]}")
         self.config = config
         self.sensor_name = name
-        self._frame_id = chassis_frame_id
+        self._frame_id = frame_id
         self._exclude = frozenset(exclude)
         self._key = int(key)
         self._range = float(config.maximum_range)
         self._threshold = float(config.change_threshold)
         self._sharp = SharpGP2D12(noise_std=config.noise_std) if config.model == "sharp_gp2d12" \
             else None
-        X_BS = sensor_pose_in_chassis(config)
+        if X_BS is None:
+            X_BS = config.X_PB.GetDeterministicValue()
         self._fan = RayFan.cross_of_rays(X_BS, config.samples, config.dispersion_cone_angle)
         self.num_rays = n = 2 * config.samples
         self.period = 1.0 / config.scan_rate_hz
@@ -448,28 +365,26 @@ class IrMeshcatVisualizer(LeafSystem):
 
 
 def add_ir_sensors(builder, plant, scene_graph, robot_name: str, configs: dict,
-                   *, model_instance, chassis, random_seed: int = 0,
+                   *, model_instance, random_seed: int = 0,
                    meshcat: Meshcat | None = None) -> dict[str, IrSensor]:
     """Adds one IrSensor per enabled config to `builder` (named `<robot>.ir.<sensor>`),
-    connected to SceneGraph's query output, and exports its ports as `<robot>.<sensor>.<port>`.
+    mounted by its `X_PB` (on a link of `model_instance`, the robot), connected to
+    SceneGraph's query output, and exports its ports as `<robot>.<sensor>.<port>`.
     With `meshcat`, adds an IrMeshcatVisualizer per sensor under /ir/<robot>/<sensor>.
 
     The plant must be finalized. Returns {sensor name: IrSensor}.
     """
     exclude = model_instance_geometry_ids(plant, model_instance)
-    frame_id = plant.GetBodyFrameIdOrThrow(chassis.index())
     sensors = {}
     for sensor_name, config in configs.items():
         if not config.enabled:
             continue
-        problem = check_ir_sensor_name(sensor_name)
-        if problem is not None:
-            raise ValueError(f"IR sensor {sensor_name!r}: {problem}")
+        body, X_BS = mount_frame(plant, model_instance, config.X_PB)
         sensor = builder.AddNamedSystem(
             f"{robot_name}.ir.{sensor_name}",
-            IrSensor(config, frame_id, exclude,
+            IrSensor(config, plant.GetBodyFrameIdOrThrow(body.index()), exclude,
                      noise_key(random_seed, robot_name, sensor_name, config.noise_seed),
-                     sensor_name))
+                     sensor_name, X_BS))
         builder.Connect(scene_graph.get_query_output_port(), sensor.get_input_port(0))
         for i in range(sensor.num_output_ports()):
             port = sensor.get_output_port(i)
@@ -488,9 +403,6 @@ __all__ = [
     "IrMeshcatVisualizer",
     "IrReading",
     "IrSensor",
-    "IrSensorConfig",
     "add_ir_sensors",
-    "check_ir_sensor_config",
     "cross_of_rays_in_sensor_frame",
-    "default_ir_sensors",
 ]

@@ -1,0 +1,99 @@
+"""The sensors' configuration: each robot's IR sensors and camera, as the scenario holds them.
+
+Both are mounted the same way, by Drake's `pydrake.common.schema.Transform` `X_PB`: the
+sensor's pose in the frame `X_PB.base_frame` (a link of its robot, `chassis` by default; a
+scoped name `model::link` for another model's link; empty for the world). The sensor frame
+of an IR sensor looks along its +x; a camera's is Drake's (+z forward, +x right, +y down).
+The values are checked by the loader (`config/validate.py`), once; the systems trust them.
+"""
+
+import dataclasses as dc
+import math
+
+from pydrake.common.schema import Transform
+from pydrake.systems.sensors import CameraConfig
+
+from corobot_drake.config.poses import mount
+from corobot_drake.model import dimensions as dim
+
+# --- IR distance sensors (the scenario's `robots.<name>.ir_sensors.<sensor>`) ----------------
+
+
+@dc.dataclass
+class IrSensorConfig:
+    """One IR distance sensor on a robot (SPEC, Sensors)."""
+
+    X_PB: Transform = dc.field(
+        default_factory=lambda: mount(dim.FRONT_IR.position, (0.0, 0.0, 0.0)))
+    """The sensor frame S (looking along its +x) in `base_frame` (default `chassis`: origin
+    on the ground midway between the axles, +x forward), as the camera's `X_PB`."""
+    samples: int = dim.IR_SAMPLES
+    """Rays per fan of the cross (one horizontal fan, one vertical), at least 2."""
+    dispersion_cone_angle: float = dim.IR_DISPERSION_CONE_ANGLE_DEG
+    """Degrees: each fan spreads its rays evenly over this angle."""
+    maximum_range: float = dim.IR_MAXIMUM_RANGE
+    """m: the reading when nothing is hit (0.762 m)."""
+    scan_rate_hz: float = 20.0
+    """Scans per second (a periodic discrete update, independent of the physics step)."""
+    model: str = "ideal"
+    """Output model: `ideal` (the book's) or `sharp_gp2d12` (datasheet voltage, ADC, noise)."""
+    change_threshold: float = 1e-4
+    """m: `changed` is set when the reading moves by more than this from the previous scan
+    (a robot standing still creeps by nanometres; subscribers want real changes)."""
+    noise_std: float = 0.01
+    """V: Gaussian noise on the sharp_gp2d12 voltage (0: none)."""
+    noise_seed: int = 0
+    """Mixed with the scenario's random_seed and the robot and sensor names."""
+    enabled: bool = True
+    """False: no sensor (a default sensor can't otherwise be removed from the mapping)."""
+
+
+def default_ir_sensors() -> dict[str, IrSensorConfig]:
+    """The Corobot's two sensors at the SPEC positions: `front` looking forward, `rear` back."""
+    return {name: IrSensorConfig(X_PB=mount(m.position, (0.0, 0.0, math.degrees(m.yaw))))
+            for name, m in (("front", dim.FRONT_IR), ("rear", dim.REAR_IR))}
+
+
+# --- the camera (the scenario's `robots.<name>.camera`, Drake's CameraConfig) ----------------
+
+ENGINES = ("RenderEngineGl", "RenderEngineVtk")
+"""The render engines a camera can use, the faster here first."""
+
+RENDERERS = ("", *ENGINES)
+"""`CameraConfig.renderer_class` names this project builds ("": the faster one available)."""
+
+RENDERER_NAME = "corobot_camera"
+"""The default `renderer_name` of the robots' cameras (one engine for all of them)."""
+
+CAMERA_ROTATION_RPY_DEG = (-90.0, 0.0, -90.0)
+"""Drake camera axes (+z forward, +x right, +y down) looking along the body's +x, level."""
+
+CAPTURE_OFFSET = 0.0005
+"""s: the default camera captures 0.5 ms past each 1/30 s tick, so that with plant steps of
+10, 5, 2 or 1 ms its capture and output events never fall within rounding distance of a
+step. Drake computes a periodic event's next time as offset + k * period, rounding
+(t - offset) / period up, so an event a few ulps after another stop can be skipped: a 10 Hz
+camera with a 30 ms delay captured at 0.30000000000000004 s, a plant step stopped at 0.33,
+and the output at 0.33000000000000007 never came (its frame was lost)."""
+
+
+def default_camera_config() -> CameraConfig:
+    """The Corobot's camera (SPEC): 320 x 240, 30 deg vertical fov, 30 Hz, on the chassis at
+    `dimensions.CAMERA`, looking forward."""
+    roll, _, yaw = CAMERA_ROTATION_RPY_DEG
+    return CameraConfig(
+        width=dim.CAMERA_WIDTH,
+        height=dim.CAMERA_HEIGHT,
+        focal=CameraConfig.FovDegrees(y=dim.CAMERA_FOV_Y_DEG),
+        clipping_near=0.01,  # in front of the hollow lens barrel (8 mm) and its glass (0.5 mm)
+        clipping_far=100.0,
+        X_PB=mount(dim.CAMERA.position, (roll, 0.0, yaw + math.degrees(dim.CAMERA.yaw))),
+        renderer_name=RENDERER_NAME,
+        name="camera",
+        fps=dim.CAMERA_FPS,
+        capture_offset=CAPTURE_OFFSET,
+        output_delay=dim.CAMERA_OUTPUT_DELAY,
+        rgb=True,
+        depth=False,
+        label=False,
+    )
