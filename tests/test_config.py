@@ -1,0 +1,98 @@
+"""The scenario's one pose convention (Drake's schema Transform) and its one validation pass."""
+
+import math
+
+import numpy as np
+import pytest
+from pydrake.common.yaml import yaml_dump_typed
+from pydrake.math import RigidTransform, RollPitchYaw
+
+from conftest import DEFAULT_SCENARIO, make_sim
+from corobot_drake.config import scenario as sc
+from corobot_drake.config.poses import ground_pose, mount_frame, transform_from
+from corobot_drake.config.scenario import ScenarioError, load_scenario
+from corobot_drake.config.sensors import default_ir_sensors
+from corobot_drake.model import dimensions as dim
+
+
+def test_the_default_ir_sensors_are_at_the_spec_mounts():
+    for name, mount in (("front", dim.FRONT_IR), ("rear", dim.REAR_IR)):
+        X_PB = default_ir_sensors()[name].X_PB
+        assert X_PB.base_frame == "chassis"
+        expected = RigidTransform(RollPitchYaw(0.0, 0.0, mount.yaw), mount.position)
+        np.testing.assert_array_equal(X_PB.GetDeterministicValue().GetAsMatrix34(),
+                                      expected.GetAsMatrix34())
+
+
+def test_ground_pose_stands_a_robot_on_the_ground():
+    X = ground_pose(1.0, -2.0, 90.0).GetDeterministicValue()
+    np.testing.assert_array_equal(X.translation(), [1.0, -2.0, 0.0])
+    assert RollPitchYaw(X.rotation()).vector() == pytest.approx([0.0, 0.0, math.pi / 2])
+
+
+def test_a_pose_written_back_reads_as_the_same_transform():
+    X = RigidTransform(RollPitchYaw(0.01, -0.2, 2.9), [0.3, -1.2, 0.05])
+    again = transform_from(X).GetDeterministicValue()
+    assert again.IsNearlyEqualTo(X, 1e-14)
+
+
+def test_sensors_ride_on_the_link_their_base_frame_names():
+    sim = make_sim()
+    plant, parts = sim.station.plant, sim.robot()._parts
+    X_PB = default_ir_sensors()["rear"].X_PB
+    body, X_BS = mount_frame(plant, parts.model_instance, X_PB)
+    assert body.index() == parts.chassis.index()
+    assert X_BS.IsExactlyEqualTo(X_PB.GetDeterministicValue())
+
+
+def test_an_ir_sensor_can_ride_on_a_wheel():
+    sim = make_sim("robots: {corobot: {ir_sensors: {hub: {X_PB: {base_frame: front_left_wheel, "
+                   "translation: [0, 0.05, 0], rotation: !Rpy {deg: [0, 0, 90]}}}}}}")
+    assert set(sim.robot().ir_distances()) == {"front", "rear", "hub"}
+
+
+def test_a_saved_scenario_keeps_every_pose_in_the_one_convention(tmp_path):
+    sim = make_sim("robots: {corobot: {commands: [!SetPower {left: 0.3, right: 0.6}]}}")
+    sim.advance(0.5)
+    path = tmp_path / "saved.yaml"
+    sim.save_scenario(path)
+    text = path.read_text()
+    assert "yaw_deg" not in text.replace("!SetPose", "")  # no other pose form
+    saved = load_scenario(path)
+    X_saved = saved.robots["corobot"].pose.GetDeterministicValue()
+    X_now = sim.station.plant.EvalBodyPoseInWorld(
+        sim.station.plant.GetMyContextFromRoot(sim.context), sim.robot()._parts.chassis)
+    assert X_saved.IsNearlyEqualTo(X_now, 1e-12)
+    assert yaml_dump_typed(saved, schema=sc.Scenario) == text  # a fixed point
+
+
+@pytest.mark.parametrize("override, field, words", [
+    ("world: {bodies: {giant_box: {pose: {translation: [0, 0, -.inf]}}}}",
+     "world.bodies.giant_box.pose.translation", "must be finite"),
+    ("world: {bodies: {giant_box: {pose: {rotation: !AngleAxis {angle_deg: 90, "
+     "axis: [0, 0, 0]}}}}}", "world.bodies.giant_box.pose.rotation", "non-zero axis"),
+    ("robots: {corobot: {pose: {translation: !UniformVector {min: [0, 0, 0], max: [1, 1, 0]}}}}",
+     "robots.corobot.pose", "must be a fixed pose"),
+    ("robots: {corobot: {ir_sensors: {rear: {X_PB: {base_frame: giant_box::giant_box}}}}}",
+     None, None),  # a scoped link of the scenario: accepted
+    ("robots: {corobot: {ir_sensors: {rear: {X_PB: {base_frame: other::chassis}}}}}",
+     "robots.corobot.ir_sensors.rear.X_PB.base_frame", "not a link of the robot"),
+])
+def test_pose_errors_name_the_field(override, field, words):
+    if field is None:
+        load_scenario(DEFAULT_SCENARIO, overrides=[override])
+        return
+    with pytest.raises(ScenarioError) as e:
+        load_scenario(DEFAULT_SCENARIO, overrides=[override])
+    assert f"--override:1: {field}:" in str(e.value) and words in str(e.value)
+
+
+def test_checks_of_meaning_name_the_line_of_the_field(tmp_path):
+    path = tmp_path / "s.yaml"
+    path.write_text("robots:\n  corobot:\n    ir_sensors:\n      rear:\n"
+                    "        maximum_range: -1\n")
+    with pytest.raises(ScenarioError) as e:
+        load_scenario(path)
+    assert str(e.value).startswith(
+        f"{path}:5: robots.corobot.ir_sensors.rear.maximum_range: must be > 0")
+
