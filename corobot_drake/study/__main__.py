@@ -1,0 +1,56 @@
+"""`python -m corobot_drake.study STUDY.yaml [--workers N] [--address ADDR] [--out DIR]
+[--resume]`: run a study on Ray and write its runs, summary and plots.
+
+Exit status: 0 when every run is ok, 1 when some runs are error rows, 2 for a bad study file
+or arguments, 130 when stopped with Ctrl-C (the finished rows are kept: `--resume`).
+"""
+
+import argparse
+import sys
+from pathlib import Path
+
+from corobot_drake.config.scenario import ScenarioError
+from corobot_drake.study.engine import read_rows, run_study
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="python -m corobot_drake.study",
+                                description=__doc__.splitlines()[0])
+    p.add_argument("study", help="study YAML file")
+    p.add_argument("--workers", type=int, default=None,
+                   help="Ray workers (default: this machine's cores, or the cluster's CPUs)")
+    p.add_argument("--address", help="join this Ray cluster (e.g. 10.0.0.1:6379) instead of "
+                   "starting a local instance")
+    p.add_argument("--out", type=Path, help="output directory (default: studies/<study name>)")
+    p.add_argument("--resume", action="store_true",
+                   help="simulate only the runs not yet in OUT/runs.csv")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    return p
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = _parser().parse_args(argv)
+    if args.workers is not None and args.workers < 1:
+        print("error: --workers: must be >= 1", file=sys.stderr)
+        return 2
+    out = args.out or Path("studies") / Path(args.study).stem
+    try:
+        runs_csv = run_study(args.study, out, workers=args.workers, address=args.address,
+                             resume=args.resume, progress=not args.quiet)
+    except ScenarioError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(f"stopped: the finished runs are in {out / 'runs.csv'} (--resume runs the rest)",
+              file=sys.stderr)
+        return 130
+    rows = read_rows(runs_csv)
+    errors = [r for r in rows if r["status"] != "ok"]
+    print(f"{len(rows)} runs ({len(errors)} errors): {runs_csv}, {out / 'summary.md'}")
+    for row in errors[:5]:
+        print(f"  run {row['run']}: {row['error']}", file=sys.stderr)
+    return 1 if errors else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

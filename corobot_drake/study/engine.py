@@ -1,0 +1,120 @@
+"""Runs a study on Ray: a local instance started for the study (the default) or a cluster
+joined by address. Rows are written to `runs.csv` as they arrive (at most every
+`SAVE_EVERY` s), so a study stopped half way keeps what it finished and `resume` runs the rest.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import csv
+import os
+import shutil
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+from tqdm import tqdm
+
+from corobot_drake.study import report
+from corobot_drake.study.runner import StudyWorker, finite_or_text
+from corobot_drake.study.spec import Run, Study, expand, load_study, scenario_path
+
+SAVE_EVERY = 2.0
+"""Wall-clock seconds between rewrites of runs.csv while runs arrive."""
+TIMING_COLUMNS = ("wall_seconds",)
+"""Columns that depend on the clock (everything else is deterministic)."""
+
+
+@contextlib.contextmanager
+def ray_session(address: str | None, workers: int | None) -> Iterator[int]:
+    """Connects to Ray for the study; yields the number of workers to start. Without an
+    address, starts a local instance with `workers` CPUs (default: this machine's cores) and
+    stops it, with its processes, on exit."""
+    import ray
+
+    if address:
+        ray.init(address=address, include_dashboard=False, log_to_driver=False,
+                 configure_logging=False)
+    else:
+        ray.init(num_cpus=workers or os.cpu_count(), include_dashboard=False,
+                 log_to_driver=False, configure_logging=False)
+    try:
+        yield workers or int(ray.cluster_resources().get("CPU", 1))
+    finally:
+        ray.shutdown()
+
+
+def read_rows(path: Path) -> list[dict]:
+    if not path.exists():
+        return []
+    with path.open(newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def columns(rows: list[dict], study: Study) -> list[str]:
+    """run, seed, the parameters in study order, the metrics in order of appearance, status,
+    error, then the timing columns."""
+    fixed = ["run", "seed", *study.grid, *study.random]
+    tail = ["status", "error", *TIMING_COLUMNS]
+    metric_columns: dict[str, None] = {}
+    for row in rows:
+        metric_columns.update((k, None) for k in row if k not in fixed and k not in tail)
+    return [*fixed, *metric_columns, *tail]
+
+
+def write_rows(path: Path, rows: list[dict], study: Study) -> None:
+    rows = sorted(rows, key=lambda r: int(r["run"]))
+    tmp = path.with_suffix(".csv.tmp")
+    with tmp.open("w", newline="") as f:
+        writer = csv.DictWriter(f, columns(rows, study), restval="")
+        writer.writeheader()
+        writer.writerows({k: finite_or_text(v) for k, v in row.items()} for row in rows)
+    tmp.replace(path)
+
+
+def _results(todo: list[Run], study: Study, scenario_file: Path, workers: int) -> Iterator[dict]:
+    """Rows as runs finish, in completion order, on `workers` Ray actors."""
+    import ray
+    from ray.util import ActorPool
+
+    remote = ray.remote(num_cpus=1)(StudyWorker)
+    actors = [remote.remote(study, str(scenario_file)) for _ in range(min(workers, len(todo)))]
+    pool = ActorPool(actors)
+    yield from pool.map_unordered(lambda actor, run: actor.run.remote(run), todo)
+
+
+def run_study(study_file: str | Path, out_dir: str | Path, *, workers: int | None = None,
+              address: str | None = None, resume: bool = False, progress: bool = True) -> Path:
+    """Simulates every run of the study not yet in `out_dir/runs.csv` and writes the outputs
+    (runs.csv, summary.md, plots, a copy of the study file); returns runs.csv's path."""
+    study = load_study(study_file)
+    scenario_file = scenario_path(study, study_file)
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    runs_csv = out / "runs.csv"
+    rows = read_rows(runs_csv) if resume else []
+    finished = {int(r["run"]) for r in rows}
+    todo = [run for run in expand(study) if run.index not in finished]
+    shutil.copyfile(study_file, out / Path(study_file).name)
+    if todo:
+        _simulate_all(todo, study, scenario_file, rows, runs_csv, workers, address, progress)
+    write_rows(runs_csv, rows, study)
+    report.write(out, study, read_rows(runs_csv))
+    return runs_csv
+
+
+def _simulate_all(todo, study, scenario_file, rows, runs_csv, workers, address,
+                  progress) -> None:
+    saved = time.monotonic()
+    bar = tqdm(total=len(todo), unit="run", disable=not progress, smoothing=0.1)
+    try:
+        with ray_session(address, workers) as n:
+            for row in _results(todo, study, scenario_file, n):
+                rows.append(row)
+                bar.update()
+                if time.monotonic() - saved > SAVE_EVERY:
+                    write_rows(runs_csv, rows, study)
+                    saved = time.monotonic()
+    finally:  # Ctrl-C or an error: keep every finished row
+        bar.close()
+        write_rows(runs_csv, rows, study)

@@ -1,0 +1,147 @@
+"""The metrics registry: named measurements of one robot at the end of a run.
+
+A metric is one small function `(RobotRun) -> value`, registered with `@metric("name")`. A
+value is a number or text (one column `<robot>.<name>`), or a dict of them (one column per key,
+`<robot>.<name>.<key>`). Adding a metric is writing one such function here.
+"""
+
+from __future__ import annotations
+
+import dataclasses as dc
+import math
+from collections.abc import Callable
+
+from corobot_drake.config.scenario import DriveDistance, RotateDegrees
+from corobot_drake.readings import BodyPose
+from corobot_drake.simulation import Robot, Simulation
+
+Value = float | int | str
+METRICS: dict[str, Callable[[RobotRun], Value | dict[str, Value]]] = {}
+
+
+@dc.dataclass
+class RobotRun:
+    """One robot after a run: the simulation, the robot and where it started."""
+
+    sim: Simulation
+    robot: Robot
+    start: BodyPose
+    start_heading: float
+    """Compass heading at the start, rad."""
+
+
+def metric(name: str):
+    def register(fn):
+        METRICS[name] = fn
+        return fn
+    return register
+
+
+@metric("x")
+def _x(run: RobotRun) -> float:
+    """Final chassis x in the world, m."""
+    return run.robot.pose().x
+
+
+@metric("y")
+def _y(run: RobotRun) -> float:
+    """Final chassis y in the world, m."""
+    return run.robot.pose().y
+
+
+@metric("yaw_deg")
+def _yaw_deg(run: RobotRun) -> float:
+    """Final heading, degrees in (-180, 180]."""
+    return math.degrees(run.robot.pose().yaw)
+
+
+@metric("distance_from_start")
+def _distance_from_start(run: RobotRun) -> float:
+    """Straight-line distance from the start position, m."""
+    p = run.robot.pose()
+    return math.hypot(p.x - run.start.x, p.y - run.start.y)
+
+
+@metric("speed")
+def _speed(run: RobotRun) -> float:
+    """Final forward speed, m/s."""
+    return run.robot.velocity().forward
+
+
+@metric("yaw_rate")
+def _yaw_rate(run: RobotRun) -> float:
+    """Final yaw rate, rad/s."""
+    return run.robot.velocity().yaw_rate
+
+
+@metric("max_tilt_deg")
+def _max_tilt_deg(run: RobotRun) -> float:
+    """Largest tilt from upright during the run, degrees."""
+    return run.robot.max_tilt_deg()
+
+
+@metric("ir")
+def _ir(run: RobotRun) -> dict[str, float]:
+    """Final raw reading of each IR sensor, m."""
+    return run.robot.ir_distances()
+
+
+@metric("command_status")
+def _command_status(run: RobotRun) -> dict[str, str]:
+    """Each command's final status (`succeeded`, `running`, `failed:<reason>`), by index."""
+    return {str(i): r.status + (f":{r.reason}" if r.reason else "")
+            for i, r in enumerate(run.robot.command_log())}
+
+
+@metric("command_duration")
+def _command_duration(run: RobotRun) -> dict[str, float]:
+    """Each ended command's duration, simulated s (NaN while running), by index."""
+    return {str(i): (r.end_time - r.start_time) if r.end_time is not None else math.nan
+            for i, r in enumerate(run.robot.command_log())}
+
+
+@metric("landing_error")
+def _landing_error(run: RobotRun) -> dict[str, float]:
+    """Each DriveDistance's (mm) and RotateDegrees' (deg) landing error, by command index:
+    measured from the run log at the command's start and at the run's end, so a study with
+    `until: commands` and `settle` measures the robot at rest. A run with one such command
+    measures exactly the book's landing; with several, each is measured to the next's start."""
+    log = run.robot.run_log()
+    records = run.robot.command_log()
+    script = run.sim.scenario.robots[run.robot.name].commands
+    starts = [r.start_time for r in records] + [math.inf]
+    out = {}
+    for i, (r, command) in enumerate(zip(records, script, strict=False)):
+        if not isinstance(command, DriveDistance | RotateDegrees):
+            continue
+        a, b = _row_at(log, r.start_time), _row_at(log, starts[i + 1])
+        if isinstance(command, DriveDistance):
+            travelled = math.hypot(b[5] - a[5], b[6] - a[6])
+            out[str(i)] = (travelled - abs(command.distance)) * 1000.0
+        else:
+            turned = b[7] - a[7] - math.radians(command.degrees)
+            out[str(i)] = math.degrees(math.remainder(turned, 2 * math.pi))
+    return out
+
+
+def _row_at(log, t: float):
+    """The last run-log row at or before time t (the last row for t = inf)."""
+    times = log[:, 0]
+    index = max(0, int((times <= t + 1e-9).sum()) - 1)
+    return log[index]
+
+
+def measure(sim: Simulation, starts: dict[str, tuple[BodyPose, float]],
+            names: list[str]) -> dict[str, Value]:
+    """The named metrics of every robot, as flat columns `<robot>.<metric>[.<key>]`."""
+    row: dict[str, Value] = {}
+    for robot_name, robot in sim.robots.items():
+        start, heading = starts[robot_name]
+        run = RobotRun(sim, robot, start, heading)
+        for name in names:
+            value = METRICS[name](run)
+            if isinstance(value, dict):
+                row.update({f"{robot_name}.{name}.{k}": v for k, v in value.items()})
+            else:
+                row[f"{robot_name}.{name}"] = value
+    return row

@@ -1,0 +1,89 @@
+"""One run of a study, as a Ray worker does it: load the run's scenario, simulate, measure.
+
+`StudyWorker` is the worker's state (a Ray actor): the study and its scenario file. A run that
+fails (a bad override, a simulation error) becomes an error row; it never stops the study.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from pathlib import Path
+
+from corobot_drake.config.scenario import load_scenario
+from corobot_drake.simulation import Simulation, quiet_drake_warnings
+from corobot_drake.study.metrics import measure
+from corobot_drake.study.spec import Run, Study
+
+CHECK_PERIOD = 0.1
+"""s of simulated time between checks whether every command has ended (`until: commands`)."""
+
+
+def one_line(error: BaseException) -> str:
+    text = str(error).strip() or type(error).__name__
+    return text.splitlines()[0]
+
+
+def build(study: Study, scenario_file: Path, run: Run) -> Simulation:
+    """The run's simulation: the scenario, the study's overrides, then the run's parameters
+    and seed; the cameras off unless the study asks for them."""
+    scenario = load_scenario(scenario_file, overrides=[*study.overrides, *run.overrides()])
+    if not study.cameras:
+        for robot in scenario.robots.values():
+            robot.camera.rgb = False
+    return Simulation(scenario)
+
+
+def commands_ended(sim: Simulation) -> bool:
+    """True once every robot has started and ended all of its scripted commands."""
+    for name, robot in sim.robots.items():
+        log = robot.command_log()
+        if len(log) < len(sim.scenario.robots[name].commands):
+            return False
+        if any(r.end_time is None for r in log):
+            return False
+    return True
+
+
+def advance(sim: Simulation, study: Study) -> None:
+    end = sim.time + study.duration
+    if study.until == "duration":
+        sim.advance_to(end)
+        return
+    while sim.time < end - 1e-12 and not commands_ended(sim):
+        sim.advance_to(min(end, sim.time + CHECK_PERIOD))
+    sim.advance_to(min(end, sim.time + study.settle))
+
+
+def simulate(study: Study, scenario_file: Path, run: Run) -> dict:
+    """The run's row: run, seed, parameters, metrics, status, error, wall_seconds."""
+    start = time.perf_counter()
+    row: dict = {"run": run.index, "seed": run.seed, **dict(run.params)}
+    try:
+        sim = build(study, scenario_file, run)
+        starts = {name: (r.pose(), r.heading()) for name, r in sim.robots.items()}
+        advance(sim, study)
+        row.update(measure(sim, starts, study.metrics))
+        row.update(status="ok", error="")
+    except Exception as e:  # noqa: BLE001 - any failure is this run's error row
+        row.update(status="error", error=one_line(e))
+    row["wall_seconds"] = round(time.perf_counter() - start, 3)
+    return row
+
+
+class StudyWorker:
+    """A worker's side of a study (a Ray actor: `ray.remote(StudyWorker)`)."""
+
+    def __init__(self, study: Study, scenario_file: str):
+        quiet_drake_warnings()
+        self.study, self.scenario_file = study, Path(scenario_file)
+
+    def run(self, run: Run) -> dict:
+        return simulate(self.study, self.scenario_file, run)
+
+
+def finite_or_text(value):
+    """CSV cell text: numbers in full precision (repr), NaN as empty."""
+    if isinstance(value, float):
+        return "" if math.isnan(value) else repr(value)
+    return value

@@ -1,0 +1,184 @@
+"""The study file: a typed YAML `Study`, loaded like a scenario (one-line errors with the
+file, the line and the field), and its expansion into runs.
+
+    scenario: ../corobot.yaml       # relative to the study file
+    duration: 8.0                   # simulated seconds per run (a cap with `until: commands`)
+    seeds: 4                        # runs per grid point (random_seed 1..N), or a list
+    grid:                           # cartesian product; keys are dotted scenario paths
+      robots.corobot.drive.motor_torque_scaling: [6.0, 10.16]
+    random:                         # drawn per run from the run's seed
+      robots.corobot.contact.friction: !Uniform {min: 0.4, max: 0.6}
+    overrides:                      # YAML merged into every run, as --override
+      - "robots: {corobot: {commands: [!SetPower {left: 1.0, right: 0.8}]}}"
+    metrics: [x, y, speed, max_tilt_deg]
+"""
+
+
+import dataclasses as dc
+import hashlib
+import itertools
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+from pydrake.common.yaml import yaml_load_typed
+
+from corobot_drake.config.scenario import ScenarioError, check_yaml_text
+
+UNTIL = ("duration", "commands")
+
+
+@dc.dataclass
+class Uniform:
+    """A value drawn uniformly from [min, max)."""
+
+    min: float = 0.0
+    max: float = 1.0
+
+
+@dc.dataclass
+class Normal:
+    """A value drawn from a normal distribution."""
+
+    mean: float = 0.0
+    sd: float = 1.0
+
+
+@dc.dataclass
+class Choice:
+    """One of `values`, equally likely."""
+
+    values: list[bool | int | float | str] = dc.field(default_factory=list)
+
+
+Distribution = Uniform | Normal | Choice
+Scalar = bool | int | float | str
+
+
+@dc.dataclass
+class Study:
+    """A batch of runs of one scenario (see the module docstring for a file)."""
+
+    scenario: str = ""
+    """The scenario file, relative to the study file (or absolute)."""
+    duration: float = 10.0
+    """Simulated seconds per run; with `until: commands`, the most a run may take."""
+    until: str = "duration"
+    """`duration`: every run lasts `duration`; `commands`: a run ends `settle` s after every
+    robot's last command has ended (or at `duration`)."""
+    settle: float = 1.0
+    """s simulated after the last command ends (`until: commands`), so the robot is at rest."""
+    seeds: list[int] | int = 1
+    """Runs per grid point: N gives random_seed 1..N; a list gives those seeds."""
+    grid: dict[str, list[Scalar]] = dc.field(default_factory=dict)
+    """Dotted scenario path -> values; every combination is a grid point."""
+    random: dict[str, Distribution] = dc.field(default_factory=dict)
+    """Dotted scenario path -> distribution, drawn per run from its seed."""
+    overrides: list[str] = dc.field(default_factory=list)
+    """YAML texts merged over the scenario in every run (after the file, before the grid)."""
+    metrics: list[str] = dc.field(default_factory=lambda: ["x", "y", "yaw_deg"])
+    """Names from the metrics registry (`corobot_drake.study.metrics.METRICS`), per robot."""
+    cameras: bool = False
+    """Render the robots' cameras (off by default: no metric reads them, and they cost)."""
+
+
+@dc.dataclass(frozen=True)
+class Run:
+    """One simulation of a study: its index, seed and parameter values by dotted path."""
+
+    index: int
+    seed: int
+    point: int
+    """Index of its grid point (runs of one point differ only in seed and random draws)."""
+    params: tuple[tuple[str, Scalar], ...]
+
+    def overrides(self) -> list[str]:
+        """The run's parameters as --override YAML texts (JSON is YAML)."""
+        texts = [json.dumps(_nest(path, value)) for path, value in self.params]
+        return [*texts, json.dumps({"random_seed": self.seed})]
+
+
+class StudyError(ScenarioError):
+    """A bad study file: one line naming the file, the line and the field."""
+
+
+def load_study(filename: str | Path) -> Study:
+    """Reads and checks a study file; StudyError (one line) for anything wrong."""
+    path = Path(filename)
+    try:
+        text = path.read_text()
+    except (OSError, UnicodeDecodeError) as e:
+        raise StudyError(str(path), "", f"cannot read the file ({e})") from None
+    check_yaml_text(text, Study, str(path))
+    try:
+        study = yaml_load_typed(schema=Study, data=text)
+    except Exception as e:  # the pre-check missed it: still one clear line
+        raise StudyError(str(path), "", (str(e) or type(e).__name__).splitlines()[0]) from None
+    _validate(study, str(path))
+    return study
+
+
+def _validate(study: Study, source: str) -> None:
+    from corobot_drake.study.metrics import METRICS
+
+    if not study.scenario:
+        raise StudyError(source, "scenario", "name the scenario file")
+    if not (math.isfinite(study.duration) and study.duration > 0):
+        raise StudyError(source, "duration", "must be a finite number of seconds > 0")
+    if study.until not in UNTIL:
+        raise StudyError(source, "until", f"{study.until!r} is not one of {', '.join(UNTIL)}")
+    if isinstance(study.seeds, int) and study.seeds < 1:
+        raise StudyError(source, "seeds", "must be >= 1 (or a list of seeds)")
+    if isinstance(study.seeds, list) and len(set(study.seeds)) != len(study.seeds):
+        raise StudyError(source, "seeds", "a seed is listed twice")
+    for path, values in study.grid.items():
+        if not values:
+            raise StudyError(source, f"grid.{path}", "needs at least one value")
+    for path in study.random:
+        if path in study.grid:
+            raise StudyError(source, f"random.{path}", "is also a grid parameter")
+    for name in study.metrics:
+        if name not in METRICS:
+            raise StudyError(source, "metrics", f"unknown metric {name!r}; known: "
+                             + ", ".join(sorted(METRICS)))
+
+
+def scenario_path(study: Study, study_file: str | Path) -> Path:
+    return (Path(study_file).resolve().parent / study.scenario).resolve()
+
+
+def seeds(study: Study) -> list[int]:
+    return list(range(1, study.seeds + 1)) if isinstance(study.seeds, int) else study.seeds
+
+
+def expand(study: Study) -> list[Run]:
+    """Every run of the study, in a fixed order: grid points (cartesian, keys in file order),
+    then seeds. Random draws depend only on the seed and the parameter's path."""
+    keys = list(study.grid)
+    runs = []
+    for point, values in enumerate(itertools.product(*(study.grid[k] for k in keys))):
+        for seed in seeds(study):
+            params = list(zip(keys, values, strict=True))
+            params += [(path, draw(dist, seed, path)) for path, dist in study.random.items()]
+            runs.append(Run(len(runs), seed, point, tuple(params)))
+    return runs
+
+
+def draw(dist: Distribution, seed: int, path: str) -> Scalar:
+    """The value of `dist` for this seed and parameter: the same on any worker or machine."""
+    digest = hashlib.sha256(f"{seed}:{path}".encode()).digest()
+    rng = np.random.default_rng(int.from_bytes(digest[:8], "little"))
+    if isinstance(dist, Uniform):
+        return float(rng.uniform(dist.min, dist.max))
+    if isinstance(dist, Normal):
+        return float(rng.normal(dist.mean, dist.sd))
+    return dist.values[int(rng.integers(len(dist.values)))]
+
+
+def _nest(path: str, value: Scalar) -> dict:
+    """`a.b.c`, v -> {"a": {"b": {"c": v}}}."""
+    nested: object = value
+    for key in reversed(path.split(".")):
+        nested = {key: nested}
+    return nested
