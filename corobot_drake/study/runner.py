@@ -65,7 +65,7 @@ def simulate(study: Study, scenario_file: Path, run: Run) -> dict:
         advance(sim, study)
         row.update(measure(sim, starts, study.metrics))
         row.update(status="ok", error="")
-    except Exception as e:  # noqa: BLE001 - any failure is this run's error row
+    except Exception as e:  # any failure is this run's error row
         row.update(status="error", error=one_line(e))
     row["wall_seconds"] = round(time.perf_counter() - start, 3)
     return row
