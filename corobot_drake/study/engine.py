@@ -32,6 +32,9 @@ def ray_session(address: str | None, workers: int | None) -> Iterator[int]:
     stops it, with its processes, on exit."""
     import ray
 
+    if ray.is_initialized():  # the caller's own Ray session (a notebook, a test): use it
+        yield workers or int(ray.cluster_resources().get("CPU", 1))
+        return
     if address:
         ray.init(address=address, include_dashboard=False, log_to_driver=False,
                  configure_logging=False)
