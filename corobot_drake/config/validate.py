@@ -126,11 +126,11 @@ class _SchemaWalk:
                 return
             return self.check(node, options[0], path)
         tag = node.tag[1:] if node.tag.startswith("!") else None
-        if tag is None:  # untagged means the first variant, as in the typed load
+        if tag is None:  # untagged: the first variant of the node's kind, as the typed load
             size = _vector_size(options)
             if size is not None:
                 return self._list(node, float, path, size)
-            return self.check(node, options[0], path)
+            return self.check(node, _untagged_variant(node, options), path)
         names = {_tag_name(o): o for o in options
                  if o is not np.ndarray and not _type_name(o).startswith("_")}
         if tag not in names:
@@ -197,11 +197,42 @@ _CONTACT_MODELS = ("hydroelastic", "point", "hydroelastic_with_fallback")
 _APPROXIMATIONS = ("lagged", "similar", "sap", "tamsi")
 
 
+def _untagged_variant(node, options):
+    """The variant an untagged node loads as: the first list type for a list, the first
+    mapping type for a mapping, the first scalar type that reads a scalar."""
+    def kind(tp):
+        origin = typing.get_origin(tp)
+        if origin in (list, typing.List):  # noqa: UP006
+            return yaml.SequenceNode
+        if origin in (dict, typing.Dict) or _fields(tp) is not None:  # noqa: UP006
+            return yaml.MappingNode
+        return yaml.ScalarNode
+
+    same_kind = [o for o in options if kind(o) is type(node)] or options
+    if isinstance(node, yaml.ScalarNode):
+        for option in same_kind:
+            if _reads(option, node.value):
+                return option
+    return same_kind[0]
+
+
+def _reads(tp, text: str) -> bool:
+    if tp is str:
+        return True
+    if tp is bool:
+        return text.lower() in ("true", "false", "yes", "no", "on", "off")
+    try:
+        tp(text)
+    except (TypeError, ValueError):
+        return tp is float and text.lower() in _YAML_SPECIAL_FLOATS
+    return tp in (int, float)
+
+
 class LayerChecks:
     """The checks of one layer of a scenario (`source` names it in errors): the YAML `text`
     against the schema on construction, then `validate` on the scenario merged with it."""
 
-    def __init__(self, source: str, text: str):
+    def __init__(self, source: str, text: str, schema=sc.Scenario):
         self.source = source
         self.lines: dict[str, int] = {}
         """Field path (`robots.corobot.drive.slew_rate`) -> its line in this layer."""
@@ -213,7 +244,7 @@ class LayerChecks:
             raise sc.ScenarioError(source, "", f"not valid YAML: {getattr(e, 'problem', e)}",
                                    line) from None
         if node is not None:
-            _SchemaWalk(source, self.lines).check(node, sc.Scenario, "")
+            _SchemaWalk(source, self.lines).check(node, schema, "")
 
     def fail(self, path: str, message: str):
         """Raises the ScenarioError at the line of `path`, or of the nearest enclosing field

@@ -24,7 +24,8 @@ from pathlib import Path
 import numpy as np
 from pydrake.common.yaml import yaml_load_typed
 
-from corobot_drake.config.scenario import ScenarioError, check_yaml_text
+from corobot_drake.config.scenario import ScenarioError
+from corobot_drake.config.validate import LayerChecks
 
 UNTIL = ("duration", "commands")
 
@@ -110,38 +111,41 @@ def load_study(filename: str | Path) -> Study:
         text = path.read_text()
     except (OSError, UnicodeDecodeError) as e:
         raise StudyError(str(path), "", f"cannot read the file ({e})") from None
-    check_yaml_text(text, Study, str(path))
+    checks = LayerChecks(str(path), text, schema=Study)
     try:
         study = yaml_load_typed(schema=Study, data=text)
     except Exception as e:  # the pre-check missed it: still one clear line
         raise StudyError(str(path), "", (str(e) or type(e).__name__).splitlines()[0]) from None
-    _validate(study, str(path))
+    _validate(study, checks)
     return study
 
 
-def _validate(study: Study, source: str) -> None:
+def _validate(study: Study, checks: LayerChecks) -> None:
+    """Checks of meaning, failing at the field's line (`checks.fail`)."""
     from corobot_drake.study.metrics import METRICS
 
     if not study.scenario:
-        raise StudyError(source, "scenario", "name the scenario file")
+        checks.fail("scenario", "name the scenario file")
     if not (math.isfinite(study.duration) and study.duration > 0):
-        raise StudyError(source, "duration", "must be a finite number of seconds > 0")
+        checks.fail("duration", "must be a finite number of seconds > 0")
     if study.until not in UNTIL:
-        raise StudyError(source, "until", f"{study.until!r} is not one of {', '.join(UNTIL)}")
+        checks.fail("until", f"{study.until!r} is not one of {', '.join(UNTIL)}")
+    if not (math.isfinite(study.settle) and study.settle >= 0):
+        checks.fail("settle", "must be a finite number of seconds >= 0")
     if isinstance(study.seeds, int) and study.seeds < 1:
-        raise StudyError(source, "seeds", "must be >= 1 (or a list of seeds)")
+        checks.fail("seeds", "must be >= 1 (or a list of seeds)")
     if isinstance(study.seeds, list) and len(set(study.seeds)) != len(study.seeds):
-        raise StudyError(source, "seeds", "a seed is listed twice")
+        checks.fail("seeds", "a seed is listed twice")
     for path, values in study.grid.items():
         if not values:
-            raise StudyError(source, f"grid.{path}", "needs at least one value")
+            checks.fail(f"grid.{path}", "needs at least one value")
     for path in study.random:
         if path in study.grid:
-            raise StudyError(source, f"random.{path}", "is also a grid parameter")
+            checks.fail(f"random.{path}", "is also a grid parameter")
     for name in study.metrics:
         if name not in METRICS:
-            raise StudyError(source, "metrics", f"unknown metric {name!r}; known: "
-                             + ", ".join(sorted(METRICS)))
+            checks.fail("metrics", f"unknown metric {name!r}; known: "
+                        + ", ".join(sorted(METRICS)))
 
 
 def scenario_path(study: Study, study_file: str | Path) -> Path:
