@@ -27,7 +27,7 @@ from corobot_drake.config.poses import ground_pose, transform_from
 from corobot_drake.model import dimensions as dim
 from corobot_drake.readings import BodyPose, BodyVelocity, CommandResult, IrReading
 from corobot_drake.station import RobotParts, Station, build_station
-from corobot_drake.systems.drive import CommandRecord
+from corobot_drake.systems.drive import CommandRecord, DriveStatus
 from corobot_drake.systems.odometry import DriveState
 from corobot_drake.systems.runlog import log_rows, write_csv
 
@@ -221,7 +221,7 @@ class Robot:
     def is_enabled(self) -> bool:
         status = self._sim.station.diagram.GetOutputPort(f"{self.name}.drive_status").Eval(
             self._sim.context)
-        return bool(status[0])
+        return bool(DriveStatus(status).enabled)
 
     def max_tilt_deg(self) -> float:
         """Largest tilt from upright so far (degrees, sampled at 100 Hz)."""

@@ -9,6 +9,7 @@ import dataclasses as dc
 import math
 
 import numpy as np
+from pydrake.common.containers import namedview
 from pydrake.common.value import Value
 from pydrake.systems.framework import BasicVector, LeafSystem
 
@@ -110,13 +111,22 @@ def check_finite(command) -> None:
 class CommandSource(LeafSystem):
     """Issues a robot's drive requests: its scenario script in order, and API commands.
 
-    Output `request` (DriveRequest). Input `command_status` (CommandStatus, from
-    `motion.MotionCommands`): how completing commands end, recorded in the log. Every `period`
-    s it records that status and advances the script; a `Wait` holds the script for its
-    duration and a completing command holds it until it ends. `Issue()` writes a command into
-    the Context directly (what the Python API, teleop and the server call between steps).
-    A new command ends a running completing one as failed: `superseded`, or `disabled` when
-    the new command is `Enable(false)`.
+    .. pydrake_system::
+
+        name: CommandSource
+        input_ports:
+        - command_status
+        output_ports:
+        - request
+
+    Output `request` (DriveRequest, abstract). Input `command_status` (CommandStatus,
+    abstract, from `motion.MotionCommands`; may be left unconnected, then no completing
+    command is ever reported ended): how completing commands end, recorded in the log.
+    Abstract state `CommandSourceState`. Every `period` s it records that status and advances
+    the script; a `Wait` holds the script for its duration and a completing command holds it
+    until it ends. `Issue()` writes a command into the Context directly (what the Python API,
+    teleop and the server call between steps). A new command ends a running completing one as
+    failed: `superseded`, or `disabled` when the new command is `Enable(false)`.
     """
 
     def __init__(self, script: list, period: float):
@@ -244,21 +254,55 @@ class CommandSource(LeafSystem):
 _COMPLETING_NAMES = tuple(c.__name__ for c in COMPLETING_COMMANDS)
 
 
-# Indices of the drive controller's discrete state.
-_SEQ, _ENABLED, _POWER_L, _POWER_R, _TARGET_L, _TARGET_R, _AXLE_L, _AXLE_R = range(8)
+DriveStatus = namedview("DriveStatus", (
+    "enabled", "power_left", "power_right", "target_left", "target_right"))
+"""The drive controller's `drive_status` output, read by name (``DriveStatus(vector)``):
+
+- ``enabled``: 1 when the drive is enabled, else 0;
+- ``power_left``, ``power_right``: the commanded power per side, in [-1, 1];
+- ``target_left``, ``target_right``: the axle speed per side the drive is slewing towards,
+  rad/s (before the slew limit; the rear axles follow the front).
+"""
+
+_ControllerState = namedview("DriveControllerState", (
+    "seq", *DriveStatus.get_fields(), "axle_left", "axle_right"))
+"""The drive controller's discrete state: the seq of the last request acted on, the
+`DriveStatus` fields, and the slewed axle speed per side (rad/s)."""
+
+
+def _stop(x) -> None:
+    """Powers, targets and slewed axle speeds of a `_ControllerState` to zero."""
+    for field in ("power_left", "power_right", "target_left", "target_right", "axle_left",
+                  "axle_right"):
+        setattr(x, field, 0.0)
 
 
 class DriveController(LeafSystem):
     """Turns drive requests into the plant's desired wheel state (velocity servo).
 
-    Input `request` (DriveRequest); input `wheel_state` [q, v] of the four axles in
+    .. pydrake_system::
+
+        name: DriveController
+        input_ports:
+        - request
+        - wheel_state
+        output_ports:
+        - desired_state
+        - axle_speed_command
+        - drive_status
+        - axle_speed
+
+    Input `request` (DriveRequest, abstract); input `wheel_state` [q, v] of the four axles in
     `dimensions.WHEEL_NAMES` order (rad, rad/s).
     Output `desired_state` [q_d, v_d] for the plant's desired-state input (actuator order;
     q_d = 0: the servo has kp = 0 and only v_d matters).
     Output `axle_speed_command` [left, right] rad/s after the slew limit; rear follows front.
-    Output `drive_status` [enabled, power_left, power_right, target_left, target_right].
+    Output `drive_status` (5, `DriveStatus`: read it by name).
     Output `axle_speed` [front_left, front_right, rear_left, rear_right] measured, rad/s.
-    Discrete state, updated every `drive.control_period` s.
+    Discrete state (`_ControllerState`), updated every `drive.control_period` s: a new request
+    sets the enable level and (when enabled) the motion target; disabled, everything is held
+    at zero; the axle speeds then move towards the targets by at most
+    `drive.slew_rate * drive.control_period`.
     """
 
     def __init__(self, drive: Drive):
@@ -266,18 +310,24 @@ class DriveController(LeafSystem):
         self._drive = drive
         self._request_port = self.DeclareAbstractInputPort("request", Value(DriveRequest()))
         self._wheel_state_port = self.DeclareVectorInputPort("wheel_state", 8)
-        initial = np.zeros(8)
-        initial[_ENABLED] = 1.0
-        self._state = self.DeclareDiscreteState(initial)
+        initial = _ControllerState.Zero()
+        initial.enabled = 1.0
+        self._state = self.DeclareDiscreteState(initial[:])
         self.DeclarePeriodicDiscreteUpdateEvent(drive.control_period, 0.0, self._update)
         ticket = {self.discrete_state_ticket(self._state)}
         # Depends on the state only, so the plant's per-step evaluation hits the cache.
         self.DeclareVectorOutputPort("desired_state", 8, self._calc_desired_state, ticket)
         self.DeclareVectorOutputPort("axle_speed_command", 2, self._calc_axle, ticket)
-        self.DeclareVectorOutputPort("drive_status", 5, self._calc_status, ticket)
+        self.DeclareVectorOutputPort("drive_status", len(DriveStatus.get_fields()),
+                                     self._calc_status, ticket)
         self.DeclareVectorOutputPort(
             "axle_speed", 4, lambda c, o: o.SetFromVector(self._wheel_state_port.Eval(c)[4:]),
             {self.input_port_ticket(self._wheel_state_port.get_index())})
+
+    def _x(self, context, copy: bool = True):
+        """The discrete state as a `_ControllerState` (a copy, or a read-only view)."""
+        x = context.get_discrete_state(self._state).get_value()
+        return _ControllerState(x.copy() if copy else x)
 
     def target_for(self, command, enabled: bool) -> tuple[float, float, float, float] | None:
         """(power_l, power_r, axle_l, axle_r) a motion command asks for; None if not motion."""
@@ -297,46 +347,47 @@ class DriveController(LeafSystem):
         return None
 
     def _update(self, context, discrete_state):
-        x = context.get_discrete_state(self._state).get_value().copy()
+        x = self._x(context)
         request = self._request_port.Eval(context)
-        if request.seq != int(x[_SEQ]):
-            x[_SEQ] = request.seq
-            x[_ENABLED] = 1.0 if request.enabled else 0.0
-            if x[_ENABLED]:
+        if request.seq != int(x.seq):
+            x.seq = request.seq
+            x.enabled = 1.0 if request.enabled else 0.0
+            if x.enabled:
                 target = self.target_for(request.command, True)
                 if target is not None:
-                    x[_POWER_L:_TARGET_R + 1] = target
-        if not x[_ENABLED]:
-            x[_POWER_L:_AXLE_R + 1] = 0.0  # disabled: wheels held at zero at once
+                    x.power_left, x.power_right, x.target_left, x.target_right = target
+        if not x.enabled:
+            _stop(x)  # disabled: wheels held at zero at once
         step = self._drive.slew_rate * self._drive.control_period
-        x[_AXLE_L:_AXLE_R + 1] += np.clip(
-            x[_TARGET_L:_TARGET_R + 1] - x[_AXLE_L:_AXLE_R + 1], -step, step)
-        discrete_state.set_value(self._state, x)
+        x.axle_left += min(step, max(-step, x.target_left - x.axle_left))
+        x.axle_right += min(step, max(-step, x.target_right - x.axle_right))
+        discrete_state.set_value(self._state, x[:])
 
     def Halt(self, context) -> None:
         """Stops the wheels at once (powers, targets and slewed axle speeds to 0): what a
         teleport does, so the robot lands at rest. `context` is this system's."""
-        x = context.get_discrete_state(self._state).get_value().copy()
-        x[_POWER_L:_AXLE_R + 1] = 0.0
-        context.SetDiscreteState(self._state, x)
+        x = self._x(context)
+        _stop(x)
+        context.SetDiscreteState(self._state, x[:])
 
     def SetAxleSpeeds(self, context, left: float, right: float) -> None:
         """Sets the commanded (slewed) axle speeds and their targets, rad/s: an initial
         condition (a saved scene). `context` is this system's."""
-        x = context.get_discrete_state(self._state).get_value().copy()
-        x[_TARGET_L], x[_TARGET_R], x[_AXLE_L], x[_AXLE_R] = left, right, left, right
+        x = self._x(context)
+        x.target_left, x.target_right, x.axle_left, x.axle_right = left, right, left, right
         scaling = self._drive.motor_torque_scaling
-        x[_POWER_L], x[_POWER_R] = left / scaling, right / scaling
-        context.SetDiscreteState(self._state, x)
+        x.power_left, x.power_right = left / scaling, right / scaling
+        context.SetDiscreteState(self._state, x[:])
 
     def _calc_desired_state(self, context, output: BasicVector):
-        x = context.get_discrete_state(self._state).get_value()
-        left, right = x[_AXLE_L], x[_AXLE_R]
+        x = self._x(context, copy=False)
+        left, right = x.axle_left, x.axle_right
         output.SetFromVector([0.0, 0.0, 0.0, 0.0, left, right, left, right])
 
     def _calc_axle(self, context, output: BasicVector):
-        output.SetFromVector(context.get_discrete_state(self._state).get_value()[_AXLE_L:])
+        x = self._x(context, copy=False)
+        output.SetFromVector([x.axle_left, x.axle_right])
 
     def _calc_status(self, context, output: BasicVector):
-        output.SetFromVector(
-            context.get_discrete_state(self._state).get_value()[_ENABLED:_TARGET_R + 1])
+        x = self._x(context, copy=False)
+        output.SetFromVector([getattr(x, field) for field in DriveStatus.get_fields()])

@@ -21,6 +21,7 @@ from pydrake.systems.primitives import Gain
 from pydrake.systems.sensors import RotaryEncoders
 
 from corobot_drake.model import dimensions as dim
+from corobot_drake.systems.drive import DriveStatus
 
 ENCODED_WHEELS = ("front_left", "front_right")
 """Wheels with an encoder (indices 0 and 1 in `dimensions.WHEEL_NAMES`)."""
@@ -157,17 +158,31 @@ class DriveState:
 class DriveStateReporter(LeafSystem):
     """Assembles the `drive_state` output (DriveState) from the drive and the odometry.
 
-    Inputs: `drive_status` [enabled, power_left, power_right, target_left, target_right]
-    (DriveController), `axle_speed` (4, rad/s), `encoder_ticks` (2), `position` (3, m),
-    `heading` (1, rad). `power_scaling_factor` is the drive's MotorTorqueScaling.
+    .. pydrake_system::
+
+        name: DriveStateReporter
+        input_ports:
+        - drive_status
+        - axle_speed
+        - encoder_ticks
+        - position
+        - heading
+        output_ports:
+        - drive_state
+
+    Inputs: `drive_status` (5, `drive.DriveStatus`, from the DriveController), `axle_speed`
+    (4, rad/s, `dimensions.WHEEL_NAMES` order), `encoder_ticks` (2, front left and front
+    right, rounded to whole ticks here), `position` (3, m, world frame), `heading` (1, rad).
+    Output `drive_state` (abstract DriveState; its time stamp is the context time, s).
+    `power_scaling_factor` is the drive's MotorTorqueScaling.
     """
 
     def __init__(self, power_scaling_factor: float):
         super().__init__()
         self._scaling = power_scaling_factor
         self._ports = {name: self.DeclareVectorInputPort(name, size) for name, size in (
-            ("drive_status", 5), ("axle_speed", 4), ("encoder_ticks", 2), ("position", 3),
-            ("heading", 1))}
+            ("drive_status", len(DriveStatus.get_fields())), ("axle_speed", 4),
+            ("encoder_ticks", 2), ("position", 3), ("heading", 1))}
         self.DeclareAbstractOutputPort("drive_state", self._default, self._calc)
 
     def _default(self):
@@ -176,15 +191,16 @@ class DriveStateReporter(LeafSystem):
                                 dict.fromkeys(dim.WHEEL_NAMES, wheel), (0.0, 0.0, 0.0), 0.0))
 
     def _calc(self, context, output):
-        status, axle, ticks, position, heading = (
+        axle, ticks, position, heading = (
             self._ports[n].Eval(context) for n in (
-                "drive_status", "axle_speed", "encoder_ticks", "position", "heading"))
+                "axle_speed", "encoder_ticks", "position", "heading"))
+        status = DriveStatus(self._ports["drive_status"].Eval(context))
         wheels = {}
         for i, name in enumerate(dim.WHEEL_NAMES):
-            power = float(status[1] if name.endswith("left") else status[2])
+            power = float(status.power_left if name.endswith("left") else status.power_right)
             encoder = (round(ticks[ENCODED_WHEELS.index(name)])
                        if name in ENCODED_WHEELS else None)
             wheels[name] = WheelState(power, float(axle[i]), encoder)
         output.set_value(DriveState(
-            context.get_time(), bool(status[0]), dim.TRACK, self._scaling, wheels,
+            context.get_time(), bool(status.enabled), dim.TRACK, self._scaling, wheels,
             tuple(float(v) for v in position), float(heading[0])))
