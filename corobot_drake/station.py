@@ -36,7 +36,7 @@ from corobot_drake.sensors.ir_sensor import add_ir_sensors
 from corobot_drake.systems.drive import CommandSource, DriveController
 from corobot_drake.systems.monitor import TiltMonitor
 from corobot_drake.systems.motion import MotionCommands
-from corobot_drake.systems.odometry import add_odometry
+from corobot_drake.systems.odometry import add_chassis_pose, add_odometry
 from corobot_drake.systems.runlog import add_run_log
 
 TILT_SAMPLE_PERIOD = 0.01
@@ -191,9 +191,11 @@ def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None) -> Stat
         # Command source -> motion commands -> drive controller; status back to the source.
         motion = builder.AddNamedSystem(f"{name}.motion", MotionCommands(robot.drive,
                                                                           robot.motion))
+        # One chassis pose (from the plant's body_poses) for the compass, GPS, tilt monitor
+        # and run log.
+        chassis_pose = add_chassis_pose(builder, name, plant, chassis)
         odometry = add_odometry(
-            builder, name, plant.num_multibody_states(), chassis.floating_positions_start(),
-            plant.get_state_output_port(), selector.get_output_port(),
+            builder, name, chassis_pose, selector.get_output_port(),
             controller.GetOutputPort("drive_status"), controller.GetOutputPort("axle_speed"),
             robot.drive.motor_torque_scaling)
         builder.Connect(source.GetOutputPort("request"), motion.GetInputPort("request"))
@@ -209,12 +211,10 @@ def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None) -> Stat
             builder.ExportOutput(port, f"{name}.{port_name}")
         builder.Connect(controller.GetOutputPort("desired_state"),
                         plant.get_desired_state_input_port(instance))
-        tilt = builder.AddNamedSystem(f"{name}.tilt_monitor", TiltMonitor(
-            plant.num_multibody_states(), chassis.floating_positions_start(),
-            TILT_SAMPLE_PERIOD))
-        builder.Connect(plant.get_state_output_port(), tilt.get_input_port())
-        add_run_log(builder, plant, name, chassis, joints,
-                    controller.GetOutputPort("drive_status"))
+        tilt = builder.AddNamedSystem(f"{name}.tilt_monitor", TiltMonitor(TILT_SAMPLE_PERIOD))
+        builder.Connect(chassis_pose, tilt.GetInputPort("chassis_pose"))
+        add_run_log(builder, name, chassis_pose, controller.GetOutputPort("drive_status"),
+                    odometry.encoder_ticks)
         for port in ("drive_status", "axle_speed_command", "axle_speed"):
             builder.ExportOutput(controller.GetOutputPort(port), f"{name}.{port}")
         builder.ExportOutput(plant.get_state_output_port(instance), f"{name}.state")

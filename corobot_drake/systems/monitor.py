@@ -2,39 +2,42 @@
 
 import math
 
-import numpy as np
+from pydrake.common.value import AbstractValue
 from pydrake.math import RigidTransform
 from pydrake.systems.framework import LeafSystem
 
 
 def tilt_deg(X_WB: RigidTransform) -> float:
     """Angle (deg) between the body's +z and the world's +z: 0 upright, 180 upside down."""
-    return math.degrees(math.acos(float(np.clip(X_WB.rotation().matrix()[2, 2], -1.0, 1.0))))
-
-
-def quaternion_tilt_deg(w: float, x: float, y: float, z: float) -> float:
-    """tilt_deg of the rotation given by a unit quaternion: R[2, 2] = 1 - 2 (x^2 + y^2)."""
-    norm2 = w * w + x * x + y * y + z * z
-    cos_tilt = 1.0 - 2.0 * (x * x + y * y) / norm2
+    cos_tilt = float(X_WB.rotation().matrix()[2, 2])
     return math.degrees(math.acos(min(1.0, max(-1.0, cos_tilt))))
 
 
 class TiltMonitor(LeafSystem):
-    """Largest tilt from upright of one floating body over the run, sampled every `period` s.
+    """Largest tilt from upright of one body over the run, sampled every `period` s.
 
-    Input `plant_state` (the plant's full state vector); the body's quaternion (w, x, y, z)
-    starts at `quaternion_start`. Output `max_tilt_deg` (1-vector, degrees).
+    .. pydrake_system::
+
+        name: TiltMonitor
+        input_ports:
+        - chassis_pose
+        output_ports:
+        - max_tilt_deg
+
+    Input `chassis_pose` (abstract RigidTransform X_WB, e.g. from `odometry.ChassisPose`).
+    Output `max_tilt_deg` (1-vector, degrees): the largest `tilt_deg` sampled so far, held in
+    discrete state (0 before the first sample, at time 0).
     """
 
-    def __init__(self, num_states: int, quaternion_start: int, period: float):
+    def __init__(self, period: float):
         super().__init__()
-        self._start = quaternion_start
-        self._state_port = self.DeclareVectorInputPort("plant_state", num_states)
+        self._pose_port = self.DeclareAbstractInputPort("chassis_pose",
+                                                        AbstractValue.Make(RigidTransform()))
         self._state = self.DeclareDiscreteState(1)
         self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._update)
         self.DeclareStateOutputPort("max_tilt_deg", self._state)
 
     def _update(self, context, discrete_state):
-        q = self._state_port.Eval(context)[self._start:self._start + 4]
         previous = context.get_discrete_state(self._state).get_value()[0]
-        discrete_state.set_value(self._state, [max(previous, quaternion_tilt_deg(*q))])
+        tilt = tilt_deg(self._pose_port.Eval(context))
+        discrete_state.set_value(self._state, [max(previous, tilt)])

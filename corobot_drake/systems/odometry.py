@@ -1,5 +1,8 @@
 """Odometry sensors and the drive state: wheel encoders, compass, GPS, the MRDS drive state.
 
+- `ChassisPose`: the chassis pose X_WB picked from the plant's `body_poses` output (Drake
+  makes it from the normalized state quaternion); the compass, the GPS, the tilt monitor and
+  the run log read it.
 - Encoders: Drake's `RotaryEncoders` on the front axles, 600 ticks per revolution (floor
   quantization of the integrated wheel angle), then a gain to ticks.
 - `Compass`: chassis yaw about world z, radians in (-pi, pi] (a command that turns unwraps
@@ -7,15 +10,14 @@
 - `Gps`: chassis frame origin in the world, metres.
 - `DriveStateReporter`: the four-wheel drive state (`DriveState`) with a two-wheel view.
 
-All read the plant's state vector: no kinematics evaluation, and they change only when the
-(discrete) plant steps.
+They change only when the (discrete) plant steps.
 """
 
 import dataclasses as dc
 import math
 
-import numpy as np
-from pydrake.common.value import Value
+from pydrake.common.value import AbstractValue, Value
+from pydrake.math import RigidTransform
 from pydrake.systems.framework import LeafSystem
 from pydrake.systems.primitives import Gain
 from pydrake.systems.sensors import RotaryEncoders
@@ -51,16 +53,24 @@ class OdometryPorts:
     drive_state: object
 
 
-def add_odometry(builder, name: str, num_states: int, positions_start: int, plant_state_port,
-                 wheel_state_port, drive_status_port, axle_speed_port,
-                 power_scaling_factor: float) -> OdometryPorts:
-    """Adds one robot's encoders, `<name>.compass`, `<name>.gps` and
-    `<name>.drive_state` (DriveStateReporter); returns their output ports."""
+def add_chassis_pose(builder, name: str, plant, chassis):
+    """Adds `<name>.chassis_pose` (`ChassisPose` of the `chassis` body, fed by the plant's
+    `body_poses`); returns its `pose` output port."""
+    pose = builder.AddNamedSystem(f"{name}.chassis_pose", ChassisPose(chassis.index()))
+    builder.Connect(plant.get_body_poses_output_port(), pose.get_input_port())
+    return pose.get_output_port()
+
+
+def add_odometry(builder, name: str, chassis_pose_port, wheel_state_port, drive_status_port,
+                 axle_speed_port, power_scaling_factor: float) -> OdometryPorts:
+    """Adds one robot's encoders, `<name>.compass` and `<name>.gps` (fed by
+    `chassis_pose_port`) and `<name>.drive_state` (DriveStateReporter); returns their output
+    ports."""
     ticks = add_wheel_encoders(builder, name, wheel_state_port)
-    compass = builder.AddNamedSystem(f"{name}.compass", Compass(num_states, positions_start))
-    gps = builder.AddNamedSystem(f"{name}.gps", Gps(num_states, positions_start))
+    compass = builder.AddNamedSystem(f"{name}.compass", Compass())
+    gps = builder.AddNamedSystem(f"{name}.gps", Gps())
     for system in (compass, gps):
-        builder.Connect(plant_state_port, system.GetInputPort("plant_state"))
+        builder.Connect(chassis_pose_port, system.GetInputPort("chassis_pose"))
     reporter = builder.AddNamedSystem(f"{name}.drive_state",
                                       DriveStateReporter(power_scaling_factor))
     for port_name, port in (("drive_status", drive_status_port), ("axle_speed", axle_speed_port),
@@ -72,43 +82,96 @@ def add_odometry(builder, name: str, num_states: int, positions_start: int, plan
                          reporter.GetOutputPort("drive_state"))
 
 
-def yaw_from_quaternion(w: float, x: float, y: float, z: float) -> float:
-    """Yaw (rad, (-pi, pi]) of the rotation given by a quaternion: the heading of body +x
-    projected on the world's x-y plane. The quaternion need not be unit length: the discrete
-    plant's state quaternion drifts from unit norm as it integrates (Drake normalizes only when
-    it makes a pose), and `1 - 2 (y^2 + z^2)` would then bias the heading (0.3 deg seen)."""
-    return math.atan2(2.0 * (w * z + x * y), w * w + x * x - y * y - z * z)
+def heading_of(X_WB: RigidTransform) -> float:
+    """Yaw (rad, (-pi, pi]) of a pose: the heading of body +x projected on the world's x-y
+    plane, atan2(R[1, 0], R[0, 0])."""
+    R = X_WB.rotation().matrix()
+    return math.atan2(R[1, 0], R[0, 0])
+
+
+class ChassisPose(LeafSystem):
+    """Picks one body's pose out of the plant's `body_poses` (as manipulation's
+    `ExtractPose` does).
+
+    .. pydrake_system::
+
+        name: ChassisPose
+        input_ports:
+        - body_poses
+        output_ports:
+        - pose
+
+    Input `body_poses` (abstract list of RigidTransform: the MultibodyPlant output, indexed by
+    BodyIndex). Output `pose` (abstract RigidTransform): X_WB, the pose of the body's frame B
+    (the chassis frame) in the world frame W; translation in m.
+    """
+
+    def __init__(self, body_index: int):
+        super().__init__()
+        self._index = int(body_index)
+        port = self.DeclareAbstractInputPort("body_poses", AbstractValue.Make([RigidTransform()]))
+        self.DeclareAbstractOutputPort(
+            "pose", lambda: AbstractValue.Make(RigidTransform()),
+            lambda c, o: o.set_value(port.Eval(c)[self._index]),
+            {self.input_port_ticket(port.get_index())})
 
 
 class _ChassisSensor(LeafSystem):
-    """Input `plant_state` (the plant's state vector); the chassis's floating-base positions
-    (quaternion w, x, y, z then x, y, z) start at `positions_start`."""
+    """Input `chassis_pose` (abstract RigidTransform X_WB, from `ChassisPose`)."""
 
-    def __init__(self, num_states: int, positions_start: int):
+    def __init__(self):
         super().__init__()
-        self._start = positions_start
-        self._state_port = self.DeclareVectorInputPort("plant_state", num_states)
+        self._pose_port = self.DeclareAbstractInputPort("chassis_pose",
+                                                        AbstractValue.Make(RigidTransform()))
+        self._ticket = {self.input_port_ticket(self._pose_port.get_index())}
+        """Outputs are functions of the pose alone (not of time)."""
 
-    def _q(self, context) -> np.ndarray:
-        return self._state_port.Eval(context)[self._start:self._start + 7]
+    def _pose(self, context) -> RigidTransform:
+        return self._pose_port.Eval(context)
 
 
 class Compass(_ChassisSensor):
-    """Output `heading` (1-vector): chassis yaw about world z, rad in (-pi, pi]."""
+    """The chassis heading.
 
-    def __init__(self, num_states: int, positions_start: int):
-        super().__init__(num_states, positions_start)
+    .. pydrake_system::
+
+        name: Compass
+        input_ports:
+        - chassis_pose
+        output_ports:
+        - heading
+
+    Input `chassis_pose` (abstract RigidTransform X_WB). Output `heading` (1-vector): chassis
+    yaw about world z, rad in (-pi, pi] (`heading_of`).
+    """
+
+    def __init__(self):
+        super().__init__()
         self.DeclareVectorOutputPort(
-            "heading", 1, lambda c, o: o.SetFromVector([yaw_from_quaternion(*self._q(c)[:4])]))
+            "heading", 1, lambda c, o: o.SetFromVector([heading_of(self._pose(c))]),
+            self._ticket)
 
 
 class Gps(_ChassisSensor):
-    """Output `position` (3-vector): the chassis frame's origin in the world, m."""
+    """The chassis position.
 
-    def __init__(self, num_states: int, positions_start: int):
-        super().__init__(num_states, positions_start)
-        self.DeclareVectorOutputPort("position", 3,
-                                     lambda c, o: o.SetFromVector(self._q(c)[4:7]))
+    .. pydrake_system::
+
+        name: Gps
+        input_ports:
+        - chassis_pose
+        output_ports:
+        - position
+
+    Input `chassis_pose` (abstract RigidTransform X_WB). Output `position` (3-vector): the
+    chassis frame's origin in the world frame, m.
+    """
+
+    def __init__(self):
+        super().__init__()
+        self.DeclareVectorOutputPort(
+            "position", 3, lambda c, o: o.SetFromVector(self._pose(c).translation()),
+            self._ticket)
 
 
 @dc.dataclass(frozen=True)

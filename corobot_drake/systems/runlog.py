@@ -10,64 +10,77 @@ log lives in the Context, like the rest of the run. `write_csv` writes it in the
 - time: s. left_power, right_power: the drive's commanded power per side in [-1, 1].
 - left_ticks, right_ticks: front-left / front-right encoder counts, `ENCODER_TICKS_PER_REVOLUTION`
   (600) per wheel revolution, floor(600 q / 2 pi) of the integrated wheel angle q (forward
-  rolling counts up).
+  rolling counts up): the odometry's encoders (`odometry.add_wheel_encoders`).
 - x, y: chassis position in the world, m. yaw: chassis heading about world z, rad, in (-pi, pi].
 """
 
-import math
 from pathlib import Path
 
 import numpy as np
+from pydrake.common.containers import namedview
+from pydrake.common.value import AbstractValue
+from pydrake.math import RigidTransform
 from pydrake.systems.framework import BasicVector, LeafSystem
 from pydrake.systems.primitives import LogVectorOutput
 
-from corobot_drake.model import dimensions as dim
-from corobot_drake.systems.odometry import yaw_from_quaternion
+from corobot_drake.systems.drive import DriveStatus
+from corobot_drake.systems.odometry import heading_of
 
 LOG_PERIOD = 0.01
 """s: the run log's sample period (100 Hz)."""
 COLUMNS = ("time", "left_power", "right_power", "left_ticks", "right_ticks", "x", "y", "yaw")
 
-
-def ticks(angle: float) -> int:
-    """Encoder count of a wheel turned by `angle` rad (600 per revolution, floor)."""
-    return math.floor(dim.ENCODER_TICKS_PER_REVOLUTION * angle / (2 * math.pi))
+LogSample = namedview("LogSample", COLUMNS[1:])
+"""`RunLogSample`'s output, read by name: the `COLUMNS` after time (the sink adds time)."""
 
 
 class RunLogSample(LeafSystem):
-    """One row of the run log (without time) from the plant state and the drive status.
+    """One row of the run log (without time) from the robot's signals.
 
-    Input `plant_state` (the plant's full state); input `drive_status` (the drive controller's
-    [enabled, power_left, power_right, ...]). Output `sample`
-    [left_power, right_power, left_ticks, right_ticks, x, y, yaw].
+    .. pydrake_system::
+
+        name: RunLogSample
+        input_ports:
+        - chassis_pose
+        - drive_status
+        - encoder_ticks
+        output_ports:
+        - sample
+
+    Input `chassis_pose` (abstract RigidTransform X_WB, from `odometry.ChassisPose`); input
+    `drive_status` (5, `drive.DriveStatus`); input `encoder_ticks` (2, front left and front
+    right, from the odometry's encoders). Output `sample` (7, `LogSample`): left_power,
+    right_power in [-1, 1]; left_ticks, right_ticks rounded to whole ticks; x, y, m, of the
+    chassis origin in the world frame; yaw, rad in (-pi, pi] (`odometry.heading_of`).
     """
 
-    def __init__(self, num_states: int, quaternion_start: int, left_wheel_q: int,
-                 right_wheel_q: int):
+    def __init__(self):
         super().__init__()
-        self._q0 = quaternion_start
-        self._wheels = (left_wheel_q, right_wheel_q)
-        self._state_port = self.DeclareVectorInputPort("plant_state", num_states)
-        self._status_port = self.DeclareVectorInputPort("drive_status", 5)
-        self.DeclareVectorOutputPort("sample", 7, self._calc)
+        self._pose_port = self.DeclareAbstractInputPort("chassis_pose",
+                                                        AbstractValue.Make(RigidTransform()))
+        self._status_port = self.DeclareVectorInputPort("drive_status",
+                                                        len(DriveStatus.get_fields()))
+        self._ticks_port = self.DeclareVectorInputPort("encoder_ticks", 2)
+        self.DeclareVectorOutputPort("sample", len(LogSample.get_fields()), self._calc)
 
     def _calc(self, context, output: BasicVector):
-        state = self._state_port.Eval(context)
-        status = self._status_port.Eval(context)
-        w, qx, qy, qz, x, y = state[self._q0:self._q0 + 6]
-        yaw = yaw_from_quaternion(w, qx, qy, qz)
-        left, right = (ticks(state[i]) for i in self._wheels)
-        output.SetFromVector([status[1], status[2], left, right, x, y, yaw])
+        X_WB = self._pose_port.Eval(context)
+        status = DriveStatus(self._status_port.Eval(context))
+        left_ticks, right_ticks = (round(t) for t in self._ticks_port.Eval(context))
+        x, y = X_WB.translation()[:2]
+        sample = dict(left_power=status.power_left, right_power=status.power_right,
+                      left_ticks=left_ticks, right_ticks=right_ticks, x=x, y=y,
+                      yaw=heading_of(X_WB))
+        output.SetFromVector([sample[field] for field in LogSample.get_fields()])
 
 
-def add_run_log(builder, plant, name: str, chassis, wheel_joints, drive_status_port):
+def add_run_log(builder, name: str, chassis_pose_port, drive_status_port, encoder_ticks_port):
     """Adds `<name>.run_log_sample` and its sink `<name>.run_log`; returns the sink."""
-    front_left, front_right = (j.position_start() for j in wheel_joints[:2])
-    sample = builder.AddNamedSystem(f"{name}.run_log_sample", RunLogSample(
-        plant.num_multibody_states(), chassis.floating_positions_start(), front_left,
-        front_right))
-    builder.Connect(plant.get_state_output_port(), sample.GetInputPort("plant_state"))
-    builder.Connect(drive_status_port, sample.GetInputPort("drive_status"))
+    sample = builder.AddNamedSystem(f"{name}.run_log_sample", RunLogSample())
+    for port_name, port in (("chassis_pose", chassis_pose_port),
+                            ("drive_status", drive_status_port),
+                            ("encoder_ticks", encoder_ticks_port)):
+        builder.Connect(port, sample.GetInputPort(port_name))
     sink = LogVectorOutput(sample.get_output_port(), builder, LOG_PERIOD)
     sink.set_name(f"{name}.run_log")
     return sink
