@@ -162,8 +162,20 @@ def _last_tick(t: float, fps: float, offset: float) -> tuple[int, float]:
 
 class CameraHold(LeafSystem):
     """Renders one colour frame at initialization and one per frame tick (every 1/fps s from
-    `capture_offset`) and holds it: outputs `rgb_image` (ImageRgba8U) and `image_time` (s,
-    when the frame was taken).
+    `capture_offset`) and holds it.
+
+    .. pydrake_system::
+
+        name: CameraHold
+        input_ports:
+        - color_image
+        output_ports:
+        - rgb_image
+        - image_time
+
+    Input `color_image` (abstract ImageRgba8U, an RgbdSensor's). Outputs `rgb_image`
+    (abstract ImageRgba8U, width x height) and `image_time` (1-vector, s: when the frame was
+    taken), both held in state.
 
     With a discrete plant (`step` > 0, its time step) frames are taken on the plant's steps:
     at the first step at or after each tick. The scene only changes at steps, so the image is
@@ -209,6 +221,16 @@ class CameraFrameSaver(LeafSystem):
     """Writes the camera's frames (`rgb_image`, captured at `image_time`) as numbered PNG files
     (RGB) `<directory>/frame_NNNNNN.png`, one per tick of its own `rate` (Hz, ticks from
     `offset`) of the camera's `fps`.
+
+    .. pydrake_system::
+
+        name: CameraFrameSaver
+        input_ports:
+        - rgb_image
+        - image_time
+
+    Inputs `rgb_image` (abstract ImageRgba8U) and `image_time` (1-vector, s: when the frame
+    was captured; NaN: no frame yet), e.g. `CameraHold`'s outputs.
 
     It looks every `period` s (the plant's step, so it adds no Simulator stops) and saves a
     frame that came out since the previous look: one whose output time, capture plus `delay`,

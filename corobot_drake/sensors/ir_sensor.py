@@ -113,6 +113,35 @@ def scan_state_layout(num_rays: int) -> tuple[int, slice, slice, slice]:
 class IrSensor(LeafSystem):
     """One IR distance sensor (see the module docstring for its state and ports).
 
+    .. pydrake_system::
+
+        name: IrSensor
+        input_ports:
+        - query_object
+        output_ports:
+        - distance
+        - range
+        - normalized
+        - scan_time
+        - changed
+        - true_distance
+        - voltage (sharp_gp2d12 only)
+        - adc_counts (sharp_gp2d12 only)
+        - reading
+        - hit_points
+        - ray_origin
+        - ray_end
+        - ray_hit
+        - scan_state
+
+    Input `query_object` (abstract QueryObject, SceneGraph's). Outputs (vectors): `distance`,
+    `range`, `true_distance` (m); `normalized` (distance / range); `scan_time` (s; NaN before
+    the first scan); `changed` (0 or 1); `voltage` (V); `adc_counts`; `reading` [distance,
+    range, normalized, scan_time]; `hit_points`, `ray_origin`, `ray_end` (m, world frame;
+    hit_points NaN for a ray that hit nothing); `ray_hit` (0 or 1 per ray); `scan_state` (the
+    discrete state, `scan_state_layout`). The sensor frame S is fixed in the body frame B by
+    X_BS; +x of S is the look direction.
+
     config: as validated by the scenario loader (`config/validate.py`), trusted here;
     frame_id: the SceneGraph FrameId of the body the sensor is fixed to; X_BS: the sensor
     frame in that body's frame (default: `config.X_PB`, its base frame being the body's);
@@ -292,6 +321,12 @@ _HIT_COLORS = (Rgba(1.0, 0.05, 0.05, 1.0), Rgba(1.0, 0.85, 0.1, 1.0))
 
 class IrMeshcatVisualizer(LeafSystem):
     """Draws one IR sensor's rays (line segments) and hit points (small spheres) in Meshcat.
+
+    .. pydrake_system::
+
+        name: IrMeshcatVisualizer
+        input_ports:
+        - scan_state
 
     Everything lives under ``path`` (``/ir/<robot>/<sensor>``): ``rays`` and ``hits/<i>``;
     the Meshcat scene tree's checkbox on ``/ir``, a robot or a sensor shows or hides it.

@@ -149,10 +149,22 @@ def _count_still(a, at_goal: bool):
 class MotionCommands(LeafSystem):
     """DriveDistance / RotateDegrees / SetPose state machine (module docstring).
 
-    Inputs: `request` (DriveRequest, from the command source), `position` (3, m, GPS),
-    `heading` (1, rad, compass). Outputs: `drive_request` (DriveRequest for the drive
-    controller, its own seq), `command_status` (CommandStatus). Updated every
-    `drive.control_period` s.
+    .. pydrake_system::
+
+        name: MotionCommands
+        input_ports:
+        - request
+        - position
+        - heading
+        output_ports:
+        - drive_request
+        - command_status
+
+    Inputs: `request` (DriveRequest, abstract, from the command source), `position` (3, m,
+    chassis origin in the world frame, GPS), `heading` (1, rad, chassis yaw about world z,
+    compass). Outputs: `drive_request` (DriveRequest, abstract, for the drive controller, its
+    own seq), `command_status` (CommandStatus, abstract: how the last completing command
+    ended). Abstract state `MotionState`, updated every `drive.control_period` s.
     """
 
     def __init__(self, drive: Drive, motion: Motion):
