@@ -30,3 +30,31 @@ def make_sim(*overrides: str, scenario: Path = DEFAULT_SCENARIO,
 @pytest.fixture
 def sim() -> Simulation:
     return make_sim()
+
+
+class Stepper:
+    """A Simulator on one system alone whose periodic events have period `period` from 0:
+    `tick()` takes the next of them (the k-th, 1-based, happens at (k - 1) period; the
+    context then stands half a period later). Fix the inputs on `context` between ticks."""
+
+    def __init__(self, system, period: float):
+        from pydrake.systems.analysis import Simulator
+
+        self.system, self.period, self.ticks = system, period, 0
+        self.simulator = Simulator(system)
+        self.context = self.simulator.get_mutable_context()
+
+    def fix(self, port_name: str, value) -> None:
+        self.system.GetInputPort(port_name).FixValue(self.context, value)
+
+    def output(self, port_name: str):
+        return self.system.GetOutputPort(port_name).Eval(self.context)
+
+    def tick(self, n: int = 1) -> None:
+        self.ticks += n
+        self.simulator.AdvanceTo((self.ticks - 0.5) * self.period)
+
+    @property
+    def last_tick_time(self) -> float:
+        """s: when the latest tick happened."""
+        return (self.ticks - 1) * self.period
