@@ -1,0 +1,193 @@
+"""MotionCommands on its own: requests, position and heading fixed by the test, its updates
+stepped by a Simulator on the lone system (conftest.Stepper)."""
+
+import math
+
+import pytest
+
+from conftest import Stepper
+from corobot_drake.config.scenario import (
+    AllStop,
+    Drive,
+    DriveDistance,
+    Motion,
+    RotateDegrees,
+    SetPose,
+    SetPower,
+)
+from corobot_drake.systems.drive import DriveRequest
+from corobot_drake.systems.motion import (
+    POSE_SETTLE_TIME,
+    POSE_TIMEOUT,
+    STILL_FRAMES,
+    MotionCommands,
+    wrap,
+)
+
+DRIVE = Drive()
+PERIOD = DRIVE.control_period
+K = DRIVE.motor_torque_scaling
+EXACT = 1e-12  # products and sums of a few doubles
+
+
+def motion(profile: str = "closed_loop", x: float = 0.0, heading: float = 0.0) -> Stepper:
+    s = Stepper(MotionCommands(DRIVE, Motion(profile=profile)), PERIOD)
+    s.fix("request", DriveRequest())
+    at(s, x, heading)
+    return s
+
+
+def at(s: Stepper, x: float, heading: float, y: float = 0.0) -> None:
+    """Fixes the measured pose: GPS (x, y, 0) m and compass `heading` rad."""
+    s.fix("position", [x, y, 0.0])
+    s.fix("heading", [heading])
+
+
+def out(s: Stepper) -> DriveRequest:
+    return s.output("drive_request")
+
+
+def status(s: Stepper):
+    return s.output("command_status")
+
+
+def ticks_until_ended(s: Stepper, limit: int = 200) -> int:
+    for n in range(1, limit + 1):
+        s.tick()
+        if status(s).seq:
+            return n
+    raise AssertionError(f"still running after {limit} updates")
+
+
+def test_ordinary_commands_pass_through_with_their_own_sequence_numbers():
+    s = motion()
+    s.fix("request", DriveRequest(5, SetPower(0.3, -0.3)))
+    s.tick()
+    assert (out(s).seq, out(s).command, out(s).enabled) == (1, SetPower(0.3, -0.3), True)
+    s.fix("request", DriveRequest(6, SetPower(0.3, -0.3)))  # the same command again
+    s.tick()
+    assert out(s).seq == 1  # not re-sent
+    s.fix("request", DriveRequest(7, AllStop()))
+    s.tick()
+    assert (out(s).seq, out(s).command) == (2, AllStop())
+    assert status(s).seq == 0  # only completing commands report an end
+
+
+def test_closed_loop_drive_cruises_then_succeeds_after_resting_on_the_goal():
+    s = motion()
+    s.fix("request", DriveRequest(1, DriveDistance(1.0, 0.5)))
+    s.tick()
+    # Far from the goal the speed is the cruise speed: power 0.5 on both sides.
+    assert out(s).command.left == pytest.approx(0.5, abs=EXACT)
+    assert out(s).command.right == out(s).command.left
+    at(s, 0.3, 0.0)
+    s.tick()
+    remaining = s.system.remaining_command(s.context)
+    assert remaining.distance == pytest.approx(0.7, abs=EXACT)
+    at(s, 1.0, 0.0)  # on the goal: the first update sees it arrive fast, then at rest
+    assert STILL_FRAMES == 3  # docs/commands.md: "succeeds after 3 frames at rest there"
+    assert ticks_until_ended(s) == 1 + STILL_FRAMES
+    st = status(s)
+    assert (st.seq, st.status, st.reason) == (1, "succeeded", "")
+    assert st.time == pytest.approx(s.last_tick_time, abs=EXACT)
+    assert out(s).command == AllStop()
+
+
+def test_closed_loop_drive_holds_its_start_heading():
+    s = motion()
+    s.fix("request", DriveRequest(1, DriveDistance(1.0, 0.5)))
+    s.tick()
+    at(s, 0.01, 0.1)  # drifted 0.1 rad to the left
+    s.tick()
+    command = out(s).command
+    # 5 axle rad/s per rad of error, per side: the left speeds up, the right slows down.
+    assert (command.left - command.right) * K == pytest.approx(2 * 5.0 * 0.1, abs=1e-9)
+
+
+def test_seed_drive_succeeds_as_soon_as_the_goal_is_reached():
+    s = motion("seed")
+    s.fix("request", DriveRequest(1, DriveDistance(-0.5, 1.0)))  # backwards
+    s.tick()
+    assert (out(s).command.left, out(s).command.right) == pytest.approx((-1.0, -1.0), abs=EXACT)
+    at(s, -0.4999, 0.0)
+    s.tick()
+    assert status(s).seq == 0
+    at(s, -0.5, 0.0)
+    s.tick()
+    assert (status(s).seq, status(s).status) == (1, "succeeded")
+    assert out(s).command == AllStop()
+
+
+def test_a_drive_that_does_not_move_fails_stalled_after_the_stall_time():
+    s = motion()
+    s.fix("request", DriveRequest(1, DriveDistance(1.0, 0.5)))
+    stall_ticks = round(Motion().stall_time / PERIOD)  # 60 updates: 1 s
+    s.tick(stall_ticks)  # the last at t = 59/60 s
+    assert status(s).seq == 0
+    s.tick()  # t = 1 s
+    st = status(s)
+    assert (st.seq, st.status, st.reason) == (1, "failed", "stalled")
+    assert st.time == pytest.approx(Motion().stall_time, abs=EXACT)
+    assert out(s).command == AllStop()
+
+
+def test_a_completing_command_to_a_disabled_drive_fails_at_once():
+    s = motion()
+    s.fix("request", DriveRequest(1, RotateDegrees(90.0, 0.5), enabled=False))
+    s.tick()
+    st = status(s)
+    assert (st.seq, st.status, st.reason) == (1, "failed", "disabled")
+    assert (out(s).command, out(s).enabled) == (AllStop(), False)
+
+
+def test_a_new_request_supersedes_the_running_command():
+    s = motion()
+    s.fix("request", DriveRequest(1, DriveDistance(1.0, 0.5)))
+    s.tick(3)
+    s.fix("request", DriveRequest(2, SetPower(0.2, 0.2)))
+    s.tick()
+    assert out(s).command == SetPower(0.2, 0.2)
+    assert s.system.remaining_command(s.context) is None
+    s.tick(100)  # the superseded drive never reports (the command source records it)
+    assert status(s).seq == 0
+
+
+def test_rotation_unwraps_across_180_degrees_and_lands():
+    s = motion(heading=3.0)
+    s.fix("request", DriveRequest(1, RotateDegrees(90.0, 0.5)))
+    s.tick()
+    assert out(s).command.left < 0 < out(s).command.right  # counter-clockwise
+    at(s, 0.0, -3.0)  # turned 2 pi - 6 = 0.283 rad through +-pi
+    s.tick()
+    turned = 2 * math.pi - 6.0
+    left = s.system.remaining_command(s.context)
+    assert left.degrees == pytest.approx(90.0 - math.degrees(turned), abs=1e-9)
+    at(s, 0.0, wrap(3.0 + math.pi / 2))
+    assert ticks_until_ended(s) == 1 + STILL_FRAMES
+    assert (status(s).seq, status(s).status) == (1, "succeeded")
+
+
+def test_set_pose_succeeds_once_the_robot_has_settled_where_it_was_put():
+    s = motion()
+    s.fix("request", DriveRequest(1, SetPose(1.0, 2.0, 90.0)))
+    s.tick()
+    assert out(s).command == AllStop()
+    at(s, 1.0, math.pi / 2, y=2.0)  # the Simulation teleported it
+    s.tick()
+    landed = s.last_tick_time
+    settle_ticks = round(POSE_SETTLE_TIME / PERIOD)  # 15
+    s.tick(settle_ticks - 1)
+    assert status(s).seq == 0
+    s.tick()
+    st = status(s)
+    assert (st.seq, st.status) == (1, "succeeded")
+    assert st.time - landed == pytest.approx(POSE_SETTLE_TIME, abs=EXACT)
+
+
+def test_set_pose_not_applied_fails_after_the_timeout():
+    s = motion()
+    s.fix("request", DriveRequest(1, SetPose(1.0, 2.0, 90.0)))
+    n = ticks_until_ended(s)
+    st = status(s)
+    assert (st.seq, st.status, st.reason) == (1, "failed", "not_applied")
+    assert n == round(POSE_TIMEOUT / PERIOD) + 1  # the update at t = 1 s
