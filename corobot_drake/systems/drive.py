@@ -268,6 +268,12 @@ _ControllerState = namedview("DriveControllerState", (
     "seq", *DriveStatus.get_fields(), "axle_left", "axle_right"))
 """The drive controller's discrete state: the seq of the last request acted on, the
 `DriveStatus` fields, and the slewed axle speed per side (rad/s)."""
+_STATUS_SLICE = slice(1, 1 + len(DriveStatus.get_fields()))
+_AXLE_SLICE = slice(_STATUS_SLICE.stop, _STATUS_SLICE.stop + 2)
+"""Where the `drive_status` and `axle_speed_command` outputs sit in the state, by the field
+order above: outputs evaluated at every step copy a slice, not a field at a time."""
+assert _ControllerState.get_fields()[_STATUS_SLICE] == DriveStatus.get_fields()
+assert _ControllerState.get_fields()[_AXLE_SLICE] == ("axle_left", "axle_right")
 
 
 def _stop(x) -> None:
@@ -324,10 +330,9 @@ class DriveController(LeafSystem):
             "axle_speed", 4, lambda c, o: o.SetFromVector(self._wheel_state_port.Eval(c)[4:]),
             {self.input_port_ticket(self._wheel_state_port.get_index())})
 
-    def _x(self, context, copy: bool = True):
-        """The discrete state as a `_ControllerState` (a copy, or a read-only view)."""
-        x = context.get_discrete_state(self._state).get_value()
-        return _ControllerState(x.copy() if copy else x)
+    def _x(self, context):
+        """A copy of the discrete state, as a `_ControllerState`."""
+        return _ControllerState(context.get_discrete_state(self._state).get_value().copy())
 
     def target_for(self, command, enabled: bool) -> tuple[float, float, float, float] | None:
         """(power_l, power_r, axle_l, axle_r) a motion command asks for; None if not motion."""
@@ -379,15 +384,15 @@ class DriveController(LeafSystem):
         x.power_left, x.power_right = left / scaling, right / scaling
         context.SetDiscreteState(self._state, x[:])
 
+    def _state_at(self, context, part: slice) -> np.ndarray:
+        return context.get_discrete_state(self._state).get_value()[part]
+
     def _calc_desired_state(self, context, output: BasicVector):
-        x = self._x(context, copy=False)
-        left, right = x.axle_left, x.axle_right
+        left, right = self._state_at(context, _AXLE_SLICE)
         output.SetFromVector([0.0, 0.0, 0.0, 0.0, left, right, left, right])
 
     def _calc_axle(self, context, output: BasicVector):
-        x = self._x(context, copy=False)
-        output.SetFromVector([x.axle_left, x.axle_right])
+        output.SetFromVector(self._state_at(context, _AXLE_SLICE))
 
     def _calc_status(self, context, output: BasicVector):
-        x = self._x(context, copy=False)
-        output.SetFromVector([getattr(x, field) for field in DriveStatus.get_fields()])
+        output.SetFromVector(self._state_at(context, _STATUS_SLICE))

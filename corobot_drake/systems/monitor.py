@@ -9,7 +9,7 @@ from pydrake.systems.framework import LeafSystem
 
 def tilt_deg(X_WB: RigidTransform) -> float:
     """Angle (deg) between the body's +z and the world's +z: 0 upright, 180 upside down."""
-    cos_tilt = float(X_WB.rotation().matrix()[2, 2])
+    cos_tilt = float(X_WB.GetAsMatrix34()[2, 2])  # R[2, 2]
     return math.degrees(math.acos(min(1.0, max(-1.0, cos_tilt))))
 
 

@@ -85,8 +85,8 @@ def add_odometry(builder, name: str, chassis_pose_port, wheel_state_port, drive_
 def heading_of(X_WB: RigidTransform) -> float:
     """Yaw (rad, (-pi, pi]) of a pose: the heading of body +x projected on the world's x-y
     plane, atan2(R[1, 0], R[0, 0])."""
-    R = X_WB.rotation().matrix()
-    return math.atan2(R[1, 0], R[0, 0])
+    X = X_WB.GetAsMatrix34()  # [R | p]: one call, cheaper than rotation().matrix()
+    return math.atan2(X[1, 0], X[0, 0])
 
 
 class ChassisPose(LeafSystem):
@@ -109,11 +109,14 @@ class ChassisPose(LeafSystem):
     def __init__(self, body_index: int):
         super().__init__()
         self._index = int(body_index)
-        port = self.DeclareAbstractInputPort("body_poses", AbstractValue.Make([RigidTransform()]))
+        self._poses = self.DeclareAbstractInputPort("body_poses",
+                                                    AbstractValue.Make([RigidTransform()]))
         self.DeclareAbstractOutputPort(
-            "pose", lambda: AbstractValue.Make(RigidTransform()),
-            lambda c, o: o.set_value(port.Eval(c)[self._index]),
-            {self.input_port_ticket(port.get_index())})
+            "pose", lambda: AbstractValue.Make(RigidTransform()), self._calc,
+            {self.input_port_ticket(self._poses.get_index())})
+
+    def _calc(self, context, output) -> None:
+        output.set_value(self._poses.Eval(context)[self._index])
 
 
 class _ChassisSensor(LeafSystem):

@@ -66,8 +66,8 @@ class RunLogSample(LeafSystem):
     def _calc(self, context, output: BasicVector):
         X_WB = self._pose_port.Eval(context)
         status = DriveStatus(self._status_port.Eval(context))
-        left_ticks, right_ticks = (round(t) for t in self._ticks_port.Eval(context))
-        x, y = X_WB.translation()[:2]
+        left_ticks, right_ticks = np.rint(self._ticks_port.Eval(context))  # whole ticks
+        x, y, _ = X_WB.translation()
         sample = dict(left_power=status.power_left, right_power=status.power_right,
                       left_ticks=left_ticks, right_ticks=right_ticks, x=x, y=y,
                       yaw=heading_of(X_WB))
