@@ -13,7 +13,8 @@ from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder
 
-from corobot_drake.sensors.ir_sensor import IrSensor, IrSensorConfig
+from corobot_drake.config.sensors import IrSensorConfig
+from corobot_drake.sensors.ir_sensor import IrSensor
 
 FACE_DISTANCE = 0.3  # m from the sensor to the box face, along its look direction
 THICKNESS = 0.1  # m: the box's extent along the look direction
