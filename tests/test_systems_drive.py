@@ -211,9 +211,9 @@ def test_script_runs_in_order_with_waits_and_completing_commands():
     assert (request(s).seq, request(s).command) == (4, AllStop())
     assert [(r.seq, r.command) for r in log(s)] == [
         (1, "SetPower"), (0, "Wait"), (2, "SetSpeed"), (3, "DriveDistance"), (4, "AllStop")]
-    # (The SetPower's record is not ended: a Wait logged after it hides it from the next
-    # command. Left as it is, a behaviour of the command source's log.)
-    assert [r.status for r in log(s)[1:]] == ["succeeded"] * 3 + ["running"]
+    # The SetPower ends when the SetSpeed replaces it, though the Wait was logged between.
+    assert [r.status for r in log(s)] == ["succeeded"] * 4 + ["running"]
+    assert log(s)[0].end_time == pytest.approx(4 * PERIOD, abs=1e-12)
     wait = log(s)[1]
     assert (wait.start_time, wait.end_time) == pytest.approx((PERIOD, PERIOD + 0.04), abs=1e-12)
     assert log(s)[3].end_time == 0.2  # the reported end time

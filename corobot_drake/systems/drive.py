@@ -160,14 +160,17 @@ class CommandSource(LeafSystem):
     def _with_command(state: CommandSourceState, command, time: float) -> CommandSourceState:
         check_finite(command)
         log = list(state.log)
-        if log and log[-1].end_time is None:
-            last = log[-1]
+        # The last issued command (a script's Wait records, seq 0, may follow it) ends now.
+        last_index = next((i for i in range(len(log) - 1, -1, -1) if log[i].seq != 0), None)
+        if last_index is not None and log[last_index].end_time is None:
+            last = log[last_index]
             if last.command in _COMPLETING_NAMES:
                 reason = ("disabled" if isinstance(command, Enable) and not command.enabled
                           else "superseded")
-                log[-1] = dc.replace(last, end_time=time, status="failed", reason=reason)
+                log[last_index] = dc.replace(last, end_time=time, status="failed",
+                                             reason=reason)
             else:
-                log[-1] = dc.replace(last, end_time=time, status="succeeded")
+                log[last_index] = dc.replace(last, end_time=time, status="succeeded")
         seq = state.request.seq + 1
         log.append(CommandRecord(seq=seq, command=command_name(command), start_time=time))
         enabled = command.enabled if isinstance(command, Enable) else state.request.enabled
