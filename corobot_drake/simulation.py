@@ -16,7 +16,7 @@ import time
 from pathlib import Path
 
 import numpy as np
-from pydrake.common.yaml import yaml_dump_typed
+from pydrake.common.yaml import yaml_dump_typed, yaml_load_typed
 from pydrake.math import RollPitchYaw
 from pydrake.multibody.math import SpatialVelocity
 from pydrake.systems.analysis import ApplySimulatorConfig, Simulator
@@ -26,6 +26,7 @@ from corobot_drake.config import scenario as sc
 from corobot_drake.config.poses import ground_pose, transform_from
 from corobot_drake.model import dimensions as dim
 from corobot_drake.readings import BodyPose, BodyVelocity, CommandResult, IrReading
+from corobot_drake.sensors.ir_sensor import noise_key
 from corobot_drake.station import RobotParts, Station, build_station
 from corobot_drake.systems.drive import CommandRecord, DriveStatus
 from corobot_drake.systems.odometry import DriveState
@@ -159,7 +160,7 @@ class Robot:
             commands.append(remaining)
         elif isinstance(state.request.command, sc.SetPower | sc.SetSpeed):
             commands.append(state.request.command)
-        script = source.script
+        script = source.script(source.GetMyContextFromRoot(root))
         if state.next_script_index < len(script):
             if state.script_blocked_until > self._sim.time:
                 commands.append(sc.Wait(state.script_blocked_until - self._sim.time))
@@ -333,12 +334,55 @@ class Simulation:
         ApplySimulatorConfig(scenario.simulator_config, self.simulator)
         self.context = self.simulator.get_mutable_context()
         self.robots = {name: Robot(self, parts) for name, parts in self.station.robots.items()}
+        self._start()
+
+    def _start(self) -> None:
+        """Puts the scenario's per-run values (`diagram_key` leaves them out) into the
+        Context, then initializes the simulator."""
+        self._set_per_run_values()
         self._set_initial_velocities()
-        if any(isinstance(c, sc.SetPose) for r in scenario.robots.values() for c in r.commands):
+        if any(isinstance(c, sc.SetPose) for r in self.scenario.robots.values()
+               for c in r.commands):
             # A scripted SetPose: stop after the step that issued it, to teleport (advance_to).
             self.simulator.set_monitor(self._teleport_monitor)
+        else:
+            self.simulator.clear_monitor()
         self.simulator.Initialize()
         self._wall_seconds = 0.0
+
+    def reset(self, scenario: sc.Scenario | None = None) -> None:
+        """Starts again from the beginning of `scenario` (default: this simulation's) on the
+        diagram already built: the Context goes back to its defaults, then takes the
+        scenario's seed, start time, scripts and initial poses and velocities. A run after a
+        reset is bit for bit a run of a freshly built simulation. The scenario may differ from
+        the built one only in those values (`diagram_key`); ValueError otherwise."""
+        if scenario is not None and diagram_key(scenario) != diagram_key(self.scenario):
+            raise ValueError("the scenario differs from the built one in more than its seed, "
+                             "start time, scripts and initial state: build a new Simulation")
+        self.scenario = scenario or self.scenario
+        self.station.diagram.SetDefaultContext(self.context)
+        for name in self.robots:  # a log sink keeps its log beside the state: clear it too
+            sink = self.station.diagram.GetSubsystemByName(f"{name}.run_log")
+            sink.GetMutableLog(sink.GetMyMutableContextFromRoot(self.context)).Clear()
+        self.context.SetTime(self.scenario.simulator_config.start_time)
+        self._start()
+
+    def _set_per_run_values(self) -> None:
+        plant = self.station.plant
+        plant_context = plant.GetMyMutableContextFromRoot(self.context)
+        for name, parts in self.station.robots.items():
+            spec = self.scenario.robots[name]
+            plant.SetFreeBodyPose(plant_context, parts.chassis, spec.pose.GetDeterministicValue())
+            source = parts.command_source
+            source.SetScript(source.GetMyMutableContextFromRoot(self.context), spec.commands)
+            for sensor_name, sensor in parts.ir_sensors.items():
+                key = noise_key(self.scenario.random_seed, name, sensor_name,
+                                spec.ir_sensors[sensor_name].noise_seed)
+                sensor.SetNoiseKey(sensor.GetMyMutableContextFromRoot(self.context), key)
+        for name, body in self.station.bodies.items():
+            spec = self.scenario.world.bodies[name]
+            if not spec.fixed:
+                plant.SetFreeBodyPose(plant_context, body, spec.pose.GetDeterministicValue())
 
     @classmethod
     def from_file(cls, filename: str | Path, overrides: list[str] = (), meshcat=None,
@@ -459,6 +503,26 @@ class Simulation:
             "wall_seconds": self._wall_seconds,
             "robots": {name: robot.summary() for name, robot in self.robots.items()},
         }
+
+
+_PER_RUN_ROBOT_FIELDS = ("pose", "velocity", "wheel_angles", "wheel_speeds", "commands")
+
+
+def diagram_key(scenario: sc.Scenario) -> str:
+    """The scenario as YAML without what `Simulation.reset` sets in the Context (the seed,
+    start time and duration, the robots' and free bodies' initial poses and velocities, the
+    wheels' initial angles and speeds, the scripts): scenarios with one key build one diagram."""
+    s = yaml_load_typed(schema=sc.Scenario, data=yaml_dump_typed(scenario, schema=sc.Scenario))
+    s.random_seed, s.simulation_duration = 0, math.inf
+    s.simulator_config.start_time = 0.0
+    default_robot, default_body = sc.Robot(), sc.WorldBody()
+    for robot in s.robots.values():
+        for field in _PER_RUN_ROBOT_FIELDS:
+            setattr(robot, field, getattr(default_robot, field))
+    for body in s.world.bodies.values():
+        if not body.fixed:
+            body.pose, body.velocity = default_body.pose, default_body.velocity
+    return yaml_dump_typed(s, schema=sc.Scenario)
 
 
 def quiet_drake_warnings() -> None:

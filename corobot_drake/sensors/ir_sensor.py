@@ -50,6 +50,7 @@ import math
 import zlib
 
 import numpy as np
+from pydrake.common.value import Value
 from pydrake.geometry import Meshcat, Rgba, Role, Sphere
 from pydrake.math import RigidTransform
 from pydrake.systems.framework import BasicVector, LeafSystem
@@ -155,7 +156,8 @@ class IrSensor(LeafSystem):
         self.sensor_name = name
         self._frame_id = frame_id
         self._exclude = frozenset(exclude)
-        self._key = int(key)
+        # A parameter: a reset Context may carry another run's seed.
+        self._key_index = self.DeclareAbstractParameter(Value(int(key)))
         self._range = float(config.maximum_range)
         self._threshold = float(config.change_threshold)
         self._sharp = SharpGP2D12(noise_std=config.noise_std) if config.model == "sharp_gp2d12" \
@@ -222,6 +224,10 @@ class IrSensor(LeafSystem):
 
     def _value(self, context) -> np.ndarray:
         return self._all(context)[:_READING_SIZE]
+
+    def SetNoiseKey(self, context, key: int) -> None:
+        """The noise key (`noise_key`) this Context's scans draw from (sharp_gp2d12)."""
+        context.get_mutable_abstract_parameter(self._key_index).set_value(int(key))
 
     def reading(self, context) -> IrReading:
         """The latest scan as an analog reading (context: this system's)."""
@@ -300,7 +306,8 @@ class IrSensor(LeafSystem):
             s = self._sharp
             v = s.voltage_scalar(true_distance if 1.0 in hit else math.inf)
             if s.noise_std > 0.0:
-                v += s.noise_std * counter_normal(self._key, index)
+                key = context.get_abstract_parameter(self._key_index).get_value()
+                v += s.noise_std * counter_normal(key, index)
             counts = s.counts_scalar(v)
             voltage = counts * s.adc_step
             raw = min(s.distance_from_voltage_scalar(voltage), rng)

@@ -21,7 +21,7 @@ from corobot_drake.study.spec import Run, Study, expand, load_study, scenario_pa
 
 SAVE_EVERY = 2.0
 """Wall-clock seconds between rewrites of runs.csv while runs arrive."""
-TIMING_COLUMNS = ("wall_seconds",)
+TIMING_COLUMNS = ("setup", "setup_seconds", "wall_seconds")
 """Columns that depend on the clock (everything else is deterministic)."""
 
 

@@ -11,7 +11,7 @@ import numpy as np
 
 from corobot_drake.study.spec import Study
 
-NOT_METRICS = {"run", "seed", "status", "error", "wall_seconds"}
+NOT_METRICS = {"run", "seed", "status", "error", "setup", "setup_seconds", "wall_seconds"}
 
 
 def _number(text: str) -> float | None:

@@ -8,13 +8,16 @@ from __future__ import annotations
 
 import math
 import time
+from collections import OrderedDict
 from pathlib import Path
 
 from corobot_drake.config.scenario import load_scenario
-from corobot_drake.simulation import Simulation, quiet_drake_warnings
+from corobot_drake.simulation import Simulation, diagram_key, quiet_drake_warnings
 from corobot_drake.study.metrics import measure
 from corobot_drake.study.spec import Run, Study
 
+CACHE_SIZE = 3
+"""Simulations a worker keeps built (each holds a diagram and its Context)."""
 CHECK_PERIOD = 0.1
 """s of simulated time between checks whether every command has ended (`until: commands`)."""
 
@@ -24,14 +27,37 @@ def one_line(error: BaseException) -> str:
     return text.splitlines()[0]
 
 
-def build(study: Study, scenario_file: Path, run: Run) -> Simulation:
-    """The run's simulation: the scenario, the study's overrides, then the run's parameters
-    and seed; the cameras off unless the study asks for them."""
+def run_scenario(study: Study, scenario_file: Path, run: Run):
+    """The run's scenario: the file, the study's overrides, then the run's parameters and
+    seed; the cameras off unless the study asks for them."""
     scenario = load_scenario(scenario_file, overrides=[*study.overrides, *run.overrides()])
     if not study.cameras:
         for robot in scenario.robots.values():
             robot.camera.rgb = False
-    return Simulation(scenario)
+    return scenario
+
+
+class SimulationCache:
+    """The last few simulations a worker built, by `diagram_key`: a run whose diagram is
+    already built resets it (`Simulation.reset`) instead of building again."""
+
+    def __init__(self, size: int = CACHE_SIZE):
+        self.size = size
+        self._sims: OrderedDict[str, Simulation] = OrderedDict()
+
+    def get(self, scenario) -> tuple[Simulation, str]:
+        """A simulation at the start of `scenario`, and `reset` or `built`."""
+        key = diagram_key(scenario)
+        sim = self._sims.pop(key, None)
+        if sim is not None:
+            sim.reset(scenario)
+            how = "reset"
+        else:
+            sim, how = Simulation(scenario), "built"
+        self._sims[key] = sim
+        while len(self._sims) > self.size:
+            self._sims.popitem(last=False)
+        return sim, how
 
 
 def commands_ended(sim: Simulation) -> bool:
@@ -55,12 +81,16 @@ def advance(sim: Simulation, study: Study) -> None:
     sim.advance_to(min(end, sim.time + study.settle))
 
 
-def simulate(study: Study, scenario_file: Path, run: Run) -> dict:
-    """The run's row: run, seed, parameters, metrics, status, error, wall_seconds."""
+def simulate(study: Study, scenario_file: Path, run: Run,
+             cache: SimulationCache | None = None) -> dict:
+    """The run's row: run, seed, parameters, metrics, status, error, and the timing columns
+    (setup: built or reset; setup_seconds; wall_seconds, the whole run)."""
     start = time.perf_counter()
     row: dict = {"run": run.index, "seed": run.seed, **dict(run.params)}
     try:
-        sim = build(study, scenario_file, run)
+        scenario = run_scenario(study, scenario_file, run)
+        sim, row["setup"] = (cache or SimulationCache(0)).get(scenario)
+        row["setup_seconds"] = round(time.perf_counter() - start, 4)
         starts = {name: (r.pose(), r.heading()) for name, r in sim.robots.items()}
         advance(sim, study)
         row.update(measure(sim, starts, study.metrics))
@@ -77,9 +107,10 @@ class StudyWorker:
     def __init__(self, study: Study, scenario_file: str):
         quiet_drake_warnings()
         self.study, self.scenario_file = study, Path(scenario_file)
+        self.cache = SimulationCache()
 
     def run(self, run: Run) -> dict:
-        return simulate(self.study, self.scenario_file, run)
+        return simulate(self.study, self.scenario_file, run, self.cache)
 
 
 def finite_or_text(value):

@@ -133,7 +133,8 @@ class CommandSource(LeafSystem):
         super().__init__()
         for command in script:
             check_finite(command)
-        self._script = tuple(script)
+        # A parameter, not a constructor constant: a reset Context may run another script.
+        self._script_index = self.DeclareAbstractParameter(Value(tuple(script)))
         self._state_index = self.DeclareAbstractState(Value(CommandSourceState()))
         self.DeclareAbstractOutputPort(
             "request", lambda: Value(DriveRequest()), self._calc_request,
@@ -142,10 +143,15 @@ class CommandSource(LeafSystem):
                                                           Value(CommandStatus()))
         self.DeclarePeriodicUnrestrictedUpdateEvent(period, 0.0, self._update)
 
-    @property
-    def script(self) -> tuple:
-        """The scenario's commands, in order."""
-        return self._script
+    def script(self, context) -> tuple:
+        """The script this Context runs (the scenario's commands, in order)."""
+        return context.get_abstract_parameter(self._script_index).get_value()
+
+    def SetScript(self, context, script) -> None:
+        """Runs `script` from the start of this Context (before the simulation starts)."""
+        for command in script:
+            check_finite(command)
+        context.get_mutable_abstract_parameter(self._script_index).set_value(tuple(script))
 
     def _calc_request(self, context, output):
         output.set_value(self.get_state(context).request)
@@ -235,9 +241,10 @@ class CommandSource(LeafSystem):
         if current.script_waits_for:
             record = next(r for r in reversed(current.log) if r.seq == current.script_waits_for)
             waiting = record.end_time is None
-        if (current.next_script_index < len(self._script)
+        script = self.script(context)
+        if (current.next_script_index < len(script)
                 and now >= current.script_blocked_until and not waiting):
-            command = self._script[current.next_script_index]
+            command = script[current.next_script_index]
             current = dc.replace(current, next_script_index=current.next_script_index + 1)
             if isinstance(command, Wait):
                 log = list(current.log)
