@@ -1,11 +1,13 @@
-"""Ray casting against real SceneGraph geometry (QueryObject.GetPoseInWorld path)."""
+"""Ray casting against real SceneGraph geometry (QueryObject.GetPoseInWorld path).
+
+The batch cast with hit points (`ReferenceRayCaster.cast`, tests/reference_raycast.py) is
+checked against closed forms and Drake's signed distances; the product's `cast_fan` against
+closed forms and against the batch cast."""
 
 from __future__ import annotations
 
-import importlib.util
 import logging
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -30,14 +32,14 @@ from pydrake.multibody.plant import AddMultibodyPlantSceneGraph, CoulombFriction
 from pydrake.multibody.tree import SpatialInertia
 from pydrake.systems.framework import DiagramBuilder
 
+from corobot_drake.analysis import bench_raycast
 from corobot_drake.sensors.raycast import (
-    BodyFixedRays,
     RayCaster,
     RayFan,
-    cross_of_rays_directions,
     cross_of_rays_in_sensor_frame,
     model_instance_geometry_ids,
 )
+from reference_raycast import ReferenceRayCaster, cross_of_rays_directions
 
 CUBE_OBJ = """\
 v -1 -1 -1
@@ -115,7 +117,7 @@ class Scene:
         self.inspector = self.scene_graph.model_inspector()
 
     def caster(self, exclude=()):
-        return RayCaster(self.inspector, exclude=[self.ids[n] for n in exclude])
+        return ReferenceRayCaster(self.inspector, exclude=[self.ids[n] for n in exclude])
 
 
 @pytest.fixture(scope="module")
@@ -361,7 +363,7 @@ def test_multibody_plant_scene_moving_robot_excluded():
     )
     own = model_instance_geometry_ids(plant, robot)
     assert len(own) == 1
-    caster = RayCaster(scene_graph.model_inspector(), exclude=own)
+    caster = ReferenceRayCaster(scene_graph.model_inspector(), exclude=own)
     assert len(caster.geometry_ids) == 2
     # Rear-looking sensor at the chassis' rear face (robot turned around: looks along world +x).
     X_WS = X_WB @ RigidTransform([-0.1, 0, 0])
@@ -380,7 +382,7 @@ def test_multibody_plant_scene_moving_robot_excluded():
     hits = caster.cast(query_object, origins, directions, 0.762)
     assert hits.distance.min() == pytest.approx(0.6366)
     # Without the exclusion the sensor, sitting on the chassis surface, sees itself at 0.
-    all_caster = RayCaster(scene_graph.model_inspector())
+    all_caster = ReferenceRayCaster(scene_graph.model_inspector())
     assert all_caster.cast(query_object, origins, directions, 0.762).distance.max() == 0.0
 
 
@@ -405,8 +407,8 @@ def test_unsupported_shape_is_reported_once_by_name(caplog):
     inspector = _InspectorWithCone(scene.inspector, scene.ids["cone_like"])
     with caplog.at_level(logging.WARNING, logger="corobot_drake.sensors.raycast"):
         caster = RayCaster(inspector)
-        caster.cast(scene.query_object, [[5, 0, 0]], [[-1, 0, 0]], 10)
-        caster.cast(scene.query_object, [[5, 0, 0]], [[-1, 0, 0]], 10)
+        caster.cast_fan(scene.query_object, [5, 0, 0], [[-1, 0, 0]], 10)
+        caster.cast_fan(scene.query_object, [5, 0, 0], [[-1, 0, 0]], 10)
     warnings = [r for r in caplog.records if r.levelno == logging.WARNING]
     assert len(warnings) == 1
     assert "cone_like" in warnings[0].getMessage()
@@ -580,38 +582,35 @@ def test_far_geometry_is_rejected_but_near_ones_are_not():
     assert caster.cast(scene.query_object, [[0, 0, 0]], [[1, 0, 0]], 4.8).distance[0] == math.inf
 
 
-def test_body_fixed_rays_in_world():
+def test_ray_fans_in_world():
+    """Each sensor's RayFan, posed by the chassis pose, is the sensor's cross of rays from the
+    sensor's origin, and its cone holds them."""
     X_BS = [
         RigidTransform([0.108, 0, 0.07]),
         RigidTransform(RotationMatrix.MakeZRotation(math.pi), [-0.108, 0, 0.07]),
     ]
-    rays = BodyFixedRays.cross_of_rays(X_BS, samples=3, dispersion_cone_angle=8.0)
-    assert rays.origins.shape == rays.directions.shape == (12, 3)
     X_WB = RigidTransform(RollPitchYaw(0.1, -0.2, 2.0), [1.0, -2.0, 0.3])
-    origins, directions = rays.in_world(X_WB)
-    for i, X in enumerate(X_BS):
+    for X in X_BS:
+        fan = RayFan.cross_of_rays(X, samples=3, dispersion_cone_angle=8.0)
+        origin, directions, (axis, half_angle) = fan.in_world(X_WB.GetAsMatrix34().tolist())
         X_WS = X_WB @ X
-        rows = slice(6 * i, 6 * (i + 1))
-        np.testing.assert_allclose(origins[rows], np.tile(X_WS.translation(), (6, 1)), atol=1e-15)
-        np.testing.assert_allclose(
-            directions[rows], cross_of_rays_directions(X_WS, 3, 8.0), atol=1e-15
-        )
+        np.testing.assert_allclose(origin, X_WS.translation(), atol=1e-15)
+        np.testing.assert_allclose(directions, cross_of_rays_directions(X_WS, 3, 8.0),
+                                   atol=1e-15)
+        np.testing.assert_allclose(axis, X_WS.rotation().col(0), atol=1e-15)
+        assert half_angle == pytest.approx(math.radians(4.0))
 
 
 def test_bench_scene_reads_the_spec_figures():
-    """tools/bench_raycast.py's scene: rear IR reads the box face at 0.62865 m (SPEC)."""
-    spec = importlib.util.spec_from_file_location(
-        "bench_raycast", Path(__file__).resolve().parents[1] / "tools" / "bench_raycast.py"
-    )
-    bench = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(bench)
-    _, context, plant, scene_graph, chassis, robot = bench.build_scene()
-    caster, scan = bench.make_scan(plant, scene_graph, chassis, robot, context)
+    """corobot_drake.analysis.bench_raycast's scene: the rear IR reads the box face at
+    0.62865 m (SPEC)."""
+    _, context, plant, scene_graph, chassis, robot = bench_raycast.build_scene()
+    caster, scan = bench_raycast.make_fan_scan(plant, scene_graph, chassis, robot, context)
     assert len(caster.geometry_ids) == 2  # ground and giant box: the robot's own are excluded
-    hits = scan()
-    assert np.all(np.isinf(hits.distance[:6]))  # front: nothing within 30 in
-    assert hits.distance[6:].min() == pytest.approx(0.62865, abs=1e-9)
-    assert 0.0 < bench.scan_cost_seconds(repeats=100) < 0.05
+    distances = scan()
+    assert np.all(np.isinf(distances[:6]))  # front: nothing within 30 in
+    assert min(distances[6:]) == pytest.approx(0.62865, abs=1e-9)
+    assert 0.0 < bench_raycast.scan_cost_seconds(repeats=100) < 0.05
 
 
 # --- cast_fan: the scalar path for one sensor's fan -----------------------------------------

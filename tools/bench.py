@@ -21,6 +21,7 @@ import statistics
 import time
 from pathlib import Path
 
+from corobot_drake.analysis import bench_raycast
 from corobot_drake.config import scenario as sc
 from corobot_drake.config.scenario import load_scenario
 from corobot_drake.simulation import Simulation, quiet_drake_warnings
@@ -184,10 +185,8 @@ def main() -> None:
     if ir is not None and hasattr(ir, "station_scan_cost_seconds"):
         print(f"micro-benchmark: IR scan of both default sensors (2 x 6 rays) in the station: "
               f"{ir.station_scan_cost_seconds() * 1000:.4f} ms (tools/bench_ir.py)", flush=True)
-    raycast = _load_tool("bench_raycast")
-    if raycast is not None and hasattr(raycast, "scan_cost_seconds"):
-        print(f"micro-benchmark: IR scan, 2 sensors x 6 rays: "
-              f"{raycast.scan_cost_seconds() * 1000:.4f} ms (tools/bench_raycast.py)", flush=True)
+    print(f"micro-benchmark: IR scan, 2 sensors x 6 rays: "
+          f"{bench_raycast.scan_cost_seconds() * 1000:.4f} ms (tools/bench_raycast.py)", flush=True)
     camera = _load_tool("bench_camera")
     if camera is not None and hasattr(camera, "camera_frame_ms"):
         print(f"micro-benchmark: the robot's camera, one 320x240 frame: "

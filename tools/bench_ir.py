@@ -37,6 +37,7 @@ from typing import ClassVar
 
 from pydrake.systems.framework import EventStatus
 
+from corobot_drake.analysis.bench_raycast import scan_cost_seconds
 from corobot_drake.config import scenario as sc
 from corobot_drake.config.scenario import load_scenario
 from corobot_drake.sensors import ir_sensor
@@ -209,8 +210,6 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=5)
     args = parser.parse_args()
     quiet_drake_warnings()
-    from bench_raycast import scan_cost_seconds
-
     print(f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
     print(f"IR scan, 2 sensors x 6 rays, both handlers called directly: "
           f"{station_scan_cost_seconds() * 1e6:.1f} us CPU (median batch), "

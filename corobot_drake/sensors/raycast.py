@@ -29,11 +29,11 @@ A :class:`RayCaster` holds only data precomputed from the inspector at construct
 pure function of the ``QueryObject`` and the rays, so it can run inside a LeafSystem's periodic
 update (no caches, no global state).
 
-Two entry points give the same distances: :meth:`RayCaster.cast` (any batch of rays, numpy,
-with hit points and geometry indices) and :meth:`RayCaster.cast_fan` (rays from one origin, e.g.
-a sensor's :class:`RayFan`; plain Python floats, which for a handful of rays is several times
-cheaper than numpy's per-call overhead: a bounding-sphere-in-cone test rejects geometry first,
-and half-spaces and boxes are then cast in scalar code).
+The cast is :meth:`RayCaster.cast_fan`: rays from one origin, e.g. a sensor's :class:`RayFan`, in
+plain Python floats, which for a handful of rays is several times cheaper than numpy's per-call
+overhead: a bounding-sphere-in-cone test rejects geometry first, half-spaces and boxes are then
+cast in scalar code, and the other shapes through the numpy kernels below. (The tests check it
+against a batch caster on the same kernels, ``tests/reference_raycast.py``.)
 """
 
 from __future__ import annotations
@@ -41,8 +41,7 @@ from __future__ import annotations
 import logging
 import math
 from collections.abc import Callable, Iterable, Sequence
-from dataclasses import dataclass, field
-from typing import NamedTuple
+from dataclasses import dataclass
 
 import numpy as np
 from pydrake.geometry import (
@@ -210,8 +209,6 @@ class _Target:
     hit: _CurvedHit | None = None
     """Curved shapes: first-hit distances of rays expressed in G."""
     params: dict | None = None
-    centered: bool = True
-    """The bounding sphere is centred on G's origin."""
 
 
 def _make_target(inspector: SceneGraphInspector, gid: GeometryId) -> _Target | str:
@@ -227,9 +224,7 @@ def _make_target(inspector: SceneGraphInspector, gid: GeometryId) -> _Target | s
     def polytope(normals, offsets, center, radius):
         normals = np.ascontiguousarray(np.asarray(normals, float).T)
         center = np.asarray(center, float)
-        return _Target(
-            gid, name, shape_type, center, radius, normals, offsets, centered=not center.any()
-        )
+        return _Target(gid, name, shape_type, center, radius, normals, offsets)
 
     if isinstance(shape, Box):
         half = 0.5 * np.array([shape.width(), shape.depth(), shape.height()])
@@ -275,31 +270,11 @@ def _make_target(inspector: SceneGraphInspector, gid: GeometryId) -> _Target | s
     return "there is no ray intersection for this shape type"
 
 
-class _Posed(NamedTuple):
-    """A target's world-frame data for one pose (precomputed once for anchored geometry)."""
-
-    R: np.ndarray
-    p: np.ndarray
-    center: list[float]
-    """Bounding-sphere centre in the world frame (a plain list: scalar math is cheaper)."""
-    normals: np.ndarray | None
-    """Polytopes: (3, F) world-frame face normals."""
-    offsets: np.ndarray | None
-    plane: list[float] | None
-    """Half-spaces: [nx, ny, nz, h] of the boundary plane n . x = h in the world frame."""
-
-
-def _pose(target: _Target, X34: np.ndarray) -> _Posed:
-    R, p = X34[:, :3], X34[:, 3]
-    center = (p if target.centered else R @ target.center + p).tolist()
-    if target.normals is None:
-        return _Posed(R, p, center, None, None, None)
-    normals = R @ target.normals
-    offsets = target.offsets + p @ normals
-    plane = None
-    if target.radius == math.inf:
-        plane = [*normals[:, 0].tolist(), float(offsets[0])]
-    return _Posed(R, p, center, normals, offsets, plane)
+def _posed_planes(target: _Target, X34: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """A polytope's world-frame face planes for the pose X34 = X_WG: (3, F) normals and (F,)
+    offsets (precomputed once for anchored geometry)."""
+    normals = X34[:, :3] @ target.normals
+    return normals, target.offsets + X34[:, 3] @ normals
 
 
 # --------------------------------------------------------------------------------------------
@@ -308,7 +283,7 @@ def _pose(target: _Target, X34: np.ndarray) -> _Posed:
 # For a handful of rays numpy's per-call overhead (~1 us a call) outweighs the arithmetic, so
 # RayCaster.cast_fan works on plain floats: a bounding-sphere-versus-cone test rejects most
 # geometries with a few operations, half-spaces and boxes (the usual scene) are then cast
-# exactly in scalar code, and the other shapes go through the same numpy kernels as cast().
+# exactly in scalar code, and the other shapes go through the numpy kernels above.
 # --------------------------------------------------------------------------------------------
 
 _HALF_SPACE, _BOX, _OTHER = range(3)
@@ -438,43 +413,16 @@ def _box_fan(R, p, half, ox, oy, oz, directions, max_range, best) -> None:
         if t0 <= t1 and t0 < best[i]:
             best[i] = t0
 
-@dataclass(frozen=True)
-class RayHits:
-    """The result of a cast, one entry per ray. ``point`` and ``geometry_index`` are computed
-    on access (a sensor that only needs distances doesn't pay for them)."""
-
-    distance: np.ndarray
-    """(N,) metres to the nearest hit, inf when nothing is hit within max_range."""
-    origins: np.ndarray
-    directions: np.ndarray
-    _per_column: np.ndarray = field(repr=False)
-    """(N, K) distance of each ray to each geometry that wasn't rejected."""
-    _column_target: tuple[int, ...] = field(repr=False)
-    """The geometry index of each column of _per_column."""
-
-    @property
-    def point(self) -> np.ndarray:
-        """(N, 3) world-frame hit points, nan where nothing is hit."""
-        t = np.where(np.isfinite(self.distance), self.distance, np.nan)
-        return self.origins + t[:, None] * self.directions
-
-    @property
-    def geometry_index(self) -> np.ndarray:
-        """(N,) index into RayCaster.geometry_ids of the geometry hit, -1 where none."""
-        lookup = np.array((*self._column_target, -1))
-        column = self._per_column.argmin(axis=1)
-        return lookup[np.where(np.isfinite(self.distance), column, -1)]
-
 
 class RayCaster:
-    """Casts batches of rays against the proximity geometries of a SceneGraph.
+    """Casts fans of rays against the proximity geometries of a SceneGraph.
 
     Build it once (e.g. in a LeafSystem's constructor) from the SceneGraph's model inspector;
-    call :meth:`cast` (or, for rays from one origin, :meth:`cast_fan`) with the current
-    ``QueryObject`` at every scan. Rebuild it if proximity geometries are added, removed or
-    reshaped after construction. Anchored geometries (fixed to the world frame) can't move, so
-    their world-frame data is computed here, once; every other geometry is posed by
-    ``QueryObject.GetPoseInWorld`` at each cast (cast_fan: of its frame, once per frame).
+    call :meth:`cast_fan` with the current ``QueryObject`` at every scan. Rebuild it if
+    proximity geometries are added, removed or reshaped after construction. Anchored geometries
+    (fixed to the world frame) can't move, so their world-frame data is computed here, once;
+    every other geometry is posed by ``QueryObject.GetPoseInWorld`` of its frame, once per
+    frame and cast.
     """
 
     def __init__(
@@ -509,12 +457,13 @@ class RayCaster:
                 targets.append(made)
         world = inspector.world_frame_id()
         self._targets: tuple[_Target, ...] = tuple(targets)
-        self._anchored: tuple[_Posed | None, ...] = tuple(
-            _pose(t, inspector.GetPoseInFrame(t.geometry_id).GetAsMatrix34())
-            if inspector.GetFrameId(t.geometry_id) == world
+        self._anchored_planes: tuple[tuple[np.ndarray, np.ndarray] | None, ...] = tuple(
+            _posed_planes(t, inspector.GetPoseInFrame(t.geometry_id).GetAsMatrix34())
+            if t.normals is not None and inspector.GetFrameId(t.geometry_id) == world
             else None
             for t in targets
         )
+        """The world-frame face planes of the anchored polytopes (None for the others)."""
         self._fan: tuple[_FanTarget, ...] = tuple(
             _make_fan_target(
                 k,
@@ -527,87 +476,10 @@ class RayCaster:
         )
         """cast_fan's scalar data for every target, in the same order."""
         self.geometry_ids: tuple[GeometryId, ...] = tuple(t.geometry_id for t in targets)
-        """The geometries rays are cast against, in the order RayHits.geometry_index uses."""
+        """The geometries rays are cast against."""
         self.unsupported: tuple[tuple[GeometryId, str, str], ...] = tuple(unsupported)
         """(id, name, shape type) of the proximity geometries that can't be ray cast."""
         self.excluded: frozenset[GeometryId] = frozenset(excluded)
-
-    def geometry_name(self, index: int) -> str:
-        """Name of the geometry with the given RayHits.geometry_index ('' for -1)."""
-        return "" if index < 0 else self._targets[index].name
-
-    def cast(
-        self,
-        query_object: QueryObject,
-        origins: np.ndarray,
-        directions: np.ndarray,
-        max_range: float,
-    ) -> RayHits:
-        """Nearest hit of each ray ``origins[i] + t directions[i]``, ``0 <= t <= max_range``.
-
-        origins, directions: (N, 3) world-frame arrays; directions must be unit vectors (not
-        checked, for speed: :func:`cross_of_rays_directions` makes them). Poses of non-anchored
-        geometries come from ``query_object.GetPoseInWorld``.
-        """
-        o = np.asarray(origins, dtype=float)
-        d = np.asarray(directions, dtype=float)
-        if o.ndim != 2 or o.shape[1] != 3 or d.shape != o.shape:
-            raise ValueError(
-                f"origins and directions must both be (N, 3); got {o.shape} and {d.shape}"
-            )
-        if not max_range >= 0.0:
-            raise ValueError(f"max_range must be >= 0, got {max_range}")
-
-        # Bounding sphere of the whole scan (every ray segment): a geometry whose bounding
-        # sphere doesn't meet it is skipped with one comparison.
-        lo, hi = o.min(axis=0).tolist(), o.max(axis=0).tolist()
-        scan_center = [0.5 * (a + b) for a, b in zip(lo, hi, strict=True)]
-        scan_radius = 0.5 * math.dist(lo, hi) + max_range
-
-        normals, offsets, starts, columns = [], [], [], []
-        curved: list[np.ndarray] = []
-        curved_columns: list[int] = []
-        n_planes = 0
-        for k, target in enumerate(self._targets):
-            posed = self._anchored[k]
-            if posed is None:
-                X34 = query_object.GetPoseInWorld(target.geometry_id).GetAsMatrix34()
-                posed = _pose(target, X34)
-            if posed.plane is not None:  # half-space: is the scan entirely outside it?
-                nx, ny, nz, h = posed.plane
-                cx, cy, cz = scan_center
-                if nx * cx + ny * cy + nz * cz - h > scan_radius:
-                    continue
-            elif math.dist(posed.center, scan_center) > scan_radius + target.radius:
-                continue
-            if target.normals is not None:
-                normals.append(posed.normals)
-                offsets.append(posed.offsets)
-                starts.append(n_planes)
-                columns.append(k)
-                n_planes += posed.offsets.shape[0]
-            else:
-                o_G = (o - posed.p) @ posed.R  # row-wise R^T (x - p)
-                d_G = d @ posed.R
-                curved.append(target.hit(o_G, d_G, target.params, max_range))
-                curved_columns.append(k)
-        blocks = []
-        if normals:
-            if len(normals) == 1:
-                normals_W, offsets_W = normals[0], offsets[0]
-            else:
-                normals_W = np.concatenate(normals, axis=1)
-                offsets_W = np.concatenate(offsets)
-            blocks.append(_polytope_distances(o, d, normals_W, offsets_W, starts, max_range))
-        if curved:
-            blocks.append(np.column_stack(curved))
-        columns += curved_columns
-        if not blocks:
-            n = o.shape[0]
-            return RayHits(np.full(n, np.inf), o, d, np.full((n, 1), np.inf), ())
-        t = blocks[0] if len(blocks) == 1 else np.hstack(blocks)
-        distance = t.min(axis=1) if t.shape[1] > 1 else t[:, 0]
-        return RayHits(distance, o, d, t, tuple(columns))
 
     def cast_fan(
         self,
@@ -617,9 +489,9 @@ class RayCaster:
         max_range: float,
         cone: tuple[Sequence[float], float] | None = None,
     ) -> list[float]:
-        """:meth:`cast` for rays from one origin (a sensor's fan), in scalar Python: the
-        nearest hit distance of each ray ``origin + t directions[i]``, ``0 <= t <= max_range``,
-        as a list of floats, inf for a miss (the same distances as :meth:`cast`, up to rounding).
+        """The nearest hit distance of each ray ``origin + t directions[i]`` from one origin
+        (a sensor's fan), ``0 <= t <= max_range``, in scalar Python: a list of floats, inf for
+        a miss.
 
         directions: unit vectors (world frame). cone: (unit axis, half angle in rad) of a cone
         about ``origin`` holding every ray (:func:`fan_cone`); a geometry whose bounding sphere
@@ -632,7 +504,7 @@ class RayCaster:
         n = len(directions)
         best = [math.inf] * n
         if not (math.isfinite(ox) and math.isfinite(oy) and math.isfinite(oz)):
-            return best  # as cast(): no hit from an undefined origin
+            return best  # no hit from an undefined origin
         (ax, ay, az), half_angle = cone if cone is not None else fan_cone(directions)
         frame_poses: dict = {}
         others = []
@@ -701,8 +573,8 @@ class RayCaster:
                 X34 = np.array([[*R[0:3], p[0]], [*R[3:6], p[1]], [*R[6:9], p[2]]])
                 target = self._targets[k]
                 if target.normals is not None:
-                    posed = self._anchored[k] or _pose(target, X34)
-                    t = _polytope_distances(o, d, posed.normals, posed.offsets, [0], max_range)
+                    normals, offsets = self._anchored_planes[k] or _posed_planes(target, X34)
+                    t = _polytope_distances(o, d, normals, offsets, [0], max_range)
                     t = t[:, 0]
                 else:
                     R_WG = X34[:, :3]
@@ -743,48 +615,6 @@ def cross_of_rays_in_sensor_frame(
     horizontal = np.column_stack([c, s, z])
     vertical = np.column_stack([c, z, s])
     return np.vstack([horizontal, vertical])
-
-
-def cross_of_rays_directions(
-    X_WS: RigidTransform,
-    samples: int = 3,
-    dispersion_cone_angle: float = DEFAULT_DISPERSION_CONE_ANGLE,
-) -> np.ndarray:
-    """Unit ray directions (2*samples, 3) in the world frame for a sensor posed at X_WS.
-
-    See :func:`cross_of_rays_in_sensor_frame` for the layout; all rays start at
-    ``X_WS.translation()``. Raises ValueError if samples < 2.
-    """
-    d_S = cross_of_rays_in_sensor_frame(samples, dispersion_cone_angle)
-    return d_S @ X_WS.rotation().matrix().T
-
-
-@dataclass(frozen=True)
-class BodyFixedRays:
-    """Rays fixed in a body frame B (sensors mounted on a body): ``origins`` and
-    ``directions`` are (N, 3) in B. :meth:`in_world` poses all of them with one matrix product."""
-
-    origins: np.ndarray
-    directions: np.ndarray
-
-    @staticmethod
-    def cross_of_rays(
-        X_BS: Sequence[RigidTransform],
-        samples: int = 3,
-        dispersion_cone_angle: float = DEFAULT_DISPERSION_CONE_ANGLE,
-    ) -> BodyFixedRays:
-        """The IR cross of rays of each sensor S posed at X_BS[i] (rows grouped per sensor:
-        rows 2*samples*i .. 2*samples*(i+1)-1 belong to sensor i)."""
-        d_S = cross_of_rays_in_sensor_frame(samples, dispersion_cone_angle)
-        origins = np.vstack([np.tile(X.translation(), (len(d_S), 1)) for X in X_BS])
-        directions = np.vstack([d_S @ X.rotation().matrix().T for X in X_BS])
-        return BodyFixedRays(origins, directions)
-
-    def in_world(self, X_WB: RigidTransform) -> tuple[np.ndarray, np.ndarray]:
-        """(origins, directions) in the world frame for the body pose X_WB."""
-        X = X_WB.GetAsMatrix34()
-        R_T = X[:, :3].T
-        return self.origins @ R_T + X[:, 3], self.directions @ R_T
 
 
 class RayFan:
