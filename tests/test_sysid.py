@@ -8,7 +8,7 @@ import pytest
 
 from conftest import DEFAULT_SCENARIO, REPO, make_sim
 from corobot_drake import cli
-from corobot_drake.analysis import sysid
+from corobot_drake.analysis import bench, sysid
 from corobot_drake.model import dimensions as dim
 from corobot_drake.systems import runlog
 
@@ -157,8 +157,8 @@ def test_tire_grip_prediction_and_recommendation():
 
 
 def test_bench_physics_only_scenario_loads():
-    bench = _tool("bench")
-    sim = make_sim(*bench.physics_only_overrides())
+    sim = make_sim(*bench.physics_only_overrides(), camera=True)  # the overrides turn it off
     sim.advance(0.1)
-    if bench.has_camera():
-        assert not sim.scenario.robots["corobot"].camera.rgb
+    robot = sim.scenario.robots["corobot"]
+    assert not robot.camera.rgb
+    assert not any(sensor.enabled for sensor in robot.ir_sensors.values())

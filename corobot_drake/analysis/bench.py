@@ -1,0 +1,94 @@
+"""Real-time factors of the default scene driving a figure of eight (`tools/bench.py`).
+
+Stacks (physics only; + 2 IR at 20 Hz; + camera at 30 Hz; both) times plant settings
+(hydroelastic at 10, 5, 2 and 1 ms; point contact at 10 ms): :func:`realtime_factor` of
+`sensor_overrides(**STACKS[stack])` with `PLANTS[plant]`.
+"""
+
+import os
+import platform
+import time
+from importlib.metadata import version
+from pathlib import Path
+
+from corobot_drake.config import scenario as sc
+from corobot_drake.config.scenario import load_scenario
+from corobot_drake.resources import DEFAULT_SCENARIO
+from corobot_drake.simulation import Simulation
+
+ROBOT = "corobot"
+DRIVING = (f"robots: {{{ROBOT}: {{commands: [!SetPower {{left: 1.0, right: 0.6}}, "
+           "!Wait {seconds: 3}, !SetPower {left: 0.6, right: 1.0}, !Wait {seconds: 3}, "
+           "!SetPower {left: -1.0, right: 1.0}]}}")
+"""The figure of eight the benchmarks drive (a scenario override)."""
+IR_RATE_HZ = 20.0
+CAMERA_FPS = 30.0
+
+
+def sensor_overrides(robot: str = ROBOT, ir: bool = False, camera: bool = False) -> list[str]:
+    """Overrides that turn the robot's IR sensors and camera on (at the bench rates) or off."""
+    sensors = ", ".join(f"{n}: {{enabled: {str(ir).lower()}, scan_rate_hz: {IR_RATE_HZ}}}"
+                        for n in sc.Robot().ir_sensors)
+    return [f"robots: {{{robot}: {{ir_sensors: {{{sensors}}}}}}}",
+            f"robots: {{{robot}: {{camera: {{rgb: {str(camera).lower()}, fps: {CAMERA_FPS}}}}}}}"]
+
+
+def physics_only_overrides(robot: str = ROBOT) -> list[str]:
+    """No camera, no IR: the physics and the drive alone."""
+    return sensor_overrides(robot, ir=False, camera=False)
+
+
+def realtime_factor(overrides: list[str], seconds: float,
+                    scenario: Path = DEFAULT_SCENARIO) -> tuple[float, float]:
+    """(wall, CPU) simulated seconds per second of the figure of eight, building excluded."""
+    sim = Simulation(load_scenario(scenario, overrides=[DRIVING, *overrides]))
+    wall, cpu = time.perf_counter(), time.process_time()
+    sim.advance(seconds)
+    return seconds / (time.perf_counter() - wall), seconds / (time.process_time() - cpu)
+
+
+STACKS = {
+    "physics only": dict(ir=False, camera=False),
+    f"+ 2 IR at {IR_RATE_HZ:g} Hz": dict(ir=True, camera=False),
+    f"+ camera at {CAMERA_FPS:g} Hz": dict(ir=False, camera=True),
+    "full stack (IR + camera)": dict(ir=True, camera=True),
+}
+"""Stack name -> `sensor_overrides` flags."""
+PLANTS = {
+    "hydroelastic 10 ms (default)": "plant_config: {time_step: 0.01, contact_model: "
+                                        "hydroelastic_with_fallback}",
+    "hydroelastic 5 ms": "plant_config: {time_step: 0.005, contact_model: "
+                                   "hydroelastic_with_fallback}",
+    "hydroelastic 2 ms": "plant_config: {time_step: 0.002, contact_model: "
+                         "hydroelastic_with_fallback}",
+    "hydroelastic 1 ms": "plant_config: {time_step: 0.001, contact_model: "
+                         "hydroelastic_with_fallback}",
+    "point 10 ms": "plant_config: {time_step: 0.01, contact_model: point}",
+}
+"""Plant setting name -> scenario override."""
+DEFAULT_PLANT = "hydroelastic 10 ms (default)"
+IN_PLACE = ((f"+ 2 IR at {IR_RATE_HZ:g} Hz", IR_RATE_HZ, "scan (2 sensors)"),
+            (f"+ camera at {CAMERA_FPS:g} Hz", CAMERA_FPS, "frame"))
+"""(stack, events per simulated second, what one event is) of each sensor's in-place cost."""
+
+
+def in_place_ms(rtf: tuple[float, float], base: tuple[float, float],
+                per_second: float) -> tuple[float, float]:
+    """(wall, CPU) ms per sensor event: the extra time per simulated second of a stack with
+    real-time factors `rtf` over `base` (physics only), per event."""
+    wall, cpu = ((1 / rtf[i] - 1 / base[i]) / per_second * 1000 for i in (0, 1))
+    return wall, cpu
+
+
+def machine() -> str:
+    """One line: cores, CPU model, OS, Python and drake versions."""
+    cpu = "unknown CPU"
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    return (f"{os.cpu_count()} cores ({cpu}), no GPU, {platform.system()} {platform.release()}, "
+            f"Python {platform.python_version()}, drake {version('drake')}")
