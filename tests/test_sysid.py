@@ -1,23 +1,23 @@
 """System identification and tuning tools (issue 5): run log, log fit, scaling tuner."""
 
-import importlib.util
 import math
+import subprocess
+import sys
 
 import numpy as np
 import pytest
 
 from conftest import DEFAULT_SCENARIO, REPO, make_sim
 from corobot_drake import cli
-from corobot_drake.analysis import bench, sysid
+from corobot_drake.analysis import bench, drive_tuning, sysid, tire_grip
 from corobot_drake.model import dimensions as dim
 from corobot_drake.systems import runlog
 
 
-def _tool(name: str):
-    spec = importlib.util.spec_from_file_location(name, REPO / "tools" / f"{name}.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+def _tool(name: str, *args: str) -> subprocess.CompletedProcess:
+    """Runs tools/NAME.py with `args` (its command line, as a user would)."""
+    return subprocess.run([sys.executable, str(REPO / "tools" / f"{name}.py"), *args],
+                          capture_output=True, text=True)
 
 
 def test_run_log_columns_and_ticks(tmp_path):
@@ -60,9 +60,8 @@ def test_cli_writes_log(tmp_path):
 
 def test_log_fit_recovers_known_scaling_and_slew(tmp_path):
     """A simulator log made at scaling 12 and slew 20 rad/s^2 is fitted back within 1%."""
-    tool = _tool("fit_drive_log")
     path = tmp_path / "sim.csv"
-    tool.simulate_log(path, 12.0, 20.0)
+    drive_tuning.simulate_log(path, 12.0, 20.0)
     fit = sysid.fit_drive(sysid.read_log(path))
     assert fit.motor_torque_scaling == pytest.approx(12.0, rel=0.01)
     assert fit.slew_rate == pytest.approx(20.0, rel=0.01)
@@ -91,11 +90,12 @@ def test_malformed_log_is_rejected_naming_the_line(tmp_path, text, line, words):
     assert words in str(e.value)
 
 
-def test_fit_tool_reports_bad_csv(tmp_path, capsys):
+def test_fit_tool_reports_bad_csv(tmp_path):
     path = tmp_path / "bad.csv"
     path.write_text(GOOD_HEADER + "0,0,0,0,0,0,0,0\n0.01,1,1,x,3,0,0,0\n")
-    assert _tool("fit_drive_log").main([str(path)]) == 2
-    assert f"{path}:3: left_ticks is not a number" in capsys.readouterr().err
+    run = _tool("fit_drive_log", str(path))
+    assert run.returncode == 2
+    assert f"{path}:3: left_ticks is not a number" in run.stderr
 
 
 def test_set_motor_torque_scaling_keeps_the_file():
@@ -118,16 +118,17 @@ def test_set_motor_torque_scaling_keeps_the_file():
                                        1.0)
 
 
-def test_tuner_steps_toward_the_target(tmp_path, capsys):
+def test_tuner_steps_toward_the_target(tmp_path):
     """Two short iterations from the untuned 20: the second lands near 10.1."""
     scenario = tmp_path / "s.yaml"
     scenario.write_text(DEFAULT_SCENARIO.read_text())
     plot = tmp_path / "tune.png"
-    status = _tool("tune_motor_torque_scaling").main([
-        "--scenario", str(scenario), "--scaling", "20", "--settle", "1.0", "--measure", "0.3",
-        "--max-iterations", "2", "--tolerance", "0.01", "--plot", str(plot), "--write"])
-    out = capsys.readouterr().out.strip().splitlines()
-    assert status == 0, out
+    run = _tool("tune_motor_torque_scaling",
+                "--scenario", str(scenario), "--scaling", "20", "--settle", "1.0", "--measure",
+                "0.3", "--max-iterations", "2", "--tolerance", "0.01", "--plot", str(plot),
+                "--write")
+    out = run.stdout.strip().splitlines()
+    assert run.returncode == 0, (out, run.stderr)
     assert plot.stat().st_size > 10_000
     assert "converged in 2 iteration(s)" in "\n".join(out)
     last = out[-1]
@@ -139,9 +140,8 @@ def test_tuner_steps_toward_the_target(tmp_path, capsys):
 
 
 def test_tire_grip_prediction_and_recommendation():
-    grip = _tool("tune_tire_grip")
     # b u / (a^2 + b^2) at 5 rad/s wheels: the figure DRAKE_NOTES quotes (1.61 rad/s).
-    assert grip.predicted_spin_rate(5 * 0.060325) == pytest.approx(1.6077, abs=1e-4)
+    assert tire_grip.predicted_spin_rate(5 * 0.060325) == pytest.approx(1.6077, abs=1e-4)
     base = dict(yaw_ratio=0.98, vz_std_mm_s=0.2, roll_rate_std_deg_s=0.01,
                 pitch_rate_std_deg_s=0.01, tilt_forwards_deg=1.5, tilt_backwards_deg=1.5,
                 top_speed=0.608, rtf_wall=1.0)
@@ -152,8 +152,8 @@ def test_tire_grip_prediction_and_recommendation():
         {**base, "setting": "fast", "rtf_cpu": 7.0, "vz_std_mm_s": 0.4},
         {**base, "setting": "fast smooth", "rtf_cpu": 6.5, "vz_std_mm_s": 0.3},
     ]
-    assert grip.recommend(rows)["setting"] == "fast smooth"  # ties within 15%: the smoother
-    assert "fast smooth (recommended)" in grip.markdown(rows, rows[4]).splitlines()[6]
+    assert tire_grip.recommend(rows)["setting"] == "fast smooth"  # ties within 15%: the smoother
+    assert "fast smooth (recommended)" in tire_grip.markdown(rows, rows[4]).splitlines()[6]
 
 
 def test_bench_physics_only_scenario_loads():

@@ -143,6 +143,15 @@ class DriveFit:
                 f"({self.iterations} Gauss-Newton iterations)")
 
 
+def fit_speeds(log: DriveLog, fit: DriveFit) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(time, measured, modelled) front-wheel speeds of a fit at the log's interior samples:
+    rad/s, [n - 2, 2] (left, right), by central differences of the logged (encoder) and the
+    modelled angles."""
+    model = model_angle(log, fit.motor_torque_scaling, fit.slew_rate, fit.delay)
+    return (log.time[1:-1], _central_speed(log.time, log.angle),
+            _central_speed(log.time, model))
+
+
 def _residuals(log: DriveLog, measured: np.ndarray, p) -> np.ndarray:
     angle = model_angle(log, *p)
     return (_central_speed(log.time, angle) - measured).ravel()
