@@ -16,12 +16,9 @@ import argparse
 import math
 import random
 import sys
-from pathlib import Path
 
-REPO = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(REPO))
-
-from corobot_drake.serving.client import CorobotClient  # noqa: E402
+from corobot_drake.resources import DEFAULT_SCENARIO
+from corobot_drake.serving.client import CorobotClient
 
 
 def legs(robot, loops: int, seed: int, power: float = 0.2, out=print) -> list[float]:
@@ -60,7 +57,7 @@ def main(argv=None) -> int:
         from corobot_drake.simulation import Simulation, quiet_drake_warnings
 
         quiet_drake_warnings()
-        sim = Simulation.from_file(REPO / "scenarios" / "corobot.yaml")
+        sim = Simulation.from_file(DEFAULT_SCENARIO)
         drift = legs(sim.robot(), args.loops, args.seed, args.power)
     elif args.url:
         with CorobotClient(args.url) as sim:

@@ -5,10 +5,10 @@ from pathlib import Path
 import pytest
 
 from corobot_drake.config.scenario import load_scenario
+from corobot_drake.resources import DEFAULT_SCENARIO
 from corobot_drake.simulation import Simulation, quiet_drake_warnings
 
 REPO = Path(__file__).resolve().parent.parent
-DEFAULT_SCENARIO = REPO / "scenarios" / "corobot.yaml"
 
 quiet_drake_warnings()
 
