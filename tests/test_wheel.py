@@ -1,5 +1,7 @@
 """The wheel: built from the checkout, installed (not editable) into a fresh virtual environment,
-it runs the simulator from any directory, with its meshes and the default scenario.
+it runs the simulator from any directory, with its meshes and the default scenario; and every
+third-party module the package, the tools, the tests and the examples import is a declared
+dependency.
 
 `test_the_installed_wheel_runs_from_any_directory` costs ~10 s (pip wheel, a venv, pip install,
 a 1 s headless run) and is marked `wheel` (deselect with `-m "not wheel"`). How it gets the
@@ -9,11 +11,13 @@ installed with `--no-deps`, and then the distributions the *wheel's own metadata
 interpreter's environment, where `tools/setup` installed them: one symlink per top-level
 entry of each distribution's RECORD, in a directory the venv reads through a `.pth` file.
 Nothing else of this environment is visible there (not the editable install, not the dev
-tools), so a missing declaration fails the run.
+tools), so a missing declaration fails the run; `test_every_import_is_a_declared_dependency`
+checks the imports the run does not reach, statically.
 """
 
 from __future__ import annotations
 
+import ast
 import os
 import re
 import shutil
@@ -61,6 +65,45 @@ def test_every_package_directory_is_listed_in_pyproject():
              if d.is_dir() and d.name != "__pycache__"
              and any(f.is_file() for f in d.iterdir())}
     assert listed - DATA_PACKAGES == found
+
+
+def _third_party_imports(*directories: str) -> dict[str, set[str]]:
+    """{top-level module: files importing it} of the absolute imports that are neither the
+    standard library, nor corobot_drake, nor a module of the directories (e.g. conftest)."""
+    local = {"corobot_drake", *(p.stem for d in directories for p in (REPO / d).glob("*.py"))}
+    out: dict[str, set[str]] = {}
+    for directory in directories:
+        for path in (REPO / directory).rglob("*.py"):
+            for node in ast.walk(ast.parse(path.read_text())):
+                if isinstance(node, ast.Import):
+                    names = [alias.name for alias in node.names]
+                elif isinstance(node, ast.ImportFrom) and node.level == 0:
+                    names = [node.module]
+                else:
+                    continue
+                for top in {name.split(".")[0] for name in names}:
+                    if top not in sys.stdlib_module_names and top not in local:
+                        out.setdefault(top, set()).add(str(path.relative_to(REPO)))
+    return out
+
+
+@pytest.mark.parametrize("directories, extras", [
+    (("corobot_drake", "tools"), ()),
+    (("tests", "examples"), ("dev",)),
+], ids=["package and tools", "tests and examples"])
+def test_every_import_is_a_declared_dependency(directories, extras):
+    project = _pyproject()["project"]
+    declared = {_normalize(Requirement(r).name) for r in project["dependencies"]}
+    for extra in extras:
+        declared |= {_normalize(Requirement(r).name)
+                     for r in project["optional-dependencies"][extra]}
+    distributions = metadata.packages_distributions()
+    missing = {}
+    for module, files in _third_party_imports(*directories).items():
+        names = {_normalize(d) for d in distributions.get(module, [module])}
+        if not names & declared:
+            missing[module] = sorted(files)
+    assert not missing, f"imported but not declared in pyproject.toml: {missing}"
 
 
 # --- the wheel itself (slow) ------------------------------------------------------------------
