@@ -64,7 +64,9 @@ def test_every_package_directory_is_listed_in_pyproject():
              for d in [REPO / "corobot_drake", *(REPO / "corobot_drake").rglob("*")]
              if d.is_dir() and d.name != "__pycache__"
              and any(f.is_file() for f in d.iterdir())}
-    assert listed - DATA_PACKAGES == found
+    assert listed - DATA_PACKAGES == found, (
+        f"add to [tool.setuptools] packages: {sorted(found - listed)}; "
+        f"remove: {sorted(listed - DATA_PACKAGES - found)}")
 
 
 def _third_party_imports(*directories: str) -> dict[str, set[str]]:
