@@ -143,6 +143,18 @@ def _link_distributions(distributions: list[metadata.Distribution], target: Path
                 (target / top).symlink_to(source)
 
 
+IMPORT_EVERYTHING = """
+import importlib, pkgutil, corobot_drake
+for module in pkgutil.walk_packages(corobot_drake.__path__, "corobot_drake."):
+    if not module.name.endswith("__main__"):  # that one runs the simulator
+        importlib.import_module(module.name)
+from corobot_drake import resources as r
+print(r.__file__, r.MODELS_DIR, r.DEFAULT_SCENARIO, sep="\\n")
+"""
+"""Imports every module of the installed package (each must find its dependencies), then
+prints where the package and its data are."""
+
+
 @pytest.mark.wheel
 def test_the_installed_wheel_runs_from_any_directory(tmp_path):
     source, dist, venv = tmp_path / "source", tmp_path / "dist", tmp_path / "venv"
@@ -165,9 +177,7 @@ def test_the_installed_wheel_runs_from_any_directory(tmp_path):
     elsewhere = tmp_path / "elsewhere"
     elsewhere.mkdir()
     env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "PYTHONHOME")}
-    where = _run(python, "-c", "from corobot_drake import resources as r; "
-                 "print(r.__file__, r.MODELS_DIR, r.DEFAULT_SCENARIO, sep='\\n')",
-                 cwd=elsewhere, env=env).stdout.split()
+    where = _run(python, "-c", IMPORT_EVERYTHING, cwd=elsewhere, env=env).stdout.split()
     assert all(Path(p).is_relative_to(site / "corobot_drake") for p in where), where
     models = Path(where[1])
     assert sorted(p.relative_to(models) for p in models.rglob("*") if p.is_file()) == sorted(
