@@ -34,9 +34,8 @@ tomllib = pytest.importorskip("tomllib")  # Python >= 3.11
 
 COPY_IGNORE = shutil.ignore_patterns(".git", ".venv", "out", "build", "dist", "__pycache__",
                                      "*.egg-info", ".pytest_cache", ".ruff_cache")
-DATA_PACKAGES = {"corobot_drake._models", "corobot_drake._models.meshes",
-                 "corobot_drake._scenarios"}
-"""Packages that pyproject's package-dir maps in from models/ and scenarios/."""
+DATA_DIRECTORIES = {"models": "corobot_drake._models", "scenarios": "corobot_drake._scenarios"}
+"""The top-level directories that pyproject's package-dir maps into the package."""
 
 
 def _pyproject() -> dict:
@@ -56,17 +55,23 @@ def _run(*args, **kwargs) -> subprocess.CompletedProcess:
 # --- the build configuration and the declared dependencies (fast) ---------------------------
 
 
+def _directories_with_files(root: Path) -> list[Path]:
+    return [d for d in [root, *root.rglob("*")] if d.is_dir() and d.name != "__pycache__"
+            and any(f.is_file() for f in d.iterdir())]
+
+
 def test_every_package_directory_is_listed_in_pyproject():
     """pyproject lists the packages (package-dir's data packages are not discoverable): a new
-    subpackage must be added there, or the wheel goes without it."""
+    subpackage, or a new directory in models/ or scenarios/, must be added there, or the wheel
+    goes without it."""
     listed = set(_pyproject()["tool"]["setuptools"]["packages"])
     found = {".".join(d.relative_to(REPO).parts)
-             for d in [REPO / "corobot_drake", *(REPO / "corobot_drake").rglob("*")]
-             if d.is_dir() and d.name != "__pycache__"
-             and any(f.is_file() for f in d.iterdir())}
-    assert listed - DATA_PACKAGES == found, (
-        f"add to [tool.setuptools] packages: {sorted(found - listed)}; "
-        f"remove: {sorted(listed - DATA_PACKAGES - found)}")
+             for d in _directories_with_files(REPO / "corobot_drake")}
+    for directory, package in DATA_DIRECTORIES.items():
+        found |= {".".join((package, *d.relative_to(REPO / directory).parts))
+                  for d in _directories_with_files(REPO / directory)}
+    assert listed == found, (f"add to [tool.setuptools] packages: {sorted(found - listed)}; "
+                             f"remove: {sorted(listed - found)}")
 
 
 def _third_party_imports(*directories: str) -> dict[str, set[str]]:
@@ -179,10 +184,11 @@ def test_the_installed_wheel_runs_from_any_directory(tmp_path):
     env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "PYTHONHOME")}
     where = _run(python, "-c", IMPORT_EVERYTHING, cwd=elsewhere, env=env).stdout.split()
     assert all(Path(p).is_relative_to(site / "corobot_drake") for p in where), where
-    models = Path(where[1])
-    assert sorted(p.relative_to(models) for p in models.rglob("*") if p.is_file()) == sorted(
-        p.relative_to(REPO / "models") for p in (REPO / "models").rglob("*") if p.is_file())
-    assert Path(where[2]).is_file()
+    for installed, directory in ((Path(where[1]), "models"),
+                                 (Path(where[2]).parent, "scenarios")):  # every file of them
+        assert sorted(p.relative_to(installed) for p in installed.rglob("*") if p.is_file()) \
+            == sorted(p.relative_to(REPO / directory) for p in (REPO / directory).rglob("*")
+                      if p.is_file() and "__pycache__" not in p.parts), directory
 
     run = _run(python, "-m", "corobot_drake", "--headless", "--duration", "1",
                cwd=elsewhere, env=env, timeout=120)
