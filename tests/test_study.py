@@ -172,3 +172,13 @@ def test_the_command_line_writes_the_study(tmp_path, local_ray, capsys):
     assert "2 runs (0 errors)" in capsys.readouterr().out
     assert main([str(tmp_path / "missing.yaml")]) == 2
     assert "cannot read the file" in capsys.readouterr().err
+
+
+def test_the_drive_test_study_and_the_drive_test_tool_agree(tmp_path, local_ray):
+    from corobot_drake.analysis import drive_test
+
+    table = drive_test.run_study_of_seeds([1], 1, "closed_loop", 0.2, tmp_path, workers=1)
+    alone = drive_test.run(1, 1, "closed_loop", verbose=False)
+    assert table[0]["failures"] == [] and alone["failures"] == []
+    assert table[0]["drift_mm"] == [alone["drift"][0] * 1000.0]  # the same run, bit for bit
+    assert 0.0 < alone["drift"][0] < 0.01  # a closed-loop loop comes back within 10 mm

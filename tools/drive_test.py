@@ -7,11 +7,12 @@ is the distance from the start position after each loop. Same seed, same numbers
 (`corobot_drake.analysis.drive_test`).
 
     python tools/drive_test.py --loops 3 --seed 1 [--profile seed] [--plot path.png]
-    python tools/drive_test.py --loops 3 --seeds 20 --jobs 2 [--profile seed]   # mean drift
+    python tools/drive_test.py --loops 3 --seeds 20 --workers 2 [--profile seed]  # on Ray
 """
 
 import argparse
 import sys
+from pathlib import Path
 
 import numpy as np
 
@@ -34,19 +35,23 @@ def _one_seed(args) -> None:
 
 
 def _many_seeds(args) -> None:
-    results = drive_test.run_seeds(range(args.seed, args.seed + args.seeds), args.loops,
-                                   args.profile, args.power, args.jobs)
-    drift = np.array([r["drift"] for r in results]) * 1000  # mm, seeds x loops
-    for r, d in zip(results, drift, strict=True):
+    """The seeds as a study on Ray (`scenarios/studies/drive_test.yaml` is the same study for
+    both profiles): its files in --out, then the tool's table."""
+    seeds = list(range(args.seed, args.seed + args.seeds))
+    out = Path(args.out or f"studies/drive_test_{args.profile}")
+    table = drive_test.run_study_of_seeds(seeds, args.loops, args.profile, args.power, out,
+                                          args.workers)
+    for r in table:
         print(f"seed {r['seed']:3d}: drift after each loop (mm) "
-              + " ".join(f"{v:7.2f}" for v in d)
+              + " ".join(f"{v:7.2f}" for v in r["drift_mm"])
               + (f"  failures: {r['failures']}" if r["failures"] else ""))
+    drift = np.array([r["drift_mm"] for r in table])  # seeds x loops
     per_loop = drift[:, -1] / args.loops
-    print(f"summary: profile {args.profile}, seeds {args.seed}..{args.seed + args.seeds - 1}, "
+    print(f"summary: profile {args.profile}, seeds {seeds[0]}..{seeds[-1]}, "
           f"{args.loops} loops: mean drift after each loop (mm) "
           + " ".join(f"{v:.2f}" for v in drift.mean(axis=0))
           + f"; drift per loop {per_loop.mean():.2f} mm mean, {per_loop.max():.2f} max; "
-          f"{sum(len(r['failures']) for r in results)} failed commands")
+          f"{sum(len(r['failures']) for r in table)} failed commands; study files in {out}")
 
 
 def main(argv=None) -> int:
@@ -58,7 +63,10 @@ def main(argv=None) -> int:
     p.add_argument("--plot", default="drive_test.png", help="PNG of the path (single seed)")
     p.add_argument("--seeds", type=int, default=1,
                    help="run seeds SEED .. SEED+N-1 and report the mean drift (no plot)")
-    p.add_argument("--jobs", type=int, default=1, help="processes for --seeds")
+    p.add_argument("--workers", "--jobs", type=int, default=None,
+                   help="Ray workers for --seeds (default: the machine's cores)")
+    p.add_argument("--out", help="study output directory for --seeds "
+                   "(default studies/drive_test_<profile>)")
     args = p.parse_args(argv)
     if args.seeds == 1:
         _one_seed(args)

@@ -6,18 +6,21 @@ drive the same distance back, rotate 180 deg - angle (all at `power`, default 0.
 is the distance from the start position after each loop. Same seed, same numbers.
 """
 
-import math
-from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
 
 import numpy as np
 
 from corobot_drake.config import scenario as sc
 from corobot_drake.resources import DEFAULT_SCENARIO
 from corobot_drake.simulation import Simulation, quiet_drake_warnings
+from corobot_drake.study import engine
+from corobot_drake.study.metrics import METRICS, RobotRun
+from corobot_drake.study.programs import DriveTest
+from corobot_drake.study.runner import commands_ended
 
 ROBOT = "corobot"
-SAMPLE_EVERY = 6
-"""Path samples: one every this many control periods (0.1 s)."""
+PATH_PERIOD = 0.1
+"""s between the path's samples."""
 
 
 def fast_overrides(profile: str) -> list[str]:
@@ -26,47 +29,31 @@ def fast_overrides(profile: str) -> list[str]:
 
 
 def run(seed: int, loops: int, profile: str, power: float = 0.2, verbose: bool = True) -> dict:
-    """Runs the test; returns {drift: [m after each loop], heading_error: [deg], path: [[x, y]],
-    failures: [...], legs: [(angle_deg, distance_m)]}."""
+    """Runs the test (the legs as the robot's script, as a study's `drive_test` runs it);
+    returns {drift: [m after each loop], heading_error: [deg], path: [[x, y]], failures:
+    [...], legs: [(angle_deg, distance_m)]}."""
     quiet_drake_warnings()
-    sim = Simulation(sc.load_scenario(DEFAULT_SCENARIO, overrides=fast_overrides(profile)))
+    test = DriveTest(loops, power, ROBOT)
+    scenario = sc.load_scenario(DEFAULT_SCENARIO, overrides=fast_overrides(profile))
+    scenario.robots[ROBOT].commands = test.commands(seed)
+    sim = Simulation(scenario)
     robot = sim.robot()
-    rng = np.random.default_rng(seed)
-    x0, y0, _ = robot.position()
-    heading0 = robot.heading()
-    path, drift, heading_error, failures, legs = [[x0, y0]], [], [], [], []
-    period = sim.station.robots[ROBOT].motion.drive_period
-
-    def follow(handle):
-        frames = 0
-        while not handle.done():
-            sim.advance(period)
-            frames += 1
-            if frames % SAMPLE_EVERY == 0:
-                path.append(list(robot.position()[:2]))
-        result = handle.result()
-        if not result.succeeded:
-            failures.append(f"{result.command} {result.status} {result.reason} "
-                            f"at {result.end_time:.2f} s")
-
-    for loop in range(1, loops + 1):
-        angle = float(rng.uniform(-45.0, 45.0))
-        distance = float(rng.uniform(0.5, 1.5))
-        legs.append((angle, distance))
-        follow(robot.rotate_degrees_async(angle, power))
-        follow(robot.drive_distance_async(distance, power))
-        follow(robot.rotate_degrees_async(180.0, power))
-        follow(robot.drive_distance_async(distance, power))
-        follow(robot.rotate_degrees_async(180.0 - angle, power))
-        x, y, _ = robot.position()
-        path.append([x, y])
-        drift.append(math.hypot(x - x0, y - y0))
-        heading_error.append(math.degrees(math.remainder(robot.heading() - heading0,
-                                                         2 * math.pi)))
-        if verbose:
+    measured = RobotRun(sim, robot, robot.pose(), robot.heading())
+    path = [list(robot.position()[:2])]
+    while not commands_ended(sim):
+        sim.advance(PATH_PERIOD)
+        path.append(list(robot.position()[:2]))
+    drift = [v / 1000.0 for v in METRICS["drive_test_drift"](measured).values()]
+    heading_error = list(METRICS["drive_test_heading_error"](measured).values())
+    commands = scenario.robots[ROBOT].commands
+    legs = [(commands[5 * k].degrees, commands[5 * k + 1].distance) for k in range(loops)]
+    failures = [f"{r.command} {r.status} {r.reason} at {r.end_time:.2f} s"
+                for r in robot.command_log() if r.status == "failed"]
+    if verbose:
+        for loop, ((angle, distance), d, h) in enumerate(zip(legs, drift, heading_error,
+                                                             strict=True), 1):
             print(f"loop {loop}: angle {angle:+6.2f} deg, distance {distance:.3f} m -> "
-                  f"drift {drift[-1] * 1000:7.2f} mm, heading error {heading_error[-1]:+.3f} deg",
-                  flush=True)
+                  f"drift {d * 1000:7.2f} mm, heading error {h:+.3f} deg", flush=True)
     return {"seed": seed, "profile": profile, "drift": drift, "heading_error": heading_error,
             "path": path, "failures": failures, "legs": legs, "sim_time": sim.time}
 
@@ -95,11 +82,32 @@ def plot(result: dict, filename: str) -> None:
     plt.close(fig)
 
 
-def _quiet_run(args) -> dict:
-    return run(*args, verbose=False)
+def study_text(seeds: list[int], loops: int, profile: str, power: float) -> str:
+    """The drive test over `seeds` as a study file (see scenarios/studies/drive_test.yaml)."""
+    return "\n".join([
+        f"scenario: {DEFAULT_SCENARIO}",
+        "duration: 900.0", "until: commands", "settle: 0.0",
+        f"seeds: {list(seeds)}",
+        f"grid: {{robots.{ROBOT}.motion.profile: [{profile}]}}",
+        f"drive_test: {{loops: {loops}, power: {power}, robot: {ROBOT}}}",
+        "metrics: [drive_test_drift, drive_test_heading_error, command_status]", ""])
 
 
-def run_seeds(seeds: range, loops: int, profile: str, power: float, jobs: int) -> list[dict]:
-    """`run` for each seed, quietly, in `jobs` processes; the results in seed order."""
-    with ProcessPoolExecutor(max_workers=jobs) as pool:
-        return list(pool.map(_quiet_run, [(s, loops, profile, power) for s in seeds]))
+def run_study_of_seeds(seeds: list[int], loops: int, profile: str, power: float, out: Path,
+                       workers: int | None = None) -> list[dict]:
+    """The drive test for each seed as a study on Ray (files in `out`); per seed:
+    {seed, drift_mm: [after each loop], failures: [index: status]}."""
+    out.mkdir(parents=True, exist_ok=True)
+    study_file = out / "drive_test.yaml"
+    study_file.write_text(study_text(seeds, loops, profile, power))
+    rows = engine.read_rows(engine.run_study(study_file, out, workers=workers))
+    table = []
+    for row in rows:
+        drift = [float(row.get(f"{ROBOT}.drive_test_drift.{k}") or "nan")
+                 for k in range(1, loops + 1)]
+        failures = [f"{key.rsplit('.', 1)[1]}: {v}" for key, v in row.items()
+                    if ".command_status." in key and v != "succeeded"]
+        if row["status"] != "ok":
+            failures.append(row["error"])
+        table.append({"seed": int(row["seed"]), "drift_mm": drift, "failures": failures})
+    return table

@@ -98,7 +98,9 @@ def run_study(study_file: str | Path, out_dir: str | Path, *, workers: int | Non
     rows = read_rows(runs_csv) if resume else []
     finished = {int(r["run"]) for r in rows}
     todo = [run for run in expand(study) if run.index not in finished]
-    shutil.copyfile(study_file, out / Path(study_file).name)
+    copy = out / Path(study_file).name
+    if not copy.exists() or not copy.samefile(study_file):
+        shutil.copyfile(study_file, copy)
     if todo:
         _simulate_all(todo, study, scenario_file, rows, runs_csv, workers, address, progress)
     write_rows(runs_csv, rows, study)

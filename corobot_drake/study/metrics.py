@@ -14,6 +14,7 @@ from collections.abc import Callable
 from corobot_drake.config.scenario import DriveDistance, RotateDegrees
 from corobot_drake.readings import BodyPose
 from corobot_drake.simulation import Robot, Simulation
+from corobot_drake.study.programs import COMMANDS_PER_LOOP
 
 Value = float | int | str
 METRICS: dict[str, Callable[[RobotRun], Value | dict[str, Value]]] = {}
@@ -122,6 +123,31 @@ def _landing_error(run: RobotRun) -> dict[str, float]:
             turned = b[7] - a[7] - math.radians(command.degrees)
             out[str(i)] = math.degrees(math.remainder(turned, 2 * math.pi))
     return out
+
+
+@metric("drive_test_drift")
+def _drive_test_drift(run: RobotRun) -> dict[str, float]:
+    """The drive test's drift (a study with `drive_test`): mm from the start position when each
+    loop's last command ended, by loop (1, 2, ...); NaN for a loop that did not end."""
+    return {str(k): 1000.0 * math.hypot(row[5] - run.start.x, row[6] - run.start.y)
+            if row is not None else math.nan for k, row in _loop_ends(run)}
+
+
+@metric("drive_test_heading_error")
+def _drive_test_heading_error(run: RobotRun) -> dict[str, float]:
+    """The drive test's heading error (deg, wrapped) when each loop's last command ended."""
+    return {str(k): math.degrees(math.remainder(row[7] - run.start_heading, 2 * math.pi))
+            if row is not None else math.nan for k, row in _loop_ends(run)}
+
+
+def _loop_ends(run: RobotRun):
+    """(loop number, run-log row when the loop's last command ended, or None)."""
+    log, records = run.robot.run_log(), run.robot.command_log()
+    loops = len(run.sim.scenario.robots[run.robot.name].commands) // COMMANDS_PER_LOOP
+    for k in range(1, loops + 1):
+        i = k * COMMANDS_PER_LOOP - 1
+        ended = i < len(records) and records[i].end_time is not None
+        yield k, _row_at(log, records[i].end_time) if ended else None
 
 
 def _row_at(log, t: float):

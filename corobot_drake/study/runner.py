@@ -31,6 +31,11 @@ def run_scenario(study: Study, scenario_file: Path, run: Run):
     """The run's scenario: the file, the study's overrides, then the run's parameters and
     seed; the cameras off unless the study asks for them."""
     scenario = load_scenario(scenario_file, overrides=[*study.overrides, *run.overrides()])
+    if study.drive_test is not None:
+        robot = scenario.robots.get(study.drive_test.robot)
+        if robot is None:
+            raise ValueError(f"drive_test: the scenario has no robot {study.drive_test.robot!r}")
+        robot.commands = study.drive_test.commands(run.seed)
     if not study.cameras:
         for robot in scenario.robots.values():
             robot.camera.rgb = False

@@ -26,6 +26,7 @@ from pydrake.common.yaml import yaml_load_typed
 
 from corobot_drake.config.scenario import ScenarioError
 from corobot_drake.config.validate import LayerChecks
+from corobot_drake.study.programs import DriveTest
 
 UNTIL = ("duration", "commands")
 
@@ -80,6 +81,9 @@ class Study:
     """YAML texts merged over the scenario in every run (after the file, before the grid)."""
     metrics: list[str] = dc.field(default_factory=lambda: ["x", "y", "yaw_deg"])
     """Names from the metrics registry (`corobot_drake.study.metrics.METRICS`), per robot."""
+    drive_test: DriveTest | None = None
+    """The book's drive test as each run's script for one robot (`{loops, power, robot}`):
+    random legs drawn from the run's seed, replacing that robot's commands."""
     cameras: bool = False
     """Render the robots' cameras (off by default: no metric reads them, and they cost)."""
 
@@ -142,6 +146,9 @@ def _validate(study: Study, checks: LayerChecks) -> None:
     for path in study.random:
         if path in study.grid:
             checks.fail(f"random.{path}", "is also a grid parameter")
+    if study.drive_test is not None and not (study.drive_test.loops >= 1
+                                          and 0 < study.drive_test.power <= 1):
+        checks.fail("drive_test", "the drive test needs loops >= 1 and power in (0, 1]")
     for name in study.metrics:
         if name not in METRICS:
             checks.fail("metrics", f"unknown metric {name!r}; known: "
