@@ -55,7 +55,7 @@ class SimulationCache:
         key = diagram_key(scenario)
         sim = self._sims.pop(key, None)
         if sim is not None:
-            sim.reset(scenario)
+            sim.reset(scenario, key=key)
             how = "reset"
         else:
             sim, how = Simulation(scenario), "built"
