@@ -8,8 +8,9 @@ import pytest
 
 from conftest import REPO
 from corobot_drake.cli import main
+from corobot_drake.resources import DEFAULT_SCENARIO, SCENARIOS_DIR
 
-SCENARIOS = sorted((REPO / "scenarios").glob("*.yaml"))
+SCENARIOS = sorted(SCENARIOS_DIR.glob("*.yaml"))
 
 
 @pytest.mark.parametrize("scenario", SCENARIOS, ids=lambda p: p.name)
@@ -26,7 +27,7 @@ def test_every_scenario_runs_headless(scenario, tmp_path):
 
 def _summary(tmp_path, name, *extra):
     path = tmp_path / name
-    assert main([str(REPO / "scenarios" / "corobot.yaml"), "--headless", "--duration", "2",
+    assert main([str(DEFAULT_SCENARIO), "--headless", "--duration", "2",
                  "--summary", str(path), *extra]) == 0
     data = json.loads(path.read_text())
     for key in ("realtime_factor", "wall_seconds"):

@@ -524,11 +524,12 @@ def test_in_process_runner_serves_from_a_thread():
     from fastapi.testclient import TestClient
 
     from corobot_drake.config.scenario import load_scenario
+    from corobot_drake.resources import DEFAULT_SCENARIO
     from corobot_drake.serving.runner import SimRunner
     from corobot_drake.serving.webapp import create_app
     from corobot_drake.simulation import Simulation
 
-    scenario = load_scenario(REPO / "scenarios" / "corobot.yaml")
+    scenario = load_scenario(DEFAULT_SCENARIO)
     runner = SimRunner(lambda: Simulation(scenario)).start()
     try:
         with TestClient(create_app(runner)) as client:
