@@ -1,0 +1,89 @@
+"""The generated blocks of README.md and docs/: the marker logic
+(corobot_drake/analysis/docs_blocks.py)."""
+
+import pytest
+
+from corobot_drake.analysis.docs_blocks import (
+    BlockError,
+    find_blocks,
+    replace_block,
+    wrap_markdown,
+)
+
+DOC = """# Title
+
+Some text before, with a figure <!-- BEGIN generated: speed (python tools/a.py) -->0.6 m/s\
+<!-- END generated: speed --> inline.
+
+<!-- BEGIN generated: table (python tools/b.py --x 1) -->
+| a | b |
+|---|---|
+| 1 | 2 |
+<!-- END generated: table -->
+
+Text after, untouched.
+"""
+
+
+def test_replacing_a_block_changes_only_its_content():
+    new = replace_block(DOC, "table", "| a | b |\n|---|---|\n| 3 | 4 |")
+    assert "| 3 | 4 |" in new and "| 1 | 2 |" not in new
+    before = DOC.split("<!-- BEGIN generated: table")[0]
+    assert new.startswith(before)
+    assert new.endswith("<!-- END generated: table -->\n\nText after, untouched.\n")
+    assert find_blocks(new)["table"].content(new) == "| a | b |\n|---|---|\n| 3 | 4 |"
+
+
+def test_replacing_an_inline_block_keeps_the_line():
+    new = replace_block(DOC, "speed", "0.61 m/s")
+    assert ("figure <!-- BEGIN generated: speed (python tools/a.py) -->0.61 m/s"
+            "<!-- END generated: speed --> inline.") in new
+    assert new.replace("0.61 m/s", "0.6 m/s") == DOC
+    with pytest.raises(BlockError, match="one line"):
+        replace_block(DOC, "speed", "two\nlines")
+
+
+def test_the_marker_takes_the_new_command():
+    new = replace_block(DOC, "table", "x", command="python tools/b.py --x 2")
+    block = find_blocks(new)["table"]
+    assert block.command == "python tools/b.py --x 2"
+    assert block.content(new) == "x"
+    assert new.count("python tools/b.py") == 1
+
+
+def test_same_content_gives_the_same_text():
+    for name, block in find_blocks(DOC).items():
+        assert replace_block(DOC, name, block.content(DOC), block.command) == DOC
+
+
+def test_a_missing_marker_is_an_error():
+    with pytest.raises(BlockError, match="no block 'drift'"):
+        replace_block(DOC, "drift", "1 mm")
+    without_end = DOC.replace("<!-- END generated: table -->", "")
+    with pytest.raises(BlockError, match="'table' has no END marker"):
+        find_blocks(without_end, "doc.md")
+    without_begin = DOC.replace("<!-- BEGIN generated: table (python tools/b.py --x 1) -->", "")
+    with pytest.raises(BlockError, match=r"doc\.md:\d+: END of block 'table' without its BEGIN"):
+        find_blocks(without_begin, "doc.md")
+
+
+def test_repeated_nested_and_line_starting_inline_blocks_are_errors():
+    with pytest.raises(BlockError, match="appears twice"):
+        find_blocks(DOC + DOC)
+    nested = DOC.replace("| 1 | 2 |", "<!-- BEGIN generated: x () -->y<!-- END generated: x -->")
+    with pytest.raises(BlockError, match="begins inside"):
+        find_blocks(nested)
+    line_start = "<!-- BEGIN generated: x () -->1 mm<!-- END generated: x --> of drift\n"
+    with pytest.raises(BlockError, match="raw HTML"):
+        find_blocks(line_start)
+
+
+def test_wrap_markdown_fills_prose_and_keeps_tables_and_code():
+    text = ("word " * 40).strip() + "\n\n| a |\n|---|\n\n    code line " + "x" * 120 + \
+        "\n\n- item " + "y " * 60
+    wrapped = wrap_markdown(text, width=50)
+    assert all(len(line) <= 50 for line in wrapped.split("\n\n")[0].splitlines())
+    assert "| a |\n|---|" in wrapped
+    assert "    code line " + "x" * 120 in wrapped
+    item = wrapped.split("\n\n")[3].splitlines()
+    assert item[0].startswith("- item") and all(line.startswith("  ") for line in item[1:])
