@@ -1,5 +1,10 @@
-"""The generated blocks of README.md and docs/: the marker logic
-(corobot_drake/analysis/docs_blocks.py)."""
+"""The generated blocks of README.md and docs/ (corobot_drake/analysis/docs_blocks.py,
+tools/refresh_docs.py): the marker logic, and the cheap deterministic blocks against what their
+commands print now."""
+
+import subprocess
+import sys
+from pathlib import Path
 
 import pytest
 
@@ -9,6 +14,9 @@ from corobot_drake.analysis.docs_blocks import (
     replace_block,
     wrap_markdown,
 )
+
+REPO = Path(__file__).resolve().parent.parent
+TOOL = REPO / "tools" / "refresh_docs.py"
 
 DOC = """# Title
 
@@ -87,3 +95,21 @@ def test_wrap_markdown_fills_prose_and_keeps_tables_and_code():
     assert "    code line " + "x" * 120 in wrapped
     item = wrapped.split("\n\n")[3].splitlines()
     assert item[0].startswith("- item") and all(line.startswith("  ") for line in item[1:])
+
+
+def _tool(*args: str) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, str(TOOL), *args], cwd=REPO, capture_output=True,
+                          text=True, timeout=900)
+
+
+def test_every_block_in_the_docs_has_a_command_and_every_command_its_block():
+    run = _tool("--list")
+    assert run.returncode == 0, run.stderr
+    assert "landing-errors" in run.stdout and "python tools/landing_errors.py" in run.stdout
+
+
+def test_the_cheap_deterministic_blocks_are_what_their_commands_print():
+    """Simulation results are deterministic: the figures in the docs are what the tools print
+    today (timings are not checked). On failure: python tools/refresh_docs.py --only NAME."""
+    run = _tool("--check")
+    assert run.returncode == 0, run.stdout + run.stderr[-3000:]

@@ -1,0 +1,830 @@
+"""Refreshes the measured figures in README.md and docs/*.md (run: python tools/refresh_docs.py).
+
+Every measured figure in the documentation sits in a generated block,
+
+    <!-- BEGIN generated: NAME (COMMAND) -->
+    ...
+    <!-- END generated: NAME -->
+
+and COMMAND is what produces it: a tool of tools/ (or examples/, or a test run with -s), or
+`python tools/refresh_docs.py --measure NAME` for a few simple measurements this tool makes
+itself through the Python API. This tool runs each block's command(s), renders the output as
+Markdown and replaces the block's content (and writes the pictures the commands write).
+Text outside the markers is never touched (corobot_drake/analysis/docs_blocks.py).
+
+    python tools/refresh_docs.py                 # every block: deterministic ones first,
+                                                 # pictures, timings last (~40 min here)
+    python tools/refresh_docs.py --only NAME ...  # some blocks
+    python tools/refresh_docs.py --list          # the blocks, their commands and costs
+    python tools/refresh_docs.py --check         # the cheap deterministic blocks: exit 1 on drift
+
+Simulation results are deterministic (same numbers on every run), so `--check` can hold them to
+the text; timings (real-time factors, per-frame and per-scan costs) are not: their blocks note
+the machine's load average while they were measured, and only a refresh rewrites them.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses as dc
+import datetime
+import difflib
+import json
+import os
+import re
+import shlex
+import statistics
+import subprocess
+import sys
+import threading
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+from corobot_drake.analysis.docs_blocks import (
+    BlockError,
+    find_blocks,
+    replace_block,
+    wrap_markdown,
+)
+from corobot_drake.resources import DEFAULT_SCENARIO
+
+REPO = Path(__file__).resolve().parent.parent
+DOCS = ("README.md", *sorted(f"docs/{p.name}" for p in (REPO / "docs").glob("*.md")))
+DETERMINISTIC, PICTURE, TIMING = "deterministic", "picture", "timing"
+ORDER = {DETERMINISTIC: 0, PICTURE: 1, TIMING: 2}
+CHECK_SECONDS = 30.0
+"""`--check` without `--only` re-renders the deterministic blocks estimated to cost this or less."""
+NO_CAMERA = "robots: {corobot: {camera: {rgb: false}}}"
+
+
+# --- Commands and their outputs ---------------------------------------------------------------
+
+@dc.dataclass
+class Output:
+    """What one run of a command printed, and the machine's state while it ran."""
+
+    command: str
+    stdout: str
+    seconds: float
+    load: tuple[float, float]
+    """Smallest and largest 1-minute load average sampled during the run."""
+    started: datetime.datetime
+
+
+def _argv(command: str) -> list[str]:
+    argv = shlex.split(command)
+    return [sys.executable, *argv[1:]] if argv[0] == "python" else argv
+
+
+def run_command(command: str, label: str, ok: tuple[int, ...] = (0,)) -> Output:
+    """Runs `command` (as shown in the docs, from the repository's top) and streams its output,
+    each line prefixed with `label`, to stderr as progress."""
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(
+        [str(REPO), *filter(None, [os.environ.get("PYTHONPATH")])]))
+    loads = [os.getloadavg()[0]]
+    started, start = datetime.datetime.now(), time.perf_counter()
+    print(f"[{label}] $ {command}", file=sys.stderr, flush=True)
+    proc = subprocess.Popen(_argv(command), cwd=REPO, env=env, stdout=subprocess.PIPE,
+                            text=True, bufsize=1)
+    done = threading.Event()
+
+    def sample() -> None:
+        while not done.wait(5.0):
+            loads.append(os.getloadavg()[0])
+
+    sampler = threading.Thread(target=sample, daemon=True)
+    sampler.start()
+    lines = []
+    for line in proc.stdout:
+        lines.append(line)
+        print(f"[{label} {time.perf_counter() - start:5.0f} s] {line.rstrip()}",
+              file=sys.stderr, flush=True)
+    code = proc.wait()
+    done.set()
+    loads.append(os.getloadavg()[0])
+    if code not in ok:
+        raise RuntimeError(f"{command}: exit status {code}")
+    return Output(command, "".join(lines), time.perf_counter() - start,
+                  (min(loads), max(loads)), started)
+
+
+class Runner:
+    """Runs each command once per refresh, however many blocks show its output."""
+
+    def __init__(self):
+        self._done: dict[tuple[str, int], Output] = {}
+
+    def outputs(self, block: Spec) -> list[list[Output]]:
+        """For each of the block's commands, its `repeats` outputs."""
+        result = []
+        for cmd in block.commands:
+            runs = []
+            for i in range(cmd.repeats):
+                key = (cmd.text, i)
+                if key not in self._done:
+                    label = block.name + (f" {i + 1}/{cmd.repeats}" if cmd.repeats > 1 else "")
+                    self._done[key] = run_command(cmd.text, label, cmd.ok)
+                runs.append(self._done[key])
+            result.append(runs)
+        return result
+
+
+@dc.dataclass(frozen=True)
+class Command:
+    text: str
+    """As the docs show it: `python tools/x.py --option value`, run from the repository's top."""
+    repeats: int = 1
+    """Runs (timings: each run gives one figure, the block shows their range)."""
+    ok: tuple[int, ...] = (0,)
+    """Exit statuses that still mean the output is good."""
+
+
+@dc.dataclass(frozen=True)
+class Spec:
+    name: str
+    file: str
+    commands: tuple[Command, ...]
+    render: Callable[[list[list[Output]]], str]
+    kind: str
+    seconds: float
+    """Rough cost on the project's 2-core machine, all commands and repeats."""
+
+    @property
+    def shown(self) -> str:
+        return "; ".join(c.text + (f" (x{c.repeats})" if c.repeats > 1 else "")
+                         for c in self.commands)
+
+
+# --- Helpers for rendering ----------------------------------------------------------------------
+
+def _find(pattern: str, text: str, group: int | str = 1) -> str:
+    m = re.search(pattern, text, re.MULTILINE)
+    if not m:
+        raise ValueError(f"no match for {pattern!r} in:\n{text}")
+    return m[group]
+
+
+def _num(pattern: str, text: str) -> float:
+    return float(_find(pattern, text))
+
+
+def _table(text: str) -> str:
+    """The Markdown table lines of a tool's output."""
+    return "\n".join(line for line in text.splitlines() if line.startswith("|"))
+
+
+def _load(outputs: list[Output]) -> str:
+    lo = min(o.load[0] for o in outputs)
+    hi = max(o.load[1] for o in outputs)
+    return f"{lo:.1f}" if f"{lo:.1f}" == f"{hi:.1f}" else f"{lo:.1f}-{hi:.1f}"
+
+
+def _measured(outputs: list[Output]) -> str:
+    """'2025-01-31, load average 1.2-3.4 on 2 cores' for a timing block."""
+    day = min(o.started for o in outputs).strftime("%Y-%m-%d")
+    return f"{day}, load average {_load(outputs)} on {os.cpu_count()} cores"
+
+
+def _flat(outs: list[list[Output]]) -> list[Output]:
+    return [o for runs in outs for o in runs]
+
+
+def _range(values: list[float], fmt: str = "{:.1f}") -> str:
+    lo, hi = fmt.format(min(values)), fmt.format(max(values))
+    return lo if lo == hi else f"{lo}-{hi}"
+
+
+def _as_markdown(text: str) -> str:
+    """A tool's output as Markdown: its tables kept, every other line a list item."""
+    out, previous = [], ""
+    for line in text.strip().splitlines():
+        line = line.rstrip()
+        if not line:
+            continue
+        kind = "table" if line.startswith("|") else "item"
+        if out and kind != previous:
+            out.append("")
+        out.append(line if kind == "table" else f"- {line.strip()}")
+        previous = kind
+    return "\n".join(out)
+
+
+def _picture(alt: str, path: str, command: str) -> Callable:
+    def render(outs):
+        return f"![{alt}]({path})\n\n    {command}"
+    return render
+
+
+# --- Measurements this tool makes itself (--measure NAME) -------------------------------------
+
+def _sim(*overrides: str):
+    from corobot_drake.simulation import Simulation, quiet_drake_warnings
+
+    quiet_drake_warnings()
+    return Simulation.from_file(DEFAULT_SCENARIO, overrides=[NO_CAMERA, *overrides])
+
+
+def measure_ir_at_start() -> dict:
+    """The default scene's IR readings at t = 0."""
+    robot = _sim().robot()
+    return {"rear": dc.asdict(robot.ir("rear")), "distances": robot.ir_distances()}
+
+
+def measure_saved_mid_drive() -> dict:
+    """Saved while a DriveDistance runs (the scene of tests/test_motion.py), reloaded, both run
+    on: the robots' distance apart (m) after 0.2 s and after 3.2 s."""
+    from corobot_drake.simulation import Simulation
+
+    script = ("robots: {corobot: {commands: [!DriveDistance {distance: -0.45, power: 1}, "
+              "!RotateDegrees {degrees: 30, power: 0.5}, !Wait {seconds: 1.0}, "
+              "!SetPower {left: 0.3, right: 0.3}]}}")
+    sim = _sim(script)
+    sim.advance(2.0)
+    again = Simulation(sim.saved_scenario())
+
+    def gap() -> float:
+        a, b = sim.robot().position(), again.robot().position()
+        return sum((p - q) ** 2 for p, q in zip(a, b, strict=True)) ** 0.5
+
+    out = {}
+    for label, seconds in (("after_0_2_s", 0.2), ("after_3_2_s", 3.0)):
+        sim.advance(seconds)
+        again.advance(seconds)
+        out[label] = gap()
+    return out
+
+
+def measure_wheel_turn() -> dict:
+    """Driving straight at 0.3 m/s for 1.5 s: front wheel rotation (encoders) over
+    distance / R."""
+    import math
+
+    from corobot_drake.model import dimensions as dim
+
+    sim = _sim()
+    robot = sim.robot()
+    sim.advance(0.3)
+    robot.set_speed(0.3, 0.3)
+    x0, y0, _ = robot.position()
+    ticks0 = robot.encoders()
+    sim.advance(1.5)
+    x, y, _ = robot.position()
+    distance = math.hypot(x - x0, y - y0)
+    ticks = {k: v - ticks0[k] for k, v in robot.encoders().items()}
+    turned = {k: v * 2 * math.pi / dim.ENCODER_TICKS_PER_REVOLUTION for k, v in ticks.items()}
+    return {"distance": distance, "ratio": {k: t / (distance / dim.WHEEL_RADIUS)
+                                            for k, t in turned.items()}}
+
+
+def measure_event_times(repeats: int = 3, seconds: float = 5.0) -> dict:
+    """Real-time factors (wall, median of `repeats`) of the default scene driving, physics
+    only, with the periodic events on and between the plant's 10 ms steps."""
+    from corobot_drake.config.scenario import load_scenario
+    from corobot_drake.simulation import Simulation, quiet_drake_warnings
+
+    quiet_drake_warnings()
+    driving = ("robots: {corobot: {commands: [!SetPower {left: 1.0, right: 0.6}, "
+               "!Wait {seconds: 3}, !SetPower {left: 0.6, right: 1.0}, !Wait {seconds: 3}, "
+               "!SetPower {left: -1.0, right: 1.0}]}}")
+
+    def ir(rate: float | None) -> str:
+        if rate is None:
+            return ("robots: {corobot: {ir_sensors: {front: {enabled: false}, "
+                    "rear: {enabled: false}}}}")
+        return (f"robots: {{corobot: {{ir_sensors: {{front: {{scan_rate_hz: {rate}}}, "
+                f"rear: {{scan_rate_hz: {rate}}}}}}}}}")
+
+    cases = {
+        "shipped": [ir(None)],
+        "control_50_hz": [ir(None), "robots: {corobot: {drive: {control_period: 0.02}}}"],
+        "step_1_120_s": [ir(None), f"plant_config: {{time_step: {1 / 120!r}}}"],
+        "ir_20_hz": [ir(20.0)],
+        "ir_19_9_hz": [ir(19.9)],
+    }
+    runs: dict[str, list[float]] = {name: [] for name in cases}
+    for _ in range(repeats):  # in turn: a slow drift of the load spreads over all
+        for name, overrides in cases.items():
+            sim = Simulation(load_scenario(DEFAULT_SCENARIO,
+                                           overrides=[NO_CAMERA, driving, *overrides]))
+            start = time.perf_counter()
+            sim.advance(seconds)
+            runs[name].append(seconds / (time.perf_counter() - start))
+            print(f"{name}: {runs[name][-1]:.2f}x", file=sys.stderr, flush=True)
+    return {name: statistics.median(r) for name, r in runs.items()}
+
+
+MEASUREMENTS = {
+    "ir-at-start": measure_ir_at_start,
+    "saved-mid-drive": measure_saved_mid_drive,
+    "wheel-turn": measure_wheel_turn,
+    "event-times": measure_event_times,
+}
+
+
+def _measure(name: str, repeats: int = 1) -> Command:
+    return Command(f"python tools/refresh_docs.py --measure {name}", repeats)
+
+
+def _json(outs: list[list[Output]], index: int = 0) -> dict:
+    return json.loads(outs[index][0].stdout)
+
+
+# --- The blocks ---------------------------------------------------------------------------------
+# Renderers take, for each of the block's commands, the list of its runs' outputs.
+
+def _shipped_scaling() -> float:
+    from corobot_drake.config.scenario import load_scenario
+
+    return load_scenario(DEFAULT_SCENARIO).robots["corobot"].drive.motor_torque_scaling
+
+
+def _top_speed(text: str) -> tuple[float, float]:
+    """(scaling, top speed) of a tuning run's first iteration."""
+    m = re.search(r"iteration 1: scaling ([\d.]+) -> top speed ([\d.]+) m/s", text)
+    return float(m[1]), float(m[2])
+
+
+def render_ir_start_readme(outs) -> str:
+    m = _json(outs)
+    rear, d = m["rear"], m["distances"]
+    nothing = " (nothing)" if d["front"] >= rear["range"] else ""
+    return (f"At the start of the default scene the rear sensor reads {d['rear']:.5g} m (the "
+            f"giant box) and the front {d['front']:.5g}{nothing}.\n\n" + _ir_code(m, readme=True))
+
+
+def _ir_code(m: dict, readme: bool) -> str:
+    rear, d = m["rear"], m["distances"]
+    reading = (f"IrReading(raw={rear['raw']:.5g}, range={rear['range']:.5g}, "
+               f"normalized={rear['normalized']:.3g}, time={rear['time']:.1f})")
+    quote = '"' if readme else "'"
+    distances = "{" + ", ".join(f"{quote}{k}{quote}: {v:.5g}" for k, v in d.items()) + "}"
+    lines = ["```python"]
+    if not readme:
+        lines.append("robot = sim.robot()")
+    width = 26 if readme else 24
+    lines.append("robot.ir(\"rear\")".ljust(width) + f"# {reading}")
+    lines.append("robot.ir_distances()".ljust(width) + f"# {distances}")
+    if readme:
+        lines += ["robot.encoders(), robot.heading(), robot.position()   # 600 ticks/rev, "
+                  "compass, GPS",
+                  "robot.camera_image()      # latest 240 x 320 x 4 frame of the front camera "
+                  "(None before the first)"]
+    lines.append("```")
+    return "\n".join(lines)
+
+
+def render_ir_start_sensors(outs) -> str:
+    return _ir_code(_json(outs), readme=False)
+
+
+def render_readme_top_speed(outs) -> str:
+    scaling, speed = _top_speed(outs[0][0].stdout)
+    return f"{scaling:g} shipped: {speed:.4f} m/s at full power"
+
+
+def render_readme_triangles(outs) -> str:
+    text = outs[0][0].stdout
+    total = int(_find(r"robot total\s+(\d+) triangles", text))
+    budget = int(_find(r"\(budget (\d+)\)", text))
+    return f"{total / 1000:.1f}k triangles for the whole robot, budget {budget / 1000:g}k"
+
+
+def render_looks_triangles(outs) -> str:
+    text = outs[0][0].stdout
+    counts = [line for line in text.splitlines() if " triangles" in line]
+    total = int(_find(r"robot total\s+(\d+)", text))
+    wheel = int(_find(r"wheel\.obj\s+(\d+)", text))
+    wheels = int(_find(r"wheel\.obj\s+\d+ triangles\s+\(x(\d+)", text)) * wheel
+    return ("\n".join(f"    {line}" for line in counts) +
+            f"\n\nThe {wheels // wheel} wheels are {wheels:,} of the robot's {total:,} triangles "
+            f"({100 * wheels / total:.0f}%).")
+
+
+def render_wheel_turn(outs) -> str:
+    ratios = _json(outs)["ratio"].values()
+    return f"measured with the front encoders: {_range([100 * (r - 1) for r in ratios])}% more"
+
+
+def render_saved_mid_drive(outs) -> str:
+    m = _json(outs)
+    return (f"{m['after_0_2_s'] * 1000:.2f} mm apart after 0.2 s, "
+            f"{m['after_3_2_s'] * 1000:.1f} mm after 3.2 s")
+
+
+def render_landing_errors(outs) -> str:
+    text = outs[0][0].stdout.strip()
+    failed = re.search(r"\((?!s\)|mm\)|deg\)|m\))[a-z_]+\)", text)
+    return text + ("\n\nAll commands succeeded." if not failed else
+                   "\n\nSome commands did not succeed: their status follows the error.")
+
+
+def _largest(text: str, profile: str) -> tuple[float, float]:
+    """(mm, deg): the landing table's largest errors of `profile`."""
+    mm, deg = (float(x) for x in re.findall(
+        rf"^Largest \|error\|, {profile}: ([\d.]+) (?:mm|deg)\.", text, re.M))
+    return mm, deg
+
+
+def render_readme_landing_closed_loop(outs) -> str:
+    mm, deg = _largest(outs[0][0].stdout, "closed_loop")
+    return f"{mm:.2g} mm and {deg:.2g} deg"
+
+
+def render_readme_landing_seed(outs) -> str:
+    mm, deg = _largest(outs[0][0].stdout, "seed")
+    return f"{mm:.0f} mm and {deg:.0f} deg: the tables in docs/commands.md"
+
+
+def render_drive_drift(outs) -> str:
+    rows, seeds = [], ""
+    for runs in outs:
+        text = runs[0].stdout
+        m = re.search(r"summary: profile (\S+), seeds (\d+)\.\.(\d+), (\d+) loops: mean drift "
+                      r"after each loop \(mm\) ([\d. ]+); drift per loop ([\d.]+) mm mean, "
+                      r"([\d.]+) max; (\d+) failed commands", text)
+        seeds = f"{m[2]}-{m[3]}"
+        after = m[5].split()
+        rows.append(f"| {m[1]} | " + " | ".join(after) + f" | {m[6]}, {m[7]} | {m[8]} |")
+    loops = len(after)
+    head = ("| profile | " + " | ".join(f"after loop {i}" for i in range(1, loops + 1))
+            + " | drift per loop (mean, max over seeds) | failed commands |")
+    return (f"Drift from the start, mm, mean over seeds {seeds} (default scene, camera off, "
+            f"10 ms):\n\n{head}\n|" + "---|" * (loops + 3) + "\n" + "\n".join(rows) +
+            "\n\nCommands: " + ", ".join(f"`{runs[0].command}`" for runs in outs) + ".")
+
+
+def render_tune(outs) -> str:
+    from corobot_drake.model import dimensions as dim
+
+    text = outs[0][0].stdout
+    lines = [re.sub(r"\s+\[[\d.]+ s\]$", "", line) for line in text.splitlines()
+             if not line.startswith(("plot:", "tuning "))]
+    tuned = _num(r"^motor_torque_scaling: ([\d.]+)", text)
+    no_slip = dim.TARGET_TOP_SPEED / dim.WHEEL_RADIUS
+    shipped, speed = _top_speed(outs[1][0].stdout)
+    return ("\n".join(f"    {line}" for line in lines) +
+            f"\n\n{tuned:.2f} is {100 * (tuned / no_slip - 1):.1f}% above the no-slip "
+            f"{no_slip:.3f} ({dim.TARGET_TOP_SPEED:g} m/s / {dim.WHEEL_RADIUS:g} m): the tyres "
+            f"creep under the servo. The shipped {shipped:g} gives {speed:.4f} m/s "
+            f"(`{outs[1][0].command}`).")
+
+
+def render_fit(outs) -> str:
+    text = outs[0][0].stdout
+    scaling = re.search(r"^motor_torque_scaling: ([\d.]+) \(\+- ([\d.]+)\)", text, re.M)
+    slew = re.search(r"^slew_rate: ([\d.]+) rad/s\^2 \(\+- ([\d.]+)\)", text, re.M)
+    residual = _num(r"^residual: ([\d.]+) rad/s RMS", text)
+    return (f"scaling {float(scaling[1]):.3f} (+- {float(scaling[2]):.3f}), slew "
+            f"{float(slew[1]):.3f} rad/s^2 (+- {float(slew[2]):.3f}), residual {residual:.2f} "
+            f"rad/s RMS")
+
+
+def render_tire_grip(outs) -> str:
+    o = outs[0][0]
+    text = o.stdout
+    prediction = _num(r"spin prediction ([\d.]+) rad/s", text)
+    took = _num(r"^wrote .*\((\d+) s\)$", text)
+    recommended = _find(r"^recommended: ([^:]+):", text)
+    best = re.search(r"^\| \*\*(.+) \(recommended\)\*\* \| ([\d.]+) \| [\d.]+ \| ([\d.]+) \| "
+                     r"([\d.]+) \| ([\d.]+) \| ([\d.]+) \|", text, re.M)
+    step = _find(r"time_step (\d+) ms", best[1]) if best and "time_step" in best[1] else None
+    checks = ["| time step | spin yaw / prediction | box tilt fwd / back (deg) | "
+              "roll / pitch rate std (deg/s) | RTF (CPU) |", "|---|---|---|---|---|"]
+    for m in re.finditer(r"^  ([\d.]+) ms: yaw ([\d.]+) x prediction, tilt ([\d.]+)/([\d.]+) "
+                         r"deg, roll/pitch rate std ([\d.]+)/([\d.]+) deg/s, RTF ([\d.]+x) CPU",
+                         text, re.M):
+        checks.append(f"| {m[1]} ms | {m[2]} | {m[3]} / {m[4]} | {m[5]} / {m[6]} | {m[7]} |")
+    if best and step:
+        checks.append(f"| {step} ms (the sweep's row) | {best[2]} | {best[5]} / {best[6]} | "
+                      f"{float(best[3]):.2f} / {float(best[4]):.2f} | see above |")
+    return (f"Measured {_measured([o])} (`{o.command}`; spin prediction {prediction:.4f} "
+            f"rad/s; the sweep took {took / 60:.1f} minutes):\n\n{_table(text)}\n\n"
+            f"The sweep's pick in this run: **{recommended}**. The recommended contact "
+            f"re-checked at other steps (same run):\n\n" + "\n".join(checks))
+
+
+def render_bench_full(outs) -> str:
+    o = outs[0][0]
+    machine = _find(r"^machine: (.+)$", o.stdout)
+    rest = [line for line in o.stdout.splitlines()
+            if line.startswith(("in place:", "micro-benchmark:"))]
+    return (f"Measured {_measured([o])} (`{o.command}`): {machine}.\n\n{_table(o.stdout)}\n\n"
+            + "\n".join(f"- {line}" for line in rest))
+
+
+def _default_column(outs) -> tuple[list[str], list[list[float]], list[Output]]:
+    """(stacks, wall RTF per stack per run, outputs) of the default-column runs."""
+    runs = outs[0]
+    stacks, values = [], []
+    for o in runs:
+        rows = [line for line in _table(o.stdout).splitlines()[2:]]
+        stacks = [r.split("|")[1].strip() for r in rows]
+        values.append([float(_find(r"\| ([\d.]+)x \(", r)) for r in rows])
+    return stacks, values, runs
+
+
+def render_readme_performance(outs) -> str:
+    stacks, values, runs = _default_column(outs)
+    lines = ["| default scene, 10 ms step | real-time factor |", "|---|---|"]
+    for i, stack in enumerate(stacks):
+        lines.append(f"| {stack} | {_range([v[i] for v in values], '{:.1f}')}x |")
+    return (f"Measured {_measured(runs)}, no GPU (a shared host), {len(runs)} runs of "
+            f"`{runs[0].command}`, the range of their medians:\n\n" + "\n".join(lines))
+
+
+def render_default_runs(outs) -> str:
+    stacks, _, runs = _default_column(outs)
+    head = "| stack | " + " | ".join(
+        f"run {i} ({o.started:%H:%M}, load {_load([o])})" for i, o in enumerate(runs, 1)) + " |"
+    lines = [head, "|---|" + "---|" * len(runs)]
+    cells = [[r.split("|")[2].strip() for r in _table(o.stdout).splitlines()[2:]] for o in runs]
+    for i, stack in enumerate(stacks):
+        lines.append(f"| {stack} | " + " | ".join(c[i] for c in cells) + " |")
+    return (f"The default column alone, {len(runs)} runs ({_measured(runs)}; "
+            f"`{runs[0].command}`):\n\n" + "\n".join(lines))
+
+
+def render_unit_costs(outs) -> str:
+    ir, raycast, camera = (runs[0].stdout for runs in outs)
+    direct = re.search(r"called directly: ([\d.]+) us CPU \(median batch\), ([\d.]+) us CPU "
+                       r"\(best batch\)", ir)
+    in_place = _num(r"in place \(called by the Simulator.*?\): ([\d.]+) us CPU", ir)
+    fan = _num(r"2 x cast_fan.*median\s+([\d.]+) us", raycast)
+
+    def row(prefix: str, clock: str) -> list[str]:
+        for line in _table(camera).splitlines()[2:]:
+            cells = [c.strip() for c in line.strip("|").split("|")]
+            if cells[0].startswith(prefix) and cells[0].endswith(clock):
+                return cells[1:]
+        raise ValueError(prefix)
+
+    render = row("render (the sensor", "wall clock")
+    sync = row("added to a simulation at 30 Hz, in the simulation's thread", "wall clock")
+    async_wall = row("added to a simulation at 30 Hz, on a worker thread", "wall clock")
+    async_cpu = row("added to a simulation at 30 Hz, on a worker thread", "CPU time")
+    lines = [
+        "| what | cost | how |", "|---|---|---|",
+        f"| IR scan of both sensors, the two update handlers called directly (CPU, median "
+        f"batch; best batch) | {float(direct[1]) / 1000:.3f} ms; {float(direct[2]) / 1000:.3f} "
+        f"ms | `tools/bench_ir.py` |",
+        f"| IR scan, the ray cast alone (2 sensors x 6 rays, wall, median) | "
+        f"{fan / 1000:.3f} ms | `tools/bench_raycast.py` |",
+        f"| IR scan of both sensors, in place (timed inside the running simulation; cold "
+        f"caches; CPU, median) | {in_place / 1000:.3f} ms | `tools/bench_ir.py` |",
+        f"| camera frame, 320 x 240, render only, GL / VTK | {render[0]} / {render[1]} ms | "
+        f"`tools/bench_camera.py` |",
+        f"| camera frame at 30 Hz, added wall time in the simulation, asynchronous GL "
+        f"(default) | {async_wall[0]} ms | `tools/bench_camera.py` |",
+        f"| camera frame at 30 Hz, added CPU time, asynchronous GL (default) | {async_cpu[0]} "
+        f"ms | `tools/bench_camera.py` |",
+        f"| camera frame at 30 Hz, synchronous (`output_delay: 0`), GL / VTK, added wall time "
+        f"| {sync[0]} / {sync[1]} ms | `tools/bench_camera.py` |",
+    ]
+    return f"Measured {_measured(_flat(outs))}:\n\n" + "\n".join(lines)
+
+
+def render_event_times(outs) -> str:
+    runs = outs[0]
+    m = json.loads(runs[0].stdout)
+    return (f"Measured {_measured(runs)} (`{runs[0].command}`; physics only, camera off, "
+            f"median of 3 x 5 s, wall clock):\n\n"
+            "| change | real-time factor |\n|---|---|\n"
+            f"| as shipped (drive, command source and motion at 60 Hz: 40 of their 60 event "
+            f"times a second fall between steps) | {m['shipped']:.1f}x |\n"
+            f"| the same systems at 50 Hz (`drive.control_period: 0.02`: every event on a "
+            f"step) | {m['control_50_hz']:.1f}x |\n"
+            f"| plant step 1/120 s (every 60 Hz event on a step, but 20% more steps) | "
+            f"{m['step_1_120_s']:.1f}x |\n"
+            f"| IR sensors at 20 Hz (on steps) vs 19.9 Hz (between steps) | "
+            f"{m['ir_20_hz']:.1f}x vs {m['ir_19_9_hz']:.1f}x |")
+
+
+def render_bench_ir(outs) -> str:
+    o = outs[0][0]
+    text = "\n".join(line for line in o.stdout.splitlines() if not line.startswith(
+        ("load average", "(the median")))
+    return f"Measured {_measured([o])} (`{o.command}`):\n\n{_as_markdown(text)}"
+
+
+def render_table_with_load(outs) -> str:
+    o = outs[0][0]
+    return f"Measured {_measured([o])} (`{o.command}`):\n\n{_table(o.stdout)}"
+
+
+def render_camera_cost(outs) -> str:
+    o = outs[0][0]
+    ratios = {r.split("|")[1].strip(): r.split("|")[4].strip()
+              for r in _table(o.stdout).splitlines()[2:]}
+    return (f"Measured {_measured([o])} (`{o.command}`):\n\n{_table(o.stdout)}\n\n"
+            f"Meshes over boxes: {ratios['robot-camera']} for the robot's own camera, "
+            f"{ratios['chase']} for the chase view.")
+
+
+def render_drive_legs(outs) -> str:
+    o = outs[0][0]
+    loops = int(_find(r"^(\d+) loops: final drift", o.stdout))
+    drift = _num(r"final drift ([\d.]+) mm", o.stdout)
+    return (f"seed 1, {loops} loop through the server: {drift:.1f} mm; {o.seconds:.0f} s of wall "
+            f"time, the server's start included, at load average {_load([o])}")
+
+
+def render_server_flood(outs) -> str:
+    o = outs[0][0]
+    m = re.search(r"real-time factor ([\d.]+) \(without the load: ([\d.]+)\)", o.stdout)
+    return (f"Measured {_measured([o])} (`{o.command}`): real-time factor {float(m[1]):.2f} "
+            f"under the load (without it: {float(m[2]):.2f}).")
+
+
+def blocks() -> list[Spec]:
+    """Every generated block of the docs, in the order a full refresh runs them."""
+    shipped = _shipped_scaling()
+    top_speed = Command(f"python tools/tune_motor_torque_scaling.py --scaling {shipped:g} "
+                        f"--max-iterations 1", ok=(0, 1))
+    meshes = Command("python tools/make_meshes.py --check", ok=(0, 1))
+    ir_start = _measure("ir-at-start")
+    landing = Command("python tools/landing_errors.py")
+    bench_ir = Command("python tools/bench_ir.py")
+    bench_raycast = Command("python tools/bench_raycast.py")
+    bench_camera = Command("python tools/bench_camera.py")
+    default_column = Command('python tools/bench.py --plants "hydroelastic 10 ms" --seconds 5 '
+                             '--repeats 5 --no-micro', repeats=3)
+    pictures = [
+        ("readme-picture-drive-test", "Drive test path", "drive_test.png",
+         "python tools/drive_test.py --loops 3 --seed 1 --plot docs/images/drive_test.png", 25),
+        ("readme-picture-beside-box", "The Corobot beside the giant box", "beside_box.png",
+         "python tools/snapshot.py --eye 1.1,-0.9,0.55 --target=-0.45,0.1,0.3 "
+         "--output docs/images/beside_box.png", 8),
+        ("readme-picture-camera-view", "The robot's camera view", "camera_view.png",
+         "python tools/snapshot.py --view robot-camera --pose 1.6,1.2,205 "
+         "--output docs/images/camera_view.png", 8),
+        ("readme-picture-chase", "Chase view", "chase.png",
+         "python tools/snapshot.py --view chase --drive 0.7,0.45 --time 3 "
+         "--output docs/images/chase.png", 8),
+        ("readme-picture-collision-boxes", "Collision shapes", "collision_boxes.png",
+         "python tools/snapshot.py --eye 1.1,-0.9,0.55 --target=-0.45,0.1,0.3 --visual boxes "
+         "--output docs/images/collision_boxes.png", 8),
+    ]
+    specs = [
+        Spec("readme-triangles", "README.md", (meshes,), render_readme_triangles,
+             DETERMINISTIC, 3),
+        Spec("looks-triangles", "docs/looks.md", (meshes,), render_looks_triangles,
+             DETERMINISTIC, 3),
+        Spec("readme-ir-at-start", "README.md", (ir_start,), render_ir_start_readme,
+             DETERMINISTIC, 8),
+        Spec("sensors-ir-at-start", "docs/sensors.md", (ir_start,), render_ir_start_sensors,
+             DETERMINISTIC, 8),
+        Spec("readme-top-speed", "README.md", (top_speed,), render_readme_top_speed,
+             DETERMINISTIC, 5),
+        Spec("tune-motor-torque-scaling", "docs/tuning.md",
+             (Command("python tools/tune_motor_torque_scaling.py --scaling 20"), top_speed),
+             render_tune, DETERMINISTIC, 10),
+        Spec("fit-drive-log", "docs/tuning.md",
+             (Command("python tools/fit_drive_log.py --simulate 12 20"),), render_fit,
+             DETERMINISTIC, 5),
+        Spec("wheel-turn", "docs/looks.md", (_measure("wheel-turn"),), render_wheel_turn,
+             DETERMINISTIC, 5),
+        Spec("saved-mid-drive", "docs/commands.md", (_measure("saved-mid-drive"),),
+             render_saved_mid_drive, DETERMINISTIC, 10),
+        Spec("landing-errors", "docs/commands.md", (landing,), render_landing_errors,
+             DETERMINISTIC, 150),
+        Spec("readme-landing-closed-loop", "README.md", (landing,),
+             render_readme_landing_closed_loop, DETERMINISTIC, 150),
+        Spec("readme-landing-seed", "README.md", (landing,), render_readme_landing_seed,
+             DETERMINISTIC, 150),
+        Spec("drive-test-drift", "docs/commands.md", tuple(
+            Command(f"python tools/drive_test.py --loops 3 --seeds 20 --jobs 1 --profile {p}")
+            for p in ("closed_loop", "seed")), render_drive_drift, DETERMINISTIC, 900),
+        *(Spec(name, "README.md", (Command(cmd),), _picture(alt, f"docs/images/{png}", cmd),
+               PICTURE, seconds) for name, alt, png, cmd, seconds in pictures),
+        Spec("drive-legs-server", "docs/services.md",
+             (Command("python examples/drive_legs.py --loops 1 --seed 1"),), render_drive_legs,
+             TIMING, 60),
+        Spec("server-flood", "docs/services.md",
+             (Command("python -m pytest -s -q tests/test_server.py -k flood"),),
+             render_server_flood, TIMING, 60),
+        Spec("camera-cost", "docs/looks.md", (Command("python tools/camera_cost.py"),),
+             render_camera_cost, TIMING, 150),
+        Spec("bench-camera", "docs/sensors.md", (bench_camera,), render_table_with_load,
+             TIMING, 150),
+        Spec("bench-ir", "docs/sensors.md", (bench_ir,), render_bench_ir, TIMING, 200),
+        Spec("unit-costs", "docs/performance.md", (bench_ir, bench_raycast, bench_camera),
+             render_unit_costs, TIMING, 380),
+        Spec("event-times", "docs/performance.md", (_measure("event-times"),),
+             render_event_times, TIMING, 150),
+        Spec("tire-grip", "docs/tuning.md", (Command("python tools/tune_tire_grip.py"),),
+             render_tire_grip, TIMING, 400),
+        Spec("default-column-runs", "docs/performance.md", (default_column,),
+             render_default_runs, TIMING, 360),
+        Spec("readme-performance", "README.md", (default_column,), render_readme_performance,
+             TIMING, 360),
+        Spec("bench-full", "docs/performance.md",
+             (Command("python tools/bench.py --seconds 5 --repeats 3"),), render_bench_full,
+             TIMING, 600),
+    ]
+    return sorted(specs, key=lambda s: ORDER[s.kind])
+
+
+# --- The command line ---------------------------------------------------------------------------
+
+def check_markers(specs: list[Spec]) -> list[str]:
+    """Problems: a registered block without its markers, a marker no block owns, bad markers."""
+    problems = []
+    owned = {(s.file, s.name) for s in specs}
+    for doc in DOCS:
+        try:
+            found = find_blocks((REPO / doc).read_text(), doc)
+        except BlockError as e:
+            problems.append(str(e))
+            continue
+        problems += [f"{doc}:{b.line}: block {n!r} is not one refresh_docs.py knows"
+                     for n, b in found.items() if (doc, n) not in owned]
+        problems += [f"{doc}: no block {s.name!r}" for s in specs
+                     if s.file == doc and s.name not in found]
+    return problems
+
+
+def _list(specs: list[Spec]) -> None:
+    for s in specs:
+        line = find_blocks((REPO / s.file).read_text(), s.file)[s.name].line
+        cheap = " (--check)" if s.kind == DETERMINISTIC and s.seconds <= CHECK_SECONDS else ""
+        print(f"{s.name:32s} {s.file}:{line}  {s.kind}{cheap}, ~{s.seconds:.0f} s\n"
+              f"{'':32s} {s.shown}")
+
+
+def refresh(specs: list[Spec], check: bool) -> int:
+    """Renders each block; writes it (or, with `check`, reports a difference). 1 on drift or
+    when a block's command failed (the other blocks are still refreshed)."""
+    runner, status = Runner(), 0
+    start = time.perf_counter()
+    for i, spec in enumerate(specs, 1):
+        print(f"== [{i}/{len(specs)}] {spec.name} ({spec.kind}, ~{spec.seconds:.0f} s; "
+              f"{time.perf_counter() - start:.0f} s so far)", file=sys.stderr, flush=True)
+        try:
+            content = spec.render(runner.outputs(spec))
+            if "\n" in content:
+                content = wrap_markdown(content)
+        except Exception as e:  # one block's failure leaves the others to refresh
+            print(f"{spec.name}: FAILED, left as it was: {type(e).__name__}: {e}", flush=True)
+            status = 1
+            continue
+        path = REPO / spec.file
+        text = path.read_text()
+        new = replace_block(text, spec.name, content, spec.shown, spec.file)
+        if new == text:
+            print(f"{spec.name}: unchanged", flush=True)
+            continue
+        if check:
+            status = 1
+            old = find_blocks(text, spec.file)[spec.name].content(text)
+            print(f"{spec.file}: block {spec.name} differs from what its command prints now:")
+            sys.stdout.writelines(difflib.unified_diff(
+                (old + "\n").splitlines(True), (content + "\n").splitlines(True),
+                "in the file", "now"))
+        else:
+            path.write_text(new)
+            print(f"{spec.name}: rewrote {spec.file}", flush=True)
+    return status
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--only", nargs="+", metavar="NAME", help="these blocks only")
+    p.add_argument("--list", action="store_true", help="list the blocks, their commands, costs")
+    p.add_argument("--check", action="store_true",
+                   help="re-render deterministic blocks (without --only: the cheap ones) and "
+                        "exit 1 if any differs from the file; writes nothing")
+    p.add_argument("--measure", choices=sorted(MEASUREMENTS),
+                   help="make one of this tool's own measurements and print it (JSON)")
+    args = p.parse_args(argv)
+    if args.measure:
+        print(json.dumps(MEASUREMENTS[args.measure](), indent=1))
+        return 0
+    specs = blocks()
+    problems = check_markers(specs)
+    for problem in problems:
+        print(f"error: {problem}", file=sys.stderr)
+    if problems:
+        return 2
+    if args.only:
+        unknown = set(args.only) - {s.name for s in specs}
+        if unknown:
+            print(f"error: no block {', '.join(sorted(unknown))} (see --list)", file=sys.stderr)
+            return 2
+        specs = [s for s in specs if s.name in args.only]
+    if args.list:
+        _list(specs)
+        return 0
+    if args.check:
+        chosen = [s for s in specs if s.kind == DETERMINISTIC
+                  and (args.only or s.seconds <= CHECK_SECONDS)]
+        skipped = [s.name for s in specs if s not in chosen]
+        if args.only and skipped:
+            print(f"note: not checked (their figures vary run to run): {', '.join(skipped)}",
+                  file=sys.stderr)
+        return refresh(chosen, check=True)
+    return refresh(specs, check=False)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
