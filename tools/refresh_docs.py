@@ -13,7 +13,7 @@ Markdown and replaces the block's content (and writes the pictures the commands 
 Text outside the markers is never touched (corobot_drake/analysis/docs_blocks.py).
 
     python tools/refresh_docs.py                 # every block: deterministic ones first,
-                                                 # pictures, timings last (~40 min here)
+                                                 # pictures, timings last (~30 min here)
     python tools/refresh_docs.py --only NAME ...  # some blocks
     python tools/refresh_docs.py --list          # the blocks, their commands and costs
     python tools/refresh_docs.py --check         # the cheap deterministic blocks: exit 1 on drift
@@ -284,9 +284,10 @@ def measure_wheel_turn() -> dict:
                                             for k, t in turned.items()}}
 
 
-def measure_event_times(repeats: int = 3, seconds: float = 5.0) -> dict:
-    """Real-time factors (wall, median of `repeats`) of the default scene driving, physics
-    only, with the periodic events on and between the plant's 10 ms steps."""
+def measure_event_times(repeats: int = 5, seconds: float = 10.0) -> dict:
+    """Real-time factors (wall, median of `repeats`) and simulator steps per simulated second
+    of the default scene driving, physics only, with the periodic events on and between the
+    plant's 10 ms steps."""
     from corobot_drake.config.scenario import load_scenario
     from corobot_drake.simulation import Simulation, quiet_drake_warnings
 
@@ -310,15 +311,19 @@ def measure_event_times(repeats: int = 3, seconds: float = 5.0) -> dict:
         "ir_19_9_hz": [ir(19.9)],
     }
     runs: dict[str, list[float]] = {name: [] for name in cases}
+    steps: dict[str, float] = {}
     for _ in range(repeats):  # in turn: a slow drift of the load spreads over all
         for name, overrides in cases.items():
             sim = Simulation(load_scenario(DEFAULT_SCENARIO,
                                            overrides=[NO_CAMERA, driving, *overrides]))
+            taken = sim.simulator.get_num_steps_taken()
             start = time.perf_counter()
             sim.advance(seconds)
             runs[name].append(seconds / (time.perf_counter() - start))
+            steps[name] = (sim.simulator.get_num_steps_taken() - taken) / seconds
             print(f"{name}: {runs[name][-1]:.2f}x", file=sys.stderr, flush=True)
-    return {name: statistics.median(r) for name, r in runs.items()}
+    return {name: {"rtf": statistics.median(r), "rtf_min": min(r), "rtf_max": max(r),
+                   "steps_per_second": steps[name]} for name, r in runs.items()}
 
 
 MEASUREMENTS = {
@@ -491,24 +496,29 @@ def render_tire_grip(outs) -> str:
     o = outs[0][0]
     text = o.stdout
     prediction = _num(r"spin prediction ([\d.]+) rad/s", text)
+    base_step = _find(r"time step ([\d.]+) ms; spin prediction", text)
     took = _num(r"^wrote .*\((\d+) s\)$", text)
     recommended = _find(r"^recommended: ([^:]+):", text)
-    best = re.search(r"^\| \*\*(.+) \(recommended\)\*\* \| ([\d.]+) \| [\d.]+ \| ([\d.]+) \| "
-                     r"([\d.]+) \| ([\d.]+) \| ([\d.]+) \|", text, re.M)
-    step = _find(r"time_step (\d+) ms", best[1]) if best and "time_step" in best[1] else None
     checks = ["| time step | spin yaw / prediction | box tilt fwd / back (deg) | "
-              "roll / pitch rate std (deg/s) | RTF (CPU) |", "|---|---|---|---|---|"]
+              "roll / pitch rate std (deg/s) | RTF (CPU) | verdict |", "|---|---|---|---|---|---|"]
+    for line in _table(text).splitlines():
+        cells = [c.strip().strip("*") for c in line.strip("|").split("|")]
+        if cells[0].endswith("(recommended)"):
+            step = re.search(r"time_step ([\d.]+) ms", cells[0])
+            checks.append(f"| {step[1] if step else base_step} ms (the sweep's row) | {cells[1]} "
+                          f"| {cells[5]} / {cells[6]} | {float(cells[3]):.2f} / "
+                          f"{float(cells[4]):.2f} | {cells[8]} | |")
     for m in re.finditer(r"^  ([\d.]+) ms: yaw ([\d.]+) x prediction, tilt ([\d.]+)/([\d.]+) "
-                         r"deg, roll/pitch rate std ([\d.]+)/([\d.]+) deg/s, RTF ([\d.]+x) CPU",
-                         text, re.M):
-        checks.append(f"| {m[1]} ms | {m[2]} | {m[3]} / {m[4]} | {m[5]} / {m[6]} | {m[7]} |")
-    if best and step:
-        checks.append(f"| {step} ms (the sweep's row) | {best[2]} | {best[5]} / {best[6]} | "
-                      f"{float(best[3]):.2f} / {float(best[4]):.2f} | see above |")
-    return (f"Measured {_measured([o])} (`{o.command}`; spin prediction {prediction:.4f} "
-            f"rad/s; the sweep took {took / 60:.1f} minutes):\n\n{_table(text)}\n\n"
-            f"The sweep's pick in this run: **{recommended}**. The recommended contact "
-            f"re-checked at other steps (same run):\n\n" + "\n".join(checks))
+                         r"deg, roll/pitch rate std ([\d.]+)/([\d.]+) deg/s, RTF ([\d.]+x) CPU"
+                         r"\s+(\w+)", text, re.M):
+        checks.append(f"| {m[1]} ms | {m[2]} | {m[3]} / {m[4]} | {m[5]} / {m[6]} | {m[7]} | "
+                      f"{m[8]} |")
+    return (f"Measured {_measured([o])} (`{o.command}`; plant step {base_step} ms unless a "
+            f"row says otherwise; spin prediction {prediction:.4f} rad/s; the sweep took "
+            f"{took / 60:.1f} minutes):\n\n{_table(text)}\n\n"
+            f"The sweep's pick in this run: **{recommended}**, re-checked at other steps (same "
+            f"run; `FAILS` is a flip or a spin off the prediction, and the tool exits 1):\n\n"
+            + "\n".join(checks))
 
 
 def render_bench_full(outs) -> str:
@@ -516,8 +526,8 @@ def render_bench_full(outs) -> str:
     machine = _find(r"^machine: (.+)$", o.stdout)
     rest = [line for line in o.stdout.splitlines()
             if line.startswith(("in place:", "micro-benchmark:"))]
-    return (f"Measured {_measured([o])} (`{o.command}`): {machine}.\n\n{_table(o.stdout)}\n\n"
-            + "\n".join(f"- {line}" for line in rest))
+    return (f"Measured {o.started:%Y-%m-%d}, load average {_load([o])} (`{o.command}`), on "
+            f"{machine}:\n\n{_table(o.stdout)}\n\n" + "\n".join(f"- {line}" for line in rest))
 
 
 def _default_column(outs) -> tuple[list[str], list[list[float]], list[Output]]:
@@ -594,17 +604,23 @@ def render_unit_costs(outs) -> str:
 def render_event_times(outs) -> str:
     runs = outs[0]
     m = json.loads(runs[0].stdout)
-    return (f"Measured {_measured(runs)} (`{runs[0].command}`; physics only, camera off, "
-            f"median of 3 x 5 s, wall clock):\n\n"
-            "| change | real-time factor |\n|---|---|\n"
-            f"| as shipped (drive, command source and motion at 60 Hz: 40 of their 60 event "
-            f"times a second fall between steps) | {m['shipped']:.1f}x |\n"
-            f"| the same systems at 50 Hz (`drive.control_period: 0.02`: every event on a "
-            f"step) | {m['control_50_hz']:.1f}x |\n"
-            f"| plant step 1/120 s (every 60 Hz event on a step, but 20% more steps) | "
-            f"{m['step_1_120_s']:.1f}x |\n"
-            f"| IR sensors at 20 Hz (on steps) vs 19.9 Hz (between steps) | "
-            f"{m['ir_20_hz']:.1f}x vs {m['ir_19_9_hz']:.1f}x |")
+    rows = (("shipped", "as shipped (drive, command source and motion at 60 Hz: 40 of their 60 "
+                        "event times a second fall between steps)"),
+            ("control_50_hz", "the same systems at 50 Hz (`drive.control_period: 0.02`: every "
+                              "event on a step)"),
+            ("step_1_120_s", "plant step 1/120 s (every 60 Hz event on a step, but 20% more "
+                             "steps)"),
+            ("ir_20_hz", "+ 2 IR sensors at 20 Hz (on steps)"),
+            ("ir_19_9_hz", "+ 2 IR sensors at 19.9 Hz (between steps)"))
+    lines = ["| change | real-time factor, median (min-max) | simulator steps per simulated s |",
+             "|---|---|---|"]
+    for key, label in rows:
+        r = m[key]
+        lines.append(f"| {label} | {r['rtf']:.1f}x ({r['rtf_min']:.1f}-{r['rtf_max']:.1f}) | "
+                     f"{r['steps_per_second']:.0f} |")
+    return (f"Measured {_measured(runs)} (`{runs[0].command}`; physics only unless a row adds "
+            f"IR, camera off, 5 runs of 10 simulated s each in turn, wall clock):\n\n"
+            + "\n".join(lines))
 
 
 def render_bench_ir(outs) -> str:
@@ -703,33 +719,34 @@ def blocks() -> list[Spec]:
              DETERMINISTIC, 90),
         Spec("drive-test-drift", "docs/commands.md", tuple(
             Command(f"python tools/drive_test.py --loops 3 --seeds 20 --jobs 1 --profile {p}")
-            for p in ("closed_loop", "seed")), render_drive_drift, DETERMINISTIC, 900),
+            for p in ("closed_loop", "seed")), render_drive_drift, DETERMINISTIC, 820),
         *(Spec(name, "README.md", (Command(cmd),), _picture(alt, f"docs/images/{png}", cmd),
                PICTURE, seconds) for name, alt, png, cmd, seconds in pictures),
         Spec("drive-legs-server", "docs/services.md",
              (Command("python examples/drive_legs.py --loops 1 --seed 1"),), render_drive_legs,
-             TIMING, 60),
+             TIMING, 45),
         Spec("server-flood", "docs/services.md",
              (Command("python -m pytest -s -q tests/test_server.py -k flood", ok=(0, 1)),),
-             render_server_flood, TIMING, 60),
+             render_server_flood, TIMING, 30),
         Spec("camera-cost", "docs/looks.md", (Command("python tools/camera_cost.py"),),
-             render_camera_cost, TIMING, 150),
+             render_camera_cost, TIMING, 70),
         Spec("bench-camera", "docs/sensors.md", (bench_camera,), render_table_with_load,
-             TIMING, 150),
-        Spec("bench-ir", "docs/sensors.md", (bench_ir,), render_bench_ir, TIMING, 200),
+             TIMING, 90),
+        Spec("bench-ir", "docs/sensors.md", (bench_ir,), render_bench_ir, TIMING, 50),
         Spec("unit-costs", "docs/performance.md", (bench_ir, bench_raycast, bench_camera),
-             render_unit_costs, TIMING, 380),
+             render_unit_costs, TIMING, 150),
         Spec("event-times", "docs/performance.md", (_measure("event-times"),),
-             render_event_times, TIMING, 150),
-        Spec("tire-grip", "docs/tuning.md", (Command("python tools/tune_tire_grip.py"),),
-             render_tire_grip, TIMING, 400),
+             render_event_times, TIMING, 60),
+        Spec("tire-grip", "docs/tuning.md",
+             (Command("python tools/tune_tire_grip.py", ok=(0, 1)),),
+             render_tire_grip, TIMING, 180),
         Spec("default-column-runs", "docs/performance.md", (default_column,),
-             render_default_runs, TIMING, 360),
+             render_default_runs, TIMING, 110),
         Spec("readme-performance", "README.md", (default_column,), render_readme_performance,
-             TIMING, 360),
+             TIMING, 110),
         Spec("bench-full", "docs/performance.md",
              (Command("python tools/bench.py --seconds 5 --repeats 3"),), render_bench_full,
-             TIMING, 600),
+             TIMING, 200),
     ]
     return sorted(specs, key=lambda s: ORDER[s.kind])
 
@@ -769,15 +786,15 @@ def refresh(specs: list[Spec], check: bool) -> int:
     for i, spec in enumerate(specs, 1):
         print(f"== [{i}/{len(specs)}] {spec.name} ({spec.kind}, ~{spec.seconds:.0f} s; "
               f"{time.perf_counter() - start:.0f} s so far)", file=sys.stderr, flush=True)
+        path = REPO / spec.file
         try:
             content = spec.render(runner.outputs(spec))
-            if "\n" in content:
+            if find_blocks(path.read_text(), spec.file)[spec.name].multiline:
                 content = wrap_markdown(content)
         except Exception as e:  # one block's failure leaves the others to refresh
             print(f"{spec.name}: FAILED, left as it was: {type(e).__name__}: {e}", flush=True)
             status = 1
             continue
-        path = REPO / spec.file
         text = path.read_text()
         new = replace_block(text, spec.name, content, spec.shown, spec.file)
         if new == text:
