@@ -718,7 +718,8 @@ def blocks() -> list[Spec]:
         Spec("readme-landing-seed", "README.md", (landing,), render_readme_landing_seed,
              DETERMINISTIC, 90),
         Spec("drive-test-drift", "docs/commands.md", tuple(
-            Command(f"python tools/drive_test.py --loops 3 --seeds 20 --jobs 1 --profile {p}")
+            Command(f"python tools/drive_test.py --loops 3 --seeds 20 --workers 1 --profile {p} "
+                    f"--out out/drive_test_{p}")
             for p in ("closed_loop", "seed")), render_drive_drift, DETERMINISTIC, 820),
         *(Spec(name, "README.md", (Command(cmd),), _picture(alt, f"docs/images/{png}", cmd),
                PICTURE, seconds) for name, alt, png, cmd, seconds in pictures),
