@@ -630,6 +630,11 @@ def render_bench_ir(outs) -> str:
     return f"Measured {_measured([o])} (`{o.command}`):\n\n{_as_markdown(text)}"
 
 
+def render_bench_study(outs) -> str:
+    o = outs[0][0]
+    return f"Measured {_measured([o])} (`{o.command}`):\n\n{_as_markdown(o.stdout.strip())}"
+
+
 def render_table_with_load(outs) -> str:
     o = outs[0][0]
     return f"Measured {_measured([o])} (`{o.command}`):\n\n{_table(o.stdout)}"
@@ -734,6 +739,9 @@ def blocks() -> list[Spec]:
         Spec("bench-camera", "docs/sensors.md", (bench_camera,), render_table_with_load,
              TIMING, 90),
         Spec("bench-ir", "docs/sensors.md", (bench_ir,), render_bench_ir, TIMING, 50),
+        Spec("bench-study", "docs/studies.md",
+             (Command("python tools/bench_study.py --seeds 24 --duration 8"),),
+             render_bench_study, TIMING, 150),
         Spec("unit-costs", "docs/performance.md", (bench_ir, bench_raycast, bench_camera),
              render_unit_costs, TIMING, 150),
         Spec("event-times", "docs/performance.md", (_measure("event-times"),),
