@@ -249,7 +249,7 @@ def test_scene_saved_while_driving_carries_on(tmp_path):
     sim.advance(3.0)
     again.advance(3.0)
     # The drive restarts from the saved pose (its heading hold and speed estimate anew), so
-    # the paths part by a few mm (3.5 mm measured at 5 ms steps).
+    # the paths part by up to a few mm (docs/commands.md, saved-mid-drive, has the figure).
     assert _max_gap(sim, again) < 0.01
     assert [c["command"] for c in again.robot().summary()["commands"]][:2] == [
         "DriveDistance", "RotateDegrees"]  # what was left of the drive, then the script's rest
