@@ -1,0 +1,6 @@
+"""What the tools in `tools/` compute, as package functions: benchmarks (`bench*`,
+`camera_cost`), system identification (`sysid`, `drive_tuning`), the tire-grip sweep
+(`tire_grip`), the drive test and landing errors (`drive_test`, `landing`), pictures
+(`snapshot`), the study engine's costs (`bench_study`) and the docs' generated blocks
+(`docs_blocks`). Each tool is argparse over one of these.
+"""

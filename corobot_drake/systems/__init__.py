@@ -1,0 +1,7 @@
+"""The robot's own LeafSystems, each one idea with named ports and its memory in the Context.
+
+- `drive.py`: `CommandSource` (script and API inbox) and `DriveController` (power, slew, clamp);
+- `motion.py`: `MotionCommands`, the DriveDistance / RotateDegrees / SetPose state machine;
+- `odometry.py`: `ChassisPose`, encoders, `Compass`, `Gps`, `DriveStateReporter`;
+- `monitor.py`: `TiltMonitor`; `runlog.py`: the run log (`RunLogSample` + a log sink).
+"""
