@@ -182,3 +182,67 @@ def test_the_drive_test_study_and_the_drive_test_tool_agree(tmp_path, local_ray)
     assert table[0]["failures"] == [] and alone["failures"] == []
     assert table[0]["drift_mm"] == [alone["drift"][0] * 1000.0]  # the same run, bit for bit
     assert 0.0 < alone["drift"][0] < 0.01  # a closed-loop loop comes back within 10 mm
+
+
+def _descendants(pid: int) -> set[int]:
+    """The PIDs of `pid`'s process tree now (from /proc)."""
+    children: dict[int, list[int]] = {}
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        children.setdefault(int(fields[1]), []).append(int(stat.parent.name))
+    found, todo = set(), [pid]
+    while todo:
+        for child in children.get(todo.pop(), []):
+            found.add(child)
+            todo.append(child)
+    return found
+
+
+def _alive(pid: int) -> bool:
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except OSError:
+        return False
+    return state != "Z"
+
+
+def test_ctrl_c_keeps_the_finished_rows_and_stops_ray(tmp_path):
+    """Ctrl-C (SIGINT) mid-study: exit 130, the finished rows kept, every process the study
+    started gone; --resume then runs only the rest."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    study_file = tmp_path / "long.yaml"
+    study_file.write_text(TINY.format(scenario=DEFAULT_SCENARIO, scalings="10.16").replace(
+        "seeds: 2", "seeds: 12").replace("duration: 0.3", "duration: 1.5"))
+    out = tmp_path / "out"
+    command = [sys.executable, "-m", "corobot_drake.study", str(study_file), "--out", str(out),
+               "--workers", "1", "--quiet"]
+    study = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        deadline = time.monotonic() + 90
+        while not ((out / "runs.csv").exists() and len(rows(out / "runs.csv")) >= 2):
+            assert time.monotonic() < deadline and study.poll() is None, "no rows written"
+            time.sleep(0.2)
+        started = _descendants(study.pid)
+        study.send_signal(signal.SIGINT)
+        _, err = study.communicate(timeout=60)
+    finally:
+        if study.poll() is None:
+            study.kill()
+    assert study.returncode == 130, err
+    assert "--resume" in err
+    kept = rows(out / "runs.csv")
+    assert 2 <= len(kept) < 12 and all(r["status"] == "ok" for r in kept)
+    time.sleep(1.0)
+    assert not [pid for pid in started if _alive(pid)]  # Ray's processes went with it
+    done = subprocess.run([*command, "--resume"], capture_output=True, text=True, timeout=180)
+    assert done.returncode == 0, done.stderr
+    resumed = rows(out / "runs.csv")
+    assert [r["run"] for r in resumed] == [str(i) for i in range(12)]
+    assert [r["wall_seconds"] for r in resumed[:len(kept)]] == [r["wall_seconds"] for r in kept]
