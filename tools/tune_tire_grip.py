@@ -1,22 +1,8 @@
 """Sweeps the wheel contact parameters and recommends a setting (SPEC "Tuning ... by hand").
 
-For each setting (friction, hydroelastic modulus, mesh resolution, Hunt-Crossley dissipation,
-motor effort limit, plant time step, contact approximation; one changed at a time from the
-current defaults), headless and physics only (no camera, no IR), it measures:
-
-- spin: the yaw rate spinning in place at 5 rad/s wheel speed, as a ratio of the
-  isotropic-Coulomb prediction b u / (a^2 + b^2) (a half wheelbase, b half track, u rim speed);
-- jitter while spinning: std of the chassis' vertical velocity and of its roll and pitch rates;
-- max tilt driving at full power into the giant box forwards and backwards (a flip is > 20 deg);
-- top speed at full power (the MotorTorqueScaling as shipped);
-- real-time factor of all those runs: simulated s per CPU s of this process (the machine is
-  shared: CPU time is steadier than wall time, which is also given).
-
-Writes a CSV, a markdown table and a plot (to --out), and names the recommended setting: no flip
-and spin within 5% of the prediction, smooth (vertical velocity std < 1 mm/s, roll and pitch
-rate std < 1 deg/s), then the fastest (within 15%, the run-to-run noise here, the smoother wins).
-Then it checks the recommended contact at 1, 2 and 5 ms. The measurements and the choice are
-`corobot_drake.analysis.tire_grip`.
+What each setting is measured on and how the recommendation is chosen:
+`corobot_drake.analysis.tire_grip` (its docstring). Writes a CSV, a markdown table and a plot
+(to --out), names the recommended setting, then checks its contact at 1, 2 and 5 ms.
 
 Usage: python tools/tune_tire_grip.py [--quick] [--out out/tire_grip]
 """

@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import Union
 
 from pydrake.common.schema import Transform
-from pydrake.common.yaml import yaml_dump_typed, yaml_load_typed
+from pydrake.common.yaml import yaml_dump_typed
 from pydrake.multibody.plant import MultibodyPlantConfig
 from pydrake.systems.analysis import SimulatorConfig
 from pydrake.systems.sensors import CameraConfig
@@ -279,32 +279,36 @@ class ScenarioError(Exception):
         self.source, self.field, self.line = source, field, line
 
 
+def one_line(error: BaseException) -> str:
+    """An exception's message as one line (its type's name when it has none)."""
+    return (str(error).strip() or type(error).__name__).splitlines()[0]
+
+
+def read_text(path: str | Path) -> str:
+    """A YAML file's text; ScenarioError (one line) when it cannot be read."""
+    try:
+        return Path(path).read_text()
+    except OSError as e:
+        raise ScenarioError(str(path), "", f"cannot read the file ({e.strerror})") from None
+
+
 def load_scenario(filename: str | Path | None = None, *, data: str | None = None,
                   overrides: list[str] = (), defaults: Scenario | None = None) -> Scenario:
     """Reads a scenario file and/or YAML text, then each override merged on top.
 
     Raises ScenarioError (one line: file, line, field, problem) for anything wrong.
     """
-    from corobot_drake.config.validate import LayerChecks  # it imports this schema
+    from corobot_drake.config.validate import load_layer  # it imports this schema
 
     scenario = defaults or Scenario()
     layers = []
     if filename is not None:
-        path = Path(filename)
-        try:
-            layers.append((str(path), path.read_text()))
-        except OSError as e:
-            raise ScenarioError(str(path), "", f"cannot read the file ({e.strerror})") from None
+        layers.append((str(filename), read_text(filename)))
     if data is not None:
         layers.append(("<scenario text>", data))
     layers += [("--override", text) for text in overrides]
     for source, text in layers:
-        checks = LayerChecks(source, text)  # the YAML against the schema, with lines
-        try:
-            scenario = yaml_load_typed(schema=Scenario, data=text, defaults=scenario,
-                                       retain_map_defaults=True)
-        except Exception as e:  # the pre-check missed it: still one clear line
-            raise ScenarioError(source, "", (str(e) or type(e).__name__).splitlines()[0]) from None
+        scenario, checks = load_layer(source, text, Scenario, scenario)
         checks.validate(scenario)  # what the types cannot say
     return scenario
 

@@ -23,6 +23,7 @@ from typing import Union
 import numpy as np
 import yaml
 from pydrake.common import pretty_class_name
+from pydrake.common.yaml import yaml_load_typed
 from pydrake.geometry import RenderEngineGlParams, RenderEngineVtkParams
 
 from corobot_drake.config import scenario as sc
@@ -416,3 +417,16 @@ class LayerChecks:
                       f"must be >= 0 m and finite; got {c.change_threshold}")
         if not c.noise_std >= 0.0:
             self.fail(f"{path}.noise_std", f"must be >= 0 V; got {c.noise_std}")
+
+
+def load_layer(source: str, text: str, schema, defaults=None):
+    """One YAML layer checked against `schema` (errors with file and line), then loaded over
+    `defaults` (a schema instance; None: the schema's defaults). Returns the value and the
+    layer's `LayerChecks`, whose `fail` names a field's line for the checks of meaning."""
+    checks = LayerChecks(source, text, schema)
+    try:
+        value = yaml_load_typed(schema=schema, data=text, defaults=defaults,
+                                retain_map_defaults=True)
+    except Exception as e:  # the pre-check missed it: still one clear line
+        raise sc.ScenarioError(source, "", sc.one_line(e)) from None
+    return value, checks

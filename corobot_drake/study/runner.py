@@ -11,7 +11,7 @@ import time
 from collections import OrderedDict
 from pathlib import Path
 
-from corobot_drake.config.scenario import load_scenario
+from corobot_drake.config.scenario import load_scenario, one_line
 from corobot_drake.simulation import Simulation, diagram_key, quiet_drake_warnings
 from corobot_drake.study.metrics import measure
 from corobot_drake.study.spec import Run, Study
@@ -20,11 +20,6 @@ CACHE_SIZE = 3
 """Simulations a worker keeps built (each holds a diagram and its Context)."""
 CHECK_PERIOD = 0.1
 """s of simulated time between checks whether every command has ended (`until: commands`)."""
-
-
-def one_line(error: BaseException) -> str:
-    text = str(error).strip() or type(error).__name__
-    return text.splitlines()[0]
 
 
 def run_scenario(study: Study, scenario_file: Path, run: Run):

@@ -22,10 +22,9 @@ import math
 from pathlib import Path
 
 import numpy as np
-from pydrake.common.yaml import yaml_load_typed
 
-from corobot_drake.config.scenario import ScenarioError
-from corobot_drake.config.validate import LayerChecks
+from corobot_drake.config.scenario import read_text
+from corobot_drake.config.validate import LayerChecks, load_layer
 from corobot_drake.study.programs import DriveTest
 
 UNTIL = ("duration", "commands")
@@ -104,22 +103,10 @@ class Run:
         return [*texts, json.dumps({"random_seed": self.seed})]
 
 
-class StudyError(ScenarioError):
-    """A bad study file: one line naming the file, the line and the field."""
-
-
 def load_study(filename: str | Path) -> Study:
-    """Reads and checks a study file; StudyError (one line) for anything wrong."""
-    path = Path(filename)
-    try:
-        text = path.read_text()
-    except (OSError, UnicodeDecodeError) as e:
-        raise StudyError(str(path), "", f"cannot read the file ({e})") from None
-    checks = LayerChecks(str(path), text, schema=Study)
-    try:
-        study = yaml_load_typed(schema=Study, data=text)
-    except Exception as e:  # the pre-check missed it: still one clear line
-        raise StudyError(str(path), "", (str(e) or type(e).__name__).splitlines()[0]) from None
+    """Reads and checks a study file, as a scenario is read; ScenarioError (one line with the
+    file, the line and the field) for anything wrong."""
+    study, checks = load_layer(str(filename), read_text(filename), Study)
     _validate(study, checks)
     return study
 
