@@ -327,10 +327,21 @@ class Robot:
 class Simulation:
     """A scenario built into a Drake diagram with its Simulator and Context."""
 
-    def __init__(self, scenario: sc.Scenario, meshcat=None, save_camera=None):
-        """`save_camera`: a directory; each robot's camera frames go to `<dir>/<robot>/`."""
+    def __init__(self, scenario: sc.Scenario, meshcat=None, save_camera=None, *,
+                 record: bool = False, foxglove=None):
+        """`save_camera`: a directory; each robot's camera frames go to `<dir>/<robot>/`.
+        `record`: keep a Meshcat replay of the run (`save_recording`; without `meshcat`, an
+        offline one records without a browser). `foxglove`: a `foxglove.Context` to publish
+        the run's topics on (`recording.publishers`; its sinks: an MCAP file, a live server)."""
         self.scenario = scenario
-        self.station: Station = build_station(scenario, meshcat, save_camera)
+        self._record_live: bool | None = None
+        """Recording: True with a browser's Meshcat (frames shown live), False offline."""
+        if record:
+            from corobot_drake.recording.meshcat_html import offline_meshcat
+
+            self._record_live = meshcat is not None
+            meshcat = meshcat or offline_meshcat()
+        self.station: Station = build_station(scenario, meshcat, save_camera, foxglove=foxglove)
         self.simulator = Simulator(self.station.diagram)
         ApplySimulatorConfig(scenario.simulator_config, self.simulator)
         self.context = self.simulator.get_mutable_context()
@@ -349,6 +360,10 @@ class Simulation:
             self.simulator.set_monitor(self._teleport_monitor)
         else:
             self.simulator.clear_monitor()
+        if self._record_live is not None:  # before Initialize: its publish is the first frame
+            from corobot_drake.recording.meshcat_html import start_recording
+
+            start_recording(self.station.meshcat, live=self._record_live)
         self.simulator.Initialize()
         self._wall_seconds = 0.0
 
@@ -391,8 +406,10 @@ class Simulation:
 
     @classmethod
     def from_file(cls, filename: str | Path, overrides: list[str] = (), meshcat=None,
-                  save_camera=None):
-        return cls(sc.load_scenario(filename, overrides=overrides), meshcat, save_camera)
+                  save_camera=None, **kwargs):
+        """`kwargs`: `record`, `foxglove`, as the constructor's."""
+        return cls(sc.load_scenario(filename, overrides=overrides), meshcat, save_camera,
+                   **kwargs)
 
     @property
     def time(self) -> float:
@@ -482,6 +499,19 @@ class Simulation:
     def save_scenario(self, filename: str | Path) -> None:
         """Writes `saved_scenario()` as a scenario YAML file."""
         sc.save_scenario(self.saved_scenario(), filename)
+
+    def save_recording(self, path: str | Path) -> int:
+        """Writes the run so far as a self-contained Meshcat replay (HTML with its timeline;
+        `recording.meshcat_html`) and carries on recording; returns the file's size in bytes.
+        Needs `Simulation(..., record=True)`."""
+        from corobot_drake.recording.meshcat_html import start_recording, write_recording
+
+        if self._record_live is None:
+            raise RuntimeError("this simulation is not recording: build it with record=True "
+                               "(--record FILE.html)")
+        size = write_recording(self.station.meshcat, path)
+        start_recording(self.station.meshcat, live=self._record_live, keep=True)
+        return size
 
     def advance(self, seconds: float) -> None:
         self.advance_to(self.time + seconds)

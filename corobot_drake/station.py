@@ -167,9 +167,12 @@ def _add_robot(plant: MultibodyPlant, name: str, robot: sc.Robot):
     return instance, chassis, joints
 
 
-def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None) -> Station:
+def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None, foxglove=None
+                  ) -> Station:
     """Builds the whole diagram for `scenario`; with `meshcat`, adds its visualizers; with
-    `save_camera` (a directory), each robot's camera frames are saved there as PNG."""
+    `save_camera` (a directory), each robot's camera frames are saved there as PNG; with
+    `foxglove` (a `foxglove.Context`), the publishers of the run's Foxglove topics
+    (`recording.publishers`)."""
     builder = DiagramBuilder()
     plant, scene_graph = AddMultibodyPlant(scenario.plant_config, builder)
     bodies = _add_world(plant, scenario.world)
@@ -227,6 +230,10 @@ def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None) -> Stat
             builder, plant, scene_graph, name, robot.ir_sensors, model_instance=instance,
             random_seed=scenario.random_seed, meshcat=meshcat)
 
+    if foxglove is not None:
+        from corobot_drake.recording.publishers import add_foxglove_topics
+
+        add_foxglove_topics(builder, plant, scene_graph, robots, scenario, foxglove)
     builder.ExportOutput(plant.get_body_poses_output_port(), "body_poses")
     builder.ExportOutput(scene_graph.get_query_output_port(), "query_object")
     if meshcat is not None:

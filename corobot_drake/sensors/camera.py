@@ -277,6 +277,12 @@ class CameraFrameSaver(LeafSystem):
         self.frames_saved += 1
 
 
+def frame_look_period(config: CameraConfig, step: float) -> float:
+    """s: how often a frame's reader (`CameraFrameSaver`, a publisher) looks for a new frame:
+    every plant step (no extra Simulator stops), or every frame if frames come faster."""
+    return step if step > 0 and config.fps * step <= 1.0 + TICK_TOLERANCE else 1.0 / config.fps
+
+
 def events_near_steps(config: CameraConfig, step: float, ticks: int = 1000) -> bool:
     """Whether any of the first `ticks` captures (or outputs, `output_delay` later) of an
     asynchronous camera comes within NEAR_STEP of a plant step of `step` s."""
@@ -312,8 +318,7 @@ def add_camera(builder, plant, scene_graph, robot: str, instance, config: Camera
     body, X_AB = mount_frame(plant, instance, config.X_PB)
     frame_id = plant.GetBodyFrameIdOrThrow(body.index())
     delay = 0.0
-    # The saver looks at every plant step, or at every frame if frames come faster.
-    look = step if step > 0 and config.fps * step <= 1.0 + TICK_TOLERANCE else 1.0 / config.fps
+    look = frame_look_period(config, step)
     if config.output_delay > 0 and renderers.get(config.renderer_name) == "RenderEngineGl":
         delay = config.output_delay
         if step > 0 and events_near_steps(config, step):

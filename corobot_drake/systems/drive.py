@@ -118,8 +118,10 @@ class CommandSource(LeafSystem):
         - command_status
         output_ports:
         - request
+        - command_log
 
-    Output `request` (DriveRequest, abstract). Input `command_status` (CommandStatus,
+    Output `request` (DriveRequest, abstract); output `command_log` (tuple of CommandRecord,
+    abstract: every command so far, with the latest reported status recorded). Input `command_status` (CommandStatus,
     abstract, from `motion.MotionCommands`; may be left unconnected, then no completing
     command is ever reported ended): how completing commands end, recorded in the log.
     Abstract state `CommandSourceState`. Every `period` s it records that status and advances
@@ -141,6 +143,10 @@ class CommandSource(LeafSystem):
             {self.abstract_state_ticket(self._state_index)})
         self._status_port = self.DeclareAbstractInputPort("command_status",
                                                           Value(CommandStatus()))
+        self.DeclareAbstractOutputPort(
+            "command_log", lambda: Value(()),
+            lambda context, output: output.set_value(self.current_state(context).log),
+            {self.abstract_state_ticket(self._state_index), self.all_input_ports_ticket()})
         self.DeclarePeriodicUnrestrictedUpdateEvent(period, 0.0, self._update)
 
     def script(self, context) -> tuple:

@@ -1,0 +1,51 @@
+"""The run as a Meshcat replay: Drake's Meshcat recording written as static HTML.
+
+Drake's visualizers (`MeshcatVisualizer`, `ContactVisualizer`, the inertia layer) stamp each
+transform and property they send with the simulation time; while a Meshcat is recording
+(`Meshcat.StartRecording`) it keeps them as frames of a `MeshcatAnimation` at
+`RECORDING_FPS`. `write_recording` publishes that animation to the Meshcat scene and writes
+`Meshcat.StaticHtml()`: the scene, its meshes and textures, Meshcat's JavaScript and the
+animation in one file that a browser opens offline, with the Animations panel's play/pause
+and time slider. Objects drawn without a time stamp (the IR rays, `/ir`) are not animated:
+the file shows them as they were at the end.
+
+The recording lives in the Meshcat object, beside the Context, like a file being written:
+`Simulation.reset` starts it again.
+"""
+
+from pathlib import Path
+
+from pydrake.geometry import Meshcat, MeshcatParams
+
+from corobot_drake.station import visualization_config
+
+RECORDING_FPS = 1.0 / visualization_config().publish_period
+"""Animation frames per second: one per visualizer publish (64 Hz)."""
+
+
+def offline_meshcat() -> Meshcat:
+    """A Meshcat for a run without a browser (`--headless --record`): it listens on the
+    loopback interface only (Meshcat always serves; nobody needs to connect)."""
+    return Meshcat(MeshcatParams(host="localhost", show_stats_plot=False))
+
+
+def start_recording(meshcat: Meshcat, live: bool, keep: bool = False) -> None:
+    """Starts the recording, dropping earlier frames unless `keep` (then it carries on after
+    `write_recording`). `live`: also send each frame to the browser as it is made (False when
+    nobody watches: recording only)."""
+    if not keep:
+        meshcat.DeleteRecording()
+    meshcat.StartRecording(frames_per_second=RECORDING_FPS,
+                           set_visualizations_while_recording=live)
+
+
+def write_recording(meshcat: Meshcat, path: str | Path) -> int:
+    """Stops the recording, publishes it as the scene's animation and writes the scene as a
+    self-contained HTML file at `path`; returns its size in bytes. The animation plays once
+    (Meshcat's Animations panel replays it and scrubs through it). The recording stays
+    stopped: `start_recording(..., keep=True)` carries it on."""
+    meshcat.StopRecording()
+    meshcat.PublishRecording()
+    html = meshcat.StaticHtml()
+    Path(path).write_text(html, encoding="utf-8")
+    return len(html.encode("utf-8"))

@@ -1,0 +1,440 @@
+"""The LeafSystems that publish the run's Foxglove topics (`topics.py`) on a `foxglove.Context`.
+
+Each publishes on periodic publish events from its input ports alone: what to publish at time
+t is decided from the Context (an event is published by the first look after it), so the
+systems keep no memory and a reset or replayed Context publishes the same messages. The
+channels are sinks, like a file being written: the Context's sinks (an MCAP file, a live
+WebSocket server) get every message. A publish event at t runs before the updates at t, so a
+look at t sees what happened in [t - period, t): the event's own time stamps the message and is
+its log time. What happens at the last instant of a run (after the last look) is not published.
+
+`add_foxglove_topics` adds them all to a station's builder.
+"""
+
+import numpy as np
+from foxglove.channels import (
+    CameraCalibrationChannel,
+    CompressedImageChannel,
+    FrameTransformsChannel,
+    JointStatesChannel,
+    LogChannel,
+    OdometryChannel,
+    SceneUpdateChannel,
+)
+from foxglove.messages import (
+    CameraCalibration,
+    CompressedImage,
+    CubePrimitive,
+    CylinderPrimitive,
+    Duration,
+    FrameTransforms,
+    JointState,
+    JointStates,
+    Log,
+    LogLevel,
+    Odometry,
+    SceneEntity,
+    SceneUpdate,
+    SpherePrimitive,
+)
+from pydrake.common.value import AbstractValue, Value
+from pydrake.geometry import Box, Cylinder, Rgba, Sphere
+from pydrake.math import RigidTransform
+from pydrake.multibody.math import SpatialVelocity
+from pydrake.multibody.tree import BodyIndex
+from pydrake.systems.framework import LeafSystem
+from pydrake.systems.sensors import ImageRgba8U, RgbdSensorAsync
+
+from corobot_drake.config.poses import mount_frame
+from corobot_drake.model import dimensions as dim
+from corobot_drake.recording import topics as tp
+from corobot_drake.sensors.camera import frame_look_period
+from corobot_drake.sensors.ir_models import SharpGP2D12
+from corobot_drake.sensors.ir_sensor import DISTANCE, SCAN_TIME, TRUE_DISTANCE, scan_state_layout
+
+STATE_PERIOD = 0.02
+"""s: /tf, /joint_states, /odom, /drive_state and /commands are published at 50 Hz (a multiple
+of the plant steps used here, 1 to 10 ms, so the looks add no Simulator stops)."""
+SCENE_PERIOD = 1.0
+"""s: /scene (the shapes) again every second, for viewers that connect late."""
+JPEG_QUALITY = 90
+TOLERANCE = 1e-9
+"""s: an event this close to a look counts as at it (float sums of periods)."""
+
+
+def in_window(x: float, t: float, period: float) -> bool:
+    """Whether an event at `x` (s) happened in [t - period, t): the look at t publishes it."""
+    return t - period - TOLERANCE <= x < t - TOLERANCE
+
+
+class TransformPublisher(LeafSystem):
+    """/tf: every body's pose, each in its parent's frame, and the sensors' fixed mounts.
+
+    .. pydrake_system::
+
+        name: TransformPublisher
+        input_ports:
+        - body_poses
+
+    Input `body_poses` (the plant's, abstract list of X_WB by body index). `bodies`: (body
+    index, frame name, parent body index or None for the world); `parents`: {body index:
+    frame name} of those parents; `mounts`: (parent frame, child frame, X_PC) fixed
+    transforms. Published every `period` s as one foxglove.FrameTransforms."""
+
+    def __init__(self, context, bodies: list, mounts: list, period: float = STATE_PERIOD):
+        super().__init__()
+        self._bodies = bodies
+        self._frames = {index: name for index, name, _ in bodies}
+        self._mounts = mounts
+        self._poses = self.DeclareAbstractInputPort("body_poses",
+                                                    AbstractValue.Make([RigidTransform()]))
+        self._channel = FrameTransformsChannel("/tf", context=context)
+        self.DeclarePeriodicPublishEvent(period, 0.0, self._publish)
+
+    def _publish(self, context):
+        t, X_W = context.get_time(), self._poses.Eval(context)
+        transforms = []
+        for index, name, parent in self._bodies:
+            if parent is None:
+                transforms.append(tp.frame_transform(t, "world", name, X_W[index]))
+            else:
+                transforms.append(tp.frame_transform(
+                    t, self._frames[parent], name, X_W[parent].InvertAndCompose(X_W[index])))
+        transforms += [tp.frame_transform(t, p, c, X) for p, c, X in self._mounts]
+        self._channel.log(FrameTransforms(transforms=transforms),
+                          log_time=tp.nanoseconds(t))
+
+
+class ScenePublisher(LeafSystem):
+    """/scene: the bodies' shapes as foxglove.SceneUpdate entities, each locked to its body's
+    frame (from /tf), published every `period` s. No inputs: the shapes are fixed."""
+
+    def __init__(self, context, entities: list, period: float = SCENE_PERIOD):
+        super().__init__()
+        self._entities = entities
+        self._channel = SceneUpdateChannel("/scene", context=context)
+        self.DeclarePeriodicPublishEvent(period, 0.0, self._publish)
+
+    def _publish(self, context):
+        t = context.get_time()
+        self._channel.log(SceneUpdate(entities=[e(t) for e in self._entities]),
+                          log_time=tp.nanoseconds(t))
+
+
+class RobotStatePublisher(LeafSystem):
+    """One robot's /joint_states, /odom, /drive_state and /commands.
+
+    .. pydrake_system::
+
+        name: RobotStatePublisher
+        input_ports:
+        - body_poses
+        - body_spatial_velocities
+        - wheel_state
+        - drive_state
+        - command_log
+
+    Inputs: `body_poses` and `body_spatial_velocities` (the plant's, abstract lists by body
+    index; the chassis is `chassis_index`), `wheel_state` (8: the four axles' angles, rad, then
+    rates, rad/s, `dimensions.WHEEL_NAMES` order), `drive_state` (abstract
+    `odometry.DriveState`), `command_log` (abstract tuple of `drive.CommandRecord`, the
+    CommandSource's). Every `period` s: the joint states, the odometry (pose in the world,
+    velocity in base_link), the drive state, and a foxglove.Log line for each command that
+    started or ended since the previous look."""
+
+    def __init__(self, context, names: tp.RobotNames, chassis_index: int,
+                 period: float = STATE_PERIOD):
+        super().__init__()
+        self._names, self._chassis, self._period = names, int(chassis_index), period
+        self._poses = self.DeclareAbstractInputPort("body_poses",
+                                                    AbstractValue.Make([RigidTransform()]))
+        self._velocities = self.DeclareAbstractInputPort(
+            "body_spatial_velocities", AbstractValue.Make([SpatialVelocity()]))
+        self._wheels = self.DeclareVectorInputPort("wheel_state", 2 * len(dim.WHEEL_NAMES))
+        self._drive = self.DeclareAbstractInputPort("drive_state", Value(object()))
+        self._log = self.DeclareAbstractInputPort("command_log", Value(()))
+        self._joint_names = [names.frame(f"{w}_axle") for w in dim.WHEEL_NAMES]
+        self._joint_channel = JointStatesChannel(names.topic("joint_states"), context=context)
+        self._odom_channel = OdometryChannel(names.topic("odom"), context=context)
+        self._drive_channel = tp.json_channel(names.topic("drive_state"),
+                                              tp.DRIVE_STATE_SCHEMA, context)
+        self._command_channel = LogChannel(names.topic("commands"), context=context)
+        self.DeclarePeriodicPublishEvent(period, 0.0, self._publish)
+
+    def _publish(self, context):
+        t = context.get_time()
+        ns = tp.nanoseconds(t)
+        x = self._wheels.Eval(context)
+        n = len(dim.WHEEL_NAMES)
+        self._joint_channel.log(JointStates(timestamp=tp.stamp(t), joints=[
+            JointState(name=name, position=float(x[i]), velocity=float(x[n + i]))
+            for i, name in enumerate(self._joint_names)]), log_time=ns)
+        self._odom_channel.log(self.odometry(context), log_time=ns)
+        self._drive_channel.log(tp.drive_state_message(self._drive.Eval(context)), log_time=ns)
+        for when, message, level in self.command_events(context):
+            self._command_channel.log(Log(timestamp=tp.stamp(when), level=level,
+                                          message=message, name=self._names.robot),
+                                      log_time=tp.nanoseconds(when))
+
+    def odometry(self, context) -> Odometry:
+        """The chassis pose in the world and its velocity in base_link (ROS's nav_msgs/Odometry:
+        twist in the child frame)."""
+        X_WB = self._poses.Eval(context)[self._chassis]
+        V_WB = self._velocities.Eval(context)[self._chassis]
+        R_BW = X_WB.rotation().inverse()
+        return Odometry(timestamp=tp.stamp(context.get_time()), frame_id="world",
+                        body_frame_id=self._names.body_frame("chassis"), pose=tp.pose_of(X_WB),
+                        linear_velocity=tp.vector3(R_BW @ V_WB.translational()),
+                        angular_velocity=tp.vector3(R_BW @ V_WB.rotational()))
+
+    def command_events(self, context) -> list[tuple[float, str, LogLevel]]:
+        """(time, line, level) of each command start and end since the previous look, in time
+        order (a Wait's end is its scheduled end)."""
+        t, events = context.get_time(), []
+        for record in self._log.Eval(context):
+            if in_window(record.start_time, t, self._period):
+                events.append((record.start_time, tp.command_event(record, False),
+                               LogLevel.Info))
+            if record.end_time is not None and in_window(record.end_time, t, self._period):
+                level = LogLevel.Warning if record.status == "failed" else LogLevel.Info
+                events.append((record.end_time, tp.command_event(record, True), level))
+        return sorted(events, key=lambda e: e[0])
+
+
+class IrPublisher(LeafSystem):
+    """One IR sensor's scans: /ir/<sensor> (corobot.Range, JSON) and /ir/<sensor>/rays
+    (foxglove.SceneUpdate: the rays in the world).
+
+    .. pydrake_system::
+
+        name: IrPublisher
+        input_ports:
+        - scan_state
+
+    Input `scan_state` (the IrSensor's, `ir_sensor.scan_state_layout`). It looks once per
+    scan period, at the scans' times, and publishes the scan taken since the previous look."""
+
+    def __init__(self, context, names: tp.RobotNames, sensor: str, sensor_system):
+        super().__init__()
+        config = sensor_system.config
+        self._names, self._sensor = names, sensor
+        self._period = sensor_system.period
+        self._fov = config.dispersion_cone_angle
+        self._min = SharpGP2D12.min_distance if config.model == "sharp_gp2d12" else 0.0
+        self._max = config.maximum_range
+        size, self._origin, self._ends, self._hits = scan_state_layout(sensor_system.num_rays)
+        self._scan = self.DeclareVectorInputPort("scan_state", size)
+        self._range_channel = tp.json_channel(names.topic(f"ir/{sensor}"), tp.RANGE_SCHEMA,
+                                              context)
+        self._rays_channel = SceneUpdateChannel(names.topic(f"ir/{sensor}/rays"),
+                                                context=context)
+        # The scans' own schedule (period, offset period): a look and a scan at one time are
+        # at the same float time, the look first (a look scheduled apart could fall an ulp
+        # after a scan and miss the scan before it).
+        self.DeclarePeriodicPublishEvent(self._period, self._period, self._publish)
+
+    def _publish(self, context):
+        s = self._scan.Eval(context)
+        when = float(s[SCAN_TIME])
+        if not in_window(when, context.get_time(), self._period):
+            return  # also NaN: no scan yet
+        ns = tp.nanoseconds(when)
+        self._range_channel.log(tp.range_message(
+            when, self._names.ir_frame(self._sensor), self._fov, self._min, self._max,
+            s[DISTANCE], s[TRUE_DISTANCE]), log_time=ns)
+        ends = np.asarray(s[self._ends]).reshape(-1, 3)
+        entity = SceneEntity(timestamp=tp.stamp(when), frame_id="world",
+                             id=self._names.ir_frame(self._sensor),
+                             lines=[tp.ray_lines(s[self._origin], ends, s[self._hits])])
+        self._rays_channel.log(SceneUpdate(entities=[entity]), log_time=ns)
+
+
+class CameraPublisher(LeafSystem):
+    """One camera's frames: /camera/image/compressed (foxglove.CompressedImage, JPEG) and
+    /camera/camera_info (foxglove.CameraCalibration), stamped with the capture time.
+
+    .. pydrake_system::
+
+        name: CameraPublisher
+        input_ports:
+        - rgb_image
+        - image_time
+
+    Inputs `rgb_image` (abstract ImageRgba8U) and `image_time` (1, s: its capture; NaN before
+    the first), the camera's outputs. It looks every `look` s and publishes a frame that came
+    out (capture + `delay`) since the previous look, as `camera.CameraFrameSaver` does."""
+
+    def __init__(self, context, names: tp.RobotNames, config, look: float, delay: float):
+        super().__init__()
+        self._names, self._look, self._delay = names, float(look), float(delay)
+        self._image = self.DeclareAbstractInputPort(
+            "rgb_image", AbstractValue.Make(ImageRgba8U(config.width, config.height)))
+        self._image_time = self.DeclareVectorInputPort("image_time", 1)
+        self._image_channel = CompressedImageChannel(names.topic("camera/image/compressed"),
+                                                     context=context)
+        self._info_channel = CameraCalibrationChannel(names.topic("camera/camera_info"),
+                                                      context=context)
+        self._frame = names.frame(tp.CAMERA_FRAME)
+        fx, fy = config.focal_x(), config.focal_y()
+        cx, cy = config.principal_point()
+        self._calibration = dict(
+            frame_id=self._frame, width=config.width, height=config.height,
+            distortion_model="plumb_bob", D=[0.0] * 5, K=[fx, 0, cx, 0, fy, cy, 0, 0, 1],
+            R=[1.0, 0, 0, 0, 1, 0, 0, 0, 1], P=[fx, 0, cx, 0, 0, fy, cy, 0, 0, 0, 1, 0])
+        self.DeclarePeriodicPublishEvent(self._look, 0.0, self._publish)
+
+    def _publish(self, context):
+        captured = float(self._image_time.Eval(context)[0])
+        if not in_window(captured + self._delay, context.get_time(), self._look):
+            return  # also NaN: no frame yet
+        ns = tp.nanoseconds(captured)
+        self._image_channel.log(CompressedImage(
+            timestamp=tp.stamp(captured), frame_id=self._frame, format="jpeg",
+            data=jpeg(self._image.Eval(context))), log_time=ns)
+        self._info_channel.log(CameraCalibration(timestamp=tp.stamp(captured),
+                                                 **self._calibration), log_time=ns)
+
+
+def jpeg(image: ImageRgba8U) -> bytes:
+    import io
+
+    from PIL import Image
+
+    out = io.BytesIO()
+    Image.fromarray(np.array(image.data[:, :, :3])).save(out, format="JPEG",
+                                                          quality=JPEG_QUALITY)
+    return out.getvalue()
+
+
+# --- wiring -------------------------------------------------------------------------------
+
+
+def _body_frames(plant, robots: dict, namespaced: bool) -> dict:
+    """{body index: (frame name, parent body index or None)}: a robot's chassis and every other
+    body in the world, a robot's other links in its chassis (`topics` names them)."""
+    robot_of = {int(parts.model_instance): parts for parts in robots.values()}
+    frames = {}
+    for i in range(1, plant.num_bodies()):
+        body = plant.get_body(BodyIndex(i))
+        parts = robot_of.get(int(body.model_instance()))
+        if parts is not None:
+            names = tp.RobotNames(parts.name, namespaced)
+            parent = None if body.index() == parts.chassis.index() else int(parts.chassis.index())
+            frames[i] = (names.body_frame(body.name()), parent)
+        else:
+            model = plant.GetModelInstanceName(body.model_instance())
+            frames[i] = (body.name() if body.name() == model else f"{model}/{body.name()}", None)
+    return frames
+
+
+def _primitive(shape, X_BG: RigidTransform, rgba):
+    """(kind, foxglove primitive) of a Box, Cylinder or Sphere; None for other shapes."""
+    pose, c = tp.pose_of(X_BG), tp.color(rgba)
+    if isinstance(shape, Box):
+        return "cubes", CubePrimitive(pose=pose, size=tp.vector3(shape.size()), color=c)
+    if isinstance(shape, Cylinder):
+        d = 2 * shape.radius()
+        return "cylinders", CylinderPrimitive(pose=pose, size=tp.vector3([d, d, shape.length()]),
+                                              bottom_scale=1.0, top_scale=1.0, color=c)
+    if isinstance(shape, Sphere):
+        d = 2 * shape.radius()
+        return "spheres", SpherePrimitive(pose=pose, size=tp.vector3([d, d, d]), color=c)
+    return None
+
+
+COLLISION_COLOR = (0.6, 0.6, 0.65, 1.0)
+"""A body drawn from its collision shapes (its visuals are meshes) is this grey."""
+
+
+def _scene_entities(plant, scene_graph, frames: dict) -> list:
+    """One entity maker per body with primitive shapes: its visual boxes, cylinders and spheres
+    in their colours, else (mesh visuals, as the robot's) its collision shapes in grey."""
+    inspector = scene_graph.model_inspector()
+    makers = []
+    for i, (frame, _) in [(0, ("world", None)), *frames.items()]:
+        body = plant.get_body(BodyIndex(i))
+        shapes: dict[str, list] = {}
+        for ids, colored in ((plant.GetVisualGeometriesForBody(body), True),
+                             (plant.GetCollisionGeometriesForBody(body), False)):
+            for gid in ids:
+                rgba = COLLISION_COLOR
+                if colored:
+                    props = inspector.GetIllustrationProperties(gid)
+                    rgba = props.GetPropertyOrDefault("phong", "diffuse",
+                                                      Rgba(*COLLISION_COLOR)).rgba
+                made = _primitive(inspector.GetShape(gid), inspector.GetPoseInFrame(gid), rgba)
+                if made is not None:
+                    shapes.setdefault(made[0], []).append(made[1])
+            if shapes:
+                break
+        if shapes:
+            makers.append(_entity_maker(frame, shapes))
+    return makers
+
+
+def _entity_maker(frame: str, shapes: dict):
+    def make(t: float) -> SceneEntity:
+        return SceneEntity(timestamp=tp.stamp(t), frame_id=frame, id=frame, frame_locked=True,
+                           lifetime=Duration(0, 0), **shapes)
+    return make
+
+
+def add_foxglove_topics(builder, plant, scene_graph, robots: dict, scenario, context) -> None:
+    """Adds the publishers of every topic (`topics.py`) for a station's plant and robots
+    ({name: station.RobotParts}, built from `scenario`), on the foxglove `context`."""
+    namespaced = len(robots) > 1
+    frames = _body_frames(plant, robots, namespaced)
+    mounts = []
+    for name, parts in robots.items():
+        names = tp.RobotNames(name, namespaced)
+        state = builder.AddNamedSystem(f"{name}.foxglove_state", RobotStatePublisher(
+            context, names, parts.chassis.index()))
+        builder.Connect(plant.get_body_poses_output_port(), state.GetInputPort("body_poses"))
+        builder.Connect(plant.get_body_spatial_velocities_output_port(),
+                        state.GetInputPort("body_spatial_velocities"))
+        builder.Connect(builder.GetSubsystemByName(f"{name}.wheel_state").get_output_port(),
+                        state.GetInputPort("wheel_state"))
+        builder.Connect(builder.GetSubsystemByName(f"{name}.drive_state").GetOutputPort(
+            "drive_state"), state.GetInputPort("drive_state"))
+        builder.Connect(parts.command_source.GetOutputPort("command_log"),
+                        state.GetInputPort("command_log"))
+        for sensor, system in parts.ir_sensors.items():
+            ir = builder.AddNamedSystem(f"{name}.foxglove_ir.{sensor}",
+                                        IrPublisher(context, names, sensor, system))
+            builder.Connect(system.GetOutputPort("scan_state"), ir.get_input_port())
+            mounts.append(_mount(plant, frames, names.ir_frame(sensor), mount_frame(
+                plant, parts.model_instance, system.config.X_PB)))
+        if parts.camera is not None:
+            mounts.append(_add_camera(builder, plant, frames, context, names, parts,
+                                      scenario.robots[name].camera))
+    tf = builder.AddNamedSystem("foxglove_tf", TransformPublisher(
+        context, [(i, f, p) for i, (f, p) in frames.items()], mounts))
+    builder.Connect(plant.get_body_poses_output_port(), tf.get_input_port())
+    builder.AddNamedSystem("foxglove_scene", ScenePublisher(
+        context, _scene_entities(plant, scene_graph, frames)))
+
+
+def _mount(plant, frames: dict, child: str, mount) -> tuple:
+    """(parent frame, child frame, X_PC) of a sensor mounted at `mount` = (body, X_BS)."""
+    body, X_BS = mount
+    parent = "world" if body.index() == plant.world_body().index() else frames[
+        int(body.index())][0]
+    return parent, child, X_BS
+
+
+def _add_camera(builder, plant, frames: dict, context, names, parts, config) -> tuple:
+    """Adds `<robot>.foxglove_camera` for the robot's camera (its `config`); returns the
+    camera frame's mount."""
+    camera = parts.camera
+    delay = config.output_delay if isinstance(camera, RgbdSensorAsync) else 0.0
+    publisher = builder.AddNamedSystem(f"{names.robot}.foxglove_camera", CameraPublisher(
+        context, names, config, frame_look_period(config, plant.time_step()), delay))
+    image = "color_image" if isinstance(camera, RgbdSensorAsync) else "rgb_image"
+    builder.Connect(camera.GetOutputPort(image), publisher.GetInputPort("rgb_image"))
+    builder.Connect(camera.GetOutputPort("image_time"), publisher.GetInputPort("image_time"))
+    return _mount(plant, frames, names.frame(tp.CAMERA_FRAME),
+                  mount_frame(plant, parts.model_instance, config.X_PB))
+
+
+__all__ = ["CameraPublisher", "IrPublisher", "RobotStatePublisher", "ScenePublisher",
+           "TransformPublisher", "add_foxglove_topics", "in_window"]
