@@ -4,6 +4,7 @@ Exit status: 0 on success, 2 for a bad scenario or bad arguments (one line on st
 """
 
 import argparse
+import contextlib
 import json
 import math
 import sys
@@ -19,6 +20,8 @@ from corobot_drake.simulation import Simulation, quiet_drake_warnings
 CAMERA_DELAY_SHARE = 0.9
 """--camera-rate HZ caps the cameras' output_delay at this share of a frame, 1/HZ."""
 
+DEFAULT_FOXGLOVE_PORT = 8765
+"""Foxglove's own default WebSocket port (`recording.foxglove_live.DEFAULT_PORT`)."""
 HEADLESS_DEFAULT_DURATION = 10.0
 PROGRESS_AFTER = 3.0
 """Wall-clock seconds after which a headless run starts printing progress."""
@@ -42,7 +45,7 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--port", type=int, default=50000,
                    help="--serve: TCP port (default 50000; 0 picks a free one)")
     p.add_argument("--host", default="127.0.0.1",
-                   help="--serve: address to listen on (default 127.0.0.1)")
+                   help="--serve, --foxglove: address to listen on (default 127.0.0.1)")
     p.add_argument("--save-camera", metavar="DIR",
                    help="write each robot's camera frames as PNG: "
                    "DIR/<robot>/frame_000000.png, ...")
@@ -55,6 +58,16 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--log", metavar="CSV",
                    help="write the run log (time, power, encoder ticks, pose; docs/tuning.md) "
                    "here; with several robots, one file per robot: CSV with the name inserted")
+    p.add_argument("--record", metavar="FILE.html",
+                   help="at the end, write the run as a Meshcat replay: one self-contained HTML "
+                   "file with a timeline, opens offline (also with --headless)")
+    p.add_argument("--mcap", metavar="FILE.mcap",
+                   help="write the run's Foxglove topics (/tf, /odom, /joint_states, /ir/..., "
+                   "/camera/image/compressed, /commands; README: Coming from ROS 2) as MCAP")
+    p.add_argument("--foxglove", nargs="?", type=int, const=DEFAULT_FOXGLOVE_PORT,
+                   metavar="PORT",
+                   help="serve the same topics live to Foxglove (WebSocket) on --host, in real "
+                   f"time (PORT default {DEFAULT_FOXGLOVE_PORT}; 0 picks a free one)")
     return p
 
 
@@ -102,6 +115,45 @@ def _write_logs(sim: Simulation, path: Path) -> None:
                         else path.with_name(f"{path.stem}.{name}{path.suffix}"))
 
 
+def _output_path_error(args) -> str | None:
+    """The first output flag (--record, --mcap) whose file cannot be written there: its one-line
+    error, or None."""
+    for flag in ("record", "mcap"):
+        path = getattr(args, flag)
+        if path is None:
+            continue
+        if Path(path).is_dir():
+            return f"--{flag}: {path} is a directory; give a file name"
+        if not Path(path).resolve().parent.is_dir():
+            return f"--{flag}: {path}: no such directory {Path(path).parent}"
+    if args.record and args.serve:
+        return "--record: not with --serve (the replay is written when a run ends)"
+    return None
+
+
+class _FoxgloveSinks(contextlib.ExitStack):
+    """--mcap and --foxglove: one foxglove Context with its MCAP file and live server,
+    closed (the file finished, the server stopped) on leaving the block."""
+
+    def __init__(self, args):
+        super().__init__()
+        self.context = None
+        if args.mcap is None and args.foxglove is None:
+            return
+        import foxglove
+
+        from corobot_drake.recording.foxglove_live import FoxgloveLive
+        from corobot_drake.recording.mcap_log import McapLog
+
+        self.context = foxglove.Context()
+        if args.foxglove is not None:  # first: a taken port leaves no file behind
+            live = self.enter_context(FoxgloveLive(args.foxglove, args.host, self.context))
+            print(f"Foxglove: {live.url}  (Foxglove: Open connection > Foxglove WebSocket)",
+                  flush=True)
+        if args.mcap is not None:
+            self.enter_context(McapLog(args.mcap, self.context))
+
+
 def _one_line_warning(message, category, filename, lineno, line=None) -> str:
     return f"warning: {message}\n"
 
@@ -127,21 +179,39 @@ def main(argv: list[str] | None = None) -> int:
             robot.camera.output_delay = min(robot.camera.output_delay,
                                             CAMERA_DELAY_SHARE / args.camera_rate)
     duration = args.duration if args.duration is not None else scenario.simulation_duration
+    if (problem := _output_path_error(args)) is not None:
+        print(f"error: {problem}", file=sys.stderr)
+        return 2
     quiet_drake_warnings()
+    try:
+        sinks = _FoxgloveSinks(args)
+    except (OSError, RuntimeError) as e:  # the port is taken, the file can't be made
+        print(f"error: --{'foxglove' if isinstance(e, RuntimeError) else 'mcap'}: "
+              f"{str(e).splitlines()[0]}", file=sys.stderr)
+        return 2
+    with sinks:
+        return _run(args, scenario, duration, sinks.context)
+
+
+def _run(args, scenario, duration: float, foxglove) -> int:
+    """Builds the simulation and runs it (served, in Meshcat or headless), then writes the
+    requested outputs; `foxglove`: the Context the run's topics go to (or None)."""
     if args.serve:  # Meshcat is made in the simulation thread (it must be used from there)
         from corobot_drake.serving.serve import serve, serve_camera_rate
 
         if args.camera_rate is None:
             serve_camera_rate(scenario)
-        return serve(lambda meshcat: Simulation(scenario, meshcat), host=args.host,
-                     port=args.port, meshcat=not args.headless, label=args.scenario)
+        return serve(lambda meshcat: Simulation(scenario, meshcat, foxglove=foxglove),
+                     host=args.host, port=args.port, meshcat=not args.headless,
+                     label=args.scenario)
     meshcat = None
     if not args.headless:
         from pydrake.geometry import StartMeshcat
 
         meshcat = StartMeshcat()
     try:
-        sim = Simulation(scenario, meshcat, save_camera=args.save_camera)
+        sim = Simulation(scenario, meshcat, save_camera=args.save_camera,
+                         record=args.record is not None, foxglove=foxglove)
     except (ValueError, RendererUnavailableError) as e:  # e.g. a non-finite number in a command
         print(f"error: {args.scenario}: {e}", file=sys.stderr)
         return 2
@@ -149,6 +219,8 @@ def main(argv: list[str] | None = None) -> int:
         if math.isinf(duration):
             duration = HEADLESS_DEFAULT_DURATION
         progress = _HeadlessProgress(duration)
+        if args.foxglove is not None:  # live: watched as it happens
+            sim.simulator.set_target_realtime_rate(1.0)
         sim.run(duration, progress=progress)
         progress.finish()
     else:
@@ -161,6 +233,8 @@ def main(argv: list[str] | None = None) -> int:
         Path(args.summary).write_text(json.dumps(summary, indent=2) + "\n")
     if args.save_scenario:
         sim.save_scenario(args.save_scenario)
+    if args.record:
+        sim.save_recording(args.record)
     return 0
 
 

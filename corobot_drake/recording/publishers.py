@@ -57,7 +57,8 @@ STATE_PERIOD = 0.02
 of the plant steps used here, 1 to 10 ms, so the looks add no Simulator stops)."""
 SCENE_PERIOD = 1.0
 """s: /scene (the shapes) again every second, for viewers that connect late."""
-JPEG_QUALITY = 90
+JPEG_QUALITY = 80
+"""PIL's JPEG quality (0-100) of the camera frames."""
 TOLERANCE = 1e-9
 """s: an event this close to a look counts as at it (float sums of periods)."""
 

@@ -7,7 +7,7 @@ as a ROS robot's; with several, each robot's are under its name (`/<robot>/odom`
 
 | topic | schema | what |
 |---|---|---|
-| `/tf` | foxglove.FrameTransforms | world -> base_link and each world body; base_link -> wheels, camera, IR sensors |
+| `/tf` | foxglove.FrameTransforms | world -> base_link, world bodies; base_link -> links, sensors |
 | `/scene` | foxglove.SceneUpdate | the bodies' shapes, locked to their frames |
 | `/joint_states` | foxglove.JointStates | the four wheel axles: angle (rad), rate (rad/s) |
 | `/odom` | foxglove.Odometry | the chassis in the world; velocity in base_link (ground truth) |
@@ -76,7 +76,7 @@ def json_channel(topic: str, schema: dict, context) -> Channel:
 
 def nanoseconds(t: float) -> int:
     """Simulation time (s) as integer nanoseconds (an MCAP log time)."""
-    return int(round(t * 1e9))
+    return round(t * 1e9)
 
 
 def stamp(t: float) -> Timestamp:
@@ -179,10 +179,16 @@ DRIVE_STATE_SCHEMA = {
 
 
 def drive_state_message(state) -> dict:
-    """A `systems.odometry.DriveState` as `DRIVE_STATE_SCHEMA` (JSON)."""
-    d = state.as_dict()
-    ts = stamp(d.pop("time_stamp"))
-    return {"timestamp": {"sec": ts.sec, "nsec": ts.nsec}, **d}
+    """A `systems.odometry.DriveState` as `DRIVE_STATE_SCHEMA` (JSON). (Field by field:
+    `dataclasses.asdict` deep-copies, ten times the cost at 50 Hz.)"""
+    ts = stamp(state.time_stamp)
+    return {"timestamp": {"sec": ts.sec, "nsec": ts.nsec}, "is_enabled": state.is_enabled,
+            "distance_between_wheels": state.distance_between_wheels,
+            "power_scaling_factor": state.power_scaling_factor,
+            "wheels": {name: {"commanded_power": w.commanded_power, "axle_speed": w.axle_speed,
+                              "encoder_ticks": w.encoder_ticks}
+                       for name, w in state.wheels.items()},
+            "position": list(state.position), "heading": state.heading}
 
 
 def command_event(record, ended: bool) -> str:

@@ -121,9 +121,10 @@ class CommandSource(LeafSystem):
         - command_log
 
     Output `request` (DriveRequest, abstract); output `command_log` (tuple of CommandRecord,
-    abstract: every command so far, with the latest reported status recorded). Input `command_status` (CommandStatus,
-    abstract, from `motion.MotionCommands`; may be left unconnected, then no completing
-    command is ever reported ended): how completing commands end, recorded in the log.
+    abstract: every command so far, with the latest reported status recorded). Input
+    `command_status` (CommandStatus, abstract, from `motion.MotionCommands`; may be left
+    unconnected, then no completing command is ever reported ended): how completing commands
+    end, recorded in the log.
     Abstract state `CommandSourceState`. Every `period` s it records that status and advances
     the script; a `Wait` holds the script for its duration and a completing command holds it
     until it ends. `Issue()` writes a command into the Context directly (what the Python API,
