@@ -504,14 +504,12 @@ class Simulation:
         """Writes the run so far as a self-contained Meshcat replay (HTML with its timeline;
         `recording.meshcat_html`) and carries on recording; returns the file's size in bytes.
         Needs `Simulation(..., record=True)`."""
-        from corobot_drake.recording.meshcat_html import start_recording, write_recording
+        from corobot_drake.recording.meshcat_html import write_recording
 
         if self._record_live is None:
             raise RuntimeError("this simulation is not recording: build it with record=True "
                                "(--record FILE.html)")
-        size = write_recording(self.station.meshcat, path)
-        start_recording(self.station.meshcat, live=self._record_live, keep=True)
-        return size
+        return write_recording(self.station.meshcat, path)
 
     def advance(self, seconds: float) -> None:
         self.advance_to(self.time + seconds)

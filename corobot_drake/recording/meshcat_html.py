@@ -29,22 +29,18 @@ def offline_meshcat() -> Meshcat:
     return Meshcat(MeshcatParams(host="localhost", show_stats_plot=False))
 
 
-def start_recording(meshcat: Meshcat, live: bool, keep: bool = False) -> None:
-    """Starts the recording, dropping earlier frames unless `keep` (then it carries on after
-    `write_recording`). `live`: also send each frame to the browser as it is made (False when
-    nobody watches: recording only)."""
-    if not keep:
-        meshcat.DeleteRecording()
+def start_recording(meshcat: Meshcat, live: bool) -> None:
+    """Starts the recording afresh (earlier frames are dropped). `live`: also send each frame
+    to the browser as it is made (False when nobody watches: recording only)."""
     meshcat.StartRecording(frames_per_second=RECORDING_FPS,
                            set_visualizations_while_recording=live)
 
 
 def write_recording(meshcat: Meshcat, path: str | Path) -> int:
-    """Stops the recording, publishes it as the scene's animation and writes the scene as a
-    self-contained HTML file at `path`; returns its size in bytes. The animation plays once
-    (Meshcat's Animations panel replays it and scrubs through it). The recording stays
-    stopped: `start_recording(..., keep=True)` carries it on."""
-    meshcat.StopRecording()
+    """Publishes the recording so far as the scene's animation (a browser watching gets it
+    too) and writes the scene as a self-contained HTML file at `path`; returns its size in
+    bytes. The animation plays once (Meshcat's Animations panel replays it and scrubs through
+    it). The recording goes on (Drake's StartRecording would start a new one)."""
     meshcat.PublishRecording()
     html = meshcat.StaticHtml()
     Path(path).write_text(html, encoding="utf-8")

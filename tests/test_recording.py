@@ -1,0 +1,297 @@
+"""The run kept for replay: the Meshcat HTML replay, the MCAP file, the live Foxglove server."""
+
+import base64
+import json
+import re
+
+import foxglove
+import msgpack  # Meshcat's wire format (installed with Ray)
+import numpy as np
+import pytest
+from google.protobuf import descriptor_pb2, descriptor_pool, message_factory
+from mcap.reader import make_reader
+
+from conftest import make_sim
+from corobot_drake.cli import main
+from corobot_drake.config.scenario import load_scenario
+from corobot_drake.recording.foxglove_live import FoxgloveLive
+from corobot_drake.recording.mcap_log import McapLog
+from corobot_drake.recording.meshcat_html import RECORDING_FPS
+from corobot_drake.recording.publishers import STATE_PERIOD, RobotStatePublisher, in_window
+from corobot_drake.recording.topics import RobotNames, command_event
+from corobot_drake.resources import DEFAULT_SCENARIO
+from corobot_drake.simulation import Simulation
+from corobot_drake.systems.drive import CommandRecord
+
+CURVE = "robots: {corobot: {commands: [!SetPower {left: 1, right: 0.5}]}}"
+NO_CAMERA = "robots: {corobot: {camera: {rgb: false}}}"
+SCRIPT = ("robots: {corobot: {commands: [!SetPower {left: 1, right: 0.5}, !Wait {seconds: 0.5},"
+          " !AllStop {}]}}")
+
+
+# --- the Meshcat replay ----------------------------------------------------------------------
+
+
+def _meshcat_messages(html: str) -> list[dict]:
+    """The Meshcat commands a static HTML file replays (base64 msgpack in data: URLs)."""
+    blobs = re.findall(r'data:application/octet-binary;base64,([A-Za-z0-9+/=]+)', html)
+    return [msgpack.unpackb(base64.b64decode(b), strict_map_key=False) for b in blobs]
+
+
+def _track(animation: dict, path: str, name: str) -> list:
+    clip = next(a["clip"] for a in animation["animations"] if a["path"] == path)
+    return next(t["keys"] for t in clip["tracks"] if t["name"] == name)
+
+
+def test_recording_is_a_self_contained_replay_of_the_run(tmp_path):
+    sim = Simulation(load_scenario(DEFAULT_SCENARIO, overrides=[CURVE]), record=True)
+    sim.advance(1.0)
+    path = tmp_path / "run.html"
+    size = sim.save_recording(path)
+    html = path.read_text()
+    assert size == len(html.encode()) > 100_000
+    # Offline: no script, style or image fetched from the network.
+    assert not re.search(r'<(script|link|img)[^>]+(src|href)="https?:', html)
+    (animation,) = [m for m in _meshcat_messages(html) if m["type"] == "set_animation"]
+    keys = _track(animation, "/drake/illustration/corobot/chassis", ".position")
+    # One frame per visualizer publish, at 0, 1/64, ..., 1 s.
+    assert len(keys) == round(1.0 * RECORDING_FPS) + 1
+    assert keys[-1]["time"] == round(1.0 * RECORDING_FPS)
+    pose = sim.robot().pose()
+    # The last frame is the robot where the run ended (published at t = 1 s exactly).
+    assert keys[-1]["value"][:2] == pytest.approx([pose.x, pose.y], abs=1e-9)
+    # It drove a curve: the path has moved more than a few centimetres from the start.
+    assert np.hypot(*np.subtract(keys[-1]["value"][:2], keys[0]["value"][:2])) > 0.1
+
+
+def test_recording_restarts_with_reset_and_carries_on_after_a_save(tmp_path):
+    sim = Simulation(load_scenario(DEFAULT_SCENARIO, overrides=[CURVE]), record=True)
+    sim.advance(0.5)
+    sim.save_recording(tmp_path / "a.html")
+    sim.advance(0.5)  # recording goes on after a save
+    sim.save_recording(tmp_path / "b.html")
+    sim.reset()
+    sim.advance(0.25)
+    sim.save_recording(tmp_path / "c.html")
+    counts = []
+    for name in "abc":
+        (animation,) = [m for m in _meshcat_messages((tmp_path / f"{name}.html").read_text())
+                        if m["type"] == "set_animation"]
+        counts.append(len(_track(animation, "/drake/illustration/corobot/chassis",
+                                 ".position")))
+    assert counts == [33, 65, 17]  # 0.5, 1.0 and (after the reset) 0.25 s at 64 Hz, from 0
+
+
+def test_save_recording_needs_record():
+    with pytest.raises(RuntimeError, match="record=True"):
+        make_sim().save_recording("x.html")
+
+
+# --- MCAP ------------------------------------------------------------------------------------
+
+
+def _decoders(summary) -> dict:
+    """{schema id: bytes -> message} for the file's protobuf and JSON schemas."""
+    out = {}
+    for sid, schema in summary.schemas.items():
+        if schema.encoding == "protobuf":
+            pool = descriptor_pool.DescriptorPool()
+            for fd in descriptor_pb2.FileDescriptorSet.FromString(schema.data).file:
+                pool.Add(fd)
+            out[sid] = message_factory.GetMessageClass(
+                pool.FindMessageTypeByName(schema.name)).FromString
+        else:
+            assert schema.encoding == "jsonschema"
+            out[sid] = json.loads
+    return out
+
+
+def read_mcap(path) -> dict[str, list]:
+    """{topic: [(log time s, schema name, decoded message), ...]} in log-time order."""
+    with open(path, "rb") as f:
+        reader = make_reader(f)
+        decode = _decoders(reader.get_summary())
+        topics: dict[str, list] = {}
+        for schema, channel, message in reader.iter_messages(log_time_order=True):
+            topics.setdefault(channel.topic, []).append(
+                (message.log_time / 1e9, schema.name, decode[schema.id](message.data)))
+    return topics
+
+
+EXPECTED_SCHEMAS = {
+    "/tf": "foxglove.FrameTransforms", "/scene": "foxglove.SceneUpdate",
+    "/joint_states": "foxglove.JointStates", "/odom": "foxglove.Odometry",
+    "/drive_state": "corobot.DriveState", "/commands": "foxglove.Log",
+    "/ir/front": "corobot.Range", "/ir/front/rays": "foxglove.SceneUpdate",
+    "/ir/rear": "corobot.Range", "/ir/rear/rays": "foxglove.SceneUpdate",
+    "/camera/image/compressed": "foxglove.CompressedImage",
+    "/camera/camera_info": "foxglove.CameraCalibration",
+}
+
+
+@pytest.fixture(scope="module")
+def mcap_run(tmp_path_factory):
+    """One second of the scripted run with the camera, logged to MCAP: (simulation, topics)."""
+    path = tmp_path_factory.mktemp("mcap") / "run.mcap"
+    with McapLog(path) as log:
+        sim = Simulation(load_scenario(DEFAULT_SCENARIO, overrides=[SCRIPT]),
+                         foxglove=log.context)
+        sim.advance(1.0)
+    return sim, read_mcap(path)
+
+
+def test_mcap_has_every_topic_at_its_rate(mcap_run):
+    _, topics = mcap_run
+    assert {t: m[0][1] for t, m in topics.items()} == EXPECTED_SCHEMAS
+    counts = {t: len(m) for t, m in topics.items()}
+    # State topics: a look every 20 ms from 0 to 1 s inclusive.
+    for topic in ("/tf", "/joint_states", "/odom", "/drive_state"):
+        assert counts[topic] == round(1.0 / STATE_PERIOD) + 1, topic
+    # IR: the scans at 0, 0.05, ..., 0.95 s (the one at 1 s is taken when the run goes on).
+    for topic in ("/ir/front", "/ir/front/rays", "/ir/rear", "/ir/rear/rays"):
+        assert counts[topic] == 20, topic
+    # Camera at 30 Hz, captures at 0.0005 + k / 30 s out 30 ms later: k = 0..29 before 1 s.
+    assert counts["/camera/image/compressed"] == counts["/camera/camera_info"] == 30
+    assert counts["/scene"] == 2  # at 0 and 1 s
+
+
+def test_mcap_messages_hold_the_run(mcap_run):
+    sim, topics = mcap_run
+    robot = sim.robot()
+    pose = robot.pose()
+    t, _, tf = topics["/tf"][-1]
+    assert t == pytest.approx(1.0)
+    base = next(x for x in tf.transforms if x.child_frame_id == "base_link")
+    assert base.parent_frame_id == "world"
+    assert [base.translation.x, base.translation.y] == pytest.approx([pose.x, pose.y], abs=1e-12)
+    frames = {x.child_frame_id for x in tf.transforms}
+    assert {"giant_box", "front_left_wheel", "rear_right_wheel", "ir_front", "ir_rear",
+            "camera_optical_frame"} <= frames
+    odom = topics["/odom"][-1][2]
+    assert [odom.pose.position.x, odom.pose.position.y] == pytest.approx([pose.x, pose.y])
+    velocity = robot.velocity()
+    # base_link's axes against the heading frame's: apart by the chassis's sub-millimetre
+    # pitch and roll on flat ground, so 1 mm/s and 1 mrad/s.
+    assert odom.linear_velocity.x == pytest.approx(velocity.forward, abs=1e-3)
+    assert odom.angular_velocity.z == pytest.approx(velocity.yaw_rate, abs=1e-3)
+    # Mid-drive (the script stops at 0.5 s), the twist matches the poses' central difference:
+    # speed is steady after the 0.33 s slew, so 1%.
+    odoms = {round(t, 2): m for t, _, m in topics["/odom"]}
+    a, b, mid = odoms[0.38].pose.position, odoms[0.42].pose.position, odoms[0.4]
+    speed = np.hypot(b.x - a.x, b.y - a.y) / 0.04
+    assert speed > 0.3 and mid.linear_velocity.x == pytest.approx(speed, rel=0.01)
+    joints = topics["/joint_states"][-1][2].joints
+    assert {j.name: j.velocity for j in joints} == pytest.approx(
+        {f"{w}_axle": v for w, v in robot.axle_speeds().items()}, abs=1e-12)
+    scan = robot.ir("rear")
+    t, _, rear = topics["/ir/rear"][-1]
+    assert (t, rear["range"], rear["frame_id"]) == (pytest.approx(scan.time), scan.raw,
+                                                    "ir_rear")
+    rays = topics["/ir/rear/rays"][-1][2].entities[0].lines[0]
+    assert len(rays.points) == 2 * 2 * 3  # 6 rays, origin and end each
+    image = topics["/camera/image/compressed"][-1][2]
+    assert image.format == "jpeg" and image.data[:2] == b"\xff\xd8"  # JPEG's start marker
+    info = topics["/camera/camera_info"][-1][2]
+    assert (info.width, info.height) == (320, 240)
+    events = [(t, m.message) for t, _, m in topics["/commands"]]
+    # Each start and end in the command log, at its time: the script's SetPower at 0, its Wait
+    # from the next control tick, then AllStop, which ends SetPower.
+    expected = sorted([(r.start_time, command_event(r, False)) for r in robot.command_log()]
+                      + [(r.end_time, command_event(r, True)) for r in robot.command_log()
+                         if r.end_time is not None and r.end_time < 1.0])
+    assert [m for _, m in expected] == ["seq 1 SetPower started", "Wait started",
+                                        "Wait succeeded", "seq 1 SetPower succeeded",
+                                        "seq 2 AllStop started"]
+    assert events == [(pytest.approx(t, abs=1e-9), m) for t, m in expected]
+
+
+def test_a_reset_run_publishes_the_same_messages(tmp_path):
+    """The publishers keep nothing outside the Context: after a reset the run is published
+    again, message for message."""
+    path = tmp_path / "twice.mcap"
+    with McapLog(path) as log:
+        sim = Simulation(load_scenario(DEFAULT_SCENARIO, overrides=[SCRIPT, NO_CAMERA]),
+                         foxglove=log.context)
+        sim.advance(0.6)
+        sim.reset()
+        sim.advance(0.6)
+    for topic, messages in read_mcap(path).items():
+        n = len(messages) // 2
+        first = sorted((t, str(m)) for t, _, m in messages)[::2]
+        second = sorted((t, str(m)) for t, _, m in messages)[1::2]
+        assert len(messages) == 2 * n and first == second, topic
+
+
+def test_command_events_alone():
+    """RobotStatePublisher on its own: a look at t publishes the starts and ends in
+    [t - period, t)."""
+    publisher = RobotStatePublisher(foxglove.Context(), RobotNames("r"), chassis_index=1)
+    context = publisher.CreateDefaultContext()
+    log = (CommandRecord(1, "SetPower", 0.0, 0.03, "succeeded"),
+           CommandRecord(2, "DriveDistance", 0.03, 0.05, "failed", "stalled"))
+    publisher.GetInputPort("command_log").FixValue(context, log)
+    seen = []
+    for k in range(5):
+        context.SetTime(k * STATE_PERIOD)
+        seen.append([m for _, m, _ in publisher.command_events(context)])
+    assert seen == [[], ["seq 1 SetPower started"],  # looks at 0 and 0.02 s
+                    ["seq 1 SetPower succeeded", "seq 2 DriveDistance started"],  # 0.04 s
+                    ["seq 2 DriveDistance failed (stalled)"], []]  # 0.06, 0.08 s
+    assert in_window(0.02, 0.04, 0.02) and not in_window(0.04, 0.04, 0.02)
+
+
+# --- live ------------------------------------------------------------------------------------
+
+
+def test_foxglove_live_serves_the_topics_and_stops():
+    from websockets.sync.client import connect
+
+    live = FoxgloveLive(port=0)
+    try:
+        sim = Simulation(load_scenario(DEFAULT_SCENARIO, overrides=[NO_CAMERA]),
+                         foxglove=live.context)
+        with connect(live.url, subprotocols=["foxglove.sdk.v1", "foxglove.websocket.v1"],
+                     open_timeout=10) as ws:
+            advertised = {}
+            while "/odom" not in advertised:
+                message = json.loads(ws.recv(timeout=10))
+                if message["op"] == "advertise":
+                    advertised.update({c["topic"]: c for c in message["channels"]})
+            assert set(EXPECTED_SCHEMAS) - {"/camera/image/compressed",
+                                            "/camera/camera_info"} <= set(advertised)
+            ws.send(json.dumps({"op": "subscribe", "subscriptions": [
+                {"id": 1, "channelId": advertised["/odom"]["id"]}]}))
+            sim.advance(0.2)
+            data = ws.recv(timeout=10)
+            while isinstance(data, str):  # status and other text frames
+                data = ws.recv(timeout=10)
+            assert data[0] == 1 and int.from_bytes(data[1:5], "little") == 1  # message, sub 1
+    finally:
+        port = live.port
+        live.stop()
+    live.stop()  # idempotent
+    with pytest.raises(OSError):  # nothing listens any more
+        import socket
+
+        socket.create_connection(("127.0.0.1", port), timeout=1).close()
+
+
+# --- the command line ------------------------------------------------------------------------
+
+
+def test_cli_writes_the_replay_and_the_mcap_headless(tmp_path, capsys):
+    html, mcap = tmp_path / "run.html", tmp_path / "run.mcap"
+    assert main(["--headless", "--duration", "0.4", "--override", CURVE, "--override",
+                 NO_CAMERA, "--record", str(html), "--mcap", str(mcap)]) == 0
+    assert "set_animation" in {m["type"] for m in _meshcat_messages(html.read_text())}
+    topics = read_mcap(mcap)
+    assert len(topics["/odom"]) == round(0.4 / STATE_PERIOD) + 1
+    assert "/camera/image/compressed" not in topics
+
+
+@pytest.mark.parametrize("flag", ["--record", "--mcap"])
+def test_cli_output_paths_are_checked(flag, tmp_path, capsys):
+    assert main(["--headless", flag, str(tmp_path / "no" / "such" / "x")]) == 2
+    assert main(["--headless", flag, str(tmp_path)]) == 2
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 2 and all(line.startswith(f"error: {flag}: ") for line in err)
