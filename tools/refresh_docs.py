@@ -739,6 +739,8 @@ def blocks() -> list[Spec]:
         Spec("bench-camera", "docs/sensors.md", (bench_camera,), render_table_with_load,
              TIMING, 90),
         Spec("bench-ir", "docs/sensors.md", (bench_ir,), render_bench_ir, TIMING, 50),
+        Spec("bench-recording", "docs/recording.md",
+             (Command("python tools/bench_recording.py"),), render_table_with_load, TIMING, 300),
         Spec("bench-study", "docs/studies.md",
              (Command("python tools/bench_study.py --seeds 24 --duration 8"),),
              render_bench_study, TIMING, 150),
