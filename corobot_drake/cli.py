@@ -148,8 +148,9 @@ class _FoxgloveSinks(contextlib.ExitStack):
         self.context = foxglove.Context()
         if args.foxglove is not None:  # first: a taken port leaves no file behind
             live = self.enter_context(FoxgloveLive(args.foxglove, args.host, self.context))
+            # stderr: --serve's first stdout line is its URL (scripts read it)
             print(f"Foxglove: {live.url}  (Foxglove: Open connection > Foxglove WebSocket)",
-                  flush=True)
+                  file=sys.stderr, flush=True)
         if args.mcap is not None:
             self.enter_context(McapLog(args.mcap, self.context))
 

@@ -295,3 +295,40 @@ def test_cli_output_paths_are_checked(flag, tmp_path, capsys):
     assert main(["--headless", flag, str(tmp_path)]) == 2
     err = capsys.readouterr().err.splitlines()
     assert len(err) == 2 and all(line.startswith(f"error: {flag}: ") for line in err)
+
+
+def test_ir_publisher_alone_publishes_each_scan_once():
+    """IrPublisher on its own, its scan_state fixed: the look at t publishes a scan taken in
+    [t - period, t), at the scan's time, with its range and rays."""
+    import io
+    import types
+
+    from pydrake.systems.analysis import Simulator
+
+    from corobot_drake.config.sensors import IrSensorConfig
+    from corobot_drake.recording.publishers import IrPublisher
+    from corobot_drake.sensors.ir_sensor import DISTANCE, SCAN_TIME, scan_state_layout
+
+    context = foxglove.Context()
+    buffer = io.BytesIO()
+    writer = foxglove.open_mcap(buffer, context=context)
+    sensor = types.SimpleNamespace(config=IrSensorConfig(), period=0.05, num_rays=6)
+    publisher = IrPublisher(context, RobotNames("r"), "front", sensor)
+    simulator = Simulator(publisher)
+    system_context = simulator.get_mutable_context()
+    size, _, ends, hits = scan_state_layout(6)
+    scan = np.zeros(size)
+    scan[[DISTANCE, SCAN_TIME]] = 0.4, 0.1
+    scan[ends] = np.tile([1.0, 0.0, 0.0], 6)
+    scan[hits] = 1.0
+    publisher.get_input_port().FixValue(system_context, scan)
+    simulator.AdvanceTo(0.22)  # looks at 0.05, 0.1, 0.15, 0.2 s: only 0.15 s sees the scan
+    writer.close()
+    buffer.seek(0)
+    reader = make_reader(buffer)
+    decode = _decoders(reader.get_summary())
+    got = [(c.topic, m.log_time, decode[s.id](m.data)) for s, c, m in reader.iter_messages()]
+    assert [(topic, ns) for topic, ns, _ in got] == [("/ir/front", 100_000_000),
+                                                     ("/ir/front/rays", 100_000_000)]
+    assert got[0][2]["range"] == 0.4 and got[0][2]["max_range"] == 0.762
+    assert len(got[1][2].entities[0].lines[0].points) == 12
