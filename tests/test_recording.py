@@ -332,3 +332,15 @@ def test_ir_publisher_alone_publishes_each_scan_once():
                                                      ("/ir/front/rays", 100_000_000)]
     assert got[0][2]["range"] == 0.4 and got[0][2]["max_range"] == 0.762
     assert len(got[1][2].entities[0].lines[0].points) == 12
+
+
+def test_cli_foxglove_on_a_taken_port_is_one_line(capsys):
+    import socket
+
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen()
+        port = taken.getsockname()[1]
+        assert main(["--headless", "--duration", "0.1", "--foxglove", str(port)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("error: --foxglove: ")
