@@ -344,3 +344,14 @@ def test_cli_foxglove_on_a_taken_port_is_one_line(capsys):
         assert main(["--headless", "--duration", "0.1", "--foxglove", str(port)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("error: --foxglove: ")
+
+
+def test_command_source_exports_its_command_log():
+    """The CommandSource's `command_log` output (what /commands reads) is its log, with the
+    latest reported status recorded: the same records as `Robot.command_log()`."""
+    sim = Simulation(load_scenario(DEFAULT_SCENARIO, overrides=[SCRIPT, NO_CAMERA]))
+    sim.advance(0.6)
+    source = sim.robot()._parts.command_source
+    log = source.GetOutputPort("command_log").Eval(source.GetMyContextFromRoot(sim.context))
+    assert list(log) == sim.robot().command_log()
+    assert [r.command for r in log] == ["SetPower", "Wait", "AllStop"]
