@@ -355,3 +355,26 @@ def test_command_source_exports_its_command_log():
     log = source.GetOutputPort("command_log").Eval(source.GetMyContextFromRoot(sim.context))
     assert list(log) == sim.robot().command_log()
     assert [r.command for r in log] == ["SetPower", "Wait", "AllStop"]
+
+
+def test_several_robots_are_namespaced(tmp_path):
+    """Two robots: each one's topics and frames under its name, as ROS namespaces and tf
+    prefixes; /tf and /scene shared."""
+    two = ("robots: {corobot: {camera: {rgb: false}, commands: [!AllStop {}]}, second: {pose: "
+           "{translation: [0, 1.5, 0]},"
+           " camera: {rgb: false}, commands: [!SetPower {left: -1, right: -1}]}}")
+    path = tmp_path / "two.mcap"
+    with McapLog(path) as log:
+        sim = Simulation(load_scenario(DEFAULT_SCENARIO, overrides=[two]), foxglove=log.context)
+        sim.advance(0.2)
+    topics = read_mcap(path)
+    per_robot = {"odom", "joint_states", "drive_state", "commands", "ir/front", "ir/rear/rays"}
+    assert {f"/{r}/{t}" for r in ("corobot", "second") for t in per_robot} <= set(topics)
+    assert "/odom" not in topics and {"/tf", "/scene"} <= set(topics)
+    tf = topics["/tf"][-1][2].transforms
+    second = next(x for x in tf if x.child_frame_id == "second/base_link")
+    assert second.parent_frame_id == "world" and second.translation.y == pytest.approx(1.5,
+                                                                                      abs=0.01)
+    assert {("second/base_link", "second/front_left_wheel"), ("corobot/base_link",
+            "corobot/ir_rear")} <= {(x.parent_frame_id, x.child_frame_id) for x in tf}
+    assert topics["/second/odom"][-1][2].body_frame_id == "second/base_link"
