@@ -93,6 +93,11 @@ class Robot:
         """Rim speed per side, m/s (axle speed clamped to the drive's max axle speed)."""
         return self.issue(sc.SetSpeed(float(left), float(right)))
 
+    def set_velocity(self, linear: float, angular: float) -> int:
+        """Chassis velocity, ROS `cmd_vel` style: `linear` m/s forward, `angular` rad/s
+        (positive: left), through the skid-steer kinematics (`sc.SetVelocity`)."""
+        return self.issue(sc.SetVelocity(float(linear), float(angular)))
+
     def all_stop(self) -> int:
         return self.issue(sc.AllStop())
 
@@ -150,7 +155,7 @@ class Robot:
 
     def continuation_commands(self) -> list:
         """Commands that carry on from now: the enable level, the running command (what is
-        left of a DriveDistance/RotateDegrees, or the last SetPower/SetSpeed), then the
+        left of a DriveDistance/RotateDegrees, or the last SetPower/SetSpeed/SetVelocity), then the
         script's unissued rest (after what is left of a running Wait)."""
         root = self._sim.context
         source, motion = self._parts.command_source, self._parts.motion
@@ -159,7 +164,7 @@ class Robot:
         remaining = motion.remaining_command(motion.GetMyContextFromRoot(root))
         if remaining is not None:
             commands.append(remaining)
-        elif isinstance(state.request.command, sc.SetPower | sc.SetSpeed):
+        elif isinstance(state.request.command, sc.SetPower | sc.SetSpeed | sc.SetVelocity):
             commands.append(state.request.command)
         script = source.script(source.GetMyContextFromRoot(root))
         if state.next_script_index < len(script):

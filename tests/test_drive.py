@@ -57,6 +57,32 @@ def test_set_speed(sim):
     assert steady_speed(sim) == pytest.approx(0.3, rel=0.01)
 
 
+def test_set_velocity_straight(sim):
+    sim.robot().set_velocity(0.3, 0.0)
+    sim.advance(1.5)
+    # As test_set_speed: both sides at 0.3 m/s, the tyres slip a little (measured 0.2%).
+    assert steady_speed(sim) == pytest.approx(0.3, rel=0.01)
+    assert abs(sim.robot().velocity().yaw_rate) < 1e-3  # symmetric: no turn
+
+
+def test_set_velocity_spin_turns_at_the_skid_steer_rate(sim):
+    """(0, 1 rad/s) with the nominal track gives rims at -+ w B; a skid-steer spin with
+    isotropic friction then turns at B u / (A^2 + B^2) = w B^2 / (A^2 + B^2) ~ 0.596 rad/s, not
+    1: the wheels slip sideways (the effective-track calibration will correct it)."""
+    robot = sim.robot()
+    robot.set_velocity(0.0, 1.0)
+    sim.advance(1.0)
+    rates = []
+    for _ in range(20):
+        sim.advance(0.05)
+        rates.append(robot.velocity().yaw_rate)
+    predicted = 1.0 * B**2 / (A**2 + B**2)
+    # 5%, as test_spin_in_place_matches_isotropic_coulomb: the hydroelastic patch's width and
+    # the servo's slip make Drake's rate differ from the point-contact formula by ~2%.
+    assert np.mean(rates) == pytest.approx(predicted, rel=0.05)
+    assert abs(robot.velocity().forward) < 0.01
+
+
 def test_set_speed_reports_power_within_full_range(sim):
     """A SetSpeed past full power reports power 1: power is a fraction of the motor's range."""
     robot = sim.robot()

@@ -110,8 +110,8 @@ def test_openapi_document_is_served_and_valid(http):
     doc = http.get("/openapi.json").json()
     validate(doc)
     paths = doc["paths"]
-    for command in ("set_power", "set_speed", "all_stop", "enable", "drive_distance",
-                    "rotate_degrees", "set_pose"):
+    for command in ("set_power", "set_speed", "set_velocity", "all_stop", "enable",
+                    "drive_distance", "rotate_degrees", "set_pose"):
         assert f"/robots/{{robot}}/drive/{command}" in paths
     assert "/robots/{robot}/drive" in paths and "/services" in paths
     power = doc["components"]["schemas"]["PowerRequest"]["properties"]["left"]
@@ -167,6 +167,18 @@ def test_set_speed(http, caps):
     wait_sim(http, 1.5)
     v = http.get(f"{ROBOT}/drive").json()["velocity"]["forward"]
     assert v == pytest.approx(0.2, abs=0.03)
+    http.post(f"{ROBOT}/drive/all_stop", json={})
+
+
+def test_set_velocity(http, caps):
+    reset(http, caps)
+    body = {"linear": 0.2, "angular": 0.0}
+    assert http.post(f"{ROBOT}/drive/set_velocity", json=body).is_success
+    wait_sim(http, 1.5)
+    v = http.get(f"{ROBOT}/drive").json()["velocity"]["forward"]
+    assert v == pytest.approx(0.2, abs=0.03)  # as test_set_speed
+    assert http.post(f"{ROBOT}/drive/set_velocity",
+                     json={"linear": 0.2}).status_code == 422  # both fields required
     http.post(f"{ROBOT}/drive/all_stop", json={})
 
 
@@ -470,8 +482,8 @@ def test_client_has_the_python_apis_methods(server, http, caps):
     reset(http, caps)
     with CorobotClient(server.url) as sim:
         bot = sim.robot()
-        for name in ("set_power", "set_speed", "all_stop", "enable", "pose", "velocity",
-                     "axle_speeds", "is_enabled", "summary"):
+        for name in ("set_power", "set_speed", "set_velocity", "all_stop", "enable", "pose",
+                     "velocity", "axle_speeds", "is_enabled", "summary"):
             assert callable(getattr(bot, name)) and hasattr(Robot, name), name
         for name in ("robot", "advance", "advance_to", "summary"):
             assert hasattr(Simulation, name) and callable(getattr(sim, name)), name

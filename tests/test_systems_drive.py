@@ -15,6 +15,7 @@ from corobot_drake.config.scenario import (
     SetPose,
     SetPower,
     SetSpeed,
+    SetVelocity,
     Wait,
 )
 from corobot_drake.model import dimensions as dim
@@ -24,6 +25,8 @@ from corobot_drake.systems.drive import (
     DriveController,
     DriveRequest,
     DriveStatus,
+    skid_steer_rim_speeds,
+    velocity_track_width,
 )
 
 DRIVE = Drive()
@@ -107,6 +110,30 @@ def test_set_speed_clamps_to_the_max_axle_speed_and_reports_power():
     assert st.target_right == pytest.approx(-slow / dim.WHEEL_RADIUS, rel=EXACT)
     assert st.power_left == 1.0  # 20 rad/s is past full power (K = 10.16): reported 1
     assert st.power_right == pytest.approx(-slow / dim.WHEEL_RADIUS / K, rel=EXACT)
+
+
+def test_set_velocity_maps_through_the_skid_steer_kinematics():
+    track = velocity_track_width(DRIVE)
+    assert skid_steer_rim_speeds(0.3, 0.0, track) == (0.3, 0.3)
+    left, right = skid_steer_rim_speeds(0.1, 1.0, track)  # turning left: the right side faster
+    assert (left, right) == pytest.approx((0.1 - track / 2, 0.1 + track / 2), rel=EXACT)
+    s = controller()
+    s.fix("request", DriveRequest(1, SetVelocity(0.1, 1.0)))
+    s.tick()
+    st = status(s)
+    assert st.target_left == pytest.approx(left / dim.WHEEL_RADIUS, rel=EXACT)
+    assert st.target_right == pytest.approx(right / dim.WHEEL_RADIUS, rel=EXACT)
+
+
+def test_set_velocity_past_the_max_axle_speed_keeps_the_curvature():
+    s = controller()
+    s.fix("request", DriveRequest(1, SetVelocity(3.0, 10.0)))  # 50 and 68.5 rad/s asked
+    s.tick()
+    st = status(s)
+    left, right = skid_steer_rim_speeds(3.0, 10.0, velocity_track_width(DRIVE))
+    assert st.target_right == DRIVE.max_axle_speed  # the faster side at the limit
+    assert st.target_left / st.target_right == pytest.approx(left / right, rel=EXACT)
+    assert st.power_right == 1.0
 
 
 def test_a_request_acts_once_by_its_sequence_number():

@@ -148,6 +148,17 @@ class SetSpeed:
 
 
 @dc.dataclass
+class SetVelocity:
+    """The chassis' velocity, ROS `cmd_vel` style: `linear` forward speed (m/s, +x of the
+    chassis) and `angular` yaw rate (rad/s, positive turns left), turned into rim speeds per
+    side by the skid-steer kinematics (`systems.drive.skid_steer_rim_speeds`), then clamped like
+    `SetSpeed` (keeping the ratio of the sides, so the path's curvature)."""
+
+    linear: float = 0.0
+    angular: float = 0.0
+
+
+@dc.dataclass
 class AllStop:
     """Command both sides to zero speed."""
 
@@ -193,7 +204,7 @@ class SetPose:
     yaw_deg: float = 0.0
 
 
-Command = Union[SetPower, SetSpeed, AllStop, Enable, Wait,  # noqa: UP007
+Command = Union[SetPower, SetSpeed, SetVelocity, AllStop, Enable, Wait,  # noqa: UP007
                 DriveDistance, RotateDegrees, SetPose]
 COMPLETING_COMMANDS = (DriveDistance, RotateDegrees, SetPose)
 """Commands that run until they end (succeeded or failed); the script waits for each."""

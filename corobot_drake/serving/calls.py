@@ -11,7 +11,7 @@ from typing import Any
 
 from corobot_drake.readings import CommandResult
 
-SIMPLE_COMMANDS = ("set_power", "set_speed", "all_stop", "enable")
+SIMPLE_COMMANDS = ("set_power", "set_speed", "set_velocity", "all_stop", "enable")
 """Drive commands that take effect at once (no operation to follow)."""
 COMPLETING_COMMANDS = ("drive_distance", "rotate_degrees", "set_pose")
 """Drive commands that complete: followed as operations."""

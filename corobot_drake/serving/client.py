@@ -186,6 +186,11 @@ class RemoteRobot:
         """Rim speed per side, m/s."""
         return self._command("set_speed", {"left": float(left), "right": float(right)})
 
+    def set_velocity(self, linear: float, angular: float) -> int | None:
+        """Chassis velocity: linear m/s forward, angular rad/s (positive: left)."""
+        return self._command("set_velocity", {"linear": float(linear),
+                                              "angular": float(angular)})
+
     def all_stop(self) -> int | None:
         return self._command("all_stop")
 

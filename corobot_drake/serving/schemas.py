@@ -40,6 +40,13 @@ class SpeedRequest(_Body):
     right: Speed
 
 
+class VelocityRequest(_Body):
+    linear: Annotated[float, Field(ge=-5.0, le=5.0,
+                                   description="m/s forward (the drive clamps the axle speed)")]
+    angular: Annotated[float, Field(ge=-50.0, le=50.0,
+                                    description="rad/s yaw rate, positive turns left")]
+
+
 class EnableRequest(_Body):
     enabled: bool = True
 

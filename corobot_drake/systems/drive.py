@@ -21,6 +21,7 @@ from corobot_drake.config.scenario import (
     SetPose,
     SetPower,
     SetSpeed,
+    SetVelocity,
     Wait,
 )
 from corobot_drake.model import dimensions as dim
@@ -271,6 +272,21 @@ class CommandSource(LeafSystem):
 _COMPLETING_NAMES = tuple(c.__name__ for c in COMPLETING_COMMANDS)
 
 
+def velocity_track_width(drive: Drive) -> float:
+    """m: the track that turns a yaw rate into rim speeds (`SetVelocity`). The nominal wheel
+    track for now; a skid-steer robot turns slower than that predicts (its wheels slip
+    sideways: ~0.6 of the rate here, docs/commands.md), which the calibrated effective track
+    will correct once the drive config carries it."""
+    del drive  # the effective track will come from here
+    return dim.TRACK
+
+
+def skid_steer_rim_speeds(linear: float, angular: float, track: float) -> tuple[float, float]:
+    """(left, right) rim speeds, m/s, for a chassis `linear` speed (m/s, forward) and yaw rate
+    `angular` (rad/s, positive left) on a drive of this track (m): v -+ w track / 2."""
+    return linear - 0.5 * angular * track, linear + 0.5 * angular * track
+
+
 DriveStatus = namedview("DriveStatus", (
     "enabled", "power_left", "power_right", "target_left", "target_right"))
 """The drive controller's `drive_status` output, read by name (``DriveStatus(vector)``):
@@ -357,9 +373,12 @@ class DriveController(LeafSystem):
         if isinstance(command, SetPower):
             pl, pr = (float(np.clip(p, -1.0, 1.0)) for p in (command.left, command.right))
             return pl, pr, pl * d.motor_torque_scaling, pr * d.motor_torque_scaling
-        if isinstance(command, SetSpeed):
-            al, ar = (float(np.clip(v / dim.WHEEL_RADIUS, -d.max_axle_speed, d.max_axle_speed))
-                      for v in (command.left, command.right))
+        if isinstance(command, SetSpeed | SetVelocity):
+            if isinstance(command, SetSpeed):
+                al, ar = (float(np.clip(v / dim.WHEEL_RADIUS, -d.max_axle_speed,
+                                        d.max_axle_speed)) for v in (command.left, command.right))
+            else:
+                al, ar = self._velocity_axle_speeds(command)
             # The power a SetSpeed amounts to; past full power (axle speed above the
             # scaling) it reports 1: power is a fraction of the motor's range.
             pl, pr = (float(np.clip(a / d.motor_torque_scaling, -1.0, 1.0)) for a in (al, ar))
@@ -367,6 +386,15 @@ class DriveController(LeafSystem):
         if isinstance(command, AllStop):
             return 0.0, 0.0, 0.0, 0.0
         return None
+
+    def _velocity_axle_speeds(self, command: SetVelocity) -> tuple[float, float]:
+        """Axle speeds (rad/s) for a SetVelocity: both scaled down together past the max axle
+        speed, so the robot keeps the commanded path's curvature at a lower speed."""
+        rims = skid_steer_rim_speeds(command.linear, command.angular,
+                                     velocity_track_width(self._drive))
+        left, right = (v / dim.WHEEL_RADIUS for v in rims)
+        scale = min(1.0, self._drive.max_axle_speed / max(abs(left), abs(right), 1e-300))
+        return left * scale, right * scale
 
     def _update(self, context, discrete_state):
         x = self._x(context)

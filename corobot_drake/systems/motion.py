@@ -1,10 +1,10 @@
 """Commands that complete: DriveDistance, RotateDegrees and SetPose as one state machine.
 
 `MotionCommands` sits between the command source and the drive controller. It passes
-ordinary commands (SetPower, SetSpeed, AllStop, Enable) through; it turns a DriveDistance or
-RotateDegrees into a stream of SetPower requests computed every control period from the
-measured chassis position (GPS) and heading (compass), and reports how each one ends on its
-`command_status` output. Two landing profiles (SPEC "Commands that complete"):
+ordinary commands (SetPower, SetSpeed, SetVelocity, AllStop, Enable) through; it turns a
+DriveDistance or RotateDegrees into a stream of SetPower requests computed every control
+period from the measured chassis position (GPS) and heading (compass), and reports how each
+one ends on its `command_status` output. Two landing profiles (SPEC "Commands that complete"):
 
 - `seed`, the book's: full power until the goal; keep the last 6 progress samples (one per
   1/60 s frame), estimate the frames left from the progress over those 6 frames and halve the

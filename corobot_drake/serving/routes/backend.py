@@ -28,8 +28,8 @@ CONTRACT_COMPASS = "corobot-drake/compass/v1"
 CONTRACT_GPS = "corobot-drake/gps/v1"
 CONTRACT_WEBCAM = "corobot-drake/webcam/v1"
 
-DRIVE_OPERATIONS = ["set_power", "set_speed", "all_stop", "enable", "drive_distance",
-                    "rotate_degrees", "set_pose"]
+DRIVE_OPERATIONS = ["set_power", "set_speed", "set_velocity", "all_stop", "enable",
+                    "drive_distance", "rotate_degrees", "set_pose"]
 """The drive service's commands, as the directory lists them."""
 
 

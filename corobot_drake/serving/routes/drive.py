@@ -59,6 +59,13 @@ async def set_speed(robot: str, body: schemas.SpeedRequest, backend: BackendDep)
     return await simple_command(backend, robot, "set_speed", body.left, body.right)
 
 
+@router.post("/robots/{robot}/drive/set_velocity", response_model=schemas.Accepted,
+             responses=ERRORS,
+             summary="Chassis velocity (cmd_vel): linear m/s, angular rad/s (positive left)")
+async def set_velocity(robot: str, body: schemas.VelocityRequest, backend: BackendDep):
+    return await simple_command(backend, robot, "set_velocity", body.linear, body.angular)
+
+
 @router.post("/robots/{robot}/drive/all_stop", response_model=schemas.Accepted,
              responses=ERRORS, summary="Both sides to zero speed")
 async def all_stop(robot: str, backend: BackendDep, body: schemas.EmptyRequest | None = None):
