@@ -23,3 +23,30 @@ SCENARIOS_DIR = _data_dir("scenarios")
 
 DEFAULT_SCENARIO = SCENARIOS_DIR / "corobot.yaml"
 """The book chapter's scene: the robot at the origin facing +x, the giant box behind it."""
+
+PACKAGE_XML = MODELS_DIR / "package.xml"
+"""Drake's package file for `models/`: its `package://corobot_drake/...` URIs."""
+
+
+def package_map():
+    """Drake's default package map (`drake`, ...) with the project's `corobot_drake`."""
+    from pydrake.multibody.parsing import PackageMap
+
+    packages = PackageMap()
+    packages.AddPackageXml(str(PACKAGE_XML))
+    return packages
+
+
+def make_parser(plant):
+    """A Drake `Parser` into `plant` that knows Drake's packages and the project's."""
+    from pydrake.multibody.parsing import Parser
+
+    parser = Parser(plant)
+    parser.package_map().AddPackageXml(str(PACKAGE_XML))
+    return parser
+
+
+def resolve_file(uri: str) -> str:
+    """A filesystem path for a `package://` URI (through `package_map`) or a path (as is).
+    RuntimeError for an unknown package."""
+    return package_map().ResolveUrl(uri) if uri.startswith("package://") else uri

@@ -178,10 +178,7 @@ class Robot:
         return self._sim.station.plant.GetMyContextFromRoot(self._sim.context)
 
     def pose(self) -> BodyPose:
-        X = self._sim.station.plant.EvalBodyPoseInWorld(self._plant_context(),
-                                                       self._parts.chassis)
-        rpy = RollPitchYaw(X.rotation()).vector()
-        return BodyPose(*(float(v) for v in (*X.translation(), *rpy)))
+        return self._sim.body_pose(self._parts.chassis)
 
     def velocity(self) -> BodyVelocity:
         plant = self._sim.station.plant
@@ -533,6 +530,24 @@ class Simulation:
         elapsed = self.time - self.scenario.simulator_config.start_time
         return elapsed / self._wall_seconds if self._wall_seconds > 0 else math.nan
 
+    def body_pose(self, body) -> BodyPose:
+        """A body's pose in the world now (m, rad)."""
+        plant = self.station.plant
+        X = plant.EvalBodyPoseInWorld(plant.GetMyContextFromRoot(self.context), body)
+        rpy = RollPitchYaw(X.rotation()).vector()
+        return BodyPose(*(float(v) for v in (*X.translation(), *rpy)))
+
+    def bodies(self) -> dict:
+        """The world's bodies beside the robots, by name: `world.bodies`, then each body of the
+        models the directives add, as `model::body`."""
+        plant = self.station.plant
+        bodies = dict(self.station.bodies)
+        for model, instance in self.station.models.items():
+            for index in plant.GetBodyIndices(instance):
+                body = plant.get_body(index)
+                bodies[f"{model}::{body.name()}"] = body
+        return bodies
+
     def summary(self) -> dict:
         """The run's figures; only `realtime_factor` and `wall_seconds` depend on the clock."""
         return {
@@ -540,6 +555,8 @@ class Simulation:
             "realtime_factor": self.realtime_factor,
             "wall_seconds": self._wall_seconds,
             "robots": {name: robot.summary() for name, robot in self.robots.items()},
+            "bodies": {name: {"pose": dc.asdict(self.body_pose(body))}
+                       for name, body in self.bodies().items()},
         }
 
 

@@ -14,23 +14,25 @@ from pydrake.geometry import (
     AddRigidHydroelasticProperties,
     Box,
     Capsule,
+    Convex,
     Cylinder,
     Ellipsoid,
     HalfSpace,
+    Mesh,
     ProximityProperties,
     Sphere,
 )
 from pydrake.math import RigidTransform
-from pydrake.multibody.parsing import Parser
+from pydrake.multibody.parsing import ModelDirectives, ProcessModelDirectives
 from pydrake.multibody.plant import AddMultibodyPlant, CoulombFriction, MultibodyPlant
-from pydrake.multibody.tree import SpatialInertia, UnitInertia
+from pydrake.multibody.tree import CalcSpatialInertia, SpatialInertia, UnitInertia
 from pydrake.systems.framework import Diagram, DiagramBuilder
 from pydrake.systems.primitives import MatrixGain
 
 from corobot_drake.config import scenario as sc
 from corobot_drake.model import dimensions as dim
 from corobot_drake.model.sdf import corobot_sdf
-from corobot_drake.resources import MODELS_DIR
+from corobot_drake.resources import make_parser, resolve_file
 from corobot_drake.sensors.camera import add_camera
 from corobot_drake.sensors.ir_sensor import add_ir_sensors
 from corobot_drake.systems.drive import CommandSource, DriveController
@@ -54,7 +56,16 @@ def _geometry(shape):
         return Capsule(shape.radius, shape.length)
     if isinstance(shape, sc.Ellipsoid):
         return Ellipsoid(shape.a, shape.b, shape.c)
+    if isinstance(shape, sc.Mesh):
+        return Mesh(resolve_file(shape.filename), shape.scale)
     raise TypeError(f"unsupported shape {shape!r}")
+
+
+def _collision_geometry(shape):
+    """What a world body touches with: its shape, or a mesh's convex hull (`Mesh.collision`)."""
+    if isinstance(shape, sc.Mesh) and shape.collision == "convex_hull":
+        return Convex(resolve_file(shape.filename), shape.scale)
+    return _geometry(shape)
 
 
 _HYDRO_RESOLUTION_FRACTION = 0.1
@@ -67,7 +78,19 @@ def _size(shape) -> float:
         return min(shape.size)
     if isinstance(shape, sc.Ellipsoid):
         return 2 * min(shape.a, shape.b, shape.c)
+    if isinstance(shape, sc.Mesh):
+        low, high = _collision_geometry(shape).GetConvexHull().CalcBoundingBox()
+        return float(min(high - low))
     return 2 * shape.radius
+
+
+def _spatial_inertia(shape, mass: float) -> SpatialInertia:
+    """A solid of uniform density: about the body frame's origin (a mesh's centre of mass
+    is wherever its file puts it; the primitives' is the origin)."""
+    if isinstance(shape, sc.Mesh):
+        unit = CalcSpatialInertia(_collision_geometry(shape), 1.0)  # its convex hull's
+        return SpatialInertia(mass, unit.get_com(), unit.get_unit_inertia())
+    return SpatialInertia(mass, np.zeros(3), _unit_inertia(shape))
 
 
 def _unit_inertia(shape) -> UnitInertia:
@@ -98,27 +121,44 @@ def _add_world(plant: MultibodyPlant, world: sc.World) -> dict:
     bodies = {}
     for name, spec in world.bodies.items():
         instance = plant.AddModelInstance(name)
-        shape = _geometry(spec.shape)
         if spec.fixed:
             body = plant.AddRigidBody(name, instance, SpatialInertia.Zero())
             plant.WeldFrames(plant.world_frame(), body.body_frame(),
                              spec.pose.GetDeterministicValue())
         else:
-            body = plant.AddRigidBody(name, instance, SpatialInertia(
-                spec.mass, np.zeros(3), _unit_inertia(spec.shape)))
+            body = plant.AddRigidBody(name, instance, _spatial_inertia(spec.shape, spec.mass))
             plant.SetDefaultFloatingBaseBodyPose(body, spec.pose.GetDeterministicValue())
-        props = ProximityProperties()
-        AddContactMaterial(friction=CoulombFriction(spec.friction, spec.friction),
-                           properties=props)
-        if spec.hydroelastic_modulus > 0:
-            AddCompliantHydroelasticProperties(
-                resolution_hint=_HYDRO_RESOLUTION_FRACTION * _size(spec.shape),
-                hydroelastic_modulus=spec.hydroelastic_modulus, properties=props)
-        plant.RegisterCollisionGeometry(body, RigidTransform(), shape, name, props)
-        plant.RegisterVisualGeometry(body, RigidTransform(), shape, name,
+        plant.RegisterCollisionGeometry(body, RigidTransform(), _collision_geometry(spec.shape),
+                                        name, _body_contact(spec))
+        plant.RegisterVisualGeometry(body, RigidTransform(), _geometry(spec.shape), name,
                                      np.asarray(spec.color, dtype=float))
         bodies[name] = body
     return bodies
+
+
+def _body_contact(spec: sc.WorldBody) -> ProximityProperties:
+    """A world body's friction and hydroelastic properties: compliant with a modulus; without,
+    point contact, except a mesh touching with its own surface (rigid hydroelastic: Drake's
+    point contact would use its convex hull)."""
+    props = ProximityProperties()
+    AddContactMaterial(friction=CoulombFriction(spec.friction, spec.friction), properties=props)
+    if spec.hydroelastic_modulus > 0:
+        AddCompliantHydroelasticProperties(
+            resolution_hint=_HYDRO_RESOLUTION_FRACTION * _size(spec.shape),
+            hydroelastic_modulus=spec.hydroelastic_modulus, properties=props)
+    elif isinstance(spec.shape, sc.Mesh) and spec.shape.collision == "mesh":
+        AddRigidHydroelasticProperties(properties=props)
+    return props
+
+
+def _add_directives(plant: MultibodyPlant, directives: list) -> dict:
+    """The scenario's model directives (Drake's `ProcessModelDirectives`); returns {model
+    name: model instance} of the models they add."""
+    if not directives:
+        return {}
+    added = ProcessModelDirectives(ModelDirectives(directives=directives), plant,
+                                   make_parser(plant))
+    return {info.model_name: info.model_instance for info in added}
 
 
 @dc.dataclass
@@ -152,15 +192,17 @@ class Station:
     scene_graph: object
     robots: dict[str, RobotParts]
     bodies: dict
+    """{name: body} of the world's bodies (`world.bodies`)."""
+    models: dict = dc.field(default_factory=dict)
+    """{model name: model instance} of the models the scenario's directives add."""
     meshcat: object = None
     renderers: dict = dc.field(default_factory=dict)
     """The cameras' render engines: renderer name -> "RenderEngineGl" or "RenderEngineVtk"."""
 
 
 def _add_robot(plant: MultibodyPlant, name: str, robot: sc.Robot):
-    parser = Parser(plant)
-    parser.package_map().AddPackageXml(str(MODELS_DIR / "package.xml"))
-    (instance,) = parser.AddModelsFromString(corobot_sdf(name, robot.contact, robot.visual), "sdf")
+    sdf = corobot_sdf(name, robot.contact, robot.visual)
+    (instance,) = make_parser(plant).AddModelsFromString(sdf, "sdf")
     chassis = plant.GetBodyByName("chassis", instance)
     plant.SetDefaultFloatingBaseBodyPose(chassis, robot.pose.GetDeterministicValue())
     joints = [plant.GetJointByName(f"{w}_axle", instance) for w in dim.WHEEL_NAMES]
@@ -176,6 +218,7 @@ def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None, foxglov
     builder = DiagramBuilder()
     plant, scene_graph = AddMultibodyPlant(scenario.plant_config, builder)
     bodies = _add_world(plant, scenario.world)
+    models = _add_directives(plant, scenario.directives)
     added = {name: _add_robot(plant, name, robot) for name, robot in scenario.robots.items()}
     plant.Finalize()
 
@@ -240,7 +283,7 @@ def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None, foxglov
         _add_meshcat(builder, plant, scene_graph, meshcat, scenario.world)
     diagram = builder.Build()
     diagram.set_name("corobot_station")
-    return Station(diagram, plant, scene_graph, robots, bodies, meshcat, renderers)
+    return Station(diagram, plant, scene_graph, robots, bodies, models, meshcat, renderers)
 
 
 def visualization_config():

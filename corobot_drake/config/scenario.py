@@ -16,6 +16,7 @@ from typing import Union
 
 from pydrake.common.schema import Transform
 from pydrake.common.yaml import yaml_dump_typed
+from pydrake.multibody.parsing import ModelDirective
 from pydrake.multibody.plant import MultibodyPlantConfig
 from pydrake.systems.analysis import SimulatorConfig
 from pydrake.systems.sensors import CameraConfig
@@ -64,8 +65,30 @@ class Ellipsoid:
     c: float = 0.5
 
 
+@dc.dataclass
+class Mesh:
+    """A mesh file: drawn as it is (OBJ or glTF), touching others through `collision`."""
+
+    filename: str = ""
+    """A path relative to the scenario file (an --override's: to the working directory), an
+    absolute path or a `package://` URI (`package://corobot_drake/...`: the project's
+    `models/`)."""
+    scale: float = 1.0
+    """Uniform scale from the file's units to metres."""
+    collision: str = "convex_hull"
+    """`convex_hull`: contact with the mesh's convex hull (compliant hydroelastic, or point
+    contact when `hydroelastic_modulus` is 0); `mesh`: with the mesh's own surface, rigid
+    hydroelastic (`hydroelastic_modulus` must be 0): the one way Drake takes a concave surface
+    into contact (its point contact uses the convex hull)."""
+
+
+MESH_COLLISIONS = ("convex_hull", "mesh")
+MESH_EXTENSIONS = (".obj", ".gltf", ".glb")
+"""The mesh files a world body may use: what Meshcat, the cameras' renderers and Drake's
+convex hull all read."""
+
 # typing.Union, not `|`: the YAML tags (!Box ...) are read from a Union's members.
-Shape = Union[Box, Sphere, Cylinder, Capsule, Ellipsoid]  # noqa: UP007
+Shape = Union[Box, Sphere, Cylinder, Capsule, Ellipsoid, Mesh]  # noqa: UP007
 
 # --- world ------------------------------------------------------------------------------
 
@@ -275,6 +298,11 @@ class Scenario:
     plant_config: MultibodyPlantConfig = dc.field(default_factory=_default_plant_config)
     simulator_config: SimulatorConfig = dc.field(default_factory=SimulatorConfig)
     world: World = dc.field(default_factory=World)
+    directives: list[ModelDirective] = dc.field(default_factory=list)
+    """Models from SDFormat, URDF or MJCF files, as Drake's `ModelDirectives` (`add_model`,
+    `add_weld`, `add_frame`, ...; `ProcessModelDirectives`). `file` is a `package://` URI
+    (`package://corobot_drake/...`: the project's `models/`), an absolute `file:///` URI, or a
+    `file://` URI relative to the scenario file."""
     robots: dict[str, Robot] = dc.field(default_factory=dict)
 
 
@@ -312,16 +340,44 @@ def load_scenario(filename: str | Path | None = None, *, data: str | None = None
     from corobot_drake.config.validate import load_layer  # it imports this schema
 
     scenario = defaults or Scenario()
+    # (source, text, the directory its relative file references are relative to)
     layers = []
     if filename is not None:
-        layers.append((str(filename), read_text(filename)))
+        layers.append((str(filename), read_text(filename), Path(filename).parent))
     if data is not None:
-        layers.append(("<scenario text>", data))
-    layers += [("--override", text) for text in overrides]
-    for source, text in layers:
+        layers.append(("<scenario text>", data, Path.cwd()))
+    layers += [("--override", text, Path.cwd()) for text in overrides]
+    for source, text, base in layers:
         scenario, checks = load_layer(source, text, Scenario, scenario)
+        resolve_paths(scenario, base)
         checks.validate(scenario)  # what the types cannot say
     return scenario
+
+
+def resolve_path(path: str, base: Path) -> str:
+    """A world mesh's filename as an absolute path: relative ones against `base`, the
+    scenario file's directory; `package://` URIs stay (resolved as the station builds)."""
+    if not path or path.startswith("package://") or Path(path).is_absolute():
+        return path
+    return str((base / path).resolve())
+
+
+def resolve_uri(uri: str, base: Path) -> str:
+    """A directive's model URI for Drake: a `file://` URI with a relative path becomes the
+    absolute `file:///...` against `base`; any other is left for Drake's parser."""
+    if not uri.startswith("file://") or uri.startswith("file:///"):
+        return uri
+    return (base / uri[len("file://"):]).resolve().as_uri()
+
+
+def resolve_paths(scenario: Scenario, base: Path) -> None:
+    """Makes the scenario's relative file references absolute against `base` (in place)."""
+    for body in scenario.world.bodies.values():
+        if isinstance(body.shape, Mesh):
+            body.shape.filename = resolve_path(body.shape.filename, base)
+    for directive in scenario.directives:
+        if directive.add_model is not None:
+            directive.add_model.file = resolve_uri(directive.add_model.file, base)
 
 
 def save_scenario(scenario: Scenario, filename: str | Path) -> None:

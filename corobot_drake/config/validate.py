@@ -18,6 +18,7 @@ import math
 import re
 import types
 import typing
+from pathlib import Path
 from typing import Union
 
 import numpy as np
@@ -25,10 +26,14 @@ import yaml
 from pydrake.common import pretty_class_name
 from pydrake.common.yaml import yaml_load_typed
 from pydrake.geometry import RenderEngineGlParams, RenderEngineVtkParams
+from pydrake.multibody.parsing import ModelDirectives, ProcessModelDirectives
+from pydrake.multibody.plant import MultibodyPlant
+from pydrake.multibody.tree import SpatialInertia
 
 from corobot_drake.config import scenario as sc
 from corobot_drake.config.sensors import RENDERERS, IrSensorConfig
 from corobot_drake.model.sdf import LINKS, VISUALS
+from corobot_drake.resources import make_parser, resolve_file
 from corobot_drake.sensors.ir_models import MODELS as IR_MODELS
 
 # --- 1. the YAML against the schema --------------------------------------------------------
@@ -260,6 +265,7 @@ class LayerChecks:
         self._plant_config(s.plant_config)
         for name, body in s.world.bodies.items():
             self._world_body(f"world.bodies.{name}", body)
+        self._directives(s)
         if len(s.world.sky_color) != 3:
             self.fail("world.sky_color", "needs 3 numbers RGB")
         for name, robot in s.robots.items():
@@ -290,7 +296,53 @@ class LayerChecks:
             self.fail(f"{path}.color", "needs 4 numbers RGBA")
         if isinstance(body.shape, sc.Box) and len(body.shape.size) != 3:
             self.fail(f"{path}.shape.size", "needs 3 numbers")
+        if isinstance(body.shape, sc.Mesh):
+            self._mesh(f"{path}.shape", body.shape, body)
         self._world_pose(f"{path}.pose", body.pose)
+
+    def _mesh(self, path: str, mesh: sc.Mesh, body: sc.WorldBody) -> None:
+        try:
+            filename = resolve_file(mesh.filename)
+        except RuntimeError as e:
+            self.fail(f"{path}.filename", sc.one_line(e).removeprefix("error: "))
+        if Path(filename).suffix.lower() not in sc.MESH_EXTENSIONS:
+            self.fail(f"{path}.filename", f"{mesh.filename!r}: a mesh file is one of "
+                      + ", ".join(sc.MESH_EXTENSIONS))
+        if not Path(filename).is_file():
+            self.fail(f"{path}.filename", f"no such file {filename!r}")
+        if filename.lower().endswith(".obj") and not _has_normals(filename):
+            self.fail(f"{path}.filename", f"{filename!r} has no vertex normals (vn): the "
+                      "cameras' renderer needs them")
+        if not (mesh.scale > 0 and math.isfinite(mesh.scale)):
+            self.fail(f"{path}.scale", "must be > 0")
+        if mesh.collision not in sc.MESH_COLLISIONS:
+            self.fail(f"{path}.collision", f"{mesh.collision!r} is not one of "
+                      + ", ".join(sc.MESH_COLLISIONS))
+        if mesh.collision == "mesh" and body.hydroelastic_modulus > 0:
+            self.fail(f"{path}.collision", "a surface mesh touches rigidly: set the body's "
+                      "hydroelastic_modulus to 0, or use convex_hull (compliant)")
+
+    def _directives(self, s: sc.Scenario) -> None:
+        """Names that clash with the scenario's, then Drake's own processing of the
+        directives into a scratch plant (files, formats, frame names), its first line."""
+        for i, directive in enumerate(s.directives):
+            model = directive.add_model
+            if model is None:
+                continue
+            path = f"directives[{i}].add_model"
+            if model.name in s.robots or model.name in s.world.bodies:
+                self.fail(f"{path}.name", f"{model.name!r} already names a robot or a world "
+                          "body")
+        if not s.directives:
+            return
+        plant = MultibodyPlant(0.0)
+        for name in s.world.bodies:  # what a directive may weld to
+            plant.AddRigidBody(name, plant.AddModelInstance(name), SpatialInertia.Zero())
+        try:  # all at once: a weld refers to the models added before it
+            ProcessModelDirectives(ModelDirectives(directives=s.directives), plant,
+                                   make_parser(plant))
+        except Exception as e:  # Drake's message (it names the file or frame), one line
+            self.fail("directives", sc.one_line(e).removeprefix("error: "))
 
     def _robot(self, name: str, robot: sc.Robot, s: sc.Scenario) -> None:
         path = f"robots.{name}"
@@ -417,6 +469,11 @@ class LayerChecks:
                       f"must be >= 0 m and finite; got {c.change_threshold}")
         if not c.noise_std >= 0.0:
             self.fail(f"{path}.noise_std", f"must be >= 0 V; got {c.noise_std}")
+
+
+def _has_normals(obj_filename: str) -> bool:
+    with open(obj_filename, errors="replace") as f:
+        return any(line.startswith("vn ") for line in f)
 
 
 def load_layer(source: str, text: str, schema, defaults=None):
