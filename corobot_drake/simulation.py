@@ -496,7 +496,25 @@ class Simulation:
             if not spec.fixed:
                 spec.pose = transform_from(plant.EvalBodyPoseInWorld(plant_context, body))
                 spec.velocity = velocity(body)
+        self._save_directive_poses(saved)
         return saved
+
+    def _save_directive_poses(self, saved: sc.Scenario) -> None:
+        """The free bodies of the directives' models start where they are now (their
+        `default_free_body_pose`; a directive has no initial velocity: they start at rest)."""
+        plant = self.station.plant
+        plant_context = plant.GetMyContextFromRoot(self.context)
+        for directive in saved.directives:
+            model = directive.add_model
+            if model is None or model.name not in self.station.models:
+                continue
+            poses = model.default_free_body_pose  # a copy (a C++ map): set it back
+            for index in plant.GetBodyIndices(self.station.models[model.name]):
+                body = plant.get_body(index)
+                if body.is_floating_base_body():
+                    poses[body.name()] = transform_from(
+                        plant.EvalBodyPoseInWorld(plant_context, body))
+            model.default_free_body_pose = poses
 
     def save_scenario(self, filename: str | Path) -> None:
         """Writes `saved_scenario()` as a scenario YAML file."""

@@ -1,7 +1,6 @@
 """Models of your own in the world: Drake model directives (SDFormat files) and `!Mesh` world
 bodies, seen by the IR sensors, the camera, the summary and Meshcat like any other body."""
 
-import numpy as np
 import pytest
 from pydrake.geometry import Role, StartMeshcat
 
@@ -176,11 +175,20 @@ def test_bad_models_stop_with_one_line(override, message):
 
 
 def test_directives_round_trip_through_a_saved_scenario(tmp_path):
-    sim = make_sim(scenario=MAZE)
-    sim.advance(0.2)
+    """The maze's directives save as they were; a free model (the pillar of the test above,
+    unwelded, dropped) saves where it has come to rest."""
+    (tmp_path / "pillar.sdf").write_text(PILLAR_SDF.replace(
+        '<link name="column">', '<link name="column"><inertial><mass>1</mass></inertial>'))
+    sim = make_sim(f"""directives:
+- add_model: {{name: pillar, file: "file://{tmp_path}/pillar.sdf",
+    default_free_body_pose: {{column: {{translation: [0.6, 0.5, 0.1]}}}}}}""", scenario=MAZE)
+    sim.advance(1.0)
+    rest = sim.summary()["bodies"]["pillar::column"]["pose"]
+    assert rest["z"] == pytest.approx(0.0, abs=2e-3)  # fallen onto its base (point contact)
     path = tmp_path / "saved.yaml"
     sim.save_scenario(path)
-    again = load_scenario(path)
-    assert [d.add_model.file for d in again.directives if d.add_model] == [
-        "package://corobot_drake/maze.sdf"]
-    assert np.allclose(again.directives[0].add_frame.X_PF.translation, [0.5, 0, 0])
+    again = Simulation(load_scenario(path))
+    assert [d.add_model.file for d in again.scenario.directives if d.add_model] == [
+        f"file://{tmp_path}/pillar.sdf"]
+    again_rest = again.summary()["bodies"]["pillar::column"]["pose"]
+    assert [again_rest[k] for k in "xyz"] == pytest.approx([rest[k] for k in "xyz"], abs=1e-9)
