@@ -330,6 +330,8 @@ class LayerChecks:
             if model is None:
                 continue
             path = f"directives[{i}].add_model"
+            if not model.file:
+                self.fail(f"{path}.file", "needs the model's URI: package://... or file://...")
             if model.name in s.robots or model.name in s.world.bodies:
                 self.fail(f"{path}.name", f"{model.name!r} already names a robot or a world "
                           "body")
