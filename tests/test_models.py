@@ -48,6 +48,22 @@ def test_maze_ir_sees_the_directive_models_walls_while_driving():
     assert robot.ir("rear").raw == dim.IR_MAXIMUM_RANGE
 
 
+def test_driving_into_a_maze_wall_stops_at_it():
+    """The rigid hydroelastic walls against the compliant tyres: the robot pushes at full
+    power, stays on the ground and upright, its front tyres against the wall (they stick out
+    past the chassis)."""
+    sim = make_sim(scenario=MAZE)
+    robot = sim.robot()
+    robot.set_power(1.0, 1.0)
+    sim.advance(4.0)  # reaches the wall (1.2 m at 0.6 m/s) and pushes for ~2 s
+    face = box_face(sim, "inner_a", 0, -1)
+    # 2 mm: the tyre's compliant patch (measured 0.5 mm into the wall).
+    assert robot.pose().x == pytest.approx(face - dim.HALF_WHEELBASE - dim.WHEEL_RADIUS,
+                                           abs=2e-3)
+    assert robot.max_tilt_deg() < 5.0  # measured 2 deg: it neither climbs nor flips
+    assert abs(robot.pose().z) < 1e-3
+
+
 def test_maze_in_the_summary_camera_and_meshcat():
     meshcat = StartMeshcat()
     scenario = load_scenario(MAZE)
