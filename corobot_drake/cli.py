@@ -97,8 +97,8 @@ def _run_interactive(sim: Simulation, meshcat, duration: float) -> None:
 
     teleop = MeshcatTeleop(meshcat, sim)
     sim.simulator.set_target_realtime_rate(1.0)
-    print(f"Meshcat: {meshcat.web_url()}  (arrows drive, Space stops, E enables; Ctrl-C quits)",
-          flush=True)
+    print(f"Meshcat: {meshcat.web_url()}  (hold the arrows to drive, Space stops, E enables, F "
+          "follows; Ctrl-C quits)", flush=True)
     end = sim.time + duration
     try:
         while sim.time < end:

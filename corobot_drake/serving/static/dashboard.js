@@ -121,6 +121,12 @@ document.addEventListener("keyup", (e) => {
   state.keys.delete(KEYS[e.code]);
   if (!state.keys.size) stopDriving();
 });
+// A key held while the page loses focus never sends its keyup here: stop instead.
+window.addEventListener("blur", () => {
+  if (!state.keys.size) return;
+  state.keys.clear();
+  stopDriving();
+});
 
 $("stop").addEventListener("click", () => { state.keys.clear(); stopDriving(); });
 function toggleEnable() { send("enable", { enabled: !state.enabled }); }
