@@ -2,6 +2,7 @@
 instance shared by the module's tests, and a separately started head joined by address)."""
 
 import csv
+import math
 from pathlib import Path
 
 import pytest
@@ -87,39 +88,112 @@ def test_a_bad_study_is_one_line_naming_the_field(tmp_path, text, expected):
     assert message.startswith(str(path)) and expected in message and "\n" not in message
 
 
+def test_paths_reach_command_fields_and_programs(tmp_path):
+    from corobot_drake.config.scenario import DriveDistance, SetPower
+    from corobot_drake.study.runner import run_scenario
+
+    path = tmp_path / "s.yaml"
+    path.write_text(f"""scenario: {DEFAULT_SCENARIO}
+grid:
+  box_approach.direction: [forwards]
+  box_approach.angle_deg: [30.0]
+box_approach: {{power: 0.5}}
+overrides: ["robots: {{corobot: {{commands: [!Wait {{}}, !DriveDistance {{}}]}}}}"]
+""")
+    study = load_study(path)
+    (run,) = expand(study)
+    assert run.overrides() == ['{"random_seed": 1}']  # program paths are not overrides
+    robot = run_scenario(study, DEFAULT_SCENARIO, run).robots["corobot"]
+    assert robot.commands == [SetPower(0.5, 0.5)]  # the program's script, forwards at 0.5
+    yaw = robot.pose.GetDeterministicValue().rotation().ToRollPitchYaw().yaw_angle()
+    assert yaw == pytest.approx(math.radians(-150.0))  # 180 + 30 deg: the box ahead, oblique
+    # A list index reaches into the script (the value checked as in a scenario) ...
+    study.box_approach = None
+    study.grid = {"robots.corobot.commands.1.distance": [2],
+                  "robots.corobot.commands.1.power": [1]}
+    (run,) = expand(study)
+    assert run.overrides() == ['{"random_seed": 1}'] and len(run.indexed()) == 2
+    assert run_scenario(study, DEFAULT_SCENARIO, run).robots["corobot"].commands[1] == \
+        DriveDistance(2.0, 1.0)  # ints become the fields' floats
+    for power, error, match in (
+            (1.5, ScenarioError, r"commands\[1\].power: must be in \(0, 1\], got 1.5"),
+            ("fast", ValueError, "commands.1.power: expected float, got 'fast'")):
+        study.grid["robots.corobot.commands.1.power"] = [power]
+        with pytest.raises(error, match=match):
+            run_scenario(study, DEFAULT_SCENARIO, expand(study)[0])
+    # ... and past its end is an error naming the list's length.
+    study.grid = {"robots.corobot.commands.2.distance": [2]}
+    with pytest.raises(ValueError, match=r"robots.corobot.commands.2: the list has 2 items"):
+        run_scenario(study, DEFAULT_SCENARIO, expand(study)[0])
+
+
+@pytest.mark.parametrize("text, expected", [
+    ("grid: {drive_test.power: [0.5]}\n", "grid.drive_test.power: the study has no drive_test"),
+    ("grid: {box_approach.speed: [1]}\nbox_approach: {}\n",
+     "box_approach has no field 'speed'; fields: direction, angle_deg, power, robot"),
+    ("grid: {box_approach.direction: [up]}\nbox_approach: {}\n",
+     "direction 'up' is not one of backwards, forwards"),
+])
+def test_a_bad_program_path_is_one_line(tmp_path, text, expected):
+    path = tmp_path / "bad.yaml"
+    path.write_text(f"scenario: x.yaml\n{text}")
+    with pytest.raises(ScenarioError, match=expected):
+        load_study(path)
+
+
 # --- studies on Ray ------------------------------------------------------------------------
 
-def test_a_study_joins_a_separately_started_ray_head(tmp_path):
+@pytest.fixture(scope="module")
+def ray_head():
+    """A separately started Ray head (2 CPUs, no dashboard, its own processes), shut down
+    through its handle at the module's end; the module's studies run on it."""
     ray = pytest.importorskip("ray")
     from ray.cluster_utils import Cluster
 
     assert not ray.is_initialized()
     cluster = Cluster(initialize_head=True, head_node_args={
         "num_cpus": 2, "include_dashboard": False})
-    try:
-        study_file = write_study(tmp_path, scalings="10.16")
-        table = rows(engine.run_study(study_file, tmp_path / "out", address=cluster.address,
-                                      progress=False))
-        assert [r["status"] for r in table] == ["ok", "ok"]
-        assert not ray.is_initialized()  # the study disconnected; the head is still ours
-    finally:
-        cluster.shutdown()
+    yield cluster
+    if ray.is_initialized():
+        ray.shutdown()
+    cluster.shutdown()
+
+
+def test_a_study_joins_a_separately_started_ray_head(tmp_path, ray_head):
+    import ray
+
+    # Runs before `connected` (file order): the study itself joins by address and leaves.
+    assert not ray.is_initialized()
+    study_file = write_study(tmp_path, scalings="10.16")
+    table = rows(engine.run_study(study_file, tmp_path / "out", address=ray_head.address,
+                                  progress=False))
+    assert [r["status"] for r in table] == ["ok", "ok"]
+    assert not ray.is_initialized()  # the study disconnected; the head is still ours
 
 
 @pytest.fixture(scope="module")
-def local_ray():
-    """One local Ray instance (2 CPUs, no dashboard) for the module; stopped at its end."""
-    ray = pytest.importorskip("ray")
-    ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False,
-             configure_logging=False)
+def connected(ray_head):
+    """This process connected to the module's head: a study then uses the caller's session
+    (as in a notebook) instead of starting its own."""
+    import ray
+
+    ray.init(address=ray_head.address, log_to_driver=False, configure_logging=False)
     yield
-    ray.shutdown()
 
 
-def test_a_tiny_study_end_to_end(tmp_path, local_ray):
-    study_file = write_study(tmp_path)
-    out = tmp_path / "out"
-    table = rows(engine.run_study(study_file, out, workers=2, progress=False))
+@pytest.fixture(scope="module")
+def tiny_study(tmp_path_factory, connected):
+    """The tiny study (2 scalings x 2 seeds, 0.3 s each) run once with 2 workers: (study file,
+    output directory), shared by the tests that read it."""
+    tmp = tmp_path_factory.mktemp("tiny")
+    study_file = write_study(tmp)
+    engine.run_study(study_file, tmp / "out", workers=2, progress=False)
+    return study_file, tmp / "out"
+
+
+def test_a_tiny_study_end_to_end(tiny_study):
+    study_file, out = tiny_study
+    table = rows(out / "runs.csv")
     assert [r["status"] for r in table] == ["ok"] * 4
     # Full power for 0.3 s. Scaling 6.0 caps the axle at 6 rad/s, reached after 0.2 s at the
     # 30 rad/s^2 slew: by 0.3 s the robot rolls at 6 x R (0.362 m/s; the soft tyres' effective
@@ -135,25 +209,32 @@ def test_a_tiny_study_end_to_end(tmp_path, local_ray):
     assert (out / "tiny.yaml").read_text() == study_file.read_text()
 
 
-def test_one_and_two_workers_give_the_same_rows(tmp_path, local_ray):
-    study_file = write_study(tmp_path)
+def test_one_and_two_workers_give_the_same_rows(tmp_path, tiny_study):
+    study_file, out = tiny_study
     one = rows(engine.run_study(study_file, tmp_path / "one", workers=1, progress=False))
-    two = rows(engine.run_study(study_file, tmp_path / "two", workers=2, progress=False))
-    assert without_timing(one) == without_timing(two)
+    assert without_timing(one) == without_timing(rows(out / "runs.csv"))
 
 
-def test_a_bad_run_is_an_error_row_and_the_others_complete(tmp_path, local_ray):
+def test_a_bad_run_is_an_error_row_and_the_others_complete(tmp_path, connected, capsys):
+    from corobot_drake.study.__main__ import main
+
     study_file = write_study(tmp_path, scalings="-1.0, 10.16")
-    table = rows(engine.run_study(study_file, tmp_path / "out", workers=2, progress=False))
+    assert main([str(study_file), "--out", str(tmp_path / "out"), "--quiet"]) == 1
+    captured = capsys.readouterr()
+    assert "4 runs (2 errors)" in captured.out and "run 0: " in captured.err
+    table = rows(tmp_path / "out" / "runs.csv")
     assert [r["status"] for r in table] == ["error", "error", "ok", "ok"]
     assert "motor_torque_scaling: must be > 0" in table[0]["error"]
     assert table[2]["corobot.x"] != ""
+    assert main([str(tmp_path / "missing.yaml")]) == 2
+    assert "cannot read the file" in capsys.readouterr().err
 
 
-def test_resume_simulates_only_the_missing_runs(tmp_path, local_ray):
-    study_file = write_study(tmp_path)
+def test_resume_simulates_only_the_missing_runs(tmp_path, tiny_study):
+    study_file, full_out = tiny_study
+    full = rows(full_out / "runs.csv")
     out = tmp_path / "out"
-    full = rows(engine.run_study(study_file, out, workers=2, progress=False))
+    out.mkdir()
     kept = [dict(r, wall_seconds="12345") for r in full if r["run"] in ("0", "3")]
     with (out / "runs.csv").open("w", newline="") as f:  # as if stopped after runs 0 and 3
         writer = csv.DictWriter(f, list(full[0]))
@@ -164,17 +245,7 @@ def test_resume_simulates_only_the_missing_runs(tmp_path, local_ray):
     assert [r["wall_seconds"] == "12345" for r in resumed] == [True, False, False, True]
 
 
-def test_the_command_line_writes_the_study(tmp_path, local_ray, capsys):
-    from corobot_drake.study.__main__ import main
-
-    study_file = write_study(tmp_path, scalings="10.16")
-    assert main([str(study_file), "--out", str(tmp_path / "o"), "--quiet"]) == 0
-    assert "2 runs (0 errors)" in capsys.readouterr().out
-    assert main([str(tmp_path / "missing.yaml")]) == 2
-    assert "cannot read the file" in capsys.readouterr().err
-
-
-def test_the_drive_test_study_and_the_drive_test_tool_agree(tmp_path, local_ray):
+def test_the_drive_test_study_and_the_drive_test_tool_agree(tmp_path, connected):
     from corobot_drake.analysis import drive_test
 
     table = drive_test.run_study_of_seeds([1], 1, "closed_loop", 0.2, tmp_path, workers=1)
@@ -209,26 +280,31 @@ def _alive(pid: int) -> bool:
     return state != "Z"
 
 
-def test_ctrl_c_keeps_the_finished_rows_and_stops_ray(tmp_path):
+def test_ctrl_c_keeps_the_finished_rows_and_stops_ray(tmp_path, connected, capsys):
     """Ctrl-C (SIGINT) mid-study: exit 130, the finished rows kept, every process the study
-    started gone; --resume then runs only the rest."""
+    started gone (its own local Ray instance); --resume then runs only the rest."""
     import signal
     import subprocess
     import sys
     import time
 
+    from corobot_drake.study.__main__ import main
+
+    # 6 runs of 2 s on one worker, each a few tenths of a second or more: the first row is
+    # written at once, and the signal follows it within 50 ms, long before the last run.
     study_file = tmp_path / "long.yaml"
     study_file.write_text(TINY.format(scenario=DEFAULT_SCENARIO, scalings="10.16").replace(
-        "seeds: 2", "seeds: 12").replace("duration: 0.3", "duration: 1.5"))
+        "seeds: 2", "seeds: 6").replace("duration: 0.3", "duration: 2.0"))
     out = tmp_path / "out"
     command = [sys.executable, "-m", "corobot_drake.study", str(study_file), "--out", str(out),
                "--workers", "1", "--quiet"]
-    study = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    study = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                             preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     try:
         deadline = time.monotonic() + 90
-        while not ((out / "runs.csv").exists() and len(rows(out / "runs.csv")) >= 2):
+        while not ((out / "runs.csv").exists() and rows(out / "runs.csv")):
             assert time.monotonic() < deadline and study.poll() is None, "no rows written"
-            time.sleep(0.2)
+            time.sleep(0.05)
         started = _descendants(study.pid)
         study.send_signal(signal.SIGINT)
         _, err = study.communicate(timeout=60)
@@ -238,11 +314,12 @@ def test_ctrl_c_keeps_the_finished_rows_and_stops_ray(tmp_path):
     assert study.returncode == 130, err
     assert "--resume" in err
     kept = rows(out / "runs.csv")
-    assert 2 <= len(kept) < 12 and all(r["status"] == "ok" for r in kept)
+    assert 1 <= len(kept) < 6 and all(r["status"] == "ok" for r in kept)
     time.sleep(1.0)
     assert not [pid for pid in started if _alive(pid)]  # Ray's processes went with it
-    done = subprocess.run([*command, "--resume"], capture_output=True, text=True, timeout=180)
-    assert done.returncode == 0, done.stderr
+    # Resumed from the command line (in this process, on the module's Ray head).
+    assert main([str(study_file), "--out", str(out), "--resume", "--quiet"]) == 0
+    assert "6 runs (0 errors)" in capsys.readouterr().out
     resumed = rows(out / "runs.csv")
-    assert [r["run"] for r in resumed] == [str(i) for i in range(12)]
+    assert [r["run"] for r in resumed] == [str(i) for i in range(6)]
     assert [r["wall_seconds"] for r in resumed[:len(kept)]] == [r["wall_seconds"] for r in kept]

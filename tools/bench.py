@@ -58,11 +58,12 @@ def _micro_benchmarks() -> None:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0],
+                                     formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     parser.add_argument("--seconds", type=float, default=10.0, help="simulated s per run")
-    parser.add_argument("--repeats", type=int, default=3)
-    parser.add_argument("--stacks", help="only stacks containing this text")
-    parser.add_argument("--plants", help="only plant settings containing this text")
+    parser.add_argument("--repeats", type=int, default=3, help="runs of each; the median")
+    parser.add_argument("--stacks", help="only stacks containing this text (None: all)")
+    parser.add_argument("--plants", help="only plant settings containing this text (None: all)")
     parser.add_argument("--no-micro", action="store_true",
                         help="skip the IR and camera micro-benchmarks")
     args = parser.parse_args()

@@ -15,11 +15,13 @@ from corobot_drake.analysis.bench_camera import RENDERERS, camera_frame_ms, came
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--frames", type=int, default=90)
-    parser.add_argument("--seconds", type=float, default=3.0)
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0],
+                                     formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    parser.add_argument("--frames", type=int, default=90, help="frames rendered per run")
+    parser.add_argument("--seconds", type=float, default=3.0, help="simulated s per run")
     parser.add_argument("--repeats", type=int, default=3, help="median of this many runs")
-    parser.add_argument("--renderers", nargs="+", default=list(RENDERERS), choices=RENDERERS)
+    parser.add_argument("--renderers", nargs="+", default=list(RENDERERS), choices=RENDERERS,
+                        help="renderers to measure")
     args = parser.parse_args()
 
     def median(fn, **kwargs):

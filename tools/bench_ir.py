@@ -88,9 +88,10 @@ def _print_in_place(med: dict[str, Run]) -> None:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0],
+                                     formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     parser.add_argument("--seconds", type=float, default=10.0, help="simulated s per RTF run")
-    parser.add_argument("--repeats", type=int, default=5)
+    parser.add_argument("--repeats", type=int, default=5, help="runs of each; the median")
     args = parser.parse_args()
     quiet_drake_warnings()
     print(f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")

@@ -25,7 +25,8 @@ from corobot_drake.analysis.bench_raycast import (
 
 
 def main() -> None:
-    argparse.ArgumentParser(description=__doc__.splitlines()[0]).parse_args()
+    argparse.ArgumentParser(description=__doc__.splitlines()[0],
+                            formatter_class=argparse.ArgumentDefaultsHelpFormatter).parse_args()
     _, context, plant, scene_graph, chassis, robot = build_scene()
     caster, scan = make_fan_scan(plant, scene_graph, chassis, robot, context)
     distances = scan()

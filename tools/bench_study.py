@@ -17,7 +17,8 @@ from corobot_drake.simulation import quiet_drake_warnings
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0],
+                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     p.add_argument("--seeds", type=int, default=12, help="runs (seeds of one scenario)")
     p.add_argument("--duration", type=float, default=4.0, help="simulated s per run")
     args = p.parse_args(argv)

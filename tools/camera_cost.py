@@ -15,7 +15,8 @@ from corobot_drake.analysis.camera_cost import VIEWS, meshes_vs_boxes_ms
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0],
+                                     formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     parser.add_argument("--frames", type=int, default=300, help="frames of each, alternated")
     args = parser.parse_args()
     print("| view (320x240) | boxes, ms/frame | meshes, ms/frame | meshes / boxes |")

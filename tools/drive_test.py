@@ -52,23 +52,31 @@ def _many_seeds(args) -> None:
           + " ".join(f"{v:.2f}" for v in drift.mean(axis=0))
           + f"; drift per loop {per_loop.mean():.2f} mm mean, {per_loop.max():.2f} max; "
           f"{sum(len(r['failures']) for r in table)} failed commands; study files in {out}")
+    plot = args.plot or out / "drift.png"
+    drive_test.plot_drift(table, args.profile, plot)
+    print(f"drift plot: {plot}")
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--loops", type=int, default=3)
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--profile", choices=sc.PROFILES, default="closed_loop")
-    p.add_argument("--power", type=float, default=0.2)
-    p.add_argument("--plot", default="drive_test.png", help="PNG of the path (single seed)")
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0],
+                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    p.add_argument("--loops", type=int, default=3, help="loops of the test")
+    p.add_argument("--seed", type=int, default=0, help="the legs' seed (the first, with --seeds)")
+    p.add_argument("--profile", choices=sc.PROFILES, default="closed_loop",
+                   help="landing profile")
+    p.add_argument("--power", type=float, default=0.2, help="power of every command")
+    p.add_argument("--plot", default=None,
+                   help="PNG: the path (one seed) or the drift per loop over seeds (None: "
+                   "drive_test.png, or OUT/drift.png with --seeds)")
     p.add_argument("--seeds", type=int, default=1,
-                   help="run seeds SEED .. SEED+N-1 and report the mean drift (no plot)")
+                   help="run seeds SEED .. SEED+N-1 as a study and report the mean drift")
     p.add_argument("--workers", "--jobs", type=int, default=None,
-                   help="Ray workers for --seeds (default: the machine's cores)")
+                   help="Ray workers for --seeds (None: the machine's cores)")
     p.add_argument("--out", help="study output directory for --seeds "
-                   "(default studies/drive_test_<profile>)")
+                   "(None: studies/drive_test_<profile>)")
     args = p.parse_args(argv)
     if args.seeds == 1:
+        args.plot = args.plot or "drive_test.png"
         _one_seed(args)
     else:
         _many_seeds(args)

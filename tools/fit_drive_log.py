@@ -34,15 +34,16 @@ def _fit(path: Path, ticks_per_revolution: int):
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0],
+                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     p.add_argument("log", nargs="?", help="run log CSV")
     p.add_argument("--simulate", nargs=2, type=float, metavar=("SCALING", "SLEW"),
                    help="make the log with the simulator at these parameters first")
-    p.add_argument("--plot", default=str(REPO / "out" / "fit_drive_log.png"))
-    p.add_argument("--ticks-per-revolution", type=int, default=600)
+    p.add_argument("--plot", default=str(REPO / "out" / "fit_drive_log.png"), help="PNG of the fit")
+    p.add_argument("--ticks-per-revolution", type=int, default=600, help="encoder counts")
     p.add_argument("--write", metavar="SCENARIO",
                    help="put the fitted motor_torque_scaling in this scenario file")
-    p.add_argument("--robot", default="corobot", help="robot to --write (default corobot)")
+    p.add_argument("--robot", default="corobot", help="robot to --write")
     args = p.parse_args(argv)
     if args.log is None and args.simulate is None:
         p.error("give a LOG or --simulate SCALING SLEW")

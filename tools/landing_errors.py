@@ -1,14 +1,16 @@
 #!/usr/bin/env python3
-"""Landing errors of DriveDistance and RotateDegrees, both profiles: a markdown table.
+"""Landing errors of DriveDistance and RotateDegrees, both profiles: markdown tables and a plot.
 
-For each profile, distance {0.25, 0.5, 1, 2} m and angle {15, 45, 90, 180} deg at power
-{0.2, 0.5, 1}: SetPose the robot to the origin facing +x (the giant box behind it), run the
-command, let the robot come to rest (1 s), and measure from the GPS and compass:
-distance error = straight-line distance from the start - target (mm), angle error = heading
-change - target (deg, wrapped). Also the command's duration (s). The two profiles run in
-parallel processes (`corobot_drake.analysis.landing`).
+Runs `scenarios/studies/landing_drive.yaml` (distance {0.25, 0.5, 1, 2} m) and
+`landing_rotate.yaml` (angle {15, 45, 90, 180} deg), each at power {0.2, 0.5, 1} in both
+profiles, on the study engine (Ray); or, with `--from DIR`, reads their finished runs.csv.
+Each run starts at the origin facing +x (the giant box behind), runs the command, rests 1 s
+and measures from the run log: distance error = straight-line distance from the start - target
+(mm), angle error = heading change - target (deg, wrapped); also the command's duration (s)
+(`corobot_drake.analysis.landing`). Prints the tables; plots error against target and power.
 
-    python tools/landing_errors.py [--out docs/landing_errors.md]
+    python tools/landing_errors.py [--workers N] [--out out/landing] [--plot out/landing.png]
+    python tools/landing_errors.py --from out/landing     # the tables and plot, no simulation
 """
 
 import argparse
@@ -19,13 +21,29 @@ from corobot_drake.analysis import landing
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--out", help="also write the table to this file")
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0],
+                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    p.add_argument("--workers", type=int, default=None,
+                   help="Ray workers (None: the machine's cores)")
+    p.add_argument("--out", type=Path, default=Path("out/landing"),
+                   help="the studies' output directory (OUT/drive, OUT/rotate)")
+    p.add_argument("--from", dest="source", type=Path, default=None,
+                   help="read finished studies from this directory instead of simulating")
+    p.add_argument("--plot", type=Path, default=Path("out/landing.png"),
+                   help="PNG of the landing errors against target and power")
+    p.add_argument("--table", type=Path, default=None, help="also write the tables to this file")
     args = p.parse_args(argv)
-    text = landing.table(landing.measure_profiles())
+    if args.source:
+        rows = landing.read_studies(args.source)
+    else:
+        rows = landing.run_studies(args.out, args.workers)
+    results = landing.results(rows)
+    text = landing.table(results)
     print(text)
-    if args.out:
-        Path(args.out).write_text(text + "\n")
+    landing.plot(results, args.plot)
+    print(f"plot: {args.plot}", file=sys.stderr)
+    if args.table:
+        args.table.write_text(text + "\n")
     return 0
 
 

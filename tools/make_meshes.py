@@ -15,9 +15,10 @@ from corobot_drake.model import meshes
 
 
 def main() -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0],
+                                     formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     parser.add_argument("--out", type=Path, default=meshes.MESH_DIR,
-                        help=f"output directory (default {meshes.MESH_DIR})")
+                        help="output directory")
     parser.add_argument("--check", action="store_true",
                         help="write nothing; exit 1 if the files in --out are stale")
     args = parser.parse_args()

@@ -673,7 +673,7 @@ def blocks() -> list[Spec]:
                         f"--max-iterations 1", ok=(0, 1))
     meshes = Command("python tools/make_meshes.py --check", ok=(0, 1))
     ir_start = _measure("ir-at-start")
-    landing = Command("python tools/landing_errors.py")
+    landing = Command("python tools/landing_errors.py --plot docs/images/landing_errors.png")
     bench_ir = Command("python tools/bench_ir.py")
     bench_raycast = Command("python tools/bench_raycast.py")
     bench_camera = Command("python tools/bench_camera.py")

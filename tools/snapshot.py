@@ -41,24 +41,27 @@ def _pair(text: str, n: int, what: str) -> list[float]:
 
 
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--scenario", type=Path, default=DEFAULT_SCENARIO)
-    parser.add_argument("--output", type=Path, default=Path("snapshot.png"))
-    parser.add_argument("--view", choices=VIEWS, default="chase")
-    parser.add_argument("--robot", help="which robot (default: the only one)")
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0],
+                                     formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    parser.add_argument("--scenario", type=Path, default=DEFAULT_SCENARIO, help="scenario file")
+    parser.add_argument("--output", type=Path, default=Path("snapshot.png"), help="PNG to write")
+    parser.add_argument("--view", choices=VIEWS, default="chase", help="camera to render")
+    parser.add_argument("--robot", help="which robot (None: the only one)")
     parser.add_argument("--pose", type=lambda s: _pair(s, 3, "--pose"),
-                        help="start pose X,Y,YAW_DEG of the robot (m, m, degrees)")
+                        help="start pose X,Y,YAW_DEG of the robot (m, m, degrees; "
+                        "None: the scenario's)")
     parser.add_argument("--drive", type=lambda s: _pair(s, 2, "--drive"),
-                        help="LEFT,RIGHT power in [-1, 1] from t = 0 (replaces its commands)")
+                        help="LEFT,RIGHT power in [-1, 1] from t = 0 (replaces its commands; "
+                        "None: its commands)")
     parser.add_argument("--eye", type=lambda s: _pair(s, 3, "--eye"),
-                        help="X,Y,Z: a free camera here instead of --view (world, m)")
+                        help="X,Y,Z: a free camera here instead of --view (world, m; None: --view)")
     parser.add_argument("--target", type=lambda s: _pair(s, 3, "--target"),
-                        help="X,Y,Z the free camera looks at (default: the robot)")
+                        help="X,Y,Z the free camera looks at (None: the robot)")
     parser.add_argument("--time", type=float, default=0.0, help="simulate S seconds first")
-    parser.add_argument("--width", type=int)
-    parser.add_argument("--height", type=int)
+    parser.add_argument("--width", type=int, help="image width, px (None: the camera's)")
+    parser.add_argument("--height", type=int, help="image height, px (None: the camera's)")
     parser.add_argument("--visual", choices=("meshes", "boxes"),
-                        help="how the robot looks (default: the scenario's)")
+                        help="how the robot looks (None: the scenario's)")
     parser.add_argument("--override", action="append", default=[],
                         help="YAML merged over the scenario (repeatable)")
     return parser

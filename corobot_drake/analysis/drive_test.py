@@ -9,6 +9,7 @@ is the distance from the start position after each loop. Same seed, same numbers
 from pathlib import Path
 
 import numpy as np
+from tqdm import tqdm
 
 from corobot_drake.config import scenario as sc
 from corobot_drake.resources import DEFAULT_SCENARIO
@@ -40,9 +41,13 @@ def run(seed: int, loops: int, profile: str, power: float = 0.2, verbose: bool =
     robot = sim.robot()
     measured = RobotRun(sim, robot, robot.pose(), robot.heading())
     path = [list(robot.position()[:2])]
+    done = tqdm(total=len(test.commands(seed)), unit="command", disable=not verbose,
+                desc=f"seed {seed}")
     while not commands_ended(sim):
         sim.advance(PATH_PERIOD)
         path.append(list(robot.position()[:2]))
+        done.update(sum(r.end_time is not None for r in robot.command_log()) - done.n)
+    done.close()
     drift = [v / 1000.0 for v in METRICS["drive_test_drift"](measured).values()]
     heading_error = list(METRICS["drive_test_heading_error"](measured).values())
     commands = scenario.robots[ROBOT].commands
@@ -79,6 +84,35 @@ def plot(result: dict, filename: str) -> None:
     ax.legend(loc="best", fontsize=8)
     fig.tight_layout()
     fig.savefig(filename, dpi=120)
+    plt.close(fig)
+
+
+def plot_drift(table: list[dict], profile: str, filename: str | Path) -> None:
+    """Drift from the start after each loop: every seed (thin) and the mean +- sd over seeds."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    drift = np.array([r["drift_mm"] for r in table])  # seeds x loops
+    loops = np.arange(1, drift.shape[1] + 1)
+    fig, ax = plt.subplots(figsize=(6, 4))
+    for row in drift:
+        ax.plot(loops, row, color="0.7", linewidth=0.8)
+    mean, sd = np.nanmean(drift, axis=0), np.nanstd(drift, axis=0, ddof=1 if len(drift) > 1
+                                                    else 0)
+    ax.errorbar(loops, mean, yerr=sd, color="k", marker="o", capsize=4,
+                label=f"mean +- sd over {len(drift)} seeds")
+    ax.set_xticks(loops)
+    ax.set_xlabel("loop")
+    ax.set_ylabel("drift from the start (mm)")
+    ax.set_title(f"drive test, profile {profile}: drift per loop "
+                 f"{np.nanmean(drift[:, -1]) / drift.shape[1]:.2f} mm (mean)", fontsize=9)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    Path(filename).parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(filename, dpi=110)
     plt.close(fig)
 
 

@@ -1,43 +1,42 @@
-"""The tire-grip sweep: wheel contact parameters measured one at a time
-(`tools/tune_tire_grip.py`).
+"""The motor's effort limit, chosen by the worst case (`tools/tune_tire_grip.py`).
 
-For each setting (friction, hydroelastic modulus, mesh resolution, Hunt-Crossley dissipation,
-motor effort limit, plant time step, contact approximation; one changed at a time from the
-current defaults), headless and physics only (no camera, no IR), :func:`measure` gives:
+Two studies, physics only (no camera, no IR):
 
-- spin: the yaw rate spinning in place at 5 rad/s wheel speed, as a ratio of the
-  isotropic-Coulomb prediction b u / (a^2 + b^2) (a half wheelbase, b half track, u rim speed);
-- jitter while spinning: std of the chassis' vertical velocity and of its roll and pitch rates;
-- max tilt driving at full power into the giant box forwards and backwards (a flip is > 20 deg);
-- top speed at full power (the MotorTorqueScaling as shipped);
-- real-time factor of all those runs: simulated s per CPU s of this process (the machine is
-  shared: CPU time is steadier than wall time, which is also given).
+- `scenarios/studies/tire_grip.yaml`: per effort limit, the robot driven into the giant box at
+  half and full power, backwards and forwards, square and at 30 deg, at plant steps 1, 2, 5 and
+  10 ms (the `box_approach` program): the largest tilt of each run. A limit's worst case is its
+  largest tilt over all of them.
+- `scenarios/studies/tire_grip_drive.yaml`: per effort limit, the steady speed driving straight
+  and the yaw rate spinning in place at full power, on open ground.
 
-:func:`recommend` picks: no flip and spin within 5% of the prediction, smooth (vertical
-velocity std < 1 mm/s, roll and pitch rate std < 1 deg/s), then the fastest (within 15%, the
-run-to-run noise here, the smoother wins).
+:func:`pick`: a limit passes when its worst-case tilt stays below `FLIP_DEG` and it slows
+neither the straight drive (`SPEED_SLACK`) nor the spin (`SPIN_SLACK`) against the strongest
+limit measured; of those, the one with the smallest worst-case tilt (the most margin to a
+flip), ties broken by the smaller limit: deterministic, as the runs are.
 """
 
-import csv
+from __future__ import annotations
+
 import dataclasses as dc
 import math
-import time
 from pathlib import Path
 
-import numpy as np
-
-from corobot_drake.analysis.bench import physics_only_overrides
-from corobot_drake.config import scenario as sc
 from corobot_drake.model import dimensions as dim
-from corobot_drake.simulation import Simulation
+from corobot_drake.resources import SCENARIOS_DIR
+from corobot_drake.study import engine
 
-SPIN_WHEEL_SPEED = 5.0
-"""rad/s: the spin test's wheel speed (the figure DRAKE_NOTES quotes)."""
+ROBOT = "corobot"
+LIMIT = f"robots.{ROBOT}.contact.effort_limit"
+STEP = "plant_config.time_step"
+STUDIES = {"box": "tire_grip.yaml", "drive": "tire_grip_drive.yaml"}
+QUICK = {"box": "tire_grip_quick.yaml", "drive": "tire_grip_drive.yaml"}
 FLIP_DEG = 20.0
-SMOOTH_VZ = 1e-3
-"""m/s: vertical-velocity std below which turning counts as smooth."""
-SMOOTH_RATE_DEG = 1.0
-"""deg/s: roll- and pitch-rate std below which turning counts as smooth."""
+"""deg: a run whose largest tilt reaches this has begun to climb the box (level driving tilts
+about 1 deg; a climb that goes over ends near 110 deg)."""
+SPEED_SLACK = 0.01
+"""A limit may cost at most this share of the strongest limit's straight-line speed."""
+SPIN_SLACK = 0.05
+"""... and this share of its spin yaw rate."""
 
 
 def predicted_spin_rate(rim_speed: float) -> float:
@@ -47,242 +46,148 @@ def predicted_spin_rate(rim_speed: float) -> float:
 
 
 @dc.dataclass
-class Setting:
-    label: str
-    contact: dict = dc.field(default_factory=dict)
-    """WheelContact fields changed from the defaults."""
-    plant: dict = dc.field(default_factory=dict)
-    """plant_config fields changed from the scenario's."""
+class Limit:
+    """One effort limit's figures from both studies."""
 
-    def overrides(self, robot: str) -> list[str]:
-        out = []
-        if self.contact:
-            fields = ", ".join(f"{k}: {v!r}" for k, v in self.contact.items())
-            out.append(f"robots: {{{robot}: {{contact: {{{fields}}}}}}}")
-        if self.plant:
-            fields = ", ".join(f"{k}: {v}" for k, v in self.plant.items())
-            out.append(f"plant_config: {{{fields}}}")
-        return out
-
-
-def default_sweep(quick: bool = False) -> list[Setting]:
-    """One parameter at a time around the defaults (WheelContact, scenario plant_config)."""
-    sweep = [Setting("defaults")]
-    if quick:
-        return [*sweep, Setting("effort_limit 1000 (unlimited)", {"effort_limit": 1000.0}),
-                Setting("time_step 10 ms", plant={"time_step": 0.01})]
-    for field, values in (
-        ("friction", (0.3, 0.8)),
-        ("hydroelastic_modulus", (3e5, 3e6, 1e7)),
-        ("resolution_hint", (0.008, 0.012)),
-        ("hunt_crossley_dissipation", (1.0, 20.0)),
-        ("effort_limit", (0.2, 0.5, 1000.0)),
-    ):
-        for v in values:
-            label = f"{field} {v:g}" + (" (unlimited)" if v == 1000.0 else "")
-            sweep.append(Setting(label, {field: v}))
-    for step in (0.001, 0.002, 0.01):
-        sweep.append(Setting(f"time_step {step * 1000:g} ms", plant={"time_step": step}))
-    sweep.append(Setting("approximation similar",
-                         plant={"discrete_contact_approximation": "similar"}))
-    # Combinations toward speed: the coarser step with a coarser mesh or the other solver.
-    sweep.append(Setting("time_step 10 ms + resolution_hint 0.008", {"resolution_hint": 0.008},
-                         {"time_step": 0.01}))
-    sweep.append(Setting("time_step 10 ms + approximation similar",
-                         plant={"time_step": 0.01, "discrete_contact_approximation": "similar"}))
-    return sweep
+    effort_limit: float
+    worst_tilt_deg: float
+    """Largest tilt over every box run."""
+    worst_case: str
+    """The run that tilted most (step, direction, angle, power)."""
+    tilt_by_step: dict[float, float]
+    """Plant step (s) -> largest tilt over that step's runs."""
+    speed: float
+    """m/s: steady speed driving straight at full power."""
+    spin_rate: float
+    """rad/s: steady yaw rate spinning in place at full power."""
+    errors: int
+    """Runs of either study that failed (a failed run fails the limit)."""
 
 
-class Clock:
-    """Adds up the simulated, CPU and wall seconds spent in `advance`."""
-
-    def __init__(self):
-        self.sim = self.cpu = self.wall = 0.0
-
-    def advance(self, sim: Simulation, seconds: float) -> None:
-        c, w = time.process_time(), time.perf_counter()
-        sim.advance(seconds)
-        self.cpu += time.process_time() - c
-        self.wall += time.perf_counter() - w
-        self.sim += seconds
+def study_files(quick: bool) -> dict[str, Path]:
+    return {kind: SCENARIOS_DIR / "studies" / name
+            for kind, name in (QUICK if quick else STUDIES).items()}
 
 
-def _make(scenario_path, robot, setting: Setting, extra=()) -> Simulation:
-    overrides = [*physics_only_overrides(robot), *setting.overrides(robot), *extra]
-    return Simulation(sc.load_scenario(scenario_path, overrides=overrides))
+def run_studies(out: Path, quick: bool = False, workers: int | None = None) -> dict:
+    """Both studies on Ray (files in `out/box`, `out/drive`); {kind: rows}."""
+    return {kind: engine.read_rows(engine.run_study(path, out / kind, workers=workers))
+            for kind, path in study_files(quick).items()}
 
 
-def _body_rates(sim: Simulation, robot: str):
-    """(vertical velocity m/s, roll rate, pitch rate, yaw rate rad/s) of the chassis; roll and
-    pitch rates about the chassis' own x and y axes."""
-    plant = sim.station.plant
-    chassis = sim.station.robots[robot].chassis
-    context = plant.GetMyContextFromRoot(sim.context)
-    V = plant.EvalBodySpatialVelocityInWorld(context, chassis)
-    R = plant.EvalBodyPoseInWorld(context, chassis).rotation()
-    w_B = R.inverse().multiply(V.rotational())
-    return float(V.translational()[2]), float(w_B[0]), float(w_B[1]), float(V.rotational()[2])
+def read_studies(out: Path) -> dict:
+    rows = {kind: engine.read_rows(out / kind / "runs.csv") for kind in STUDIES}
+    for kind, table in rows.items():
+        if not table:
+            raise FileNotFoundError(f"{out / kind / 'runs.csv'}: no runs (run the study first)")
+    return rows
 
 
-def _spin(scenario_path, robot: str, setting: Setting, time_step: float, clock: Clock) -> dict:
-    """Spin in place, wheels at +-5 rad/s: the yaw rate against the prediction, the jitter."""
-    sim = _make(scenario_path, robot, setting)
-    rim = SPIN_WHEEL_SPEED * dim.WHEEL_RADIUS
-    sim.robot(robot).set_speed(-rim, rim)
-    clock.advance(sim, 1.5)
-    period = max(time_step, 0.005)
-    samples = []
-    for _ in range(round(1.0 / period)):
-        clock.advance(sim, period)
-        samples.append(_body_rates(sim, robot))
-    vz, roll, pitch, yaw = np.array(samples).T
-    return {
-        "yaw_rate": float(np.mean(yaw)),
-        "yaw_ratio": float(np.mean(yaw)) / predicted_spin_rate(rim),
-        "vz_std_mm_s": float(np.std(vz)) * 1000,
-        "roll_rate_std_deg_s": math.degrees(float(np.std(roll))),
-        "pitch_rate_std_deg_s": math.degrees(float(np.std(pitch))),
-        "spin_tilt_deg": sim.robot(robot).max_tilt_deg(),
-    }
+def _case(row: dict) -> str:
+    return (f"{float(row[STEP]) * 1000:g} ms, {row['box_approach.direction']}, "
+            f"{float(row['box_approach.angle_deg']):g} deg, power "
+            f"{float(row['box_approach.power']):g}")
 
 
-def _into_the_box(scenario_path, robot: str, setting: Setting, box_seconds: float,
-                  clock: Clock) -> dict:
-    """Full power into the giant box (behind the robot): forwards (turned round), backwards."""
-    out = {}
-    for direction, power, yaw_deg in (("forwards", 1.0, 180.0), ("backwards", -1.0, 0.0)):
-        turned = f"{{rotation: !Rpy {{deg: [0, 0, {yaw_deg}]}}}}"
-        sim = _make(scenario_path, robot, setting, [f"robots: {{{robot}: {{pose: {turned}}}}}"])
-        sim.robot(robot).set_power(power, power)
-        clock.advance(sim, box_seconds)
-        out[f"tilt_{direction}_deg"] = sim.robot(robot).max_tilt_deg()
-        out[f"box_x_{direction}"] = sim.robot(robot).pose().x
+def limits(rows: dict) -> list[Limit]:
+    """Each effort limit's figures, in increasing limit."""
+    out = []
+    for value in sorted({float(r[LIMIT]) for r in rows["box"]}):
+        box = [r for r in rows["box"] if float(r[LIMIT]) == value]
+        drive = [r for r in rows["drive"] if float(r[LIMIT]) == value]
+        ok = [r for r in box if r["status"] == "ok"]
+        tilt = lambda r: float(r[f"{ROBOT}.max_tilt_deg"])  # noqa: E731
+        worst = max(ok, key=tilt) if ok else None
+        by_step = {}
+        for r in ok:
+            step = float(r[STEP])
+            by_step[step] = max(by_step.get(step, 0.0), tilt(r))
+        straight = [r for r in drive if float(r[f"robots.{ROBOT}.commands.0.left"]) > 0]
+        spin = [r for r in drive if float(r[f"robots.{ROBOT}.commands.0.left"]) < 0]
+        out.append(Limit(
+            value, tilt(worst) if worst else math.nan, _case(worst) if worst else "-",
+            dict(sorted(by_step.items())), _steady(straight, "steady_speed"),
+            _steady(spin, "steady_yaw_rate"),
+            sum(r["status"] != "ok" for r in box + drive)))
     return out
 
 
-def _top_speed(scenario_path, robot: str, setting: Setting, clock: Clock) -> float:
-    """Mean forward speed at full power after 2 s, away from the box."""
-    sim = _make(scenario_path, robot, setting)
-    sim.robot(robot).set_power(1.0, 1.0)
-    clock.advance(sim, 2.0)
-    speeds = []
-    for _ in range(10):
-        clock.advance(sim, 0.05)
-        speeds.append(sim.robot(robot).velocity().forward)
-    return float(np.mean(speeds))
+def _steady(rows: list[dict], metric: str) -> float:
+    values = [float(r[f"{ROBOT}.{metric}"]) for r in rows if r["status"] == "ok"]
+    return values[0] if len(values) == 1 else math.nan
 
 
-def measure(scenario_path, robot: str, setting: Setting, time_step: float,
-            box_seconds: float = 4.0) -> dict:
-    """All the figures of one setting (see the module docstring)."""
-    clock = Clock()
-    out = _spin(scenario_path, robot, setting, time_step, clock)
-    out.update(_into_the_box(scenario_path, robot, setting, box_seconds, clock))
-    out["top_speed"] = _top_speed(scenario_path, robot, setting, clock)
-    out["rtf_cpu"] = clock.sim / clock.cpu
-    out["rtf_wall"] = clock.sim / clock.wall
-    return out
+def verdict(limit: Limit, strongest: Limit) -> str:
+    """`ok`, or why the limit fails."""
+    if limit.errors:
+        return f"{limit.errors} runs failed"
+    if not limit.worst_tilt_deg < FLIP_DEG:
+        return f"flips ({limit.worst_tilt_deg:.0f} deg: {limit.worst_case})"
+    if not limit.speed >= (1 - SPEED_SLACK) * strongest.speed:
+        return f"slows the straight drive ({limit.speed:.4f} m/s)"
+    if not abs(limit.spin_rate) >= (1 - SPIN_SLACK) * abs(strongest.spin_rate):
+        return f"slows the spin ({abs(limit.spin_rate):.3f} rad/s)"
+    return "ok"
 
 
-def verdict(row: dict) -> tuple[bool, bool]:
-    """(passes: no flip and spin within 5%, smooth)."""
-    passes = (row["tilt_forwards_deg"] < FLIP_DEG and row["tilt_backwards_deg"] < FLIP_DEG
-              and abs(row["yaw_ratio"] - 1.0) < 0.05)
-    smooth = (row["vz_std_mm_s"] < SMOOTH_VZ * 1000
-              and row["roll_rate_std_deg_s"] < SMOOTH_RATE_DEG
-              and row["pitch_rate_std_deg_s"] < SMOOTH_RATE_DEG)
-    return passes, smooth
+def pick(table: list[Limit]) -> Limit | None:
+    """The passing limit with the smallest worst-case tilt (ties: the smaller limit)."""
+    strongest = table[-1]
+    passing = [t for t in table if verdict(t, strongest) == "ok"]
+    return min(passing, key=lambda t: (t.worst_tilt_deg, t.effort_limit), default=None)
 
 
-SPEED_TIE = 0.15
-"""Real-time factors within this fraction of the best count as equally fast: run to run, the
-same setting's figure moves by about that much on a shared 2-core machine."""
+def _limit_label(value: float) -> str:
+    return "unlimited (1000)" if value >= 1000 else f"{value:g}"
 
 
-def recommend(rows: list[dict]) -> dict | None:
-    """No flip and spin within 5%; smooth; the fastest (CPU real-time factor), where settings
-    within `SPEED_TIE` of the fastest tie and the least vertical jitter wins among them."""
-    passing = [r for r in rows if verdict(r)[0]]
-    if not passing:
-        return None
-    smooth = [r for r in passing if verdict(r)[1]]
-    if not smooth:
-        return min(passing, key=lambda r: r["roll_rate_std_deg_s"] + r["pitch_rate_std_deg_s"])
-    fastest = max(r["rtf_cpu"] for r in smooth)
-    tied = [r for r in smooth if r["rtf_cpu"] >= (1 - SPEED_TIE) * fastest]
-    return min(tied, key=lambda r: r["vz_std_mm_s"])
-
-
-COLUMNS = (
-    ("setting", "setting", "{}"),
-    ("yaw_ratio", "spin yaw / prediction", "{:.3f}"),
-    ("vz_std_mm_s", "vz std (mm/s)", "{:.3f}"),
-    ("roll_rate_std_deg_s", "roll rate std (deg/s)", "{:.3f}"),
-    ("pitch_rate_std_deg_s", "pitch rate std (deg/s)", "{:.3f}"),
-    ("tilt_forwards_deg", "box tilt fwd (deg)", "{:.1f}"),
-    ("tilt_backwards_deg", "box tilt back (deg)", "{:.1f}"),
-    ("top_speed", "top speed (m/s)", "{:.4f}"),
-    ("rtf_cpu", "RTF (CPU)", "{:.2f}x"),
-    ("rtf_wall", "RTF (wall)", "{:.2f}x"),
-)
-
-
-def markdown(rows: list[dict], recommended: dict | None) -> str:
-    lines = ["| " + " | ".join(h for _, h, _ in COLUMNS) + " |",
-             "|" + "---|" * len(COLUMNS)]
-    for r in rows:
-        cells = [fmt.format(r[key]) for key, _, fmt in COLUMNS]
-        if r is recommended:
-            cells[0] = f"**{cells[0]} (recommended)**"
+def markdown(table: list[Limit], picked: Limit | None) -> str:
+    """A row per limit: the worst tilt per step and overall, the open-ground figures, verdict."""
+    steps = sorted({s for t in table for s in t.tilt_by_step})
+    prediction = predicted_spin_rate(dim.MOTOR_TORQUE_SCALING * dim.WHEEL_RADIUS)
+    head = (["effort limit (N m)"] + [f"worst tilt {s * 1000:g} ms (deg)" for s in steps]
+            + ["worst tilt (deg)", "worst case", "straight speed (m/s)",
+               "spin / prediction", "verdict"])
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for t in table:
+        label = _limit_label(t.effort_limit)
+        if t is picked:
+            label = f"**{label} (picked)**"
+        cells = ([label] + [f"{t.tilt_by_step.get(s, math.nan):.1f}" for s in steps]
+                 + [f"{t.worst_tilt_deg:.1f}", t.worst_case, f"{t.speed:.4f}",
+                    f"{abs(t.spin_rate) / prediction:.3f}", verdict(t, table[-1])])
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
 
 
-def plot(rows: list[dict], path: Path) -> None:
+def plot(rows: dict, path: Path) -> None:
+    """Largest tilt against the plant step, a panel per effort limit, a line per approach."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    labels = [r["setting"] for r in rows]
-    y = np.arange(len(rows))
-    fig, axes = plt.subplots(1, 4, figsize=(16, 0.35 * len(rows) + 2), sharey=True)
-    axes[0].barh(y, [r["yaw_ratio"] for r in rows], color="tab:blue")
-    axes[0].axvspan(0.95, 1.05, color="0.85")
-    axes[0].set_xlabel("spin yaw rate / isotropic prediction")
-    axes[0].set_xlim(0.5, 1.2)
-    axes[1].barh(y - 0.2, [r["roll_rate_std_deg_s"] for r in rows], 0.4, label="roll rate")
-    axes[1].barh(y + 0.2, [r["pitch_rate_std_deg_s"] for r in rows], 0.4, label="pitch rate")
-    axes[1].set_xscale("log")
-    axes[1].set_xlabel("std while spinning (deg/s)")
-    axes[1].legend(fontsize=7)
-    axes[2].barh(y - 0.2, [r["tilt_forwards_deg"] for r in rows], 0.4, label="forwards")
-    axes[2].barh(y + 0.2, [r["tilt_backwards_deg"] for r in rows], 0.4, label="backwards")
-    axes[2].axvline(FLIP_DEG, color="r", linestyle="--", linewidth=1)
-    axes[2].set_xlabel("max tilt into the giant box (deg)")
-    axes[2].legend(fontsize=7)
-    axes[3].barh(y, [r["rtf_cpu"] for r in rows], color="tab:green")
-    axes[3].set_xlabel("real-time factor (sim s / CPU s)")
-    axes[0].set_yticks(y, labels, fontsize=8)
-    axes[0].invert_yaxis()
-    for ax in axes:
-        ax.grid(True, axis="x", alpha=0.3)
-    fig.suptitle("Tire grip sweep (one parameter changed at a time from the defaults)")
+    box = [r for r in rows["box"] if r["status"] == "ok"]
+    values = sorted({float(r[LIMIT]) for r in box})
+    fig, axes = plt.subplots(1, len(values), figsize=(4 * len(values), 3.8), sharey=True,
+                             squeeze=False)
+    for ax, value in zip(axes[0], values, strict=True):
+        cases: dict[str, list] = {}
+        for r in box:
+            if float(r[LIMIT]) == value:
+                case = _case(r).split(", ", 1)[1]
+                cases.setdefault(case, []).append(
+                    (float(r[STEP]) * 1000, float(r[f"{ROBOT}.max_tilt_deg"])))
+        for case, points in sorted(cases.items()):
+            ax.plot(*zip(*sorted(points), strict=True), "o-", label=case, alpha=0.7)
+        ax.axhline(FLIP_DEG, color="r", linestyle="--", linewidth=1)
+        ax.set_yscale("log")
+        ax.set_xlabel("plant time step (ms)")
+        ax.set_title(f"effort limit {_limit_label(value)} N m", fontsize=10)
+        ax.grid(True, alpha=0.3)
+    axes[0][0].set_ylabel("largest tilt into the giant box (deg)")
+    axes[0][-1].legend(fontsize=6)
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=100)
     plt.close(fig)
-
-
-def write_outputs(rows: list[dict], recommended: dict | None, out: Path) -> str:
-    """Writes OUT.csv, OUT.md and OUT.png; returns the markdown table."""
-    out.parent.mkdir(parents=True, exist_ok=True)
-    keys = [k for k in rows[0] if not k.startswith("_")]
-    with open(out.with_suffix(".csv"), "w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=keys, extrasaction="ignore")
-        writer.writeheader()
-        writer.writerows(rows)
-    table = markdown(rows, recommended)
-    out.with_suffix(".md").write_text(table)
-    plot(rows, out.with_suffix(".png"))
-    return table

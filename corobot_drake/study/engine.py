@@ -1,12 +1,14 @@
 """Runs a study on Ray: a local instance started for the study (the default) or a cluster
-joined by address. Rows are written to `runs.csv` as they arrive (at most every
-`SAVE_EVERY` s), so a study stopped half way keeps what it finished and `resume` runs the rest.
+joined by address. Rows are written to `runs.csv` as they arrive (the first at once, then at
+most every `SAVE_EVERY` s), so a study stopped half way keeps what it finished and `resume`
+runs the rest.
 """
 
 from __future__ import annotations
 
 import contextlib
 import csv
+import math
 import os
 import shutil
 import time
@@ -39,7 +41,8 @@ def ray_session(address: str | None, workers: int | None) -> Iterator[int]:
         ray.init(address=address, include_dashboard=False, log_to_driver=False,
                  configure_logging=False)
     else:
-        ray.init(num_cpus=workers or os.cpu_count(), include_dashboard=False,
+        # "local": a new instance even when RAY_ADDRESS or a running cluster would be joined.
+        ray.init(address="local", num_cpus=workers or os.cpu_count(), include_dashboard=False,
                  log_to_driver=False, configure_logging=False)
     try:
         yield workers or int(ray.cluster_resources().get("CPU", 1))
@@ -110,7 +113,7 @@ def run_study(study_file: str | Path, out_dir: str | Path, *, workers: int | Non
 
 def _simulate_all(todo, study, scenario_file, rows, runs_csv, workers, address,
                   progress) -> None:
-    saved = time.monotonic()
+    saved = -math.inf  # the first row is written at once
     bar = tqdm(total=len(todo), unit="run", disable=not progress, smoothing=0.1)
     try:
         with ray_session(address, workers) as n:

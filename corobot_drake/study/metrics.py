@@ -11,6 +11,8 @@ import dataclasses as dc
 import math
 from collections.abc import Callable
 
+import numpy as np
+
 from corobot_drake.config.scenario import DriveDistance, RotateDegrees
 from corobot_drake.readings import BodyPose
 from corobot_drake.simulation import Robot, Simulation
@@ -73,6 +75,43 @@ def _speed(run: RobotRun) -> float:
 def _yaw_rate(run: RobotRun) -> float:
     """Final yaw rate, rad/s."""
     return run.robot.velocity().yaw_rate
+
+
+WINDOW = 1.0
+"""s: the window of the `steady_*` metrics, the run's last second."""
+
+
+@metric("steady_speed")
+def _steady_speed(run: RobotRun) -> float:
+    """Mean forward speed over the run's last `WINDOW` s (the displacement along the mean
+    heading over the window's length), m/s: a steady speed without a sample's noise."""
+    rows = _window(run)
+    yaw = np.unwrap(rows[:, 7])
+    heading = 0.5 * (yaw[0] + yaw[-1])
+    dx, dy = rows[-1, 5:7] - rows[0, 5:7]
+    return float(dx * math.cos(heading) + dy * math.sin(heading)) / _span(rows)
+
+
+@metric("steady_yaw_rate")
+def _steady_yaw_rate(run: RobotRun) -> float:
+    """Mean yaw rate over the run's last `WINDOW` s, rad/s (the heading unwrapped sample to
+    sample: any number of turns)."""
+    rows = _window(run)
+    yaw = np.unwrap(rows[:, 7])
+    return float(yaw[-1] - yaw[0]) / _span(rows)
+
+
+def _window(run: RobotRun):
+    """The run-log rows of the run's last `WINDOW` s."""
+    log = run.robot.run_log()
+    rows = log[log[:, 0] >= log[-1, 0] - WINDOW - 1e-9]
+    if _span(rows) < 0.5 * WINDOW:
+        raise ValueError(f"the run is shorter than the {WINDOW:g} s the steady metrics average")
+    return rows
+
+
+def _span(rows) -> float:
+    return float(rows[-1, 0] - rows[0, 0])
 
 
 @metric("max_tilt_deg")

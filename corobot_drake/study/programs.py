@@ -1,11 +1,23 @@
-"""Scripts generated per run from the run's seed, for tests whose commands are random, like
-the book's drive test (the study's `drive_test`)."""
+"""Scripts a study writes per run (the study's program fields), for tests whose commands are
+random, like the book's drive test (`drive_test`), or that also turn the robot, like driving
+into the box behind it (`box_approach`). A grid or random path `<program>.<field>` (e.g.
+`box_approach.power`) sets that field of the program for the run."""
 
 import dataclasses as dc
+import math
 
 import numpy as np
+from pydrake.common.schema import Transform
+from pydrake.math import RigidTransform, RotationMatrix
 
-from corobot_drake.config.scenario import DriveDistance, RotateDegrees
+from corobot_drake.config.scenario import DriveDistance, RotateDegrees, Scenario, SetPower
+
+
+def _robot(scenario: Scenario, field: str, name: str):
+    robot = scenario.robots.get(name)
+    if robot is None:
+        raise ValueError(f"{field}: the scenario has no robot {name!r}")
+    return robot
 
 
 @dc.dataclass
@@ -30,5 +42,55 @@ class DriveTest:
                          RotateDegrees(180.0 - angle, self.power)]
         return commands
 
+    def check(self) -> str | None:
+        """What is wrong with the fields, or None."""
+        if not (self.loops >= 1 and 0 < self.power <= 1):
+            return "the drive test needs loops >= 1 and power in (0, 1]"
+        return None
+
+    def apply(self, scenario: Scenario, seed: int) -> None:
+        _robot(scenario, "drive_test", self.robot).commands = self.commands(seed)
+
 
 COMMANDS_PER_LOOP = 5
+
+DIRECTIONS = ("backwards", "forwards")
+
+
+@dc.dataclass
+class BoxApproach:
+    """Drive at constant `power` into whatever is behind the robot's start (the giant box in
+    the default scene), for the whole run: `backwards` as the robot starts, or `forwards`
+    (turned 180 deg about its start position first), meeting the box's face square
+    (`angle_deg` 0) or obliquely (the robot turned by `angle_deg` more, so it drives into the
+    face at that angle from its normal)."""
+
+    direction: str = "backwards"
+    angle_deg: float = 0.0
+    power: float = 1.0
+    """In (0, 1]: the approach speed is power x top speed (0.61 m/s at 1)."""
+    robot: str = "corobot"
+
+    def check(self) -> str | None:
+        if self.direction not in DIRECTIONS:
+            return f"direction {self.direction!r} is not one of {', '.join(DIRECTIONS)}"
+        if not 0 < self.power <= 1:
+            return f"power must be in (0, 1], got {self.power:g}"
+        if not abs(self.angle_deg) < 90:
+            return f"angle_deg must be in (-90, 90), got {self.angle_deg:g}"
+        return None
+
+    def apply(self, scenario: Scenario, seed: int) -> None:
+        robot = _robot(scenario, "box_approach", self.robot)
+        turn = self.angle_deg + (180.0 if self.direction == "forwards" else 0.0)
+        X_WB = robot.pose.GetDeterministicValue()
+        turned = RigidTransform(RotationMatrix.MakeZRotation(math.radians(turn)))
+        # About the start position: rotate the orientation, keep the translation.
+        robot.pose = Transform(RigidTransform(
+            turned.rotation() @ X_WB.rotation(), X_WB.translation()))
+        power = self.power if self.direction == "forwards" else -self.power
+        robot.commands = [SetPower(power, power)]
+
+
+PROGRAMS = {"drive_test": DriveTest, "box_approach": BoxApproach}
+"""Study field name -> its program's class."""

@@ -6,15 +6,18 @@ fails (a bad override, a simulation error) becomes an error row; it never stops 
 
 from __future__ import annotations
 
+import dataclasses as dc
 import math
 import time
 from collections import OrderedDict
 from pathlib import Path
 
 from corobot_drake.config.scenario import load_scenario, one_line
+from corobot_drake.config.validate import LayerChecks
 from corobot_drake.simulation import Simulation, diagram_key, quiet_drake_warnings
 from corobot_drake.study.metrics import measure
-from corobot_drake.study.spec import Run, Study
+from corobot_drake.study.programs import PROGRAMS
+from corobot_drake.study.spec import Run, Scalar, Study
 
 CACHE_SIZE = 3
 """Simulations a worker keeps built (each holds a diagram and its Context)."""
@@ -24,17 +27,62 @@ CHECK_PERIOD = 0.1
 
 def run_scenario(study: Study, scenario_file: Path, run: Run):
     """The run's scenario: the file, the study's overrides, then the run's parameters and
-    seed; the cameras off unless the study asks for them."""
+    seed, the study's programs, then the run's parameters through a list index (checked as a
+    scenario is); the cameras off unless the study asks for them."""
     scenario = load_scenario(scenario_file, overrides=[*study.overrides, *run.overrides()])
-    if study.drive_test is not None:
-        robot = scenario.robots.get(study.drive_test.robot)
-        if robot is None:
-            raise ValueError(f"drive_test: the scenario has no robot {study.drive_test.robot!r}")
-        robot.commands = study.drive_test.commands(run.seed)
+    for name in PROGRAMS:
+        program = run.program(study, name)
+        if program is not None:
+            if problem := program.check():
+                raise ValueError(f"{name}: {problem}")
+            program.apply(scenario, run.seed)
+    indexed = run.indexed()
+    for path, value in indexed:
+        set_path(scenario, path, value)
+    if indexed:
+        checks = LayerChecks("study grid", "")
+        # No line to name; `fail` walks up the path to a field it has a line for, so give it
+        # the top-level fields (without one it would never stop).
+        checks.lines = {field.name: None for field in dc.fields(scenario)}
+        checks.validate(scenario)
     if not study.cameras:
         for robot in scenario.robots.values():
             robot.camera.rgb = False
     return scenario
+
+
+def set_path(scenario, path: str, value: Scalar) -> None:
+    """Sets the field at a dotted path (keys, attributes, list indices) of a loaded scenario;
+    ValueError (one line naming the path) when the path or the value's type does not fit."""
+    *keys, last = path.split(".")
+    node = scenario
+    for depth, key in enumerate(keys):
+        node = _child(node, key, ".".join(keys[:depth + 1]))
+    old = _child(node, last, path)
+    if isinstance(old, float) and isinstance(value, int) and not isinstance(value, bool):
+        value = float(value)
+    if type(old) is not type(value):
+        raise ValueError(f"{path}: expected {type(old).__name__}, got {value!r}")
+    if isinstance(node, list):
+        node[int(last)] = value
+    elif isinstance(node, dict):
+        node[last] = value
+    else:
+        setattr(node, last, value)
+
+
+def _child(node, key: str, where: str):
+    if isinstance(node, list):
+        if not (key.isdigit() and int(key) < len(node)):
+            raise ValueError(f"{where}: the list has {len(node)} items (index from 0)")
+        return node[int(key)]
+    if isinstance(node, dict):
+        if key not in node:
+            raise ValueError(f"{where}: no such key; keys: {', '.join(map(str, node))}")
+        return node[key]
+    if not dc.is_dataclass(node) or key not in {f.name for f in dc.fields(node)}:
+        raise ValueError(f"{where}: {type(node).__name__} has no field {key!r}")
+    return getattr(node, key)
 
 
 class SimulationCache:
@@ -116,5 +164,5 @@ class StudyWorker:
 def finite_or_text(value):
     """CSV cell text: numbers in full precision (repr), NaN as empty."""
     if isinstance(value, float):
-        return "" if math.isnan(value) else repr(value)
+        return "" if math.isnan(value) else repr(float(value))  # numpy's repr names its type
     return value

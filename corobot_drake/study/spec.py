@@ -11,6 +11,12 @@ file, the line and the field), and its expansion into runs.
     overrides:                      # YAML merged into every run, as --override
       - "robots: {corobot: {commands: [!SetPower {left: 1.0, right: 0.8}]}}"
     metrics: [x, y, speed, max_tilt_deg]
+
+A grid or random path is one of three kinds (`path_kind`): a scenario path
+(`robots.corobot.drive.slew_rate`), merged as an --override; a scenario path through a list
+index (`robots.corobot.commands.0.distance`: the first command's distance), set on the loaded
+scenario and checked again; or a program field (`box_approach.power`), set on the study's
+program for the run (`programs`).
 """
 
 
@@ -25,7 +31,7 @@ import numpy as np
 
 from corobot_drake.config.scenario import read_text
 from corobot_drake.config.validate import LayerChecks, load_layer
-from corobot_drake.study.programs import DriveTest
+from corobot_drake.study.programs import PROGRAMS, BoxApproach, DriveTest
 
 UNTIL = ("duration", "commands")
 
@@ -83,6 +89,9 @@ class Study:
     drive_test: DriveTest | None = None
     """The book's drive test as each run's script for one robot (`{loops, power, robot}`):
     random legs drawn from the run's seed, replacing that robot's commands."""
+    box_approach: BoxApproach | None = None
+    """Drive into the box behind the robot (`{direction, angle_deg, power, robot}`): turns
+    the robot and replaces its commands."""
     cameras: bool = False
     """Render the robots' cameras (off by default: no metric reads them, and they cost)."""
 
@@ -98,9 +107,33 @@ class Run:
     params: tuple[tuple[str, Scalar], ...]
 
     def overrides(self) -> list[str]:
-        """The run's parameters as --override YAML texts (JSON is YAML)."""
-        texts = [json.dumps(_nest(path, value)) for path, value in self.params]
+        """The run's scenario parameters without a list index, as --override YAML texts (JSON
+        is YAML), and its seed."""
+        texts = [json.dumps(_nest(path, value)) for path, value in self.params
+                 if path_kind(path) == "override"]
         return [*texts, json.dumps({"random_seed": self.seed})]
+
+    def indexed(self) -> list[tuple[str, Scalar]]:
+        """The run's scenario parameters through a list index (`set_path` sets them)."""
+        return [(p, v) for p, v in self.params if path_kind(p) == "indexed"]
+
+    def program(self, study: Study, name: str):
+        """The study's program `name` with this run's values of its fields, or None."""
+        program = getattr(study, name)
+        if program is None:
+            return None
+        prefix = name + "."
+        values = {p[len(prefix):]: v for p, v in self.params if p.startswith(prefix)}
+        return dc.replace(program, **values) if values else program
+
+
+def path_kind(path: str) -> str:
+    """`program` (its first key is a program field of the study), `indexed` (a key is a list
+    index) or `override`."""
+    keys = path.split(".")
+    if keys[0] in PROGRAMS:
+        return "program"
+    return "indexed" if any(k.isdigit() for k in keys) else "override"
 
 
 def load_study(filename: str | Path) -> Study:
@@ -133,13 +166,34 @@ def _validate(study: Study, checks: LayerChecks) -> None:
     for path in study.random:
         if path in study.grid:
             checks.fail(f"random.{path}", "is also a grid parameter")
-    if study.drive_test is not None and not (study.drive_test.loops >= 1
-                                          and 0 < study.drive_test.power <= 1):
-        checks.fail("drive_test", "the drive test needs loops >= 1 and power in (0, 1]")
+    for name in PROGRAMS:
+        program = getattr(study, name)
+        if program is not None and (problem := program.check()):
+            checks.fail(name, problem)
+    for section, paths in (("grid", study.grid), ("random", study.random)):
+        for path in paths:
+            _check_program_path(study, checks, f"{section}.{path}", path)
     for name in study.metrics:
         if name not in METRICS:
             checks.fail("metrics", f"unknown metric {name!r}; known: "
                         + ", ".join(sorted(METRICS)))
+
+
+def _check_program_path(study: Study, checks: LayerChecks, where: str, path: str) -> None:
+    """A program path names a field of a program the study has (and each grid value of it
+    passes the program's check)."""
+    if path_kind(path) != "program":
+        return
+    name, _, field = path.partition(".")
+    program = getattr(study, name)
+    if program is None:
+        checks.fail(where, f"the study has no {name}: add `{name}: {{}}` to vary its fields")
+    names = [f.name for f in dc.fields(program)]
+    if field not in names:
+        checks.fail(where, f"{name} has no field {field!r}; fields: {', '.join(names)}")
+    for value in study.grid.get(path, []):
+        if problem := dc.replace(program, **{field: value}).check():
+            checks.fail(where, problem)
 
 
 def scenario_path(study: Study, study_file: str | Path) -> Path:
