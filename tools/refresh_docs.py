@@ -825,14 +825,16 @@ def refresh(specs: list[Spec], check: bool) -> int:
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--only", nargs="+", metavar="NAME", help="these blocks only")
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0],
+                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    p.add_argument("--only", nargs="+", metavar="NAME", help="these blocks only (None: all)")
     p.add_argument("--list", action="store_true", help="list the blocks, their commands, costs")
     p.add_argument("--check", action="store_true",
                    help="re-render deterministic blocks (without --only: the cheap ones) and "
                         "exit 1 if any differs from the file; writes nothing")
     p.add_argument("--measure", choices=sorted(MEASUREMENTS),
-                   help="make one of this tool's own measurements and print it (JSON)")
+                   help="make one of this tool's own measurements and print it (JSON; None: "
+                   "refresh instead)")
     args = p.parse_args(argv)
     if args.measure:
         print(json.dumps(MEASUREMENTS[args.measure](), indent=1))

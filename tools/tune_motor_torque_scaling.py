@@ -8,7 +8,11 @@ gives. `--write` puts the value in the scenario file (only that number changes).
 A plot of speed vs time per iteration goes to `--plot`. The measurement is
 `corobot_drake.analysis.drive_tuning.measure_top_speed`.
 
+`--sweep` instead runs `scenarios/studies/motor_torque_scaling.yaml` on the study engine (the
+same steady speed over a grid of scalings, in parallel) and interpolates the target's scaling.
+
 Usage: python tools/tune_motor_torque_scaling.py [--scenario S] [--scaling 20] [--target 0.6096]
+       python tools/tune_motor_torque_scaling.py --sweep [--workers N]
 """
 
 import argparse
@@ -16,7 +20,13 @@ import sys
 import time
 from pathlib import Path
 
-from corobot_drake.analysis.drive_tuning import measure_top_speed, plot_top_speed
+from corobot_drake.analysis.drive_tuning import (
+    measure_top_speed,
+    plot_sweep,
+    plot_top_speed,
+    run_sweep,
+    scaling_for,
+)
 from corobot_drake.analysis.sysid import set_motor_torque_scaling
 from corobot_drake.config.scenario import ScenarioError, load_scenario
 from corobot_drake.model import dimensions as dim
@@ -27,21 +37,29 @@ REPO = Path(__file__).resolve().parent.parent
 
 
 def _parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--scenario", default=str(DEFAULT_SCENARIO))
-    p.add_argument("--robot", help="robot name (default: the scenario's only robot)")
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0],
+                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    p.add_argument("--scenario", default=str(DEFAULT_SCENARIO), help="scenario file")
+    p.add_argument("--robot", help="robot name (None: the scenario's only robot)")
     p.add_argument("--scaling", type=float, default=dim.MOTOR_TORQUE_SCALING_UNTUNED,
-                   help="starting MotorTorqueScaling (default 20, the untuned value)")
+                   help="starting MotorTorqueScaling (20 is the untuned value)")
     p.add_argument("--target", type=float, default=dim.TARGET_TOP_SPEED,
-                   help="top speed wanted, m/s (default 0.6096 = 2 ft/s)")
-    p.add_argument("--tolerance", type=float, default=0.005, help="relative (default 0.5%%)")
-    p.add_argument("--max-iterations", type=int, default=8)
+                   help="top speed wanted, m/s (0.6096 = 2 ft/s)")
+    p.add_argument("--tolerance", type=float, default=0.005, help="relative")
+    p.add_argument("--max-iterations", type=int, default=8, help="iterations at most")
     p.add_argument("--settle", type=float, default=2.0,
                    help="s at full power before measuring (the ramp takes ~0.4-0.7 s)")
     p.add_argument("--measure", type=float, default=1.0, help="s averaged for the top speed")
-    p.add_argument("--plot", default=str(REPO / "out" / "tune_motor_torque_scaling.png"))
+    p.add_argument("--plot", default=str(REPO / "out" / "tune_motor_torque_scaling.png"),
+                   help="PNG: speed against time per iteration (or against scaling, --sweep)")
     p.add_argument("--write", action="store_true",
                    help="write the value into --scenario (only that number changes)")
+    p.add_argument("--sweep", action="store_true",
+                   help="run the sweep study (the default scene's robot) instead of iterating")
+    p.add_argument("--workers", type=int, default=None,
+                   help="Ray workers for --sweep (None: the machine's cores)")
+    p.add_argument("--out", default=str(REPO / "out" / "motor_torque_scaling"),
+                   help="the sweep study's output directory")
     return p
 
 
@@ -87,6 +105,31 @@ def _tune(args, robot_name: str):
     return scaling, measured, False, curves
 
 
+def _sweep(args, robot_name: str) -> int:
+    """The sweep study, the interpolated scaling and its plot (and --write)."""
+    scalings, speeds = run_sweep(Path(args.out), args.workers)
+    for scaling, speed in zip(scalings, speeds, strict=True):
+        print(f"scaling {scaling:g}: steady speed {speed:.4f} m/s")
+    try:
+        tuned = scaling_for(args.target, scalings, speeds)
+    except ValueError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 1
+    plot_sweep(scalings, speeds, args.target, tuned, Path(args.plot))
+    print(f"plot: {args.plot}")
+    if args.write:
+        _write(args, robot_name, tuned)
+    print(f"motor_torque_scaling: {tuned:.4f}  (interpolated between the sweep's scalings for "
+          f"{args.target:.4f} m/s)")
+    return 0
+
+
+def _write(args, robot_name: str, scaling: float) -> None:
+    path = Path(args.scenario)
+    path.write_text(set_motor_torque_scaling(path.read_text(), robot_name, scaling))
+    print(f"wrote motor_torque_scaling {scaling:.4g} for {robot_name} in {path}")
+
+
 def main(argv=None) -> int:
     args = _parser().parse_args(argv)
     quiet_drake_warnings()
@@ -96,6 +139,8 @@ def main(argv=None) -> int:
     if not (args.scaling > 0 and args.target > 0):
         print("error: --scaling and --target must be > 0", file=sys.stderr)
         return 2
+    if args.sweep:
+        return _sweep(args, robot_name)
     scaling, measured, converged, curves = _tune(args, robot_name)
     plot_top_speed(curves, args.target, args.settle, Path(args.plot))
     print(f"plot: {args.plot}")

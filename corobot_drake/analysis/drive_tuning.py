@@ -3,6 +3,8 @@
 
 - :func:`measure_top_speed`: the robot's steady speed at full power for a MotorTorqueScaling
   (the mean forward speed over a window after the ramp, not the average including it);
+- :func:`run_sweep`, :func:`scaling_for`: the same speed over a grid of scalings as a study
+  (`scenarios/studies/motor_torque_scaling.yaml`), and the scaling that gives a target speed;
 - :func:`simulate_log`: a run log made by the simulator at known drive parameters, for the
   least-squares fit (`sysid.fit_drive`) to find again;
 - their plots.
@@ -14,7 +16,7 @@ import numpy as np
 
 from corobot_drake.analysis import sysid
 from corobot_drake.config.scenario import load_scenario
-from corobot_drake.resources import DEFAULT_SCENARIO
+from corobot_drake.resources import DEFAULT_SCENARIO, SCENARIOS_DIR
 from corobot_drake.simulation import Simulation, quiet_drake_warnings
 
 SAMPLE_PERIOD = 0.02
@@ -45,6 +47,53 @@ def measure_top_speed(scenario_path, robot_name, scaling: float, settle: float, 
     window = times > settle + 1e-9
     slope = float(np.polyfit(times[window], speeds[window], 1)[0]) if window.sum() > 2 else 0.0
     return float(np.mean(speeds[window])), slope, times, speeds
+
+
+SWEEP_STUDY = SCENARIOS_DIR / "studies" / "motor_torque_scaling.yaml"
+SCALING = "robots.corobot.drive.motor_torque_scaling"
+
+
+def run_sweep(out: Path, workers: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """The sweep study on Ray (files in `out`): (scalings, steady speeds m/s), by scaling."""
+    from corobot_drake.study import engine
+
+    rows = engine.read_rows(engine.run_study(SWEEP_STUDY, out, workers=workers))
+    bad = [r["error"] for r in rows if r["status"] != "ok"]
+    if bad:
+        raise RuntimeError(f"{len(bad)} sweep runs failed: {bad[0]}")
+    pairs = sorted((float(r[SCALING]), float(r["corobot.steady_speed"])) for r in rows)
+    return np.array([p[0] for p in pairs]), np.array([p[1] for p in pairs])
+
+
+def scaling_for(target: float, scalings: np.ndarray, speeds: np.ndarray) -> float:
+    """The scaling whose speed is `target`, linear between the two measured scalings around it
+    (the speed is nearly proportional to the scaling); ValueError outside the sweep."""
+    if not speeds.min() <= target <= speeds.max():
+        raise ValueError(f"target {target:g} m/s is outside the sweep's {speeds.min():.4f}-"
+                         f"{speeds.max():.4f} m/s")
+    return float(np.interp(target, speeds, scalings))
+
+
+def plot_sweep(scalings, speeds, target: float, tuned: float, path: Path) -> None:
+    """Steady speed against scaling, the target and the interpolated scaling."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    ax.plot(scalings, speeds, "o-", label="steady speed at full power")
+    ax.axhline(target, color="k", linestyle="--", linewidth=1, label=f"target {target:.4f} m/s")
+    ax.axvline(tuned, color="tab:red", linewidth=1, label=f"scaling {tuned:.3f}")
+    ax.set_xlabel("MotorTorqueScaling (axle rad/s at power 1)")
+    ax.set_ylabel("forward speed (m/s)")
+    ax.set_title("MotorTorqueScaling sweep")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
 
 
 def plot_top_speed(curves, target: float, settle: float, path: Path) -> None:

@@ -1,0 +1,47 @@
+"""Every tool's --help shows each option's default (the project's rule for tools)."""
+
+import argparse
+import importlib.util
+import sys
+from pathlib import Path
+
+import pytest
+
+TOOLS = sorted((Path(__file__).resolve().parent.parent / "tools").glob("*.py"))
+
+
+class _Parsed(Exception):
+    """Raised by the patched parse_args: the tool built its parser."""
+
+
+def _parser_of(tool: Path, monkeypatch) -> argparse.ArgumentParser:
+    """The tool's argument parser, caught at its parse_args (nothing else of the tool runs)."""
+    caught = []
+
+    def parse_args(self, *args, **kwargs):
+        caught.append(self)
+        raise _Parsed
+
+    monkeypatch.setattr(argparse.ArgumentParser, "parse_args", parse_args)
+    spec = importlib.util.spec_from_file_location(f"tool_{tool.stem}", tool)
+    module = importlib.util.module_from_spec(spec)
+    monkeypatch.setitem(sys.modules, spec.name, module)  # dataclasses look their module up
+    spec.loader.exec_module(module)
+    with pytest.raises(_Parsed):
+        module.main()
+    return caught[0]
+
+
+@pytest.mark.parametrize("tool", TOOLS, ids=[t.stem for t in TOOLS])
+def test_help_shows_every_default(tool, monkeypatch):
+    parser = _parser_of(tool, monkeypatch)
+    assert parser.formatter_class is argparse.ArgumentDefaultsHelpFormatter
+    formatter = parser._get_formatter()
+    for action in parser._actions:
+        if not action.option_strings or action.help == argparse.SUPPRESS \
+                or isinstance(action, argparse._HelpAction):
+            continue
+        # The formatter appends "(default: ...)" only to an option with help text.
+        assert action.help, f"{tool.name}: {action.option_strings[0]} has no help"
+        assert f"(default: {action.default})" in formatter._expand_help(action), \
+            f"{tool.name}: {action.option_strings[0]} does not show its default"
