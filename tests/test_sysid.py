@@ -9,7 +9,7 @@ import pytest
 
 from conftest import DEFAULT_SCENARIO, REPO, make_sim
 from corobot_drake import cli
-from corobot_drake.analysis import bench, drive_tuning, sysid, tire_grip
+from corobot_drake.analysis import bench, drive_tuning, sysid
 from corobot_drake.model import dimensions as dim
 from corobot_drake.systems import runlog
 
@@ -137,23 +137,6 @@ def test_tuner_steps_toward_the_target(tmp_path):
     assert value == pytest.approx(10.1, rel=0.01)
     assert f"motor_torque_scaling: {value:.4g}" in scenario.read_text()
     assert math.isclose(float(last.split("top speed ")[1].split()[0]), 0.6096, rel_tol=0.01)
-
-
-def test_tire_grip_prediction_and_recommendation():
-    # b u / (a^2 + b^2) at 5 rad/s wheels: the figure DRAKE_NOTES quotes (1.61 rad/s).
-    assert tire_grip.predicted_spin_rate(5 * 0.060325) == pytest.approx(1.6077, abs=1e-4)
-    base = dict(yaw_ratio=0.98, vz_std_mm_s=0.2, roll_rate_std_deg_s=0.01,
-                pitch_rate_std_deg_s=0.01, tilt_forwards_deg=1.5, tilt_backwards_deg=1.5,
-                top_speed=0.608, rtf_wall=1.0)
-    rows = [
-        {**base, "setting": "slow", "rtf_cpu": 4.0},
-        {**base, "setting": "flips", "rtf_cpu": 9.0, "tilt_forwards_deg": 110.0},
-        {**base, "setting": "fast jittery", "rtf_cpu": 8.0, "vz_std_mm_s": 3.0},
-        {**base, "setting": "fast", "rtf_cpu": 7.0, "vz_std_mm_s": 0.4},
-        {**base, "setting": "fast smooth", "rtf_cpu": 6.5, "vz_std_mm_s": 0.3},
-    ]
-    assert tire_grip.recommend(rows)["setting"] == "fast smooth"  # ties within 15%: the smoother
-    assert "fast smooth (recommended)" in tire_grip.markdown(rows, rows[4]).splitlines()[6]
 
 
 def test_bench_physics_only_scenario_loads():

@@ -10,7 +10,7 @@ import pytest
 TOOLS = sorted((Path(__file__).resolve().parent.parent / "tools").glob("*.py"))
 
 
-class _Parsed(Exception):
+class _ParsedError(Exception):
     """Raised by the patched parse_args: the tool built its parser."""
 
 
@@ -20,14 +20,14 @@ def _parser_of(tool: Path, monkeypatch) -> argparse.ArgumentParser:
 
     def parse_args(self, *args, **kwargs):
         caught.append(self)
-        raise _Parsed
+        raise _ParsedError
 
     monkeypatch.setattr(argparse.ArgumentParser, "parse_args", parse_args)
     spec = importlib.util.spec_from_file_location(f"tool_{tool.stem}", tool)
     module = importlib.util.module_from_spec(spec)
     monkeypatch.setitem(sys.modules, spec.name, module)  # dataclasses look their module up
     spec.loader.exec_module(module)
-    with pytest.raises(_Parsed):
+    with pytest.raises(_ParsedError):
         module.main()
     return caught[0]
 

@@ -482,6 +482,15 @@ def render_tune(outs) -> str:
             f"(`{outs[1][0].command}`).")
 
 
+def render_tune_sweep(outs) -> str:
+    text = outs[0][0].stdout
+    pairs = re.findall(r"^scaling ([\d.]+): steady speed ([\d.]+) m/s", text, re.M)
+    tuned = _num(r"^motor_torque_scaling: ([\d.]+)", text)
+    return ("| MotorTorqueScaling | steady speed at power 1 (m/s) |\n|---|---|\n"
+            + "\n".join(f"| {a} | {b} |" for a, b in pairs)
+            + f"\n\nInterpolated for the target: {tuned:.3f}.")
+
+
 def render_fit(outs) -> str:
     text = outs[0][0].stdout
     scaling = re.search(r"^motor_torque_scaling: ([\d.]+) \(\+- ([\d.]+)\)", text, re.M)
@@ -495,30 +504,12 @@ def render_fit(outs) -> str:
 def render_tire_grip(outs) -> str:
     o = outs[0][0]
     text = o.stdout
-    prediction = _num(r"spin prediction ([\d.]+) rad/s", text)
-    base_step = _find(r"time step ([\d.]+) ms; spin prediction", text)
-    took = _num(r"^wrote .*\((\d+) s\)$", text)
-    recommended = _find(r"^recommended: ([^:]+):", text)
-    checks = ["| time step | spin yaw / prediction | box tilt fwd / back (deg) | "
-              "roll / pitch rate std (deg/s) | RTF (CPU) | verdict |", "|---|---|---|---|---|---|"]
-    for line in _table(text).splitlines():
-        cells = [c.strip().strip("*") for c in line.strip("|").split("|")]
-        if cells[0].endswith("(recommended)"):
-            step = re.search(r"time_step ([\d.]+) ms", cells[0])
-            checks.append(f"| {step[1] if step else base_step} ms (the sweep's row) | {cells[1]} "
-                          f"| {cells[5]} / {cells[6]} | {float(cells[3]):.2f} / "
-                          f"{float(cells[4]):.2f} | {cells[8]} | |")
-    for m in re.finditer(r"^  ([\d.]+) ms: yaw ([\d.]+) x prediction, tilt ([\d.]+)/([\d.]+) "
-                         r"deg, roll/pitch rate std ([\d.]+)/([\d.]+) deg/s, RTF ([\d.]+x) CPU"
-                         r"\s+(\w+)", text, re.M):
-        checks.append(f"| {m[1]} ms | {m[2]} | {m[3]} / {m[4]} | {m[5]} / {m[6]} | {m[7]} | "
-                      f"{m[8]} |")
-    return (f"Measured {_measured([o])} (`{o.command}`; plant step {base_step} ms unless a "
-            f"row says otherwise; spin prediction {prediction:.4f} rad/s; the sweep took "
-            f"{took / 60:.1f} minutes):\n\n{_table(text)}\n\n"
-            f"The sweep's pick in this run: **{recommended}**, re-checked at other steps (same "
-            f"run; `FAILS` is a flip or a spin off the prediction, and the tool exits 1):\n\n"
-            + "\n".join(checks))
+    runs, took = _find(r"^tire grip: (\d+) runs in (\d+) s", text, 1), _num(
+        r"^tire grip: \d+ runs in (\d+) s", text)
+    picked = _find(r"^picked: (.+)$", text)
+    return (f"Measured {_measured([o])} (`{o.command}`; {runs} runs on 2 Ray workers in "
+            f"{took / 60:.0f} minutes; worst tilt: the largest tilt over both directions, both "
+            f"angles and both powers at that step):\n\n{_table(text)}\n\nPicked: {picked}.")
 
 
 def render_bench_full(outs) -> str:
@@ -709,6 +700,9 @@ def blocks() -> list[Spec]:
         Spec("tune-motor-torque-scaling", "docs/tuning.md",
              (Command("python tools/tune_motor_torque_scaling.py --scaling 20"), top_speed),
              render_tune, DETERMINISTIC, 10),
+        Spec("tune-motor-torque-scaling-sweep", "docs/tuning.md",
+             (Command("python tools/tune_motor_torque_scaling.py --sweep"),), render_tune_sweep,
+             DETERMINISTIC, 40),
         Spec("fit-drive-log", "docs/tuning.md",
              (Command("python tools/fit_drive_log.py --simulate 12 20"),), render_fit,
              DETERMINISTIC, 5),
@@ -749,8 +743,9 @@ def blocks() -> list[Spec]:
         Spec("event-times", "docs/performance.md", (_measure("event-times"),),
              render_event_times, TIMING, 60),
         Spec("tire-grip", "docs/tuning.md",
-             (Command("python tools/tune_tire_grip.py", ok=(0, 1)),),
-             render_tire_grip, TIMING, 180),
+             (Command("python tools/tune_tire_grip.py --plot docs/images/tire_grip.png",
+                      ok=(0, 1)),),
+             render_tire_grip, TIMING, 1200),
         Spec("default-column-runs", "docs/performance.md", (default_column,),
              render_default_runs, TIMING, 110),
         Spec("readme-performance", "README.md", (default_column,), render_readme_performance,

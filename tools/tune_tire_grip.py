@@ -43,9 +43,7 @@ def main(argv=None) -> int:
     table = tire_grip.limits(rows)
     picked = tire_grip.pick(table)
     runs = sum(len(r) for r in rows.values())
-    print(f"tire grip: {runs} runs in {took:.0f} s; flip threshold {tire_grip.FLIP_DEG:g} deg; "
-          f"spin prediction at full power {tire_grip.predicted_spin_rate(1) :.4f} rad/s per m/s "
-          f"of rim speed\n")
+    print(f"tire grip: {runs} runs in {took:.0f} s; flip threshold {tire_grip.FLIP_DEG:g} deg\n")
     print(tire_grip.markdown(table, picked))
     tire_grip.plot(rows, args.plot)
     print(f"plot: {args.plot}")
