@@ -9,10 +9,13 @@ Two studies, physics only (no camera, no IR):
 - `scenarios/studies/tire_grip_drive.yaml`: per effort limit, the steady speed driving straight
   and the yaw rate spinning in place at full power, on open ground.
 
-:func:`pick`: a limit passes when its worst-case tilt stays below `FLIP_DEG` and it slows
+:func:`pick`: a limit passes when its worst-case tilt stays below `FLIP_DEG`, it slows
 neither the straight drive (`SPEED_SLACK`) nor the spin (`SPIN_SLACK`) against the strongest
-limit measured; of those, the one with the smallest worst-case tilt (the most margin to a
-flip), ties broken by the smaller limit: deterministic, as the runs are.
+limit measured, and it can still slip a wheel on level ground (at least `traction_limit`: the
+tyre, not the motor, limits traction, as on the robot with its velocity servo). Of those, the
+smallest: a wheel against the box's face climbs with at most limit / R, so the smallest limit
+keeps the most margin to a flip that the sweep's steps might not show. Deterministic, as the
+runs are.
 """
 
 from __future__ import annotations
@@ -22,10 +25,12 @@ import math
 from pathlib import Path
 
 from corobot_drake.model import dimensions as dim
+from corobot_drake.model.sdf import WheelContact
 from corobot_drake.resources import SCENARIOS_DIR
 from corobot_drake.study import engine
 
 ROBOT = "corobot"
+GRAVITY = 9.81
 LIMIT = f"robots.{ROBOT}.contact.effort_limit"
 STEP = "plant_config.time_step"
 STUDIES = {"box": "tire_grip.yaml", "drive": "tire_grip_drive.yaml"}
@@ -37,6 +42,14 @@ SPEED_SLACK = 0.01
 """A limit may cost at most this share of the strongest limit's straight-line speed."""
 SPIN_SLACK = 0.05
 """... and this share of its spin yaw rate."""
+
+
+def traction_limit() -> float:
+    """N m: the axle torque at which a wheel slips on level ground, mu (m g / 4) R (the robot's
+    weight shared by the four wheels; the tyre's friction combined with the ground's equal one
+    is the same mu)."""
+    mass = dim.TOTAL_BODY_MASS + 4 * dim.WHEEL_MASS
+    return WheelContact().friction * mass * GRAVITY / 4 * dim.WHEEL_RADIUS
 
 
 def predicted_spin_rate(rim_speed: float) -> float:
@@ -127,14 +140,15 @@ def verdict(limit: Limit, strongest: Limit) -> str:
         return f"slows the straight drive ({limit.speed:.4f} m/s)"
     if not abs(limit.spin_rate) >= (1 - SPIN_SLACK) * abs(strongest.spin_rate):
         return f"slows the spin ({abs(limit.spin_rate):.3f} rad/s)"
+    if limit.effort_limit < traction_limit():
+        return f"cannot slip a wheel (traction limit {traction_limit():.3f} N m)"
     return "ok"
 
 
 def pick(table: list[Limit]) -> Limit | None:
-    """The passing limit with the smallest worst-case tilt (ties: the smaller limit)."""
-    strongest = table[-1]
-    passing = [t for t in table if verdict(t, strongest) == "ok"]
-    return min(passing, key=lambda t: (t.worst_tilt_deg, t.effort_limit), default=None)
+    """The smallest passing limit (`verdict`)."""
+    passing = [t for t in table if verdict(t, table[-1]) == "ok"]
+    return min(passing, key=lambda t: t.effort_limit, default=None)
 
 
 def _limit_label(value: float) -> str:
