@@ -43,7 +43,8 @@ def main(argv=None) -> int:
     table = tire_grip.limits(rows)
     picked = tire_grip.pick(table)
     runs = sum(len(r) for r in rows.values())
-    print(f"tire grip: {runs} runs in {took:.0f} s; flip threshold {tire_grip.FLIP_DEG:g} deg\n")
+    how = f"read from {args.source}" if args.source else f"simulated in {took:.0f} s"
+    print(f"tire grip: {runs} runs {how}; flip threshold {tire_grip.FLIP_DEG:g} deg\n")
     print(tire_grip.markdown(table, picked))
     tire_grip.plot(rows, args.plot)
     print(f"plot: {args.plot}")
