@@ -248,8 +248,9 @@ def test_resume_simulates_only_the_missing_runs(tmp_path, tiny_study):
 def test_the_drive_test_study_and_the_drive_test_tool_agree(tmp_path, connected):
     from corobot_drake.analysis import drive_test
 
-    table = drive_test.run_study_of_seeds([1], 1, "closed_loop", 0.2, tmp_path, workers=1)
-    alone = drive_test.run(1, 1, "closed_loop", verbose=False)
+    # Power 1: the loop's legs in a third of the simulated time of the tool's default 0.2.
+    table = drive_test.run_study_of_seeds([1], 1, "closed_loop", 1.0, tmp_path, workers=1)
+    alone = drive_test.run(1, 1, "closed_loop", power=1.0, verbose=False)
     assert table[0]["failures"] == [] and alone["failures"] == []
     assert table[0]["drift_mm"] == [alone["drift"][0] * 1000.0]  # the same run, bit for bit
     assert 0.0 < alone["drift"][0] < 0.01  # a closed-loop loop comes back within 10 mm
@@ -290,11 +291,11 @@ def test_ctrl_c_keeps_the_finished_rows_and_stops_ray(tmp_path, connected, capsy
 
     from corobot_drake.study.__main__ import main
 
-    # 6 runs of 2 s on one worker, each a few tenths of a second or more: the first row is
-    # written at once, and the signal follows it within 50 ms, long before the last run.
+    # 6 runs of 1 s on one worker, each a tenth of a second or more: the first row is written
+    # at once, and the signal follows it within 50 ms, long before the last run.
     study_file = tmp_path / "long.yaml"
     study_file.write_text(TINY.format(scenario=DEFAULT_SCENARIO, scalings="10.16").replace(
-        "seeds: 2", "seeds: 6").replace("duration: 0.3", "duration: 2.0"))
+        "seeds: 2", "seeds: 6").replace("duration: 0.3", "duration: 1.0"))
     out = tmp_path / "out"
     command = [sys.executable, "-m", "corobot_drake.study", str(study_file), "--out", str(out),
                "--workers", "1", "--quiet"]
