@@ -117,17 +117,23 @@ def _sweep(args, robot_name: str) -> int:
         return 1
     plot_sweep(scalings, speeds, args.target, tuned, Path(args.plot))
     print(f"plot: {args.plot}")
-    if args.write:
-        _write(args, robot_name, tuned)
+    if args.write and not _write(args, robot_name, tuned):
+        return 2
     print(f"motor_torque_scaling: {tuned:.4f}  (interpolated between the sweep's scalings for "
           f"{args.target:.4f} m/s)")
     return 0
 
 
-def _write(args, robot_name: str, scaling: float) -> None:
+def _write(args, robot_name: str, scaling: float) -> bool:
+    """Puts the value in --scenario (only that number changes); False after saying why not."""
     path = Path(args.scenario)
-    path.write_text(set_motor_torque_scaling(path.read_text(), robot_name, scaling))
+    try:
+        path.write_text(set_motor_torque_scaling(path.read_text(), robot_name, scaling))
+    except ValueError as e:
+        print(f"error: {path}: {e}", file=sys.stderr)
+        return False
     print(f"wrote motor_torque_scaling {scaling:.4g} for {robot_name} in {path}")
+    return True
 
 
 def main(argv=None) -> int:
@@ -140,6 +146,10 @@ def main(argv=None) -> int:
         print("error: --scaling and --target must be > 0", file=sys.stderr)
         return 2
     if args.sweep:
+        if Path(args.scenario).resolve() != Path(DEFAULT_SCENARIO).resolve():
+            print("error: --scenario: --sweep measures its study's scenario (the default scene; "
+                  "edit scenarios/studies/motor_torque_scaling.yaml for another)", file=sys.stderr)
+            return 2
         return _sweep(args, robot_name)
     scaling, measured, converged, curves = _tune(args, robot_name)
     plot_top_speed(curves, args.target, args.settle, Path(args.plot))
@@ -149,14 +159,8 @@ def main(argv=None) -> int:
               f"iterations", flush=True)
     else:
         print(f"converged in {len(curves)} iteration(s) (within {args.tolerance * 100:g}%)")
-    if args.write:
-        path = Path(args.scenario)
-        try:
-            path.write_text(set_motor_torque_scaling(path.read_text(), robot_name, scaling))
-        except ValueError as e:
-            print(f"error: {path}: {e}", file=sys.stderr)
-            return 2
-        print(f"wrote motor_torque_scaling {scaling:.4g} for {robot_name} in {path}")
+    if args.write and not _write(args, robot_name, scaling):
+        return 2
     print(f"motor_torque_scaling: {scaling:.4f}  (top speed {measured:.4f} m/s, "
           f"target {args.target:.4f})")
     return 0 if converged else 1
