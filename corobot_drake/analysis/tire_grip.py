@@ -36,8 +36,8 @@ STEP = "plant_config.time_step"
 STUDIES = {"box": "tire_grip.yaml", "drive": "tire_grip_drive.yaml"}
 QUICK = {"box": "tire_grip_quick.yaml", "drive": "tire_grip_drive.yaml"}
 FLIP_DEG = 20.0
-"""deg: a run whose largest tilt reaches this has begun to climb the box (level driving tilts
-about 1 deg; a climb that goes over ends near 110 deg)."""
+"""deg: a run whose largest tilt reaches this has begun to climb the box (pushing against its
+face without climbing pitches the chassis 1-2 deg; a climb that goes over ends near 110 deg)."""
 SPEED_SLACK = 0.01
 """A limit may cost at most this share of the strongest limit's straight-line speed."""
 SPIN_SLACK = 0.05
