@@ -17,11 +17,12 @@ from corobot_drake.analysis.bench_recording import KINDS, recording_run
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0],
+                                     formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     parser.add_argument("--seconds", type=float, default=10.0,
-                        help="simulated seconds per run (default 10)")
+                        help="simulated seconds per run")
     parser.add_argument("--repeats", type=int, default=3,
-                        help="runs of each kind, the median kept (default 3)")
+                        help="runs of each kind, the median kept")
     args = parser.parse_args()
     times: dict[str, list[float]] = {k: [] for k in KINDS}
     sizes: dict[str, int] = {}
