@@ -1,0 +1,35 @@
+"""Reinforcement learning: the Corobot as a Gymnasium environment, a trained policy, rollouts.
+
+    import gymnasium, corobot_drake.gym
+    env = gymnasium.make("corobot_drake/GoToGoal-v0")        # camera=True: a Dict with the image
+    policy = corobot_drake.gym.load_policy()                  # observation -> action
+    obs, info = env.reset(seed=0)
+
+- `env.py`: `GoToGoalEnv` and its `GoToGoalConfig` (spaces, reward, held boxes);
+- `layout.py`: an episode's start, goal and boxes, drawn from the seed;
+- `policy.py`: `LinearPolicy` (features of an observation, a linear map, tanh), saved as JSON;
+  `policy.json` is the shipped one (`load_policy`);
+- `rollouts.py`: episodes of a policy, in one process or on Ray (the study engine's
+  `ray_session`), and their summary;
+- `train.py`: the cross-entropy method over a LinearPolicy, episodes evaluated on Ray
+  (`tools/train_policy.py`); `bench.py`: environment steps per second (`tools/bench_gym.py`).
+
+docs/gym.md has the spaces, the reward and the measured figures.
+"""
+
+import gymnasium
+
+ENV_ID = "corobot_drake/GoToGoal-v0"
+
+if ENV_ID not in gymnasium.registry:
+    gymnasium.register(ENV_ID, entry_point="corobot_drake.gym.env:GoToGoalEnv")
+
+
+def load_policy(path=None):
+    """The shipped policy (or the one saved at `path`): a callable observation -> action."""
+    from corobot_drake.gym.policy import LinearPolicy
+
+    return LinearPolicy.load(path)
+
+
+__all__ = ["ENV_ID", "load_policy"]

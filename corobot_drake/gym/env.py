@@ -1,0 +1,306 @@
+"""`GoToGoalEnv`: drive the Corobot from a start pose to a goal point among boxes (Gymnasium).
+
+A thin env over `Simulation`: the diagram is built once, in the constructor, and every
+`reset` puts the episode's layout (`layout.draw_layout`) into the same diagram with
+`Simulation.reset` (start pose, box poses, seed). The boxes are free bodies, so their poses
+are per-run values of the scenario; they are held still: their weight is balanced by a
+constant applied force (the plant's `applied_spatial_force` input, fixed in the Context) and
+they float 1 mm above the ground, so they cost the plant nothing until the robot touches
+them (a box resting on the ground would be a hydroelastic contact at every step). They weigh
+`HELD_MASS` kg: the robot cannot push them away. (Drake's `RigidBody.Lock` would hold them, but
+in pydrake 1.51 a locked body touching the ground segfaults in the contact solver.)
+
+A step is one control period (`GoToGoalConfig.control_period`, 0.1 s): the action's powers
+are issued as `SetPower(left, right)` and the simulation advances. See docs/gym.md for the
+spaces and the reward.
+"""
+
+from __future__ import annotations
+
+import dataclasses as dc
+import math
+from typing import ClassVar
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+from pydrake.multibody.math import SpatialForce
+from pydrake.multibody.plant import ExternallyAppliedSpatialForce
+
+from corobot_drake.config import scenario as sc
+from corobot_drake.config.poses import ground_pose
+from corobot_drake.gym.layout import Layout, draw_layout
+from corobot_drake.model import dimensions as dim
+from corobot_drake.resources import DEFAULT_SCENARIO
+from corobot_drake.sensors.ir_sensor import scan_state_layout
+from corobot_drake.simulation import Simulation, diagram_key, quiet_drake_warnings
+
+ROBOT = "corobot"
+HELD_MASS = 1.0e5
+"""kg of each held box (the giant box too): 17 N of traction moves it < 1 mm/s in 8 s."""
+HOVER = 0.001
+"""m between a held box and the ground."""
+MAX_GOAL_DISTANCE = 10.0
+"""m: the observation's goal distance is clipped here (the goal is 1-1.8 m away at start)."""
+MAX_SPEED = 1.0
+"""m/s: forward speed is clipped to +-this in the observation (top speed 0.61 m/s)."""
+MAX_YAW_RATE = 6.0
+"""rad/s: yaw rate clipped to +-this (a spin at full power turns ~3.3 rad/s)."""
+
+
+@dc.dataclass
+class GoToGoalConfig:
+    """The task: its timing, its layouts and its reward (units in each field's docstring)."""
+
+    control_period: float = 0.1
+    """s of simulation per step."""
+    time_limit: float = 6.0
+    """s: the episode is truncated here (60 steps)."""
+    goal_radius: float = 0.2
+    """m: the episode ends in success when the chassis origin is this close to the goal."""
+    goal_distance: tuple[float, float] = (1.0, 1.8)
+    """m: the goal's distance from the start, drawn uniformly."""
+    start_spread: float = 0.2
+    """m: the start's x and y are drawn in +-this around the origin; its yaw anywhere."""
+    boxes: int = 3
+    """Boxes besides the giant box (a fixed number of bodies: the diagram never changes)."""
+    box_size: float = 0.3
+    """m: edge of each (cubic) box."""
+    blocking_probability: float = 0.3
+    """Chance that the first box stands on the way to the goal."""
+    blocking_offset: float = 0.2
+    """m: how far to the side of the straight line a box on the way may stand."""
+    box_area: float = 2.0
+    """m: the other boxes stand in +-this around the start."""
+    start_clearance: float = 0.3
+    """m: free space around the start (beyond a box's half diagonal)."""
+    goal_clearance: float = 0.3
+    """m: free space around the goal, and between boxes and the giant box."""
+    flip_tilt_deg: float = 60.0
+    """Tilt from upright at which the robot counts as flipped (the episode ends)."""
+    progress_reward: float = 10.0
+    """Per metre of progress toward the goal (negative when moving away)."""
+    time_cost: float = 0.05
+    """Per step."""
+    collision_penalty: float = 0.5
+    """Per step ending with the robot touching a box or the giant box."""
+    stall_penalty: float = 0.5
+    """Per step ending stalled: wheels commanded to move, the chassis hardly moving."""
+    success_reward: float = 10.0
+    flip_penalty: float = 10.0
+    camera: bool = False
+    """Add the front camera's 240 x 320 RGB image to the observation (a Dict)."""
+
+
+IR_SENSORS = ("front", "rear")
+"""The sensors whose rays the observation holds, in this order."""
+
+
+def base_scenario(config: GoToGoalConfig) -> sc.Scenario:
+    """The default scene with the task's boxes, held (see the module docstring); the camera
+    only with `config.camera` (then one frame per step, rendered synchronously)."""
+    scenario = sc.load_scenario(DEFAULT_SCENARIO)
+    robot = scenario.robots[ROBOT]
+    robot.camera.rgb = config.camera
+    if config.camera:
+        robot.camera.fps = 1.0 / config.control_period
+        robot.camera.output_delay = 0.0
+    giant = scenario.world.bodies["giant_box"]
+    giant.mass = HELD_MASS
+    giant.pose = ground_pose(*dim.GIANT_BOX_CENTER[:2])
+    giant.pose.translation = [*dim.GIANT_BOX_CENTER[:2], dim.GIANT_BOX_CENTER[2] + HOVER]
+    for i in range(config.boxes):
+        scenario.world.bodies[f"box_{i}"] = sc.WorldBody(
+            shape=sc.Box([config.box_size] * 3), mass=HELD_MASS, color=[0.3, 0.45, 0.7, 1.0])
+    return scenario
+
+
+class GoToGoalEnv(gym.Env):
+    """Drive to a goal among boxes. Observation (float32, `observation_names()`): each IR
+    ray's distance (m; front then rear), the goal's distance (m) and bearing (rad, in the
+    robot's frame, positive to the left), forward speed (m/s), yaw rate (rad/s). Action:
+    left and right power in [-1, 1]."""
+
+    metadata: ClassVar[dict] = {"render_modes": []}
+
+    def __init__(self, config: GoToGoalConfig | None = None, **overrides):
+        """`overrides` replace fields of `config` (default `GoToGoalConfig()`), e.g.
+        `camera=True`, as `gymnasium.make("corobot_drake/GoToGoal-v0", camera=True)`."""
+        quiet_drake_warnings()
+        self.config = dc.replace(config or GoToGoalConfig(), **overrides)
+        self.scenario = base_scenario(self.config)
+        self.sim = Simulation(self.scenario)
+        self._key = diagram_key(self.scenario)
+        self.robot = self.sim.robot(ROBOT)
+        self._ports = _Ports(self.sim, self.scenario)
+        self._hold_boxes()
+        n_rays = self._ports.num_rays
+        rng = dim.IR_MAXIMUM_RANGE
+        low = np.array([0.0] * n_rays + [0.0, -math.pi, -MAX_SPEED, -MAX_YAW_RATE], np.float32)
+        high = np.array([rng] * n_rays + [MAX_GOAL_DISTANCE, math.pi, MAX_SPEED, MAX_YAW_RATE],
+                        np.float32)
+        state = spaces.Box(low, high, dtype=np.float32)
+        if self.config.camera:
+            image = spaces.Box(0, 255, (dim.CAMERA_HEIGHT, dim.CAMERA_WIDTH, 3), np.uint8)
+            self.observation_space = spaces.Dict({"state": state, "image": image})
+        else:
+            self.observation_space = state
+        self.action_space = spaces.Box(-1.0, 1.0, (2,), np.float32)
+        self.layout: Layout | None = None
+        self._distance = 0.0
+
+    def observation_names(self) -> list[str]:
+        """Names of the state observation's entries, in order."""
+        return [*self._ports.ray_names, "goal_distance", "goal_bearing", "forward_speed",
+                "yaw_rate"]
+
+    # --- episodes -------------------------------------------------------------------------
+    def reset(self, *, seed: int | None = None, options: dict | None = None):
+        """A new episode: its layout drawn from the seed, or `options={"layout": Layout}`."""
+        super().reset(seed=seed)
+        self.layout = (options or {}).get("layout") or draw_layout(self.np_random, self.config)
+        self._apply_layout(self.layout)
+        self.sim.reset(self.scenario, key=self._key)
+        self._distance = self._goal_in_robot_frame()[0]
+        return self._observation(), self._info(collided=False, stalled=False)
+
+    def _apply_layout(self, layout: Layout) -> None:
+        x, y, yaw = layout.start
+        self.scenario.robots[ROBOT].pose = ground_pose(x, y, math.degrees(yaw))
+        # the episode's seed: the IR noise of a sharp_gp2d12 model draws from it
+        self.scenario.random_seed = int(self.np_random.integers(2**31))
+        half = self.config.box_size / 2 + HOVER
+        for i, (bx, by, byaw) in enumerate(layout.boxes):
+            pose = ground_pose(bx, by, math.degrees(byaw))
+            pose.translation = [bx, by, half]
+            self.scenario.world.bodies[f"box_{i}"].pose = pose
+
+    def _hold_boxes(self) -> None:
+        """Balances each world body's weight with a constant upward force (fixed in the
+        Context: `Simulation.reset` keeps fixed inputs)."""
+        plant = self.sim.station.plant
+        g = -plant.gravity_field().gravity_vector()[2]
+        forces = []
+        for name, body in self.sim.station.bodies.items():
+            force = ExternallyAppliedSpatialForce()
+            force.body_index = body.index()
+            force.p_BoBq_B = np.zeros(3)
+            force.F_Bq_W = SpatialForce(np.zeros(3),
+                                        [0.0, 0.0, g * self.scenario.world.bodies[name].mass])
+            forces.append(force)
+        plant.get_applied_spatial_force_input_port().FixValue(
+            plant.GetMyMutableContextFromRoot(self.sim.context), forces)
+
+    def step(self, action):
+        left, right = np.clip(np.asarray(action, dtype=float), -1.0, 1.0)
+        self.robot.set_power(left, right)
+        self.sim.advance(self.config.control_period)
+        c = self.config
+        distance, _ = self._goal_in_robot_frame()
+        collided = self._ports.touching_boxes(self.sim.context)
+        stalled = self._stalled()
+        reward = c.progress_reward * (self._distance - distance) - c.time_cost
+        reward -= c.collision_penalty * collided + c.stall_penalty * stalled
+        self._distance = distance
+        success = distance < c.goal_radius
+        flipped = self._tilt_deg() > c.flip_tilt_deg
+        if success:
+            reward += c.success_reward
+        if flipped:
+            reward -= c.flip_penalty
+        truncated = not (success or flipped) and self.sim.time >= (
+            c.time_limit - 1e-9 + self.scenario.simulator_config.start_time)
+        info = self._info(collided, stalled, success=success, flipped=flipped)
+        return self._observation(), float(reward), bool(success or flipped), truncated, info
+
+    # --- measurements ---------------------------------------------------------------------
+    def _goal_in_robot_frame(self) -> tuple[float, float]:
+        """(distance m, bearing rad) of the goal from the chassis origin, bearing positive to
+        the robot's left."""
+        pose = self.robot.pose()
+        dx, dy = self.layout.goal[0] - pose.x, self.layout.goal[1] - pose.y
+        bearing = math.atan2(dy, dx) - pose.yaw
+        return math.hypot(dx, dy), math.atan2(math.sin(bearing), math.cos(bearing))
+
+    def _observation(self):
+        distance, bearing = self._goal_in_robot_frame()
+        v = self.robot.velocity()
+        state = np.concatenate([
+            self._ports.ray_distances(self.sim.context),
+            [min(distance, MAX_GOAL_DISTANCE), bearing,
+             np.clip(v.forward, -MAX_SPEED, MAX_SPEED),
+             np.clip(v.yaw_rate, -MAX_YAW_RATE, MAX_YAW_RATE)]]).astype(np.float32)
+        if not self.config.camera:
+            return state
+        image = self.robot.camera_image()
+        rgb = (np.zeros(self.observation_space["image"].shape, np.uint8) if image is None
+               else np.ascontiguousarray(image[:, :, :3]))
+        return {"state": state, "image": rgb}
+
+    def _stalled(self) -> bool:
+        """The drive commands at least 0.15 m/s of rim speed on average but the chassis moves
+        (forward, or turning at the wheels' track) at under a fifth of it."""
+        commanded = self._ports.commanded_rim_speed(self.sim.context)
+        if commanded < 0.15:
+            return False
+        v = self.robot.velocity()
+        return abs(v.forward) + abs(v.yaw_rate) * dim.HALF_TRACK < 0.2 * commanded
+
+    def _tilt_deg(self) -> float:
+        pose = self.robot.pose()
+        return math.degrees(math.acos(max(-1.0, min(1.0, math.cos(pose.roll) *
+                                                     math.cos(pose.pitch)))))
+
+    def _info(self, collided: bool, stalled: bool, success: bool = False,
+              flipped: bool = False) -> dict:
+        return {"is_success": bool(success), "flipped": bool(flipped),
+                "collided": bool(collided), "stalled": bool(stalled),
+                "goal_distance": float(self._distance), "time": float(self.sim.time)}
+
+
+class _Ports:
+    """What the env reads from the diagram besides the Robot API: the IR rays (each sensor's
+    `scan_state`), the drive's commanded axle speeds, and the plant's contacts with boxes."""
+
+    def __init__(self, sim: Simulation, scenario: sc.Scenario):
+        diagram, plant = sim.station.diagram, sim.station.plant
+        self._plant = plant
+        self._scans = []
+        self.ray_names = []
+        for name in IR_SENSORS:
+            n = 2 * scenario.robots[ROBOT].ir_sensors[name].samples
+            _, origin, ends, _ = scan_state_layout(n)
+            self._scans.append((diagram.GetOutputPort(f"{ROBOT}.{name}.scan_state"), origin,
+                                ends))
+            self.ray_names += [f"ir_{name}_{i}" for i in range(n)]
+        self.num_rays = len(self.ray_names)
+        self._axle = diagram.GetOutputPort(f"{ROBOT}.axle_speed_command")
+        self._boxes = {g for body in sim.station.bodies.values()
+                       for g in plant.GetCollisionGeometriesForBody(body)}
+
+    def ray_distances(self, context) -> np.ndarray:
+        """m, each ray from its origin to where it stopped (maximum_range: nothing hit)."""
+        out = []
+        for port, origin, ends in self._scans:
+            x = port.Eval(context)
+            out.append(np.linalg.norm(x[ends].reshape(-1, 3) - x[origin], axis=1))
+        return np.concatenate(out)
+
+    def commanded_rim_speed(self, context) -> float:
+        """m/s: the mean magnitude of the two sides' commanded axle speeds times R."""
+        return float(np.mean(np.abs(self._axle.Eval(context)))) * dim.WHEEL_RADIUS
+
+    def touching_boxes(self, context) -> bool:
+        """Any contact with a box or the giant box (only the robot can touch them: they are
+        held above the ground, apart)."""
+        results = self._plant.get_contact_results_output_port().Eval(
+            self._plant.GetMyContextFromRoot(context))
+        for i in range(results.num_hydroelastic_contacts()):
+            surface = results.hydroelastic_contact_info(i).contact_surface()
+            if surface.id_M() in self._boxes or surface.id_N() in self._boxes:
+                return True
+        for i in range(results.num_point_pair_contacts()):
+            pair = results.point_pair_contact_info(i).point_pair()
+            if pair.id_A in self._boxes or pair.id_B in self._boxes:
+                return True
+        return False
