@@ -1,0 +1,126 @@
+"""Training a `LinearPolicy` with the cross-entropy method, episodes evaluated on Ray.
+
+Each generation draws `population` weight vectors from a diagonal Gaussian, plays each on the
+generation's `episodes` training seeds (the same seeds for every candidate: common random
+numbers, so candidates are compared on the same layouts), keeps the `elite` with the highest
+mean return and refits the Gaussian to them (plus a little extra spread that decays, so it
+does not collapse early). Training seeds start at `TRAIN_SEEDS`; the held-out seeds
+`HELD_OUT` are never trained on. No deep-learning framework: numpy and Ray.
+"""
+
+from __future__ import annotations
+
+import dataclasses as dc
+import time
+
+import numpy as np
+from tqdm import tqdm
+
+from corobot_drake.gym.policy import NUM_FEATURES, LinearPolicy
+from corobot_drake.gym.rollouts import EpisodePool, summary
+
+TRAIN_SEEDS = 10_000
+"""The first training seed (generation g uses TRAIN_SEEDS + g * episodes + 0..episodes-1)."""
+HELD_OUT = tuple(range(10))
+"""Seeds the policy is judged on, never trained on."""
+
+
+@dc.dataclass(frozen=True)
+class CemSettings:
+    generations: int = 5
+    population: int = 8
+    episodes: int = 4
+    """Training seeds per generation (every candidate plays all of them)."""
+    elite: int = 2
+    start: str = "goal_seeker"
+    """The initial mean: `goal_seeker` (`LinearPolicy.goal_seeker`, hand-written) or `zero`
+    (a robot that stays; it needs many more generations)."""
+    sigma: float = 0.7
+    """Initial standard deviation of every weight."""
+    extra_sigma: float = 0.2
+    """Spread added to the refitted one, decaying linearly to 0 at the last generation."""
+    seed: int = 0
+    """Seeds the sampling of candidates."""
+
+
+@dc.dataclass(frozen=True)
+class Generation:
+    """One generation's figures (its candidates on its training seeds)."""
+
+    generation: int
+    mean_return: float
+    """Mean over the population's episodes."""
+    elite_return: float
+    """Mean over the elite's episodes."""
+    best_return: float
+    success_rate: float
+    """Over the population's episodes."""
+    elite_success_rate: float
+    seconds: float
+
+
+def train(settings: CemSettings, pool: EpisodePool,
+          progress: bool = True) -> tuple[LinearPolicy, list[Generation]]:
+    """The final mean policy and the learning curve."""
+    rng = np.random.default_rng(settings.seed)
+    dim = 2 * NUM_FEATURES
+    mean = (LinearPolicy.goal_seeker().weights.ravel() if settings.start == "goal_seeker"
+            else np.zeros(dim))
+    std = np.full(dim, settings.sigma)
+    curve = []
+    bar = tqdm(range(settings.generations), unit="generation", disable=not progress)
+    for g in bar:
+        start = time.perf_counter()
+        seeds = TRAIN_SEEDS + g * settings.episodes + np.arange(settings.episodes)
+        thetas = mean + std * rng.standard_normal((settings.population, dim))
+        jobs = [(LinearPolicy.from_vector(t), int(s)) for t in thetas for s in seeds]
+        episodes = pool.run(jobs, chunk=settings.episodes)
+        returns = np.array([e.episode_return for e in episodes]).reshape(settings.population, -1)
+        successes = np.array([e.success for e in episodes]).reshape(settings.population, -1)
+        scores = returns.mean(axis=1)
+        elite = np.argsort(-scores, kind="stable")[:settings.elite]
+        extra = settings.extra_sigma * (1.0 - (g + 1) / settings.generations)
+        mean = thetas[elite].mean(axis=0)
+        std = thetas[elite].std(axis=0) + extra
+        curve.append(Generation(g + 1, float(scores.mean()), float(scores[elite].mean()),
+                                float(scores.max()), float(successes.mean()),
+                                float(successes[elite].mean()), time.perf_counter() - start))
+        bar.set_postfix(elite_return=f"{curve[-1].elite_return:.1f}",
+                        success=f"{curve[-1].success_rate:.2f}")
+    return LinearPolicy.from_vector(mean), curve
+
+
+def evaluate(pool: EpisodePool, policy, seeds=HELD_OUT) -> dict:
+    """`summary` of the policy's episodes on `seeds` (None: random actions)."""
+    return summary(pool.run([(policy, s) for s in seeds]))
+
+
+def plot_curve(curve: list[Generation], path, held_out: dict | None = None) -> None:
+    """Returns (population mean, elite mean, best) and success rates per generation."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    g = [c.generation for c in curve]
+    fig, (top, bottom) = plt.subplots(2, 1, figsize=(7, 6), sharex=True)
+    top.plot(g, [c.best_return for c in curve], "^-", label="best candidate")
+    top.plot(g, [c.elite_return for c in curve], "o-", label="elite mean")
+    top.plot(g, [c.mean_return for c in curve], "s-", label="population mean")
+    top.set_ylabel("mean episode return")
+    top.legend()
+    top.grid(alpha=0.3)
+    bottom.plot(g, [c.elite_success_rate for c in curve], "o-", label="elite")
+    bottom.plot(g, [c.success_rate for c in curve], "s-", label="population")
+    if held_out is not None:
+        bottom.axhline(held_out["success_rate"], color="k", ls="--",
+                       label=f"final policy, held-out seeds ({held_out['success_rate']:.0%})")
+    bottom.set_ylim(-0.05, 1.05)
+    bottom.set_ylabel("success rate (training seeds)")
+    bottom.set_xlabel("CEM generation")
+    bottom.legend()
+    bottom.grid(alpha=0.3)
+    fig.suptitle("GoToGoal: cross-entropy method over a linear policy")
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)

@@ -1,0 +1,83 @@
+#!/usr/bin/env python3
+"""Trains the GoToGoal policy (cross-entropy method over a linear policy, episodes on Ray),
+saves it, plots the learning curve and prints the held-out success rates
+(`corobot_drake.gym.train`).
+
+    python tools/train_policy.py [--generations 5] [--population 8] [--episodes 4] ...
+    python tools/train_policy.py --evaluate     # the saved policy and random actions only
+"""
+
+import argparse
+import dataclasses as dc
+import sys
+from pathlib import Path
+
+from corobot_drake.gym.policy import SHIPPED, LinearPolicy
+from corobot_drake.gym.rollouts import episode_pool
+from corobot_drake.gym.train import HELD_OUT, CemSettings, evaluate, plot_curve, train
+from corobot_drake.simulation import quiet_drake_warnings
+
+REPO = Path(__file__).resolve().parent.parent
+
+
+def _print_evaluation(policy: dict, start: dict, random: dict) -> None:
+    print(f"Held-out seeds {HELD_OUT[0]}-{HELD_OUT[-1]}:")
+    print("| policy | success rate | mean return | mean steps | collision steps | "
+          "stall steps |")
+    print("|---|---|---|---|---|---|")
+    for name, s in (("trained (linear, CEM)", policy),
+                    ("hand-written start (LinearPolicy.goal_seeker)", start),
+                    ("random actions", random)):
+        print(f"| {name} | {s['success_rate']:.0%} | {s['mean_return']:.1f} | "
+              f"{s['mean_steps']:.1f} | {s['collision_steps']:.1f} | {s['stall_steps']:.1f} |")
+
+
+def main(argv=None) -> int:
+    defaults = CemSettings()
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0],
+                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    for field in dc.fields(CemSettings):
+        p.add_argument(f"--{field.name.replace('_', '-')}", type=type(getattr(defaults,
+                                                                                field.name)),
+                       default=getattr(defaults, field.name), help=f"CEM {field.name}")
+    p.add_argument("--workers", type=int, default=None,
+                   help="Ray workers (default: this machine's cores)")
+    p.add_argument("--address", default=None, help="a Ray cluster's address (default: local)")
+    p.add_argument("--out", type=Path, default=SHIPPED, help="where the policy is saved")
+    p.add_argument("--plot", type=Path, default=REPO / "docs/images/gym_learning_curve.png",
+                   help="the learning curve's picture")
+    p.add_argument("--evaluate", action="store_true",
+                   help="only evaluate the policy at --out and random actions on the held-out "
+                        "seeds")
+    args = p.parse_args(argv)
+    quiet_drake_warnings()
+    settings = CemSettings(**{f.name: getattr(args, f.name) for f in dc.fields(CemSettings)})
+    with episode_pool(args.workers, args.address) as pool:
+        if args.evaluate:
+            policy = LinearPolicy.load(args.out)
+        else:
+            policy, curve = train(settings, pool)
+        held_out, random = evaluate(pool, policy), evaluate(pool, None)
+        start = evaluate(pool, LinearPolicy.goal_seeker())
+    if not args.evaluate:
+        policy.save(args.out, trained_by="tools/train_policy.py", settings=dc.asdict(settings),
+                    held_out=held_out, goal_seeker=start, random_actions=random)
+        plot_curve(curve, args.plot, held_out)
+        print("| generation | population mean return | elite mean return | best | "
+              "success (population) | success (elite) | s |")
+        print("|---|---|---|---|---|---|---|")
+        for c in curve:
+            print(f"| {c.generation} | {c.mean_return:.1f} | {c.elite_return:.1f} | "
+                  f"{c.best_return:.1f} | {c.success_rate:.0%} | {c.elite_success_rate:.0%} | "
+                  f"{c.seconds:.0f} |")
+        episodes = settings.generations * settings.population * settings.episodes
+        print(f"\nTrained on {episodes} episodes ({settings.generations} generations x "
+              f"{settings.population} candidates x {settings.episodes} seeds) in "
+              f"{sum(c.seconds for c in curve):.0f} s; saved {args.out.name}, plotted "
+              f"{args.plot.name}.\n")
+    _print_evaluation(held_out, start, random)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
