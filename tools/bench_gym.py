@@ -1,6 +1,8 @@
 #!/usr/bin/env python3
-"""GoToGoal environment steps per second: one env in this process, AsyncVectorEnv with 1 and
-2 envs, and rollouts on Ray with 1 and 2 workers (`corobot_drake.gym.bench`).
+"""GoToGoal environment steps per second, in process, vectorized and on Ray.
+
+One env in this process, AsyncVectorEnv with 1 and 2 envs, and rollouts on Ray with 1 and 2
+workers (`corobot_drake.gym.bench`).
 
     python tools/bench_gym.py [--steps 100] [--episodes 4]
 """
@@ -25,9 +27,9 @@ def main(argv=None) -> int:
     args = p.parse_args(argv)
     quiet_drake_warnings()
     cases = [
-        ("one env, this process", "build", lambda: bench.in_process(args.steps)),
-        ("AsyncVectorEnv, 1 env", "start", lambda: bench.vector(1, args.steps)),
-        ("AsyncVectorEnv, 2 envs", "start", lambda: bench.vector(2, args.steps)),
+        ("one env, this process", "startup", lambda: bench.in_process(args.steps)),
+        ("AsyncVectorEnv, 1 env", "startup", lambda: bench.vector(1, args.steps)),
+        ("AsyncVectorEnv, 2 envs", "startup", lambda: bench.vector(2, args.steps)),
         ("Ray rollouts, 1 worker (start-up included)", None,
          lambda: bench.on_ray(1, args.episodes)),
         ("Ray rollouts, 2 workers (start-up included)", None,

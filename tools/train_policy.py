@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
-"""Trains the GoToGoal policy (cross-entropy method over a linear policy, episodes on Ray),
-saves it, plots the learning curve and prints the held-out success rates
+"""Trains the GoToGoal policy: the cross-entropy method over a linear policy, on Ray.
+
+Saves the policy, plots the learning curve and prints the held-out success rates
 (`corobot_drake.gym.train`).
 
     python tools/train_policy.py [--generations 5] [--population 8] [--episodes 4] ...
@@ -41,8 +42,8 @@ def main(argv=None) -> int:
                                                                                 field.name)),
                        default=getattr(defaults, field.name), help=f"CEM {field.name}")
     p.add_argument("--workers", type=int, default=None,
-                   help="Ray workers (default: this machine's cores)")
-    p.add_argument("--address", default=None, help="a Ray cluster's address (default: local)")
+                   help="Ray workers (None: this machine's cores)")
+    p.add_argument("--address", default=None, help="a Ray cluster's address (None: a local instance)")
     p.add_argument("--out", type=Path, default=SHIPPED, help="where the policy is saved")
     p.add_argument("--plot", type=Path, default=REPO / "docs/images/gym_learning_curve.png",
                    help="the learning curve's picture")

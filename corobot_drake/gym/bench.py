@@ -27,7 +27,7 @@ def in_process(steps: int) -> dict:
         if terminated or truncated:
             env.reset()
     wall = time.perf_counter() - start
-    return {"steps": steps, "wall": wall, "build": built}
+    return {"steps": steps, "wall": wall, "startup": built}
 
 
 def vector(num_envs: int, steps: int) -> dict:
@@ -43,7 +43,7 @@ def vector(num_envs: int, steps: int) -> dict:
         envs.step(envs.action_space.sample())
     wall = time.perf_counter() - start
     envs.close()
-    return {"steps": steps * num_envs, "wall": wall, "build": started}
+    return {"steps": steps * num_envs, "wall": wall, "startup": started}
 
 
 def on_ray(workers: int, episodes: int) -> dict:
