@@ -625,6 +625,19 @@ def render_bench_study(outs) -> str:
     return f"Measured {_measured([o])} (`{o.command}`):\n\n{_as_markdown(o.stdout.strip())}"
 
 
+def render_gym_evaluation(outs) -> str:
+    o = outs[0][0]
+    return f"`{o.command}`:\n\n{_table(o.stdout)}"
+
+
+def render_gym_training(outs) -> str:
+    o = outs[0][0]
+    trained = _find(r"^(Trained on .*)$", o.stdout)
+    curve = _table(o.stdout.split("Held-out seeds")[0])
+    return (f"Measured {_measured([o])} (`{o.command}`): {trained}\n\n{curve}\n\n"
+            f"![GoToGoal learning curve](images/gym_learning_curve.png)")
+
+
 def render_table_with_load(outs) -> str:
     o = outs[0][0]
     return f"Measured {_measured([o])} (`{o.command}`):\n\n{_table(o.stdout)}"
@@ -734,6 +747,13 @@ def blocks() -> list[Spec]:
         Spec("bench-ir", "docs/sensors.md", (bench_ir,), render_bench_ir, TIMING, 50),
         Spec("bench-recording", "docs/recording.md",
              (Command("python tools/bench_recording.py"),), render_table_with_load, TIMING, 300),
+        Spec("gym-evaluation", "docs/gym.md",
+             (Command("python tools/train_policy.py --evaluate"),), render_gym_evaluation,
+             DETERMINISTIC, 90),
+        Spec("gym-training", "docs/gym.md", (Command("python tools/train_policy.py"),),
+             render_gym_training, PICTURE, 1200),
+        Spec("bench-gym", "docs/gym.md", (Command("python tools/bench_gym.py"),),
+             render_bench_study, TIMING, 150),
         Spec("bench-study", "docs/studies.md",
              (Command("python tools/bench_study.py --seeds 24 --duration 8"),),
              render_bench_study, TIMING, 150),

@@ -1,0 +1,188 @@
+"""The GoToGoal Gymnasium environment: its checker, seeds, held boxes, collisions and stalls,
+the camera observation, vectorized and Ray rollouts, and the shipped policy."""
+
+import math
+
+import gymnasium
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env
+
+import corobot_drake.gym
+from corobot_drake.gym import ENV_ID, load_policy
+from corobot_drake.gym.env import HOVER, GoToGoalEnv
+from corobot_drake.gym.layout import Layout
+from corobot_drake.gym.policy import LinearPolicy
+from corobot_drake.gym.rollouts import rollouts, run_episode
+from corobot_drake.gym.train import HELD_OUT
+
+PARKED = ((0.0, 50.0, 0.0), (2.0, 50.0, 0.0), (4.0, 50.0, 0.0))
+"""The three boxes out of the way."""
+OPEN_FIELD = Layout(start=(0.0, 0.0, 0.0), goal=(1.5, 0.0), boxes=PARKED)
+
+
+@pytest.fixture(scope="module")
+def env():
+    return GoToGoalEnv()
+
+
+def test_registered_env_passes_gymnasiums_checker():
+    env = gymnasium.make(ENV_ID)
+    check_env(env.unwrapped, skip_render_check=True)
+    assert env.observation_space.shape == (16,)
+    assert env.action_space.dtype == np.float32
+    assert env.action_space.shape == (2,)
+
+
+def _play(env, seed, actions):
+    obs, _ = env.reset(seed=seed)
+    out = [obs]
+    for action in actions:
+        obs, reward, terminated, truncated, info = env.step(action)
+        out += [obs, reward, terminated, truncated, info]
+    return out, env.layout
+
+
+def test_a_seed_gives_the_same_episode_every_time(env):
+    actions = np.random.default_rng(1).uniform(-1, 1, (15, 2)).astype(np.float32)
+    first, layout = _play(env, 5, actions)
+    _play(env, 6, actions)  # another episode in between: nothing of it must remain
+    again, same_layout = _play(env, 5, actions)
+    assert layout == same_layout
+    for a, b in zip(first, again, strict=True):
+        if isinstance(a, np.ndarray):
+            np.testing.assert_array_equal(a, b)
+        else:
+            assert a == b
+    _, other_layout = _play(env, 6, actions)
+    assert other_layout != layout
+    # the observation is measured: the robot moved under random powers
+    assert first[-5][12] != first[0][12]
+
+
+def test_observation_is_the_goal_in_the_robot_frame(env):
+    layout = Layout(start=(0.0, 0.0, math.pi / 2), goal=(-1.0, 1.0),
+                    boxes=PARKED)
+    obs, _ = env.reset(seed=0, options={"layout": layout})
+    names = env.observation_names()
+    assert obs[names.index("goal_distance")] == pytest.approx(math.sqrt(2), abs=1e-3)
+    # facing +y, the goal at (-1, 1) is 45 deg to the left
+    assert obs[names.index("goal_bearing")] == pytest.approx(math.pi / 4, abs=1e-3)
+    # at the start the rear sensor sees nothing (the giant box is to its right), the front
+    # neither: every ray reads the range
+    assert np.all(obs[:12] == pytest.approx(0.762, abs=1e-6))
+
+
+def _box_pose(env, i):
+    plant = env.sim.station.plant
+    return plant.EvalBodyPoseInWorld(plant.GetMyContextFromRoot(env.sim.context),
+                                     env.sim.station.bodies[f"box_{i}"]).translation()
+
+
+def test_driving_into_a_box_is_a_collision_and_a_stall_and_the_box_stays(env):
+    # a box 0.5 m ahead on the way to the goal: full power straight into it
+    layout = Layout(start=(0.0, 0.0, 0.0), goal=(1.5, 0.0),
+                    boxes=((0.5, 0.0, 0.0), (2.0, 50.0, 0.0), (4.0, 50.0, 0.0)))
+    obs, _ = env.reset(seed=0, options={"layout": layout})
+    start = _box_pose(env, 0)
+    assert start[2] == pytest.approx(0.15 + HOVER)
+    infos, rewards, front = [], [], []
+    for _ in range(30):
+        obs, reward, terminated, truncated, info = env.step(np.array([1.0, 1.0], np.float32))
+        infos.append(info)
+        rewards.append(reward)
+        front.append(obs[:6].min())
+    # the front face is 0.35 m ahead of the chassis origin, the sensor 0.108 m ahead of it:
+    # it read the box coming (0.242 m at the start, nearer as the robot drove)
+    assert min(front) < 0.1
+    assert any(i["collided"] for i in infos)
+    assert sum(i["stalled"] for i in infos[-10:]) >= 8  # pushing, not moving: stalled
+    assert rewards[-1] < -0.5  # time cost + collision + stall, no progress
+    assert not terminated and not truncated
+    # 1e5 kg held above the ground: the robot's push moves it less than a millimetre
+    assert np.linalg.norm(_box_pose(env, 0) - start) < 1e-3
+
+
+def test_reaching_the_goal_terminates_with_success(env):
+    layout = Layout(start=(0.0, 0.0, 0.0), goal=(0.6, 0.0),
+                    boxes=PARKED)
+    env.reset(seed=0, options={"layout": layout})
+    steps, terminated = 0, False
+    while not terminated and steps < 30:
+        _, reward, terminated, truncated, info = env.step(np.ones(2, np.float32))
+        steps += 1
+    assert info["is_success"] and not truncated
+    assert info["goal_distance"] < env.config.goal_radius
+    # 0.4 m at <= 0.61 m/s after a 0.34 s ramp: 0.8-1.2 s
+    assert 8 <= steps <= 12
+    assert reward > env.config.success_reward
+
+
+def test_time_limit_truncates(env):
+    env.reset(seed=3)
+    for _ in range(59):
+        assert not any(env.step(np.zeros(2, np.float32))[2:4])
+    _, _, terminated, truncated, info = env.step(np.zeros(2, np.float32))
+    assert truncated and not terminated and not info["is_success"]
+    assert info["time"] == pytest.approx(env.config.time_limit)
+
+
+def test_camera_adds_the_image_to_a_dict_observation():
+    env = GoToGoalEnv(camera=True)
+    obs, _ = env.reset(seed=0, options={"layout": OPEN_FIELD})  # facing +x: nothing ahead
+    assert set(obs) == {"state", "image"}
+    assert obs["image"].shape == (240, 320, 3) and obs["image"].dtype == np.uint8
+    assert env.observation_space.contains(obs)
+    obs, *_ = env.step(np.zeros(2, np.float32))
+    # a rendered scene: the sky above (blue 0.92 x 255), the ground below (0.4 x 255, lit)
+    image = obs["image"].astype(int)
+    assert image[:40, :, 2].mean() > 200
+    assert image[-40:, :, 2].mean() < 150
+
+
+def test_async_vector_env_steps_the_same_episodes_as_one_env(env):
+    envs = gymnasium.vector.AsyncVectorEnv([lambda: gymnasium.make(ENV_ID)] * 2)
+    try:
+        obs, _ = envs.reset(seed=[11, 12])
+        actions = np.array([[0.5, 0.8], [-0.3, 0.6]], np.float32)
+        for _ in range(5):
+            obs, rewards, *_ = envs.step(actions)
+    finally:
+        envs.close()
+    for i, seed in enumerate((11, 12)):
+        env.reset(seed=seed)
+        for _ in range(5):
+            one, reward, *_ = env.step(actions[i])
+        np.testing.assert_array_equal(obs[i], one)
+        assert rewards[i] == pytest.approx(reward, abs=1e-6)
+
+
+def test_rollouts_on_ray_equal_episodes_in_this_process(env):
+    policy = load_policy()
+    on_ray = rollouts(policy, [HELD_OUT[0], HELD_OUT[1]], workers=1, progress=False)
+    here = [run_episode(env, policy, seed) for seed in (HELD_OUT[0], HELD_OUT[1])]
+    assert on_ray == here
+
+
+def test_shipped_policy_reaches_goals_a_random_policy_does_not(env):
+    policy = load_policy()
+    action = policy(env.reset(seed=0)[0])
+    assert env.action_space.contains(action)
+    seeds = HELD_OUT[:3]
+    assert all(run_episode(env, policy, s).success for s in seeds)
+    random = run_episode(env, None, seeds[0])
+    assert not random.success and random.steps == 60
+
+
+def test_policy_round_trips_through_json(tmp_path):
+    policy = LinearPolicy(np.random.default_rng(0).normal(size=(2, 13)))
+    policy.save(tmp_path / "p.json", note="test")
+    np.testing.assert_array_equal(LinearPolicy.load(tmp_path / "p.json").weights,
+                                  policy.weights)
+    (tmp_path / "bad.json").write_text('{"features": ["x"], "weights": {}}')
+    with pytest.raises(ValueError, match="features"):
+        LinearPolicy.load(tmp_path / "bad.json")
+
+
+def test_the_package_registers_one_env():
+    assert corobot_drake.gym.ENV_ID in gymnasium.registry
