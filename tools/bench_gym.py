@@ -27,29 +27,25 @@ def main(argv=None) -> int:
     args = p.parse_args(argv)
     quiet_drake_warnings()
     cases = [
-        ("one env, this process", "startup", lambda: bench.in_process(args.steps)),
-        ("AsyncVectorEnv, 1 env", "startup", lambda: bench.vector(1, args.steps)),
-        ("AsyncVectorEnv, 2 envs", "startup", lambda: bench.vector(2, args.steps)),
-        ("Ray rollouts, 1 worker (start-up included)", None,
-         lambda: bench.on_ray(1, args.episodes)),
-        ("Ray rollouts, 2 workers (start-up included)", None,
-         lambda: bench.on_ray(2, args.episodes)),
+        ("one env, this process", lambda: bench.in_process(args.steps)),
+        ("AsyncVectorEnv, 1 env", lambda: bench.vector(1, args.steps)),
+        ("AsyncVectorEnv, 2 envs", lambda: bench.vector(2, args.steps)),
+        ("Ray rollouts, 1 worker", lambda: bench.on_ray(1, args.episodes)),
+        ("Ray rollouts, 2 workers", lambda: bench.on_ray(2, args.episodes)),
     ]
-    rows = []
-    for name, setup, run in tqdm(cases, unit="case"):
-        rows.append((name, setup, run()))
+    rows = [(name, run()) for name, run in tqdm(cases, unit="case")]
     print(f"Random actions, IR only (no camera), 0.1 s per step; {os.cpu_count()} cores, load "
           f"average {os.getloadavg()[0]:.1f} at the end")
     print("| how | env steps | wall (s) | env steps per s | start-up (s) |")
     print("|---|---|---|---|---|")
-    for name, setup, r in rows:
-        extra = f"{r[setup]:.1f}" if setup else "-"
+    for name, r in rows:
         print(f"| {name} | {r['steps']} | {r['wall']:.1f} | {r['steps'] / r['wall']:.1f} | "
-              f"{extra} |")
-    rate = {name: r["steps"] / r["wall"] for name, _, r in rows}
-    print(f"\n2 envs vs 1 (AsyncVectorEnv): "
-          f"{rate['AsyncVectorEnv, 2 envs'] / rate['AsyncVectorEnv, 1 env']:.2f}x; 2 Ray workers "
-          f"vs 1: {rate[rows[4][0]] / rate[rows[3][0]]:.2f}x.")
+              f"{r['startup']:.1f} |")
+    rate = {name: r["steps"] / r["wall"] for name, r in rows}
+    vector = rate["AsyncVectorEnv, 2 envs"] / rate["AsyncVectorEnv, 1 env"]
+    ray = rate["Ray rollouts, 2 workers"] / rate["Ray rollouts, 1 worker"]
+    print(f"\n2 envs vs 1 (AsyncVectorEnv): {vector:.2f}x; 2 Ray workers vs 1: {ray:.2f}x "
+          f"(start-up excluded).")
     return 0
 
 

@@ -11,7 +11,7 @@ import numpy as np
 
 from corobot_drake.gym import ENV_ID
 from corobot_drake.gym.env import GoToGoalEnv
-from corobot_drake.gym.rollouts import rollouts
+from corobot_drake.gym.rollouts import episode_pool
 
 
 def in_process(steps: int) -> dict:
@@ -47,9 +47,14 @@ def vector(num_envs: int, steps: int) -> dict:
 
 
 def on_ray(workers: int, episodes: int) -> dict:
-    """`episodes` random-action episodes with `rollouts` on a local Ray instance of
-    `workers` workers; wall time with Ray's start-up and the workers' builds."""
+    """`episodes` random-action episodes on a local Ray instance of `workers` workers (an
+    `episode_pool`); wall time of the episodes once the workers have built their envs, and
+    the start-up before (Ray's start, the workers' imports and builds)."""
     start = time.perf_counter()
-    done = rollouts(None, list(range(episodes)), workers=workers, progress=False)
-    wall = time.perf_counter() - start
-    return {"steps": int(np.sum([e.steps for e in done])), "wall": wall}
+    with episode_pool(workers) as pool:
+        pool.wait_ready()
+        ready = time.perf_counter()
+        done = pool.run([(None, seed) for seed in range(episodes)])
+        wall = time.perf_counter() - ready
+    return {"steps": int(np.sum([e.steps for e in done])), "wall": wall,
+            "startup": ready - start}

@@ -59,6 +59,10 @@ class EpisodeWorker:
     def __init__(self, config: GoToGoalConfig | None = None):
         self.env = GoToGoalEnv(config)
 
+    def ready(self) -> bool:
+        """True once the env is built (the actor's constructor has run)."""
+        return True
+
     def run_jobs(self, start: int, jobs) -> tuple[int, list[Episode]]:
         """`start` (where the batch sits in the caller's list) and each (policy, seed) job's
         episode."""
@@ -73,6 +77,12 @@ class EpisodePool:
 
         remote = ray.remote(num_cpus=1)(EpisodeWorker)
         self._actors = [remote.remote(config) for _ in range(workers)]
+
+    def wait_ready(self) -> None:
+        """Waits until every worker has built its env."""
+        import ray
+
+        ray.get([actor.ready.remote() for actor in self._actors])
 
     def run(self, jobs: Sequence[tuple[Callable | None, int]], progress: bool = False,
             chunk: int = 1) -> list[Episode]:
