@@ -43,7 +43,8 @@ def main(argv=None) -> int:
                        default=getattr(defaults, field.name), help=f"CEM {field.name}")
     p.add_argument("--workers", type=int, default=None,
                    help="Ray workers (None: this machine's cores)")
-    p.add_argument("--address", default=None, help="a Ray cluster's address (None: a local instance)")
+    p.add_argument("--address", default=None,
+                   help="a Ray cluster's address (None: a local instance)")
     p.add_argument("--out", type=Path, default=SHIPPED, help="where the policy is saved")
     p.add_argument("--plot", type=Path, default=REPO / "docs/images/gym_learning_curve.png",
                    help="the learning curve's picture")
