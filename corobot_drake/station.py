@@ -38,7 +38,7 @@ from corobot_drake.sensors.ir_sensor import add_ir_sensors
 from corobot_drake.systems.drive import CommandSource, DriveController
 from corobot_drake.systems.monitor import TiltMonitor
 from corobot_drake.systems.motion import MotionCommands
-from corobot_drake.systems.odometry import add_chassis_pose, add_odometry
+from corobot_drake.systems.odometry import add_chassis_poses, add_odometry
 from corobot_drake.systems.runlog import add_run_log
 
 TILT_SAMPLE_PERIOD = 0.01
@@ -223,6 +223,10 @@ def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None, foxglov
     plant.Finalize()
 
     robots, renderers = {}, {}
+    # One chassis pose per robot (from the plant's body_poses, converted once per step) for
+    # its compass, GPS, tilt monitor and run log.
+    chassis_poses = add_chassis_poses(builder, plant,
+                                      {name: parts[1] for name, parts in added.items()})
     for name, robot in scenario.robots.items():
         instance, chassis, joints = added[name]
         source = builder.AddNamedSystem(
@@ -237,9 +241,7 @@ def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None, foxglov
         # Command source -> motion commands -> drive controller; status back to the source.
         motion = builder.AddNamedSystem(f"{name}.motion", MotionCommands(robot.drive,
                                                                           robot.motion))
-        # One chassis pose (from the plant's body_poses) for the compass, GPS, tilt monitor
-        # and run log.
-        chassis_pose = add_chassis_pose(builder, name, plant, chassis)
+        chassis_pose = chassis_poses[name]
         odometry = add_odometry(
             builder, name, chassis_pose, selector.get_output_port(),
             controller.GetOutputPort("drive_status"), controller.GetOutputPort("axle_speed"),

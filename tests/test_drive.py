@@ -119,13 +119,14 @@ def test_slew_limit_holds(sim):
     robot = sim.robot()
     robot.set_power(1.0, -1.0)
     port = sim.station.diagram.GetOutputPort("corobot.axle_speed_command")
+    period = sim.scenario.robots["corobot"].drive.control_period
     commands = []
-    for _ in range(30):
-        sim.advance(1.0 / 60.0)
+    for k in range(50):
+        sim.advance_to((k + 0.5) * period)  # between two updates
         commands.append(port.Eval(sim.context).copy())
     steps = np.abs(np.diff(np.array(commands), axis=0))
-    assert steps.max() <= 0.5 + 1e-9  # 30 rad/s^2 x 1/60 s
-    assert commands[-1] == pytest.approx([10.16, -10.16])  # reached in 21 frames
+    assert steps.max() <= 30.0 * period + 1e-9  # 30 rad/s^2 x the control period
+    assert commands[-1] == pytest.approx([10.16, -10.16])  # reached in 0.34 s
     measured = robot.axle_speeds()
     assert measured["front_left"] == pytest.approx(10.16, rel=0.02)
     assert measured["rear_right"] == pytest.approx(-10.16, rel=0.02)

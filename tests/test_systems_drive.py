@@ -69,8 +69,8 @@ def test_set_power_targets_and_slews_by_at_most_one_step_per_update():
     s.fix("request", DriveRequest(1, SetPower(0.5, -0.25)))
     expected = np.zeros(2)
     target = np.array([0.5 * K, -0.25 * K])
-    assert math.isclose(STEP, 0.5)  # the SPEC's 30 rad/s^2 at 60 Hz
-    for _ in range(15):  # 0.5 K = 5.08 rad/s takes 11 updates at 0.5 rad/s each
+    assert math.isclose(STEP / DRIVE.control_period, 30.0)  # the SPEC's 30 rad/s^2
+    for _ in range(25):  # 0.5 K = 5.08 rad/s takes 17 updates at 0.3 rad/s each (10 ms)
         s.tick()
         expected += np.clip(target - expected, -STEP, STEP)
         axle = s.output("axle_speed_command")
@@ -198,7 +198,7 @@ def test_axle_speed_is_the_measured_wheel_velocities():
 
 # --- CommandSource --------------------------------------------------------------------------
 
-PERIOD = DRIVE.control_period
+PERIOD = 1.0 / 60.0  # the script tests count 1/60 s ticks (the source works at any period)
 
 
 def source(script=(), status=None) -> Stepper:

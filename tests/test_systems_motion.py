@@ -19,7 +19,7 @@ from corobot_drake.systems.drive import DriveRequest
 from corobot_drake.systems.motion import (
     POSE_SETTLE_TIME,
     POSE_TIMEOUT,
-    STILL_FRAMES,
+    STILL_TIME,
     MotionCommands,
     wrap,
 )
@@ -27,6 +27,7 @@ from corobot_drake.systems.motion import (
 DRIVE = Drive()
 PERIOD = DRIVE.control_period
 K = DRIVE.motor_torque_scaling
+STILL_FRAMES = round(STILL_TIME / PERIOD)  # updates at rest before a closed-loop success
 EXACT = 1e-12  # products and sums of a few doubles
 
 
@@ -85,7 +86,7 @@ def test_closed_loop_drive_cruises_then_succeeds_after_resting_on_the_goal():
     remaining = s.system.remaining_command(s.context)
     assert remaining.distance == pytest.approx(0.7, abs=EXACT)
     at(s, 1.0, 0.0)  # on the goal: the first update sees it arrive fast, then at rest
-    assert STILL_FRAMES == 3  # docs/commands.md: "succeeds after 3 frames at rest there"
+    assert STILL_TIME == 0.05  # docs/commands.md: "succeeds after 0.05 s at rest there"
     assert ticks_until_ended(s) == 1 + STILL_FRAMES
     st = status(s)
     assert (st.seq, st.status, st.reason) == (1, "succeeded", "")
@@ -116,13 +117,34 @@ def test_seed_drive_succeeds_as_soon_as_the_goal_is_reached():
     s.tick()
     assert (status(s).seq, status(s).status) == (1, "succeeded")
     assert out(s).command == AllStop()
+    assert out(s).immediate  # the book: axle speed 0 at once, not slewed
+
+
+def test_seed_halves_the_speed_when_under_a_tenth_of_a_second_remains():
+    s = motion("seed")
+    s.fix("request", DriveRequest(1, DriveDistance(1.0, 1.0)))
+    s.tick()  # starts at x = 0, full power
+    speed = 0.45  # m/s, steady: the 0.1 s threshold (0.045 m left) falls between updates
+    x, n = 0.0, 0
+    while out(s).command.left == pytest.approx(1.0, abs=EXACT):
+        x += speed * PERIOD
+        at(s, x, 0.0)
+        s.tick()
+        n += 1
+        assert n < 1000
+    # Halved at the first update whose estimate of the time left (from the progress over
+    # the last 0.1 s: the distance left / the speed) is under 0.1 s.
+    assert (1.0 - x) / speed < 0.1
+    assert (1.0 - (x - speed * PERIOD)) / speed > 0.1
+    assert out(s).command.left == pytest.approx(0.5, abs=EXACT)
+    assert not out(s).immediate  # slowing down slews
 
 
 def test_a_drive_that_does_not_move_fails_stalled_after_the_stall_time():
     s = motion()
     s.fix("request", DriveRequest(1, DriveDistance(1.0, 0.5)))
-    stall_ticks = round(Motion().stall_time / PERIOD)  # 60 updates: 1 s
-    s.tick(stall_ticks)  # the last at t = 59/60 s
+    stall_ticks = round(Motion().stall_time / PERIOD)  # updates in 1 s
+    s.tick(stall_ticks)  # the last one period before 1 s
     assert status(s).seq == 0
     s.tick()  # t = 1 s
     st = status(s)
@@ -175,7 +197,7 @@ def test_set_pose_succeeds_once_the_robot_has_settled_where_it_was_put():
     at(s, 1.0, math.pi / 2, y=2.0)  # the Simulation teleported it
     s.tick()
     landed = s.last_tick_time
-    settle_ticks = round(POSE_SETTLE_TIME / PERIOD)  # 15
+    settle_ticks = round(POSE_SETTLE_TIME / PERIOD)
     s.tick(settle_ticks - 1)
     assert status(s).seq == 0
     s.tick()

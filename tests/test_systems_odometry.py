@@ -1,4 +1,4 @@
-"""The odometry systems on their own: ChassisPose, Compass, Gps, the wheel encoders and
+"""The odometry systems on their own: ChassisPoses, Compass, Gps, the wheel encoders and
 DriveStateReporter (fixed inputs, evaluated outputs)."""
 
 import math
@@ -14,11 +14,11 @@ from pydrake.systems.primitives import ConstantVectorSource
 from corobot_drake.model import dimensions as dim
 from corobot_drake.systems.drive import DriveStatus
 from corobot_drake.systems.odometry import (
-    ChassisPose,
+    ChassisPoses,
     Compass,
     DriveStateReporter,
     Gps,
-    add_chassis_pose,
+    add_chassis_poses,
     add_wheel_encoders,
 )
 
@@ -29,13 +29,16 @@ def pose(x, y, z, roll, pitch, yaw) -> RigidTransform:
     return RigidTransform(RollPitchYaw(roll, pitch, yaw), [x, y, z])
 
 
-def test_chassis_pose_picks_its_body_from_body_poses():
-    system = ChassisPose(body_index=2)
+def test_chassis_poses_pick_each_robots_body_from_body_poses():
+    system = ChassisPoses({"a": 2, "b": 1})
     context = system.CreateDefaultContext()
     poses = [RigidTransform(), pose(1, 2, 3, 0, 0, 0.5), pose(-4, 5, 0.1, 0.2, -0.1, 2.0)]
     system.get_input_port().FixValue(context, poses)
-    X = system.get_output_port().Eval(context)
-    assert X.IsExactlyEqualTo(poses[2])
+    assert system.GetOutputPort("a").Eval(context).IsExactlyEqualTo(poses[2])
+    assert system.GetOutputPort("b").Eval(context).IsExactlyEqualTo(poses[1])
+    moved = [*poses[:2], pose(7, 8, 9, 0, 0, 1.0)]  # a new input: the cached list follows
+    system.get_input_port().FixValue(context, moved)
+    assert system.GetOutputPort("a").Eval(context).IsExactlyEqualTo(moved[2])
 
 
 @pytest.mark.parametrize("yaw", [0.0, 0.7, -2.0, math.pi - 1e-9, -math.pi + 1e-9])
@@ -69,7 +72,7 @@ def test_compass_reads_a_state_quaternion_that_drifted_from_unit_norm():
     builder = DiagramBuilder()
     builder.AddSystem(plant)
     compass = builder.AddSystem(Compass())
-    builder.Connect(add_chassis_pose(builder, "robot", plant, body),
+    builder.Connect(add_chassis_poses(builder, plant, {"robot": body})["robot"],
                     compass.GetInputPort("chassis_pose"))
     diagram = builder.Build()
     context = diagram.CreateDefaultContext()

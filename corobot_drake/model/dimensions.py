@@ -116,8 +116,10 @@ MAX_AXLE_SPEED = 20.0
 """set_speed clamps axle speed to +-this (rad/s)."""
 SLEW_RATE = 30.0
 """Axle-speed slew limit, rad/s^2 (0.5 rad/s per 1/60 s frame)."""
-CONTROL_PERIOD = 1.0 / 60.0
-"""Drive controller update period, seconds (the original's frame rate)."""
+CONTROL_PERIOD = 0.01
+"""Drive controller update period, seconds: the plant's default 10 ms step, so the drive's
+events fall on the plant's steps (the original ran at 60 Hz; its per-frame rules are expressed
+per second: docs/performance.md)."""
 
 # The chapter's world.
 GIANT_BOX_SIZE = 2.0

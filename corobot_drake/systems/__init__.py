@@ -2,6 +2,6 @@
 
 - `drive.py`: `CommandSource` (script and API inbox) and `DriveController` (power, slew, clamp);
 - `motion.py`: `MotionCommands`, the DriveDistance / RotateDegrees / SetPose state machine;
-- `odometry.py`: `ChassisPose`, encoders, `Compass`, `Gps`, `DriveStateReporter`;
+- `odometry.py`: `ChassisPoses`, encoders, `Compass`, `Gps`, `DriveStateReporter`;
 - `monitor.py`: `TiltMonitor`; `runlog.py`: the run log (`RunLogSample` + a log sink).
 """

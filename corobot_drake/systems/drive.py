@@ -52,6 +52,9 @@ class DriveRequest(_Immutable):
     enabled: bool = True
     """The drive's enable level (the last `Enable` issued) at this request: a level, so an
     Enable issued in the same instant as the next command is never lost."""
+    immediate: bool = False
+    """The drive sets the axle speeds to the command's at once, without the slew limit (the
+    seed profile's stop: the book sets the axle speed to 0 when the goal is reached)."""
 
 
 @dc.dataclass(frozen=True)
@@ -241,17 +244,21 @@ class CommandSource(LeafSystem):
     def has_teleport(self, context) -> bool:
         return self.get_state(context).teleport is not None
 
+    @staticmethod
+    def _script_waiting(state: CommandSourceState) -> bool:
+        """True while the scripted completing command the script waits for runs."""
+        if not state.script_waits_for:
+            return False
+        record = next(r for r in reversed(state.log) if r.seq == state.script_waits_for)
+        return record.end_time is None
+
     def _update(self, context, state):
-        now = context.get_time()
         original = self.get_state(context)
         current = self._with_status(original, self._status(context))
-        waiting = False
-        if current.script_waits_for:
-            record = next(r for r in reversed(current.log) if r.seq == current.script_waits_for)
-            waiting = record.end_time is None
         script = self.script(context)
-        if (current.next_script_index < len(script)
-                and now >= current.script_blocked_until and not waiting):
+        now = context.get_time()
+        if (current.next_script_index < len(script) and now >= current.script_blocked_until
+                and not self._script_waiting(current)):
             command = script[current.next_script_index]
             current = dc.replace(current, next_script_index=current.next_script_index + 1)
             if isinstance(command, Wait):
@@ -297,23 +304,20 @@ DriveStatus = namedview("DriveStatus", (
   rad/s (before the slew limit; the rear axles follow the front).
 """
 
-_ControllerState = namedview("DriveControllerState", (
-    "seq", *DriveStatus.get_fields(), "axle_left", "axle_right"))
-"""The drive controller's discrete state: the seq of the last request acted on, the
-`DriveStatus` fields, and the slewed axle speed per side (rad/s)."""
-_STATUS_SLICE = slice(1, 1 + len(DriveStatus.get_fields()))
-_AXLE_SLICE = slice(_STATUS_SLICE.stop, _STATUS_SLICE.stop + 2)
-"""Where the `drive_status` and `axle_speed_command` outputs sit in the state, by the field
-order above: outputs evaluated at every step copy a slice, not a field at a time."""
-assert _ControllerState.get_fields()[_STATUS_SLICE] == DriveStatus.get_fields()
-assert _ControllerState.get_fields()[_AXLE_SLICE] == ("axle_left", "axle_right")
+_TARGETS = slice(3, 5)
+"""Where the targets sit in a `DriveStatus` vector."""
+assert DriveStatus.get_fields()[_TARGETS] == ("target_left", "target_right")
 
 
-def _stop(x) -> None:
-    """Powers, targets and slewed axle speeds of a `_ControllerState` to zero."""
-    for field in ("power_left", "power_right", "target_left", "target_right", "axle_left",
-                  "axle_right"):
-        setattr(x, field, 0.0)
+def _stop(status) -> None:
+    """Powers and targets of a `DriveStatus` to zero."""
+    for field in ("power_left", "power_right", "target_left", "target_right"):
+        setattr(status, field, 0.0)
+
+
+def _slew(axle: float, target: float, step: float) -> float:
+    """`axle` moved towards `target` by at most `step` (rad/s)."""
+    return axle + min(step, max(-step, target - axle))
 
 
 class DriveController(LeafSystem):
@@ -338,34 +342,36 @@ class DriveController(LeafSystem):
     Output `axle_speed_command` [left, right] rad/s after the slew limit; rear follows front.
     Output `drive_status` (5, `DriveStatus`: read it by name).
     Output `axle_speed` [front_left, front_right, rear_left, rear_right] measured, rad/s.
-    Discrete state (`_ControllerState`), updated every `drive.control_period` s: a new request
-    sets the enable level and (when enabled) the motion target; disabled, everything is held
-    at zero; the axle speeds then move towards the targets by at most
-    `drive.slew_rate * drive.control_period`.
+    Discrete state, updated every `drive.control_period` s: the seq of the last request acted
+    on, the `DriveStatus` and the slewed axle speeds (and the desired state made from them).
+    A new request sets the enable level and (when enabled) the motion target; disabled,
+    everything is held at zero; the axle speeds then move towards the targets by at most
+    `drive.slew_rate * drive.control_period`, or jump to them for a request marked
+    `immediate` (the seed profile's stop).
     """
 
     def __init__(self, drive: Drive):
         super().__init__()
         self._drive = drive
+        self._step = drive.slew_rate * drive.control_period
+        """rad/s: the most the axle speed moves per update."""
         self._request_port = self.DeclareAbstractInputPort("request", Value(DriveRequest()))
         self._wheel_state_port = self.DeclareVectorInputPort("wheel_state", 8)
-        initial = _ControllerState.Zero()
-        initial.enabled = 1.0
-        self._state = self.DeclareDiscreteState(initial[:])
+        # Each output is a state group of its own, so the ports are Drake's state output
+        # ports (no Python call when the plant reads its desired state every step).
+        enabled = DriveStatus.Zero()
+        enabled.enabled = 1.0
+        self._seq = self.DeclareDiscreteState(1)
+        self._status = self.DeclareDiscreteState(enabled[:])
+        self._axle = self.DeclareDiscreteState(2)
+        self._desired = self.DeclareDiscreteState(8)
         self.DeclarePeriodicDiscreteUpdateEvent(drive.control_period, 0.0, self._update)
-        ticket = {self.discrete_state_ticket(self._state)}
-        # Depends on the state only, so the plant's per-step evaluation hits the cache.
-        self.DeclareVectorOutputPort("desired_state", 8, self._calc_desired_state, ticket)
-        self.DeclareVectorOutputPort("axle_speed_command", 2, self._calc_axle, ticket)
-        self.DeclareVectorOutputPort("drive_status", len(DriveStatus.get_fields()),
-                                     self._calc_status, ticket)
+        self.DeclareStateOutputPort("desired_state", self._desired)
+        self.DeclareStateOutputPort("axle_speed_command", self._axle)
+        self.DeclareStateOutputPort("drive_status", self._status)
         self.DeclareVectorOutputPort(
             "axle_speed", 4, lambda c, o: o.SetFromVector(self._wheel_state_port.Eval(c)[4:]),
             {self.input_port_ticket(self._wheel_state_port.get_index())})
-
-    def _x(self, context):
-        """A copy of the discrete state, as a `_ControllerState`."""
-        return _ControllerState(context.get_discrete_state(self._state).get_value().copy())
 
     def target_for(self, command, enabled: bool) -> tuple[float, float, float, float] | None:
         """(power_l, power_r, axle_l, axle_r) a motion command asks for; None if not motion."""
@@ -397,47 +403,51 @@ class DriveController(LeafSystem):
         return left * scale, right * scale
 
     def _update(self, context, discrete_state):
-        x = self._x(context)
+        # Only the groups that change are written (the others keep their copied values).
         request = self._request_port.Eval(context)
-        if request.seq != int(x.seq):
-            x.seq = request.seq
-            x.enabled = 1.0 if request.enabled else 0.0
-            if x.enabled:
-                target = self.target_for(request.command, True)
-                if target is not None:
-                    x.power_left, x.power_right, x.target_left, x.target_right = target
-        if not x.enabled:
-            _stop(x)  # disabled: wheels held at zero at once
-        step = self._drive.slew_rate * self._drive.control_period
-        x.axle_left += min(step, max(-step, x.target_left - x.axle_left))
-        x.axle_right += min(step, max(-step, x.target_right - x.axle_right))
-        discrete_state.set_value(self._state, x[:])
+        status = context.get_discrete_state(self._status).get_value()
+        jump = False
+        if request.seq != context.get_discrete_state(self._seq).get_value()[0]:
+            discrete_state.set_value(self._seq, [request.seq])
+            status = DriveStatus(status.copy())
+            status.enabled = 1.0 if request.enabled else 0.0
+            target = self.target_for(request.command, True) if request.enabled else None
+            if target is not None:
+                (status.power_left, status.power_right, status.target_left,
+                 status.target_right) = target
+                jump = request.immediate
+            if not request.enabled:
+                _stop(status)
+                jump = True  # disabled: wheels held at zero at once
+            discrete_state.set_value(self._status, status[:])
+            status = status[:]
+        left, right = context.get_discrete_state(self._axle).get_value().tolist()
+        target_left, target_right = status[_TARGETS].tolist()
+        if jump:
+            new_left, new_right = target_left, target_right
+        else:
+            new_left = _slew(left, target_left, self._step)
+            new_right = _slew(right, target_right, self._step)
+        if (new_left, new_right) != (left, right):
+            self._set_axle(discrete_state, new_left, new_right)
+
+    def _set_axle(self, state, left: float, right: float) -> None:
+        """Writes the slewed axle speeds (rad/s) and the desired state made from them into
+        `state` (a Context or DiscreteValues)."""
+        state.set_value(self._axle, [left, right])
+        state.set_value(self._desired, [0.0, 0.0, 0.0, 0.0, left, right, left, right])
 
     def Halt(self, context) -> None:
         """Stops the wheels at once (powers, targets and slewed axle speeds to 0): what a
         teleport does, so the robot lands at rest. `context` is this system's."""
-        x = self._x(context)
-        _stop(x)
-        context.SetDiscreteState(self._state, x[:])
+        self.SetAxleSpeeds(context, 0.0, 0.0)
 
     def SetAxleSpeeds(self, context, left: float, right: float) -> None:
-        """Sets the commanded (slewed) axle speeds and their targets, rad/s: an initial
-        condition (a saved scene). `context` is this system's."""
-        x = self._x(context)
-        x.target_left, x.target_right, x.axle_left, x.axle_right = left, right, left, right
+        """Sets the commanded (slewed) axle speeds and their targets, rad/s, and the powers
+        they amount to: an initial condition (a saved scene). `context` is this system's."""
+        status = DriveStatus(context.get_discrete_state(self._status).get_value().copy())
+        status.target_left, status.target_right = left, right
         scaling = self._drive.motor_torque_scaling
-        x.power_left, x.power_right = left / scaling, right / scaling
-        context.SetDiscreteState(self._state, x[:])
-
-    def _state_at(self, context, part: slice) -> np.ndarray:
-        return context.get_discrete_state(self._state).get_value()[part]
-
-    def _calc_desired_state(self, context, output: BasicVector):
-        left, right = self._state_at(context, _AXLE_SLICE)
-        output.SetFromVector([0.0, 0.0, 0.0, 0.0, left, right, left, right])
-
-    def _calc_axle(self, context, output: BasicVector):
-        output.SetFromVector(self._state_at(context, _AXLE_SLICE))
-
-    def _calc_status(self, context, output: BasicVector):
-        output.SetFromVector(self._state_at(context, _STATUS_SLICE))
+        status.power_left, status.power_right = left / scaling, right / scaling
+        context.SetDiscreteState(self._status, status[:])
+        self._set_axle(context.get_mutable_discrete_state(), left, right)

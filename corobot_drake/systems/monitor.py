@@ -24,7 +24,7 @@ class TiltMonitor(LeafSystem):
         output_ports:
         - max_tilt_deg
 
-    Input `chassis_pose` (abstract RigidTransform X_WB, e.g. from `odometry.ChassisPose`).
+    Input `chassis_pose` (abstract RigidTransform X_WB, e.g. from `odometry.ChassisPoses`).
     Output `max_tilt_deg` (1-vector, degrees): the largest `tilt_deg` sampled so far, held in
     discrete state (0 before the first sample, at time 0).
     """

@@ -6,15 +6,19 @@ DriveDistance or RotateDegrees into a stream of SetPower requests computed every
 period from the measured chassis position (GPS) and heading (compass), and reports how each
 one ends on its `command_status` output. Two landing profiles (SPEC "Commands that complete"):
 
-- `seed`, the book's: full power until the goal; keep the last 6 progress samples (one per
-  1/60 s frame), estimate the frames left from the progress over those 6 frames and halve the
-  speed when fewer than 6 remain; stop (and succeed) as soon as the goal is reached, the robot
-  still coasting. A rotation ends when less than 0.005 rad is left or it overshot.
+- `seed`, the book's: full power until the goal; from the progress over the last 0.1 s (the
+  book's 6 samples of 1/60 s, kept one per control period), estimate the time left and halve
+  the speed when under 0.1 s (the book's 6 frames) remains; when the goal is reached, stop the
+  wheels at once (no slew: the book sets the axle speed to 0) and succeed. A rotation ends when
+  less than 0.005 rad is left or it overshot.
 - `closed_loop`: a speed servo on the measured distance (along the start heading) or angle
-  left, predicted 2 frames ahead for the command's latency: the speed is the smallest of the
-  cruise speed, sqrt(2 a left) (braking within the slew limit) and k left, never under a creep
-  speed; inside the tolerance it stops, and succeeds once at rest there (it backs up if it
-  overshot). A drive also holds the start heading.
+  left, predicted 2 control periods ahead for the command's latency: the speed is the smallest
+  of the cruise speed, sqrt(2 a left) (braking within the slew limit) and k left, never under a
+  creep speed; inside the tolerance it stops, and succeeds once at rest there for
+  `STILL_TIME` (it backs up if it overshot). A drive also holds the start heading.
+
+The book's rules per 1/60 s frame are expressed per second, so the control period may be any
+(the default runs on the plant's 10 ms steps: no event time falls between two steps).
 
 Both fail `stalled` when progress stays under the scenario's stall distance/angle for its
 stall time, and `disabled` when issued to a disabled drive (a newer command ending one is
@@ -40,11 +44,12 @@ from corobot_drake.config.scenario import (
 from corobot_drake.model import dimensions as dim
 from corobot_drake.systems.drive import CommandStatus, DriveRequest, _Immutable
 
-# The seed profile (the book's constants).
-SEED_KERNEL = 6
-"""Progress samples kept, one per frame."""
-SEED_DECELERATE_FRAMES = 6
-"""Halve the speed when fewer frames than this are estimated to remain."""
+# The seed profile (the book's constants, per second: it counted 1/60 s frames).
+SEED_WINDOW = 6 / 60
+"""s: the progress over this last stretch estimates the time left (the book's 6 samples)."""
+SEED_DECELERATE_TIME = 6 / 60
+"""s: halve the speed when less time than this is estimated to remain (the book's 6
+frames)."""
 SEED_ROTATION_TOLERANCE = 0.005
 """rad: a rotation ends when less than this is left (or it overshot)."""
 
@@ -72,12 +77,12 @@ TURN_GAIN = 3.0
 TURN_CREEP = 0.05
 """rad/s: slowest approach yaw rate."""
 TURN_TOLERANCE = 0.001
-"""rad: a rotation stops inside this of the goal (0.057 deg; the creep turns 0.8 mrad a
-frame, so it cannot step over the band)."""
+"""rad: a rotation stops inside this of the goal (0.057 deg; the creep turns 0.5 mrad per
+10 ms update, 0.8 per 1/60 s, so it cannot step over the band)."""
 TURN_STILL_RATE = 0.01
 """rad/s: at rest below this."""
-STILL_FRAMES = 3
-"""Frames in tolerance and at rest before a closed-loop command succeeds."""
+STILL_TIME = 0.05
+"""s in tolerance and at rest before a closed-loop command succeeds (3 frames of 1/60 s)."""
 SPIN_YAW_PER_RIM_SPEED = dim.HALF_TRACK / (dim.HALF_WHEELBASE**2 + dim.HALF_TRACK**2)
 """1/m: a skid-steer spin's yaw rate per rim speed with isotropic Coulomb friction,
 b / (a^2 + b^2) (DRAKE_NOTES: Drake matches it within 2%)."""
@@ -139,11 +144,11 @@ class MotionState(_Immutable):
     """How the last completing command ended."""
 
 
-def _count_still(a, at_goal: bool):
-    """The active command with its count of frames at rest on the goal (reset when it moves);
-    True once it has held there for STILL_FRAMES frames."""
+def _count_still(a, at_goal: bool, frames: int):
+    """The active command with its count of updates at rest on the goal (reset when it
+    moves); True once it has held there for `frames` updates."""
     a = dc.replace(a, still_frames=a.still_frames + 1 if at_goal else 0)
-    return a, a.still_frames >= STILL_FRAMES
+    return a, a.still_frames >= frames
 
 
 class MotionCommands(LeafSystem):
@@ -171,6 +176,10 @@ class MotionCommands(LeafSystem):
         super().__init__()
         self._drive, self._motion = drive, motion
         self._period = drive.control_period
+        self._seed_samples = max(1, round(SEED_WINDOW / self._period))
+        """Progress samples the seed profile keeps (one per update)."""
+        self._still_frames = max(1, math.ceil(STILL_TIME / self._period - 1e-9))
+        """Updates at rest on the goal before a closed-loop command succeeds."""
         self._request_port = self.DeclareAbstractInputPort("request", Value(DriveRequest()))
         self._position_port = self.DeclareVectorInputPort("position", 3)
         self._heading_port = self.DeclareVectorInputPort("heading", 1)
@@ -203,11 +212,13 @@ class MotionCommands(LeafSystem):
 
     # --- the state machine ----------------------------------------------------------------
     def _update(self, context, state):
-        now = context.get_time()
         original = self.get_state(context)
         s = original
         request = self._request_port.Eval(context)
-        x, y = self._position_port.Eval(context)[:2]
+        if request.seq == s.handled_seq and s.active is None:
+            return  # nothing new, nothing running: the pose is not needed
+        now = context.get_time()
+        x, y = (float(v) for v in self._position_port.Eval(context)[:2])
         heading = float(self._heading_port.Eval(context)[0])
         if request.seq != s.handled_seq:
             s = dc.replace(s, handled_seq=request.seq, active=None)
@@ -216,7 +227,7 @@ class MotionCommands(LeafSystem):
                 if not request.enabled:
                     s = self._finish(s, request, request.seq, "failed", "disabled", now)
                 else:
-                    s = self._start(s, request, command, (float(x), float(y), heading), now)
+                    s = self._start(s, request, command, (x, y, heading), now)
             elif isinstance(command, SetPose):
                 target = (command.x, command.y, math.radians(command.yaw_deg))
                 s = dc.replace(s, active=ActiveCommand(
@@ -227,21 +238,26 @@ class MotionCommands(LeafSystem):
         if s.active is not None:
             step = {"drive": self._step_drive, "rotate": self._step_rotate,
                     "pose": self._step_pose}[s.active.kind]
-            s = step(s, request, float(x), float(y), heading, now)
+            s = step(s, request, x, y, heading, now)
         if s is not original:
             state.get_mutable_abstract_state(self._state_index).set_value(s)
 
     @staticmethod
-    def _emit(s: MotionState, command, request: DriveRequest, now: float) -> MotionState:
-        """Outputs `command` (a new seq only when it differs from the last one output)."""
+    def _emit(s: MotionState, command, request: DriveRequest, now: float,
+              immediate: bool = False) -> MotionState:
+        """Outputs `command` (a new seq only when it differs from the last one output);
+        `immediate`: the drive skips the slew limit for it."""
         out = s.output
-        if out.seq and out.command == command and out.enabled == request.enabled:
+        if (out.seq and out.command == command and out.enabled == request.enabled
+                and out.immediate == immediate):
             return s
-        return dc.replace(s, output=DriveRequest(out.seq + 1, command, now, request.enabled))
+        return dc.replace(s, output=DriveRequest(out.seq + 1, command, now, request.enabled,
+                                                 immediate))
 
-    def _finish(self, s, request, seq, status, reason, now) -> MotionState:
+    def _finish(self, s, request, seq, status, reason, now, immediate=False) -> MotionState:
+        """Ends the active command with `status`; the wheels stop (at once if `immediate`)."""
         s = dc.replace(s, active=None, status=CommandStatus(seq, status, reason, now))
-        return self._emit(s, AllStop(), request, now)
+        return self._emit(s, AllStop(), request, now, immediate)
 
     def _start(self, s, request, command, pose, now) -> MotionState:
         if isinstance(command, DriveDistance):
@@ -282,8 +298,8 @@ class MotionCommands(LeafSystem):
         remaining = a.target - progress
         cruise = a.power * self._drive.motor_torque_scaling  # axle rad/s
         if seed:
-            if remaining <= 0.0:
-                return self._finish(s, request, a.seq, "succeeded", "", now)
+            if remaining <= 0.0:  # the book: axle speed 0 at once
+                return self._finish(s, request, a.seq, "succeeded", "", now, immediate=True)
             a = self._seed_slowdown(a, remaining, progress)
             s, a = self._check_stall(s, a, request, now, self._motion.stall_distance, True)
             if a is None:
@@ -294,7 +310,7 @@ class MotionCommands(LeafSystem):
         v = self._servo(remaining, speed, DRIVE_TOLERANCE, DRIVE_STILL_SPEED,
                         BRAKE_FRACTION * self._drive.slew_rate * dim.WHEEL_RADIUS, DRIVE_GAIN,
                         DRIVE_CREEP, cruise * dim.WHEEL_RADIUS)
-        a, settled = _count_still(a, at_goal=v is None)
+        a, settled = _count_still(a, v is None, self._still_frames)
         if settled:
             return self._finish(s, request, a.seq, "succeeded", "", now)
         v = 0.0 if v is None else v
@@ -320,8 +336,8 @@ class MotionCommands(LeafSystem):
         cruise = a.power * self._drive.motor_torque_scaling  # axle rad/s
         if self._motion.profile == "seed":
             error = remaining if a.target > 0 else -remaining
-            if error < SEED_ROTATION_TOLERANCE:
-                return self._finish(s, request, a.seq, "succeeded", "", now)
+            if error < SEED_ROTATION_TOLERANCE:  # the book: axle speed 0 at once
+                return self._finish(s, request, a.seq, "succeeded", "", now, immediate=True)
             if delta != 0.0:
                 a = self._seed_slowdown(a, error, progress)
             s, a = self._check_stall(s, a, request, now,
@@ -335,7 +351,7 @@ class MotionCommands(LeafSystem):
         w = self._servo(remaining, rate, TURN_TOLERANCE, TURN_STILL_RATE,
                         BRAKE_FRACTION * self._drive.slew_rate / to_axle, TURN_GAIN, TURN_CREEP,
                         cruise / to_axle)
-        a, settled = _count_still(a, at_goal=w is None)
+        a, settled = _count_still(a, w is None, self._still_frames)
         if settled:
             return self._finish(s, request, a.seq, "succeeded", "", now)
         w = 0.0 if w is None else w
@@ -346,18 +362,19 @@ class MotionCommands(LeafSystem):
         axle = w * to_axle
         return self._set_power(dc.replace(s, active=a), request, -axle, axle, now)
 
-    @staticmethod
-    def _seed_slowdown(a: ActiveCommand, remaining: float, progress: float) -> ActiveCommand:
-        """The book's: over the last SEED_KERNEL frames, estimate the frames left; halve the
-        speed (and forget the samples) when fewer than SEED_DECELERATE_FRAMES remain."""
-        samples, scale = a.samples, a.scale
-        if len(samples) >= SEED_KERNEL:
+    def _seed_slowdown(self, a: ActiveCommand, remaining: float,
+                       progress: float) -> ActiveCommand:
+        """The book's: from the progress over the last SEED_WINDOW, estimate the time left;
+        halve the speed (and forget the samples) when less than SEED_DECELERATE_TIME
+        remains."""
+        samples, scale, kept = a.samples, a.scale, self._seed_samples
+        if len(samples) >= kept:
             moved = progress - samples[0]
             samples = samples[1:]
-            frames = math.inf if moved == 0.0 else abs(remaining * SEED_KERNEL / moved)
+            left = math.inf if moved == 0.0 else abs(remaining * kept * self._period / moved)
             if moved < 0.0 and a.kind == "drive":
-                frames = -frames  # the book's: moving away gives a negative estimate
-            if frames < SEED_DECELERATE_FRAMES:
+                left = -left  # the book's: moving away gives a negative estimate
+            if left < SEED_DECELERATE_TIME:
                 scale *= 0.5
                 samples = ()
         return dc.replace(a, samples=(*samples, progress), scale=scale)

@@ -1,8 +1,8 @@
 """Odometry sensors and the drive state: wheel encoders, compass, GPS, the MRDS drive state.
 
-- `ChassisPose`: the chassis pose X_WB picked from the plant's `body_poses` output (Drake
-  makes it from the normalized state quaternion); the compass, the GPS, the tilt monitor and
-  the run log read it.
+- `ChassisPoses`: each robot's chassis pose X_WB picked from the plant's `body_poses` output
+  (Drake makes it from the normalized state quaternion); the compass, the GPS, the tilt
+  monitor and the run log read it.
 - Encoders: Drake's `RotaryEncoders` on the front axles, 600 ticks per revolution (floor
   quantization of the integrated wheel angle), then a gain to ticks.
 - `Compass`: chassis yaw about world z, radians in (-pi, pi] (a command that turns unwraps
@@ -18,7 +18,7 @@ import math
 
 from pydrake.common.value import AbstractValue, Value
 from pydrake.math import RigidTransform
-from pydrake.systems.framework import LeafSystem
+from pydrake.systems.framework import LeafSystem, ValueProducer
 from pydrake.systems.primitives import Gain
 from pydrake.systems.sensors import RotaryEncoders
 
@@ -53,12 +53,13 @@ class OdometryPorts:
     drive_state: object
 
 
-def add_chassis_pose(builder, name: str, plant, chassis):
-    """Adds `<name>.chassis_pose` (`ChassisPose` of the `chassis` body, fed by the plant's
-    `body_poses`); returns its `pose` output port."""
-    pose = builder.AddNamedSystem(f"{name}.chassis_pose", ChassisPose(chassis.index()))
-    builder.Connect(plant.get_body_poses_output_port(), pose.get_input_port())
-    return pose.get_output_port()
+def add_chassis_poses(builder, plant, chassis: dict) -> dict:
+    """Adds `chassis_poses` (`ChassisPoses` of the robots' `chassis` bodies, by robot name,
+    fed by the plant's `body_poses`); returns {robot name: its `pose` output port}."""
+    system = builder.AddNamedSystem("chassis_poses", ChassisPoses(
+        {name: body.index() for name, body in chassis.items()}))
+    builder.Connect(plant.get_body_poses_output_port(), system.get_input_port())
+    return {name: system.GetOutputPort(name) for name in chassis}
 
 
 def add_odometry(builder, name: str, chassis_pose_port, wheel_state_port, drive_status_port,
@@ -89,38 +90,42 @@ def heading_of(X_WB: RigidTransform) -> float:
     return math.atan2(X[1, 0], X[0, 0])
 
 
-class ChassisPose(LeafSystem):
-    """Picks one body's pose out of the plant's `body_poses` (as manipulation's
-    `ExtractPose` does).
+class ChassisPoses(LeafSystem):
+    """Picks the robots' chassis poses out of the plant's `body_poses` (as manipulation's
+    `ExtractPose` does, for several bodies at once).
 
     .. pydrake_system::
 
-        name: ChassisPose
+        name: ChassisPoses
         input_ports:
         - body_poses
         output_ports:
-        - pose
+        - <robot name> ...
 
     Input `body_poses` (abstract list of RigidTransform: the MultibodyPlant output, indexed by
-    BodyIndex). Output `pose` (abstract RigidTransform): X_WB, the pose of the body's frame B
-    (the chassis frame) in the world frame W; translation in m.
+    BodyIndex). One output per robot, named by it (abstract RigidTransform): X_WB, the pose of
+    its chassis frame B in the world frame W; translation in m. The list (every body of every
+    robot) is converted to Python once per plant step, in a cache entry, not once per robot:
+    the cost per robot stays flat however many share the plant.
     """
 
-    def __init__(self, body_index: int):
+    def __init__(self, body_indices: dict[str, int]):
         super().__init__()
-        self._index = int(body_index)
         self._poses = self.DeclareAbstractInputPort("body_poses",
                                                     AbstractValue.Make([RigidTransform()]))
-        self.DeclareAbstractOutputPort(
-            "pose", lambda: AbstractValue.Make(RigidTransform()), self._calc,
+        self._list = self.DeclareCacheEntry(
+            "body_poses_list", ValueProducer(allocate=lambda: Value(object()),
+                                             calc=lambda c, v: v.set_value(self._poses.Eval(c))),
             {self.input_port_ticket(self._poses.get_index())})
-
-    def _calc(self, context, output) -> None:
-        output.set_value(self._poses.Eval(context)[self._index])
+        for name, index in body_indices.items():
+            self.DeclareAbstractOutputPort(
+                name, lambda: AbstractValue.Make(RigidTransform()),
+                lambda c, o, i=int(index): o.set_value(self._list.Eval(c)[i]),
+                {self._list.ticket()})
 
 
 class _ChassisSensor(LeafSystem):
-    """Input `chassis_pose` (abstract RigidTransform X_WB, from `ChassisPose`)."""
+    """Input `chassis_pose` (abstract RigidTransform X_WB, from `ChassisPoses`)."""
 
     def __init__(self):
         super().__init__()

@@ -47,7 +47,7 @@ class RunLogSample(LeafSystem):
         output_ports:
         - sample
 
-    Input `chassis_pose` (abstract RigidTransform X_WB, from `odometry.ChassisPose`); input
+    Input `chassis_pose` (abstract RigidTransform X_WB, from `odometry.ChassisPoses`); input
     `drive_status` (5, `drive.DriveStatus`); input `encoder_ticks` (2, front left and front
     right, from the odometry's encoders). Output `sample` (7, `LogSample`): left_power,
     right_power in [-1, 1]; left_ticks, right_ticks rounded to whole ticks; x, y, m, of the
