@@ -11,7 +11,7 @@ import math
 import numpy as np
 from pydrake.common.containers import namedview
 from pydrake.common.value import Value
-from pydrake.systems.framework import BasicVector, LeafSystem
+from pydrake.systems.framework import LeafSystem
 
 from corobot_drake.config.scenario import (
     COMPLETING_COMMANDS,
