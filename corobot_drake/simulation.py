@@ -154,8 +154,9 @@ class Robot:
         return True
 
     def continuation_commands(self) -> list:
-        """Commands that carry on from now: the enable level, the running command (what is
-        left of a DriveDistance/RotateDegrees, or the last SetPower/SetSpeed/SetVelocity), then the
+        """Commands that carry on from now: the enable level, the running command (a
+        DriveDistance/RotateDegrees carried on from where it is, the last
+        SetPower/SetSpeed/SetVelocity, or an AllStop when the wheels' target is 0), then the
         script's unissued rest (after what is left of a running Wait)."""
         root = self._sim.context
         source, motion = self._parts.command_source, self._parts.motion
@@ -166,6 +167,11 @@ class Robot:
             commands.append(remaining)
         elif isinstance(state.request.command, sc.SetPower | sc.SetSpeed | sc.SetVelocity):
             commands.append(state.request.command)
+        elif state.request.enabled and (state.request.seq or any(self._parts.drive_controller
+                                                                 .target_speeds(root))):
+            # Stopping or stopped (an AllStop, an ended command): the wheels' target is 0,
+            # not the speeds they have now (which the reloaded drive starts from).
+            commands.append(sc.AllStop())
         script = source.script(source.GetMyContextFromRoot(root))
         if state.next_script_index < len(script):
             if state.script_blocked_until > self._sim.time:
@@ -442,10 +448,11 @@ class Simulation:
                                            spec.wheel_speeds, strict=True):
                 joint.set_angle(plant_context, angle)
                 joint.set_angular_rate(plant_context, speed)
-            if any(spec.wheel_speeds):
+            command = spec.axle_speed_command or spec.wheel_speeds[:2]
+            if any(command):
                 controller = parts.drive_controller
                 controller.SetAxleSpeeds(controller.GetMyMutableContextFromRoot(self.context),
-                                         *spec.wheel_speeds[:2])
+                                         *command)
         for name, body in self.station.bodies.items():
             spec = self.scenario.world.bodies[name]
             if not spec.fixed:
@@ -471,8 +478,9 @@ class Simulation:
 
     def saved_scenario(self) -> sc.Scenario:
         """This scenario with the current state: time, every robot's and free body's pose
-        and velocity, the wheels' angles, and each robot's commands from now on
-        (`Robot.continuation_commands`). Running it continues from here."""
+        and velocity, the wheels' angles and speeds, the drives' commanded axle speeds, and
+        each robot's commands from now on (`Robot.continuation_commands`). Running it
+        continues from here."""
         saved = sc.load_scenario(data=yaml_dump_typed(self.scenario, schema=sc.Scenario),
                                  defaults=sc.Scenario())
         saved.simulator_config.start_time = self.time
@@ -490,6 +498,9 @@ class Simulation:
             spec.wheel_angles = [float(j.get_angle(plant_context)) for j in parts.wheel_joints]
             spec.wheel_speeds = [float(j.get_angular_rate(plant_context))
                                  for j in parts.wheel_joints]
+            controller = parts.drive_controller
+            spec.axle_speed_command = [float(v) for v in controller.GetOutputPort(
+                "axle_speed_command").Eval(controller.GetMyContextFromRoot(self.context))]
             spec.commands = robot.continuation_commands()
         for name, body in self.station.bodies.items():
             spec = saved.world.bodies[name]
@@ -578,7 +589,8 @@ class Simulation:
         }
 
 
-_PER_RUN_ROBOT_FIELDS = ("pose", "velocity", "wheel_angles", "wheel_speeds", "commands")
+_PER_RUN_ROBOT_FIELDS = ("pose", "velocity", "wheel_angles", "wheel_speeds",
+                         "axle_speed_command", "commands")
 
 
 def diagram_key(scenario: sc.Scenario) -> str:

@@ -2,6 +2,7 @@
 saved scenes, measured from the simulation of the default scene (camera off: not needed)."""
 
 import dataclasses as dc
+import functools
 import itertools
 import json
 import math
@@ -10,6 +11,8 @@ import sys
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from conftest import REPO, make_sim
 from corobot_drake.cli import main
@@ -234,7 +237,9 @@ def test_saved_scene_reloads_where_it_was(tmp_path):
         sim.advance(1.0)
         again.advance(1.0)
         assert _max_gap(sim, again) < 1e-3
-    assert [c["command"] for c in again.robot().summary()["commands"]] == ["Wait", "SetPower"]
+    # The wheels' target (0: the turn ended), what was left of the Wait, the script's rest.
+    assert [c["command"] for c in again.robot().summary()["commands"]] == [
+        "AllStop", "Wait", "SetPower"]
 
 
 def test_scene_saved_while_driving_carries_on(tmp_path):
@@ -253,6 +258,44 @@ def test_scene_saved_while_driving_carries_on(tmp_path):
     assert _max_gap(sim, again) < 0.01
     assert [c["command"] for c in again.robot().summary()["commands"]][:2] == [
         "DriveDistance", "RotateDegrees"]  # what was left of the drive, then the script's rest
+
+
+RESUME_CASES = {  # (profile, command): simulated s until the robot is at rest after it
+    ("closed_loop", "!DriveDistance {distance: 0.3, power: 1.0}"): 2.0,
+    ("closed_loop", "!RotateDegrees {degrees: -60, power: 1.0}"): 2.2,
+    ("seed", "!DriveDistance {distance: 0.3, power: 1.0}"): 1.2,
+    ("seed", "!RotateDegrees {degrees: -60, power: 0.5}"): 1.2,
+}
+
+
+@functools.cache
+def _rest_pose(profile: str, command: str, end: float, save: float | None = None):
+    """(x, y, heading) at `end` of the command run uninterrupted, or saved at `save` s and
+    reloaded from the saved scene."""
+    sim = fast_sim(profile, extra=f"commands: [{command}]")
+    if save is not None:
+        sim.advance_to(save)
+        sim = Simulation(sim.saved_scenario())
+    sim.advance_to(end)
+    robot = sim.robot()
+    return (*robot.position()[:2], robot.heading())
+
+
+@pytest.mark.parametrize("profile, command", list(RESUME_CASES))
+@settings(max_examples=3, deadline=None, derandomize=True)
+@given(fraction=st.floats(0.0, 1.0))
+def test_a_command_saved_at_any_time_resumes_to_the_same_landing(profile, command, fraction):
+    """Issue 14: a resumed command lands within 1 mm and 0.1 deg of the uninterrupted one.
+    The saved scene carries the command on from where it started (its `start`), at the power
+    it runs at, with the drive's commanded axle speeds; the script restarts at the saved
+    time. Measured: within 0.04 mm and 0.003 deg (a seed turn saved within its last 0.1 s of
+    halving loses its progress samples and lands up to ~1 deg off: docs/commands.md)."""
+    end = RESUME_CASES[profile, command]
+    save = 0.01 + fraction * (0.6 if profile == "seed" else 1.2)  # while it runs (or after)
+    x0, y0, h0 = _rest_pose(profile, command, end)
+    x, y, h = _rest_pose(profile, command, end, save)
+    assert math.hypot(x - x0, y - y0) < 1e-3
+    assert abs(math.degrees(math.remainder(h - h0, 2 * math.pi))) < 0.1
 
 
 def test_drive_test_same_seed_same_numbers(tmp_path):

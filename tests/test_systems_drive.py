@@ -220,15 +220,15 @@ def test_script_runs_in_order_with_waits_and_completing_commands():
     script = [SetPower(0.1, 0.1), Wait(0.04), SetSpeed(0.2, 0.2), DriveDistance(1.0, 0.5),
               AllStop()]
     s = source(script, CommandStatus())
-    assert request(s).seq == 0  # nothing before the first update
+    assert request(s).seq == 0  # nothing before the simulation starts
+    # Initialization issues the SetPower; the update at t = 0, the Wait: held until 0.04 s.
     s.tick()
-    assert (request(s).seq, request(s).command) == (1, SetPower(0.1, 0.1))
-    s.tick()  # the Wait, at t = 1/60 s: holds the script until 1/60 + 0.04 = 0.057 s
-    s.tick(2)  # t = 2/60, 3/60 s: held
+    assert (request(s).seq, request(s).command, request(s).time) == (1, SetPower(0.1, 0.1), 0)
+    s.tick(2)  # t = 1/60, 2/60 s: held
     assert request(s).seq == 1
-    s.tick()  # t = 4/60 s
+    s.tick()  # t = 3/60 s
     assert (request(s).seq, request(s).command) == (2, SetSpeed(0.2, 0.2))
-    assert request(s).time == pytest.approx(4 * PERIOD, abs=1e-12)
+    assert request(s).time == pytest.approx(3 * PERIOD, abs=1e-12)
     s.tick()
     assert (request(s).seq, request(s).command) == (3, DriveDistance(1.0, 0.5))
     s.tick(10)  # the DriveDistance runs (no end reported): the script waits for it
@@ -240,9 +240,9 @@ def test_script_runs_in_order_with_waits_and_completing_commands():
         (1, "SetPower"), (0, "Wait"), (2, "SetSpeed"), (3, "DriveDistance"), (4, "AllStop")]
     # The SetPower ends when the SetSpeed replaces it, though the Wait was logged between.
     assert [r.status for r in log(s)] == ["succeeded"] * 4 + ["running"]
-    assert log(s)[0].end_time == pytest.approx(4 * PERIOD, abs=1e-12)
+    assert log(s)[0].end_time == pytest.approx(3 * PERIOD, abs=1e-12)
     wait = log(s)[1]
-    assert (wait.start_time, wait.end_time) == pytest.approx((PERIOD, PERIOD + 0.04), abs=1e-12)
+    assert (wait.start_time, wait.end_time) == pytest.approx((0.0, 0.04), abs=1e-12)
     assert log(s)[3].end_time == 0.2  # the reported end time
 
 

@@ -83,8 +83,8 @@ def test_closed_loop_drive_cruises_then_succeeds_after_resting_on_the_goal():
     assert out(s).command.right == out(s).command.left
     at(s, 0.3, 0.0)
     s.tick()
-    remaining = s.system.remaining_command(s.context)
-    assert remaining.distance == pytest.approx(0.7, abs=EXACT)
+    # Carried on (a saved scene): the distance counted from where it started.
+    assert s.system.remaining_command(s.context) == DriveDistance(1.0, 0.5, [0.0, 0.0, 0.0])
     at(s, 1.0, 0.0)  # on the goal: the first update sees it arrive fast, then at rest
     assert STILL_TIME == 0.05  # docs/commands.md: "succeeds after 0.05 s at rest there"
     assert ticks_until_ended(s) == 1 + STILL_FRAMES
@@ -213,3 +213,35 @@ def test_set_pose_not_applied_fails_after_the_timeout():
     st = status(s)
     assert (st.seq, st.status, st.reason) == (1, "failed", "not_applied")
     assert n == round(POSE_TIMEOUT / PERIOD) + 1  # the update at t = 1 s
+
+
+@pytest.mark.parametrize("profile", ["closed_loop", "seed"])
+def test_a_drive_given_its_start_counts_from_there(profile):
+    s = motion(profile, x=0.3)
+    s.fix("request", DriveRequest(1, DriveDistance(1.0, 0.5, [0.0, 0.0, 0.0])))
+    s.tick()
+    assert out(s).command.left == pytest.approx(0.5, abs=EXACT)  # far from the goal: cruise
+    assert s.system.get_state(s.context).active.progress == pytest.approx(0.3, abs=EXACT)
+    if profile == "seed":
+        at(s, 1.0, 0.0)  # 1 m from the start given, not from where it began
+        s.tick()
+        assert (status(s).status, out(s).command, out(s).immediate) == (
+            "succeeded", AllStop(), True)
+
+
+def test_a_turn_given_its_start_heading_counts_from_it():
+    s = motion(heading=0.5)
+    s.fix("request", DriveRequest(1, RotateDegrees(60.0, 0.5, [0.0, 0.0, 0.0])))
+    s.tick()
+    # Already 0.5 rad of the 60 deg turned: 60 - 28.6 deg are left.
+    left = s.system.remaining_command(s.context)
+    assert left.degrees == pytest.approx(60.0 - math.degrees(0.5), abs=1e-9)
+    assert left.start == [0.0, 0.0, pytest.approx(math.degrees(0.5))]
+
+
+def test_a_seed_turn_saved_past_its_goal_resumes_as_done():
+    s = motion("seed")
+    s.fix("request", DriveRequest(1, RotateDegrees(30.0, 1.0)))
+    s.tick()
+    at(s, 0.0, math.radians(31.0))  # overshot since the last update: the next one ends it
+    assert s.system.remaining_command(s.context).degrees == 0.0

@@ -207,6 +207,10 @@ class DriveDistance:
 
     distance: float = 0.0
     power: float = 0.5
+    start: list[float] = dc.field(default_factory=list)
+    """[x, y, yaw_deg] (m, m, deg): the pose the distance counts from (and, closed loop, the
+    heading held); empty: where the robot is when the command starts. A saved scene resumes
+    a running drive so (`Simulation.saved_scenario`)."""
 
 
 @dc.dataclass
@@ -216,6 +220,10 @@ class RotateDegrees:
 
     degrees: float = 0.0
     power: float = 0.5
+    start: list[float] = dc.field(default_factory=list)
+    """[x, y, yaw_deg] (m, m, deg): the heading the turn counts from (within +-180 deg of the
+    heading when it starts; x and y are not used); empty: the heading when the command
+    starts. A saved scene resumes a running turn so (`Simulation.saved_scenario`)."""
 
 
 @dc.dataclass
@@ -272,6 +280,10 @@ class Robot:
     wheel_speeds: list[float] = dc.field(default_factory=lambda: [0.0] * 4)
     """Initial axle speeds (rad/s, same order); the drive's commanded axle speeds start at the
     front wheels' (a saved scene carries on without a jolt)."""
+    axle_speed_command: list[float] = dc.field(default_factory=list)
+    """The drive's initial commanded (slewed) axle speeds [left, right], rad/s; empty: the
+    front wheels' `wheel_speeds`. A saved scene records them (they differ from the wheels'
+    while the drive accelerates or brakes)."""
     camera: CameraConfig = dc.field(default_factory=default_camera_config)
     """The front camera, Drake's CameraConfig (SPEC defaults; `config/sensors.py`).
     `X_PB.base_frame` names a link of this robot (`chassis`); `{rgb: false}`: no camera."""

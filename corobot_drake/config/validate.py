@@ -374,11 +374,17 @@ class LayerChecks:
         for field in ("wheel_angles", "wheel_speeds"):
             if len(getattr(robot, field)) != 4:
                 self.fail(f"{path}.{field}", "needs 4 numbers")
+        if len(robot.axle_speed_command) not in (0, 2):
+            self.fail(f"{path}.axle_speed_command", "needs [] or 2 numbers [left, right]")
         for i, cmd in enumerate(robot.commands):
             if isinstance(cmd, sc.Wait) and not cmd.seconds >= 0:
                 self.fail(f"{path}.commands[{i}].seconds", "must be >= 0")
             if isinstance(cmd, sc.DriveDistance | sc.RotateDegrees) and not 0 < cmd.power <= 1:
                 self.fail(f"{path}.commands[{i}].power", f"must be in (0, 1], got {cmd.power:g}")
+            if isinstance(cmd, sc.DriveDistance | sc.RotateDegrees) and len(cmd.start) not in (
+                    0, 3):
+                self.fail(f"{path}.commands[{i}].start",
+                          f"expected [] or [x, y, yaw_deg], got {len(cmd.start)} numbers")
 
     def _all_positive(self, path: str, config, fields) -> None:
         for field in fields:

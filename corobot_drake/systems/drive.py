@@ -129,11 +129,13 @@ class CommandSource(LeafSystem):
     `command_status` (CommandStatus, abstract, from `motion.MotionCommands`; may be left
     unconnected, then no completing command is ever reported ended): how completing commands
     end, recorded in the log.
-    Abstract state `CommandSourceState`. Every `period` s it records that status and advances
-    the script; a `Wait` holds the script for its duration and a completing command holds it
-    until it ends. `Issue()` writes a command into the Context directly (what the Python API,
-    teleop and the server call between steps). A new command ends a running completing one as
-    failed: `superseded`, or `disabled` when the new command is `Enable(false)`.
+    Abstract state `CommandSourceState`. At initialization it issues the script's commands
+    up to the first Wait or completing command; then every `period` s it records that status
+    and issues the next command; a `Wait` holds the script for its duration and a completing
+    command holds it until it ends. `Issue()` writes a command into the Context directly
+    (what the Python API, teleop and the server call between steps). A new command ends a
+    running completing one as failed: `superseded`, or `disabled` when the new command is
+    `Enable(false)`.
     """
 
     def __init__(self, script: list, period: float):
@@ -153,6 +155,10 @@ class CommandSource(LeafSystem):
             lambda context, output: output.set_value(self.current_state(context).log),
             {self.abstract_state_ticket(self._state_index), self.all_input_ports_ticket()})
         self.DeclarePeriodicUnrestrictedUpdateEvent(period, 0.0, self._update)
+        # The script's first commands are issued when the simulation starts, not at the
+        # first period: a saved scene's script (what was running, what was left of a Wait)
+        # then carries on at the very times the saved run would have.
+        self.DeclareInitializationUnrestrictedUpdateEvent(self._initialize)
 
     def script(self, context) -> tuple:
         """The script this Context runs (the scenario's commands, in order)."""
@@ -254,26 +260,40 @@ class CommandSource(LeafSystem):
 
     def _update(self, context, state):
         original = self.get_state(context)
-        current = self._with_status(original, self._status(context))
-        script = self.script(context)
-        now = context.get_time()
-        if (current.next_script_index < len(script) and now >= current.script_blocked_until
-                and not self._script_waiting(current)):
-            command = script[current.next_script_index]
-            current = dc.replace(current, next_script_index=current.next_script_index + 1)
-            if isinstance(command, Wait):
-                log = list(current.log)
-                log.append(CommandRecord(seq=0, command="Wait", start_time=now,
-                                         end_time=now + command.seconds, status="succeeded"))
-                current = dc.replace(current, script_blocked_until=now + command.seconds,
-                                     log=tuple(log))
-            else:
-                current = self._with_command(current, command, now)
-                completing = isinstance(command, COMPLETING_COMMANDS)
-                current = dc.replace(
-                    current, script_waits_for=current.request.seq if completing else 0)
+        current = self._next_script_command(
+            self._with_status(original, self._status(context)), self.script(context),
+            context.get_time())
         if current is not original:
             self._set_state(state, current)
+
+    def _initialize(self, context, state):
+        """The script's commands up to its first Wait or completing command, at once."""
+        original = current = self.get_state(context)
+        script, now = self.script(context), context.get_time()
+        while True:
+            issued = self._next_script_command(current, script, now)
+            if issued is current:
+                break
+            current = issued
+        if current is not original:
+            self._set_state(state, current)
+
+    def _next_script_command(self, current: CommandSourceState, script: tuple,
+                             now: float) -> CommandSourceState:
+        """The state after issuing the script's next command, if it is due now."""
+        if (current.next_script_index >= len(script) or now < current.script_blocked_until
+                or self._script_waiting(current)):
+            return current
+        command = script[current.next_script_index]
+        current = dc.replace(current, next_script_index=current.next_script_index + 1)
+        if isinstance(command, Wait):
+            log = (*current.log, CommandRecord(seq=0, command="Wait", start_time=now,
+                                               end_time=now + command.seconds,
+                                               status="succeeded"))
+            return dc.replace(current, script_blocked_until=now + command.seconds, log=log)
+        current = self._with_command(current, command, now)
+        completing = isinstance(command, COMPLETING_COMMANDS)
+        return dc.replace(current, script_waits_for=current.request.seq if completing else 0)
 
 
 _COMPLETING_NAMES = tuple(c.__name__ for c in COMPLETING_COMMANDS)
@@ -436,6 +456,11 @@ class DriveController(LeafSystem):
         `state` (a Context or DiscreteValues)."""
         state.set_value(self._axle, [left, right])
         state.set_value(self._desired, [0.0, 0.0, 0.0, 0.0, left, right, left, right])
+
+    def target_speeds(self, root_context) -> tuple[float, float]:
+        """The axle speeds (left, right; rad/s) the drive slews towards now."""
+        status = self.GetOutputPort("drive_status").Eval(self.GetMyContextFromRoot(root_context))
+        return tuple(float(v) for v in status[_TARGETS])
 
     def Halt(self, context) -> None:
         """Stops the wheels at once (powers, targets and slewed axle speeds to 0): what a

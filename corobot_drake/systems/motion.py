@@ -202,13 +202,23 @@ class MotionCommands(LeafSystem):
         return context.get_abstract_state(self._state_index).get_value()
 
     def remaining_command(self, context):
-        """The running DriveDistance/RotateDegrees with what is left of it (None if none)."""
+        """The running DriveDistance/RotateDegrees as a command that carries it on from now
+        (None if none): a drive with its distance counted from where it started (`start`), a
+        turn with the angle left counted from the heading now, at the power it runs at (the
+        seed profile's halvings kept). What a saved scene resumes."""
         a = self.get_state(context).active
         if a is None or a.kind == "pose":
             return None
+        power = a.power * a.scale
+        x, y, yaw = a.start
         if a.kind == "drive":
-            return DriveDistance(a.sign * (a.target - a.progress), a.power)
-        return RotateDegrees(math.degrees(a.target - a.progress), a.power)
+            return DriveDistance(a.sign * a.target, power, [x, y, math.degrees(yaw)])
+        heading = float(self._heading_port.Eval(context)[0])
+        left = a.target - (a.progress + wrap(heading - a.heading))
+        if self._motion.profile == "seed" and math.copysign(1.0, a.target) * left < (
+                SEED_ROTATION_TOLERANCE):
+            left = 0.0  # arrived: its next update stops it
+        return RotateDegrees(math.degrees(left), power, [x, y, math.degrees(heading)])
 
     # --- the state machine ----------------------------------------------------------------
     def _update(self, context, state):
@@ -260,17 +270,37 @@ class MotionCommands(LeafSystem):
         return self._emit(s, AllStop(), request, now, immediate)
 
     def _start(self, s, request, command, pose, now) -> MotionState:
+        seed = self._motion.profile == "seed"
         if isinstance(command, DriveDistance):
             kind, target, power = "drive", abs(command.distance), command.power
             sign = math.copysign(1.0, command.distance)
         else:
             kind, target, power = "rotate", math.radians(command.degrees), command.power
             sign = math.copysign(1.0, target)
-        if target == 0.0:
-            return self._finish(s, request, request.seq, "succeeded", "", now)
-        active = ActiveCommand(request.seq, kind, target, sign, min(abs(power), 1.0), pose,
-                               now, pose[2], stall_time=now)
+        if target == 0.0:  # the seed profile's stop is at once (the book's)
+            return self._finish(s, request, request.seq, "succeeded", "", now, immediate=seed)
+        start, progress = pose, 0.0
+        if command.start:  # counted from a given pose (a resumed command)
+            x0, y0, yaw0 = command.start[0], command.start[1], math.radians(command.start[2])
+            if kind == "drive":
+                start = (x0, y0, yaw0)
+                progress = self._drive_progress(start, sign, pose[0], pose[1])
+            else:
+                progress = wrap(pose[2] - yaw0)
+        active = ActiveCommand(request.seq, kind, target, sign, min(abs(power), 1.0), start,
+                               now, pose[2], progress=progress, stall_progress=progress,
+                               stall_time=now)
         return dc.replace(s, active=active)
+
+    def _drive_progress(self, start, sign: float, x: float, y: float) -> float:
+        """m towards a drive's goal from `start` (x0, y0, yaw0): the book's straight-line
+        distance (seed), or the signed distance along the start heading (closed loop: an
+        overshoot shows as negative distance left)."""
+        x0, y0, yaw0 = start
+        dx, dy = x - x0, y - y0
+        if self._motion.profile == "seed":
+            return math.hypot(dx, dy)
+        return sign * (dx * math.cos(yaw0) + dy * math.sin(yaw0))
 
     def _check_stall(self, s, a: ActiveCommand, request, now, threshold: float, moving: bool):
         """(state, active): failed `stalled` when progress < threshold for the stall time."""
@@ -286,14 +316,10 @@ class MotionCommands(LeafSystem):
 
     def _step_drive(self, s, request, x, y, heading, now) -> MotionState:
         a = s.active
-        x0, y0, yaw0 = a.start
-        dx, dy = x - x0, y - y0
+        yaw0 = a.start[2]
         previous = a.progress
         seed = self._motion.profile == "seed"
-        if seed:  # the book: straight-line distance from the start
-            progress = math.hypot(dx, dy)
-        else:  # signed, along the start heading: an overshoot shows as negative distance left
-            progress = a.sign * (dx * math.cos(yaw0) + dy * math.sin(yaw0))
+        progress = self._drive_progress(a.start, a.sign, x, y)
         a = dc.replace(a, progress=progress, heading=heading)
         remaining = a.target - progress
         cruise = a.power * self._drive.motor_torque_scaling  # axle rad/s
