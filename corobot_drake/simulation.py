@@ -156,7 +156,7 @@ class Robot:
     def continuation_commands(self) -> list:
         """Commands that carry on from now: the enable level, the running command (a
         DriveDistance/RotateDegrees carried on from where it is, the last
-        SetPower/SetSpeed/SetVelocity, or an AllStop when the wheels' target is 0), then the
+        SetPower/SetSpeed/SetVelocity, or an AllStop while the drive slews down to 0), then the
         script's unissued rest (after what is left of a running Wait)."""
         root = self._sim.context
         source, motion = self._parts.command_source, self._parts.motion
@@ -167,11 +167,12 @@ class Robot:
             commands.append(remaining)
         elif isinstance(state.request.command, sc.SetPower | sc.SetSpeed | sc.SetVelocity):
             commands.append(state.request.command)
-        elif state.request.enabled and (state.request.seq or any(self._parts.drive_controller
-                                                                 .target_speeds(root))):
-            # Stopping or stopped (an AllStop, an ended command): the wheels' target is 0,
-            # not the speeds they have now (which the reloaded drive starts from).
-            commands.append(sc.AllStop())
+        else:
+            target, commanded = self._parts.drive_controller.speeds(root)
+            if not any(target) and any(commanded):
+                # Slewing down to 0 (an AllStop, an ended command): the reloaded drive starts
+                # from the commanded speeds and must stop, not hold them.
+                commands.append(sc.AllStop())
         script = source.script(source.GetMyContextFromRoot(root))
         if state.next_script_index < len(script):
             if state.script_blocked_until > self._sim.time:
@@ -498,9 +499,7 @@ class Simulation:
             spec.wheel_angles = [float(j.get_angle(plant_context)) for j in parts.wheel_joints]
             spec.wheel_speeds = [float(j.get_angular_rate(plant_context))
                                  for j in parts.wheel_joints]
-            controller = parts.drive_controller
-            spec.axle_speed_command = [float(v) for v in controller.GetOutputPort(
-                "axle_speed_command").Eval(controller.GetMyContextFromRoot(self.context))]
+            spec.axle_speed_command = parts.drive_controller.speeds(self.context)[1]
             spec.commands = robot.continuation_commands()
         for name, body in self.station.bodies.items():
             spec = saved.world.bodies[name]

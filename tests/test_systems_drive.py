@@ -152,6 +152,20 @@ def test_a_request_acts_once_by_its_sequence_number():
     np.testing.assert_allclose(s.output("axle_speed_command"), [STEP, STEP], atol=EXACT)
 
 
+def test_an_immediate_request_skips_the_slew_limit():
+    s = controller()
+    s.fix("request", DriveRequest(1, SetPower(1.0, -1.0)))
+    s.tick(10)
+    assert s.output("axle_speed_command")[0] == pytest.approx(10 * STEP)
+    s.fix("request", DriveRequest(2, AllStop(), immediate=True))  # the seed profile's stop
+    s.tick()
+    np.testing.assert_array_equal(s.output("axle_speed_command"), [0.0, 0.0])
+    np.testing.assert_array_equal(s.output("desired_state"), np.zeros(8))
+    s.fix("request", DriveRequest(3, SetPower(1.0, 1.0)))  # an ordinary request slews again
+    s.tick()
+    np.testing.assert_allclose(s.output("axle_speed_command"), [STEP, STEP], atol=EXACT)
+
+
 def test_disable_stops_at_once_and_ignores_motion_until_enabled():
     s = controller()
     s.fix("request", DriveRequest(1, SetPower(1.0, 1.0)))

@@ -7,7 +7,9 @@ tire-grip sweep's pick, and at 5, 2 and 1 ms; point contact at 10 ms). Each cell
 wall-clock real-time factor (the CPU-time one in parentheses: the machine may be shared). Then
 the IR cost per scan and the camera cost per frame, both measured in place (the extra wall time
 per scan or frame over physics only) and by their micro-benchmarks (tools/bench_ir.py,
-tools/bench_raycast.py, tools/bench_camera.py). The measurements are
+tools/bench_raycast.py, tools/bench_camera.py). `--robots 1,2,4,8,16` adds fleets of robots
+driving, physics only: robot-seconds per second, flat when nothing grows per robot. The
+measurements are
 `corobot_drake.analysis.bench` and the micro-benchmarks' modules beside it.
 """
 
@@ -48,6 +50,20 @@ def _in_place(results: dict) -> None:
                   f"(extra time over physics only, {DEFAULT_PLANT}; noisy on a busy machine)")
 
 
+def _fleets(counts: list[int], seconds: float, repeats: int) -> None:
+    """Prints robot-seconds per second for each fleet size (median of `repeats`)."""
+    print("| robots | robot-seconds per second, wall (CPU) | per robot, of one robot's |\n"
+          "|---|---|---|", flush=True)
+    single = None
+    for count in counts:
+        runs = [bench.robot_seconds_per_second(count, seconds) for _ in range(repeats)]
+        wall = statistics.median(r[0] for r in runs)
+        cpu = statistics.median(r[1] for r in runs)
+        single = single or (wall, cpu)
+        print(f"| {count} | {wall:.1f} ({cpu:.1f}) | {wall / single[0]:.2f} "
+              f"({cpu / single[1]:.2f}) |", flush=True)
+
+
 def _micro_benchmarks() -> None:
     print(f"micro-benchmark: IR scan of both default sensors (2 x 6 rays) in the station: "
           f"{bench_ir.station_scan_cost_seconds() * 1000:.4f} ms (tools/bench_ir.py)", flush=True)
@@ -66,6 +82,11 @@ def main() -> None:
     parser.add_argument("--plants", help="only plant settings containing this text (None: all)")
     parser.add_argument("--no-micro", action="store_true",
                         help="skip the IR and camera micro-benchmarks")
+    parser.add_argument("--robots", default="",
+                        help="also fleets of these sizes, e.g. 1,2,4,8,16: robot-seconds per "
+                             "second, physics only (default: none)")
+    parser.add_argument("--no-table", action="store_true",
+                        help="skip the stacks x plants table")
     args = parser.parse_args()
     quiet_drake_warnings()
     print(f"machine: {bench.machine()}", flush=True)
@@ -73,9 +94,13 @@ def main() -> None:
           "factor (CPU-time one in parentheses)\n", flush=True)
     stacks = {k: v for k, v in bench.STACKS.items() if not args.stacks or args.stacks in k}
     plants = {k: v for k, v in bench.PLANTS.items() if not args.plants or args.plants in k}
-    results = _table(stacks, plants, args.seconds, args.repeats)
-    print()
-    _in_place(results)
+    if not args.no_table:
+        results = _table(stacks, plants, args.seconds, args.repeats)
+        print()
+        _in_place(results)
+    if args.robots:
+        _fleets([int(n) for n in args.robots.split(",")], args.seconds, args.repeats)
+        print()
     if not args.no_micro:
         _micro_benchmarks()
 

@@ -2,7 +2,8 @@
 
 Stacks (physics only; + 2 IR at 20 Hz; + camera at 30 Hz; both) times plant settings
 (hydroelastic at 10, 5, 2 and 1 ms; point contact at 10 ms): :func:`realtime_factor` of
-`sensor_overrides(**STACKS[stack])` with `PLANTS[plant]`.
+`sensor_overrides(**STACKS[stack])` with `PLANTS[plant]`. Fleets of robots, each driving
+the figure of eight: :func:`robot_seconds_per_second`.
 """
 
 import os
@@ -45,6 +46,33 @@ def realtime_factor(overrides: list[str], seconds: float,
     wall, cpu = time.perf_counter(), time.process_time()
     sim.advance(seconds)
     return seconds / (time.perf_counter() - wall), seconds / (time.process_time() - cpu)
+
+
+ROBOT_SPACING = 4.0
+"""m between the robots of a fleet (on a 4-wide grid): their figures of eight stay apart."""
+
+
+def fleet_overrides(count: int) -> list[str]:
+    """`count` robots (`corobot` and `robot_1`...) on a grid, each driving the figure of eight,
+    physics only."""
+    overrides = [DRIVING, *physics_only_overrides()]
+    commands = DRIVING[DRIVING.index("commands:"):-2]
+    for i in range(1, count):
+        name = f"robot_{i}"
+        x, y = ROBOT_SPACING * (i % 4), ROBOT_SPACING * (i // 4)
+        overrides += [f"robots: {{{name}: {{pose: {{translation: [{x}, {y}, 0.0]}}, "
+                      f"{commands}}}}}", *physics_only_overrides(name)]
+    return overrides
+
+
+def robot_seconds_per_second(count: int, seconds: float) -> tuple[float, float]:
+    """(wall, CPU) simulated robot-seconds per second of `count` robots driving, physics only
+    (`fleet_overrides`), building excluded."""
+    sim = Simulation(load_scenario(DEFAULT_SCENARIO, overrides=fleet_overrides(count)))
+    wall, cpu = time.perf_counter(), time.process_time()
+    sim.advance(seconds)
+    return (count * seconds / (time.perf_counter() - wall),
+            count * seconds / (time.process_time() - cpu))
 
 
 STACKS = {

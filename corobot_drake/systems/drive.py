@@ -457,10 +457,12 @@ class DriveController(LeafSystem):
         state.set_value(self._axle, [left, right])
         state.set_value(self._desired, [0.0, 0.0, 0.0, 0.0, left, right, left, right])
 
-    def target_speeds(self, root_context) -> tuple[float, float]:
-        """The axle speeds (left, right; rad/s) the drive slews towards now."""
-        status = self.GetOutputPort("drive_status").Eval(self.GetMyContextFromRoot(root_context))
-        return tuple(float(v) for v in status[_TARGETS])
+    def speeds(self, root_context) -> tuple[list[float], list[float]]:
+        """(targets, commanded): the axle speeds [left, right] (rad/s) the drive slews towards
+        now, and where the slew has brought them."""
+        context = self.GetMyContextFromRoot(root_context)
+        return ([float(v) for v in context.get_discrete_state(self._status).get_value()[
+            _TARGETS]], [float(v) for v in context.get_discrete_state(self._axle).get_value()])
 
     def Halt(self, context) -> None:
         """Stops the wheels at once (powers, targets and slewed axle speeds to 0): what a
