@@ -1,21 +1,32 @@
 """`python -m corobot_drake [SCENARIO]`: run a scenario in Meshcat or headless.
 
-Exit status: 0 on success, 2 for a bad scenario or bad arguments (one line on stderr).
+Exit status: 0 on success, 2 for a bad scenario or bad arguments (one line on stderr, before
+anything is built), 1 when an output could not be written at the end (it went to a fallback
+file, named on stderr).
 """
+
+from __future__ import annotations
 
 import argparse
 import contextlib
 import json
 import math
+import os
 import sys
+import tempfile
 import time
 import warnings
 from pathlib import Path
+from typing import TYPE_CHECKING
 
+from pydrake.systems.sensors import CameraConfig
+
+from corobot_drake.config.bounds import DRAKE_BOUNDS, DURATION, SIMULATION_DURATION, Range
 from corobot_drake.config.scenario import ScenarioError, load_scenario
 from corobot_drake.resources import DEFAULT_SCENARIO
-from corobot_drake.sensors.camera import RendererUnavailableError
-from corobot_drake.simulation import Simulation, quiet_drake_warnings
+
+if TYPE_CHECKING:  # imported when a run starts: a bad input stops before pydrake's systems load
+    from corobot_drake.simulation import Simulation
 
 CAMERA_DELAY_SHARE = 0.9
 """--camera-rate HZ caps the cameras' output_delay at this share of a frame, 1/HZ."""
@@ -27,8 +38,18 @@ PROGRESS_AFTER = 3.0
 """Wall-clock seconds after which a headless run starts printing progress."""
 
 
+class _ArgumentParser(argparse.ArgumentParser):
+    def error(self, message):
+        """One line, like every bad input (argparse's usage line goes to --help)."""
+        self.exit(2, f"error: {message}\n")
+
+
+class ArgumentError(Exception):
+    """A bad command line value: `str()` is `--flag: what is wrong and what is allowed`."""
+
+
 def _parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="python -m corobot_drake", description=__doc__.splitlines()[0])
+    p = _ArgumentParser(prog="python -m corobot_drake", description=__doc__.splitlines()[0])
     p.add_argument("scenario", nargs="?", default=str(DEFAULT_SCENARIO),
                    help="scenario YAML (default: scenarios/corobot.yaml)")
     p.add_argument("--headless", action="store_true",
@@ -108,6 +129,82 @@ def _run_interactive(sim: Simulation, meshcat, duration: float) -> None:
         print("\nstopped", file=sys.stderr)
 
 
+# --- checks of the command line, before anything is built ------------------------------------
+
+PORT = Range(0, 65535, why="0 picks a free one")
+HEADLESS_DURATION = Range(0.0, DURATION.high, low_open=True, unit="s",
+                          why="a headless run ends by itself")
+
+OUTPUT_FLAGS = {"summary": "file", "save_scenario": "file", "log": "file",
+                "save_camera": "directory", "record": "file", "mcap": "file"}
+"""The flags that name an output (argparse dest -> `file` or `directory`): each is checked
+before the run (`check_outputs`). A new output flag joins here."""
+
+
+def _check(flag: str, value, bound: Range) -> None:
+    problem = bound.problem(value)
+    if problem:
+        raise ArgumentError(f"{flag}: {problem}")
+
+
+def _file_problem(path: Path) -> str | None:
+    """Why a file cannot be written at `path` (its directory must exist), else None."""
+    directory = path.parent
+    if path.is_dir():
+        return "is a directory; name a file"
+    if not directory.is_dir():
+        return f"the directory {directory} does not exist"
+    if path.exists() and not os.access(path, os.W_OK):
+        return "the file is not writable"
+    if not os.access(directory, os.W_OK | os.X_OK):
+        return f"the directory {directory} is not writable"
+    return None
+
+
+def _directory_problem(path: Path) -> str | None:
+    """Why files cannot be written under `path` (made when needed), else None."""
+    if path.exists() and not path.is_dir():
+        return "is a file, not a directory"
+    ancestor = path  # the first that exists: the directories below it can be made
+    while not ancestor.exists() and ancestor != ancestor.parent:
+        ancestor = ancestor.parent
+    if not ancestor.is_dir():
+        return f"{ancestor} is not a directory"
+    if not os.access(ancestor, os.W_OK | os.X_OK):
+        return f"{ancestor} is not writable"
+    return None
+
+
+def check_outputs(args) -> None:
+    """Every output path can be written (its directory exists and is writable), before a
+    run that would otherwise end without its results; ArgumentError names the flag."""
+    for dest, kind in OUTPUT_FLAGS.items():
+        value = getattr(args, dest, None)
+        if value is not None:
+            problem = (_file_problem if kind == "file" else _directory_problem)(Path(value))
+            if problem:
+                raise ArgumentError(f"--{dest.replace('_', '-')}: {value}: {problem}")
+
+
+def check_arguments(args) -> None:
+    """The command line's numbers within their bounds and its outputs writable."""
+    if args.duration is not None:
+        _check("--duration", args.duration,
+               HEADLESS_DURATION if args.headless and not args.serve else SIMULATION_DURATION)
+    if args.camera_rate is not None:
+        _check("--camera-rate", args.camera_rate, DRAKE_BOUNDS[CameraConfig]["fps"])
+    if args.serve:
+        _check("--port", args.port, PORT)
+    if args.foxglove is not None:
+        _check("--foxglove", args.foxglove, PORT)
+    if args.record and args.serve:
+        raise ArgumentError("--record: not with --serve (the replay is written when a run ends)")
+    check_outputs(args)
+
+
+# --- writing the results ---------------------------------------------------------------------
+
+
 def _write_logs(sim: Simulation, path: Path) -> None:
     """One robot: `path`; several: `path` with `.<robot>` before the suffix."""
     for name, robot in sim.robots.items():
@@ -115,20 +212,32 @@ def _write_logs(sim: Simulation, path: Path) -> None:
                         else path.with_name(f"{path.stem}.{name}{path.suffix}"))
 
 
-def _output_path_error(args) -> str | None:
-    """The first output flag (--record, --mcap) whose file cannot be written there: its one-line
-    error, or None."""
-    for flag in ("record", "mcap"):
-        path = getattr(args, flag)
-        if path is None:
-            continue
-        if Path(path).is_dir():
-            return f"--{flag}: {path} is a directory; give a file name"
-        if not Path(path).resolve().parent.is_dir():
-            return f"--{flag}: {path}: no such directory {Path(path).parent}"
-    if args.record and args.serve:
-        return "--record: not with --serve (the replay is written when a run ends)"
-    return None
+def write_output(flag: str, path: str, write) -> bool:
+    """`write(path)`; if that fails (the disk filled, the directory went), `write` into a
+    fallback file in the temporary directory, named in the one-line error. False then."""
+    try:
+        write(Path(path))
+        return True
+    except OSError as e:
+        fd, fallback = tempfile.mkstemp(prefix=f"corobot-{flag.strip('-')}-",
+                                        suffix=Path(path).suffix)
+        os.close(fd)
+        write(Path(fallback))
+        print(f"error: {flag}: {path}: cannot write ({e.strerror}); written to {fallback} "
+              "instead", file=sys.stderr)
+        return False
+
+
+def _write_results(sim: Simulation, args, summary: dict) -> int:
+    """The run's outputs; exit status 1 when one went to its fallback file."""
+    outputs = (
+        ("--log", args.log, lambda p: _write_logs(sim, p)),
+        ("--summary", args.summary, lambda p: p.write_text(json.dumps(summary, indent=2) + "\n")),
+        ("--save-scenario", args.save_scenario, sim.save_scenario),
+        ("--record", args.record, sim.save_recording),
+    )
+    written = [write_output(flag, path, write) for flag, path, write in outputs if path]
+    return 0 if all(written) else 1
 
 
 class _FoxgloveSinks(contextlib.ExitStack):
@@ -163,26 +272,20 @@ def main(argv: list[str] | None = None) -> int:
     warnings.formatwarning = _one_line_warning  # for a user, not a developer: no source lines
     args = _parser().parse_args(argv)
     try:
+        check_arguments(args)
         scenario = load_scenario(args.scenario, overrides=args.override)
-    except ScenarioError as e:
+    except (ArgumentError, ScenarioError) as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
-    if args.duration is not None and not (args.duration >= 0):
-        print(f"error: --duration must be >= 0, got {args.duration}", file=sys.stderr)
-        return 2
     if args.camera_rate is not None:
-        if not (args.camera_rate > 0 and math.isfinite(args.camera_rate)):
-            print(f"error: --camera-rate must be > 0, got {args.camera_rate}", file=sys.stderr)
-            return 2
         for robot in scenario.robots.values():
             robot.camera.fps = args.camera_rate
             # A frame's output delay must stay under one frame (Drake's RgbdSensorAsync).
             robot.camera.output_delay = min(robot.camera.output_delay,
                                             CAMERA_DELAY_SHARE / args.camera_rate)
     duration = args.duration if args.duration is not None else scenario.simulation_duration
-    if (problem := _output_path_error(args)) is not None:
-        print(f"error: {problem}", file=sys.stderr)
-        return 2
+    from corobot_drake.simulation import quiet_drake_warnings
+
     quiet_drake_warnings()
     try:
         sinks = _FoxgloveSinks(args)
@@ -197,6 +300,9 @@ def main(argv: list[str] | None = None) -> int:
 def _run(args, scenario, duration: float, foxglove) -> int:
     """Builds the simulation and runs it (served, in Meshcat or headless), then writes the
     requested outputs; `foxglove`: the Context the run's topics go to (or None)."""
+    from corobot_drake.sensors.camera import RendererUnavailableError
+    from corobot_drake.simulation import Simulation
+
     if args.serve:  # Meshcat is made in the simulation thread (it must be used from there)
         from corobot_drake.serving.serve import serve, serve_camera_rate
 
@@ -213,8 +319,8 @@ def _run(args, scenario, duration: float, foxglove) -> int:
     try:
         sim = Simulation(scenario, meshcat, save_camera=args.save_camera,
                          record=args.record is not None, foxglove=foxglove)
-    except (ValueError, RendererUnavailableError) as e:  # e.g. a non-finite number in a command
-        print(f"error: {args.scenario}: {e}", file=sys.stderr)
+    except (ValueError, RendererUnavailableError) as e:  # the loader missed it: still one line
+        print(f"error: {args.scenario}: (top level): {e}", file=sys.stderr)
         return 2
     if args.headless:
         if math.isinf(duration):
@@ -228,15 +334,7 @@ def _run(args, scenario, duration: float, foxglove) -> int:
         _run_interactive(sim, meshcat, duration)
     summary = sim.summary()
     print(f"simulated {summary['time']:.2f} s at {summary['realtime_factor']:.1f}x real time")
-    if args.log:
-        _write_logs(sim, Path(args.log))
-    if args.summary:
-        Path(args.summary).write_text(json.dumps(summary, indent=2) + "\n")
-    if args.save_scenario:
-        sim.save_scenario(args.save_scenario)
-    if args.record:
-        sim.save_recording(args.record)
-    return 0
+    return _write_results(sim, args, summary)
 
 
 if __name__ == "__main__":

@@ -236,7 +236,7 @@ def test_no_camera():
     ("{output_delay: 0.04}", "robots.corobot.camera.output_delay"),
     ("{fps: 0}", "robots.corobot.camera.fps"),
     ("{renderer_class: RenderEngineGltfClient}", "robots.corobot.camera.renderer_class"),
-    ("{clipping_near: 2.0, clipping_far: 1.0}", "robots.corobot.camera"),
+    ("{clipping_near: 2.0, clipping_far: 1.0}", "robots.corobot.camera.clipping_far"),
 ])
 def test_bad_camera_is_a_clear_error(override, field):
     with pytest.raises(ScenarioError, match=field.replace(".", r"\.") + ":"):

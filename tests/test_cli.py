@@ -79,7 +79,7 @@ BAD_FILES = {
     "bad_tag.yaml": ("robots:\n  corobot:\n    commands: [!Fly {}]\n",
                      "robots.corobot.commands[0]: unknown tag !Fly"),
     "out_of_range.yaml": ("robots:\n  corobot:\n    drive:\n      slew_rate: -1\n",
-                          ":4: robots.corobot.drive.slew_rate: must be > 0"),
+                          ":4: robots.corobot.drive.slew_rate: must be in (0, 10000] rad/s^2"),
     "old_pose.yaml": ("robots:\n  corobot:\n    pose: {x: 1.0, yaw_deg: 90}\n",
                       ":3: robots.corobot.pose.x: unknown field; Transform has base_frame, "
                       "translation, rotation"),

@@ -68,7 +68,7 @@ def test_a_saved_scenario_keeps_every_pose_in_the_one_convention(tmp_path):
 
 @pytest.mark.parametrize("override, field, words", [
     ("world: {bodies: {giant_box: {pose: {translation: [0, 0, -.inf]}}}}",
-     "world.bodies.giant_box.pose.translation", "must be finite"),
+     "world.bodies.giant_box.pose.translation[2]", "must be in [-10000, 10000] m; got -inf"),
     ("world: {bodies: {giant_box: {pose: {rotation: !AngleAxis {angle_deg: 90, "
      "axis: [0, 0, 0]}}}}}", "world.bodies.giant_box.pose.rotation", "non-zero axis"),
     ("robots: {corobot: {pose: {translation: !UniformVector {min: [0, 0, 0], max: [1, 1, 0]}}}}",
@@ -94,5 +94,5 @@ def test_checks_of_meaning_name_the_line_of_the_field(tmp_path):
     with pytest.raises(ScenarioError) as e:
         load_scenario(path)
     assert str(e.value).startswith(
-        f"{path}:5: robots.corobot.ir_sensors.rear.maximum_range: must be > 0")
+        f"{path}:5: robots.corobot.ir_sensors.rear.maximum_range: must be in (0, 100] m; got -1")
 

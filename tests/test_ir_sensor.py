@@ -169,15 +169,16 @@ def test_samples_below_two_is_a_clear_scenario_error():
                       overrides=["robots: {corobot: {ir_sensors: {front: {samples: 1}}}}"])
     message = str(e.value)
     assert "robots.corobot.ir_sensors.front.samples" in message
-    assert "at least 2" in message and "got 1" in message
+    assert "must be in [2, 64]" in message and "got 1" in message
 
 
 @pytest.mark.parametrize("override, field, words", [
     ("{rear: {model: laser}}", "rear.model", "not one of ideal, sharp_gp2d12"),
-    ("{rear: {scan_rate_hz: 0}}", "rear.scan_rate_hz", "must be > 0"),
-    ("{rear: {maximum_range: -1}}", "rear.maximum_range", "must be > 0"),
+    ("{rear: {scan_rate_hz: 0}}", "rear.scan_rate_hz", "must be in (0, 1000] Hz"),
+    ("{rear: {maximum_range: -1}}", "rear.maximum_range", "must be in (0, 100] m"),
     ("{rear: {X_PB: {translation: [0, 0]}}}", "rear.X_PB.translation", "needs 3 numbers"),
-    ("{rear: {X_PB: {translation: [.inf, 0, 0]}}}", "rear.X_PB.translation", "finite"),
+    ("{rear: {X_PB: {translation: [.inf, 0, 0]}}}", "rear.X_PB.translation[0]",
+     "[-10000, 10000] m; got inf"),
     ("{rear: {X_PB: {rotation: !Rpy {deg: [0, 0]}}}}", "rear.X_PB.rotation.deg",
      "needs 3 numbers"),
     ("{rear: {X_PB: {rotation: !Uniform {}}}}", "rear.X_PB", "fixed pose"),

@@ -224,7 +224,7 @@ def test_a_bad_run_is_an_error_row_and_the_others_complete(tmp_path, connected, 
     assert "4 runs (2 errors)" in captured.out and "run 0: " in captured.err
     table = rows(tmp_path / "out" / "runs.csv")
     assert [r["status"] for r in table] == ["error", "error", "ok", "ok"]
-    assert "motor_torque_scaling: must be > 0" in table[0]["error"]
+    assert "motor_torque_scaling: must be in (0, 200] rad/s; got -1" in table[0]["error"]
     assert table[2]["corobot.x"] != ""
     assert main([str(tmp_path / "missing.yaml")]) == 2
     assert "cannot read the file" in capsys.readouterr().err

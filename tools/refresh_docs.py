@@ -659,6 +659,19 @@ def render_camera_cost(outs) -> str:
             f"{ratios['chase']} for the chase view.")
 
 
+def render_step_limit(outs) -> str:
+    o = outs[0][0]
+    return f"`{o.command}`:\n\n{_table(o.stdout)}"
+
+
+def render_hostile_inputs(outs) -> str:
+    o = outs[0][0]
+    defects = [line for line in o.stdout.splitlines() if line.startswith("defect:")]
+    return (f"Measured {_measured([o])} (`{o.command}`; CPU time per input, pydrake's import "
+            f"aside):\n\n{_table(o.stdout)}"
+            + (f"\n\n{len(defects)} defects: see the command's output." if defects else ""))
+
+
 def render_drive_legs(outs) -> str:
     o = outs[0][0]
     loops = int(_find(r"^(\d+) loops: final drift", o.stdout))
@@ -725,6 +738,8 @@ def blocks() -> list[Spec]:
         Spec("fit-drive-log", "docs/tuning.md",
              (Command("python tools/fit_drive_log.py --simulate 12 20"),), render_fit,
              DETERMINISTIC, 5),
+        Spec("step-limit", "docs/tuning.md", (Command("python tools/step_limit.py"),),
+             render_step_limit, DETERMINISTIC, 40),
         Spec("wheel-turn", "docs/looks.md", (_measure("wheel-turn"),), render_wheel_turn,
              DETERMINISTIC, 5),
         Spec("saved-mid-drive", "docs/commands.md", (_measure("saved-mid-drive"),),
@@ -774,6 +789,9 @@ def blocks() -> list[Spec]:
              render_tire_grip, DETERMINISTIC, 2500),
         Spec("default-column-runs", "docs/performance.md", (default_column,),
              render_default_runs, TIMING, 110),
+        Spec("readme-hostile-inputs", "README.md",
+             (Command("python tools/hostile_inputs.py", ok=(0, 1)),), render_hostile_inputs,
+             TIMING, 90),
         Spec("readme-performance", "README.md", (default_column,), render_readme_performance,
              TIMING, 110),
         Spec("bench-robots", "docs/performance.md",

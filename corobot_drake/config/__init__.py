@@ -3,5 +3,7 @@
 - `scenario.py`: the schema (`Scenario` and its parts), `load_scenario`, `save_scenario`;
 - `sensors.py`: the sensors' configuration (`IrSensorConfig`, the camera's defaults);
 - `poses.py`: the one pose convention, Drake's schema `Transform`, and its helpers;
+- `bounds.py`: every field's allowed values (`Range`, `OneOf`), stated once beside the schema;
+- `placement.py`: the start poses against the ground, the world's bodies and each other;
 - `validate.py`: the one validation pass `load_scenario` runs on every layer.
 """

@@ -11,6 +11,8 @@ trusted by everything that builds from it.
 
 import dataclasses as dc
 import math
+import os
+import stat
 from pathlib import Path
 from typing import Union
 
@@ -21,9 +23,11 @@ from pydrake.multibody.plant import MultibodyPlantConfig
 from pydrake.systems.analysis import SimulatorConfig
 from pydrake.systems.sensors import CameraConfig
 
+from corobot_drake.config import bounds as lim
+from corobot_drake.config.bounds import OneOf, Range, bounded
 from corobot_drake.config.sensors import IrSensorConfig, default_camera_config, default_ir_sensors
 from corobot_drake.model import dimensions as dim
-from corobot_drake.model.sdf import WheelContact
+from corobot_drake.model.sdf import VISUALS, WheelContact
 
 # --- shapes -----------------------------------------------------------------------------
 
@@ -32,37 +36,37 @@ from corobot_drake.model.sdf import WheelContact
 class Box:
     """Box with edge lengths (x, y, z), metres."""
 
-    size: list[float] = dc.field(default_factory=lambda: [1.0, 1.0, 1.0])
+    size: list[float] = bounded(lambda: [1.0, 1.0, 1.0], lim.SHAPE_SIZE, size=3)
 
 
 @dc.dataclass
 class Sphere:
-    radius: float = 0.5
+    radius: float = bounded(0.5, lim.SHAPE_SIZE)
 
 
 @dc.dataclass
 class Cylinder:
     """Cylinder along its z axis."""
 
-    radius: float = 0.5
-    length: float = 1.0
+    radius: float = bounded(0.5, lim.SHAPE_SIZE)
+    length: float = bounded(1.0, lim.SHAPE_SIZE)
 
 
 @dc.dataclass
 class Capsule:
     """Capsule along its z axis (length excludes the end caps)."""
 
-    radius: float = 0.5
-    length: float = 1.0
+    radius: float = bounded(0.5, lim.SHAPE_SIZE)
+    length: float = bounded(1.0, lim.SHAPE_SIZE)
 
 
 @dc.dataclass
 class Ellipsoid:
     """Ellipsoid with semi-axes a, b, c along x, y, z."""
 
-    a: float = 0.5
-    b: float = 0.5
-    c: float = 0.5
+    a: float = bounded(0.5, lim.SHAPE_SIZE)
+    b: float = bounded(0.5, lim.SHAPE_SIZE)
+    c: float = bounded(0.5, lim.SHAPE_SIZE)
 
 
 @dc.dataclass
@@ -97,8 +101,8 @@ Shape = Union[Box, Sphere, Cylinder, Capsule, Ellipsoid, Mesh]  # noqa: UP007
 class Ground:
     """The ground: a rigid hydroelastic half-space at z = 0."""
 
-    friction: float = dim.GROUND_FRICTION
-    color: list[float] = dc.field(default_factory=lambda: [0.45, 0.5, 0.4, 1.0])
+    friction: float = bounded(dim.GROUND_FRICTION, lim.FRICTION)
+    color: list[float] = bounded(lambda: [0.45, 0.5, 0.4, 1.0], lim.COLOR, size=4)
 
 
 @dc.dataclass
@@ -106,26 +110,27 @@ class WorldBody:
     """A body of the world: free (it has mass and moves) or fixed (welded to the world)."""
 
     shape: Shape = dc.field(default_factory=Box)
-    mass: float = 1.0
+    mass: float = bounded(1.0, lim.MASS)
     """kg; ignored when fixed."""
     pose: Transform = dc.field(default_factory=Transform)
     """X_WB: the body's frame (its centre) in the world."""
-    velocity: list[float] = dc.field(default_factory=lambda: [0.0] * 6)
+    velocity: list[float] = bounded(lambda: [0.0] * 6, lim.SPATIAL_VELOCITY, size=6)
     """Initial spatial velocity in the world [wx, wy, wz, vx, vy, vz] (rad/s, m/s)."""
     fixed: bool = False
-    friction: float = 0.5
-    hydroelastic_modulus: float = 1.0e7
+    friction: float = bounded(0.5, lim.FRICTION)
+    hydroelastic_modulus: float = bounded(1.0e7, lim.HYDROELASTIC_MODULUS)
     """Pa: the body is compliant-hydroelastic (a cheap contact patch on the ground and with
     the tyres); 0 makes it rigid, touching everything by point contact."""
-    color: list[float] = dc.field(default_factory=lambda: [0.75, 0.55, 0.3, 1.0])
+    color: list[float] = bounded(lambda: [0.75, 0.55, 0.3, 1.0], lim.COLOR, size=4)
 
 
 @dc.dataclass
 class Sun:
     """A directional light: `direction` is the way the light travels, in the world frame."""
 
-    direction: list[float] = dc.field(default_factory=lambda: [0.3, 0.2, -1.0])
-    intensity: float = 1.0
+    direction: list[float] = bounded(lambda: [0.3, 0.2, -1.0], Range(-1e3, 1e3), size=3)
+    """Not zero (checked with the scene)."""
+    intensity: float = bounded(1.0, Range(0.0, 100.0))
 
 
 @dc.dataclass
@@ -133,7 +138,7 @@ class World:
     ground: Ground = dc.field(default_factory=Ground)
     bodies: dict[str, WorldBody] = dc.field(default_factory=dict)
     sun: Sun = dc.field(default_factory=Sun)
-    sky_color: list[float] = dc.field(default_factory=lambda: [0.53, 0.73, 0.92])
+    sky_color: list[float] = bounded(lambda: [0.53, 0.73, 0.92], lim.COLOR, size=3)
     """RGB in [0, 1]: the background of the camera images and of Meshcat."""
 
 
@@ -144,13 +149,13 @@ class World:
 class Drive:
     """Drive parameters of one robot (SPEC "Drive")."""
 
-    motor_torque_scaling: float = dim.MOTOR_TORQUE_SCALING
+    motor_torque_scaling: float = bounded(dim.MOTOR_TORQUE_SCALING, lim.AXLE_SPEED)
     """Axle speed (rad/s) at power 1."""
-    slew_rate: float = dim.SLEW_RATE
+    slew_rate: float = bounded(dim.SLEW_RATE, Range(0.0, 1e4, low_open=True, unit="rad/s^2"))
     """rad/s^2: how fast the commanded axle speed may change."""
-    max_axle_speed: float = dim.MAX_AXLE_SPEED
+    max_axle_speed: float = bounded(dim.MAX_AXLE_SPEED, lim.AXLE_SPEED)
     """rad/s: set_speed clamps to +-this."""
-    control_period: float = dim.CONTROL_PERIOD
+    control_period: float = bounded(dim.CONTROL_PERIOD, lim.PERIOD)
     """s: the drive controller's update period."""
 
 
@@ -197,7 +202,7 @@ class Enable:
 class Wait:
     """Let the previous command run for this long (s) before the next one."""
 
-    seconds: float = 1.0
+    seconds: float = bounded(1.0, lim.DURATION)
 
 
 @dc.dataclass
@@ -205,8 +210,8 @@ class DriveDistance:
     """Drive straight until |distance| m from the start pose (negative: backwards), at
     `power` in (0, 1]; ends succeeded on arrival (SPEC "Commands that complete")."""
 
-    distance: float = 0.0
-    power: float = 0.5
+    distance: float = bounded(0.0, lim.POSITION)
+    power: float = bounded(0.5, lim.POWER)
     start: list[float] = dc.field(default_factory=list)
     """[x, y, yaw_deg] (m, m, deg): the pose the distance counts from (and, closed loop, the
     heading held); empty: where the robot is when the command starts. A saved scene resumes
@@ -218,8 +223,8 @@ class RotateDegrees:
     """Turn in place by `degrees` (positive: counter-clockwise seen from above, i.e. left),
     at `power` in (0, 1]; ends succeeded on arrival."""
 
-    degrees: float = 0.0
-    power: float = 0.5
+    degrees: float = bounded(0.0, lim.ANGLE)
+    power: float = bounded(0.5, lim.POWER)
     start: list[float] = dc.field(default_factory=list)
     """[x, y, yaw_deg] (m, m, deg): the heading the turn counts from (within +-180 deg of the
     heading when it starts; x and y are not used); empty: the heading when the command
@@ -230,9 +235,9 @@ class RotateDegrees:
 class SetPose:
     """Teleport the robot to (x, y) m facing `yaw_deg`: on the ground, at rest, wheels stopped."""
 
-    x: float = 0.0
-    y: float = 0.0
-    yaw_deg: float = 0.0
+    x: float = bounded(0.0, lim.POSITION)
+    y: float = bounded(0.0, lim.POSITION)
+    yaw_deg: float = bounded(0.0, lim.ANGLE)
 
 
 Command = Union[SetPower, SetSpeed, SetVelocity, AllStop, Enable, Wait,  # noqa: UP007
@@ -247,15 +252,15 @@ PROFILES = ("closed_loop", "seed")
 class Motion:
     """How DriveDistance and RotateDegrees slow down, land and give up (`motion.py`)."""
 
-    profile: str = "closed_loop"
+    profile: str = bounded("closed_loop", OneOf(PROFILES))
     """`closed_loop`: speed from the measured distance/angle left, heading held while
     driving; `seed`: the book's (last 6 samples at 60 Hz, halve the speed when < 6 frames
     remain, stop when reached)."""
-    stall_time: float = 1.0
+    stall_time: float = bounded(1.0, Range(0.0, 1e3, low_open=True, unit="s"))
     """s: a command that makes no progress for this long fails as `stalled`."""
-    stall_distance: float = 0.005
+    stall_distance: float = bounded(0.005, Range(0.0, 10.0, low_open=True, unit="m"))
     """m: progress a DriveDistance must make within `stall_time`."""
-    stall_angle_deg: float = 0.5
+    stall_angle_deg: float = bounded(0.5, Range(0.0, 360.0, low_open=True, unit="deg"))
     """deg: progress a RotateDegrees must make within `stall_time`."""
 
 
@@ -269,15 +274,15 @@ class Robot:
     it on the ground facing `yaw`."""
     drive: Drive = dc.field(default_factory=Drive)
     contact: WheelContact = dc.field(default_factory=WheelContact)
-    visual: str = "meshes"
+    visual: str = bounded("meshes", OneOf(VISUALS))
     """How the robot looks: `meshes` (the detailed model) or `boxes` (its collision shapes)."""
     commands: list[Command] = dc.field(default_factory=list)
     motion: Motion = dc.field(default_factory=Motion)
-    velocity: list[float] = dc.field(default_factory=lambda: [0.0] * 6)
+    velocity: list[float] = bounded(lambda: [0.0] * 6, lim.SPATIAL_VELOCITY, size=6)
     """Initial chassis spatial velocity in the world [wx, wy, wz, vx, vy, vz] (rad/s, m/s)."""
-    wheel_angles: list[float] = dc.field(default_factory=lambda: [0.0] * 4)
+    wheel_angles: list[float] = bounded(lambda: [0.0] * 4, Range(-1e6, 1e6, unit="rad"), size=4)
     """Initial axle angles (rad, `dimensions.WHEEL_NAMES` order): the encoders start here."""
-    wheel_speeds: list[float] = dc.field(default_factory=lambda: [0.0] * 4)
+    wheel_speeds: list[float] = bounded(lambda: [0.0] * 4, lim.AXLE_SPEED_RANGE, size=4)
     """Initial axle speeds (rad/s, same order); the drive's commanded axle speeds start at the
     front wheels' (a saved scene carries on without a jolt)."""
     axle_speed_command: list[float] = dc.field(default_factory=list)
@@ -305,8 +310,8 @@ class Scenario:
     """Everything needed to build and run one simulation."""
 
     random_seed: int = 0
-    simulation_duration: float = math.inf
-    """s; the CLI's --duration overrides it."""
+    simulation_duration: float = bounded(math.inf, lim.SIMULATION_DURATION)
+    """s; the CLI's --duration overrides it (.inf: until stopped)."""
     plant_config: MultibodyPlantConfig = dc.field(default_factory=_default_plant_config)
     simulator_config: SimulatorConfig = dc.field(default_factory=SimulatorConfig)
     world: World = dc.field(default_factory=World)
@@ -335,12 +340,47 @@ def one_line(error: BaseException) -> str:
     return (str(error).strip() or type(error).__name__).splitlines()[0]
 
 
+MAX_FILE_BYTES = 256 << 10
+"""A scenario or study file's largest size (256 KiB; the largest shipped is under 2 kB, a
+saved scene of several robots ~10 kB, a world of 500 bodies ~60 kB); larger is refused
+unread, so that a bad input ends within 2 s (`config/validate.py`, MAX_VALUES)."""
+
+
 def read_text(path: str | Path) -> str:
-    """A YAML file's text; ScenarioError (one line) when it cannot be read."""
+    """A YAML file's UTF-8 text; ScenarioError (one line) when it cannot be read, is not a
+    regular file (a FIFO, a device: never waited on), is over MAX_FILE_BYTES or not UTF-8."""
+    source = str(path)
     try:
-        return Path(path).read_text()
+        # O_NONBLOCK: opening a FIFO with no writer returns at once (then refused below).
+        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK)
     except OSError as e:
-        raise ScenarioError(str(path), "", f"cannot read the file ({e.strerror})") from None
+        raise ScenarioError(source, "", f"cannot read the file ({e.strerror})") from None
+    mode = os.fstat(fd).st_mode
+    if not stat.S_ISREG(mode):
+        os.close(fd)
+        kind = ("a directory" if stat.S_ISDIR(mode) else "a FIFO" if stat.S_ISFIFO(mode)
+                else "a device" if stat.S_ISCHR(mode) or stat.S_ISBLK(mode)
+                else "a socket" if stat.S_ISSOCK(mode) else "a special file")
+        raise ScenarioError(source, "", f"cannot read {kind}; a scenario is a YAML file")
+    with os.fdopen(fd, "rb") as f:
+        try:
+            data = f.read(MAX_FILE_BYTES + 1)
+        except OSError as e:
+            raise ScenarioError(source, "", f"cannot read the file ({e.strerror})") from None
+    if len(data) > MAX_FILE_BYTES:
+        raise ScenarioError(source, "", f"the file is larger than {MAX_FILE_BYTES >> 10} KiB, "
+                            "the most a scenario may be")
+    return decode(source, data)
+
+
+def decode(source: str, data: bytes) -> str:
+    """`data` as UTF-8 text; ScenarioError at the line of the first byte that is not."""
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as e:
+        line = data.count(b"\n", 0, e.start) + 1
+        raise ScenarioError(source, "", f"not UTF-8 text (byte 0x{data[e.start]:02x}); a "
+                            "scenario is UTF-8 YAML", line) from None
 
 
 def load_scenario(filename: str | Path | None = None, *, data: str | None = None,

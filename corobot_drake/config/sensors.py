@@ -13,8 +13,10 @@ import math
 from pydrake.common.schema import Transform
 from pydrake.systems.sensors import CameraConfig
 
+from corobot_drake.config.bounds import RATE, OneOf, Range, bounded
 from corobot_drake.config.poses import mount
 from corobot_drake.model import dimensions as dim
+from corobot_drake.sensors.ir_models import MODELS as IR_MODELS
 
 # --- IR distance sensors (the scenario's `robots.<name>.ir_sensors.<sensor>`) ----------------
 
@@ -27,20 +29,22 @@ class IrSensorConfig:
         default_factory=lambda: mount(dim.FRONT_IR.position, (0.0, 0.0, 0.0)))
     """The sensor frame S (looking along its +x) in `base_frame` (default `chassis`: origin
     on the ground midway between the axles, +x forward), as the camera's `X_PB`."""
-    samples: int = dim.IR_SAMPLES
+    samples: int = bounded(dim.IR_SAMPLES, Range(2, 64, why="rays per fan"))
     """Rays per fan of the cross (one horizontal fan, one vertical), at least 2."""
-    dispersion_cone_angle: float = dim.IR_DISPERSION_CONE_ANGLE_DEG
+    dispersion_cone_angle: float = bounded(dim.IR_DISPERSION_CONE_ANGLE_DEG,
+                                           Range(0.0, 180.0, high_open=True, unit="deg"))
     """Degrees: each fan spreads its rays evenly over this angle."""
-    maximum_range: float = dim.IR_MAXIMUM_RANGE
+    maximum_range: float = bounded(dim.IR_MAXIMUM_RANGE,
+                                   Range(0.0, 100.0, low_open=True, unit="m"))
     """m: the reading when nothing is hit (0.762 m)."""
-    scan_rate_hz: float = 20.0
+    scan_rate_hz: float = bounded(20.0, RATE)
     """Scans per second (a periodic discrete update, independent of the physics step)."""
-    model: str = "ideal"
+    model: str = bounded("ideal", OneOf(IR_MODELS))
     """Output model: `ideal` (the book's) or `sharp_gp2d12` (datasheet voltage, ADC, noise)."""
-    change_threshold: float = 1e-4
+    change_threshold: float = bounded(1e-4, Range(0.0, 100.0, unit="m"))
     """m: `changed` is set when the reading moves by more than this from the previous scan
     (a robot standing still creeps by nanometres; subscribers want real changes)."""
-    noise_std: float = 0.01
+    noise_std: float = bounded(0.01, Range(0.0, 10.0, unit="V"))
     """V: Gaussian noise on the sharp_gp2d12 voltage (0: none)."""
     noise_seed: int = 0
     """Mixed with the scenario's random_seed and the robot and sensor names."""

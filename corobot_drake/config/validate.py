@@ -2,11 +2,15 @@
 
 For each layer (a file, YAML text, an `--override`), `LayerChecks`:
 
-1. walks the YAML node tree beside the schema before the typed load (unknown fields, wrong
-   types, unknown tags, duplicate names, vectors of the wrong size), noting the line of
-   every field;
-2. after the typed load, checks what the types cannot say (ranges, names, the sensors and
-   camera, every pose), on the merged scenario.
+1. takes the text only if it is UTF-8, at most 256 KiB, YAML nested at most 64 deep with at
+   most 20000 values (so that any bad input ends within 2 s);
+2. walks the YAML node tree beside the schema before the typed load (unknown fields, wrong
+   types, unknown or misplaced tags, duplicate names, vectors of the wrong size), noting the
+   line of every field;
+3. after the typed load, checks every value against its bound (`config/bounds.py`: declared
+   beside the schema; a float without one must be finite), then what involves several fields
+   (names, the camera, every pose, and the start poses against the ground, the world's bodies
+   and each other: `config/placement.py`), on the merged scenario.
 
 Either way a problem stops the load with one `ScenarioError` line, `FILE:LINE: field.path:
 message` (the line of the field in this layer, or of its nearest enclosing field).
@@ -24,17 +28,28 @@ from typing import Union
 import numpy as np
 import yaml
 from pydrake.common import pretty_class_name
+from pydrake.common.schema import Transform
 from pydrake.common.yaml import yaml_load_typed
-from pydrake.geometry import RenderEngineGlParams, RenderEngineVtkParams
+from pydrake.geometry import RenderEngineGlParams, RenderEngineVtkParams, Rgba
 from pydrake.multibody.parsing import ModelDirectives, ProcessModelDirectives
 from pydrake.multibody.plant import MultibodyPlant
 from pydrake.multibody.tree import SpatialInertia
 
+from corobot_drake.config import placement
 from corobot_drake.config import scenario as sc
+from corobot_drake.config.bounds import (
+    ANGLE,
+    COLOR,
+    DRAKE_BOUNDS,
+    DRAKE_INT,
+    ELLIPSOID_MAX_ASPECT,
+    FINITE,
+    POSITION,
+    bound_of,
+)
 from corobot_drake.config.sensors import RENDERERS, IrSensorConfig
-from corobot_drake.model.sdf import LINKS, VISUALS
+from corobot_drake.model.sdf import LINKS
 from corobot_drake.resources import make_parser, resolve_file
-from corobot_drake.sensors.ir_models import MODELS as IR_MODELS
 
 # --- 1. the YAML against the schema --------------------------------------------------------
 
@@ -86,8 +101,81 @@ def _describe(node) -> str:
     return repr(node.value) if isinstance(node, yaml.ScalarNode) else f"a {_kind(node)}"
 
 
-class _TagTolerantLoader(yaml.SafeLoader):
-    """Composes nodes with any `!Tag` (the typed load interprets them)."""
+MAX_DEPTH = 64
+"""Deepest YAML nesting read (the schema's deepest field is ~8 levels; thousands overflowed
+Python's stack)."""
+MAX_VALUES = 20_000
+"""Most YAML values one layer may hold, counting each use of an alias (`*name`) again (a world
+of 500 bodies has ~10k). Drake's typed load takes ~35 us of CPU a value: 0.7 s at most."""
+
+_Loader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+"""libyaml's composer when PyYAML has it: 10x faster than PyYAML's own (1.7 s for 60k
+numbers). Composing keeps any `!Tag`; the typed load interprets them."""
+
+
+def _flow_too_deep(text: str) -> int | None:
+    """The line where `[`/`{` brackets first nest deeper than MAX_DEPTH, else None. Checked
+    before parsing: PyYAML's scanner takes time quadratic in flow depth (5000 deep: 2 s).
+    Brackets in quotes or comments count too: a real scenario has far fewer than 64."""
+    if text.count("[") + text.count("{") <= MAX_DEPTH:
+        return None
+    depth, line = 0, 1
+    for m in re.finditer(r"[\[\]{}\n]", text):
+        c = m.group()
+        if c == "\n":
+            line += 1
+        elif c in "[{":
+            depth += 1
+            if depth > MAX_DEPTH:
+                return line
+        else:
+            depth = max(depth - 1, 0)
+    return None
+
+
+def _check_size(source: str, root) -> None:
+    """At most MAX_DEPTH levels and MAX_VALUES values below `root` (aliases may make the
+    node tree a graph, even a cycle: each visit counts)."""
+    stack, values = [(root, 1)], 0
+    while stack:
+        node, depth = stack.pop()
+        values += 1
+        if depth > MAX_DEPTH or values > MAX_VALUES:
+            message = (f"nested deeper than {MAX_DEPTH} levels; a scenario's fields nest ~8 "
+                       "deep" if depth > MAX_DEPTH else
+                       f"more than {MAX_VALUES} values (each alias counted at every use)")
+            raise sc.ScenarioError(source, "", message, node.start_mark.line + 1)
+        if isinstance(node, yaml.SequenceNode):
+            stack += [(item, depth + 1) for item in node.value]
+        elif isinstance(node, yaml.MappingNode):
+            stack += [(n, depth + 1) for pair in node.value for n in pair]
+
+
+def _yaml_error(source: str, text: str, e: yaml.YAMLError) -> sc.ScenarioError:
+    """The one line of a YAML syntax error, at its line."""
+    if isinstance(e, yaml.reader.ReaderError):  # a character YAML refuses (a NUL, ...)
+        character = chr(e.character) if isinstance(e.character, int) else e.character
+        return sc.ScenarioError(source, "", f"not valid YAML: character {character!r} is not "
+                                "allowed", text.count("\n", 0, e.position) + 1)
+    mark = getattr(e, "problem_mark", None) or getattr(e, "context_mark", None)
+    return sc.ScenarioError(source, "", f"not valid YAML: {getattr(e, 'problem', e)}",
+                            mark.line + 1 if mark else None)
+
+
+def _compose(source: str, text: str):
+    """The YAML node tree of `text` (None when it holds no document); ScenarioError (with
+    the line) when it is not YAML, nests too deep or holds too many values."""
+    line = _flow_too_deep(text)
+    if line is not None:
+        raise sc.ScenarioError(source, "", f"nested deeper than {MAX_DEPTH} levels; a "
+                               "scenario's fields nest ~8 deep", line)
+    try:
+        node = yaml.compose(text, Loader=_Loader)
+    except yaml.YAMLError as e:
+        raise _yaml_error(source, text, e) from None
+    if node is not None:
+        _check_size(source, node)
+    return node
 
 
 class _SchemaWalk:
@@ -100,9 +188,13 @@ class _SchemaWalk:
     def fail(self, node, path, message):
         raise sc.ScenarioError(self.source, path, message, node.start_mark.line + 1)
 
-    def check(self, node, tp, path: str):
+    def check(self, node, tp, path: str, tag_read: bool = False):
+        """`tag_read`: the node's `!Tag` chose `tp` from a union (elsewhere a tag is wrong)."""
         if _is_union(tp):
             return self._union(node, typing.get_args(tp), path)
+        if node.tag.startswith("!") and not tag_read:
+            self.fail(node, path, f"unexpected tag {node.tag}; a tag picks a variant only "
+                      "where there are several (a shape, a command, a rotation)")
         if tp in (float, int):
             return self._number(node, tp, path)
         if tp is bool:
@@ -121,9 +213,31 @@ class _SchemaWalk:
         if origin in (dict, typing.Dict):  # noqa: UP006
             return self._names(node, args[1], path)
         fields = _fields(tp)
-        if fields is not None:
+        if tp is Rgba:
+            self._rgba(node, path)
+        elif fields is not None:
             self._struct(node, tp, fields, path)
         # else a Drake type with its own reader; the typed load checks it
+
+    def _rgba(self, node, path):
+        """Drake's `Rgba`: `{rgba: [r, g, b, a]}` (or 3 numbers), each in [0, 1] (Drake
+        would refuse it without a line)."""
+        if not isinstance(node, yaml.MappingNode):
+            self.fail(node, path, f"expected a mapping {{rgba: [r, g, b, a]}}, got "
+                      f"{_describe(node)}")
+        for key, value in node.value:
+            sub = f"{path}.{key.value}"
+            if key.value != "rgba":
+                self.fail(key, sub, "unknown field; Rgba has rgba")
+            self.lines[sub] = key.start_mark.line + 1
+            self._list(value, float, sub)
+            if len(value.value) not in (3, 4):
+                self.fail(value, sub, f"needs 3 or 4 numbers, got {len(value.value)}")
+            for i, item in enumerate(value.value):
+                problem = COLOR.problem(float(_YAML_SPECIAL_FLOATS.get(item.value.lower(),
+                                                                        item.value)))
+                if problem:
+                    self.fail(item, f"{sub}[{i}]", problem)
 
     def _union(self, node, args, path):
         options = [a for a in args if a is not type(None)]
@@ -142,7 +256,7 @@ class _SchemaWalk:
         if tag not in names:
             self.fail(node, path, f"unknown tag !{tag}; expected one of "
                       + ", ".join(f"!{n}" for n in names))
-        return self.check(node, names[tag], path)
+        return self.check(node, names[tag], path, tag_read=True)
 
     def _number(self, node, tp, path):
         if not isinstance(node, yaml.ScalarNode):
@@ -199,9 +313,6 @@ class _SchemaWalk:
 
 # --- 2. what the types cannot say -----------------------------------------------------------
 
-_CONTACT_MODELS = ("hydroelastic", "point", "hydroelastic_with_fallback")
-_APPROXIMATIONS = ("lagged", "similar", "sap", "tamsi")
-
 
 def _untagged_variant(node, options):
     """The variant an untagged node loads as: the first list type for a list, the first
@@ -240,65 +351,107 @@ class LayerChecks:
 
     def __init__(self, source: str, text: str, schema=sc.Scenario):
         self.source = source
-        self.lines: dict[str, int] = {}
-        """Field path (`robots.corobot.drive.slew_rate`) -> its line in this layer."""
-        try:
-            node = yaml.compose(text, Loader=_TagTolerantLoader)
-        except yaml.YAMLError as e:
-            mark = getattr(e, "problem_mark", None)
-            line = mark.line + 1 if mark else None
-            raise sc.ScenarioError(source, "", f"not valid YAML: {getattr(e, 'problem', e)}",
-                                   line) from None
-        if node is not None:
-            _SchemaWalk(source, self.lines).check(node, schema, "")
+        if len(text) > sc.MAX_FILE_BYTES:  # an --override or YAML text, as large as a file
+            raise sc.ScenarioError(source, "", f"larger than {sc.MAX_FILE_BYTES >> 10} KiB, "
+                                   "the most a scenario may be")
+        try:  # argv's undecodable bytes come as surrogates: check them as bytes
+            data = text.encode("utf-8", "surrogateescape")
+        except UnicodeEncodeError:
+            data = text.encode("utf-8", "surrogatepass")
+        sc.decode(source, data)
+        node = _compose(source, text)
+        if node is None:
+            raise sc.ScenarioError(source, "", f"empty (no YAML document); expected a mapping "
+                                   f"of {_type_name(schema)} fields", 1)
+        self.lines: dict[str, int] = {"": node.start_mark.line + 1}
+        """Field path (`robots.corobot.drive.slew_rate`) -> its line in this layer ("": the
+        document's first)."""
+        _SchemaWalk(source, self.lines).check(node, schema, "")
+
+    def has(self, path: str) -> bool:
+        """Whether this layer writes the field `path`."""
+        return path in self.lines
 
     def fail(self, path: str, message: str):
         """Raises the ScenarioError at the line of `path`, or of the nearest enclosing field
-        this layer has."""
+        this layer has (at worst, the layer's first line)."""
         where = path
         while where and where not in self.lines:
             where = re.sub(r"(\.[^.\[]*|\[\d+\])$", "", where)
         raise sc.ScenarioError(self.source, path, message, self.lines.get(where))
 
-    def validate(self, s: sc.Scenario) -> None:
-        """Checks of meaning that the schema's types cannot express."""
-        self._plant_config(s.plant_config)
+    def validate(self, s) -> None:
+        """Every value against its bound (`config/bounds.py`), then, for a Scenario, the
+        checks of meaning that involve several fields."""
+        self._bounds(s, "")
+        if isinstance(s, sc.Scenario):
+            self._scenario(s)
+
+    # -- every value against its bound ------------------------------------------------------
+
+    def _bounds(self, obj, path: str) -> None:
+        """Walks a loaded value: the fields of dataclasses (bounds in their metadata) and of
+        Drake's config structs (bounds in `DRAKE_BOUNDS`), mappings and lists."""
+        if isinstance(obj, dict):
+            for key, value in obj.items():
+                self._value(value, f"{path}.{key}", None)
+        elif dc.is_dataclass(obj):
+            for f in dc.fields(obj):
+                self._value(getattr(obj, f.name), _join(path, f.name), bound_of(f),
+                            f.metadata.get("size"))
+        elif hasattr(type(obj), "__fields__") and not isinstance(obj, Transform):
+            table = DRAKE_BOUNDS.get(type(obj), {})
+            for f in type(obj).__fields__:
+                self._value(getattr(obj, f.name), _join(path, f.name), table.get(f.name))
+
+    def _value(self, value, path: str, bound, size: int | None = None) -> None:
+        if isinstance(value, list):
+            if size is not None and len(value) != size:
+                self.fail(path, f"needs {size} numbers, got {len(value)}")
+            for i, item in enumerate(value):
+                self._value(item, f"{path}[{i}]",
+                            bound[i] if isinstance(bound, tuple) else bound)
+        elif isinstance(value, bool) or value is None:
+            return
+        elif isinstance(value, int | float):
+            bound = bound or (DRAKE_INT if isinstance(value, int) else FINITE)
+            problem = bound.problem(value)
+            if problem:
+                self.fail(path, problem)
+        elif isinstance(value, str):
+            problem = bound.problem(value) if bound else None
+            if problem:
+                self.fail(path, problem)
+        elif isinstance(value, Rgba):
+            for channel in "rgba":
+                problem = COLOR.problem(getattr(value, channel)())
+                if problem:
+                    self.fail(f"{path}.{channel}", problem)
+        elif not isinstance(value, Transform):  # poses: checked as poses below
+            self._bounds(value, path)
+
+    # -- what involves several fields -------------------------------------------------------
+
+    def _scenario(self, s: sc.Scenario) -> None:
         for name, body in s.world.bodies.items():
-            self._world_body(f"world.bodies.{name}", body)
+            self._world_pose(f"world.bodies.{name}.pose", body.pose)
+            shape = body.shape
+            if isinstance(shape, sc.Mesh):
+                self._mesh(f"world.bodies.{name}.shape", shape, body)
+            if isinstance(shape, sc.Ellipsoid) and body.hydroelastic_modulus > 0:
+                axes = (shape.a, shape.b, shape.c)
+                if max(axes) > ELLIPSOID_MAX_ASPECT * min(axes):
+                    self.fail(f"world.bodies.{name}.shape", f"a compliant ellipsoid's largest "
+                              f"semi-axis may be at most {ELLIPSOID_MAX_ASPECT:g} times its "
+                              f"smallest (its mesh grows fast); got {max(axes) / min(axes):.3g}"
+                              "; or make it rigid (hydroelastic_modulus: 0)")
         self._directives(s)
-        if len(s.world.sky_color) != 3:
-            self.fail("world.sky_color", "needs 3 numbers RGB")
+        if not np.linalg.norm(s.world.sun.direction) >= 1e-6:  # it is normalized
+            self.fail("world.sun.direction", "must not be zero (the way the light travels): "
+                      "a length of at least 1e-6")
         for name, robot in s.robots.items():
             self._robot(name, robot, s)
-
-    def _plant_config(self, pc) -> None:
-        if not pc.time_step > 0:
-            self.fail("plant_config.time_step",
-                      "must be > 0 (the robot's velocity servo needs the discrete plant)")
-        if pc.contact_model not in _CONTACT_MODELS:
-            self.fail("plant_config.contact_model",
-                      f"{pc.contact_model!r} is not one of {', '.join(_CONTACT_MODELS)}")
-        approximation = pc.discrete_contact_approximation
-        if approximation not in _APPROXIMATIONS:
-            self.fail("plant_config.discrete_contact_approximation",
-                      f"{approximation!r} is not one of " + ", ".join(_APPROXIMATIONS))
-        if approximation == "tamsi":
-            self.fail("plant_config.discrete_contact_approximation",
-                      "tamsi ignores the wheels' velocity-servo gains (the robot would not "
-                      "move); use lagged, similar or sap")
-
-    def _world_body(self, path: str, body: sc.WorldBody) -> None:
-        if not body.fixed and not body.mass > 0:
-            self.fail(f"{path}.mass", "a free body needs a mass > 0")
-        if len(body.velocity) != 6:
-            self.fail(f"{path}.velocity", "needs 6 numbers [w, v]")
-        if len(body.color) != 4:
-            self.fail(f"{path}.color", "needs 4 numbers RGBA")
-        if isinstance(body.shape, sc.Box) and len(body.shape.size) != 3:
-            self.fail(f"{path}.shape.size", "needs 3 numbers")
-        if isinstance(body.shape, sc.Mesh):
-            self._mesh(f"{path}.shape", body.shape, body)
-        self._world_pose(f"{path}.pose", body.pose)
+        self._placement(s)
 
     def _mesh(self, path: str, mesh: sc.Mesh, body: sc.WorldBody) -> None:
         try:
@@ -352,57 +505,53 @@ class LayerChecks:
             self.fail(path, "a robot name must be non-empty, without :: or /")
         if name in s.world.bodies:
             self.fail(path, "a world body already has this name")
-        if robot.visual not in VISUALS:
-            self.fail(f"{path}.visual", f"{robot.visual!r} is not one of " + ", ".join(VISUALS))
         self._world_pose(f"{path}.pose", robot.pose)
-        self._all_positive(f"{path}.drive", robot.drive, (
-            "motor_torque_scaling", "slew_rate", "max_axle_speed", "control_period"))
-        self._all_positive(f"{path}.contact", robot.contact, (
-            "friction", "hydroelastic_modulus", "resolution_hint", "effort_limit",
-            "servo_damping"))
         self._camera(f"{path}.camera", robot.camera, s)
         for sensor, ir in robot.ir_sensors.items():
             self._ir_sensor(f"{path}.ir_sensors.{sensor}", sensor, ir, s)
-        m = robot.motion
-        if m.profile not in sc.PROFILES:
-            self.fail(f"{path}.motion.profile",
-                      f"{m.profile!r} is not one of " + ", ".join(sc.PROFILES))
-        self._all_positive(f"{path}.motion", m, ("stall_time", "stall_distance",
-                                                  "stall_angle_deg"))
-        if len(robot.velocity) != 6:
-            self.fail(f"{path}.velocity", "needs 6 numbers [w, v]")
-        for field in ("wheel_angles", "wheel_speeds"):
-            if len(getattr(robot, field)) != 4:
-                self.fail(f"{path}.{field}", "needs 4 numbers")
+        self._resume_fields(path, robot)
+
+    def _resume_fields(self, path: str, robot: sc.Robot) -> None:
+        """The fields a saved scene writes to resume a drive: sizes that a bound cannot state
+        (empty, or a full vector)."""
         if len(robot.axle_speed_command) not in (0, 2):
             self.fail(f"{path}.axle_speed_command", "needs [] or 2 numbers [left, right]")
         for i, cmd in enumerate(robot.commands):
-            if isinstance(cmd, sc.Wait) and not cmd.seconds >= 0:
-                self.fail(f"{path}.commands[{i}].seconds", "must be >= 0")
-            if isinstance(cmd, sc.DriveDistance | sc.RotateDegrees) and not 0 < cmd.power <= 1:
-                self.fail(f"{path}.commands[{i}].power", f"must be in (0, 1], got {cmd.power:g}")
             if isinstance(cmd, sc.DriveDistance | sc.RotateDegrees) and len(cmd.start) not in (
                     0, 3):
                 self.fail(f"{path}.commands[{i}].start",
                           f"expected [] or [x, y, yaw_deg], got {len(cmd.start)} numbers")
 
-    def _all_positive(self, path: str, config, fields) -> None:
-        for field in fields:
-            if not getattr(config, field) > 0:
-                self.fail(f"{path}.{field}", "must be > 0")
+    def _placement(self, s: sc.Scenario) -> None:
+        """Robots on or above the ground, clear of the world's bodies and of each other; free
+        bodies not in the ground (`config/placement.py`)."""
+        for problem in placement.problems(s):
+            # Blame the pose this layer wrote: the robot's, else the other body's.
+            paths = [p for p in problem.paths if self.has(p)] or list(problem.paths)
+            self.fail(paths[0], problem.message)
 
     # -- poses (Drake's schema Transform, `config/poses.py`) --------------------------------
 
     def _transform(self, path: str, X) -> None:
-        """A fixed, finite pose."""
+        """A fixed, finite pose within the world's bounds."""
         if not X.IsDeterministic():
             self.fail(path, "must be a fixed pose (no random distributions)")
+        rotation = X.rotation.value
+        for name, bound in (("deg", ANGLE), ("angle_deg", ANGLE), ("axis", FINITE)):
+            values = np.atleast_1d(np.asarray(getattr(rotation, name, []), dtype=float))
+            for i, v in enumerate(values):
+                problem = bound.problem(float(v))
+                if problem:
+                    self.fail(f"{path}.rotation.{name}" + (f"[{i}]" if len(values) > 1 else ""),
+                              problem)
         try:
             value = X.GetDeterministicValue()
         except Exception as e:  # Drake's own check (e.g. an AngleAxis with a zero axis)
-            self.fail(path, str(e).splitlines()[0])
-        if not np.all(np.isfinite(value.translation())):
-            self.fail(f"{path}.translation", "must be finite")
+            self.fail(path, sc.one_line(e))
+        for i, v in enumerate(value.translation()):
+            problem = POSITION.problem(float(v))
+            if problem:
+                self.fail(f"{path}.translation[{i}]", problem)
         R = value.rotation().matrix()
         if not (np.all(np.isfinite(R)) and np.allclose(R @ R.T, np.eye(3), atol=1e-9)):
             self.fail(f"{path}.rotation", "must be a finite rotation (an AngleAxis needs a "
@@ -437,46 +586,32 @@ class LayerChecks:
         if config.depth or config.label:
             self.fail(f"{path}.{'depth' if config.depth else 'label'}",
                       "only the colour image is simulated; set it false")
-        if not (config.fps > 0 and np.isfinite(config.fps)):
-            self.fail(f"{path}.fps", "must be a positive number")
-        if not 0 <= config.output_delay < 1.0 / config.fps:
+        if not config.output_delay < 1.0 / config.fps:
             self.fail(f"{path}.output_delay", f"must be >= 0 and less than one frame "
-                      f"(1/fps = {1.0 / config.fps:.4g} s)")
-        if not config.capture_offset >= 0:
-            self.fail(f"{path}.capture_offset", "must be >= 0")
+                      f"(1/fps = {1.0 / config.fps:.4g} s); got {config.output_delay:g}")
         rc = config.renderer_class
         if not (isinstance(rc, RenderEngineVtkParams | RenderEngineGlParams) or rc in RENDERERS):
             self.fail(f"{path}.renderer_class", "must be RenderEngineGl, RenderEngineVtk or "
                       "empty (the faster one available)")
+        for near, far in (("clipping_near", "clipping_far"), ("z_near", "z_far")):
+            if not getattr(config, near) < getattr(config, far):
+                self.fail(f"{path}.{far}", f"must be more than {near} "
+                          f"({getattr(config, near):g} m); got {getattr(config, far):g}")
         self._mount(f"{path}.X_PB", config.X_PB, s)
         try:
             config.MakeCameras()
-        except Exception as e:  # Drake's own validation: one line
-            self.fail(path, str(e).splitlines()[0])
+        except Exception as e:  # Drake's own validation, its reasons on lines of their own
+            self.fail(path, " ".join(str(e).split()))
 
     def _ir_sensor(self, path: str, name: str, c: IrSensorConfig, s: sc.Scenario) -> None:
         if not name or any(ch in name for ch in "./: "):
             # It appears in port names and Meshcat paths.
             self.fail(path, "a sensor name must be non-empty, without '.', '/', ':' or spaces")
-        if c.samples < 2:
-            self.fail(f"{path}.samples", f"must be an integer of at least 2 (rays per fan of "
-                      f"the IR cross of rays: one horizontal and one vertical fan); got "
-                      f"{c.samples!r}")
         self._mount(f"{path}.X_PB", c.X_PB, s)
-        if not 0.0 <= c.dispersion_cone_angle < 180.0:
-            self.fail(f"{path}.dispersion_cone_angle",
-                      f"must be in [0, 180) degrees; got {c.dispersion_cone_angle}")
-        if not 0.0 < c.maximum_range < math.inf:
-            self.fail(f"{path}.maximum_range", f"must be > 0 m and finite; got {c.maximum_range}")
-        if not 0.0 < c.scan_rate_hz < math.inf:
-            self.fail(f"{path}.scan_rate_hz", f"must be > 0 and finite; got {c.scan_rate_hz}")
-        if c.model not in IR_MODELS:
-            self.fail(f"{path}.model", f"{c.model!r} is not one of {', '.join(IR_MODELS)}")
-        if not 0.0 <= c.change_threshold < math.inf:
-            self.fail(f"{path}.change_threshold",
-                      f"must be >= 0 m and finite; got {c.change_threshold}")
-        if not c.noise_std >= 0.0:
-            self.fail(f"{path}.noise_std", f"must be >= 0 V; got {c.noise_std}")
+
+
+def _join(path: str, name: str) -> str:
+    return f"{path}.{name}" if path else name
 
 
 def _has_normals(obj_filename: str) -> bool:
@@ -492,6 +627,8 @@ def load_layer(source: str, text: str, schema, defaults=None):
     try:
         value = yaml_load_typed(schema=schema, data=text, defaults=defaults,
                                 retain_map_defaults=True)
+    except yaml.YAMLError as e:  # PyYAML's reader (Drake's) is stricter than libyaml's
+        raise _yaml_error(source, text, e) from None
     except Exception as e:  # the pre-check missed it: still one clear line
         raise sc.ScenarioError(source, "", sc.one_line(e)) from None
     return value, checks

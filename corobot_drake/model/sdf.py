@@ -8,6 +8,8 @@ same function with that robot's own name and contact parameters.
 
 from dataclasses import dataclass
 
+from corobot_drake.config import bounds as lim
+from corobot_drake.config.bounds import Range, bounded
 from corobot_drake.model import dimensions as dim
 
 PACKAGE_NAME = "corobot_drake"
@@ -21,19 +23,19 @@ class WheelContact:
     Defaults come from the tire-grip sweep (docs/tuning.md): smooth turning, no flip at the box.
     """
 
-    friction: float = 0.5
+    friction: float = bounded(0.5, lim.FRICTION)
     """Coulomb friction of the tyres (static = dynamic); the ground's is combined with it."""
-    hydroelastic_modulus: float = 1.0e6
+    hydroelastic_modulus: float = bounded(1.0e6, lim.TYRE_MODULUS)
     """Pa. Soft enough for a smooth contact patch, stiff enough to sink < 1 mm under 9.3 N."""
-    resolution_hint: float = 0.005
+    resolution_hint: float = bounded(0.005, lim.RESOLUTION_HINT)
     """m. The tyre's tetrahedral mesh size: coarser turns the wheel into a polygon (jitter)."""
-    hunt_crossley_dissipation: float = 5.0
+    hunt_crossley_dissipation: float = bounded(5.0, lim.DISSIPATION)
     """s/m. Damps the tyre's vertical bounce (the original used restitution 0.2)."""
-    effort_limit: float = 0.3
+    effort_limit: float = bounded(0.3, Range(0.0, 100.0, low_open=True, unit="N m"))
     """N m. Motor stall torque per axle. Above the traction limit mu N R ~ 0.28 N m so
     it never limits top speed or turning, but low enough that the robot cannot climb (and flip
     on) the giant box."""
-    servo_damping: float = 10.0
+    servo_damping: float = bounded(10.0, Range(0.0, 1000.0, low_open=True, unit="N m s/rad"))
     """N m s/rad. Velocity-servo gain kd of Drake's implicit PD (kp = 0)."""
 
 

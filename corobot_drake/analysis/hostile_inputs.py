@@ -1,0 +1,684 @@
+"""A hostile corpus of scenario inputs and what the loader makes of each (tools/hostile_inputs.py,
+tests/test_hostile_inputs.py).
+
+Every input here is invalid, and must end in one line `FILE_OR_--override[:LINE]: FIELD:
+MESSAGE` (the CLI prints it after `error: ` and exits 2) within 2 s of CPU time, before
+anything is built: `HAND_WRITTEN` (YAML text or bytes -> the field and a fragment of the
+message) and, generated, hostile values put into every numeric field of the shipped scenarios
+(`mutated_override`) and edits of their text (`mutated_file`). A mutation's choices come from
+a `draw`: `RandomDraw` (seeded) in the tool, hypothesis in the test (a dev dependency).
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses as dc
+import functools
+import math
+import os
+import random
+import re
+import threading
+import time
+from pathlib import Path
+
+from corobot_drake.config.scenario import ScenarioError, load_scenario
+from corobot_drake.resources import DEFAULT_SCENARIO, SCENARIOS_DIR
+
+CPU_SECONDS = 2.0
+"""The most CPU time one bad input may take to be refused."""
+HANG_SECONDS = 60.0
+"""Wall-clock seconds after which a load counts as hung (the host may be loaded)."""
+
+ERROR_LINE = re.compile(r"^(?P<source>.+?)(?::(?P<line>\d+))?: (?P<field>.+?): (?P<message>\S.*)$")
+"""The one line of a ScenarioError (the CLI prefixes `error: `)."""
+
+
+@dc.dataclass(frozen=True)
+class Case:
+    """One bad input: YAML `text` (an --override), or the `data` of a file, or a `path` to
+    read; the `field` the error must name and `words` its message must contain."""
+
+    name: str
+    field: str
+    words: str
+    text: str | None = None
+    data: bytes | None = None
+    path: str | None = None
+    line: int | None = 1
+    """The line the error must name (None: a file that cannot be read names none)."""
+
+
+@dc.dataclass
+class Outcome:
+    """What loading one input gave."""
+
+    error: str | None = None
+    """The ScenarioError's line; None when the input was accepted or failed otherwise."""
+    other: str | None = None
+    """Any other exception (a defect), as `Type: message`."""
+    cpu_seconds: float = 0.0
+    hung: bool = False
+
+    def match(self):
+        return ERROR_LINE.match(self.error) if self.error else None
+
+
+def load(path: str | Path | None = None, overrides: tuple[str, ...] = ()) -> Outcome:
+    """Loads a scenario file (default: the default scenario, loaded once) with `overrides`
+    in a thread of its own, so that a hang is reported (`hung`) instead of hanging the
+    caller."""
+    outcome = Outcome()
+    defaults = copy.deepcopy(_default_scenario()) if path is None else None
+
+    def run():
+        start = time.thread_time()
+        try:
+            load_scenario(path if defaults is None else None, overrides=list(overrides),
+                          defaults=defaults)
+        except ScenarioError as e:
+            outcome.error = str(e)
+        except BaseException as e:  # a defect to report, whatever it is
+            outcome.other = f"{type(e).__name__}: {str(e)[:200]}"
+        outcome.cpu_seconds = time.thread_time() - start
+
+    thread = threading.Thread(target=run, daemon=True)
+    thread.start()
+    thread.join(HANG_SECONDS)
+    outcome.hung = thread.is_alive()
+    return outcome
+
+
+@functools.cache
+def _default_scenario():
+    return load_scenario(DEFAULT_SCENARIO)
+
+
+def problems(outcome: Outcome, source: str, field: str | None = None, words: str = "",
+             line: int | None = None) -> list[str]:
+    """What is wrong with an outcome of a bad input (empty: the one clear line, in time).
+    `field` None: any field; `line` None: any line or none."""
+    found = []
+    if outcome.hung:
+        return [f"hung (more than {HANG_SECONDS:g} s)"]
+    if outcome.other:
+        found.append(f"not a ScenarioError: {outcome.other}")
+    elif outcome.error is None:
+        found.append("accepted")
+    elif "\n" in outcome.error or not outcome.match():
+        found.append(f"not one line FILE[:LINE]: FIELD: MESSAGE: {outcome.error!r}")
+    else:
+        m = outcome.match()
+        if m["source"] != source:
+            found.append(f"blames {m['source']!r}, not {source!r}")
+        if field is not None and m["field"] != field:
+            found.append(f"names field {m['field']!r}, not {field!r}")
+        if line is not None and m["line"] != str(line):
+            found.append(f"names line {m['line']}, not {line}")
+        if words not in m["message"]:
+            found.append(f"message {m['message']!r} lacks {words!r}")
+    if outcome.cpu_seconds > CPU_SECONDS:
+        found.append(f"took {outcome.cpu_seconds:.2f} s of CPU time (> {CPU_SECONDS:g})")
+    return found
+
+
+# --- the hand-written corpus ----------------------------------------------------------------
+
+
+def _override(name: str, text: str, field: str, words: str) -> Case:
+    return Case(name, field, words, text=text)
+
+
+def _robot(name: str, yaml: str, field: str, words: str) -> Case:
+    return _override(name, f"robots: {{corobot: {yaml}}}", f"robots.corobot.{field}", words)
+
+
+def _body(name: str, yaml: str, field: str, words: str) -> Case:
+    return _override(name, f"world: {{bodies: {{giant_box: {yaml}}}}}",
+                     f"world.bodies.giant_box.{field}", words)
+
+
+def _camera(name: str, yaml: str, field: str, words: str) -> Case:
+    return _robot(name, f"{{camera: {yaml}}}", f"camera.{field}", words)
+
+
+def _ir(name: str, yaml: str, field: str, words: str) -> Case:
+    return _robot(name, f"{{ir_sensors: {{front: {yaml}}}}}", f"ir_sensors.front.{field}",
+                  words)
+
+
+def _file(name: str, data: bytes, field: str, words: str, line: int | None = 1) -> Case:
+    return Case(name, field, words, data=data, line=line)
+
+
+TOP = "(top level)"
+STEP = "plant_config.time_step"
+
+FILES = [
+    _file("non-UTF-8", b"robots:\n  corobot:\n    \xff\xfe: 1\n", TOP, "not UTF-8", 3),
+    _file("UTF-16", "robots: {}\n".encode("utf-16"), TOP, "not UTF-8", 1),
+    _file("Latin-1 name", b"robots:\n  caf\xe9: {}\n", TOP, "not UTF-8", 2),
+    _file("empty", b"", TOP, "empty"),
+    _file("only a comment", b"# nothing here\n", TOP, "empty"),
+    _file("only blank lines", b"\n\n\n", TOP, "empty"),
+    _file("flow nested 5000 deep", b"robots: " + b"[" * 5000 + b"]" * 5000, TOP,
+          "nested deeper than 64"),
+    _file("flow nested 100000 deep", b"[" * 100_000, TOP, "nested deeper than 64"),
+    _file("block nested 200 deep", "".join(f"{' ' * i}a:\n" for i in range(200)).encode(),
+          TOP, "nested deeper than 64", 65),
+    _file("over 256 KiB", b"# " + b"x" * (256 << 10) + b"\n", TOP, "larger than 256 KiB", None),
+    _file("25k values", b"robots: {corobot: {wheel_angles: [" + b"0," * 25_000 + b"0]}}",
+          TOP, "more than 20000 values"),
+    _file("NUL character", b"robots:\n  corobot: {}\n  \x00: 1\n", TOP,
+          "not valid YAML: character '\\x00'", 3),
+    _file("two documents", b"robots: {}\n---\nrobots: {}\n", TOP, "not valid YAML", 2),
+    _file("tab indentation", b"robots:\n\tcorobot: {}\n", TOP, "not valid YAML", 2),
+    _file("tab after a key", b"world:\n  sky_color:\t [0.5, 0.5, 0.5]\n", TOP,
+          "not valid YAML: found character '\\t' that cannot start any token", 2),
+    _file("unclosed bracket", b"robots: [\n", TOP, "not valid YAML", 2),
+    _file("a list", b"- robots\n", TOP, "expected a mapping for Scenario"),
+    _file("a number", b"42\n", TOP, "expected a mapping for Scenario"),
+    _file("recursive alias", b"robots: &r {corobot: *r}\n", TOP, "nested deeper than 64"),
+    _file("field on line 6", b"# a scenario\nworld:\n  ground:\n    friction: 0.5\n"
+          b"  sun:\n    direction: [0, 0, 0]\n", "world.sun.direction", "must not be zero", 6),
+    _file("step on line 3", b"plant_config:\n  discrete_contact_approximation: lagged\n"
+          b"  time_step: 1.0\n", STEP, "must be in [0.0001, 0.02] s", 3),
+    _file("robot in the ground, line 5", b"robots:\n  corobot:\n    drive: {}\n"
+          b"    # half a metre down\n    pose: {translation: [0, 0, -0.5]}\n",
+          "robots.corobot.pose", "below the ground", 5),
+    _file("command on line 7", b"robots:\n  corobot:\n    commands:\n"
+          b"      - !SetPower {left: 0.5, right: 0.5}\n      - !Wait {seconds: 1}\n"
+          b"      - !Wait\n        seconds: -1\n", "robots.corobot.commands[2].seconds",
+          "must be in [0, 1e+07] s", 7),
+]
+
+READS = [
+    Case("directory", TOP, "cannot read a directory", path="{tmp}", line=None),
+    Case("/dev/zero", TOP, "cannot read a device", path="/dev/zero", line=None),
+    Case("/dev/null", TOP, "cannot read a device", path="/dev/null", line=None),
+    Case("FIFO", TOP, "cannot read a FIFO", path="{fifo}", line=None),
+    Case("missing", TOP, "cannot read the file", path="{tmp}/nowhere.yaml", line=None),
+]
+
+OVERRIDES = [
+    # the plant and the simulator
+    _override("step 1e-7", "plant_config: {time_step: 1e-7}", STEP, "[0.0001, 0.02] s"),
+    _override("step 1 s", "plant_config: {time_step: 1.0}", STEP, "[0.0001, 0.02] s"),
+    _override("step 0", "plant_config: {time_step: 0}", STEP, "got 0"),
+    _override("step negative", "plant_config: {time_step: -0.01}", STEP, "got -0.01"),
+    _override("step inf", "plant_config: {time_step: .inf}", STEP, "got inf"),
+    _override("step 1e300", "plant_config: {time_step: 1e300}", STEP, "got 1e+300"),
+    _override("step NaN", "plant_config: {time_step: .nan}", STEP, "NaN is not allowed"),
+    _override("step text", "plant_config: {time_step: fast}", STEP, "expected a number"),
+    _override("tamsi", "plant_config: {discrete_contact_approximation: tamsi}",
+              "plant_config.discrete_contact_approximation", "ignores the wheels'"),
+    _override("contact model", "plant_config: {contact_model: soft}",
+              "plant_config.contact_model", "not one of hydroelastic, point"),
+    _override("penetration allowance", "plant_config: {penetration_allowance: -1}",
+              "plant_config.penetration_allowance", "(0, 0.1] m"),
+    _override("stiction", "plant_config: {stiction_tolerance: 0}",
+              "plant_config.stiction_tolerance", "(0, 1] m/s"),
+    _override("surface", "plant_config: {contact_surface_representation: quads}",
+              "plant_config.contact_surface_representation", "not one of polygon, triangle"),
+    _override("integrator", "simulator_config: {integration_scheme: magic}",
+              "simulator_config.integration_scheme", "not one of bogacki_shampine3"),
+    _override("start -5", "simulator_config: {start_time: -5}", "simulator_config.start_time",
+              "[0, 1e+07] s"),
+    _override("start inf", "simulator_config: {start_time: .inf}",
+              "simulator_config.start_time", "got inf"),
+    _override("start 1e300", "simulator_config: {start_time: 1e300}",
+              "simulator_config.start_time", "got 1e+300"),
+    _override("accuracy", "simulator_config: {accuracy: 0}", "simulator_config.accuracy",
+              "(0, 1]"),
+    _override("max step", "simulator_config: {max_step_size: -1}",
+              "simulator_config.max_step_size", "(0, 1] s"),
+    _override("realtime rate", "simulator_config: {target_realtime_rate: -1}",
+              "simulator_config.target_realtime_rate", "[0, 1000]"),
+    _override("duration -3", "simulation_duration: -3", "simulation_duration", "> 0 s, or .inf"),
+    _override("duration 0", "simulation_duration: 0", "simulation_duration", "got 0"),
+    _override("seed huge", "random_seed: 99999999999999", "random_seed", "Drake's int"),
+    _override("seed float", "random_seed: 1.5", "random_seed", "expected an integer"),
+    _override("seed 1e99", "random_seed: 1e99", "random_seed", "expected an integer"),
+    _override("empty override", "", TOP, "empty"),
+    _override("unknown top field", "robot: {}", "robot", "unknown field; Scenario has"),
+    _override("robots a list", "robots: [corobot]", "robots", "expected a mapping of names"),
+    _override("duplicate robot", "robots: {a: {}, a: {}}", "robots.a", "duplicate name"),
+    # the world
+    _override("ground friction", "world: {ground: {friction: -1}}", "world.ground.friction",
+              "[0, 10] (Coulomb friction"),
+    _override("ground friction inf", "world: {ground: {friction: .inf}}",
+              "world.ground.friction", "got inf"),
+    _override("ground colour", "world: {ground: {color: [2, 0, 0, 1]}}",
+              "world.ground.color[0]", "[0, 1] (a colour component)"),
+    _override("ground colour size", "world: {ground: {color: [0, 0, 0]}}",
+              "world.ground.color", "needs 4 numbers, got 3"),
+    _override("sun zero", "world: {sun: {direction: [0, 0, 0]}}", "world.sun.direction",
+              "must not be zero"),
+    _override("sun size", "world: {sun: {direction: [1, 2]}}", "world.sun.direction",
+              "needs 3 numbers"),
+    _override("sun intensity", "world: {sun: {intensity: -1}}", "world.sun.intensity",
+              "[0, 100]"),
+    _override("sky", "world: {sky_color: [1.5, 0, 0]}", "world.sky_color[0]", "[0, 1]"),
+    _body("box size 0", "{shape: !Box {size: [0, 1, 1]}}", "shape.size[0]",
+          "[0.001, 100] m (a shape's dimensions)"),
+    _body("box size negative", "{shape: !Box {size: [1, -1, 1]}}", "shape.size[1]", "got -1"),
+    _body("box size inf", "{shape: !Box {size: [1, 1, .inf]}}", "shape.size[2]", "got inf"),
+    _body("box size 1e9", "{shape: !Box {size: [1e9, 1, 1]}}", "shape.size[0]", "got 1e+09"),
+    _body("box size short", "{shape: !Box {size: [1, 1]}}", "shape.size", "needs 3 numbers"),
+    _body("sphere 0", "{shape: !Sphere {radius: 0}}", "shape.radius", "[0.001, 100] m"),
+    _body("cylinder", "{shape: !Cylinder {length: -1}}", "shape.length", "got -1"),
+    _body("capsule inf", "{shape: !Capsule {radius: .inf}}", "shape.radius", "got inf"),
+    _body("ellipsoid 0", "{shape: !Ellipsoid {a: 0}}", "shape.a", "got 0"),
+    _body("ellipsoid a needle", "{shape: !Ellipsoid {a: 1, b: 0.05, c: 0.05}}", "shape",
+          "at most 4 times its smallest"),
+    _body("unknown shape", "{shape: !Torus {}}", "shape", "unknown tag !Torus"),
+    _body("mass inf", "{mass: .inf}", "mass", "[0.001, 100000] kg"),
+    _body("mass 1e-300", "{mass: 1e-300}", "mass", "got 1e-300"),
+    _body("mass 0", "{mass: 0}", "mass", "got 0"),
+    _body("mass negative", "{mass: -100}", "mass", "got -100"),
+    _body("body at 1e6 m/s", "{velocity: [0, 0, 0, 1e6, 0, 0]}", "velocity[3]",
+          "[-50, 50] m/s"),
+    _body("body spinning", "{velocity: [1e3, 0, 0, 0, 0, 0]}", "velocity[0]",
+          "[-100, 100] rad/s"),
+    _body("velocity short", "{velocity: [0, 0, 0, 0, 0]}", "velocity", "needs 6 numbers"),
+    _body("body friction", "{friction: -0.5}", "friction", "[0, 10]"),
+    _body("modulus 1e30", "{hydroelastic_modulus: 1e30}", "hydroelastic_modulus",
+          "0 (rigid) or in [10000, 1e+11] Pa"),
+    _body("modulus negative", "{hydroelastic_modulus: -1}", "hydroelastic_modulus", "got -1"),
+    _body("modulus 1 Pa", "{hydroelastic_modulus: 1}", "hydroelastic_modulus", "got 1"),
+    _body("body colour", "{color: [0, 0, 0, 2]}", "color[3]", "[0, 1]"),
+    _body("body at -inf", "{pose: {translation: [0, 0, -.inf]}}", "pose.translation[2]",
+          "got -inf"),
+    _body("body far away", "{pose: {translation: [1e9, 0, 0]}}", "pose.translation[0]",
+          "[-10000, 10000] m"),
+    _body("zero axis", "{pose: {rotation: !AngleAxis {angle_deg: 90, axis: [0, 0, 0]}}}",
+          "pose.rotation", "non-zero axis"),
+    _body("random pose", "{pose: {translation: !UniformVector {min: [0, 0, 0], "
+          "max: [1, 1, 1]}}}", "pose", "must be a fixed pose"),
+    _body("body base frame", "{pose: {base_frame: corobot}}", "pose.base_frame",
+          "has no base_frame"),
+    _body("box in the ground", "{pose: {translation: [-1.7366, 0, -5]}}", "pose",
+          "below the ground"),
+    _body("box on the robot", "{pose: {translation: [0, 0, 1.0]}}", "pose",
+          "inside world body 'giant_box'"),
+    _body("rpy inf", "{pose: {rotation: !Rpy {deg: [.inf, 0, 0]}}}", "pose.rotation.deg[0]",
+          "[-1e+06, 1e+06] deg; got inf"),
+    # the robots
+    _robot("below the ground", "{pose: {translation: [0, 0, -0.5]}}", "pose",
+           "mm below the ground (at most 5 mm allowed); lift it"),
+    _robot("upside down", "{pose: {rotation: !Rpy {deg: [180, 0, 0]}}}", "pose",
+           "below the ground"),
+    _robot("inside the box", "{pose: {translation: [-1.5, 0, 0]}}", "pose",
+           "inside world body 'giant_box'"),
+    _robot("far away", "{pose: {translation: [1e5, 0, 0]}}", "pose.translation[0]",
+           "[-10000, 10000] m"),
+    _override("robots overlap", "robots: {second: {pose: {translation: [0.1, 0, 0]}}}",
+              "robots.second.pose", "inside robot 'corobot'"),
+    _override("robot named like a body", "robots: {giant_box: {pose: {translation: [2, 0, 0]}}}",
+              "robots.giant_box", "a world body already has this name"),
+    _override("robot name with ::", "robots: {'a::b': {pose: {translation: [2, 0, 0]}}}",
+              "robots.a::b", "without :: or /"),
+    _robot("wheel speed 1e9", "{wheel_speeds: [1e9, 0, 0, 0]}", "wheel_speeds[0]",
+           "[-200, 200] rad/s"),
+    _robot("wheel speeds short", "{wheel_speeds: [0, 0]}", "wheel_speeds", "needs 4 numbers"),
+    _robot("wheel angle inf", "{wheel_angles: [.inf, 0, 0, 0]}", "wheel_angles[0]", "got inf"),
+    _robot("robot at 1e6 m/s", "{velocity: [0, 0, 0, 1e6, 0, 0]}", "velocity[3]",
+           "[-50, 50] m/s"),
+    _robot("velocity text", "{velocity: fast}", "velocity", "expected a list"),
+    _robot("torque scaling 0", "{drive: {motor_torque_scaling: 0}}",
+           "drive.motor_torque_scaling", "(0, 200] rad/s"),
+    _robot("torque scaling 1e9", "{drive: {motor_torque_scaling: 1e9}}",
+           "drive.motor_torque_scaling", "got 1e+09"),
+    _robot("slew negative", "{drive: {slew_rate: -1}}", "drive.slew_rate",
+           "(0, 10000] rad/s^2"),
+    _robot("slew list", "{drive: {slew_rate: [1, 2]}}", "drive.slew_rate",
+           "expected a number, got a list"),
+    _robot("axle speed inf", "{drive: {max_axle_speed: .inf}}", "drive.max_axle_speed",
+           "got inf"),
+    _robot("control 1e-7", "{drive: {control_period: 1e-7}}", "drive.control_period",
+           "[0.001, 1] s"),
+    _robot("control inf", "{drive: {control_period: .inf}}", "drive.control_period", "got inf"),
+    _robot("control 0", "{drive: {control_period: 0}}", "drive.control_period", "got 0"),
+    _robot("tyre friction", "{contact: {friction: -0.1}}", "contact.friction", "[0, 10]"),
+    _robot("tyre modulus 1e30", "{contact: {hydroelastic_modulus: 1e30}}",
+           "contact.hydroelastic_modulus", "[100000, 1e+08] Pa"),
+    _robot("tyre modulus 10", "{contact: {hydroelastic_modulus: 10}}",
+           "contact.hydroelastic_modulus", "got 10"),
+    _robot("resolution 1e-6", "{contact: {resolution_hint: 1e-6}}", "contact.resolution_hint",
+           "[0.001, 0.02] m"),
+    _robot("resolution 1 m", "{contact: {resolution_hint: 1}}", "contact.resolution_hint",
+           "got 1"),
+    _robot("dissipation", "{contact: {hunt_crossley_dissipation: -1}}",
+           "contact.hunt_crossley_dissipation", "[0, 100] s/m"),
+    _robot("effort 0", "{contact: {effort_limit: 0}}", "contact.effort_limit", "(0, 100] N m"),
+    _robot("damping 1e9", "{contact: {servo_damping: 1e9}}", "contact.servo_damping",
+           "(0, 1000] N m s/rad"),
+    _robot("visual", "{visual: sketch}", "visual", "not one of meshes, boxes"),
+    _robot("profile", "{motion: {profile: fast}}", "motion.profile",
+           "not one of closed_loop, seed"),
+    _robot("stall time", "{motion: {stall_time: 0}}", "motion.stall_time", "(0, 1000] s"),
+    _robot("unknown field", "{colour: red}", "colour", "unknown field; Robot has"),
+    # commands
+    _robot("power inf", "{commands: [!SetPower {left: .inf, right: 0}]}", "commands[0].left",
+           "must be a finite number; got inf"),
+    _robot("speed -inf", "{commands: [!SetSpeed {left: 0, right: -.inf}]}",
+           "commands[0].right", "got -inf"),
+    _robot("power text", "{commands: [!SetPower {left: fast}]}", "commands[0].left",
+           "expected a number, got 'fast'"),
+    _robot("wait negative", "{commands: [!Wait {seconds: -1}]}", "commands[0].seconds",
+           "[0, 1e+07] s"),
+    _robot("wait inf", "{commands: [!Wait {seconds: .inf}]}", "commands[0].seconds", "got inf"),
+    _robot("drive power 0", "{commands: [!DriveDistance {distance: 1, power: 0}]}",
+           "commands[0].power", "(0, 1]"),
+    _robot("drive power 2", "{commands: [!DriveDistance {distance: 1, power: 2}]}",
+           "commands[0].power", "got 2"),
+    _robot("drive 1e9 m", "{commands: [!DriveDistance {distance: 1e9}]}",
+           "commands[0].distance", "[-10000, 10000] m"),
+    _robot("rotate inf", "{commands: [!RotateDegrees {degrees: .inf}]}", "commands[0].degrees",
+           "got inf"),
+    _robot("set pose far", "{commands: [!SetPose {x: 1e300}]}", "commands[0].x",
+           "[-10000, 10000] m"),
+    _robot("unknown command", "{commands: [!Fly {}]}", "commands[0]", "unknown tag !Fly"),
+    _robot("command untagged", "{commands: [5]}", "commands[0]", "expected a mapping"),
+    # the camera
+    _camera("width -1", "{width: -1}", "width", "[1, 4096] pixels; got -1"),
+    _camera("100000 square", "{width: 100000, height: 100000}", "width", "got 100000"),
+    _camera("height 0", "{height: 0}", "height", "got 0"),
+    _camera("fps 0", "{fps: 0}", "fps", "(0, 240] Hz"),
+    _camera("fps 1e9", "{fps: 1e9}", "fps", "got 1e+09"),
+    _camera("delay a frame", "{output_delay: 0.5}", "output_delay", "less than one frame"),
+    _camera("fov 0", "{focal: !FovDegrees {y: 0}}", "focal.y", "(0, 180) deg"),
+    _camera("fov 200", "{focal: !FovDegrees {x: 200}}", "focal.x", "got 200"),
+    _camera("focal negative", "{focal: !FocalLength {x: -1}}", "focal.x", "(0, 1e+06] pixels"),
+    _camera("near 0", "{clipping_near: 0}", "clipping_near", "(0, 1000] m"),
+    _camera("far before near", "{clipping_near: 2, clipping_far: 1}", "clipping_far",
+            "must be more than clipping_near"),
+    _camera("background", "{background: {rgba: [2, 0, 0, 1]}}", "background.rgba[0]",
+            "[0, 1]"),
+    _camera("depth", "{depth: true}", "depth", "only the colour image"),
+    _camera("renderer", "{renderer_class: Blender}", "renderer_class",
+            "must be RenderEngineGl, RenderEngineVtk"),
+    _camera("center negative", "{center_x: -5}", "center_x", "(0, 4096] pixels"),
+    _camera("capture offset", "{capture_offset: -1}", "capture_offset", "[0, 1e+07] s"),
+    _robot("one pixel", "{camera: {width: 1, height: 1, focal: !FocalLength {x: 100, y: 100}}}",
+           "camera", "Invalid camera configuration: Center X (0) should lie in the range (0, 1)."),
+    _camera("mount frame", "{X_PB: {base_frame: tail}}", "X_PB.base_frame", "'tail' is not a link"),
+    # the IR sensors
+    _ir("samples 1", "{samples: 1}", "samples", "[2, 64] (rays per fan)"),
+    _ir("samples 1e6", "{samples: 1000000}", "samples", "got 1000000"),
+    _ir("scan 1e9", "{scan_rate_hz: 1e9}", "scan_rate_hz", "(0, 1000] Hz"),
+    _ir("scan 0", "{scan_rate_hz: 0}", "scan_rate_hz", "got 0"),
+    _ir("range negative", "{maximum_range: -1}", "maximum_range", "(0, 100] m"),
+    _ir("range inf", "{maximum_range: .inf}", "maximum_range", "got inf"),
+    _ir("cone 200", "{dispersion_cone_angle: 200}", "dispersion_cone_angle", "[0, 180) deg"),
+    _ir("model", "{model: laser}", "model", "not one of ideal, sharp_gp2d12"),
+    _ir("noise", "{noise_std: -1}", "noise_std", "[0, 10] V"),
+    _ir("threshold inf", "{change_threshold: .inf}", "change_threshold", "got inf"),
+    _ir("mount inf", "{X_PB: {translation: [.inf, 0, 0]}}", "X_PB.translation[0]", "got inf"),
+    _robot("sensor name", "{ir_sensors: {a.b: {}}}", "ir_sensors.a.b", "without '.'"),
+]
+
+HAND_WRITTEN = FILES + READS + OVERRIDES
+"""Every hand-written bad input."""
+
+
+# --- generated: hostile values in every numeric field, edits of the shipped files -----------
+
+HOSTILE_NUMBERS = (math.nan, math.inf, -math.inf, 0.0, -1.0, 1e-300, -1e-300, 1e300, -1e300,
+                   1e9, 1e-7, 2.0**63, -(2.0**31) - 1)
+
+
+def numeric_fields(scenario_file: Path = DEFAULT_SCENARIO) -> list[tuple[str, float, list]]:
+    """Every number of the loaded scenario: (YAML path, value, the list it is an element of
+    or None), lists element by element (`world.sun.direction[2]`), poses' translations too."""
+    found: list[tuple[str, float, list]] = []
+
+    def walk(value, path, within=None):
+        if isinstance(value, bool) or value is None:
+            return
+        if isinstance(value, int | float):
+            found.append((path, value, within))
+        elif isinstance(value, list):
+            for i, item in enumerate(value):
+                walk(item, f"{path}[{i}]", value)
+        elif isinstance(value, dict):
+            for key, item in value.items():
+                walk(item, f"{path}.{key}" if path else key)
+        elif dc.is_dataclass(value):
+            for f in dc.fields(value):
+                if f.name != "commands":  # tagged: not plain YAML
+                    walk(getattr(value, f.name), f"{path}.{f.name}" if path else f.name)
+        elif type(value).__name__ == "Transform" and path.endswith(".pose"):
+            translation = [float(v) for v in value.translation]
+            for i, v in enumerate(translation):
+                walk(v, f"{path}.translation[{i}]", translation)
+        elif type(value).__name__ in ("MultibodyPlantConfig", "SimulatorConfig"):
+            for f in type(value).__fields__:
+                walk(getattr(value, f.name), f"{path}.{f.name}")
+
+    walk(load_scenario(scenario_file), "")
+    return found
+
+
+def yaml_value(value) -> str:
+    """`value` as YAML flow text (floats with YAML's .inf and .nan)."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, float):
+        if math.isnan(value):
+            return ".nan"
+        if math.isinf(value):
+            return ".inf" if value > 0 else "-.inf"
+        return repr(value)
+    if isinstance(value, int):
+        return str(value)
+    if isinstance(value, list):
+        return "[" + ", ".join(yaml_value(v) for v in value) + "]"
+    if isinstance(value, dict):
+        return "{" + ", ".join(f"{yaml_value(k)}: {yaml_value(v)}" for k, v in value.items()) + "}"
+    if value is None:
+        return "null"
+    return '"' + str(value).replace("\\", "\\\\").replace('"', '\\"') + '"'
+
+
+def override_at(path: str, value, original: list | None = None) -> str:
+    """An --override setting `path` (`a.b[2]`: element 2 of the list `original`) to `value`."""
+    m = re.fullmatch(r"(.*)\[(\d+)\]", path)
+    if m:
+        items = [yaml_value(v) for v in original]
+        items[int(m.group(2))] = yaml_value(value)
+        path, text = m.group(1), "[" + ", ".join(items) + "]"
+    else:
+        text = yaml_value(value)
+    for key in reversed(path.split(".")):
+        text = f"{{{key}: {text}}}"
+    return text
+
+
+def shipped_scenarios() -> list[Path]:
+    return sorted(SCENARIOS_DIR.glob("*.yaml"))
+
+
+EDIT_TOKENS = ("[", "]", "{", "}", ":", ": ", "-", "- ", "!", "!Box", "&a ", "*a", "\t", "\n",
+               "  ", "'", '"', "#", ".inf", "-.inf", ".nan", "1e999", "-1", "0", "1e-300",
+               "\x00", "\ufeff", "\u00e9", "\x85", "\\", "%", "@", "`", "|", ">", "?", ",")
+"""Text an edit inserts: YAML's punctuation, hostile numbers, odd characters."""
+
+
+class RandomDraw:
+    """The choices a mutation makes, drawn from a seeded generator (tools/hostile_inputs.py;
+    the test draws the same mutations with hypothesis instead: its `HypothesisDraw`)."""
+
+    def __init__(self, seed: int):
+        self.random = random.Random(seed)
+
+    def choice(self, options):
+        return self.random.choice(list(options))
+
+    def integer(self, low: int, high: int) -> int:
+        return self.random.randint(low, high)
+
+    def value(self):
+        """A hostile value: a number of HOSTILE_NUMBERS or any float, text, a list, a
+        mapping, nothing."""
+        r = self.random
+        kind = r.randrange(6)
+        if kind == 0:
+            return r.choice(HOSTILE_NUMBERS)
+        if kind == 1:
+            return r.choice((r.uniform(-1e6, 1e6), 10.0 ** r.uniform(-320, 308)))
+        if kind == 2:
+            return "".join(chr(r.randrange(32, 0x2FFF)) for _ in range(r.randrange(6)))
+        if kind == 3:
+            return [r.choice(HOSTILE_NUMBERS) for _ in range(r.randrange(5))]
+        if kind == 4:
+            return {"x": r.choice(HOSTILE_NUMBERS)}
+        return None
+
+
+def mutated_override(draw) -> tuple[Path, str, str]:
+    """(scenario file, field path, --override text): a hostile value (`draw.value()`) in a
+    numeric field of a shipped scenario. `draw` makes the choices (RandomDraw, or the test's
+    hypothesis draw)."""
+    file = draw.choice(shipped_scenarios())
+    path, _, within = draw.choice(_numeric_fields(file))
+    return file, path, override_at(path, draw.value(), within)
+
+
+def mutated_file(draw) -> tuple[str, str]:
+    """(file name, text): a shipped scenario's text with 1-4 edits (an insertion from
+    EDIT_TOKENS, a deletion, a duplicated line, a number swapped for a hostile one)."""
+    file = draw.choice(shipped_scenarios())
+    text = file.read_text()
+    for _ in range(draw.integer(1, 4)):
+        at = draw.integer(0, len(text))
+        edit = draw.choice(("insert", "delete", "duplicate line", "number"))
+        if edit == "insert":
+            text = text[:at] + draw.choice(EDIT_TOKENS) + text[at:]
+        elif edit == "delete":
+            text = text[:at] + text[at + draw.integer(1, 20):]
+        elif edit == "duplicate line":
+            start = text.rfind("\n", 0, at) + 1
+            end = text.find("\n", at) + 1 or len(text)
+            text = text[:end] + text[start:end] + text[end:]
+        else:
+            numbers = list(re.finditer(r"-?\d+(\.\d+)?(e-?\d+)?", text))
+            if numbers:
+                m = draw.choice(numbers)
+                text = text[:m.start()] + yaml_value(draw.choice(HOSTILE_NUMBERS)) + text[m.end():]
+    return file.name, text
+
+
+@functools.cache
+def _numeric_fields(file: Path):
+    return numeric_fields(file)
+
+
+def related(error: re.Match, path: str) -> bool:
+    """Whether an error (an ERROR_LINE match) is about a change at `path`: it names the same
+    field, one that holds it (a list, a pose) or one inside it; or the text is not YAML (a
+    generated string may hold a character YAML refuses)."""
+    field = error["field"]
+    return (field == path or path.startswith((f"{field}.", f"{field}["))
+            or field.startswith(path) or error["message"].startswith("not valid YAML"))
+
+
+# --- the corpus run as a whole (tools/hostile_inputs.py) ------------------------------------
+
+
+@dc.dataclass
+class Tally:
+    """How one kind of input fared."""
+
+    kind: str
+    inputs: int = 0
+    refused: int = 0
+    """Refused with the one clear line, in time."""
+    accepted: int = 0
+    """Accepted: a generated input that happened to be valid."""
+    defects: list[str] = dc.field(default_factory=list)
+    slowest: float = 0.0
+    """CPU seconds of the slowest input."""
+
+    def add(self, outcome: Outcome, found: list[str], label: str) -> None:
+        self.inputs += 1
+        self.slowest = max(self.slowest, outcome.cpu_seconds)
+        if outcome.error is None and outcome.other is None and not outcome.hung:
+            self.accepted += 1
+        elif found:
+            self.defects.append(f"{label}: {'; '.join(found)} ({outcome.error or outcome.other})")
+        else:
+            self.refused += 1
+
+
+def prepare(case: Case, directory: Path) -> tuple[str, Path | None]:
+    """(the source its error must name, the file to load: None for the default scenario)
+    of a case, its file written (or its FIFO made) under `directory`."""
+    if case.text is not None:
+        return "--override", None
+    if case.data is not None:
+        path = directory / "bad.yaml"
+        path.write_bytes(case.data)
+        return str(path), path
+    fifo = directory / "fifo"
+    if "{fifo}" in case.path and not fifo.exists():
+        os.mkfifo(fifo)
+    path = case.path.format(tmp=directory, fifo=fifo)
+    return path, Path(path)
+
+
+def run_hand_written(directory: Path, progress=None) -> Tally:
+    """Every HAND_WRITTEN case, files written under `directory`."""
+    tally = Tally("hand-written (bytes, special files, every bound, the poses)")
+    for case in HAND_WRITTEN:
+        source, path = prepare(case, directory)
+        outcome = load(path, (case.text,) if case.text is not None else ())
+        found = problems(outcome, source, case.field, case.words, case.line)
+        if outcome.error is None and outcome.other is None and not outcome.hung:
+            found = ["accepted"]  # every hand-written input is invalid
+            outcome.other = "accepted"
+        tally.add(outcome, found, case.name)
+        if progress:
+            progress()
+    return tally
+
+
+def run_generated(directory: Path, examples: int, seed: int = 1, progress=None) -> list[Tally]:
+    """`examples` inputs of each generated kind, drawn by RandomDraw(seed)."""
+    overrides = Tally("a hostile value in a numeric field of a shipped scenario (generated)")
+    edits = Tally("1-4 edits of a shipped scenario file's text (generated)")
+    draw = RandomDraw(seed)
+    for _ in range(examples):
+        file, path, text = mutated_override(draw)
+        outcome = load(file, (text,))
+        found = problems(outcome, "--override", line=1)
+        if not found and outcome.error and not related(outcome.match(), path):
+            found = [f"names {outcome.match()['field']!r} for a change at {path}"]
+        overrides.add(outcome, found, text)
+        if progress:
+            progress()
+    for _ in range(examples):
+        name, text = mutated_file(draw)
+        path = directory / name
+        path.write_bytes(text.encode("utf-8", "surrogatepass"))
+        outcome = load(path)
+        found = problems(outcome, str(path))
+        if not found and outcome.error and outcome.match()["line"] is None:
+            found = ["no line"]
+        edits.add(outcome, found, repr(text[:80]))
+        if progress:
+            progress()
+    return [overrides, edits]
+
+
+def table(tallies: list[Tally]) -> str:
+    lines = ["| inputs | count | refused with the one line | accepted (valid) | defects | "
+             "slowest (CPU s) |", "|---|---|---|---|---|---|"]
+    for t in tallies:
+        lines.append(f"| {t.kind} | {t.inputs} | {t.refused} | {t.accepted} | "
+                     f"{len(t.defects)} | {t.slowest:.2f} |")
+    total = sum(t.inputs for t in tallies)
+    lines.append(f"| all | {total} | {sum(t.refused for t in tallies)} | "
+                 f"{sum(t.accepted for t in tallies)} | {sum(len(t.defects) for t in tallies)} "
+                 f"| {max(t.slowest for t in tallies):.2f} |")
+    return "\n".join(lines)

@@ -1,0 +1,154 @@
+"""Where the scene starts: each robot on or above the ground and clear of the world's bodies
+and of the other robots, each free body out of the ground.
+
+Checked by the loader (`config/validate.py`) on the scenario's collision shapes alone, in a
+SceneGraph of their own (no plant is built): a robot started inside the giant box stayed
+embedded, one below the ground fell through it.
+"""
+
+import dataclasses as dc
+import logging
+
+import numpy as np
+from pydrake.geometry import (
+    Box,
+    Capsule,
+    Cylinder,
+    Ellipsoid,
+    FramePoseVector,
+    GeometryFrame,
+    GeometryInstance,
+    HalfSpace,
+    ProximityProperties,
+    SceneGraph,
+    Sphere,
+)
+from pydrake.math import RigidTransform, RollPitchYaw
+
+from corobot_drake.model import dimensions as dim
+
+OVERLAP_TOLERANCE = 0.005
+"""m: the deepest a start pose may overlap the ground or a body, so that a scene saved mid-run
+loads again: its tyres sink up to 2.2 mm into the ground (at the largest plant step: the
+table in docs/tuning.md), and a robot reversing into the giant box at full power pressed 1 mm
+into it (saved every 0.25 s for 5 s at 10 and 20 ms steps; a one-off check, 2026-11-23)."""
+
+
+@dc.dataclass(frozen=True)
+class Problem:
+    """A start pose in something: `paths` are the poses at fault, the robot's first."""
+
+    paths: tuple[str, ...]
+    message: str
+
+
+def robot_shapes() -> list[tuple[str, object, RigidTransform]]:
+    """The Corobot's collision shapes (name, shape, pose in the chassis frame), as
+    `model/sdf.py` builds them from `dimensions`."""
+    shapes = [(name, Box(*part.size), RigidTransform(part.center))
+              for name, part in (("chassis", dim.CHASSIS), ("platform", dim.PLATFORM))]
+    for wheel in dim.WHEEL_NAMES:  # cylinders along the axle, +y
+        shapes.append((f"{wheel} tyre", Cylinder(dim.WHEEL_RADIUS, dim.WHEEL_WIDTH),
+                       RigidTransform(RollPitchYaw(np.pi / 2, 0, 0), dim.wheel_center(wheel))))
+    return shapes
+
+
+def body_shape(shape):
+    """Drake's shape of a world body's scenario shape."""
+    from corobot_drake.config import scenario as sc  # it imports the loader, which imports this
+
+    kind = type(shape)
+    if kind is sc.Box:
+        return Box(*shape.size)
+    if kind is sc.Sphere:
+        return Sphere(shape.radius)
+    if kind is sc.Cylinder:
+        return Cylinder(shape.radius, shape.length)
+    if kind is sc.Capsule:
+        return Capsule(shape.radius, shape.length)
+    if kind is sc.Ellipsoid:
+        return Ellipsoid(shape.a, shape.b, shape.c)
+    return None  # a shape this check does not know: not checked
+
+
+def problems(scenario) -> list[Problem]:
+    """Every robot's start pose that overlaps the ground, a body or another robot by more
+    than OVERLAP_TOLERANCE, and every free body's that overlaps the ground (bodies may meet
+    each other, and fixed bodies sink into the ground, as a scene is built)."""
+    drake_log = logging.getLogger("drake")
+    level = drake_log.level
+    drake_log.setLevel(logging.ERROR)  # not its warning that half-spaces skip deformable contact
+    try:
+        return _problems(scenario)
+    finally:
+        drake_log.setLevel(level)
+
+
+def _problems(scenario) -> list[Problem]:
+    scene_graph = SceneGraph()
+    source = scene_graph.RegisterSource("placement")
+    props = ProximityProperties()
+    owner, poses = {}, {}
+    ground = scene_graph.RegisterAnchoredGeometry(
+        source, GeometryInstance(RigidTransform(), HalfSpace(), "ground"))
+    scene_graph.AssignRole(source, ground, props)
+    owner[ground] = _Owner("the ground", None, "ground")
+
+    def add(name: str, path: str, X_WF, shapes, kind: str) -> None:
+        frame = scene_graph.RegisterFrame(source, GeometryFrame(name))
+        poses[frame] = X_WF
+        for shape_name, shape, X_FG in shapes:
+            geometry = scene_graph.RegisterGeometry(
+                source, frame, GeometryInstance(X_FG, shape, f"{name} {shape_name}"))
+            scene_graph.AssignRole(source, geometry, props)
+            owner[geometry] = _Owner(name, path, kind)
+
+    for name, body in scenario.world.bodies.items():
+        shape = body_shape(body.shape)
+        if shape is not None:
+            add(f"world body {name!r}", f"world.bodies.{name}.pose",
+                body.pose.GetDeterministicValue(), [("", shape, RigidTransform())],
+                "fixed body" if body.fixed else "free body")
+    for name, robot in scenario.robots.items():
+        add(f"robot {name!r}", f"robots.{name}.pose", robot.pose.GetDeterministicValue(),
+            robot_shapes(), "robot")
+    context = scene_graph.CreateDefaultContext()
+    scene_graph.get_source_pose_port(source).FixValue(context, _frame_poses(source, poses))
+    query = scene_graph.get_query_output_port().Eval(context)
+    deepest = {}  # (owner, owner) -> the deepest overlap of their shapes
+    for pair in query.ComputePointPairPenetration():
+        a, b = owner[pair.id_A], owner[pair.id_B]
+        if b.kind == "robot" or a.kind == "ground":
+            a, b = b, a  # a robot first, else a body before the ground
+        if a.kind == "robot" or (a.kind == "free body" and b.kind == "ground"):
+            deepest[a, b] = max(deepest.get((a, b), 0.0), pair.depth)
+    return sorted((_problem(a, b, depth) for (a, b), depth in deepest.items()
+                   if depth > OVERLAP_TOLERANCE), key=lambda p: p.paths)
+
+
+@dc.dataclass(frozen=True)
+class _Owner:
+    name: str
+    path: str | None
+    kind: str
+    """`robot`, `free body`, `fixed body` or `ground`."""
+
+
+def _problem(a: _Owner, b: _Owner, depth: float) -> Problem:
+    where = "below the ground" if b.kind == "ground" else f"inside {b.name}"
+    message = (f"{a.name} starts {depth * 1000:.0f} mm {where} (at most "
+               f"{OVERLAP_TOLERANCE * 1000:g} mm allowed); ")
+    if b.kind != "ground":
+        message += "move it clear"
+    elif a.kind == "robot":
+        message += "lift it (z = 0 stands an upright robot on the ground)"
+    else:
+        message += "lift it clear of the ground"
+    return Problem(tuple(o.path for o in (a, b) if o.path), message)
+
+
+def _frame_poses(source, poses) -> FramePoseVector:
+    vector = FramePoseVector()
+    for frame, X_WF in poses.items():
+        vector.set_value(frame, X_WF)
+    return vector

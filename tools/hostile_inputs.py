@@ -1,0 +1,46 @@
+#!/usr/bin/env python3
+"""Runs the hostile corpus of scenario inputs and tallies what the loader made of them.
+
+Every hand-written input is invalid; each generated one (seeded: the same inputs every run)
+puts a hostile value into a numeric field of a shipped scenario or edits a shipped file's
+text, and may happen to be valid. A refusal counts when it is the one line
+`FILE_OR_--override[:LINE]: FIELD: MESSAGE` within 2 s of CPU time; anything else (another
+exception, a hang, a missing line, a slow refusal) is a defect, listed after the table.
+Exit status 1 when there is one (`corobot_drake/analysis/hostile_inputs.py`).
+
+    python tools/hostile_inputs.py [--examples 200] [--seed 1]
+"""
+
+import argparse
+import sys
+import tempfile
+from pathlib import Path
+
+from tqdm import tqdm
+
+from corobot_drake.analysis import hostile_inputs as hi
+from corobot_drake.simulation import quiet_drake_warnings
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0],
+                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    p.add_argument("--examples", type=int, default=200,
+                   help="generated inputs of each kind")
+    p.add_argument("--seed", type=int, default=1, help="seed of the generated inputs")
+    args = p.parse_args(argv)
+    quiet_drake_warnings()
+    with tempfile.TemporaryDirectory(prefix="corobot-hostile-") as tmp, tqdm(
+            total=len(hi.HAND_WRITTEN) + 2 * args.examples, unit="input",
+            file=sys.stderr) as bar:
+        tallies = [hi.run_hand_written(Path(tmp), bar.update),
+                   *hi.run_generated(Path(tmp), args.examples, args.seed, bar.update)]
+    print(hi.table(tallies))
+    defects = [d for t in tallies for d in t.defects]
+    for defect in defects:
+        print(f"defect: {defect}")
+    return 1 if defects else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
