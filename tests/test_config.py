@@ -96,3 +96,13 @@ def test_checks_of_meaning_name_the_line_of_the_field(tmp_path):
     assert str(e.value).startswith(
         f"{path}:5: robots.corobot.ir_sensors.rear.maximum_range: must be in (0, 100] m; got -1")
 
+
+
+def test_a_field_the_layer_does_not_write_is_blamed_on_the_layer_line():
+    # A study's grid sets fields no YAML line wrote: the error names the layer and the field,
+    # and finding the line ends (it once walked up "robots" forever).
+    from corobot_drake.config.validate import LayerChecks
+
+    checks = LayerChecks("study grid", "{}")
+    with pytest.raises(ScenarioError, match=r"^study grid:1: robots\.corobot\.drive: bad"):
+        checks.fail("robots.corobot.drive", "bad")

@@ -116,7 +116,7 @@ overrides: ["robots: {{corobot: {{commands: [!Wait {{}}, !DriveDistance {{}}]}}}
     assert run_scenario(study, DEFAULT_SCENARIO, run).robots["corobot"].commands[1] == \
         DriveDistance(2.0, 1.0)  # ints become the fields' floats
     for power, error, match in (
-            (1.5, ScenarioError, r"commands\[1\].power: must be in \(0, 1\], got 1.5"),
+            (1.5, ScenarioError, r"commands\[1\].power: must be in \(0, 1\]; got 1.5"),
             ("fast", ValueError, "commands.1.power: expected float, got 'fast'")):
         study.grid["robots.corobot.commands.1.power"] = [power]
         with pytest.raises(error, match=match):

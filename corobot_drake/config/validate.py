@@ -377,7 +377,8 @@ class LayerChecks:
         this layer has (at worst, the layer's first line)."""
         where = path
         while where and where not in self.lines:
-            where = re.sub(r"(\.[^.\[]*|\[\d+\])$", "", where)
+            parent = re.sub(r"(\.[^.\[]*|\[\d+\])$", "", where)
+            where = parent if parent != where else ""  # a top-level field: the layer's line
         raise sc.ScenarioError(self.source, path, message, self.lines.get(where))
 
     def validate(self, s) -> None:

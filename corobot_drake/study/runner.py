@@ -40,10 +40,8 @@ def run_scenario(study: Study, scenario_file: Path, run: Run):
     for path, value in indexed:
         set_path(scenario, path, value)
     if indexed:
-        checks = LayerChecks("study grid", "")
-        # No line to name; `fail` walks up the path to a field it has a line for, so give it
-        # the top-level fields (without one it would never stop).
-        checks.lines = {field.name: None for field in dc.fields(scenario)}
+        checks = LayerChecks("study grid", "{}")
+        checks.lines = {}  # the values come from the study's grid, not from a line of YAML
         checks.validate(scenario)
     if not study.cameras:
         for robot in scenario.robots.values():
