@@ -14,24 +14,32 @@ import dataclasses as dc
 import logging
 import math
 import time
+import typing
 from pathlib import Path
 
 import numpy as np
 from pydrake.common.yaml import yaml_dump_typed
-from pydrake.math import RollPitchYaw
+from pydrake.geometry import HalfSpace
+from pydrake.math import RigidTransform, RollPitchYaw
 from pydrake.multibody.math import SpatialVelocity
 from pydrake.systems.analysis import ApplySimulatorConfig, Simulator
 from pydrake.systems.framework import EventStatus
 
+from corobot_drake import limits
 from corobot_drake.config import scenario as sc
 from corobot_drake.config.poses import ground_pose, transform_from
 from corobot_drake.model import dimensions as dim
 from corobot_drake.readings import BodyPose, BodyVelocity, CommandResult, IrReading
 from corobot_drake.sensors.ir_sensor import noise_key
 from corobot_drake.station import RobotParts, Station, build_station
-from corobot_drake.systems.drive import CommandRecord, DriveStatus
+from corobot_drake.systems.drive import CommandRecord, DriveStatus, check_finite
 from corobot_drake.systems.odometry import DriveState
 from corobot_drake.systems.runlog import log_rows, write_csv
+
+
+POSE_CLEARANCE = 1e-3
+"""m: a SetPose is `blocked` when the robot at the target would overlap another body by more
+than this (a robot set down touching a wall is fine)."""
 
 
 class CommandHandle:
@@ -53,6 +61,7 @@ class CommandHandle:
     def wait(self, timeout: float | None = 300.0) -> CommandResult:
         """Advances the simulation (one control period at a time) until the command ends;
         TimeoutError after `timeout` simulated seconds (None: no limit)."""
+        timeout = _check_timeout(timeout)
         sim = self.robot._sim
         period = self.robot._parts.motion.drive_period
         end = math.inf if timeout is None else sim.time + timeout
@@ -64,11 +73,42 @@ class CommandHandle:
         return self.result()
 
 
-def _check_power(power: float) -> float:
-    power = float(power)
-    if not 0.0 < power <= 1.0:
-        raise ValueError(f"power must be in (0, 1], got {power}")
-    return power
+_ISSUABLE = tuple(c for c in typing.get_args(sc.Command) if c is not sc.Wait)
+"""The commands `Robot.issue` takes: the scenario's, but `Wait` (a script's pause; from Python,
+`Simulation.advance`)."""
+
+
+def check_command(command):
+    """`command` with its numbers as floats; ValueError, naming the field and its allowed
+    range (`limits`), unless it is a command the API can issue with every argument in range."""
+    if not isinstance(command, _ISSUABLE):
+        names = ", ".join(c.__name__ for c in _ISSUABLE)
+        raise ValueError(f"a command must be one of {names}; got {command!r}")
+    name = type(command).__name__
+    ranges = {
+        sc.SetPower: {"left": limits.POWER, "right": limits.POWER},
+        sc.SetSpeed: {"left": limits.SPEED, "right": limits.SPEED},
+        sc.DriveDistance: {"distance": limits.DISTANCE, "power": limits.DRIVE_POWER},
+        sc.RotateDegrees: {"degrees": limits.DEGREES, "power": limits.DRIVE_POWER},
+        sc.SetPose: {"x": limits.POSITION, "y": limits.POSITION, "yaw_deg": limits.YAW_DEG},
+    }.get(type(command), {})
+    checked = {field: limits.number(f"{name}.{field}", getattr(command, field), low, high,
+                                    low_open=(low, high) == limits.DRIVE_POWER)
+               for field, (low, high) in ranges.items()}
+    if isinstance(command, sc.Enable) and not isinstance(command.enabled, bool | np.bool_):
+        raise ValueError(f"Enable.enabled must be True or False, got {command.enabled!r}")
+    command = dc.replace(command, **checked)
+    if isinstance(command, sc.Enable):
+        command = sc.Enable(bool(command.enabled))
+    check_finite(command)  # the fields of commands added later
+    return command
+
+
+def _check_timeout(timeout: float | None) -> float | None:
+    """A command's wait limit: None (no limit) or a number of simulated s > 0."""
+    if timeout is None:
+        return None
+    return limits.number("timeout", timeout, 0.0, low_open=True, finite=False)
 
 
 class Robot:
@@ -81,17 +121,21 @@ class Robot:
 
     # --- commands -------------------------------------------------------------------------
     def issue(self, command) -> int:
-        """Issues a scenario command dataclass now; returns its sequence number."""
+        """Issues a scenario command dataclass now; returns its sequence number. ValueError
+        (naming the allowed range) for a command the API does not take or an argument out of
+        its range (`limits`)."""
+        command = check_command(command)
         source = self._parts.command_source
         return source.Issue(source.GetMyMutableContextFromRoot(self._sim.context), command)
 
     def set_power(self, left: float, right: float) -> int:
-        """Power per side in [-1, 1] (clamped): axle speed = power x MotorTorqueScaling."""
-        return self.issue(sc.SetPower(float(left), float(right)))
+        """Power per side in [-1, 1]: axle speed = power x MotorTorqueScaling."""
+        return self.issue(sc.SetPower(left, right))
 
     def set_speed(self, left: float, right: float) -> int:
-        """Rim speed per side, m/s (axle speed clamped to the drive's max axle speed)."""
-        return self.issue(sc.SetSpeed(float(left), float(right)))
+        """Rim speed per side, m/s, in [-5, 5] (`limits.SPEED`; the drive clamps the axle
+        speed to its max axle speed)."""
+        return self.issue(sc.SetSpeed(left, right))
 
     def set_velocity(self, linear: float, angular: float) -> int:
         """Chassis velocity, ROS `cmd_vel` style: `linear` m/s forward, `angular` rad/s
@@ -102,35 +146,42 @@ class Robot:
         return self.issue(sc.AllStop())
 
     def enable(self, enabled: bool = True) -> int:
-        return self.issue(sc.Enable(bool(enabled)))
+        """Enables (True) or disables (False) the drive."""
+        return self.issue(sc.Enable(enabled))
 
     def drive_distance_async(self, distance: float, power: float = 0.5) -> CommandHandle:
-        """Starts driving straight |distance| m (negative: backwards) at `power` in (0, 1]."""
-        return CommandHandle(self, self.issue(sc.DriveDistance(float(distance),
-                                                               _check_power(power))))
+        """Starts driving straight |distance| m (distance in [-100, 100]; negative: backwards)
+        at `power` in (0, 1]."""
+        return CommandHandle(self, self.issue(sc.DriveDistance(distance, power)))
 
     def drive_distance(self, distance: float, power: float = 0.5,
                        timeout: float | None = 300.0) -> CommandResult:
         """Drives straight |distance| m (negative: backwards) at `power`, advancing the
-        simulation until the command ends; returns how it ended."""
+        simulation until the command ends; returns how it ended. `timeout`: simulated s > 0,
+        or None for no limit."""
+        _check_timeout(timeout)
         return self.drive_distance_async(distance, power).wait(timeout)
 
     def rotate_degrees_async(self, degrees: float, power: float = 0.5) -> CommandHandle:
-        """Starts turning in place by `degrees` (positive: counter-clockwise, left)."""
-        return CommandHandle(self, self.issue(sc.RotateDegrees(float(degrees),
-                                                               _check_power(power))))
+        """Starts turning in place by `degrees` in [-3600, 3600] (positive: counter-clockwise,
+        left) at `power` in (0, 1]."""
+        return CommandHandle(self, self.issue(sc.RotateDegrees(degrees, power)))
 
     def rotate_degrees(self, degrees: float, power: float = 0.5,
                        timeout: float | None = 300.0) -> CommandResult:
         """Turns in place by `degrees` (positive: left), advancing the simulation until the
         command ends; returns how it ended."""
+        _check_timeout(timeout)
         return self.rotate_degrees_async(degrees, power).wait(timeout)
 
     def set_pose(self, x: float, y: float, yaw_deg: float = 0.0) -> CommandHandle:
         """Teleports the robot now to (x, y) m facing `yaw_deg`, on the ground, at rest, the
         wheels stopped; a running command fails as superseded. The returned handle ends
-        (succeeded) once the robot has settled there (`motion.POSE_SETTLE_TIME`)."""
-        handle = CommandHandle(self, self.issue(sc.SetPose(float(x), float(y), float(yaw_deg))))
+        (succeeded) once the robot has settled there (`motion.POSE_SETTLE_TIME`), or at once
+        failed, reason `blocked`, if the robot there would be inside another body
+        (`obstacle_at`): then it stays where it was (its drive stopping). x, y in
+        [-1000, 1000] m, yaw_deg in [-3600, 3600] (ValueError otherwise)."""
+        handle = CommandHandle(self, self.issue(sc.SetPose(x, y, yaw_deg)))
         self._apply_teleport()
         return handle
 
@@ -142,16 +193,54 @@ class Robot:
         if request is None:
             return False
         pose = request.command
+        X_WB = ground_pose(pose.x, pose.y, pose.yaw_deg).GetDeterministicValue()
+        if self.obstacle_at(X_WB) is not None:
+            source.Fail(source.GetMyMutableContextFromRoot(root), request.seq, "blocked")
+            return True
         plant = self._sim.station.plant
         plant_context = plant.GetMyMutableContextFromRoot(root)
-        plant.SetFreeBodyPose(plant_context, parts.chassis,
-                              ground_pose(pose.x, pose.y, pose.yaw_deg).GetDeterministicValue())
+        plant.SetFreeBodyPose(plant_context, parts.chassis, X_WB)
         plant.SetFreeBodySpatialVelocity(plant_context, parts.chassis, SpatialVelocity.Zero())
         for joint in parts.wheel_joints:
             joint.set_angular_rate(plant_context, 0.0)
         controller = parts.drive_controller
         controller.Halt(controller.GetMyMutableContextFromRoot(root))
         return True
+
+    def obstacle_at(self, X_WB: RigidTransform) -> str | None:
+        """What the robot would overlap (by more than `POSE_CLEARANCE`) with its chassis at
+        `X_WB`: the name of the other body (a world body or another robot's part), or None
+        if the pose is clear. The ground (any half-space) does not count: a SetPose stands the
+        robot on it. The Context is left as it was (the pose is tried, then the plant's
+        positions are put back exactly)."""
+        plant = self._sim.station.plant
+        plant_context = plant.GetMyMutableContextFromRoot(self._sim.context)
+        q = plant.GetPositions(plant_context)
+        try:
+            plant.SetFreeBodyPose(plant_context, self._parts.chassis, X_WB)
+            query = plant.get_geometry_query_input_port().Eval(plant_context)
+            inspector = query.inspector()
+
+            def body(geometry_id):
+                return plant.GetBodyFromFrameId(inspector.GetFrameId(geometry_id))
+
+            for pair in query.ComputePointPairPenetration():
+                a, b = body(pair.id_A), body(pair.id_B)
+                if a.model_instance() == self._parts.model_instance:
+                    other, other_id = b, pair.id_B
+                elif b.model_instance() == self._parts.model_instance:
+                    other, other_id = a, pair.id_A
+                else:
+                    continue
+                if (other.model_instance() == self._parts.model_instance
+                        or isinstance(inspector.GetShape(other_id), HalfSpace)
+                        or pair.depth <= POSE_CLEARANCE):
+                    continue
+                owner = plant.GetModelInstanceName(other.model_instance())
+                return owner if owner == other.name() else f"{owner}::{other.name()}"
+            return None
+        finally:
+            plant.SetPositions(plant_context, q)
 
     def continuation_commands(self) -> list:
         """Commands that carry on from now: the enable level, the running command (a
@@ -468,7 +557,9 @@ class Simulation:
         return EventStatus.Succeeded()
 
     def advance_to(self, t: float) -> None:
-        """Advances to simulated time `t` (s), applying scripted SetPose teleports."""
+        """Advances to simulated time `t` (s; finite, not before now: ValueError otherwise),
+        applying scripted SetPose teleports."""
+        limits.number("t", t, self.time)
         start = time.perf_counter()
         while True:
             self.simulator.AdvanceTo(t)
@@ -542,10 +633,15 @@ class Simulation:
         return write_recording(self.station.meshcat, path)
 
     def advance(self, seconds: float) -> None:
-        self.advance_to(self.time + seconds)
+        """Advances by `seconds` of simulated time (a finite number >= 0; ValueError
+        otherwise)."""
+        self.advance_to(self.time + limits.number("seconds", seconds, 0.0))
 
     def run(self, duration: float, progress=None, chunk: float = 0.5) -> None:
-        """Advances by `duration` s in chunks, calling `progress(sim)` after each."""
+        """Advances by `duration` s (finite, >= 0) in chunks of `chunk` s (finite, > 0),
+        calling `progress(sim)` after each."""
+        duration = limits.number("duration", duration, 0.0)
+        chunk = limits.number("chunk", chunk, 0.0, low_open=True)
         end = self.time + duration
         while self.time < end - 1e-12:
             self.advance_to(min(end, self.time + chunk))

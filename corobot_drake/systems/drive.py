@@ -66,7 +66,8 @@ class CommandStatus(_Immutable):
     status: str = "running"
     """running, succeeded or failed."""
     reason: str = ""
-    """Why it failed: superseded, disabled, stalled (or not_applied for a SetPose)."""
+    """Why it failed: superseded, disabled, stalled (or, for a SetPose, not_applied or
+    blocked)."""
     time: float = 0.0
 
 
@@ -238,6 +239,12 @@ class CommandSource(LeafSystem):
         state = self._with_command(self.current_state(context), command, context.get_time())
         self._set_state(context, state)
         return state.request.seq
+
+    def Fail(self, context, seq: int, reason: str) -> None:
+        """Ends command `seq` now as failed for `reason`, if it still runs: how the Simulation
+        reports a SetPose it could not apply (`blocked`). `context` is this system's."""
+        status = CommandStatus(seq, "failed", reason, context.get_time())
+        self._set_state(context, self._with_status(self.current_state(context), status))
 
     def TakeTeleport(self, context) -> DriveRequest | None:
         """The pending SetPose request, cleared (the caller applies it to the plant)."""

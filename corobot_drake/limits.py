@@ -1,0 +1,53 @@
+"""The allowed range of every argument a caller gives the running simulation: the Python API
+(`simulation`, which raises ValueError naming the range) and the HTTP contract
+(`serving.schemas`, which answers 422 naming it) read them here, so the two agree.
+
+No Drake import here (the HTTP process and `serving.client` read it).
+"""
+
+from __future__ import annotations
+
+import math
+
+POWER = (-1.0, 1.0)
+"""set_power: power per side."""
+SPEED = (-5.0, 5.0)
+"""set_speed: rim speed per side, m/s (8x the robot's top speed; the drive then clamps the
+axle speed to its maximum)."""
+DRIVE_POWER = (0.0, 1.0)
+"""drive_distance / rotate_degrees: power in (0, 1] (the lower end excluded)."""
+DISTANCE = (-100.0, 100.0)
+"""drive_distance: m (negative: backwards)."""
+DEGREES = (-3600.0, 3600.0)
+"""rotate_degrees: degrees (positive: left)."""
+POSITION = (-1000.0, 1000.0)
+"""set_pose: x and y, m."""
+YAW_DEG = (-3600.0, 3600.0)
+"""set_pose: heading, degrees."""
+
+
+def number(name: str, value, low: float = -math.inf, high: float = math.inf, *,
+           low_open: bool = False, finite: bool = True) -> float:
+    """`value` as a float if it is a number in [low, high] (`low_open`: (low, high]; `finite`:
+    also finite); otherwise ValueError naming `name`, the allowed range and the value.
+    Booleans are not numbers here (True is not a power)."""
+    allowed = _describe(low, high, low_open, finite)
+    if isinstance(value, bool) or not isinstance(value, int | float) and not hasattr(
+            value, "__float__"):
+        raise ValueError(f"{name} must be {allowed}, got {value!r}")
+    x = float(value)
+    inside = (low < x if low_open else low <= x) and x <= high
+    if not inside or (finite and not math.isfinite(x)):
+        raise ValueError(f"{name} must be {allowed}, got {x!r}")
+    return x
+
+
+def _describe(low: float, high: float, low_open: bool, finite: bool) -> str:
+    kind = "a finite number" if finite else "a number"
+    if low == -math.inf and high == math.inf:
+        return kind
+    if high == math.inf:
+        return f"{kind} {'>' if low_open else '>='} {low:g}"
+    if low == -math.inf:
+        return f"{kind} <= {high:g}"
+    return f"{kind} in {'(' if low_open else '['}{low:g}, {high:g}]"

@@ -1,0 +1,122 @@
+"""The Python API refuses bad arguments with a ValueError naming the allowed range (never
+SystemExit, never a hang), and leaves the simulation as it was; a SetPose into a body fails
+`blocked` and leaves the robot where it was."""
+
+import math
+
+import pytest
+
+from conftest import make_sim
+from corobot_drake.config import scenario as sc
+
+
+@pytest.fixture(scope="module")
+def sim():
+    return make_sim()
+
+
+BAD_CALLS = [
+    # (method, args, words the message must contain)
+    ("advance", (math.nan,), "seconds must be a finite number >= 0, got nan"),
+    ("advance", (-1.0,), "seconds must be a finite number >= 0, got -1.0"),
+    ("advance", (math.inf,), "seconds must be a finite number >= 0, got inf"),
+    ("advance", ("1",), "seconds must be a finite number"),
+    ("advance_to", (math.nan,), "t must be a finite number >="),
+    ("advance_to", (-5.0,), "t must be a finite number >="),
+    ("run", (math.inf,), "duration must be a finite number >= 0"),
+    ("run", (1.0, None, 0.0), "chunk must be a finite number > 0"),
+    ("set_power", (1.5, 0), "SetPower.left must be a finite number in [-1, 1], got 1.5"),
+    ("set_power", (0, -2), "SetPower.right must be a finite number in [-1, 1]"),
+    ("set_power", (math.nan, 0), "SetPower.left must be a finite number in [-1, 1], got nan"),
+    ("set_power", (math.inf, 0), "in [-1, 1], got inf"),
+    ("set_power", (True, 0), "in [-1, 1], got True"),
+    ("set_speed", (6.0, 0), "SetSpeed.left must be a finite number in [-5, 5], got 6.0"),
+    ("set_speed", (0, -math.inf), "SetSpeed.right must be a finite number in [-5, 5]"),
+    ("enable", ("false",), "Enable.enabled must be True or False"),
+    ("drive_distance_async", (1.0, 0.0), "DriveDistance.power must be a finite number in (0, 1]"),
+    ("drive_distance_async", (1e9,), "DriveDistance.distance must be a finite number in [-100"),
+    ("drive_distance_async", (math.nan,), "DriveDistance.distance"),
+    ("drive_distance", (0.1, 0.5, -1.0), "timeout must be a number > 0"),
+    ("drive_distance", (0.1, 0.5, math.nan), "timeout must be a number > 0"),
+    ("rotate_degrees_async", (90, 1.5), "RotateDegrees.power must be a finite number in (0, 1]"),
+    ("rotate_degrees_async", (math.inf,), "RotateDegrees.degrees must be a finite number in"),
+    ("set_pose", (math.nan, 0.0), "SetPose.x must be a finite number in [-1000, 1000]"),
+    ("set_pose", (0.0, 1e6), "SetPose.y must be a finite number in [-1000, 1000]"),
+    ("set_pose", (0.0, 0.0, math.inf), "SetPose.yaw_deg must be a finite number"),
+    ("issue", ("forward",), "a command must be one of SetPower"),
+    ("issue", (sc.Wait(1.0),), "a command must be one of"),
+    ("issue", (sc.SetPower(3.0, 0.0),), "SetPower.left must be a finite number in [-1, 1]"),
+]
+
+
+@pytest.mark.parametrize(("method", "args", "words"), BAD_CALLS,
+                         ids=[f"{m}{a}" for m, a, _ in BAD_CALLS])
+def test_bad_arguments_raise_value_error_and_change_nothing(sim, method, args, words):
+    robot = sim.robot()
+    target = sim if hasattr(sim, method) else robot
+    t0, log0 = sim.time, robot.command_log()
+    with pytest.raises(ValueError) as info:  # a ValueError, so not SystemExit
+        getattr(target, method)(*args)
+    assert words in str(info.value)
+    assert sim.time == t0 and robot.command_log() == log0
+
+
+def test_valid_calls_still_work(sim):
+    robot = sim.robot()
+    robot.set_power(1, -1)  # ints are numbers; the ends of the range are allowed
+    assert robot.command_log()[-1].command == "SetPower"
+    robot.set_speed(5.0, -5.0)
+    robot.enable(True)
+    robot.all_stop()
+    sim.advance(0.0)
+    sim.run(0.02, chunk=0.01)
+
+
+def test_set_pose_into_the_giant_box_is_blocked_and_leaves_the_robot_there(sim):
+    robot = sim.robot()
+    assert robot.set_pose(0.0, 0.0).wait(5).succeeded
+    robot.set_power(0.4, 0.4)
+    sim.advance(0.5)  # moving: the blocked SetPose must not teleport it
+    before = robot.pose()
+    # The box's centre (x = -1.7366 m, a 2 m cube): the robot would be inside it.
+    handle = robot.set_pose(-1.7, 0.0, 0.0)
+    result = handle.result()
+    assert (result.status, result.reason) == ("failed", "blocked")
+    assert result.end_time == pytest.approx(sim.time)
+    after = robot.pose()
+    assert (after.x, after.y, after.yaw) == (before.x, before.y, before.yaw)  # exactly
+    sim.advance(1.0)
+    # It stays out of the box: at most the braking distance (0.4 x 0.61 m/s over the
+    # slew-limited stop, a few cm) further on, and still on the ground.
+    assert robot.pose().x == pytest.approx(before.x, abs=0.1)
+    assert abs(robot.pose().z) < 0.01
+    assert handle.result().reason == "blocked"  # the later not_applied is not recorded
+
+
+def test_set_pose_near_the_box_is_clear_but_a_wheel_inside_is_blocked(sim):
+    """The box's near face is at x = -0.7366 m; the rear wheels reach 0.152 m behind the
+    chassis origin (half wheelbase 0.092 + radius 0.060): at x = -0.55 they clear the face by
+    35 mm, at -0.60 they are 15 mm inside it."""
+    robot = sim.robot()
+    assert robot.set_pose(-0.55, 0.0, 0.0).wait(5).succeeded
+    assert robot.pose().x == pytest.approx(-0.55, abs=0.005)
+    result = robot.set_pose(-0.60, 0.0, 0.0).result()
+    assert (result.status, result.reason) == ("failed", "blocked")
+    assert robot.obstacle_at(_ground(-0.60)) == "giant_box"
+    assert robot.obstacle_at(_ground(2.0)) is None
+
+
+def test_scripted_set_pose_into_the_box_is_blocked_and_the_script_goes_on():
+    sim = make_sim("robots: {corobot: {commands: [!SetPose {x: -1.7, y: 0}, "
+                   "!SetPower {left: 0.5, right: 0.5}]}}")
+    sim.advance(1.0)
+    log = sim.robot().command_log()
+    assert [(r.command, r.status, r.reason) for r in log[:2]] == [
+        ("SetPose", "failed", "blocked"), ("SetPower", "running", "")]
+    assert sim.robot().pose().x > 0.1  # it drove forward from the origin instead
+
+
+def _ground(x: float):
+    from corobot_drake.config.poses import ground_pose
+
+    return ground_pose(x, 0.0, 0.0).GetDeterministicValue()
