@@ -32,8 +32,8 @@ def number(name: str, value, low: float = -math.inf, high: float = math.inf, *,
     also finite); otherwise ValueError naming `name`, the allowed range and the value.
     Booleans are not numbers here (True is not a power)."""
     allowed = _describe(low, high, low_open, finite)
-    if isinstance(value, bool) or not isinstance(value, int | float) and not hasattr(
-            value, "__float__"):
+    if isinstance(value, bool) or (not isinstance(value, int | float) and not hasattr(
+            value, "__float__")):
         raise ValueError(f"{name} must be {allowed}, got {value!r}")
     x = float(value)
     inside = (low < x if low_open else low <= x) and x <= high

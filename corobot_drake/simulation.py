@@ -36,7 +36,6 @@ from corobot_drake.systems.drive import CommandRecord, DriveStatus, check_finite
 from corobot_drake.systems.odometry import DriveState
 from corobot_drake.systems.runlog import log_rows, write_csv
 
-
 POSE_CLEARANCE = 1e-3
 """m: a SetPose is `blocked` when the robot at the target would overlap another body by more
 than this (a robot set down touching a wall is fine)."""

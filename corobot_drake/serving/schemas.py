@@ -13,6 +13,8 @@ from typing import Annotated, Any
 
 from pydantic import BaseModel, ConfigDict, Field
 
+from corobot_drake import limits
+
 DEFAULT_WAIT_TIMEOUT = 120.0
 """s a completing command may hold its request open before answering 202 with a status URL."""
 
@@ -23,9 +25,12 @@ class _Body(BaseModel):
     model_config = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False)
 
 
-Power = Annotated[float, Field(ge=-1.0, le=1.0, description="power in [-1, 1]")]
-DrivePower = Annotated[float, Field(gt=0.0, le=1.0, description="power in (0, 1]")]
-Speed = Annotated[float, Field(ge=-5.0, le=5.0, description="rim speed, m/s")]
+Power = Annotated[float, Field(ge=limits.POWER[0], le=limits.POWER[1],
+                               description="power in [-1, 1]")]
+DrivePower = Annotated[float, Field(gt=limits.DRIVE_POWER[0], le=limits.DRIVE_POWER[1],
+                                    description="power in (0, 1]")]
+Speed = Annotated[float, Field(ge=limits.SPEED[0], le=limits.SPEED[1],
+                               description="rim speed, m/s")]
 WaitTimeout = Annotated[float, Field(gt=0.0, le=600.0,
                                      description="s to hold the request open (wall clock)")]
 
@@ -62,20 +67,21 @@ class _Completing(_Body):
 
 
 class DriveDistanceRequest(_Completing):
-    distance: Annotated[float, Field(ge=-100.0, le=100.0, description="m; negative: backwards")]
+    distance: Annotated[float, Field(ge=limits.DISTANCE[0], le=limits.DISTANCE[1],
+                                     description="m; negative: backwards")]
     power: DrivePower = 0.2
 
 
 class RotateDegreesRequest(_Completing):
-    degrees: Annotated[float, Field(ge=-3600.0, le=3600.0,
+    degrees: Annotated[float, Field(ge=limits.DEGREES[0], le=limits.DEGREES[1],
                                     description="degrees; positive turns left (CCW)")]
     power: DrivePower = 0.2
 
 
 class SetPoseRequest(_Completing):
-    x: Annotated[float, Field(ge=-1000.0, le=1000.0, description="m")]
-    y: Annotated[float, Field(ge=-1000.0, le=1000.0, description="m")]
-    yaw_deg: Annotated[float, Field(ge=-3600.0, le=3600.0)] = 0.0
+    x: Annotated[float, Field(ge=limits.POSITION[0], le=limits.POSITION[1], description="m")]
+    y: Annotated[float, Field(ge=limits.POSITION[0], le=limits.POSITION[1], description="m")]
+    yaw_deg: Annotated[float, Field(ge=limits.YAW_DEG[0], le=limits.YAW_DEG[1])] = 0.0
 
 
 # --- response descriptions (for the OpenAPI document) --------------------------------------
