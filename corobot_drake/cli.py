@@ -66,7 +66,11 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--port", type=int, default=50000,
                    help="--serve: TCP port (default 50000; 0 picks a free one)")
     p.add_argument("--host", default="127.0.0.1",
-                   help="--serve, --foxglove: address to listen on (default 127.0.0.1)")
+                   help="--serve, --foxglove: address to listen on (default 127.0.0.1, "
+                   "loopback only; --serve anywhere else needs a token, docs/services.md)")
+    p.add_argument("--token", default=None,
+                   help="--serve: the bearer token clients must send (default: none on "
+                   "loopback; off loopback one is generated and printed)")
     p.add_argument("--save-camera", metavar="DIR",
                    help="write each robot's camera frames as PNG: "
                    "DIR/<robot>/frame_000000.png, ...")
@@ -310,7 +314,7 @@ def _run(args, scenario, duration: float, foxglove) -> int:
             serve_camera_rate(scenario)
         return serve(lambda meshcat: Simulation(scenario, meshcat, foxglove=foxglove),
                      host=args.host, port=args.port, meshcat=not args.headless,
-                     label=args.scenario)
+                     label=args.scenario, token=args.token)
     meshcat = None
     if not args.headless:
         from pydrake.geometry import StartMeshcat

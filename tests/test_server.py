@@ -69,7 +69,7 @@ def reset(http, caps):
         r = http.post(f"{ROBOT}/drive/set_pose", json={"x": 0, "y": 0, "yaw_deg": 0})
         assert r.json()["status"] == "succeeded", r.json()
     else:
-        http.post(f"{ROBOT}/drive/all_stop")
+        http.post(f"{ROBOT}/drive/all_stop", json={})
         wait_sim(http, 0.5)
 
 
@@ -156,7 +156,7 @@ def test_set_power_drives_forward_and_all_stop_stops(http, caps):
     assert d["position"]["x"] - x0 > 0.2
     assert d["wheels"]["front_left"]["commanded_power"] == 0.5
     assert d["wheels"]["front_left"]["encoder_ticks"] > 100
-    assert http.post(f"{ROBOT}/drive/all_stop").status_code == 200
+    assert http.post(f"{ROBOT}/drive/all_stop", json={}).status_code == 200
     wait_sim(http, 1.0)
     assert abs(http.get(f"{ROBOT}/drive").json()["velocity"]["forward"]) < 0.01
 
@@ -193,7 +193,7 @@ def test_disabled_drive_ignores_power(http, caps):
     assert http.post(f"{ROBOT}/drive/enable", json={"enabled": True}).is_success
     wait_sim(http, 0.1)  # the drive acts on it at its next update (60 Hz)
     assert http.get(f"{ROBOT}/drive").json()["is_enabled"] is True
-    http.post(f"{ROBOT}/drive/all_stop")
+    http.post(f"{ROBOT}/drive/all_stop", json={})
 
 
 def test_completing_commands_wait_or_answer_at_once(http, caps):
@@ -226,7 +226,7 @@ def test_a_new_command_supersedes_a_running_one(http, caps):
                   json={"distance": 2.0, "power": 0.2, "wait": False})
     url = r.json()["status_url"]
     wait_sim(http, 0.3)
-    http.post(f"{ROBOT}/drive/all_stop")
+    http.post(f"{ROBOT}/drive/all_stop", json={})
     wait_sim(http, 0.1)
     op = http.get(url).json()
     assert op["status"] == "failed" and op["reason"] == "superseded"
@@ -288,7 +288,7 @@ def test_subscription_sends_changes(http, server, caps):
             assert {"front_ir", "rear_ir"} <= names
         http.post(f"{ROBOT}/drive/set_power", json={"left": -0.4, "right": -0.4})
         events = read_events(lines, 30, 4)
-    http.post(f"{ROBOT}/drive/all_stop")
+    http.post(f"{ROBOT}/drive/all_stop", json={})
     drive = [e for e in events if e[0] == "drive"]
     assert len(drive) >= 5  # the robot moves, so its state changes at every check
     assert any(e[1]["wheels"]["front_left"]["commanded_power"] == -0.4 for e in drive)
@@ -467,7 +467,7 @@ def test_malformed_flood_and_pollers_keep_real_time(http, server, caps):
     assert rtf >= 0.9 * min(1.0, baseline / 0.98), (rtf, baseline)
     stats = http.get("/simulation").json()
     assert stats["running"] and stats["error"] is None
-    http.post(f"{ROBOT}/drive/all_stop")
+    http.post(f"{ROBOT}/drive/all_stop", json={})
     assert server.process.poll() is None
     assert math.isfinite(http.get(f"{ROBOT}/drive").json()["heading"])
 
@@ -544,7 +544,7 @@ def test_in_process_runner_serves_from_a_thread():
     scenario = load_scenario(DEFAULT_SCENARIO)
     runner = SimRunner(lambda: Simulation(scenario)).start()
     try:
-        with TestClient(create_app(runner)) as client:
+        with TestClient(create_app(runner), base_url="http://127.0.0.1") as client:
             assert client.get(f"{ROBOT}/drive").status_code == 200
             assert client.post(f"{ROBOT}/drive/set_power",
                                json={"left": 2, "right": 0}).status_code == 422

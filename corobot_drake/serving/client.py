@@ -50,9 +50,17 @@ class CorobotNotFoundError(CorobotError, KeyError):
 class CorobotClient:
     """The server's simulation: the `Simulation` methods that make sense over HTTP."""
 
-    def __init__(self, url: str = "http://127.0.0.1:50000", timeout: float = 30.0):
-        self.url = url.rstrip("/")
-        self._http = httpx.Client(base_url=self.url, timeout=timeout)
+    def __init__(self, url: str = "http://127.0.0.1:50000", timeout: float = 30.0,
+                 token: str | None = None):
+        """`token`: the server's bearer token (needed off loopback; a URL the server printed,
+        `.../dashboard#token=...`, carries it too). Every request carries it, and every POST
+        a JSON body, as the server requires (docs/services.md, "Security")."""
+        url, _, fragment = url.partition("#")
+        if token is None and fragment.startswith("token="):
+            token = fragment.removeprefix("token=")
+        self.url = url.rstrip("/").removesuffix("/dashboard")
+        headers = {"Authorization": f"Bearer {token}"} if token else {}
+        self._http = httpx.Client(base_url=self.url, timeout=timeout, headers=headers)
         self.robots = {name: RemoteRobot(self, name)
                        for name in self._get("/robots")["robots"]}
 

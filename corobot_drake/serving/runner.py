@@ -32,6 +32,11 @@ log = logging.getLogger(__name__)
 T = TypeVar("T")
 
 
+class SimulationStoppedError(RuntimeError):
+    """A request the simulation will never answer: it has stopped (or was never reached).
+    The routes answer it 503."""
+
+
 @runtime_checkable
 class Runner(Protocol):
     """A running simulation as the HTTP routes see it (`SimRunner` in process,
@@ -151,7 +156,7 @@ class SimRunner:
     def _put(self, fn: Callable, watch: bool) -> concurrent.futures.Future:
         future: concurrent.futures.Future = concurrent.futures.Future()
         if self._stop.is_set() or (self._thread is not None and not self.alive):
-            future.set_exception(RuntimeError("the simulation is not running"))
+            future.set_exception(SimulationStoppedError("the simulation is not running"))
         else:
             self._inbox.put((fn, future, watch))
         return future
@@ -199,7 +204,7 @@ class SimRunner:
         finally:
             self._ready.set()
             self._stop.set()
-            self._fail_pending(RuntimeError("the simulation stopped"))
+            self._fail_pending(SimulationStoppedError("the simulation stopped"))
 
     def _loop(self) -> None:
         sim, clock = self.sim, time.perf_counter

@@ -20,6 +20,8 @@ from __future__ import annotations
 import contextlib
 import sys
 
+from corobot_drake.serving.security import is_loopback
+
 SWITCH_INTERVAL = 0.001
 """s. Python's GIL hand-over interval in the simulation process while serving. The
 simulation's Python systems re-take the GIL many times a step; the transport's threads are
@@ -28,6 +30,10 @@ mostly idle, but at the default 5 ms each of their wake-ups could hold the simul
 HTTP_NICENESS = 10
 """The HTTP process's nice increment: under CPU contention the simulation comes first."""
 
+HTTP_STOP_TIMEOUT = 3.0
+"""s the HTTP process has, once the simulation stops, to answer the requests in flight (503)
+and exit (uvicorn's graceful shutdown takes up to 1 s) before it is terminated."""
+
 SERVE_CAMERA_FPS = 10.0
 """Hz: the camera's render rate when serving, unless --camera-rate says otherwise. The
 dashboard and the webcam page show a few frames a second; rendering 30 would cost a
@@ -35,20 +41,28 @@ third of the simulation's time budget."""
 
 
 def serve(make_sim, host: str = "127.0.0.1", port: int = 50000, meshcat: bool = False,
-          log_level: str = "warning", label: str = "") -> int:
+          log_level: str = "warning", label: str = "", token: str | None = None) -> int:
     """Builds the simulation (`make_sim(meshcat)`, in the simulation thread, with a Meshcat
     made there too when `meshcat`: Meshcat must be used from the thread that made it) and
     serves it until Ctrl-C. The HTTP server runs in a child process (see the module
-    docstring). Returns the exit status: 2 when the port or the simulation cannot be had."""
+    docstring), behind `security.Access.for_host(host, token)` (off loopback a token is
+    needed: `token`, or one made and printed). Returns the exit status: 2 when the port, the
+    token or the simulation cannot be had."""
     import multiprocessing
 
     from corobot_drake.sensors.camera import RendererUnavailableError
+    from corobot_drake.serving.security import Access
     from corobot_drake.serving.transport import SimSide
 
+    try:
+        access = Access.for_host(host, token)
+    except ValueError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
     ctx = multiprocessing.get_context("spawn")
     conn, child_conn = ctx.Pipe()
     http = ctx.Process(target=http_main, name="corobot-http", daemon=True, args=(
-        child_conn, host, port, log_level, HTTP_NICENESS))
+        child_conn, access, port, log_level, HTTP_NICENESS))
     http.start()
     kind, value = conn.recv()
     if kind == "error":
@@ -66,8 +80,14 @@ def serve(make_sim, host: str = "127.0.0.1", port: int = 50000, meshcat: bool = 
     bridge = SimSide(runner, conn)
     shown = f"http://[{host}]:{value}" if ":" in host else f"http://{host}:{value}"
     print(f"serving {shown}", flush=True)
-    print(f"  dashboard {shown}/dashboard  services {shown}/services  API {shown}/docs"
+    print(f"  dashboard {access.page_url(shown)}  services {shown}/services  API {shown}/docs"
           + (f"  Meshcat {runner.meshcat_url}" if runner.meshcat_url else ""), flush=True)
+    if access.token:
+        print(f"  token {access.token}  (send 'Authorization: Bearer <token>'; the dashboard "
+              "link carries it)", flush=True)
+    if not is_loopback(host):
+        print(f"warning: serving on {host}: anyone who can reach it and has the token can "
+              "drive the robot", file=sys.stderr, flush=True)
     stats = runner.stats()
     try:
         while http.is_alive() and runner.alive and not bridge.closed.is_set():
@@ -76,7 +96,10 @@ def serve(make_sim, host: str = "127.0.0.1", port: int = 50000, meshcat: bool = 
     except KeyboardInterrupt:
         pass
     finally:
-        runner.stop()
+        runner.stop()  # fails the requests still waiting on the simulation: 503
+        bridge.close()  # their answers go out, then the HTTP process sees the pipe close
+        with contextlib.suppress(KeyboardInterrupt):  # a second Ctrl-C: terminate it now
+            http.join(HTTP_STOP_TIMEOUT)
         if http.is_alive():
             http.terminate()
             http.join(5)
@@ -109,8 +132,9 @@ def _sim_runner(make_sim, meshcat: bool):
     return runner
 
 
-def http_main(conn, host: str, port: int, log_level: str, niceness: int) -> None:
-    """The HTTP process: listen, report the port, wait for the simulation, serve."""
+def http_main(conn, access, port: int, log_level: str, niceness: int) -> None:
+    """The HTTP process: listen on `access.host`, report the port, wait for the simulation,
+    serve behind `access` (`security.Access`)."""
     import os
 
     import uvicorn
@@ -121,7 +145,7 @@ def http_main(conn, host: str, port: int, log_level: str, niceness: int) -> None
     if niceness:
         with contextlib.suppress(OSError):
             os.nice(niceness)
-    sock = _listen(conn, host, port)
+    sock = _listen(conn, access.host, port)
     if sock is None:
         return
     server_box: list = []
@@ -134,7 +158,7 @@ def http_main(conn, host: str, port: int, log_level: str, niceness: int) -> None
         runner = RemoteRunner(conn, on_close=closed)
     except (TimeoutError, EOFError, OSError):
         return
-    config = uvicorn.Config(create_app(runner), log_level=log_level, access_log=False,
+    config = uvicorn.Config(create_app(runner, access), log_level=log_level, access_log=False,
                             lifespan="off", timeout_graceful_shutdown=1)
     server = uvicorn.Server(config)
     server_box.append(server)
@@ -176,6 +200,11 @@ class ServerProcess:
         self.startup_timeout = startup_timeout
         self.stderr_path = stderr_path
         self.url: str | None = None
+        self.token: str | None = (self.args[self.args.index("--token") + 1]
+                                  if "--token" in self.args else None)
+        """The token given with --token (None: none given)."""
+        self.lines: list[str] = []
+        """What the server printed on stdout after its first line."""
         self.process = None
 
     def __enter__(self) -> ServerProcess:
@@ -195,9 +224,26 @@ class ServerProcess:
             self.__exit__(None, None, None)
             raise RuntimeError(f"the server did not start: {line[0] if line else 'timeout'}")
         self.url = line[0].split()[1]
-        # Keep draining stdout so the child never blocks on a full pipe.
-        threading.Thread(target=self.process.stdout.read, daemon=True).start()
+        # Keep reading stdout (into `lines`) so the child never blocks on a full pipe.
+        threading.Thread(target=lambda: self.lines.extend(self.process.stdout), daemon=True
+                         ).start()
         return self
+
+    def printed_token(self, timeout: float = 10.0) -> str | None:
+        """The token the server printed (`  token <token> ...`; None if it printed none
+        within `timeout` s of its start)."""
+        import time
+
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            for text in list(self.lines):
+                if text.startswith("  token "):
+                    return text.split()[1]
+            if any(text.startswith("  dashboard") for text in self.lines) and not any(
+                    "#token=" in text for text in self.lines):
+                return None
+            time.sleep(0.05)
+        return None
 
     def __exit__(self, *exc) -> None:
         import signal

@@ -19,11 +19,12 @@ import contextlib
 import itertools
 import pickle
 import threading
+import time
 from collections import deque
 from collections.abc import Callable
 from typing import Any, TypeVar
 
-from corobot_drake.serving.runner import SimRunner
+from corobot_drake.serving.runner import SimRunner, SimulationStoppedError
 from corobot_drake.serving.snapshots import RobotInfo
 
 T = TypeVar("T")
@@ -47,6 +48,8 @@ class SimSide:
         self._messages: deque = deque()
         self._snapshot: dict | None = None
         self._watches: dict[int, concurrent.futures.Future] = {}
+        self._sending = False
+        """A batch taken from `_messages` is being written to the pipe."""
         self.closed = threading.Event()
         runner.on_publish.append(self._on_snapshot)
         self._post(("hello", {"robots": runner.robots, "snapshot": runner.snapshot,
@@ -74,6 +77,7 @@ class SimSide:
             messages = list(self._messages)
             self._messages.clear()
             snapshot, self._snapshot = self._snapshot, None
+            self._sending = True
         return messages, snapshot
 
     def _send_loop(self) -> None:
@@ -87,8 +91,23 @@ class SimSide:
                     self.conn.send(message)
                 if snapshot is not None:
                     self.conn.send(("snapshot", snapshot, self.runner.stats()))
+                with self._cond:
+                    self._sending = False
+                    self._cond.notify_all()
         except (OSError, EOFError, BrokenPipeError):
             self.closed.set()
+
+    def close(self, timeout: float = 2.0) -> None:
+        """Sends what is queued (e.g. the 503s of requests the stopped simulation failed),
+        waiting up to `timeout` s, then closes the pipe: the HTTP process then stops."""
+        deadline = time.monotonic() + timeout
+        with self._cond:
+            while ((self._messages or self._sending) and not self.closed.is_set()
+                   and time.monotonic() < deadline):
+                self._cond.wait(0.05)
+        self.closed.set()
+        with contextlib.suppress(OSError):
+            self.conn.close()
 
     def _receive_loop(self) -> None:
         try:
@@ -170,7 +189,7 @@ class RemoteRunner:
     def _request(self, kind: str, fn) -> concurrent.futures.Future:
         future: concurrent.futures.Future = concurrent.futures.Future()
         if not self._open:
-            future.set_exception(RuntimeError("the simulation is not running"))
+            future.set_exception(SimulationStoppedError("the simulation is not running"))
             return future
         rid = next(self._ids)
         with self._lock:
@@ -180,7 +199,7 @@ class RemoteRunner:
         except (OSError, pickle.PicklingError) as e:
             with self._lock:
                 self._pending.pop(rid, None)
-            future.set_exception(RuntimeError(f"cannot reach the simulation: {e}"))
+            future.set_exception(SimulationStoppedError(f"cannot reach the simulation: {e}"))
             return future
         if kind == "watch":
             future.add_done_callback(lambda f: self._cancelled(rid, f))
@@ -225,6 +244,6 @@ class RemoteRunner:
             pending, self._pending = self._pending, {}
         for future in pending.values():
             if future.set_running_or_notify_cancel():
-                future.set_exception(RuntimeError("the simulation stopped"))
+                future.set_exception(SimulationStoppedError("the simulation stopped"))
         if self._on_close is not None:
             self._on_close()

@@ -16,7 +16,7 @@ from fastapi.responses import Response
 
 from corobot_drake.serving.frames import FrameCache
 from corobot_drake.serving.operations import Operations
-from corobot_drake.serving.runner import Runner
+from corobot_drake.serving.runner import Runner, SimulationStoppedError
 from corobot_drake.serving.snapshots import RobotInfo
 
 STATIC_DIR = Path(__file__).resolve().parent.parent / "static"
@@ -85,6 +85,8 @@ class Backend:
             return await asyncio.wait_for(asyncio.wrap_future(future), timeout)
         except TimeoutError:
             raise HTTPException(503, "the simulation did not answer in time") from None
+        except SimulationStoppedError as e:  # it stopped while the request waited
+            raise HTTPException(503, str(e)) from None
         except (ValueError, KeyError, TypeError) as e:
             raise HTTPException(422, str(e).strip("'\"")) from None
 

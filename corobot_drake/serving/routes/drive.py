@@ -17,6 +17,7 @@ from corobot_drake.serving.routes.backend import (
     BackendDep,
     json_response,
 )
+from corobot_drake.serving.runner import SimulationStoppedError
 from corobot_drake.serving.snapshots import two_wheel_view
 
 router = APIRouter(tags=["drive"])
@@ -68,7 +69,7 @@ async def set_velocity(robot: str, body: schemas.VelocityRequest, backend: Backe
 
 @router.post("/robots/{robot}/drive/all_stop", response_model=schemas.Accepted,
              responses=ERRORS, summary="Both sides to zero speed")
-async def all_stop(robot: str, backend: BackendDep, body: schemas.EmptyRequest | None = None):
+async def all_stop(robot: str, body: schemas.EmptyRequest, backend: BackendDep):
     return await simple_command(backend, robot, "all_stop")
 
 
@@ -103,8 +104,8 @@ async def _ended(backend: Backend, robot: str, seq: int,
         return await asyncio.wait_for(asyncio.wrap_future(future), timeout)
     except TimeoutError:
         return None  # wait_for cancelled the watch
-    except RuntimeError:  # the simulation stopped meanwhile
-        raise HTTPException(503, "the simulation is not running") from None
+    except SimulationStoppedError as e:  # the simulation stopped meanwhile
+        raise HTTPException(503, str(e)) from None
 
 
 @router.post("/robots/{robot}/drive/drive_distance", response_model=schemas.OperationState,

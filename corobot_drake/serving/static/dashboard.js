@@ -1,6 +1,7 @@
 // The dashboard: drive pad (drag or keys), stop/enable, IR gauges, pose, encoders, camera.
 // State arrives by Server-Sent Events from /robots/<name>/subscribe; commands are POSTs to
-// the drive contract. No framework, no build step.
+// the drive contract; every request carries the server's token (token.js). No framework, no
+// build step.
 "use strict";
 
 const $ = (id) => document.getElementById(id);
@@ -12,7 +13,7 @@ window.dashboard = state;  // for tests and the curious
 async function api(path, body) {
   const init = body === undefined ? {} : {
     method: "POST", headers: { "Content-Type": "application/json" }, body: JSON.stringify(body) };
-  const response = await fetch(path, init);
+  const response = await fetch(path, authorized(init));
   const data = await response.json().catch(() => ({}));
   if (!response.ok) throw new Error(data.detail || response.statusText);
   return data;
@@ -179,21 +180,46 @@ function showIr(name, s) {
   gauge.firstElementChild.style.width = `${Math.max(0, Math.min(1, s.normalized)) * 100}%`;
 }
 
-function subscribe() {
-  if (state.events) state.events.close();
+// Server-Sent Events read with fetch (EventSource cannot send the token's header); like
+// EventSource, it reconnects a second after the stream ends or fails.
+async function subscribe() {
+  if (state.events) state.events.abort();
   const names = state.services.filter((s) => s.subscribe_url).map((s) => s.name);
-  const es = new EventSource(`${base()}/subscribe?services=${names.join(",")}`);
-  state.events = es;
-  es.addEventListener("drive", (e) => showDrive(JSON.parse(e.data)));
-  for (const name of names.filter((n) => n.endsWith("_ir"))) {
-    es.addEventListener(name, (e) => showIr(name, JSON.parse(e.data)));
+  const handlers = { drive: showDrive };
+  for (const name of names.filter((n) => n.endsWith("_ir"))) handlers[name] = (d) => showIr(name, d);
+  const events = new AbortController();
+  state.events = events;
+  const url = `${base()}/subscribe?services=${names.join(",")}`;
+  while (!events.signal.aborted) {
+    try {
+      const response = await fetch(url, authorized({ signal: events.signal }));
+      const reader = response.body.pipeThrough(new TextDecoderStream()).getReader();
+      let buffer = "";
+      for (;;) {
+        const { value, done } = await reader.read();
+        if (done) break;
+        buffer += value;
+        let end;
+        while ((end = buffer.indexOf("\n\n")) >= 0) {
+          let event = "message", data = "";
+          for (const line of buffer.slice(0, end).split("\n")) {
+            if (line.startsWith("event: ")) event = line.slice(7);
+            else if (line.startsWith("data: ")) data += line.slice(6);
+          }
+          buffer = buffer.slice(end + 2);
+          if (data && handlers[event]) handlers[event](JSON.parse(data));
+        }
+      }
+    } catch (e) { if (events.signal.aborted) return; }
+    await new Promise((resolve) => setTimeout(resolve, 1000));
   }
 }
 
 // --- camera: fetch each frame (so we see its time stamp), then wait, then the next ----------
 async function nextFrame() {
   try {
-    const response = await fetch(`${base()}/camera/frame.jpg?t=${Date.now()}`, { cache: "no-store" });
+    const response = await fetch(`${base()}/camera/frame.jpg?t=${Date.now()}`,
+                                 authorized({ cache: "no-store" }));
     if (response.ok) {
       const url = URL.createObjectURL(await response.blob());
       const img = $("camera");
@@ -229,7 +255,7 @@ async function selectRobot(name) {
   for (const [n, s] of Object.entries(info.state.ir)) showIr(n, s);
   $("completing").hidden = !(info.capabilities.drive_distance && info.capabilities.rotate_degrees);
   const hasCamera = state.services.some((s) => s.name === "camera");
-  $("webcam-link").href = hasCamera ? `${base()}/camera/page` : "#";
+  $("webcam-link").href = hasCamera ? withToken(`${base()}/camera/page`) : "#";
   clearTimeout(state.cameraTimer);
   if (hasCamera) nextFrame();
   subscribe();
