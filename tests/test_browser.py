@@ -209,3 +209,66 @@ def test_meshcat_view_and_a_key_press_that_stops_by_itself(page, meshcat_server)
     assert drive()["position"]["x"] - x0 > 0.05  # HOLD_FIRST (0.7 s) at power 0.5 (~0.3 m/s)
     OUT.mkdir(exist_ok=True)
     page.screenshot(path=str(OUT / "meshcat.png"))
+
+
+def offline(page, server_url: str) -> list[tuple[str, str]]:
+    """Aborts every request the page makes to anywhere but the server (no network: a CDN
+    asset would fail); returns the list of what was blocked: (resource type, URL)."""
+    blocked = []
+
+    def route(r):
+        if r.request.url.startswith(server_url):
+            r.continue_()
+        else:
+            blocked.append((r.request.resource_type, r.request.url))
+            r.abort()
+
+    page.route("**/*", route)
+    return blocked
+
+
+def test_api_docs_render_offline(page, server):
+    """/docs (Swagger UI) and /redoc (ReDoc) load their scripts from the server itself."""
+    blocked = offline(page, server.url)
+    page.goto(f"{server.url}/docs")
+    page.wait_for_selector(".swagger-ui .info .title", timeout=30000)
+    assert "corobot-drake live services" in page.locator(".swagger-ui .info .title").inner_text()
+    page.wait_for_selector("#operations-drive-set_power_robots__robot__drive_set_power_post",
+                           timeout=10000)
+    assert page.locator(".opblock").count() >= 20  # every endpoint listed
+    assert page.locator(".btn.authorize").count() == 1  # where a token goes
+    page.goto(f"{server.url}/redoc")
+    page.wait_for_selector("text=corobot-drake live services", timeout=30000)
+    assert page.locator("[data-section-id]").count() >= 20
+    # Nothing the pages need came from elsewhere: only ReDoc's "powered by" logo asks for
+    # cdn.redoc.ly (an image; the page renders without it).
+    assert all(kind == "image" for kind, _ in blocked), blocked
+    OUT.mkdir(exist_ok=True)
+    page.screenshot(path=str(OUT / "redoc.png"))
+
+
+@pytest.fixture(scope="module")
+def token_server(tmp_path_factory):
+    log = tmp_path_factory.mktemp("token_server") / "stderr.log"
+    with ServerProcess(["--headless", "--token", "browser-test-token"],
+                       stderr_path=str(log)) as s:
+        yield s
+
+
+def test_dashboard_carries_the_token(page, token_server):
+    """A server with a token: the dashboard opened with the printed URL (#token=...) gets its
+    state and drives the robot; opened without it, it gets nothing."""
+    url = token_server.url
+    page.goto(f"{url}/dashboard#token={token_server.token}")
+    page.wait_for_selector("body[data-ready='1']", timeout=30000)
+    wait_for(lambda: page.locator("#pos-x").inner_text() != "-", 10, "the first state")
+    x0 = number(page, "#pos-x")
+    page.locator("body").click(position={"x": 5, "y": 5})
+    page.keyboard.down("ArrowUp")
+    wait_for(lambda: number(page, "#pos-x") > x0 + 0.05, 15, "the arrow key to drive")
+    page.keyboard.up("ArrowUp")
+    page.keyboard.press("Space")
+    link = page.locator("#webcam-link").get_attribute("href")
+    assert link.endswith(f"#token={token_server.token}") or link == "#"
+    refused = page.request.get(f"{url}/robots/corobot/drive")
+    assert refused.status == 401
