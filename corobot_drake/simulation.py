@@ -9,6 +9,7 @@
 All of a run's memory is in the Drake Context, so two runs of one scenario agree bit for bit.
 """
 
+import collections
 import copy
 import dataclasses as dc
 import logging
@@ -34,7 +35,7 @@ from corobot_drake.sensors.ir_sensor import noise_key
 from corobot_drake.station import RobotParts, Station, build_station
 from corobot_drake.systems.drive import CommandRecord, DriveStatus, check_finite
 from corobot_drake.systems.odometry import DriveState
-from corobot_drake.systems.runlog import log_rows, write_csv
+from corobot_drake.systems.runlog import RUN_LOG_CHUNK, log_rows, write_csv
 
 POSE_CLEARANCE = 1e-3
 """m: a SetPose is `blocked` when the robot at the target would overlap another body by more
@@ -349,9 +350,12 @@ class Robot:
 
     def run_log(self):
         """The run log so far (numpy rows; columns `runlog.COLUMNS`: time, left_power,
-        right_power, left_ticks, right_ticks, x, y, yaw), sampled every `runlog.LOG_PERIOD` s."""
-        sink = self._sim.station.diagram.GetSubsystemByName(f"{self.name}.run_log")
-        return log_rows(sink, self._sim.context)
+        right_power, left_ticks, right_ticks, x, y, yaw), sampled every `runlog.LOG_PERIOD` s;
+        with `Simulation.run_log_window`, only its last part."""
+        sim = self._sim
+        rows = log_rows(sim._run_log_sink(self.name), sim.context)
+        chunks = sim._run_log_chunks[self.name]
+        return np.concatenate([*chunks, rows]) if chunks else rows
 
     def write_log(self, path: str | Path) -> None:
         """Writes the run log as CSV (columns in docs/tuning.md; read by `analysis.sysid`)."""
@@ -398,8 +402,15 @@ class Robot:
         return CommandResult(r.seq, r.command, r.status, r.reason, r.start_time, r.end_time)
 
     def command_log(self) -> list[CommandRecord]:
+        """Every command's record, oldest first (the newest `drive.COMMAND_LOG_CAPACITY`)."""
         source = self._parts.command_source
         return list(source.current_state(source.GetMyContextFromRoot(self._sim.context)).log)
+
+    def last_command(self) -> CommandRecord | None:
+        """The newest record of the command log (None before any), without copying the log."""
+        source = self._parts.command_source
+        log = source.current_state(source.GetMyContextFromRoot(self._sim.context)).log
+        return log[-1] if log else None
 
     def summary(self) -> dict:
         pose, velocity = self.pose(), self.velocity()
@@ -425,11 +436,12 @@ class Simulation:
     """A scenario built into a Drake diagram with its Simulator and Context."""
 
     def __init__(self, scenario: sc.Scenario, meshcat=None, save_camera=None, *,
-                 record: bool = False, foxglove=None):
+                 record: bool = False, foxglove=None, run_log_window: float | None = None):
         """`save_camera`: a directory; each robot's camera frames go to `<dir>/<robot>/`.
         `record`: keep a Meshcat replay of the run (`save_recording`; without `meshcat`, an
         offline one records without a browser). `foxglove`: a `foxglove.Context` to publish
-        the run's topics on (`recording.publishers`; its sinks: an MCAP file, a live server)."""
+        the run's topics on (`recording.publishers`; its sinks: an MCAP file, a live server).
+        `run_log_window`: see the attribute."""
         self.scenario = scenario
         self._record_live: bool | None = None
         """Recording: True with a browser's Meshcat (frames shown live), False offline."""
@@ -444,6 +456,13 @@ class Simulation:
         self.context = self.simulator.get_mutable_context()
         self.robots = {name: Robot(self, parts) for name, parts in self.station.robots.items()}
         self._diagram_key: str | None = None
+        self.run_log_window: float | None = run_log_window
+        """s of run log kept in memory (the newest, plus up to `runlog.RUN_LOG_CHUNK`
+        samples); None keeps the whole run. A long-running simulation (`--serve`) sets it so
+        that its memory stays flat: the log takes 64 bytes a sample, 23 MB an hour."""
+        self._run_log_chunks = {name: collections.deque() for name in self.robots}
+        """Each robot's run-log samples moved out of its Drake log sink when bounded
+        (`_collect_run_logs`): arrays of `runlog.COLUMNS` rows, oldest first."""
         self._start()
 
     def _start(self) -> None:
@@ -479,8 +498,9 @@ class Simulation:
         self.scenario = scenario or self.scenario
         self.station.diagram.SetDefaultContext(self.context)
         for name in self.robots:  # a log sink keeps its log beside the state: clear it too
-            sink = self.station.diagram.GetSubsystemByName(f"{name}.run_log")
-            sink.GetMutableLog(sink.GetMyMutableContextFromRoot(self.context)).Clear()
+            self._run_log_sink(name).GetMutableLog(
+                self._run_log_sink(name).GetMyMutableContextFromRoot(self.context)).Clear()
+            self._run_log_chunks[name].clear()
         self.context.SetTime(self.scenario.simulator_config.start_time)
         self._start()
 
@@ -565,7 +585,29 @@ class Simulation:
             applied = [robot._apply_teleport() for robot in self.robots.values()]
             if not any(applied) or self.time >= t:
                 break
+        if self.run_log_window is not None:
+            self._collect_run_logs()
         self._wall_seconds += time.perf_counter() - start
+
+    def _run_log_sink(self, name: str):
+        return self.station.diagram.GetSubsystemByName(f"{name}.run_log")
+
+    def _collect_run_logs(self) -> None:
+        """Bounds the run logs to `run_log_window`: once a sink holds `RUN_LOG_CHUNK` samples
+        they move out of it (the sink then starts again, small) into the robot's chunks,
+        whose samples older than the window go."""
+        for name, chunks in self._run_log_chunks.items():
+            sink = self._run_log_sink(name)
+            log = sink.GetMutableLog(sink.GetMyMutableContextFromRoot(self.context))
+            if log.num_samples() < RUN_LOG_CHUNK:
+                continue
+            chunks.append(log_rows(sink, self.context))
+            log.Clear()
+            cutoff = self.time - self.run_log_window
+            while chunks and chunks[0][-1, 0] < cutoff:
+                chunks.popleft()
+            if chunks and chunks[0][0, 0] < cutoff:  # a long advance: one chunk spans it
+                chunks[0] = chunks[0][chunks[0][:, 0] >= cutoff].copy()
 
     def saved_scenario(self) -> sc.Scenario:
         """This scenario with the current state: time, every robot's and free body's pose

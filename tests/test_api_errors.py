@@ -120,3 +120,48 @@ def _ground(x: float):
     from corobot_drake.config.poses import ground_pose
 
     return ground_pose(x, 0.0, 0.0).GetDeterministicValue()
+
+
+# --- memory stays flat in long runs ----------------------------------------------------------
+
+
+def test_a_bounded_run_log_keeps_its_window_and_agrees_with_the_whole_one():
+    """With `run_log_window` the run log keeps the newest window (plus what the sink holds,
+    under one chunk of `RUN_LOG_CHUNK` samples), and those rows are the same as a whole
+    run's. One advance of 31 s or many small ones (as when serving) bound it alike."""
+    from corobot_drake.systems.runlog import LOG_PERIOD, RUN_LOG_CHUNK
+
+    script = "robots: {corobot: {commands: [!SetPower {left: 0.3, right: -0.3}]}}"
+    whole, bounded = make_sim(script), make_sim(script)
+    bounded.run_log_window = 5.0
+    whole.advance(31.0)
+    bounded.advance(20.0)
+    while bounded.time < 31.0 - 1e-9:
+        bounded.advance_to(min(31.0, bounded.time + 0.05))
+    full, kept = whole.robot().run_log(), bounded.robot().run_log()
+    assert len(full) == pytest.approx(31.0 / LOG_PERIOD, abs=2)
+    window = 5.0 / LOG_PERIOD
+    assert window <= len(kept) <= window + RUN_LOG_CHUNK + 1
+    assert (kept == full[-len(kept):]).all()  # bit for bit the whole log's end
+    assert (bounded._run_log_chunks["corobot"][0][:, 0] > 0).all()
+    bounded.reset()
+    assert not bounded._run_log_chunks["corobot"]  # a reset clears the chunks too
+    assert bounded.robot().run_log()[:, 0].tolist() == [0.0]  # the sample at the start
+
+
+def test_the_command_log_keeps_the_newest_records(sim, monkeypatch):
+    """Past `COMMAND_LOG_CAPACITY` records the oldest go; the newest and running ones stay, and
+    a handle to a dropped command says so (KeyError) instead of failing later."""
+    from corobot_drake.systems import drive
+
+    monkeypatch.setattr(drive, "COMMAND_LOG_CAPACITY", 50)
+    robot = sim.robot()
+    first = robot.set_power(0.1, 0.1)
+    seqs = [robot.set_power(0.1 * (i % 5), 0.0) for i in range(120)]
+    log = robot.command_log()
+    assert len(log) == 50
+    assert [r.seq for r in log] == seqs[-50:]
+    assert robot.last_command() == log[-1] and log[-1].status == "running"
+    with pytest.raises(KeyError, match=f"issued no command {first}"):
+        robot.command_result(first)
+    robot.all_stop()

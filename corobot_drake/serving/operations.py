@@ -42,8 +42,14 @@ class Operation:
         })
 
 
+OPERATIONS_KEPT = 1000
+"""The newest operations kept (their status URLs answer); older ones answer 404, as their
+records leave the command log (`drive.COMMAND_LOG_CAPACITY`) too."""
+
+
 class Operations:
-    """The operations started over HTTP, by id (ids count from 1 across robots)."""
+    """The operations started over HTTP, by id (ids count from 1 across robots); the newest
+    `OPERATIONS_KEPT`."""
 
     def __init__(self):
         self._operations: dict[int, Operation] = {}
@@ -52,6 +58,8 @@ class Operations:
     def add(self, robot: str, command: str, arguments: dict, seq: int) -> Operation:
         operation = Operation(next(self._ids), robot, command, arguments, seq)
         self._operations[operation.id] = operation
+        if len(self._operations) > OPERATIONS_KEPT:  # dicts keep insertion order
+            del self._operations[next(iter(self._operations))]
         return operation
 
     def get(self, robot: str, op_id: int) -> Operation | None:

@@ -34,6 +34,10 @@ HTTP_STOP_TIMEOUT = 3.0
 """s the HTTP process has, once the simulation stops, to answer the requests in flight (503)
 and exit (uvicorn's graceful shutdown takes up to 1 s) before it is terminated."""
 
+SERVE_RUN_LOG_WINDOW = 300.0
+"""s of run log a served simulation keeps in memory (1.9 MB a robot): serving runs for days,
+and nothing it serves reads the run log (`Simulation.run_log_window`)."""
+
 SERVE_CAMERA_FPS = 10.0
 """Hz: the camera's render rate when serving, unless --camera-rate says otherwise. The
 dashboard and the webcam page show a few frames a second; rendering 30 would cost a
@@ -41,13 +45,15 @@ third of the simulation's time budget."""
 
 
 def serve(make_sim, host: str = "127.0.0.1", port: int = 50000, meshcat: bool = False,
-          log_level: str = "warning", label: str = "", token: str | None = None) -> int:
+          log_level: str = "warning", label: str = "", token: str | None = None,
+          rate: float = 1.0) -> int:
     """Builds the simulation (`make_sim(meshcat)`, in the simulation thread, with a Meshcat
     made there too when `meshcat`: Meshcat must be used from the thread that made it) and
     serves it until Ctrl-C. The HTTP server runs in a child process (see the module
     docstring), behind `security.Access.for_host(host, token)` (off loopback a token is
-    needed: `token`, or one made and printed). Returns the exit status: 2 when the port, the
-    token or the simulation cannot be had."""
+    needed: `token`, or one made and printed). `rate`: simulated s per wall-clock s (a rate
+    the machine cannot keep runs as fast as it can; tools/bench_memory.py). Returns the exit
+    status: 2 when the port, the token or the simulation cannot be had."""
     import multiprocessing
 
     from corobot_drake.sensors.camera import RendererUnavailableError
@@ -70,7 +76,7 @@ def serve(make_sim, host: str = "127.0.0.1", port: int = 50000, meshcat: bool = 
         print(f"error: {value}", file=sys.stderr)
         return 2
     sys.setswitchinterval(SWITCH_INTERVAL)
-    runner = _sim_runner(make_sim, meshcat)
+    runner = _sim_runner(make_sim, meshcat, rate)
     try:
         runner.start()
     except (ValueError, RendererUnavailableError) as e:  # e.g. a non-finite number
@@ -108,7 +114,7 @@ def serve(make_sim, host: str = "127.0.0.1", port: int = 50000, meshcat: bool = 
     return 0 if runner.error is None else 1
 
 
-def _sim_runner(make_sim, meshcat: bool):
+def _sim_runner(make_sim, meshcat: bool, rate: float = 1.0):
     """A `SimRunner` (not started) whose simulation thread makes the Meshcat (if `meshcat`),
     the simulation (`make_sim(meshcat or None)`) and the Meshcat teleop."""
     from corobot_drake.serving.runner import SimRunner
@@ -121,6 +127,7 @@ def _sim_runner(make_sim, meshcat: bool):
             viewer = StartMeshcat()
             runner.meshcat_url = viewer.web_url()
         sim = make_sim(viewer)
+        sim.run_log_window = SERVE_RUN_LOG_WINDOW
         if viewer is not None:
             from corobot_drake.serving.teleop import MeshcatTeleop
 
@@ -128,7 +135,7 @@ def _sim_runner(make_sim, meshcat: bool):
             runner.hooks.append(lambda s: teleop.poll())
         return sim
 
-    runner = SimRunner(build)
+    runner = SimRunner(build, rate=rate)
     return runner
 
 

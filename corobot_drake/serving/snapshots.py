@@ -73,7 +73,7 @@ def drive_state(robot, time: float) -> dict:
               for name, w in native.wheels.items()}
     x, y, z = native.position
     heading = float(native.heading)
-    log = robot.command_log()
+    last = robot.last_command()
     return jsonable({
         "time_stamp": time,
         "is_enabled": bool(native.is_enabled),
@@ -87,7 +87,7 @@ def drive_state(robot, time: float) -> dict:
         "heading_deg": math.degrees(heading),
         "pose": dc.asdict(robot.pose()),
         "velocity": dc.asdict(robot.velocity()),
-        "command": command_json(log[-1]) if log else None,
+        "command": command_json(last) if last is not None else None,
     })
 
 

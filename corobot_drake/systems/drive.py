@@ -84,6 +84,18 @@ class CommandRecord(_Immutable):
     reason: str = ""
 
 
+COMMAND_LOG_CAPACITY = 10_000
+"""Records the command log keeps (the newest; ~220 bytes each, so ~2.2 MB at most): a day of
+driving from the dashboard must not fill the memory. Older records are dropped as new ones
+come (a scripted run longer than this has its log's indices shifted from the script's)."""
+
+
+def _bounded(log: list) -> tuple:
+    """The newest `COMMAND_LOG_CAPACITY` records (running ones are always among them: only
+    the latest command, and a completing one it superseded ends at once, run)."""
+    return tuple(log[-COMMAND_LOG_CAPACITY:])
+
+
 @dc.dataclass(frozen=True)
 class CommandSourceState(_Immutable):
     """The command source's whole memory (held as abstract state in the Context)."""
@@ -200,7 +212,7 @@ class CommandSource(LeafSystem):
         enabled = command.enabled if isinstance(command, Enable) else state.request.enabled
         request = DriveRequest(seq, command, time, enabled)
         teleport = request if isinstance(command, SetPose) else state.teleport
-        return dc.replace(state, request=request, log=tuple(log), teleport=teleport)
+        return dc.replace(state, request=request, log=_bounded(log), teleport=teleport)
 
     @staticmethod
     def _with_status(state: CommandSourceState, status: CommandStatus) -> CommandSourceState:
@@ -262,8 +274,8 @@ class CommandSource(LeafSystem):
         """True while the scripted completing command the script waits for runs."""
         if not state.script_waits_for:
             return False
-        record = next(r for r in reversed(state.log) if r.seq == state.script_waits_for)
-        return record.end_time is None
+        record = next((r for r in reversed(state.log) if r.seq == state.script_waits_for), None)
+        return record is not None and record.end_time is None  # None: dropped, long over
 
     def _update(self, context, state):
         original = self.get_state(context)
@@ -294,9 +306,9 @@ class CommandSource(LeafSystem):
         command = script[current.next_script_index]
         current = dc.replace(current, next_script_index=current.next_script_index + 1)
         if isinstance(command, Wait):
-            log = (*current.log, CommandRecord(seq=0, command="Wait", start_time=now,
-                                               end_time=now + command.seconds,
-                                               status="succeeded"))
+            log = _bounded([*current.log, CommandRecord(seq=0, command="Wait", start_time=now,
+                                                        end_time=now + command.seconds,
+                                                        status="succeeded")])
             return dc.replace(current, script_blocked_until=now + command.seconds, log=log)
         current = self._with_command(current, command, now)
         completing = isinstance(command, COMPLETING_COMMANDS)

@@ -28,6 +28,9 @@ from corobot_drake.systems.odometry import heading_of
 
 LOG_PERIOD = 0.01
 """s: the run log's sample period (100 Hz)."""
+RUN_LOG_CHUNK = 1000
+"""Samples (10 s at 100 Hz) moved out of the sink at a time when the run log is bounded
+(`Simulation.run_log_window`)."""
 COLUMNS = ("time", "left_power", "right_power", "left_ticks", "right_ticks", "x", "y", "yaw")
 
 LogSample = namedview("LogSample", COLUMNS[1:])
