@@ -689,6 +689,12 @@ def render_server_flood(outs) -> str:
             f"load (without it: {base:.2f}); the test {'passed' if passed else 'FAILED'}.")
 
 
+def render_server_memory(outs) -> str:
+    o = outs[0][0]
+    paragraph = next(line for line in o.stdout.splitlines() if line.startswith("`--serve`"))
+    return wrap_markdown(f"Measured {_measured([o])}: {paragraph}")
+
+
 def blocks() -> list[Spec]:
     """Every generated block of the docs, in the order a full refresh runs them."""
     shipped = _shipped_scaling()
@@ -762,6 +768,9 @@ def blocks() -> list[Spec]:
         Spec("server-flood", "docs/services.md",
              (Command("python -m pytest -s -q tests/test_server.py -k flood", ok=(0, 1)),),
              render_server_flood, TIMING, 30),
+        Spec("server-memory", "docs/services.md",
+             (Command("python tools/bench_memory.py --sim-minutes 10 --warmup-minutes 1 "
+                      "--sample-every 20"),), render_server_memory, TIMING, 2400),
         Spec("camera-cost", "docs/looks.md", (Command("python tools/camera_cost.py"),),
              render_camera_cost, TIMING, 70),
         Spec("bench-camera", "docs/sensors.md", (bench_camera,), render_table_with_load,

@@ -5,6 +5,7 @@
 - `calls.py`, `operations.py`, `snapshots.py`, `frames.py`: what crosses to the simulation
   thread, the commands in flight, the published state, the camera frames;
 - `webapp.py`, `routes/`, `schemas.py`: the FastAPI app, its routers and its models;
+- `security.py`: who may drive the robot (loopback, the bearer token, Host, JSON bodies);
 - `serve.py`: `--serve` (both processes); `client.py`: `CorobotClient`; `teleop.py`: Meshcat keys;
   `view.py`: Meshcat's initial view and follow camera.
 """
