@@ -214,5 +214,8 @@ def summary(result: Result, args: str) -> str:
             f"{first.rss / 1e6:.0f} MB after {result.warmup / 60:.0f} min, "
             f"{result.samples[-1].rss / 1e6:.0f} MB at the end ({result.growth:+.1f} MB); over "
             f"the second half {result.slope_per_hour:+.1f} MB per simulated hour; one simulated "
-            f"hour: {result.hour_growth():+.1f} MB (target: under 10). Load average "
-            f"{load:.1f} at the end ({args}).")
+            f"hour: {result.hour_growth():+.1f} MB"
+            + ("" if result.simulated >= 3600.0 + result.warmup else
+               " extrapolated with that slope (an upper bound: the command log, still filling "
+               "then, stops at its cap)")
+            + f" (target: under 10). Load average {load:.1f} at the end ({args}).")
