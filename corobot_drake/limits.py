@@ -14,6 +14,11 @@ POWER = (-1.0, 1.0)
 SPEED = (-5.0, 5.0)
 """set_speed: rim speed per side, m/s (8x the robot's top speed; the drive then clamps the
 axle speed to its maximum)."""
+LINEAR = (-5.0, 5.0)
+"""set_velocity: chassis speed, m/s (the drive scales both sides down past the max axle
+speed)."""
+ANGULAR = (-50.0, 50.0)
+"""set_velocity: yaw rate, rad/s (positive: left)."""
 DRIVE_POWER = (0.0, 1.0)
 """drive_distance / rotate_degrees: power in (0, 1] (the lower end excluded)."""
 DISTANCE = (-100.0, 100.0)

@@ -88,6 +88,7 @@ def check_command(command):
     ranges = {
         sc.SetPower: {"left": limits.POWER, "right": limits.POWER},
         sc.SetSpeed: {"left": limits.SPEED, "right": limits.SPEED},
+        sc.SetVelocity: {"linear": limits.LINEAR, "angular": limits.ANGULAR},
         sc.DriveDistance: {"distance": limits.DISTANCE, "power": limits.DRIVE_POWER},
         sc.RotateDegrees: {"degrees": limits.DEGREES, "power": limits.DRIVE_POWER},
         sc.SetPose: {"x": limits.POSITION, "y": limits.POSITION, "yaw_deg": limits.YAW_DEG},
@@ -139,8 +140,9 @@ class Robot:
 
     def set_velocity(self, linear: float, angular: float) -> int:
         """Chassis velocity, ROS `cmd_vel` style: `linear` m/s forward, `angular` rad/s
-        (positive: left), through the skid-steer kinematics (`sc.SetVelocity`)."""
-        return self.issue(sc.SetVelocity(float(linear), float(angular)))
+        (positive: left), through the skid-steer kinematics (`sc.SetVelocity`); in
+        [-5, 5] m/s and [-50, 50] rad/s (`limits`; ValueError otherwise)."""
+        return self.issue(sc.SetVelocity(linear, angular))
 
     def all_stop(self) -> int:
         return self.issue(sc.AllStop())

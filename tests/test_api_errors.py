@@ -32,6 +32,8 @@ BAD_CALLS = [
     ("set_power", (True, 0), "in [-1, 1], got True"),
     ("set_speed", (6.0, 0), "SetSpeed.left must be a finite number in [-5, 5], got 6.0"),
     ("set_speed", (0, -math.inf), "SetSpeed.right must be a finite number in [-5, 5]"),
+    ("set_velocity", (6.0, 0.0), "SetVelocity.linear must be a finite number in [-5, 5]"),
+    ("set_velocity", (0.0, math.nan), "SetVelocity.angular must be a finite number in [-50"),
     ("enable", ("false",), "Enable.enabled must be True or False"),
     ("drive_distance_async", (1.0, 0.0), "DriveDistance.power must be a finite number in (0, 1]"),
     ("drive_distance_async", (1e9,), "DriveDistance.distance must be a finite number in [-100"),

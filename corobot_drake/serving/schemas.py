@@ -46,9 +46,9 @@ class SpeedRequest(_Body):
 
 
 class VelocityRequest(_Body):
-    linear: Annotated[float, Field(ge=-5.0, le=5.0,
+    linear: Annotated[float, Field(ge=limits.LINEAR[0], le=limits.LINEAR[1],
                                    description="m/s forward (the drive clamps the axle speed)")]
-    angular: Annotated[float, Field(ge=-50.0, le=50.0,
+    angular: Annotated[float, Field(ge=limits.ANGULAR[0], le=limits.ANGULAR[1],
                                     description="rad/s yaw rate, positive turns left")]
 
 
