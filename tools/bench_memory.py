@@ -20,15 +20,16 @@ from corobot_drake.analysis import bench_memory
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0],
+                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     p.add_argument("--sim-minutes", type=float, default=60.0,
-                   help="simulated minutes to serve (default 60)")
+                   help="simulated minutes to serve")
     p.add_argument("--warmup-minutes", type=float, default=2.0,
-                   help="simulated minutes before the growth is counted (default 2)")
+                   help="simulated minutes before the growth is counted")
     p.add_argument("--poll-hz", type=float, default=10.0,
-                   help="the poller's rate, wall clock (default 10)")
+                   help="the poller's rate, wall clock")
     p.add_argument("--sample-every", type=float, default=30.0,
-                   help="simulated s between memory samples (default 30)")
+                   help="simulated s between memory samples")
     args = p.parse_args(argv)
     bar = tqdm(total=round(args.sim_minutes * 60), unit="sim s", file=sys.stderr)
 
