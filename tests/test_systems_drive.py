@@ -252,12 +252,15 @@ def test_script_runs_in_order_with_waits_and_completing_commands():
     assert (request(s).seq, request(s).command) == (4, AllStop())
     assert [(r.seq, r.command) for r in log(s)] == [
         (1, "SetPower"), (0, "Wait"), (2, "SetSpeed"), (3, "DriveDistance"), (4, "AllStop")]
-    # The SetPower ends when the SetSpeed replaces it, though the Wait was logged between.
+    # Level commands end at the update after their issue, when the drive takes them; the
+    # AllStop, issued at this update, runs until the next.
     assert [r.status for r in log(s)] == ["succeeded"] * 4 + ["running"]
-    assert log(s)[0].end_time == pytest.approx(3 * PERIOD, abs=1e-12)
+    assert log(s)[0].end_time == 0.0  # issued and handed over at initialization
     wait = log(s)[1]
     assert (wait.start_time, wait.end_time) == pytest.approx((0.0, 0.04), abs=1e-12)
     assert log(s)[3].end_time == 0.2  # the reported end time
+    s.tick()
+    assert log(s)[4].status == "succeeded"
 
 
 def test_api_commands_take_the_next_sequence_numbers_at_once():
@@ -269,6 +272,8 @@ def test_api_commands_take_the_next_sequence_numbers_at_once():
     assert s.system.Issue(s.context, AllStop()) == 3
     assert [(r.seq, r.status) for r in log(s)] == [(1, "succeeded"), (2, "succeeded"),
                                                    (3, "running")]
+    s.tick()  # the drive takes the AllStop at the next update
+    assert [(r.seq, r.status) for r in log(s)][-1] == (3, "succeeded")
     assert s.system.record(s.context, 2).command == "SetSpeed"
     assert s.system.record(s.context, 9) is None
 
@@ -327,3 +332,41 @@ def test_non_finite_commands_are_rejected(bad):
     with pytest.raises(ValueError, match=r"SetSpeed\.right"):
         s.system.Issue(s.context, SetSpeed(0.0, bad))
     assert request(s).seq == 0  # nothing issued
+
+
+LEVEL_AND_WAIT = [SetPower(0.3, 0.3), SetSpeed(0.1, 0.1), AllStop(), Enable(True), Wait(0.05)]
+LATER = [SetPower(0.2, 0.2), Wait(0.05), AllStop(), Enable(True), Enable(False),
+         SetSpeed(0.1, 0.1)]
+
+
+@pytest.mark.parametrize("first", LEVEL_AND_WAIT, ids=lambda c: type(c).__name__)
+@pytest.mark.parametrize("later", LATER, ids=lambda c: f"then_{c}")
+def test_every_scripted_command_ends_whatever_follows(first, later):
+    """Issue 14 point 7: no command of a script is left `running` once the script is done,
+    whatever follows it (a Wait's record used to hide the command before it)."""
+    s = source([first, later], CommandStatus())
+    s.tick(8)  # 8 updates: both issued, the Waits (3 updates each) elapsed
+    records = log(s)
+    assert len(records) == 2
+    assert all(r.end_time is not None for r in records), records
+    assert all(r.status == "succeeded" for r in records), records
+    assert records[0].end_time <= records[1].start_time + 1e-12
+
+
+def test_power_to_a_disabled_drive_fails_disabled():
+    s = source([Enable(False), SetPower(0.5, 0.5), SetSpeed(0.1, 0.1), Enable(True),
+                SetPower(0.2, 0.2)], CommandStatus())
+    s.tick(7)
+    assert [(r.command, r.status, r.reason) for r in log(s)] == [
+        ("Enable", "succeeded", ""), ("SetPower", "failed", "disabled"),
+        ("SetSpeed", "failed", "disabled"), ("Enable", "succeeded", ""),
+        ("SetPower", "succeeded", "")]
+
+
+def test_a_wait_runs_until_it_has_elapsed():
+    s = source([Wait(0.1)], CommandStatus())
+    s.tick(3)  # t = 2/60 s: 0.1 s not yet elapsed
+    assert (log(s)[0].status, log(s)[0].end_time) == ("running", None)
+    s.tick(5)  # t = 7/60 s > 0.1 s
+    assert log(s)[0].status == "succeeded"
+    assert log(s)[0].end_time == pytest.approx(0.1, abs=1e-12)

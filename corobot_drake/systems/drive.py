@@ -148,7 +148,9 @@ class CommandSource(LeafSystem):
     command holds it until it ends. `Issue()` writes a command into the Context directly
     (what the Python API, teleop and the server call between steps). A new command ends a
     running completing one as failed: `superseded`, or `disabled` when the new command is
-    `Enable(false)`.
+    `Enable(false)`; a level command (SetPower, SetSpeed, AllStop, Enable) ends at the first
+    update after it is issued, when the drive takes it (`_with_ended`), and a Wait when it has
+    elapsed.
     """
 
     def __init__(self, script: list, period: float):
@@ -230,6 +232,30 @@ class CommandSource(LeafSystem):
                 return dc.replace(state, log=tuple(log))
         return state
 
+    @staticmethod
+    def _with_ended(state: CommandSourceState, now: float) -> CommandSourceState:
+        """Ends, at this control tick, the commands that end without a reported status: a
+        level command (SetPower, SetSpeed, AllStop, Enable) issued before the tick is handed
+        to the drive now, so it has `succeeded` (SetPower and SetSpeed `failed`, `disabled`,
+        on a disabled drive, which ignores them); a script's Wait succeeds once it elapsed."""
+        log = None
+        # Only the last issued command and the last Wait can be running: look at the tail.
+        for i in range(len(state.log) - 1, max(-1, len(state.log) - 4), -1):
+            r = state.log[i]
+            if r.end_time is not None or r.command in _COMPLETING_NAMES:
+                continue
+            if r.seq == 0:  # a Wait: the script is held until script_blocked_until
+                if now < state.script_blocked_until - 1e-12:
+                    continue
+                ended = dc.replace(r, end_time=state.script_blocked_until, status="succeeded")
+            elif r.command in _MOTION_LEVEL_NAMES and not state.request.enabled:
+                ended = dc.replace(r, end_time=now, status="failed", reason="disabled")
+            else:
+                ended = dc.replace(r, end_time=now, status="succeeded")
+            log = log or list(state.log)
+            log[i] = ended
+        return state if log is None else dc.replace(state, log=tuple(log))
+
     def _status(self, context) -> CommandStatus:
         if not self._status_port.HasValue(context):
             return CommandStatus()
@@ -279,9 +305,9 @@ class CommandSource(LeafSystem):
 
     def _update(self, context, state):
         original = self.get_state(context)
-        current = self._next_script_command(
-            self._with_status(original, self._status(context)), self.script(context),
-            context.get_time())
+        now = context.get_time()
+        current = self._with_ended(self._with_status(original, self._status(context)), now)
+        current = self._next_script_command(current, self.script(context), now)
         if current is not original:
             self._set_state(state, current)
 
@@ -293,7 +319,9 @@ class CommandSource(LeafSystem):
             issued = self._next_script_command(current, script, now)
             if issued is current:
                 break
-            current = issued
+            # Handed to the drive at this instant, as at an update (and so the tail that
+            # `_with_ended` looks at never holds more than the last few running commands).
+            current = self._with_ended(issued, now)
         if current is not original:
             self._set_state(state, current)
 
@@ -306,9 +334,7 @@ class CommandSource(LeafSystem):
         command = script[current.next_script_index]
         current = dc.replace(current, next_script_index=current.next_script_index + 1)
         if isinstance(command, Wait):
-            log = _bounded([*current.log, CommandRecord(seq=0, command="Wait", start_time=now,
-                                                        end_time=now + command.seconds,
-                                                        status="succeeded")])
+            log = _bounded([*current.log, CommandRecord(seq=0, command="Wait", start_time=now)])
             return dc.replace(current, script_blocked_until=now + command.seconds, log=log)
         current = self._with_command(current, command, now)
         completing = isinstance(command, COMPLETING_COMMANDS)
@@ -316,6 +342,8 @@ class CommandSource(LeafSystem):
 
 
 _COMPLETING_NAMES = tuple(c.__name__ for c in COMPLETING_COMMANDS)
+_MOTION_LEVEL_NAMES = (SetPower.__name__, SetSpeed.__name__)
+"""Level commands that a disabled drive ignores (they fail `disabled`)."""
 
 
 def velocity_track_width(drive: Drive) -> float:
