@@ -28,6 +28,16 @@ class BodyVelocity:
 
 
 @dc.dataclass(frozen=True)
+class OdometryPose:
+    """The dead-reckoned pose (`Robot.odometry()`): x, y in m (chassis origin, world frame),
+    yaw in rad in (-pi, pi], integrated from the encoders since the start."""
+
+    x: float
+    y: float
+    yaw: float
+
+
+@dc.dataclass(frozen=True)
 class CommandResult:
     """How a command went: status running, succeeded or failed; reason when failed
     (superseded, disabled, stalled; not_applied for a SetPose); times in simulated s.

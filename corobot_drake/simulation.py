@@ -30,7 +30,13 @@ from corobot_drake import limits
 from corobot_drake.config import scenario as sc
 from corobot_drake.config.poses import ground_pose, transform_from
 from corobot_drake.model import dimensions as dim
-from corobot_drake.readings import BodyPose, BodyVelocity, CommandResult, IrReading
+from corobot_drake.readings import (
+    BodyPose,
+    BodyVelocity,
+    CommandResult,
+    IrReading,
+    OdometryPose,
+)
 from corobot_drake.sensors.ir_sensor import noise_key
 from corobot_drake.station import RobotParts, Station, build_station
 from corobot_drake.systems.drive import CommandRecord, DriveStatus, check_finite
@@ -315,6 +321,32 @@ class Robot:
             self._sim.context)
         return (float(p[0]), float(p[1]), float(p[2]))
 
+    def odometry(self) -> OdometryPose:
+        """Dead reckoning from the encoders (`systems.dead_reckoning`, with the drive's
+        effective wheel radius and track width) from the start pose: x, y m, yaw rad."""
+        p = self._sim.station.diagram.GetOutputPort(f"{self.name}.odometry").Eval(
+            self._sim.context)
+        return OdometryPose(float(p[0]), float(p[1]), float(p[2]))
+
+    def _by_wheel(self, port: str) -> dict[str, float]:
+        v = self._sim.station.diagram.GetOutputPort(f"{self.name}.{port}").Eval(
+            self._sim.context)
+        return {w: float(x) for w, x in zip(dim.WHEEL_NAMES, v, strict=True)}
+
+    def wheel_loads(self) -> dict[str, float]:
+        """Each wheel's load, N: the vertical component of its contact forces
+        (`systems.contact`), by wheel name; at rest they sum to the robot's weight."""
+        return self._by_wheel("wheel_loads")
+
+    def wheel_slip(self) -> dict[str, float]:
+        """Each wheel's longitudinal slip speed, m/s: its centre's speed along the heading
+        minus its rim speed (negative: spinning faster than it travels), by wheel name."""
+        return self._by_wheel("wheel_slip")
+
+    def wheel_lateral_slip(self) -> dict[str, float]:
+        """Each wheel's sideways speed across the heading (+ left), m/s, by wheel name."""
+        return self._by_wheel("wheel_lateral_slip")
+
     def enable_requested(self) -> bool:
         """The enable level last commanded (is_enabled() follows it at the next control tick)."""
         source = self._parts.command_source
@@ -426,6 +458,10 @@ class Robot:
             "encoders": self.encoders(),
             "heading": self.heading(),
             "position": list(self.position()),
+            "odometry": dc.asdict(self.odometry()),
+            "wheel_loads_N": list(self.wheel_loads().values()),
+            "slip": {"longitudinal_mps": list(self.wheel_slip().values()),
+                     "lateral_mps": list(self.wheel_lateral_slip().values())},
             "commands": [
                 {"command": r.command, "status": r.status, "reason": r.reason,
                  "start_time": r.start_time, "end_time": r.end_time}

@@ -35,6 +35,8 @@ from corobot_drake.model.sdf import corobot_sdf
 from corobot_drake.resources import make_parser, resolve_file
 from corobot_drake.sensors.camera import add_camera
 from corobot_drake.sensors.ir_sensor import add_ir_sensors
+from corobot_drake.systems.contact import add_wheel_contacts
+from corobot_drake.systems.dead_reckoning import DeadReckoning
 from corobot_drake.systems.drive import CommandSource, DriveController
 from corobot_drake.systems.monitor import TiltMonitor
 from corobot_drake.systems.motion import MotionCommands
@@ -246,6 +248,16 @@ def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None, foxglov
             builder, name, chassis_pose, selector.get_output_port(),
             controller.GetOutputPort("drive_status"), controller.GetOutputPort("axle_speed"),
             robot.drive.motor_torque_scaling)
+        dead_reckoning = builder.AddNamedSystem(
+            f"{name}.dead_reckoning", DeadReckoning(robot.drive, robot.drive.control_period))
+        builder.Connect(odometry.encoder_ticks, dead_reckoning.GetInputPort("encoder_ticks"))
+        builder.Connect(chassis_pose, dead_reckoning.GetInputPort("chassis_pose"))
+        builder.ExportOutput(dead_reckoning.GetOutputPort("pose"), f"{name}.odometry")
+        contacts = add_wheel_contacts(builder, name, plant, chassis,
+                                      [j.child_body() for j in joints],
+                                      selector.get_output_port())
+        for port in ("wheel_loads", "wheel_slip", "wheel_lateral_slip"):
+            builder.ExportOutput(contacts.GetOutputPort(port), f"{name}.{port}")
         builder.Connect(source.GetOutputPort("request"), motion.GetInputPort("request"))
         builder.Connect(odometry.position, motion.GetInputPort("position"))
         builder.Connect(odometry.heading, motion.GetInputPort("heading"))

@@ -36,11 +36,13 @@ class DriveLog:
     power: np.ndarray
     angle: np.ndarray
     source: str = ""
+    position: np.ndarray | None = None
+    """[n, 2] chassis x, y (m) when the log has ground truth, else None."""
 
 
-def read_log(path: str | Path, ticks_per_revolution: int = dim.ENCODER_TICKS_PER_REVOLUTION
-             ) -> DriveLog:
-    """Reads and checks a run-log CSV; raises LogError naming the line of the first problem."""
+def read_columns(path: str | Path, required: tuple[str, ...]) -> np.ndarray:
+    """The `required` columns of a CSV log with a header line, as an array [n, len(required)]
+    (time first, increasing); raises LogError naming the line of the first problem."""
     path = Path(path)
     try:
         text = path.read_text()
@@ -49,13 +51,13 @@ def read_log(path: str | Path, ticks_per_revolution: int = dim.ENCODER_TICKS_PER
     rows = list(csv.reader(text.splitlines()))
     if not rows:
         raise LogError(f"{path}:1: empty file; expected a header line "
-                       f"({', '.join(REQUIRED)}, ...)")
+                       f"({', '.join(required)}, ...)")
     header = [h.strip() for h in rows[0]]
-    missing = [c for c in REQUIRED if c not in header]
+    missing = [c for c in required if c not in header]
     if missing:
         raise LogError(f"{path}:1: header lacks column(s) {', '.join(missing)}; "
-                       f"expected {', '.join(REQUIRED)} (got {', '.join(header)})")
-    index = [header.index(c) for c in REQUIRED]
+                       f"expected {', '.join(required)} (got {', '.join(header)})")
+    index = [header.index(c) for c in required]
     data = []
     previous_time = -math.inf
     for line, row in enumerate(rows[1:], start=2):
@@ -65,7 +67,7 @@ def read_log(path: str | Path, ticks_per_revolution: int = dim.ENCODER_TICKS_PER
             raise LogError(f"{path}:{line}: expected {len(header)} fields like the header, "
                            f"got {len(row)}")
         values = []
-        for column, i in zip(REQUIRED, index, strict=True):
+        for column, i in zip(required, index, strict=True):
             try:
                 value = float(row[i])
             except ValueError:
@@ -76,16 +78,29 @@ def read_log(path: str | Path, ticks_per_revolution: int = dim.ENCODER_TICKS_PER
         if values[0] <= previous_time:
             raise LogError(f"{path}:{line}: time {values[0]:g} does not increase "
                            f"(previous {previous_time:g})")
-        if abs(values[1]) > 1 + 1e-9 or abs(values[2]) > 1 + 1e-9:
-            raise LogError(f"{path}:{line}: power must be in [-1, 1], got "
-                           f"{values[1]:g}, {values[2]:g}")
+        for column, value in zip(required, values, strict=True):
+            if column.endswith("_power") and abs(value) > 1 + 1e-9:
+                raise LogError(f"{path}:{line}: power must be in [-1, 1], got "
+                               f"{column} {value:g}")
         previous_time = values[0]
         data.append(values)
     if len(data) < 10:
         raise LogError(f"{path}:{len(rows)}: only {len(data)} samples; a fit needs at least 10")
-    a = np.array(data)
-    return DriveLog(time=a[:, 0], power=a[:, 1:3],
-                    angle=a[:, 3:5] * (2 * math.pi / ticks_per_revolution), source=str(path))
+    return np.array(data)
+
+
+def read_log(path: str | Path, ticks_per_revolution: int = dim.ENCODER_TICKS_PER_REVOLUTION
+             ) -> DriveLog:
+    """Reads and checks a run-log CSV; raises LogError naming the line of the first problem.
+    The chassis pose (x, y: m) is kept when the log has it (`DriveLog.position`)."""
+    a = read_columns(path, REQUIRED)
+    log = DriveLog(time=a[:, 0], power=a[:, 1:3],
+                   angle=a[:, 3:5] * (2 * math.pi / ticks_per_revolution), source=str(path))
+    try:
+        log.position = read_columns(path, ("time", "x", "y"))[:, 1:]
+    except LogError:
+        pass  # encoders only (a robot without ground truth)
+    return log
 
 
 def _central_speed(t: np.ndarray, angle: np.ndarray) -> np.ndarray:
@@ -231,15 +246,10 @@ def _is_content(line: str) -> bool:
     return bool(stripped) and not stripped.startswith("#")
 
 
-def set_motor_torque_scaling(text: str, robot: str, value: float) -> str:
-    """`text` (a scenario YAML) with robot `robot`'s drive.motor_torque_scaling set to `value`.
-
-    Only the number on that robot's `motor_torque_scaling:` line changes: comments, layout and
-    every other line stay as they are. Raises ValueError if the robot or the field is absent.
-    """
+def _robot_block(lines: list[str], robot: str) -> tuple[int, int]:
+    """(first, end) line indices of robot `robot`'s block under the top-level `robots:`."""
     import re
 
-    lines = text.splitlines(keepends=True)
     robots_line = next((i for i, ln in enumerate(lines)
                         if re.match(r"^robots\s*:\s*(#.*)?$", ln.rstrip("\n"))), None)
     if robots_line is None:
@@ -259,12 +269,63 @@ def set_motor_torque_scaling(text: str, robot: str, value: float) -> str:
     end = start + 1
     while end < len(lines) and not (_is_content(lines[end]) and _indent(lines[end]) <= depth):
         end += 1
-    field = re.compile(rf"(\bmotor_torque_scaling\s*:\s*)({_NUMBER})")
+    return start, end
+
+
+def set_drive_field(text: str, robot: str, field: str, value: float, comment: str | None = None,
+                    digits: int = 4) -> str:
+    """`text` (a scenario YAML) with robot `robot`'s `drive.<field>` set to `value` (`digits`
+    significant digits).
+
+    Only that field's line changes (a missing field is added to a block-style `drive:` as a
+    new line); every other line, comment and the layout stay. With `comment`, the line's comment
+    becomes it (a line that holds other fields too keeps its own). Raises ValueError if the
+    robot is absent, or the field is absent and cannot be added.
+    """
+    import re
+
+    lines = text.splitlines(keepends=True)
+    start, end = _robot_block(lines, robot)
+    number = f"{value:.{digits}g}"
+    pattern = re.compile(rf"(\b{re.escape(field)}\s*:\s*)({_NUMBER})")
     for i in range(start, end):
-        code, hash_, comment = lines[i].partition("#")
-        if field.search(code):
-            code = field.sub(lambda m: m.group(1) + f"{value:.4g}", code, count=1)
-            lines[i] = code + hash_ + comment
+        code, hash_, old_comment = lines[i].partition("#")
+        if pattern.search(code):
+            code = pattern.sub(lambda m: m.group(1) + number, code, count=1)
+            alone = re.fullmatch(rf"\s*{re.escape(field)}\s*:\s*{_NUMBER}\s*", code.rstrip("\n"))
+            if comment is not None and alone:
+                lines[i] = f"{code.rstrip()}  # {comment}\n"
+            else:
+                lines[i] = code + hash_ + old_comment
             return "".join(lines)
-    raise ValueError(f"robot {robot!r} has no `motor_torque_scaling:` line; add one under its "
-                     "`drive:` (e.g. `drive: {motor_torque_scaling: 10.16}`)")
+    drive = next((i for i in range(start, end)
+                  if re.match(r"^\s+drive\s*:\s*(#.*)?$", lines[i].rstrip("\n"))), None)
+    if drive is None:
+        raise ValueError(f"robot {robot!r} has no `{field}:` line and no block-style `drive:` to "
+                         f"add it to; add `{field}: {number}` under its `drive:`")
+    last = drive
+    for i in range(drive + 1, end):
+        if _is_content(lines[i]) and _indent(lines[i]) <= _indent(lines[drive]):
+            break
+        if _is_content(lines[i]):
+            last = i
+    indent = " " * (_indent(lines[last]) if last != drive else _indent(lines[drive]) + 2)
+    line = f"{indent}{field}: {number}" + (f"  # {comment}" if comment else "") + "\n"
+    if not lines[last].endswith("\n"):
+        lines[last] += "\n"
+    lines.insert(last + 1, line)
+    return "".join(lines)
+
+
+def set_motor_torque_scaling(text: str, robot: str, value: float) -> str:
+    """`text` (a scenario YAML) with robot `robot`'s drive.motor_torque_scaling set to `value`.
+
+    Only the number on that robot's `motor_torque_scaling:` line changes: comments, layout and
+    every other line stay as they are. Raises ValueError if the robot or the field is absent.
+    """
+    lines = text.splitlines(keepends=True)
+    start, end = _robot_block(lines, robot)
+    if not any("motor_torque_scaling" in ln.partition("#")[0] for ln in lines[start:end]):
+        raise ValueError(f"robot {robot!r} has no `motor_torque_scaling:` line; add one under "
+                         "its `drive:` (e.g. `drive: {motor_torque_scaling: 10.16}`)")
+    return set_drive_field(text, robot, "motor_torque_scaling", value)

@@ -157,6 +157,14 @@ class Drive:
     """rad/s: set_speed clamps to +-this."""
     control_period: float = bounded(dim.CONTROL_PERIOD, lim.PERIOD)
     """s: the drive controller's update period."""
+    effective_wheel_radius: float = bounded(dim.WHEEL_RADIUS, Range(
+        0.5 * dim.WHEEL_RADIUS, 1.5 * dim.WHEEL_RADIUS, unit="m", why="within 50% of the wheel's"))
+    """m: the rolling radius the dead-reckoning odometry turns encoder ticks into distance with
+    (`tools/calibrate_odometry.py` identifies it; default the nominal wheel radius)."""
+    effective_track_width: float = bounded(dim.TRACK, Range(
+        0.5 * dim.TRACK, 4.0 * dim.TRACK, unit="m", why="skid-steer: wider than the wheels' track"))
+    """m: the track width the odometry turns the left-right wheel difference into yaw with; a
+    skid-steer robot's is wider than its geometric one (default the geometric track)."""
 
 
 @dc.dataclass

@@ -126,6 +126,26 @@ def _ir(run: RobotRun) -> dict[str, float]:
     return run.robot.ir_distances()
 
 
+@metric("wheel_loads")
+def _wheel_loads(run: RobotRun) -> dict[str, float]:
+    """Final load on each wheel (N, vertical contact force), by wheel name."""
+    return run.robot.wheel_loads()
+
+
+@metric("wheel_slip")
+def _wheel_slip(run: RobotRun) -> dict[str, float]:
+    """Final longitudinal slip speed of each wheel (m/s: centre speed along the heading minus
+    rim speed), by wheel name."""
+    return run.robot.wheel_slip()
+
+
+@metric("odometry_error")
+def _odometry_error(run: RobotRun) -> float:
+    """Final distance of the dead-reckoned position (`Robot.odometry()`) from the true one, m."""
+    odometry, pose = run.robot.odometry(), run.robot.pose()
+    return math.hypot(odometry.x - pose.x, odometry.y - pose.y)
+
+
 @metric("command_status")
 def _command_status(run: RobotRun) -> dict[str, str]:
     """Each command's final status (`succeeded`, `running`, `failed:<reason>`), by index."""

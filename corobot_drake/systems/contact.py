@@ -1,0 +1,114 @@
+"""Contact telemetry: each wheel's load and slip, from the plant's contact results.
+
+- load: the vertical (world +z) component of the total contact force on the wheel, N: what
+  the ground carries on that wheel (at rest the four sum to the robot's weight);
+- longitudinal slip speed: the wheel centre's speed along the chassis heading minus the rim
+  speed omega R (nominal radius), m/s: negative while a driven wheel spins faster than it
+  travels (traction), positive while it is dragged faster than it turns (braking, skidding);
+  free rolling on the compliant tyre reads about -0.8% of the speed (it rolls on a smaller
+  effective radius, `tools/calibrate_odometry.py`);
+- lateral slip speed: the wheel centre's speed across the heading (+ to the left), m/s: a
+  skid-steer turn scrubs every wheel sideways.
+
+Hydroelastic contacts (the tyres' compliant patches) and point contacts (the fallback, e.g. a
+rigid body against a tyre) both count.
+"""
+
+import numpy as np
+from pydrake.common.value import AbstractValue
+from pydrake.math import RigidTransform
+from pydrake.multibody.math import SpatialVelocity
+from pydrake.multibody.plant import ContactResults
+from pydrake.systems.framework import LeafSystem
+
+from corobot_drake.model import dimensions as dim
+
+
+class WheelContacts(LeafSystem):
+    """Per-wheel load and slip of one robot (module docstring).
+
+    .. pydrake_system::
+
+        name: WheelContacts
+        input_ports:
+        - contact_results
+        - body_poses
+        - body_spatial_velocities
+        - wheel_state
+        output_ports:
+        - wheel_loads
+        - wheel_slip
+        - wheel_lateral_slip
+
+    Inputs: `contact_results` (abstract ContactResults of the plant), `body_poses` and
+    `body_spatial_velocities` (the plant's, indexed by BodyIndex), `wheel_state` [q, v] of the
+    four axles (rad, rad/s). Outputs (4 each, `dimensions.WHEEL_NAMES` order): `wheel_loads`
+    (N), `wheel_slip` (longitudinal slip speed, m/s), `wheel_lateral_slip` (m/s). No state: the
+    outputs are functions of the plant's latest step.
+    """
+
+    def __init__(self, plant, chassis, wheels):
+        super().__init__()
+        self._chassis = int(chassis.index())
+        self._wheels = [int(w.index()) for w in wheels]
+        self._wheel_of_body = {i: k for k, i in enumerate(self._wheels)}
+        self._wheel_of_geometry = {g: k for k, w in enumerate(wheels)
+                                   for g in plant.GetCollisionGeometriesForBody(w)}
+        self._contacts = self.DeclareAbstractInputPort("contact_results",
+                                                       AbstractValue.Make(ContactResults()))
+        self._poses = self.DeclareAbstractInputPort("body_poses",
+                                                    AbstractValue.Make([RigidTransform()]))
+        self._velocities = self.DeclareAbstractInputPort(
+            "body_spatial_velocities", AbstractValue.Make([SpatialVelocity()]))
+        self._wheel_state = self.DeclareVectorInputPort("wheel_state", 8)
+        self.DeclareVectorOutputPort("wheel_loads", 4, self._calc_loads)
+        self.DeclareVectorOutputPort("wheel_slip", 4, lambda c, o: o.SetFromVector(
+            self._slip(c)[0]))
+        self.DeclareVectorOutputPort("wheel_lateral_slip", 4, lambda c, o: o.SetFromVector(
+            self._slip(c)[1]))
+
+    def forces(self, context) -> np.ndarray:
+        """[4, 3]: the total contact force on each wheel in the world frame, N."""
+        results = self._contacts.Eval(context)
+        f = np.zeros((4, 3))
+        for i in range(results.num_hydroelastic_contacts()):
+            info = results.hydroelastic_contact_info(i)
+            surface = info.contact_surface()
+            force = info.F_Ac_W().translational()  # on the body of geometry M
+            for geometry, sign in ((surface.id_M(), 1.0), (surface.id_N(), -1.0)):
+                k = self._wheel_of_geometry.get(geometry)
+                if k is not None:
+                    f[k] += sign * force
+        for i in range(results.num_point_pair_contacts()):
+            info = results.point_pair_contact_info(i)
+            force = info.contact_force()  # on body B
+            for body, sign in ((info.bodyA_index(), -1.0), (info.bodyB_index(), 1.0)):
+                k = self._wheel_of_body.get(int(body))
+                if k is not None:
+                    f[k] += sign * force
+        return f
+
+    def _calc_loads(self, context, output):
+        output.SetFromVector(self.forces(context)[:, 2])
+
+    def _slip(self, context) -> tuple[np.ndarray, np.ndarray]:
+        """(longitudinal, lateral) slip speeds of the four wheels, m/s."""
+        R = self._poses.Eval(context)[self._chassis].rotation().matrix()
+        forward, left = R[:, 0], R[:, 1]
+        velocities = self._velocities.Eval(context)
+        rim = self._wheel_state.Eval(context)[4:] * dim.WHEEL_RADIUS
+        v = np.array([velocities[i].translational() for i in self._wheels])
+        return v @ forward - rim, v @ left
+
+
+def add_wheel_contacts(builder, name: str, plant, chassis, wheels, wheel_state_port):
+    """Adds `<name>.wheel_contacts` fed by the plant and `wheel_state_port`; returns it."""
+    system = builder.AddNamedSystem(f"{name}.wheel_contacts",
+                                    WheelContacts(plant, chassis, wheels))
+    for port_name, port in (("contact_results", plant.get_contact_results_output_port()),
+                            ("body_poses", plant.get_body_poses_output_port()),
+                            ("body_spatial_velocities",
+                             plant.get_body_spatial_velocities_output_port()),
+                            ("wheel_state", wheel_state_port)):
+        builder.Connect(port, system.GetInputPort(port_name))
+    return system

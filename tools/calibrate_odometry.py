@@ -1,0 +1,142 @@
+"""Calibrates the dead-reckoning odometry: the effective wheel radius and track width.
+
+From a log with encoder ticks and ground truth (a simulated run log or a real robot's CSV:
+`time, left_ticks, right_ticks, x, y, yaw`, docs/tuning.md), or, with `--simulate`, from
+UMBmark's squares (1 m, counter-clockwise then clockwise, power 0.2) driven in the scenario.
+Prints the fit, plots the dead-reckoned path against the true one before (nominal radius and
+track) and after calibration, and with `--write` puts both in the scenario's drive fields
+(`effective_wheel_radius`, `effective_track_width`) with a comment saying where they came from.
+`--drive-test` then runs the book's 3-loop drive test with the calibrated odometry and prints
+the dead-reckoned end position error before and after. The fit is
+`corobot_drake.analysis.odometry_calibration`.
+
+Usage: python tools/calibrate_odometry.py [LOG.csv | --simulate] [--write SCENARIO] [--drive-test]
+"""
+
+import argparse
+import sys
+from pathlib import Path
+
+from tqdm import tqdm
+
+from corobot_drake.analysis import odometry_calibration as oc
+from corobot_drake.analysis.sysid import LogError, set_drive_field
+from corobot_drake.config.scenario import ScenarioError, load_scenario
+from corobot_drake.model import dimensions as dim
+from corobot_drake.resources import DEFAULT_SCENARIO
+
+REPO = Path(__file__).resolve().parent.parent
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("log", nargs="?", help="log CSV with time, left_ticks, right_ticks, x, y, yaw")
+    p.add_argument("--simulate", action="store_true",
+                   help="drive UMBmark's squares in --scenario and fit their log (default off)")
+    p.add_argument("--scenario", default=str(DEFAULT_SCENARIO),
+                   help="scenario to simulate in (default: the shipped corobot.yaml)")
+    p.add_argument("--robot", default="corobot", help="robot (default corobot)")
+    p.add_argument("--ticks-per-revolution", type=int, default=dim.ENCODER_TICKS_PER_REVOLUTION,
+                   help="encoder counts per wheel revolution (default 600)")
+    p.add_argument("--plot", default=str(REPO / "out" / "calibrate_odometry.png"),
+                   help="before/after plot of the log (default out/calibrate_odometry.png)")
+    p.add_argument("--write", metavar="SCENARIO", help="put the fit in this scenario file "
+                   "(default: print only)")
+    p.add_argument("--drive-test", action="store_true",
+                   help="check on the 3-loop drive test, seed --seed (default off)")
+    p.add_argument("--seed", type=int, default=1, help="the drive test's seed (default 1)")
+    return p
+
+
+def _progress(total: float, description: str):
+    bar = tqdm(total=round(total), desc=description, unit="sim s", file=sys.stderr)
+
+    def update(sim):
+        bar.update(round(sim.time) - bar.n)
+    return bar, update
+
+
+def _simulated_log(args) -> oc.PoseLog:
+    commands = oc.square_commands()
+    bar, update = _progress(110, "UMBmark squares")
+    with bar:
+        sim = oc.run_script(args.scenario, args.robot, commands, progress=update)
+    path = REPO / "out" / "odometry_squares_log.csv"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    sim.robot(args.robot).write_log(path)
+    print(f"simulated UMBmark squares ({sim.time:.1f} s) -> {path}", flush=True)
+    return oc.read_pose_log(path)
+
+
+def _write(args, fit: oc.OdometryFit, source: str) -> None:
+    target = Path(args.write)
+    text = target.read_text()
+    comment = f"calibrate_odometry.py from {source}"
+    text = set_drive_field(text, args.robot, "effective_wheel_radius",
+                           fit.effective_wheel_radius, comment, digits=5)
+    text = set_drive_field(text, args.robot, "effective_track_width",
+                           fit.effective_track_width, comment, digits=4)
+    target.write_text(text)
+    load_scenario(target)  # still a valid scenario
+    print(f"wrote effective_wheel_radius {fit.effective_wheel_radius:.5g} and "
+          f"effective_track_width {fit.effective_track_width:.4g} in {target}")
+
+
+def _drive_test(args, fit: oc.OdometryFit) -> None:
+    """The drive test run with the calibrated odometry; the nominal odometry's error is the
+    same encoder ticks dead reckoned with the nominal radius and track."""
+    bar, update = _progress(150, f"drive test, seed {args.seed}")
+    with bar:
+        run = oc.drive_test_odometry_error(args.scenario, args.robot, fit.effective_wheel_radius,
+                                           fit.effective_track_width, args.seed,
+                                           progress=update)
+    log = run["log"]
+    nominal = oc.end_error(log, dim.WHEEL_RADIUS, dim.TRACK)
+    offline = oc.end_error(log, fit.effective_wheel_radius, fit.effective_track_width)
+    calibrated = run["error"]
+    print(f"drive test (3 loops, seed {args.seed}, {run['sim_time']:.1f} s): dead-reckoned end "
+          f"position error {nominal * 1000:.1f} mm uncalibrated, {calibrated * 1000:.1f} mm "
+          f"calibrated (Robot.odometry(); {offline * 1000:.1f} mm from the log), ratio "
+          f"{calibrated / nominal:.4f} (target <= 0.2); heading error calibrated "
+          f"{run['yaw_error_deg']:+.2f} deg")
+    plot = Path(args.plot).with_name(Path(args.plot).stem + "_drive_test.png")
+    oc.plot_paths(log, (dim.WHEEL_RADIUS, dim.TRACK),
+                  (fit.effective_wheel_radius, fit.effective_track_width), plot,
+                  f"drive test, 3 loops, seed {args.seed}: odometry before and after calibration")
+    print(f"plot: {plot}")
+
+
+def main(argv=None) -> int:
+    p = _parser()
+    args = p.parse_args(argv)
+    if (args.log is None) == (not args.simulate):
+        p.error("give a LOG or --simulate (not both)")
+    try:
+        log = (_simulated_log(args) if args.simulate
+               else oc.read_pose_log(args.log, args.ticks_per_revolution))
+        fit = oc.fit_odometry(log)
+    except (LogError, ScenarioError) as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    print(fit.describe())
+    nominal = (dim.WHEEL_RADIUS, dim.TRACK)
+    fitted = (fit.effective_wheel_radius, fit.effective_track_width)
+    print(f"end position error on this log: {oc.end_error(log, *nominal) * 1000:.1f} mm "
+          f"nominal, {oc.end_error(log, *fitted) * 1000:.1f} mm calibrated")
+    source = ("simulated UMBmark squares, 1 m at power 0.2" if args.simulate
+              else f"the log {Path(args.log).name}")
+    oc.plot_paths(log, nominal, fitted, args.plot, f"odometry calibration: {source}")
+    print(f"plot: {args.plot}")
+    if args.write:
+        try:
+            _write(args, fit, source)
+        except (OSError, ValueError, ScenarioError) as e:
+            print(f"error: {args.write}: {e}", file=sys.stderr)
+            return 2
+    if args.drive_test:
+        _drive_test(args, fit)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
