@@ -373,6 +373,11 @@ class Robot:
                            f"{', '.join(self._parts.ir_sensors) or 'none'}") from None
         return sensor.reading(sensor.GetMyContextFromRoot(self._sim.context))
 
+    def ir_change_threshold(self, name: str) -> float:
+        """m: the reading change the named IR sensor counts as a change (its scenario's
+        `change_threshold`)."""
+        return self._parts.ir_sensors[name].change_threshold
+
     @property
     def ir_names(self) -> tuple[str, ...]:
         """The IR sensors' names (`front`, `rear`, ...), in the scenario's order."""

@@ -300,6 +300,42 @@ def test_subscription_sends_changes(http, server, caps):
         assert len(rear) >= 2 and rear[-1] < rear[0]
 
 
+def test_change_thresholds_ignore_creep_and_time_stamps():
+    from corobot_drake.serving.routes.subscriptions import CHANGE_THRESHOLDS, changed
+
+    gps = {"time_stamp": 1.0, "x": 0.5, "y": 0.25, "z": 0.0}
+    assert not changed(gps, {**gps, "time_stamp": 2.0, "x": 0.5 + 1e-9}, CHANGE_THRESHOLDS)
+    assert changed(gps, {**gps, "x": 0.5 + 2e-4}, CHANGE_THRESHOLDS)  # 0.2 mm > 0.1 mm
+    ir = {"raw": 0.6, "range": 0.762, "normalized": 0.6 / 0.762, "time_stamp": 0.05}
+    ir_thresholds = {**CHANGE_THRESHOLDS, "raw": 1e-4}
+    assert not changed(ir, {**ir, "raw": 0.6 + 1e-10, "normalized": 0.7874}, ir_thresholds)
+    assert changed(ir, {**ir, "raw": 0.6 - 2e-4}, ir_thresholds)
+    drive = {"wheels": {"front_left": {"commanded_power": 0.0, "encoder_ticks": 3}},
+             "command": None}
+    assert changed(drive, {"wheels": {"front_left": {"commanded_power": 0.0, "encoder_ticks": 4}},
+                           "command": None}, CHANGE_THRESHOLDS)  # ticks: any change
+    assert changed(drive, {**drive, "command": {"status": "running"}}, CHANGE_THRESHOLDS)
+
+
+def test_subscription_of_a_robot_at_rest_sends_only_the_first_state_and_heartbeats(
+        http, server, caps):
+    """Issue 14 point 6: at rest the IR readings move by ~1e-10 m and the pose creeps by
+    nanometres; none of that is a change, so each service sends its first state only."""
+    reset(http, caps)
+    wait_sim(http, 0.5)  # settled after the teleport
+    services = "drive,front_ir,rear_ir,encoders,compass,gps" if caps["ir"] else "drive,gps"
+    with httpx.Client(base_url=server.url, timeout=30) as client, client.stream(
+            "GET", f"{ROBOT}/subscribe?services={services}&limit=3") as response:
+        events = read_events(response.iter_lines(), 100, 6)
+    names = [e[0] for e in events]
+    assert sorted(names) == sorted(services.split(",")), names  # one each
+    with httpx.Client(base_url=server.url, timeout=30) as client, client.stream(
+            "GET", f"{ROBOT}/gps/subscribe?limit=2.2&heartbeat=0.5") as response:
+        beats = read_events(response.iter_lines(), 100, 6)
+    # The first state, then one every 0.5 s of a 2.2 s stream checked every 0.1 s: 4 or 5.
+    assert 4 <= len(beats) <= 6, [round(b[2] - beats[0][2], 2) for b in beats]
+
+
 def test_single_service_subscription_and_unknown(http, server):
     with httpx.Client(base_url=server.url, timeout=30) as client, client.stream(
             "GET", f"{ROBOT}/compass/subscribe?limit=1") as response:

@@ -229,6 +229,11 @@ class IrSensor(LeafSystem):
         """The noise key (`noise_key`) this Context's scans draw from (sharp_gp2d12)."""
         context.get_mutable_abstract_parameter(self._key_index).set_value(int(key))
 
+    @property
+    def change_threshold(self) -> float:
+        """m: a reading moving by more than this counts as a change (`changed`)."""
+        return self._threshold
+
     def reading(self, context) -> IrReading:
         """The latest scan as an analog reading (context: this system's)."""
         r = self._value(context)

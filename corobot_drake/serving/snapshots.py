@@ -39,12 +39,16 @@ class RobotInfo:
     ir_services: tuple[str, ...]
     """Its IR sensors' service names (`front_ir`, `rear_ir`, ...)."""
     has_camera: bool
+    ir_change_thresholds: tuple[tuple[str, float], ...] = ()
+    """(service name, m): the reading change each IR sensor counts as a change."""
 
     @classmethod
     def of(cls, robot) -> RobotInfo:
         """The info of a `simulation.Robot`."""
         return cls(robot.name, tuple(f"{name}_ir" for name in robot.ir_names),
-                   robot.has_camera)
+                   robot.has_camera,
+                   tuple((f"{name}_ir", robot.ir_change_threshold(name))
+                         for name in robot.ir_names))
 
     @property
     def capabilities(self) -> dict[str, bool]:

@@ -1,10 +1,16 @@
 """Subscriptions: Server-Sent Events carrying a service's state each time it changes, checked
-against the runner's latest snapshot every `period` s."""
+against the runner's latest snapshot every `period` s.
+
+A change is a move beyond a threshold since the state last sent (`CHANGE_THRESHOLDS`; an IR
+reading's is its sensor's `change_threshold`), so a robot at rest, which creeps by nanometres,
+sends nothing; an optional `heartbeat` sends the state anyway when none was sent for that long.
+"""
 
 from __future__ import annotations
 
 import asyncio
 import json
+import math
 import time
 from collections.abc import AsyncIterator, Callable
 from typing import Annotated
@@ -23,6 +29,26 @@ SUBSCRIPTION_CHECK_PERIOD = 0.1
 SubscribePeriod = Annotated[float, Query(ge=0.02, le=0.2, description="s between checks")]
 SubscribeLimit = Annotated[float | None, Query(gt=0, le=86400,
                                                description="close the stream after this many s")]
+SubscribeHeartbeat = Annotated[float | None, Query(
+    gt=0, le=3600, description="s: send a service's state anyway when none was sent for this "
+    "long (default: only on changes)")]
+
+POSITION_THRESHOLD = 1e-4
+"""m: a position (x, y, z) change that counts (0.1 mm; a robot at rest creeps by nm)."""
+ANGLE_THRESHOLD = 1e-3
+"""rad (0.057 deg): a heading, roll, pitch or yaw change that counts."""
+SPEED_THRESHOLD = 1e-3
+"""m/s, rad/s: a velocity, yaw rate or axle speed change that counts."""
+CHANGE_THRESHOLDS = {
+    "x": POSITION_THRESHOLD, "y": POSITION_THRESHOLD, "z": POSITION_THRESHOLD,
+    "heading": ANGLE_THRESHOLD, "roll": ANGLE_THRESHOLD, "pitch": ANGLE_THRESHOLD,
+    "yaw": ANGLE_THRESHOLD, "heading_deg": math.degrees(ANGLE_THRESHOLD),
+    "forward": SPEED_THRESHOLD, "lateral": SPEED_THRESHOLD, "yaw_rate": SPEED_THRESHOLD,
+    "axle_speed": SPEED_THRESHOLD,
+}
+"""A state's numbers by field name -> the change that counts; any other field (commanded power,
+encoder ticks, the command, ...) counts at any change. Time stamps never count."""
+IGNORED = ("time", "time_stamp")
 
 
 @router.get("/robots/{robot}/subscribe", response_class=Response,
@@ -30,24 +56,27 @@ SubscribeLimit = Annotated[float | None, Query(gt=0, le=86400,
 async def subscribe_all(request: Request, robot: str, backend: BackendDep,
                         services: str | None = None,
                         period: SubscribePeriod = SUBSCRIPTION_CHECK_PERIOD,
-                        limit: SubscribeLimit = None):
+                        limit: SubscribeLimit = None, heartbeat: SubscribeHeartbeat = None):
     names = services.split(",") if services else backend.subscribable(robot)
-    return event_stream(request, backend, robot, names, period, limit)
+    return event_stream(request, backend, robot, names, period, limit, heartbeat)
 
 
 @router.get("/robots/{robot}/{service}/subscribe", response_class=Response,
             summary="Server-Sent Events for one service (when its reading changes)")
 async def subscribe(request: Request, robot: str, service: str, backend: BackendDep,
                     period: SubscribePeriod = SUBSCRIPTION_CHECK_PERIOD,
-                    limit: SubscribeLimit = None):
-    return event_stream(request, backend, robot, [service], period, limit)
+                    limit: SubscribeLimit = None, heartbeat: SubscribeHeartbeat = None):
+    return event_stream(request, backend, robot, [service], period, limit, heartbeat)
 
 
 def event_stream(request: Request, backend: Backend, robot: str, services: list[str],
-                 period: float, limit: float | None) -> Response:
+                 period: float, limit: float | None, heartbeat: float | None = None
+                 ) -> Response:
     """The stream of `services`' changes (404 for an unknown robot or service)."""
     extractors = {s: extractor(backend, robot, s) for s in services}
-    return StreamingResponse(_events(request, backend, robot, extractors, period, limit),
+    thresholds = {s: thresholds_of(backend, robot, s) for s in services}
+    return StreamingResponse(_events(request, backend, robot, extractors, thresholds, period,
+                                     limit, heartbeat),
                              media_type="text/event-stream",
                              headers={"Cache-Control": "no-store", "X-Accel-Buffering": "no"})
 
@@ -63,28 +92,55 @@ def extractor(backend: Backend, robot: str, service: str) -> Callable[[dict], di
     return lambda snap: snap["ir"][service]
 
 
+def thresholds_of(backend: Backend, robot: str, service: str) -> dict[str, float]:
+    """The change thresholds of `service`'s fields (an IR sensor's raw and normalized reading
+    from its `change_threshold`)."""
+    ir = dict(backend.robot(robot).ir_change_thresholds)
+    if service in ir:
+        return {**CHANGE_THRESHOLDS, "raw": ir[service], "normalized": 0.0}
+    return CHANGE_THRESHOLDS
+
+
+def changed(old, new, thresholds: dict[str, float], field: str = "") -> bool:
+    """Whether `new` differs from `old` (JSON-like states) beyond the thresholds: a number
+    by more than its field's threshold (IR `normalized` follows `raw`), anything else at all."""
+    if isinstance(old, dict) and isinstance(new, dict):
+        if old.keys() != new.keys():
+            return True
+        if "raw" in new and "normalized" in new and "raw" in thresholds:
+            new = {k: v for k, v in new.items() if k != "normalized"}  # raw / range
+        return any(changed(old[k], v, thresholds, k) for k, v in new.items()
+                   if k not in IGNORED)
+    if isinstance(old, list) and isinstance(new, list):
+        return len(old) != len(new) or any(changed(a, b, thresholds, field)
+                                           for a, b in zip(old, new, strict=True))
+    numbers = (int, float)
+    if (isinstance(old, numbers) and isinstance(new, numbers) and not isinstance(old, bool)
+            and not isinstance(new, bool)):
+        return abs(new - old) > thresholds.get(field, 0.0)
+    return old != new
+
+
 async def _events(request: Request, backend: Backend, robot: str,
-                  extractors: dict[str, Callable[[dict], dict]], period: float,
-                  limit: float | None) -> AsyncIterator[str]:
-    last: dict[str, str] = {}
+                  extractors: dict[str, Callable[[dict], dict]],
+                  thresholds: dict[str, dict[str, float]], period: float,
+                  limit: float | None, heartbeat: float | None) -> AsyncIterator[str]:
+    sent: dict[str, tuple[dict, float]] = {}  # service -> (state sent, monotonic time)
     started = time.monotonic()
     yield "retry: 1000\n\n"
     while True:
         snap = backend.runner.snapshot["robots"][robot]
+        now = time.monotonic()
         for name, extract in extractors.items():
             state = extract(snap)
-            key = _change_key(state)
-            if last.get(name) != key:
-                last[name] = key
+            last = sent.get(name)
+            due = last is None or changed(last[0], state, thresholds[name]) or (
+                heartbeat is not None and now - last[1] >= heartbeat)
+            if due:
+                sent[name] = (state, now)
                 yield f"event: {name}\ndata: {json.dumps(state, allow_nan=False)}\n\n"
-        if limit is not None and time.monotonic() - started > limit:
+        if limit is not None and now - started > limit:
             return
         if await request.is_disconnected():
             return
         await asyncio.sleep(period)
-
-
-def _change_key(state: dict) -> str:
-    """A state's identity for change notification: everything but its time stamps."""
-    return json.dumps({k: v for k, v in state.items() if k not in ("time", "time_stamp")},
-                      sort_keys=True, default=str)
