@@ -94,11 +94,13 @@ def _drive_test(args, fit: oc.OdometryFit) -> None:
     nominal = oc.end_error(log, dim.WHEEL_RADIUS, dim.TRACK)
     offline = oc.end_error(log, fit.effective_wheel_radius, fit.effective_track_width)
     calibrated = run["error"]
+    radius_only = oc.end_error(log, dim.WHEEL_RADIUS, fit.effective_track_width)
     print(f"drive test (3 loops, seed {args.seed}, {run['sim_time']:.1f} s): dead-reckoned end "
           f"position error {nominal * 1000:.1f} mm uncalibrated, {calibrated * 1000:.1f} mm "
           f"calibrated (Robot.odometry(); {offline * 1000:.1f} mm from the log), ratio "
           f"{calibrated / nominal:.4f} (target <= 0.2); heading error calibrated "
           f"{run['yaw_error_deg']:+.2f} deg")
+    print(f"with the calibrated track but the nominal radius: {radius_only * 1000:.1f} mm")
     plot = Path(args.plot).with_name(Path(args.plot).stem + "_drive_test.png")
     oc.plot_paths(log, (dim.WHEEL_RADIUS, dim.TRACK),
                   (fit.effective_wheel_radius, fit.effective_track_width), plot,

@@ -3,12 +3,16 @@
 The log comes from a real robot or from the simulator (`python -m corobot_drake --log run.csv`
 or `Robot.write_log`); columns in docs/tuning.md. Prints the fit, its residual and a plot of
 measured vs modelled front-wheel speeds. A malformed CSV stops with one line naming the line.
-The fit is `corobot_drake.analysis.sysid`; the simulated log and the plot
-`corobot_drake.analysis.drive_tuning`.
+Stalls (power commanded, the wheels still: e.g. pushing the giant box) and outliers are dropped
+with a warning naming their times; a log that is mostly stalls is refused (exit status 2).
+`--write` puts every fitted parameter (motor_torque_scaling, slew_rate) in the scenario, each
+with a comment saying where it came from. The fit is `corobot_drake.analysis.sysid`; the
+simulated log and the plot `corobot_drake.analysis.drive_tuning`.
 
 Usage: python tools/fit_drive_log.py LOG.csv [--plot out/fit_drive_log.png] [--write SCENARIO]
 
-With no LOG, `--simulate SCALING SLEW` first makes a log with the simulator (a self-check).
+With no LOG, `--simulate SCALING SLEW` first makes a log with the simulator (a self-check);
+`--stall` makes that log end backing into the giant box.
 """
 
 import argparse
@@ -16,12 +20,13 @@ import sys
 from pathlib import Path
 
 from corobot_drake.analysis import drive_tuning, sysid
+from corobot_drake.config.scenario import ScenarioError, load_scenario
 
 REPO = Path(__file__).resolve().parent.parent
 
 
 def _fit(path: Path, ticks_per_revolution: int):
-    """(log, fit), printing progress; raises sysid.LogError."""
+    """(log, fit, dropped), printing progress; raises sysid.LogError."""
     log = sysid.read_log(path, ticks_per_revolution)
     print(f"read {len(log.time)} samples over {log.time[-1] - log.time[0]:.2f} s from {path}",
           flush=True)
@@ -30,7 +35,22 @@ def _fit(path: Path, ticks_per_revolution: int):
         print(f"  iteration {i}: scaling {params[0]:.4f}, slew {params[1]:.3f} rad/s^2, "
               f"delay {params[2] * 1000:.2f} ms, residual {rms:.4f} rad/s", flush=True)
 
-    return log, sysid.fit_drive(log, progress=progress)
+    return (log, *sysid.robust_fit(log, progress=progress))
+
+
+def _write(args, fit: sysid.DriveFit, source: str) -> None:
+    target = Path(args.write)
+    text = target.read_text()
+    where = (f"fit_drive_log.py from {source} ({fit.samples} speed samples, residual "
+             f"{fit.residual_rms:.2f} rad/s RMS)")
+    text = sysid.set_drive_field(text, args.robot, "motor_torque_scaling",
+                                 fit.motor_torque_scaling, f"{where}: axle rad/s at power 1")
+    text = sysid.set_drive_field(text, args.robot, "slew_rate", fit.slew_rate,
+                                 f"{where}: rad/s^2")
+    target.write_text(text)
+    load_scenario(target)  # still a valid scenario
+    print(f"wrote motor_torque_scaling {fit.motor_torque_scaling:.4g} and slew_rate "
+          f"{fit.slew_rate:.4g} in {target}")
 
 
 def main(argv=None) -> int:
@@ -39,10 +59,12 @@ def main(argv=None) -> int:
     p.add_argument("log", nargs="?", help="run log CSV")
     p.add_argument("--simulate", nargs=2, type=float, metavar=("SCALING", "SLEW"),
                    help="make the log with the simulator at these parameters first")
+    p.add_argument("--stall", action="store_true",
+                   help="with --simulate: end the log backing into the giant box")
     p.add_argument("--plot", default=str(REPO / "out" / "fit_drive_log.png"), help="PNG of the fit")
     p.add_argument("--ticks-per-revolution", type=int, default=600, help="encoder counts")
     p.add_argument("--write", metavar="SCENARIO",
-                   help="put the fitted motor_torque_scaling in this scenario file")
+                   help="put the fitted motor_torque_scaling and slew_rate in this scenario file")
     p.add_argument("--robot", default="corobot", help="robot to --write")
     args = p.parse_args(argv)
     if args.log is None and args.simulate is None:
@@ -50,26 +72,31 @@ def main(argv=None) -> int:
     path = Path(args.log or REPO / "out" / "simulated_drive_log.csv")
     if args.simulate:
         scaling, slew = args.simulate
-        print(f"simulating a log at motor_torque_scaling {scaling:g}, slew {slew:g} rad/s^2 "
-              f"-> {path}", flush=True)
-        drive_tuning.simulate_log(path, scaling, slew)
+        print(f"simulating a log at motor_torque_scaling {scaling:g}, slew {slew:g} rad/s^2"
+              f"{', ending in a stall against the giant box' if args.stall else ''} -> {path}",
+              flush=True)
+        drive_tuning.simulate_log(path, scaling, slew, excitation=drive_tuning.STALL_EXCITATION
+                                  if args.stall else drive_tuning.EXCITATION)
     try:
-        log, fit = _fit(path, args.ticks_per_revolution)
+        log, fit, dropped = _fit(path, args.ticks_per_revolution)
     except sysid.LogError as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
+    for d in dropped:
+        print(f"warning: {path}: dropped {d.describe()}", file=sys.stderr)
     print(fit.describe())
+    if dropped:
+        print(f"dropped {len(dropped)} stretch(es) of the log (warnings above)")
     drive_tuning.plot_fit(log, fit, Path(args.plot))
     print(f"plot: {args.plot}")
     if args.write:
-        target = Path(args.write)
+        source = (f"a simulated log at {args.simulate[0]:g}, {args.simulate[1]:g}"
+                  if args.simulate else f"the log {path.name}")
         try:
-            target.write_text(sysid.set_motor_torque_scaling(
-                target.read_text(), args.robot, fit.motor_torque_scaling))
-        except (OSError, ValueError) as e:
-            print(f"error: {target}: {e}", file=sys.stderr)
+            _write(args, fit, source)
+        except (OSError, ValueError, ScenarioError) as e:
+            print(f"error: {args.write}: {e}", file=sys.stderr)
             return 2
-        print(f"wrote motor_torque_scaling {fit.motor_torque_scaling:.4g} in {target}")
     print(f"motor_torque_scaling: {fit.motor_torque_scaling:.4f}  slew_rate: "
           f"{fit.slew_rate:.3f}  (residual {fit.residual_rms:.4f} rad/s)")
     return 0

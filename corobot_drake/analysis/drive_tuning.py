@@ -27,6 +27,9 @@ EXCITATION = ((1.0, 1.0, 1.5), (0.0, 0.0, 1.0), (0.5, 0.5, 1.0), (-0.6, -0.6, 1.
 drags the tyres sideways and loads the motors to their effort limit (0.3 N m), and then the
 wheels no longer follow the drive's command (the encoders lag or overrun it): log straight runs
 for this fit, on a real robot too."""
+STALL_EXCITATION = (*EXCITATION, (-1.0, -1.0, 5.0), (0.0, 0.0, 0.5))
+"""`EXCITATION`, then full power backwards for 5 s: the robot backs into the giant box and
+stalls against it for ~2.5 s (a log with a stall, for `sysid.robust_fit` to drop)."""
 
 
 def measure_top_speed(scenario_path, robot_name, scaling: float, settle: float, measure: float):
@@ -119,8 +122,9 @@ def plot_top_speed(curves, target: float, settle: float, path: Path) -> None:
     plt.close(fig)
 
 
-def simulate_log(path: Path, scaling: float, slew: float, scenario=DEFAULT_SCENARIO) -> None:
-    """Runs `EXCITATION` in the simulator at the given drive parameters and writes its log."""
+def simulate_log(path: Path, scaling: float, slew: float, scenario=DEFAULT_SCENARIO,
+                 excitation=EXCITATION) -> None:
+    """Runs `excitation` in the simulator at the given drive parameters and writes its log."""
     quiet_drake_warnings()
     robots = load_scenario(scenario).robots
     name = next(iter(robots))
@@ -128,7 +132,7 @@ def simulate_log(path: Path, scaling: float, slew: float, scenario=DEFAULT_SCENA
         f"robots: {{{name}: {{drive: {{motor_torque_scaling: {scaling!r}, "
         f"slew_rate: {slew!r}}}}}}}"]))
     robot = sim.robot(name)
-    for left, right, seconds in EXCITATION:
+    for left, right, seconds in excitation:
         robot.set_power(left, right)
         sim.advance(seconds)
     path.parent.mkdir(parents=True, exist_ok=True)

@@ -12,6 +12,7 @@ robot's logger writes with the same header (docs/tuning.md):
 time, left_power, right_power, left_ticks, right_ticks[, x, y, yaw, anything else].
 """
 
+import contextlib
 import csv
 import dataclasses as dc
 import math
@@ -96,10 +97,8 @@ def read_log(path: str | Path, ticks_per_revolution: int = dim.ENCODER_TICKS_PER
     a = read_columns(path, REQUIRED)
     log = DriveLog(time=a[:, 0], power=a[:, 1:3],
                    angle=a[:, 3:5] * (2 * math.pi / ticks_per_revolution), source=str(path))
-    try:
+    with contextlib.suppress(LogError):  # encoders only: a robot without ground truth
         log.position = read_columns(path, ("time", "x", "y"))[:, 1:]
-    except LogError:
-        pass  # encoders only (a robot without ground truth)
     return log
 
 
@@ -167,15 +166,23 @@ def fit_speeds(log: DriveLog, fit: DriveFit) -> tuple[np.ndarray, np.ndarray, np
             _central_speed(log.time, model))
 
 
-def _residuals(log: DriveLog, measured: np.ndarray, p) -> np.ndarray:
+def _residuals(log: DriveLog, measured: np.ndarray, p, keep=None) -> np.ndarray:
+    """Modelled minus measured speeds at the interior samples `keep` (all by default),
+    both sides, flattened."""
     angle = model_angle(log, *p)
-    return (_central_speed(log.time, angle) - measured).ravel()
+    r = _central_speed(log.time, angle) - measured
+    return (r if keep is None else r[keep]).ravel()
 
 
-def fit_drive(log: DriveLog, max_iterations: int = 30, progress=None) -> DriveFit:
-    """Least-squares MotorTorqueScaling, slew limit and delay from the log's encoder speeds."""
-    measured = _central_speed(log.time, log.angle)
-    p_mid = log.power[1:-1]
+def fit_drive(log: DriveLog, max_iterations: int = 30, progress=None,
+              keep: np.ndarray | None = None) -> DriveFit:
+    """Least-squares MotorTorqueScaling, slew limit and delay from the log's encoder speeds,
+    over the interior samples `keep` (a bool mask [n - 2]; default all: `robust_fit` drops
+    stalls and outliers)."""
+    measured_all = _central_speed(log.time, log.angle)
+    keep = np.ones(len(measured_all), bool) if keep is None else keep
+    measured = measured_all[keep]
+    p_mid = log.power[1:-1][keep]
     driven = np.abs(p_mid) > 0.1
     if not driven.any():
         raise LogError(f"{log.source}: the log never commands more than 10% power: nothing to fit")
@@ -183,12 +190,12 @@ def fit_drive(log: DriveLog, max_iterations: int = 30, progress=None) -> DriveFi
     scaling0 = float(np.median(measured[driven] / p_mid[driven]))
     best = None
     for slew in np.geomspace(2.0, 300.0, 13):
-        r = _residuals(log, measured, (scaling0, slew, 0.0))
+        r = _residuals(log, measured_all, (scaling0, slew, 0.0), keep)
         sse = float(r @ r)
         if best is None or sse < best[0]:
             best = (sse, slew)
     p = np.array([scaling0, best[1], 0.0])
-    r = _residuals(log, measured, p)
+    r = _residuals(log, measured_all, p, keep)
     sse = float(r @ r)
     damping = 1e-3
     iterations = 0
@@ -199,7 +206,7 @@ def fit_drive(log: DriveLog, max_iterations: int = 30, progress=None) -> DriveFi
             h = 1e-4 if j == 2 else 1e-3 * max(abs(p[j]), 1.0)
             dp = np.zeros(3)
             dp[j] = h
-            J[:, j] = (_residuals(log, measured, p + dp) - r) / h
+            J[:, j] = (_residuals(log, measured_all, p + dp, keep) - r) / h
         JtJ = J.T @ J
         g = J.T @ r
         improved = False
@@ -209,7 +216,7 @@ def fit_drive(log: DriveLog, max_iterations: int = 30, progress=None) -> DriveFi
             candidate = p + step
             candidate[0] = max(candidate[0], 1e-3)
             candidate[1] = max(candidate[1], 1e-3)
-            rc = _residuals(log, measured, candidate)
+            rc = _residuals(log, measured_all, candidate, keep)
             sse_c = float(rc @ rc)
             if sse_c < sse:
                 improved = True
@@ -230,6 +237,106 @@ def fit_drive(log: DriveLog, max_iterations: int = 30, progress=None) -> DriveFi
         stderr = (math.nan, math.nan, math.nan)
     return DriveFit(float(p[0]), float(p[1]), float(p[2]), math.sqrt(sse / r.size), stderr,
                     int(r.size), iterations)
+
+
+# --- stalls and outliers ------------------------------------------------------------------
+
+STALL_FRACTION = 0.1
+"""A side stalls when its wheel turns at less than this fraction of the speed its power asks."""
+STALL_MIN_TIME = 0.2
+"""s: how long a stall lasts at least (the slew ramp after a power step is shorter)."""
+OUTLIER_SIGMAS = 6.0
+"""Residuals beyond this many robust standard deviations are outliers..."""
+OUTLIER_FLOOR = 2.5
+"""...and beyond this, rad/s: a fifth of the top axle speed, above the 1.9 rad/s a good log's
+power steps reach (the servo's lag the model leaves out, plus one encoder tick per 20 ms)."""
+MAX_DROPPED = 0.5
+"""A log whose dropped samples exceed this share of its driven ones is refused."""
+
+
+@dc.dataclass
+class Dropped:
+    """A stretch of the log left out of the fit: times (s) and why."""
+
+    start: float
+    end: float
+    reason: str
+
+    def describe(self) -> str:
+        return f"{self.start:.2f}-{self.end:.2f} s: {self.reason}"
+
+
+def _runs(mask: np.ndarray):
+    """(first, last) indices of each run of True in `mask`."""
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], mask.astype(int), [0]])))
+    return list(zip(edges[::2], edges[1::2] - 1, strict=True))
+
+
+def find_stalls(log: DriveLog, scaling: float) -> tuple[np.ndarray, list[Dropped]]:
+    """Interior samples [n - 2] where power is commanded but a side's wheel barely turns (under
+    `STALL_FRACTION` of power x `scaling`) for at least `STALL_MIN_TIME`: the wheels are held (an
+    obstacle, the motor's torque limit), so the drive model does not hold there."""
+    t, measured, power = log.time[1:-1], _central_speed(log.time, log.angle), log.power[1:-1]
+    asked = np.abs(power) * scaling
+    still = ((np.abs(power) > 0.1) & (np.abs(measured) < STALL_FRACTION * asked)).any(axis=1)
+    mask = np.zeros(len(t), bool)
+    dropped = []
+    for a, b in _runs(still):
+        if t[b] - t[a] < STALL_MIN_TIME:
+            continue
+        mask[a:b + 1] = True
+        reason = "stall: power commanded, the wheels still"
+        if log.position is not None:
+            moved = np.hypot(*(log.position[b + 1] - log.position[a + 1]))
+            reason += f", the robot moved {moved * 1000:.1f} mm (pushing an obstacle?)"
+        dropped.append(Dropped(float(t[a]), float(t[b]), reason))
+    return mask, dropped
+
+
+def find_outliers(log: DriveLog, fit: DriveFit, keep: np.ndarray
+                  ) -> tuple[np.ndarray, list[Dropped]]:
+    """Interior samples whose speed residual (either side) exceeds `OUTLIER_SIGMAS` robust
+    standard deviations (1.4826 MAD over the kept samples) and `OUTLIER_FLOOR`."""
+    t, measured, model = fit_speeds(log, fit)
+    r = np.abs(model - measured).max(axis=1)
+    sigma = 1.4826 * float(np.median(np.abs(r[keep] - np.median(r[keep]))))
+    limit = max(OUTLIER_SIGMAS * sigma, OUTLIER_FLOOR)
+    mask = (r > limit) & keep
+    return mask, [Dropped(float(t[a]), float(t[b]),
+                          f"outlier: residual up to {r[a:b + 1].max():.2f} rad/s "
+                          f"(limit {limit:.2f})") for a, b in _runs(mask)]
+
+
+def robust_fit(log: DriveLog, progress=None) -> tuple[DriveFit, list[Dropped]]:
+    """`fit_drive` without the log's stalls and outliers: drops them (returned, to warn about)
+    and refits; LogError when they are more than `MAX_DROPPED` of the driven samples."""
+    measured, power = _central_speed(log.time, log.angle), log.power[1:-1]
+    driven = (np.abs(power) > 0.1).any(axis=1)
+    moving = driven & (np.abs(measured) > 0).any(axis=1)
+    scaling0 = float(np.median(np.abs(measured[moving] / np.where(
+        np.abs(power[moving]) > 0.1, power[moving], np.inf)).max(axis=1))) if moving.any() else 1
+    stalled, dropped = find_stalls(log, scaling0)
+    keep = ~stalled
+    fit = None
+    for _ in range(3):  # fit, drop outliers, refit (twice at most)
+        _check_dropped(log, driven, keep, dropped)
+        fit = fit_drive(log, progress=progress, keep=keep)
+        outliers, more = find_outliers(log, fit, keep)
+        if not more:
+            break
+        keep &= ~outliers
+        dropped += more
+    return fit, sorted(dropped, key=lambda d: d.start)
+
+
+def _check_dropped(log: DriveLog, driven, keep, dropped) -> None:
+    lost = int((driven & ~keep).sum())
+    if lost > MAX_DROPPED * driven.sum():
+        where = "; ".join(d.describe() for d in dropped[:3]) + ("; ..." if len(dropped) > 3
+                                                                else "")
+        raise LogError(f"{log.source}: the drive model does not hold in {lost} of the "
+                       f"{int(driven.sum())} driven samples ({where}): refusing to fit; log "
+                       "straight runs in the open")
 
 
 # --- editing a scenario file in place ----------------------------------------------------
