@@ -318,3 +318,29 @@ def test_compass_agrees_with_the_chassis_yaw_after_a_long_drive():
         robot.rotate_degrees(degrees, 0.5)
         robot.drive_distance(0.3, 0.5)
     assert robot.heading() == pytest.approx(robot.pose().yaw, abs=1e-6)
+
+
+@pytest.fixture(scope="module")
+def physics_only_sim():
+    return make_sim("robots: {corobot: {ir_sensors: {front: {enabled: false}, rear: "
+                    "{enabled: false}}}}")
+
+
+@pytest.mark.parametrize("later", [sc.SetPower(0.2, 0.2), sc.Wait(0.2), sc.AllStop()],
+                         ids=lambda c: type(c).__name__)
+@pytest.mark.parametrize("first", [sc.SetPower(0.3, 0.3), sc.DriveDistance(0.05, 0.5),
+                                   sc.RotateDegrees(10.0, 0.5)], ids=lambda c: type(c).__name__)
+def test_the_summary_shows_every_ended_command_ended(physics_only_sim, first, later):
+    """Issue 14 point 7, end to end: whatever follows a command in the script, the summary
+    shows it `succeeded` (none of these can fail here) with its end time, and the script's
+    last command too once the drive has taken it."""
+    sim = physics_only_sim
+    scenario = dc.replace(sim.scenario, robots={"corobot": dc.replace(
+        sim.scenario.robots["corobot"], commands=[first, later])})
+    sim.reset(scenario)
+    sim.advance(2.5)  # the 5 cm drive and 10 deg turn take under 1.5 s
+    commands = sim.summary()["robots"]["corobot"]["commands"]
+    assert [c["command"] for c in commands] == [type(first).__name__, type(later).__name__]
+    for c in commands:
+        assert (c["status"], c["reason"]) == ("succeeded", ""), commands
+        assert c["start_time"] <= c["end_time"] <= sim.time

@@ -86,7 +86,8 @@ def main(argv=None) -> int:
         print(f"warning: {path}: dropped {d.describe()}", file=sys.stderr)
     print(fit.describe())
     if dropped:
-        print(f"dropped {len(dropped)} stretch(es) of the log (warnings above)")
+        print(f"dropped {len(dropped)} stretch(es) of the log: " + "; ".join(
+            f"{d.start:.2f}-{d.end:.2f} s {d.reason.split(':')[0]}" for d in dropped))
     drive_tuning.plot_fit(log, fit, Path(args.plot))
     print(f"plot: {args.plot}")
     if args.write:

@@ -502,6 +502,23 @@ def render_fit(outs) -> str:
             f"rad/s RMS")
 
 
+def render_fit_stall(outs) -> str:
+    text = outs[0][0].stdout
+    stall = _find(r"([\d.]+-[\d.]+ s) stall", text)
+    scaling = _num(r"^motor_torque_scaling: ([\d.]+) \(", text)
+    slew = _num(r"^slew_rate: ([\d.]+) rad/s\^2", text)
+    dropped = _num(r"^dropped (\d+) stretch", text)
+    return (f"scaling {scaling:.3f}, slew {slew:.2f} rad/s^2, with {dropped:.0f} stretches "
+            f"dropped (the stall {stall} and the outliers at its edges)")
+
+
+def render_calibrate_odometry(outs) -> str:
+    text = outs[0][0].stdout
+    lines = [line for line in text.splitlines() if line.startswith((
+        "effective_", "residuals", "end position error", "drive test", "with the calibrated"))]
+    return "\n".join(f"    {line}" for line in lines)
+
+
 def render_tire_grip(outs) -> str:
     """The table and the pick (deterministic; the sweep's wall time is in the prose)."""
     o = outs[0][0]
@@ -746,6 +763,12 @@ def blocks() -> list[Spec]:
              DETERMINISTIC, 5),
         Spec("step-limit", "docs/tuning.md", (Command("python tools/step_limit.py"),),
              render_step_limit, DETERMINISTIC, 40),
+        Spec("fit-drive-log-stall", "docs/tuning.md",
+             (Command("python tools/fit_drive_log.py --simulate 12 20 --stall"),),
+             render_fit_stall, DETERMINISTIC, 40),
+        Spec("calibrate-odometry", "docs/tuning.md",
+             (Command("python tools/calibrate_odometry.py --simulate --drive-test"),),
+             render_calibrate_odometry, DETERMINISTIC, 300),
         Spec("wheel-turn", "docs/looks.md", (_measure("wheel-turn"),), render_wheel_turn,
              DETERMINISTIC, 5),
         Spec("saved-mid-drive", "docs/commands.md", (_measure("saved-mid-drive"),),
