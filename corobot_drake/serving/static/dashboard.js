@@ -189,7 +189,8 @@ async function subscribe() {
   for (const name of names.filter((n) => n.endsWith("_ir"))) handlers[name] = (d) => showIr(name, d);
   const events = new AbortController();
   state.events = events;
-  const url = `${base()}/subscribe?services=${names.join(",")}`;
+  // A robot at rest sends no changes; the heartbeat keeps the shown time moving.
+  const url = `${base()}/subscribe?services=${names.join(",")}&heartbeat=1`;
   while (!events.signal.aborted) {
     try {
       const response = await fetch(url, authorized({ signal: events.signal }));
