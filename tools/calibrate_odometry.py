@@ -29,22 +29,22 @@ REPO = Path(__file__).resolve().parent.parent
 
 
 def _parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0],
+                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     p.add_argument("log", nargs="?", help="log CSV with time, left_ticks, right_ticks, x, y, yaw")
     p.add_argument("--simulate", action="store_true",
-                   help="drive UMBmark's squares in --scenario and fit their log (default off)")
+                   help="drive UMBmark's squares in --scenario and fit their log")
     p.add_argument("--scenario", default=str(DEFAULT_SCENARIO),
-                   help="scenario to simulate in (default: the shipped corobot.yaml)")
-    p.add_argument("--robot", default="corobot", help="robot (default corobot)")
+                   help="scenario to simulate in")
+    p.add_argument("--robot", default="corobot", help="robot")
     p.add_argument("--ticks-per-revolution", type=int, default=dim.ENCODER_TICKS_PER_REVOLUTION,
-                   help="encoder counts per wheel revolution (default 600)")
+                   help="encoder counts per wheel revolution")
     p.add_argument("--plot", default=str(REPO / "out" / "calibrate_odometry.png"),
-                   help="before/after plot of the log (default out/calibrate_odometry.png)")
-    p.add_argument("--write", metavar="SCENARIO", help="put the fit in this scenario file "
-                   "(default: print only)")
+                   help="before/after plot of the log")
+    p.add_argument("--write", metavar="SCENARIO", help="put the fit in this scenario file")
     p.add_argument("--drive-test", action="store_true",
-                   help="check on the 3-loop drive test, seed --seed (default off)")
-    p.add_argument("--seed", type=int, default=1, help="the drive test's seed (default 1)")
+                   help="check on the 3-loop drive test, seed --seed")
+    p.add_argument("--seed", type=int, default=1, help="the drive test's seed")
     return p
 
 
