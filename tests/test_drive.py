@@ -66,21 +66,24 @@ def test_set_velocity_straight(sim):
     assert abs(sim.robot().velocity().yaw_rate) < 1e-3  # symmetric: no turn
 
 
-def test_set_velocity_spin_turns_at_the_skid_steer_rate(sim):
-    """(0, 1 rad/s) with the nominal track gives rims at -+ w B; a skid-steer spin with
-    isotropic friction then turns at B u / (A^2 + B^2) = w B^2 / (A^2 + B^2) ~ 0.596 rad/s, not
-    1: the wheels slip sideways (the effective-track calibration will correct it)."""
+def test_set_velocity_spin_turns_at_the_commanded_rate(sim):
+    """(0, 1 rad/s) gives rims at -+ w T / 2 on the drive's effective track T (the shipped
+    scenario's is calibrated); a skid-steer spin with isotropic friction then turns at
+    (w T / 2) B / (A^2 + B^2), which the calibrated track makes ~1 rad/s, as commanded."""
     robot = sim.robot()
+    track = sim.scenario.robots["corobot"].drive.effective_track_width
+    assert track > 1.5 * 2 * B  # calibrated: the robot turns slower than its wheels' track says
     robot.set_velocity(0.0, 1.0)
     sim.advance(1.0)
     rates = []
     for _ in range(20):
         sim.advance(0.05)
         rates.append(robot.velocity().yaw_rate)
-    predicted = 1.0 * B**2 / (A**2 + B**2)
+    predicted = 1.0 * (track / 2) * B / (A**2 + B**2)
     # 5%, as test_spin_in_place_matches_isotropic_coulomb: the hydroelastic patch's width and
     # the servo's slip make Drake's rate differ from the point-contact formula by ~2%.
     assert np.mean(rates) == pytest.approx(predicted, rel=0.05)
+    assert np.mean(rates) == pytest.approx(1.0, rel=0.05)  # what the command asked for
     assert abs(robot.velocity().forward) < 0.01
 
 

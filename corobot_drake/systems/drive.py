@@ -347,12 +347,11 @@ _MOTION_LEVEL_NAMES = (SetPower.__name__, SetSpeed.__name__)
 
 
 def velocity_track_width(drive: Drive) -> float:
-    """m: the track that turns a yaw rate into rim speeds (`SetVelocity`). The nominal wheel
-    track for now; a skid-steer robot turns slower than that predicts (its wheels slip
-    sideways: ~0.6 of the rate here, docs/commands.md), which the calibrated effective track
-    will correct once the drive config carries it."""
-    del drive  # the effective track will come from here
-    return dim.TRACK
+    """m: the track that turns a yaw rate into rim speeds (`SetVelocity`): the drive's
+    calibrated `effective_track_width` (`tools/calibrate_odometry.py`), so that a skid-steer
+    robot, whose wheels slip sideways in a turn, turns at the commanded rate; the geometric
+    track by default."""
+    return drive.effective_track_width
 
 
 def skid_steer_rim_speeds(linear: float, angular: float, track: float) -> tuple[float, float]:
