@@ -114,7 +114,7 @@ def test_scripted_set_pose_into_the_box_is_blocked_and_the_script_goes_on():
     sim.advance(1.0)
     log = sim.robot().command_log()
     assert [(r.command, r.status, r.reason) for r in log[:2]] == [
-        ("SetPose", "failed", "blocked"), ("SetPower", "running", "")]
+        ("SetPose", "failed", "blocked"), ("SetPower", "succeeded", "")]  # taken by the drive
     assert sim.robot().pose().x > 0.1  # it drove forward from the origin instead
 
 
