@@ -324,3 +324,17 @@ def test_ctrl_c_keeps_the_finished_rows_and_stops_ray(tmp_path, connected, capsy
     resumed = rows(out / "runs.csv")
     assert [r["run"] for r in resumed] == [str(i) for i in range(6)]
     assert [r["wall_seconds"] for r in resumed[:len(kept)]] == [r["wall_seconds"] for r in kept]
+
+
+@pytest.mark.parametrize("study_file", sorted((DEFAULT_SCENARIO.parent / "studies").glob("*.yaml")),
+                         ids=lambda p: p.stem)
+def test_every_shipped_study_run_is_a_valid_scenario(study_file):
+    # Each run's scenario as a worker builds it, checked (no simulation): a grid value out of
+    # a field's bounds would make every such run an error row (the tire-grip study's unlimited
+    # motor once did).
+    from corobot_drake.study.runner import run_scenario
+    from corobot_drake.study.spec import scenario_path
+
+    study = load_study(study_file)
+    for run in expand(study):
+        run_scenario(study, scenario_path(study, study_file), run)

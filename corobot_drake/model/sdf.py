@@ -31,7 +31,9 @@ class WheelContact:
     """m. The tyre's tetrahedral mesh size: coarser turns the wheel into a polygon (jitter)."""
     hunt_crossley_dissipation: float = bounded(5.0, lim.DISSIPATION)
     """s/m. Damps the tyre's vertical bounce (the original used restitution 0.2)."""
-    effort_limit: float = bounded(0.3, Range(0.0, 100.0, low_open=True, unit="N m"))
+    effort_limit: float = bounded(0.3, Range(0.0, 1000.0, low_open=True, unit="N m",
+                                             why="1000: an unlimited motor, as the tire-grip "
+                                                 "studies model one"))
     """N m. Motor stall torque per axle. Above the traction limit mu N R ~ 0.28 N m so
     it never limits top speed or turning, but low enough that the robot cannot climb (and flip
     on) the giant box."""
