@@ -350,7 +350,7 @@ OVERRIDES = [
            "got 1"),
     _robot("dissipation", "{contact: {hunt_crossley_dissipation: -1}}",
            "contact.hunt_crossley_dissipation", "[0, 100] s/m"),
-    _robot("effort 0", "{contact: {effort_limit: 0}}", "contact.effort_limit", "(0, 100] N m"),
+    _robot("effort 0", "{contact: {effort_limit: 0}}", "contact.effort_limit", "(0, 1000] N m"),
     _robot("damping 1e9", "{contact: {servo_damping: 1e9}}", "contact.servo_damping",
            "(0, 1000] N m s/rad"),
     _robot("visual", "{visual: sketch}", "visual", "not one of meshes, boxes"),
