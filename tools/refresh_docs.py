@@ -792,8 +792,8 @@ def blocks() -> list[Spec]:
              (Command("python -m pytest -s -q tests/test_server.py -k flood", ok=(0, 1)),),
              render_server_flood, TIMING, 30),
         Spec("server-memory", "docs/services.md",
-             (Command("python tools/bench_memory.py --sim-minutes 10 --warmup-minutes 1 "
-                      "--sample-every 20"),), render_server_memory, TIMING, 2400),
+             (Command("python tools/bench_memory.py --sim-minutes 60 --warmup-minutes 1 "
+                      "--sample-every 60"),), render_server_memory, TIMING, 2200),
         Spec("camera-cost", "docs/looks.md", (Command("python tools/camera_cost.py"),),
              render_camera_cost, TIMING, 70),
         Spec("bench-camera", "docs/sensors.md", (bench_camera,), render_table_with_load,
