@@ -39,11 +39,7 @@ def run_studies(out: Path, workers: int | None = None, progress: bool = True) ->
 
 def read_studies(out: Path) -> dict:
     """The rows of finished studies in `out/drive`, `out/rotate`."""
-    rows = {kind: engine.read_rows(out / kind / "runs.csv") for kind in KINDS}
-    for kind, table in rows.items():
-        if not table:
-            raise FileNotFoundError(f"{out / kind / 'runs.csv'}: no runs (run the study first)")
-    return rows
+    return engine.read_studies(out, KINDS)
 
 
 def results(rows: dict) -> dict:

@@ -89,11 +89,7 @@ def run_studies(out: Path, quick: bool = False, workers: int | None = None) -> d
 
 
 def read_studies(out: Path) -> dict:
-    rows = {kind: engine.read_rows(out / kind / "runs.csv") for kind in STUDIES}
-    for kind, table in rows.items():
-        if not table:
-            raise FileNotFoundError(f"{out / kind / 'runs.csv'}: no runs (run the study first)")
-    return rows
+    return engine.read_studies(out, STUDIES)
 
 
 def _case(row: dict) -> str:
