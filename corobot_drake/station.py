@@ -6,6 +6,7 @@ station: every robot's systems are named `<robot>.<system>` and its ports are ex
 """
 
 import dataclasses as dc
+import math
 
 import numpy as np
 from pydrake.geometry import (
@@ -322,9 +323,26 @@ def _add_meshcat(builder, plant, scene_graph, meshcat, world: sc.World) -> None:
     meshcat.SetProperty("/Background", "top_color", sky)
     meshcat.SetProperty("/Background", "bottom_color", [min(1.0, c * 1.15) for c in sky])
     meshcat.SetProperty("/Grid", "visible", False)
-    # Meshcat's default lights stay; the sun's direction shapes the directional light.
-    d = -np.asarray(world.sun.direction, dtype=float)
-    d = d / np.linalg.norm(d)
-    meshcat.SetProperty("/Lights/DirectionalLight/<object>", "position", list(d * 10.0))
-    meshcat.SetProperty("/Lights/DirectionalLight/<object>", "intensity",
-                        float(world.sun.intensity))
+    _set_meshcat_sun(meshcat, world.sun)
+
+
+MESHCAT_SUN = "/Lights/FillLight/<object>"
+"""Meshcat's one directional light (its default scene names it FillLight)."""
+
+MESHCAT_SUN_DISTANCE = 10.0
+"""m: where the light sits, up-sun of the origin (a three.js directional light shines from
+its position towards its target, the origin)."""
+
+MESHCAT_DIRECTIONAL_INTENSITY = 0.4 * math.pi
+"""Meshcat's default directional intensity (0.4 in three.js's legacy units, which its
+physically based lights scale by pi): the sun's intensity 1."""
+
+
+def _set_meshcat_sun(meshcat, sun: sc.Sun) -> None:
+    """Meshcat's other default lights (ambient, two points) stay; its directional light
+    becomes the sun: shining along `sun.direction` at `sun.intensity`."""
+    d = np.asarray(sun.direction, dtype=float)
+    meshcat.SetProperty(MESHCAT_SUN, "position",
+                        list(-d / np.linalg.norm(d) * MESHCAT_SUN_DISTANCE))
+    meshcat.SetProperty(MESHCAT_SUN, "intensity",
+                        float(sun.intensity) * MESHCAT_DIRECTIONAL_INTENSITY)

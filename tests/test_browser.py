@@ -177,14 +177,28 @@ def test_meshcat_view_and_a_key_press_that_stops_by_itself(page, meshcat_server)
     import numpy as np
 
     from conftest import make_sim
+    from corobot_drake.config.scenario import BOOK_SUN_DIRECTION
     from corobot_drake.serving.view import framing, scene_points
+    from corobot_drake.station import MESHCAT_DIRECTIONAL_INTENSITY
 
     url = meshcat_server.url
     meshcat_url = page.request.get(f"{url}/simulation").json()["meshcat_url"]
     page.set_viewport_size({"width": 480, "height": 360})  # software WebGL: fewer pixels
     _, target = framing(scene_points(make_sim()))  # the default scene's, at rest
+    console = []
+    page.on("console", lambda m: console.append(m.text))
     page.goto(meshcat_url)
     page.wait_for_selector("text=Forward (Up)", state="attached", timeout=90000)
+    # The sun: Meshcat's directional light at the scenario's direction and intensity, and no
+    # property sent to a path that is no light (the browser warns "has no property").
+    sun = ["Lights", "FillLight", "<object>"]
+    wait_for(lambda: page.evaluate(
+        "p => viewer.scene_tree.find(p).object.intensity", sun) == pytest.approx(
+            MESHCAT_DIRECTIONAL_INTENSITY), 90, "the sun's intensity")
+    x, y, z = page.evaluate("p => viewer.scene_tree.find(p).object.position.toArray()", sun)
+    assert np.array([x, y, z]) / np.linalg.norm([x, y, z]) == pytest.approx(
+        -np.array(BOOK_SUN_DIRECTION) / np.linalg.norm(BOOK_SUN_DIRECTION), abs=1e-6)
+    assert not [m for m in console if "has no property" in m], console
 
     def view_target():  # Drake's z-up world from Meshcat's y-up three.js scene
         x, y, z = page.evaluate("() => viewer.controls.target.toArray()")

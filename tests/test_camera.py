@@ -125,7 +125,7 @@ def test_box_fills_the_share_the_geometry_predicts(x, y):
 
 def test_frames_are_lit_not_black():
     """Facing away from the box: sky above the horizon, sunlit ground below; facing the box:
-    its face (turned from the sun) is lit by the fill light."""
+    its face is lit (by the book's sun, which shines on it, and the fill light)."""
     sim = make_sim(camera=True)
     sim.advance(0.2)
     image = sim.robot().camera_image()[:, :, :3].astype(float)

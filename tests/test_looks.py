@@ -101,6 +101,36 @@ def test_meshcat_publishes_collision_shapes_hidden_by_default():
             assert meshcat.HasPath(f"/drake/{layer}/{path}"), (layer, path)
 
 
+def test_meshcat_sun_shines_from_the_books_direction():
+    """The book's sun, (0.5, -0.75, 0.5) in MRDS's y-up frame, is (-0.5, -0.5, -0.75) here;
+    Meshcat's directional light sits up-sun of the origin with the scenario's intensity (a
+    property on a path that is no light, as `DirectionalLight` was, only warns in the
+    browser: the page-level check is tests/test_browser.py)."""
+    import msgpack
+    from pydrake.geometry import StartMeshcat
+
+    from corobot_drake.config.scenario import BOOK_SUN_DIRECTION, from_mrds_frame
+    from corobot_drake.simulation import Simulation
+    from corobot_drake.station import MESHCAT_DIRECTIONAL_INTENSITY, MESHCAT_SUN
+
+    assert BOOK_SUN_DIRECTION == [-0.5, -0.5, -0.75]
+    assert from_mrds_frame((0, 0, -1)) == [1, 0, 0]  # MRDS's forward is +x
+    assert from_mrds_frame((0, 1, 0)) == [0, 0, 1]  # and its up is +z
+    sim = make_sim("world: {sun: {intensity: 0.5}}")
+    assert sim.scenario.world.sun.direction == BOOK_SUN_DIRECTION  # the shipped scene's
+    meshcat = StartMeshcat()
+    Simulation(sim.scenario, meshcat=meshcat)
+
+    def sent(prop):
+        return msgpack.unpackb(meshcat._GetPackedProperty(MESHCAT_SUN, prop))["value"]
+
+    position = np.array(sent("position"))
+    unit = -np.array(BOOK_SUN_DIRECTION) / np.linalg.norm(BOOK_SUN_DIRECTION)
+    assert position / np.linalg.norm(position) == pytest.approx(unit, abs=1e-12)
+    assert sent("intensity") == pytest.approx(0.5 * MESHCAT_DIRECTIONAL_INTENSITY)
+    assert not meshcat.HasPath("/Lights/DirectionalLight")
+
+
 def _fraction(image, rgb, tol=30) -> float:
     return float(np.mean(np.all(np.abs(image.astype(int) - np.array(rgb)) <= tol, axis=2)))
 

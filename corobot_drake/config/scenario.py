@@ -124,11 +124,25 @@ class WorldBody:
     color: list[float] = bounded(lambda: [0.75, 0.55, 0.3, 1.0], lim.COLOR, size=4)
 
 
+def from_mrds_frame(v) -> list[float]:
+    """A vector in MRDS's world frame (y up, a robot at rest facing -z) in this project's
+    (z up, facing +x): x = -z_mrds, y = -x_mrds, z = y_mrds (a proper rotation)."""
+    x, y, z = (float(c) for c in v)
+    return [-z, -x, y]
+
+
+BOOK_SUN_DIRECTION = from_mrds_frame((0.5, -0.75, 0.5))
+"""[-0.5, -0.5, -0.75]: the book's sun, travelling down and towards the giant box's side."""
+
+
 @dc.dataclass
 class Sun:
-    """A directional light: `direction` is the way the light travels, in the world frame."""
+    """A directional light: `direction` is the way the light travels, in the world frame
+    (the book's by default); `intensity` 1 is full sunlight in the camera and Meshcat's
+    default brightness for its directional light."""
 
-    direction: list[float] = bounded(lambda: [0.3, 0.2, -1.0], Range(-1e3, 1e3), size=3)
+    direction: list[float] = bounded(lambda: list(BOOK_SUN_DIRECTION), Range(-1e3, 1e3),
+                                     size=3)
     """Not zero (checked with the scene)."""
     intensity: float = bounded(1.0, Range(0.0, 100.0))
 
