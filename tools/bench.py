@@ -8,15 +8,19 @@ wall-clock real-time factor (the CPU-time one in parentheses: the machine may be
 the IR cost per scan and the camera cost per frame, both measured in place (the extra wall time
 per scan or frame over physics only) and by their micro-benchmarks (tools/bench_ir.py,
 tools/bench_raycast.py, tools/bench_camera.py). `--robots 1,2,4,8,16` adds fleets of robots
-driving, physics only: robot-seconds per second, flat when nothing grows per robot. The
-measurements are
+driving, physics only: robot-seconds per second, flat when nothing grows per robot.
+`--layers` adds what physics only is made of: the plant alone (the floor Drake sets), then the
+robot's systems added one layer at a time, CPU ms per simulated second
+(`corobot_drake.analysis.bench_layers`). The measurements are
 `corobot_drake.analysis.bench` and the micro-benchmarks' modules beside it.
 """
 
 import argparse
 import statistics
 
-from corobot_drake.analysis import bench, bench_camera, bench_ir, bench_raycast
+from tqdm import tqdm
+
+from corobot_drake.analysis import bench, bench_camera, bench_ir, bench_layers, bench_raycast
 from corobot_drake.analysis.bench import DEFAULT_PLANT, ROBOT
 from corobot_drake.simulation import quiet_drake_warnings
 
@@ -64,6 +68,22 @@ def _fleets(counts: list[int], seconds: float, repeats: int) -> None:
               f"({cpu / single[1]:.2f}) |", flush=True)
 
 
+def _layers(seconds: float, repeats: int) -> None:
+    """Prints the physics-only stack layer by layer (median CPU ms per simulated second)."""
+    rows = len(bench_layers.LAYERS) + 1 + len(bench_layers.VARIANTS)
+    with tqdm(total=rows * repeats, desc="layers", leave=False) as bar:
+        costs = bench_layers.layer_costs(seconds, repeats, progress=bar.update)
+    print("| layers (cumulative) | CPU ms per simulated s | added | CPU-time RTF |\n"
+          "|---|---|---|---|", flush=True)
+    previous = None
+    for name, cost in costs.items():
+        added = (f"{cost - previous:+.1f}" if name in bench_layers.LAYERS[1:] else
+                 f"{cost / costs[bench_layers.STATION]:.2f} of the station's"
+                 if name in bench_layers.VARIANTS else "")
+        print(f"| {name} | {cost:.1f} | {added} | {1000 / cost:.2f}x |", flush=True)
+        previous = cost
+
+
 def _micro_benchmarks() -> None:
     print(f"micro-benchmark: IR scan of both default sensors (2 x 6 rays) in the station: "
           f"{bench_ir.station_scan_cost_seconds() * 1000:.4f} ms (tools/bench_ir.py)", flush=True)
@@ -85,6 +105,9 @@ def main() -> None:
     parser.add_argument("--robots", default="",
                         help="also fleets of these sizes, e.g. 1,2,4,8,16: robot-seconds per "
                              "second, physics only (default: none)")
+    parser.add_argument("--layers", action="store_true",
+                        help="also the physics-only stack layer by layer, from the plant "
+                             "alone (CPU time, the layers interleaved)")
     parser.add_argument("--no-table", action="store_true",
                         help="skip the stacks x plants table")
     args = parser.parse_args()
@@ -100,6 +123,9 @@ def main() -> None:
         _in_place(results)
     if args.robots:
         _fleets([int(n) for n in args.robots.split(",")], args.seconds, args.repeats)
+        print()
+    if args.layers:
+        _layers(args.seconds, args.repeats)
         print()
     if not args.no_micro:
         _micro_benchmarks()

@@ -1,0 +1,197 @@
+"""What each layer of the physics-only stack costs (`python tools/bench.py --layers`).
+
+The default scene's plant and scene graph (the same world and robot model as
+`station.build_station`), then the robot's own systems added one layer at a time with the
+station's wiring, each diagram driving the benchmark's figure of eight (`bench.DRIVING`):
+
+- the plant alone: the wheels' servo fed a fixed desired state (the figure of eight's axle
+  speeds, changed at its 3 s and 6 s), no project system: the floor Drake sets;
+- + the drive controller (its request fixed, changed at the same times);
+- + the chassis poses, encoders, compass, GPS and drive state (no events of their own: they
+  cost only when something reads them);
+- + the command source and motion (the script replaces the fixed request);
+- + dead reckoning, + the tilt monitor, + the run log (each an event every 10 ms);
+- + the wheel contacts (read by nothing per step);
+- the station itself (`Simulation`, physics only), which the last layer should match;
+- the station with one Drake-side setting changed (`VARIANTS`).
+
+Each row's cost is CPU time per simulated second; the difference from the layer before is
+what that layer adds. The rows run interleaved, `repeats` rounds; medians.
+"""
+
+import dataclasses as dc
+import itertools
+import statistics
+import time
+
+import numpy as np
+from pydrake.multibody.plant import AddMultibodyPlant
+from pydrake.systems.analysis import Simulator
+from pydrake.systems.framework import DiagramBuilder
+from pydrake.systems.primitives import MatrixGain
+
+from corobot_drake.analysis import bench
+from corobot_drake.config import scenario as sc
+from corobot_drake.resources import DEFAULT_SCENARIO
+from corobot_drake.station import TILT_SAMPLE_PERIOD, _add_robot, _add_world
+from corobot_drake.systems.contact import add_wheel_contacts
+from corobot_drake.systems.dead_reckoning import DeadReckoning
+from corobot_drake.systems.drive import CommandSource, DriveController, DriveRequest
+from corobot_drake.systems.monitor import TiltMonitor
+from corobot_drake.systems.motion import MotionCommands
+from corobot_drake.systems.odometry import add_chassis_poses, add_odometry
+from corobot_drake.systems.runlog import add_run_log
+
+LAYERS = ("plant alone (desired state fixed)", "+ drive controller (request fixed)",
+          "+ chassis poses, encoders, compass, GPS, drive state",
+          "+ command source and motion (the script)", "+ dead reckoning", "+ tilt monitor",
+          "+ run log", "+ wheel contacts")
+STATION = "the station (Simulation, physics only)"
+VARIANTS = {
+    "the station, `use_sampled_output_ports: false` (same trajectory)":
+        "plant_config: {use_sampled_output_ports: false}",
+    "the station, 7 mm tyre mesh (22 polygons per patch, not 30)":
+        f"robots: {{{bench.ROBOT}: {{contact: {{resolution_hint: 0.007}}}}}}",
+    "the station, the giant box in point contact (no 16-polygon patch)":
+        "world: {bodies: {giant_box: {hydroelastic_modulus: 0}}}",
+}
+"""Station rows with one Drake-side setting changed (scenario overrides): what it would save.
+Only the first keeps the trajectory bit for bit (docs/performance.md)."""
+
+
+def _scenario(*overrides: str) -> sc.Scenario:
+    return sc.load_scenario(DEFAULT_SCENARIO, overrides=[
+        bench.DRIVING, *bench.physics_only_overrides(), *overrides])
+
+
+def _segments(robot: sc.Robot) -> list[tuple[float, object]]:
+    """(start time s, SetPower) of the figure of eight's script (its Waits give the times)."""
+    segments, now = [], 0.0
+    for command in robot.commands:
+        if isinstance(command, sc.Wait):
+            now += command.seconds
+        else:
+            segments.append((now, command))
+    return segments
+
+
+@dc.dataclass
+class _Layered:
+    simulator: Simulator
+    set_command: object
+    """set_command(root context, seq, SetPower): what the fixed inputs get at a segment."""
+
+
+def build_layers(scenario: sc.Scenario, layers: int) -> _Layered:
+    """The default scene's plant with the first `layers` of `LAYERS` (1: the plant alone)."""
+    builder = DiagramBuilder()
+    plant, _ = AddMultibodyPlant(scenario.plant_config, builder)
+    _add_world(plant, scenario.world)
+    name, robot = next(iter(scenario.robots.items()))
+    instance, chassis, joints = _add_robot(plant, name, robot)
+    plant.Finalize()
+    fixed = {}
+    if layers == 1:
+        fixed["desired_state"] = plant.get_desired_state_input_port(instance)
+    else:
+        controller = builder.AddSystem(DriveController(robot.drive))
+        selector = builder.AddSystem(MatrixGain(plant.MakeStateSelectorMatrix(
+            [j.index() for j in joints])))
+        builder.Connect(plant.get_state_output_port(), selector.get_input_port())
+        builder.Connect(selector.get_output_port(), controller.GetInputPort("wheel_state"))
+        builder.Connect(controller.GetOutputPort("desired_state"),
+                        plant.get_desired_state_input_port(instance))
+        _add_robot_layers(builder, plant, name, robot, chassis, joints, selector, controller,
+                          layers, fixed)
+    diagram = builder.Build()
+    simulator = Simulator(diagram)
+    context = simulator.get_mutable_context()
+    drive = robot.drive
+
+    def set_command(root, seq, command):
+        if "desired_state" in fixed:
+            left, right = (p * drive.motor_torque_scaling for p in (command.left, command.right))
+            fixed["desired_state"].FixValue(plant.GetMyMutableContextFromRoot(root),
+                                            np.array([0, 0, 0, 0, left, right, left, right]))
+        if "request" in fixed:
+            port = fixed["request"]
+            port.FixValue(port.get_system().GetMyMutableContextFromRoot(root),
+                          DriveRequest(seq, command, root.get_time()))
+
+    set_command(context, 1, _segments(robot)[0][1])
+    simulator.Initialize()
+    return _Layered(simulator, set_command)
+
+
+def _add_robot_layers(builder, plant, name, robot, chassis, joints, selector, controller,
+                      layers, fixed) -> None:
+    """Layers 3 and up of `LAYERS`, wired as `station.build_station` wires them."""
+    if layers < 3:
+        fixed["request"] = controller.GetInputPort("request")
+        return
+    pose = add_chassis_poses(builder, plant, {name: chassis})[name]
+    odometry = add_odometry(builder, name, pose, selector.get_output_port(),
+                            controller.GetOutputPort("drive_status"),
+                            controller.GetOutputPort("axle_speed"),
+                            robot.drive.motor_torque_scaling)
+    if layers < 4:
+        fixed["request"] = controller.GetInputPort("request")
+        return
+    source = builder.AddSystem(CommandSource(robot.commands, robot.drive.control_period))
+    motion = builder.AddSystem(MotionCommands(robot.drive, robot.motion))
+    builder.Connect(source.GetOutputPort("request"), motion.GetInputPort("request"))
+    builder.Connect(odometry.position, motion.GetInputPort("position"))
+    builder.Connect(odometry.heading, motion.GetInputPort("heading"))
+    builder.Connect(motion.GetOutputPort("drive_request"), controller.GetInputPort("request"))
+    builder.Connect(motion.GetOutputPort("command_status"), source.GetInputPort("command_status"))
+    if layers >= 5:
+        dead_reckoning = builder.AddSystem(DeadReckoning(robot.drive, robot.drive.control_period))
+        builder.Connect(odometry.encoder_ticks, dead_reckoning.GetInputPort("encoder_ticks"))
+        builder.Connect(pose, dead_reckoning.GetInputPort("chassis_pose"))
+    if layers >= 6:
+        tilt = builder.AddSystem(TiltMonitor(TILT_SAMPLE_PERIOD))
+        builder.Connect(pose, tilt.GetInputPort("chassis_pose"))
+    if layers >= 7:
+        add_run_log(builder, name, pose, controller.GetOutputPort("drive_status"),
+                    odometry.encoder_ticks)
+    if layers >= 8:
+        add_wheel_contacts(builder, name, plant, chassis, [j.child_body() for j in joints],
+                           selector.get_output_port())
+
+
+def _cpu_seconds(layers: int | None, scenario: sc.Scenario, seconds: float) -> float:
+    """CPU s to simulate `seconds` of the figure of eight with the first `layers` of `LAYERS`
+    (None: the station itself), building excluded."""
+    if layers is None:
+        from corobot_drake.simulation import Simulation
+
+        sim = Simulation(scenario)
+        start = time.process_time()
+        sim.advance(seconds)
+        return time.process_time() - start
+    built = build_layers(scenario, layers)
+    context = built.simulator.get_mutable_context()
+    segments = [*_segments(scenario.robots[bench.ROBOT]), (seconds, None)]
+    start = time.process_time()
+    for seq, ((t0, command), (t1, _)) in enumerate(itertools.pairwise(segments), start=1):
+        if t0 >= seconds:
+            break
+        if seq > 1:
+            built.set_command(context, seq, command)
+        built.simulator.AdvanceTo(min(t1, seconds))
+    return time.process_time() - start
+
+
+def layer_costs(seconds: float, repeats: int, progress=None) -> dict[str, float]:
+    """{row (`LAYERS`, `STATION`, then `VARIANTS`): median CPU ms per simulated second}; the
+    rows run in turn, `repeats` rounds. `progress()` is called after each run."""
+    rows = [(name, i + 1, _scenario()) for i, name in enumerate(LAYERS)]
+    rows += [(STATION, None, _scenario())]
+    rows += [(name, None, _scenario(override)) for name, override in VARIANTS.items()]
+    runs = {name: [] for name, _, _ in rows}
+    for _ in range(repeats):
+        for name, layers, scenario in rows:
+            runs[name].append(_cpu_seconds(layers, scenario, seconds) / seconds * 1000)
+            if progress:
+                progress()
+    return {name: statistics.median(values) for name, values in runs.items()}
