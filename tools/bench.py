@@ -73,15 +73,21 @@ def _layers(seconds: float, repeats: int) -> None:
     rows = len(bench_layers.LAYERS) + 1 + len(bench_layers.VARIANTS)
     with tqdm(total=rows * repeats, desc="layers", leave=False) as bar:
         costs = bench_layers.layer_costs(seconds, repeats, progress=bar.update)
-    print("| layers (cumulative) | CPU ms per simulated s | added | CPU-time RTF |\n"
-          "|---|---|---|---|", flush=True)
+    print("| layers (cumulative) | CPU ms per simulated s, median (least) | added (least) | "
+          "CPU-time RTF, median (best) |\n|---|---|---|---|", flush=True)
     previous = None
-    for name, cost in costs.items():
-        added = (f"{cost - previous:+.1f}" if name in bench_layers.LAYERS[1:] else
-                 f"{cost / costs[bench_layers.STATION]:.2f} of the station's"
-                 if name in bench_layers.VARIANTS else "")
-        print(f"| {name} | {cost:.1f} | {added} | {1000 / cost:.2f}x |", flush=True)
-        previous = cost
+    for name, (median, least) in costs.items():
+        if name in bench_layers.LAYERS[1:]:
+            added = f"{median - previous[0]:+.1f} ({least - previous[1]:+.1f})"
+        elif name in bench_layers.VARIANTS:
+            station = costs[bench_layers.STATION]
+            added = (f"{median / station[0]:.2f} ({least / station[1]:.2f}) of the "
+                     "station's")
+        else:
+            added = ""
+        print(f"| {name} | {median:.1f} ({least:.1f}) | {added} | {1000 / median:.2f}x "
+              f"({1000 / least:.2f}x) |", flush=True)
+        previous = median, least
 
 
 def _micro_benchmarks() -> None:

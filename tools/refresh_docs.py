@@ -830,8 +830,8 @@ def blocks() -> list[Spec]:
              (Command("python tools/bench.py --robots 1,2,4,8,16 --no-table --no-micro "
                       "--seconds 5 --repeats 1"),), render_bench_robots, TIMING, 300),
         Spec("bench-layers", "docs/performance.md",
-             (Command("python tools/bench.py --layers --no-table --no-micro --seconds 5 "
-                      "--repeats 5"),), render_bench_robots, TIMING, 300),
+             (Command("python tools/bench.py --layers --no-table --no-micro --seconds 4 "
+                      "--repeats 7"),), render_bench_robots, TIMING, 420),
         Spec("bench-full", "docs/performance.md",
              (Command("python tools/bench.py --seconds 5 --repeats 3"),), render_bench_full,
              TIMING, 200),

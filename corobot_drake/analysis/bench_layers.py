@@ -182,9 +182,11 @@ def _cpu_seconds(layers: int | None, scenario: sc.Scenario, seconds: float) -> f
     return time.process_time() - start
 
 
-def layer_costs(seconds: float, repeats: int, progress=None) -> dict[str, float]:
-    """{row (`LAYERS`, `STATION`, then `VARIANTS`): median CPU ms per simulated second}; the
-    rows run in turn, `repeats` rounds. `progress()` is called after each run."""
+def layer_costs(seconds: float, repeats: int, progress=None) -> dict[str, tuple[float, float]]:
+    """{row (`LAYERS`, `STATION`, then `VARIANTS`): (median, least) CPU ms per simulated
+    second}; the rows run in turn, `repeats` rounds. The least is the run least disturbed by
+    other work on a shared machine (contention only adds CPU time: cache and memory bandwidth).
+    `progress()` is called after each run."""
     rows = [(name, i + 1, _scenario()) for i, name in enumerate(LAYERS)]
     rows += [(STATION, None, _scenario())]
     rows += [(name, None, _scenario(override)) for name, override in VARIANTS.items()]
@@ -194,4 +196,4 @@ def layer_costs(seconds: float, repeats: int, progress=None) -> dict[str, float]
             runs[name].append(_cpu_seconds(layers, scenario, seconds) / seconds * 1000)
             if progress:
                 progress()
-    return {name: statistics.median(values) for name, values in runs.items()}
+    return {name: (statistics.median(values), min(values)) for name, values in runs.items()}

@@ -1,0 +1,37 @@
+"""The physics-only decomposition (`tools/bench.py --layers`) measures what the station runs."""
+
+import numpy as np
+
+from corobot_drake.analysis import bench_layers as bl
+from corobot_drake.simulation import Simulation
+
+
+def _plant_state(simulator) -> np.ndarray:
+    plant = simulator.get_system().GetSubsystemByName("plant")
+    return plant.GetPositionsAndVelocities(plant.GetMyContextFromRoot(simulator.get_context()))
+
+
+def test_all_layers_step_the_station_bit_for_bit():
+    # The layers are wired as the station: with all of them the trajectory is the station's
+    # exactly, so the last layer's cost is the station's cost and nothing is missing.
+    scenario = bl._scenario()
+    built = bl.build_layers(scenario, len(bl.LAYERS))
+    built.simulator.AdvanceTo(1.0)
+    sim = Simulation(scenario)
+    sim.advance(1.0)
+    plant = sim.station.plant
+    expected = plant.GetPositionsAndVelocities(plant.GetMyContextFromRoot(sim.context))
+    assert np.array_equal(_plant_state(built.simulator), expected)
+
+
+def test_the_plant_alone_drives_the_figure_of_eight():
+    # The fixed desired state turns the wheels as the script's SetPower does (left faster:
+    # a right turn): the floor is measured on the same driving, not on a robot at rest.
+    built = bl.build_layers(bl._scenario(), 1)
+    built.simulator.AdvanceTo(1.0)
+    plant = built.simulator.get_system().GetSubsystemByName("plant")
+    chassis = plant.GetBodyByName("chassis")
+    X = plant.EvalBodyPoseInWorld(plant.GetMyContextFromRoot(built.simulator.get_context()),
+                                  chassis)
+    assert X.translation()[0] > 0.3  # 0.49 m/s mean rim speed for most of a second
+    assert X.translation()[1] < -0.01  # turning right
