@@ -127,6 +127,43 @@ overrides: ["robots: {{corobot: {{commands: [!Wait {{}}, !DriveDistance {{}}]}}}
         run_scenario(study, DEFAULT_SCENARIO, expand(study)[0])
 
 
+def test_a_worker_reads_the_study_scenario_once(tmp_path):
+    """Runs on a worker's `study_scenario` are the runs read from the file, and a run's
+    programs and grid values never reach the next run; a bad study override is every run's
+    error row, read once."""
+    from pydrake.common.yaml import yaml_dump_typed
+
+    from corobot_drake.config.scenario import Scenario
+    from corobot_drake.study.runner import SimulationCache, StudyWorker, run_scenario
+
+    path = tmp_path / "s.yaml"
+    path.write_text(f"""scenario: {DEFAULT_SCENARIO}
+seeds: 2
+grid: {{robots.corobot.commands.1.distance: [0.5, 2]}}
+random: {{robots.corobot.contact.friction: !Uniform {{min: 0.4, max: 0.6}}}}
+drive_test: {{loops: 1}}
+overrides: ["robots: {{corobot: {{drive: {{motor_torque_scaling: 8.0}}}}}}"]
+""")
+    study = load_study(path)
+    cache = SimulationCache()
+    base = cache.base(study, DEFAULT_SCENARIO)
+    before = yaml_dump_typed(base, schema=Scenario)
+    for run in expand(study):
+        on_base, from_file = (run_scenario(study, DEFAULT_SCENARIO, run, b)
+                              for b in (cache.base(study, DEFAULT_SCENARIO), None))
+        assert yaml_dump_typed(on_base, schema=Scenario) == \
+            yaml_dump_typed(from_file, schema=Scenario)
+        robot = on_base.robots["corobot"]
+        assert robot.drive.motor_torque_scaling == 8.0 and robot.commands[1].distance == \
+            run.params[0][1] and robot.contact.friction == run.params[1][1]
+    assert cache.base(study, DEFAULT_SCENARIO) is base
+    assert yaml_dump_typed(base, schema=Scenario) == before
+    study.overrides = ["robots: {corobot: {drive: {motor_torque_scaling: -1}}}"]
+    worker = StudyWorker(study, DEFAULT_SCENARIO)
+    errors = [worker.run(run)["error"] for run in expand(study)]
+    assert len(set(errors)) == 1 and "motor_torque_scaling: must be in" in errors[0]
+
+
 @pytest.mark.parametrize("text, expected", [
     ("grid: {drive_test.power: [0.5]}\n", "grid.drive_test.power: the study has no drive_test"),
     ("grid: {box_approach.speed: [1]}\nbox_approach: {}\n",

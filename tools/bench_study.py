@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """The study engine's throughput: the same runs in one process (diagram built per run, or
-reset) and on Ray with 1 and 2 workers; Ray's start-up; and the projected wall time of a big
-study on a cluster (`corobot_drake.analysis.bench_study`).
+reset) and on Ray with 1 and 2 workers, with and without Ray's start-up; each run's CPU
+seconds; and the projected wall time of a big study on a cluster
+(`corobot_drake.analysis.bench_study`).
 
     python tools/bench_study.py [--seeds 12] [--duration 4]
 """
@@ -11,6 +12,8 @@ import os
 import sys
 import tempfile
 from pathlib import Path
+
+from tqdm import tqdm
 
 from corobot_drake.analysis import bench_study
 from corobot_drake.simulation import quiet_drake_warnings
@@ -23,33 +26,45 @@ def main(argv=None) -> int:
     p.add_argument("--duration", type=float, default=4.0, help="simulated s per run")
     args = p.parse_args(argv)
     quiet_drake_warnings()
+    load = [os.getloadavg()[0]]
     with tempfile.TemporaryDirectory() as folder:
         study = bench_study.write_study(Path(folder), args.seeds, args.duration)
-        built = bench_study.in_process(study, reuse=False)
-        reset = bench_study.in_process(study, reuse=True)
-        one = bench_study.on_ray(study, 1)
-        two = bench_study.on_ray(study, 2)
-    start = bench_study.ray_start_seconds()
+        cases = [("one process, a new diagram per run",
+                  lambda: bench_study.in_process(study, reuse=False)),
+                 ("one process, diagram reset per run",
+                  lambda: bench_study.in_process(study, reuse=True)),
+                 ("Ray, 1 worker", lambda: bench_study.on_ray(study, 1)),
+                 ("Ray, 2 workers", lambda: bench_study.on_ray(study, 2))]
+        results = {}
+        for name, case in tqdm(cases, unit="case"):
+            results[name] = case()
+            load.append(os.getloadavg()[0])
+    print_table(args, results, load)
+    return 0
+
+
+def print_table(args, results: dict, load: list[float]) -> None:
     n = args.seeds
     print(f"{n} runs of {args.duration:g} simulated s (default scene, driving, 2 IR, no camera),"
-          f" {os.cpu_count()} cores, load average {os.getloadavg()[0]:.1f}")
-    print("| how | wall (s) | runs per s | per-run setup (s, median) |")
-    print("|---|---|---|---|")
-    for name, r in (("one process, a new diagram per run", built),
-                    ("one process, diagram reset per run", reset),
-                    ("Ray, 1 worker (start-up included)", one),
-                    ("Ray, 2 workers (start-up included)", two)):
-        setup = f"{r['setup']:.3f}" if "setup" in r else "-"
-        print(f"| {name} | {r['wall']:.1f} | {n / r['wall']:.2f} | {setup} |")
-    print(f"\nRay start + stop with one worker importing the package: {start:.1f} s. "
-          f"2 workers vs 1: {one['wall'] / two['wall']:.2f}x; without start-up: "
-          f"{(one['wall'] - start) / max(two['wall'] - start, 1e-9):.2f}x.")
-    per_run = (two["wall"] - start) * 2 / n  # core-seconds per run on this machine
+          f" {os.cpu_count()} cores, load average {min(load):.1f}-{max(load):.1f}, every case at"
+          f" niceness {os.nice(0)} (Ray's workers too)")
+    print("| how | wall (s) | runs per s | wall without Ray's start and stop (s) | "
+          "per-run setup (s, median) | per-run CPU (s, median) |")
+    print("|---|---|---|---|---|---|")
+    for name, r in results.items():
+        study = f"{r['study']:.1f}" if "study" in r else "-"
+        print(f"| {name} | {r['wall']:.1f} | {n / r['wall']:.2f} | {study} | {r['setup']:.3f} "
+              f"| {r['cpu']:.2f} |")
+    one, two = results["Ray, 1 worker"], results["Ray, 2 workers"]
+    print(f"\nRay's start and stop: {one['start']:.1f} s (1 worker), {two['start']:.1f} s (2). "
+          f"2 workers vs 1: {one['wall'] / two['wall']:.2f}x; without Ray's start and stop: "
+          f"{one['study'] / two['study']:.2f}x. A run's CPU on a Ray worker vs in one process: "
+          f"{one['cpu'] / results['one process, diagram reset per run']['cpu']:.2f}x.")
+    per_run = two["study"] * 2 / n  # core-seconds per run on this machine
     cores, runs = 320, 10_000
     print(f"A {runs}-run study of these runs on 10 nodes x 32 cores, at this machine's "
           f"{per_run:.2f} core-s per run (Ray's per-task cost included, cores as fast as these, "
           f"every run the same length): ~{runs * per_run / cores / 60:.1f} min plus start-up.")
-    return 0
 
 
 if __name__ == "__main__":

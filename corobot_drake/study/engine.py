@@ -18,13 +18,11 @@ from pathlib import Path
 from tqdm import tqdm
 
 from corobot_drake.study import report
-from corobot_drake.study.runner import StudyWorker, finite_or_text
+from corobot_drake.study.runner import TIMING_COLUMNS, StudyWorker, finite_or_text
 from corobot_drake.study.spec import Run, Study, expand, load_study, scenario_path
 
 SAVE_EVERY = 2.0
 """Wall-clock seconds between rewrites of runs.csv while runs arrive."""
-TIMING_COLUMNS = ("setup", "setup_seconds", "wall_seconds")
-"""Columns that depend on the clock (everything else is deterministic)."""
 
 
 @contextlib.contextmanager

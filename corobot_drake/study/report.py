@@ -9,9 +9,10 @@ from pathlib import Path
 
 import numpy as np
 
+from corobot_drake.study.runner import TIMING_COLUMNS
 from corobot_drake.study.spec import Study
 
-NOT_METRICS = {"run", "seed", "status", "error", "setup", "setup_seconds", "wall_seconds"}
+NOT_METRICS = {"run", "seed", "status", "error", *TIMING_COLUMNS}
 
 
 def _number(text: str) -> float | None:

@@ -21,15 +21,26 @@ from corobot_drake.study.spec import Run, Scalar, Study
 
 CACHE_SIZE = 3
 """Simulations a worker keeps built (each holds a diagram and its Context)."""
+TIMING_COLUMNS = ("setup", "setup_seconds", "wall_seconds", "cpu_seconds")
+"""Columns that depend on the clock or the worker (everything else is deterministic)."""
 CHECK_PERIOD = 0.1
 """s of simulated time between checks whether every command has ended (`until: commands`)."""
 
 
-def run_scenario(study: Study, scenario_file: Path, run: Run):
-    """The run's scenario: the file, the study's overrides, then the run's parameters and
-    seed, the study's programs, then the run's parameters through a list index (checked as a
-    scenario is); the cameras off unless the study asks for them."""
-    scenario = load_scenario(scenario_file, overrides=[*study.overrides, *run.overrides()])
+def study_scenario(study: Study, scenario_file: Path):
+    """What every run of the study starts from: the file, then the study's overrides."""
+    return load_scenario(scenario_file, overrides=study.overrides)
+
+
+def run_scenario(study: Study, scenario_file: Path, run: Run, base=None):
+    """The run's scenario: the file, the study's overrides (`base`, their `study_scenario`, if
+    given: a worker reads them once), then the run's parameters and seed, the study's
+    programs, then the run's parameters through a list index (checked as a scenario is); the
+    cameras off unless the study asks for them."""
+    # yaml_load_typed merges a layer into a deep copy of `base`: the run never changes it.
+    if base is None:
+        base = study_scenario(study, scenario_file)
+    scenario = load_scenario(overrides=run.overrides(), defaults=base)
     for name in PROGRAMS:
         program = run.program(study, name)
         if program is not None:
@@ -84,12 +95,25 @@ def _child(node, key: str, where: str):
 
 
 class SimulationCache:
-    """The last few simulations a worker built, by `diagram_key`: a run whose diagram is
-    already built resets it (`Simulation.reset`) instead of building again."""
+    """What a worker keeps between the runs of a study: the study's scenario (`base`) and the
+    last few simulations it built, by `diagram_key`: a run whose diagram is already built
+    resets it (`Simulation.reset`) instead of building again."""
 
     def __init__(self, size: int = CACHE_SIZE):
         self.size = size
         self._sims: OrderedDict[str, Simulation] = OrderedDict()
+        self._base = None
+
+    def base(self, study: Study, scenario_file: Path):
+        """`study_scenario`, read once (its error too: every run's error row says it)."""
+        if self._base is None:
+            try:
+                self._base = study_scenario(study, scenario_file)
+            except Exception as e:
+                self._base = e
+        if isinstance(self._base, Exception):
+            raise self._base
+        return self._base
 
     def get(self, scenario) -> tuple[Simulation, str]:
         """A simulation at the start of `scenario`, and `reset` or `built`."""
@@ -130,12 +154,14 @@ def advance(sim: Simulation, study: Study) -> None:
 def simulate(study: Study, scenario_file: Path, run: Run,
              cache: SimulationCache | None = None) -> dict:
     """The run's row: run, seed, parameters, metrics, status, error, and the timing columns
-    (setup: built or reset; setup_seconds; wall_seconds, the whole run)."""
-    start = time.perf_counter()
+    (setup: built or reset; setup_seconds; wall_seconds, the whole run; cpu_seconds, the
+    worker process's CPU time for the whole run, which a loaded machine changes less)."""
+    start, cpu_start = time.perf_counter(), time.process_time()
     row: dict = {"run": run.index, "seed": run.seed, **dict(run.params)}
     try:
-        scenario = run_scenario(study, scenario_file, run)
-        sim, row["setup"] = (cache or SimulationCache(0)).get(scenario)
+        cache = cache or SimulationCache(0)
+        scenario = run_scenario(study, scenario_file, run, cache.base(study, scenario_file))
+        sim, row["setup"] = cache.get(scenario)
         row["setup_seconds"] = round(time.perf_counter() - start, 4)
         starts = {name: (r.pose(), r.heading()) for name, r in sim.robots.items()}
         advance(sim, study)
@@ -144,6 +170,7 @@ def simulate(study: Study, scenario_file: Path, run: Run,
     except Exception as e:  # any failure is this run's error row
         row.update(status="error", error=one_line(e))
     row["wall_seconds"] = round(time.perf_counter() - start, 3)
+    row["cpu_seconds"] = round(time.process_time() - cpu_start, 3)
     return row
 
 
