@@ -1,8 +1,9 @@
 #!/usr/bin/env python3
-"""The study engine's throughput: the same runs in one process (diagram built per run, or
-reset) and on Ray with 1 and 2 workers, with and without Ray's start-up; each run's CPU
-seconds; and the projected wall time of a big study on a cluster
-(`corobot_drake.analysis.bench_study`).
+"""The study engine's throughput in one process and on Ray with 1 and 2 workers.
+
+The same runs in one process (diagram built per run, or reset) and on Ray with 1 and 2
+workers, with and without Ray's start and stop; each run's CPU seconds; and the projected wall
+time of a big study on a cluster (`corobot_drake.analysis.bench_study`).
 
     python tools/bench_study.py [--seeds 12] [--duration 4]
 """
