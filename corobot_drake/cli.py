@@ -151,7 +151,7 @@ def _check(flag: str, value, bound: Range) -> None:
         raise ArgumentError(f"{flag}: {problem}")
 
 
-def _file_problem(path: Path) -> str | None:
+def file_problem(path: Path) -> str | None:
     """Why a file cannot be written at `path` (its directory must exist), else None."""
     directory = path.parent
     if path.is_dir():
@@ -165,7 +165,7 @@ def _file_problem(path: Path) -> str | None:
     return None
 
 
-def _directory_problem(path: Path) -> str | None:
+def directory_problem(path: Path) -> str | None:
     """Why files cannot be written under `path` (made when needed), else None."""
     if path.exists() and not path.is_dir():
         return "is a file, not a directory"
@@ -185,7 +185,7 @@ def check_outputs(args) -> None:
     for dest, kind in OUTPUT_FLAGS.items():
         value = getattr(args, dest, None)
         if value is not None:
-            problem = (_file_problem if kind == "file" else _directory_problem)(Path(value))
+            problem = (file_problem if kind == "file" else directory_problem)(Path(value))
             if problem:
                 raise ArgumentError(f"--{dest.replace('_', '-')}: {value}: {problem}")
 

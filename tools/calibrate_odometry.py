@@ -13,14 +13,22 @@ the dead-reckoned end position error before and after. The fit is
 Usage: python tools/calibrate_odometry.py [LOG.csv | --simulate] [--write SCENARIO] [--drive-test]
 """
 
-import argparse
 import sys
 from pathlib import Path
 
 from tqdm import tqdm
 
 from corobot_drake.analysis import odometry_calibration as oc
+from corobot_drake.analysis.arguments import (
+    TICKS_PER_REVOLUTION,
+    ToolParser,
+    bounded,
+    existing_file,
+    one_line_errors,
+    output_file,
+)
 from corobot_drake.analysis.sysid import LogError, set_drive_field
+from corobot_drake.config.bounds import DRAKE_INT
 from corobot_drake.config.scenario import ScenarioError, load_scenario
 from corobot_drake.model import dimensions as dim
 from corobot_drake.resources import DEFAULT_SCENARIO
@@ -28,23 +36,24 @@ from corobot_drake.resources import DEFAULT_SCENARIO
 REPO = Path(__file__).resolve().parent.parent
 
 
-def _parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0],
-                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+def _parser() -> ToolParser:
+    p = ToolParser(description=__doc__.splitlines()[0])
     p.add_argument("log", nargs="?", help="log CSV with time, left_ticks, right_ticks, x, y, yaw")
     p.add_argument("--simulate", action="store_true",
                    help="drive UMBmark's squares in --scenario and fit their log")
     p.add_argument("--scenario", default=str(DEFAULT_SCENARIO),
                    help="scenario to simulate in")
     p.add_argument("--robot", default="corobot", help="robot")
-    p.add_argument("--ticks-per-revolution", type=int, default=dim.ENCODER_TICKS_PER_REVOLUTION,
+    p.add_argument("--ticks-per-revolution", type=bounded(TICKS_PER_REVOLUTION, int),
+                   default=dim.ENCODER_TICKS_PER_REVOLUTION,
                    help="encoder counts per wheel revolution")
-    p.add_argument("--plot", default=str(REPO / "out" / "calibrate_odometry.png"),
+    p.add_argument("--plot", type=output_file, default=str(REPO / "out" / "calibrate_odometry.png"),
                    help="before/after plot of the log")
-    p.add_argument("--write", metavar="SCENARIO", help="put the fit in this scenario file")
+    p.add_argument("--write", metavar="SCENARIO", type=existing_file,
+                   help="put the fit in this scenario file")
     p.add_argument("--drive-test", action="store_true",
                    help="check on the 3-loop drive test, seed --seed")
-    p.add_argument("--seed", type=int, default=1, help="the drive test's seed")
+    p.add_argument("--seed", type=bounded(DRAKE_INT, int), default=1, help="the drive test's seed")
     return p
 
 
@@ -108,6 +117,7 @@ def _drive_test(args, fit: oc.OdometryFit) -> None:
     print(f"plot: {plot}")
 
 
+@one_line_errors
 def main(argv=None) -> int:
     p = _parser()
     args = p.parse_args(argv)

@@ -10,14 +10,24 @@ is the distance from the start position after each loop. Same seed, same numbers
     python tools/drive_test.py --loops 3 --seeds 20 --workers 2 [--profile seed]  # on Ray
 """
 
-import argparse
 import sys
 from pathlib import Path
 
 import numpy as np
 
 from corobot_drake.analysis import drive_test
+from corobot_drake.analysis.arguments import (
+    WORKERS,
+    ToolParser,
+    bounded,
+    output_directory,
+    output_file,
+)
 from corobot_drake.config import scenario as sc
+from corobot_drake.config.bounds import DRAKE_INT, POWER, Range
+
+LOOPS = Range(1, 100, why="loops of ~13 simulated s each")
+SEEDS = Range(1, 10_000, why="runs of the study")
 
 
 def _one_seed(args) -> None:
@@ -58,21 +68,21 @@ def _many_seeds(args) -> None:
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0],
-                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
-    p.add_argument("--loops", type=int, default=3, help="loops of the test")
-    p.add_argument("--seed", type=int, default=0, help="the legs' seed (the first, with --seeds)")
+    p = ToolParser(description=__doc__.splitlines()[0])
+    p.add_argument("--loops", type=bounded(LOOPS, int), default=3, help="loops of the test")
+    p.add_argument("--seed", type=bounded(DRAKE_INT, int), default=0,
+                   help="the legs' seed (the first, with --seeds)")
     p.add_argument("--profile", choices=sc.PROFILES, default="closed_loop",
                    help="landing profile")
-    p.add_argument("--power", type=float, default=0.2, help="power of every command")
-    p.add_argument("--plot", default=None,
+    p.add_argument("--power", type=bounded(POWER), default=0.2, help="power of every command")
+    p.add_argument("--plot", type=output_file, default=None,
                    help="PNG: the path (one seed) or the drift per loop over seeds (None: "
                    "drive_test.png, or OUT/drift.png with --seeds)")
-    p.add_argument("--seeds", type=int, default=1,
+    p.add_argument("--seeds", type=bounded(SEEDS, int), default=1,
                    help="run seeds SEED .. SEED+N-1 as a study and report the mean drift")
-    p.add_argument("--workers", "--jobs", type=int, default=None,
+    p.add_argument("--workers", "--jobs", type=bounded(WORKERS, int), default=None,
                    help="Ray workers for --seeds (None: the machine's cores)")
-    p.add_argument("--out", help="study output directory for --seeds "
+    p.add_argument("--out", type=output_directory, help="study output directory for --seeds "
                    "(None: studies/drive_test_<profile>)")
     args = p.parse_args(argv)
     if args.seeds == 1:

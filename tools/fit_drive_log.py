@@ -15,11 +15,18 @@ With no LOG, `--simulate SCALING SLEW` first makes a log with the simulator (a s
 `--stall` makes that log end backing into the giant box.
 """
 
-import argparse
 import sys
 from pathlib import Path
 
 from corobot_drake.analysis import drive_tuning, sysid
+from corobot_drake.analysis.arguments import (
+    TICKS_PER_REVOLUTION,
+    ToolParser,
+    bounded,
+    existing_file,
+    one_line_errors,
+    output_file,
+)
 from corobot_drake.config.scenario import ScenarioError, load_scenario
 
 REPO = Path(__file__).resolve().parent.parent
@@ -53,17 +60,19 @@ def _write(args, fit: sysid.DriveFit, source: str) -> None:
           f"{fit.slew_rate:.4g} in {target}")
 
 
+@one_line_errors
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0],
-                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    p = ToolParser(description=__doc__.splitlines()[0])
     p.add_argument("log", nargs="?", help="run log CSV")
     p.add_argument("--simulate", nargs=2, type=float, metavar=("SCALING", "SLEW"),
                    help="make the log with the simulator at these parameters first")
     p.add_argument("--stall", action="store_true",
                    help="with --simulate: end the log backing into the giant box")
-    p.add_argument("--plot", default=str(REPO / "out" / "fit_drive_log.png"), help="PNG of the fit")
-    p.add_argument("--ticks-per-revolution", type=int, default=600, help="encoder counts")
-    p.add_argument("--write", metavar="SCENARIO",
+    p.add_argument("--plot", type=output_file, default=str(REPO / "out" / "fit_drive_log.png"),
+                   help="PNG of the fit")
+    p.add_argument("--ticks-per-revolution", type=bounded(TICKS_PER_REVOLUTION, int), default=600,
+                   help="encoder counts")
+    p.add_argument("--write", metavar="SCENARIO", type=existing_file,
                    help="put the fitted motor_torque_scaling and slew_rate in this scenario file")
     p.add_argument("--robot", default="corobot", help="robot to --write")
     args = p.parse_args(argv)

@@ -13,25 +13,33 @@ and measures from the run log: distance error = straight-line distance from the 
     python tools/landing_errors.py --from out/landing     # the tables and plot, no simulation
 """
 
-import argparse
 import sys
 from pathlib import Path
 
 from corobot_drake.analysis import landing
+from corobot_drake.analysis.arguments import (
+    WORKERS,
+    ToolParser,
+    bounded,
+    one_line_errors,
+    output_directory,
+    output_file,
+)
 
 
+@one_line_errors
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0],
-                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
-    p.add_argument("--workers", type=int, default=None,
+    p = ToolParser(description=__doc__.splitlines()[0])
+    p.add_argument("--workers", type=bounded(WORKERS, int), default=None,
                    help="Ray workers (None: the machine's cores)")
-    p.add_argument("--out", type=Path, default=Path("out/landing"),
+    p.add_argument("--out", type=output_directory, default=Path("out/landing"),
                    help="the studies' output directory (OUT/drive, OUT/rotate)")
     p.add_argument("--from", dest="source", type=Path, default=None,
                    help="read finished studies from this directory instead of simulating")
-    p.add_argument("--plot", type=Path, default=Path("out/landing.png"),
+    p.add_argument("--plot", type=output_file, default=Path("out/landing.png"),
                    help="PNG of the landing errors against target and power")
-    p.add_argument("--table", type=Path, default=None, help="also write the tables to this file")
+    p.add_argument("--table", type=output_file, default=None,
+                   help="also write the tables to this file")
     args = p.parse_args(argv)
     if args.source:
         rows = landing.read_studies(args.source)

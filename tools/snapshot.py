@@ -21,13 +21,19 @@ import math
 import sys
 from pathlib import Path
 
+from pydrake.systems.sensors import CameraConfig
+
+from corobot_drake.analysis.arguments import ToolParser, bounded, output_file
 from corobot_drake.analysis.snapshot import VIEWS, take
+from corobot_drake.config.bounds import DRAKE_BOUNDS, DURATION
 from corobot_drake.config.poses import ground_pose
 from corobot_drake.config.scenario import ScenarioError, SetPower, load_scenario
 from corobot_drake.model import dimensions as dim
 from corobot_drake.resources import DEFAULT_SCENARIO
 from corobot_drake.sensors import render
 from corobot_drake.simulation import Simulation, quiet_drake_warnings
+
+PIXELS = DRAKE_BOUNDS[CameraConfig]["width"]
 
 
 def _pair(text: str, n: int, what: str) -> list[float]:
@@ -41,10 +47,10 @@ def _pair(text: str, n: int, what: str) -> list[float]:
 
 
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0],
-                                     formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    parser = ToolParser(description=__doc__.splitlines()[0])
     parser.add_argument("--scenario", type=Path, default=DEFAULT_SCENARIO, help="scenario file")
-    parser.add_argument("--output", type=Path, default=Path("snapshot.png"), help="PNG to write")
+    parser.add_argument("--output", type=output_file, default=Path("snapshot.png"),
+                        help="PNG to write")
     parser.add_argument("--view", choices=VIEWS, default="chase", help="camera to render")
     parser.add_argument("--robot", help="which robot (None: the only one)")
     parser.add_argument("--pose", type=lambda s: _pair(s, 3, "--pose"),
@@ -57,9 +63,12 @@ def _parser() -> argparse.ArgumentParser:
                         help="X,Y,Z: a free camera here instead of --view (world, m; None: --view)")
     parser.add_argument("--target", type=lambda s: _pair(s, 3, "--target"),
                         help="X,Y,Z the free camera looks at (None: the robot)")
-    parser.add_argument("--time", type=float, default=0.0, help="simulate S seconds first")
-    parser.add_argument("--width", type=int, help="image width, px (None: the camera's)")
-    parser.add_argument("--height", type=int, help="image height, px (None: the camera's)")
+    parser.add_argument("--time", type=bounded(DURATION), default=0.0,
+                        help="simulate S seconds first")
+    parser.add_argument("--width", type=bounded(PIXELS, int),
+                        help="image width, px (None: the camera's)")
+    parser.add_argument("--height", type=bounded(PIXELS, int),
+                        help="image height, px (None: the camera's)")
     parser.add_argument("--visual", choices=("meshes", "boxes"),
                         help="how the robot looks (None: the scenario's)")
     parser.add_argument("--override", action="append", default=[],
@@ -89,11 +98,10 @@ def main(argv: list[str] | None = None) -> int:
     quiet_drake_warnings()
     try:
         scenario, name = _scenario(args, parser)
+        sim = Simulation(scenario)  # checks the command line's changes (--pose, --drive)
     except ScenarioError as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
-
-    sim = Simulation(scenario)
     if args.time > 0:
         sim.advance(args.time)
     small = args.view == "robot-camera"

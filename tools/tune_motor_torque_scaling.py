@@ -15,11 +15,17 @@ Usage: python tools/tune_motor_torque_scaling.py [--scenario S] [--scaling 20] [
        python tools/tune_motor_torque_scaling.py --sweep [--workers N]
 """
 
-import argparse
 import sys
 import time
 from pathlib import Path
 
+from corobot_drake.analysis.arguments import (
+    WORKERS,
+    ToolParser,
+    bounded,
+    output_directory,
+    output_file,
+)
 from corobot_drake.analysis.drive_tuning import (
     measure_top_speed,
     plot_sweep,
@@ -28,37 +34,43 @@ from corobot_drake.analysis.drive_tuning import (
     scaling_for,
 )
 from corobot_drake.analysis.sysid import set_motor_torque_scaling
+from corobot_drake.config.bounds import AXLE_SPEED, Range
 from corobot_drake.config.scenario import ScenarioError, load_scenario
 from corobot_drake.model import dimensions as dim
 from corobot_drake.resources import DEFAULT_SCENARIO
 from corobot_drake.simulation import quiet_drake_warnings
 
 REPO = Path(__file__).resolve().parent.parent
+TOP_SPEED = Range(0.0, 5.0, low_open=True, unit="m/s", why="the top speed wanted")
 
 
-def _parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0],
-                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+def _parser() -> ToolParser:
+    p = ToolParser(description=__doc__.splitlines()[0])
     p.add_argument("--scenario", default=str(DEFAULT_SCENARIO), help="scenario file")
     p.add_argument("--robot", help="robot name (None: the scenario's only robot)")
-    p.add_argument("--scaling", type=float, default=dim.MOTOR_TORQUE_SCALING_UNTUNED,
+    p.add_argument("--scaling", type=bounded(AXLE_SPEED), default=dim.MOTOR_TORQUE_SCALING_UNTUNED,
                    help="starting MotorTorqueScaling (20 is the untuned value)")
-    p.add_argument("--target", type=float, default=dim.TARGET_TOP_SPEED,
+    p.add_argument("--target", type=bounded(TOP_SPEED), default=dim.TARGET_TOP_SPEED,
                    help="top speed wanted, m/s (0.6096 = 2 ft/s)")
-    p.add_argument("--tolerance", type=float, default=0.005, help="relative")
-    p.add_argument("--max-iterations", type=int, default=8, help="iterations at most")
-    p.add_argument("--settle", type=float, default=2.0,
+    p.add_argument("--tolerance", type=bounded(Range(0.0, 0.5, low_open=True)), default=0.005,
+                   help="relative")
+    p.add_argument("--max-iterations", type=bounded(Range(1, 100), int), default=8,
+                   help="iterations at most")
+    p.add_argument("--settle", type=bounded(Range(0.0, 60.0, unit="s")), default=2.0,
                    help="s at full power before measuring (the ramp takes ~0.4-0.7 s)")
-    p.add_argument("--measure", type=float, default=1.0, help="s averaged for the top speed")
-    p.add_argument("--plot", default=str(REPO / "out" / "tune_motor_torque_scaling.png"),
+    p.add_argument("--measure", type=bounded(Range(0.0, 60.0, low_open=True, unit="s")),
+                   default=1.0, help="s averaged for the top speed")
+    p.add_argument("--plot", type=output_file,
+                   default=str(REPO / "out" / "tune_motor_torque_scaling.png"),
                    help="PNG: speed against time per iteration (or against scaling, --sweep)")
     p.add_argument("--write", action="store_true",
                    help="write the value into --scenario (only that number changes)")
     p.add_argument("--sweep", action="store_true",
                    help="run the sweep study (the default scene's robot) instead of iterating")
-    p.add_argument("--workers", type=int, default=None,
+    p.add_argument("--workers", type=bounded(WORKERS, int), default=None,
                    help="Ray workers for --sweep (None: the machine's cores)")
-    p.add_argument("--out", default=str(REPO / "out" / "motor_torque_scaling"),
+    p.add_argument("--out", type=output_directory,
+                   default=str(REPO / "out" / "motor_torque_scaling"),
                    help="the sweep study's output directory")
     return p
 

@@ -11,27 +11,34 @@ reads them with `--from DIR`; prints a table per limit and the pick: no flip in 
     python tools/tune_tire_grip.py [--quick] [--workers N] [--out out/tire_grip]
 """
 
-import argparse
 import sys
 import time
 from pathlib import Path
 
 from corobot_drake.analysis import tire_grip
+from corobot_drake.analysis.arguments import (
+    WORKERS,
+    ToolParser,
+    bounded,
+    one_line_errors,
+    output_directory,
+    output_file,
+)
 
 
+@one_line_errors
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0],
-                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    p = ToolParser(description=__doc__.splitlines()[0])
     p.add_argument("--quick", action="store_true",
                    help="tire_grip_quick.yaml: the unlimited motor's flip case at 5 and 10 ms, "
                    "two limits (a smoke run, ~1 minute)")
-    p.add_argument("--workers", type=int, default=None,
+    p.add_argument("--workers", type=bounded(WORKERS, int), default=None,
                    help="Ray workers (None: the machine's cores)")
-    p.add_argument("--out", type=Path, default=Path("out/tire_grip"),
+    p.add_argument("--out", type=output_directory, default=Path("out/tire_grip"),
                    help="the studies' output directory (OUT/box, OUT/drive)")
     p.add_argument("--from", dest="source", type=Path, default=None,
                    help="read finished studies from this directory instead of simulating")
-    p.add_argument("--plot", type=Path, default=Path("out/tire_grip.png"),
+    p.add_argument("--plot", type=output_file, default=Path("out/tire_grip.png"),
                    help="PNG of the largest tilt against the step, per limit")
     args = p.parse_args(argv)
     start = time.perf_counter()

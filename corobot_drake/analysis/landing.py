@@ -10,7 +10,7 @@ it), runs the one command, lets the robot come to rest (1 s) and measures from t
 from pathlib import Path
 
 from corobot_drake.resources import SCENARIOS_DIR
-from corobot_drake.study import engine
+from corobot_drake.study import engine, finished
 
 ROBOT = "corobot"
 KINDS = {
@@ -38,8 +38,9 @@ def run_studies(out: Path, workers: int | None = None, progress: bool = True) ->
 
 
 def read_studies(out: Path) -> dict:
-    """The rows of finished studies in `out/drive`, `out/rotate`."""
-    return engine.read_studies(out, KINDS)
+    """The rows of finished studies in `out/drive`, `out/rotate`, checked against the study
+    files (ScenarioError: one line naming the file, line and column)."""
+    return finished.read_studies(out, {kind: study_file(kind) for kind in KINDS})
 
 
 def results(rows: dict) -> dict:

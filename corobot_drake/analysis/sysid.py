@@ -20,8 +20,12 @@ from pathlib import Path
 
 import numpy as np
 
+from corobot_drake.config.scenario import ScenarioError, read_text
 from corobot_drake.model import dimensions as dim
 
+MAX_LOG_BYTES = 64 << 20
+"""The largest log read (64 MiB: an hour of the simulator's 100 Hz run log is 360k lines);
+larger is refused unread."""
 REQUIRED = ("time", "left_power", "right_power", "left_ticks", "right_ticks")
 
 
@@ -46,9 +50,10 @@ def read_columns(path: str | Path, required: tuple[str, ...]) -> np.ndarray:
     (time first, increasing); raises LogError naming the line of the first problem."""
     path = Path(path)
     try:
-        text = path.read_text()
-    except OSError as e:
-        raise LogError(f"{path}: cannot read the file ({e.strerror})") from None
+        text = read_text(path, kind="a log is a CSV file", max_bytes=MAX_LOG_BYTES)
+    except ScenarioError as e:  # not a regular file, unreadable, too large, not UTF-8
+        where = f"{e.source}:{e.line}" if e.line else e.source
+        raise LogError(f"{where}: {e.message}") from None
     rows = list(csv.reader(text.splitlines()))
     if not rows:
         raise LogError(f"{path}:1: empty file; expected a header line "

@@ -27,12 +27,15 @@ from pathlib import Path
 from corobot_drake.model import dimensions as dim
 from corobot_drake.model.sdf import WheelContact
 from corobot_drake.resources import SCENARIOS_DIR
-from corobot_drake.study import engine
+from corobot_drake.study import engine, finished
 
 ROBOT = "corobot"
 GRAVITY = 9.81
 LIMIT = f"robots.{ROBOT}.contact.effort_limit"
 STEP = "plant_config.time_step"
+NEEDS = {"box": (f"{ROBOT}.max_tilt_deg",),
+         "drive": (f"{ROBOT}.steady_speed", f"{ROBOT}.steady_yaw_rate")}
+"""The metric columns `limits` reads (numbers in every ok run)."""
 STUDIES = {"box": "tire_grip.yaml", "drive": "tire_grip_drive.yaml"}
 QUICK = {"box": "tire_grip_quick.yaml", "drive": "tire_grip_drive.yaml"}
 FLIP_DEG = 20.0
@@ -89,7 +92,9 @@ def run_studies(out: Path, quick: bool = False, workers: int | None = None) -> d
 
 
 def read_studies(out: Path) -> dict:
-    return engine.read_studies(out, STUDIES)
+    """The rows of finished studies in `out/box`, `out/drive`, checked against the study files
+    and the metrics read here (ScenarioError: one line naming the file, line and column)."""
+    return finished.read_studies(out, study_files(quick=False), NEEDS)
 
 
 def _case(row: dict) -> str:

@@ -354,7 +354,7 @@ class ScenarioError(Exception):
     def __init__(self, source: str, field: str, message: str, line: int | None = None):
         where = f"{source}:{line}" if line is not None else source
         super().__init__(f"{where}: {field or '(top level)'}: {message}")
-        self.source, self.field, self.line = source, field, line
+        self.source, self.field, self.line, self.message = source, field, line, message
 
 
 def one_line(error: BaseException) -> str:
@@ -368,9 +368,11 @@ saved scene of several robots ~10 kB, a world of 500 bodies ~60 kB); larger is r
 unread, so that a bad input ends within 2 s (`config/validate.py`, MAX_VALUES)."""
 
 
-def read_text(path: str | Path) -> str:
-    """A YAML file's UTF-8 text; ScenarioError (one line) when it cannot be read, is not a
-    regular file (a FIFO, a device: never waited on), is over MAX_FILE_BYTES or not UTF-8."""
+def read_text(path: str | Path, *, kind: str = "a scenario is a YAML file",
+              max_bytes: int = MAX_FILE_BYTES) -> str:
+    """A file's UTF-8 text (a scenario's, a study's, a log's: `kind` says what it should be);
+    ScenarioError (one line) when it cannot be read, is not a regular file (a FIFO, a device:
+    never waited on), is over `max_bytes` or not UTF-8."""
     source = str(path)
     try:
         # O_NONBLOCK: opening a FIFO with no writer returns at once (then refused below).
@@ -380,29 +382,34 @@ def read_text(path: str | Path) -> str:
     mode = os.fstat(fd).st_mode
     if not stat.S_ISREG(mode):
         os.close(fd)
-        kind = ("a directory" if stat.S_ISDIR(mode) else "a FIFO" if stat.S_ISFIFO(mode)
-                else "a device" if stat.S_ISCHR(mode) or stat.S_ISBLK(mode)
-                else "a socket" if stat.S_ISSOCK(mode) else "a special file")
-        raise ScenarioError(source, "", f"cannot read {kind}; a scenario is a YAML file")
+        special = ("a directory" if stat.S_ISDIR(mode) else "a FIFO" if stat.S_ISFIFO(mode)
+                   else "a device" if stat.S_ISCHR(mode) or stat.S_ISBLK(mode)
+                   else "a socket" if stat.S_ISSOCK(mode) else "a special file")
+        raise ScenarioError(source, "", f"cannot read {special}; {kind}")
     with os.fdopen(fd, "rb") as f:
         try:
-            data = f.read(MAX_FILE_BYTES + 1)
+            data = f.read(max_bytes + 1)
         except OSError as e:
             raise ScenarioError(source, "", f"cannot read the file ({e.strerror})") from None
-    if len(data) > MAX_FILE_BYTES:
-        raise ScenarioError(source, "", f"the file is larger than {MAX_FILE_BYTES >> 10} KiB, "
-                            "the most a scenario may be")
-    return decode(source, data)
+    if len(data) > max_bytes:
+        raise ScenarioError(source, "", f"the file is larger than {_size(max_bytes)}, the most "
+                            f"{kind.split(' is ')[0]} may be")
+    return decode(source, data) if kind == "a scenario is a YAML file" else decode(
+        source, data, f"{kind}, in UTF-8")
 
 
-def decode(source: str, data: bytes) -> str:
+def _size(n: int) -> str:
+    return f"{n >> 20} MiB" if n >= 1 << 20 else f"{n >> 10} KiB"
+
+
+def decode(source: str, data: bytes, kind: str = "a scenario is UTF-8 YAML") -> str:
     """`data` as UTF-8 text; ScenarioError at the line of the first byte that is not."""
     try:
         return data.decode("utf-8")
     except UnicodeDecodeError as e:
         line = data.count(b"\n", 0, e.start) + 1
-        raise ScenarioError(source, "", f"not UTF-8 text (byte 0x{data[e.start]:02x}); a "
-                            "scenario is UTF-8 YAML", line) from None
+        raise ScenarioError(source, "", f"not UTF-8 text (byte 0x{data[e.start]:02x}); "
+                            f"{kind}", line) from None
 
 
 def load_scenario(filename: str | Path | None = None, *, data: str | None = None,

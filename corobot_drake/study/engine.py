@@ -55,16 +55,6 @@ def read_rows(path: Path) -> list[dict]:
         return list(csv.DictReader(f))
 
 
-def read_studies(out: Path, kinds) -> dict:
-    """{kind: rows} of finished studies in `out/<kind>/runs.csv` (a tool's `--from DIR`);
-    FileNotFoundError naming the first that has no runs."""
-    rows = {kind: read_rows(out / kind / "runs.csv") for kind in kinds}
-    for kind, table in rows.items():
-        if not table:
-            raise FileNotFoundError(f"{out / kind / 'runs.csv'}: no runs (run the study first)")
-    return rows
-
-
 def columns(rows: list[dict], study: Study) -> list[str]:
     """run, seed, the parameters in study order, the metrics in order of appearance, status,
     error, then the timing columns."""
