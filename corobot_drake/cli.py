@@ -23,6 +23,7 @@ from pydrake.systems.sensors import CameraConfig
 
 from corobot_drake.config.bounds import DRAKE_BOUNDS, DURATION, SIMULATION_DURATION, Range
 from corobot_drake.config.scenario import ScenarioError, load_scenario
+from corobot_drake.limits import LIVE_RUN_LOG_WINDOW
 from corobot_drake.resources import DEFAULT_SCENARIO
 
 if TYPE_CHECKING:  # imported when a run starts: a bad input stops before pydrake's systems load
@@ -82,7 +83,8 @@ def _parser() -> argparse.ArgumentParser:
                    "velocities, settings, commands still to run): running it continues from there")
     p.add_argument("--log", metavar="CSV",
                    help="write the run log (time, power, encoder ticks, pose; docs/tuning.md) "
-                   "here; with several robots, one file per robot: CSV with the name inserted")
+                   "here; with several robots, one file per robot: CSV with the name inserted. An "
+                   f"interactive run without it keeps the last {LIVE_RUN_LOG_WINDOW:g} s")
     p.add_argument("--record", metavar="FILE.html",
                    help="at the end, write the run as a Meshcat replay: one self-contained HTML "
                    "file with a timeline, opens offline (also with --headless)")
@@ -115,6 +117,15 @@ class _HeadlessProgress:
     def finish(self) -> None:
         if self._printed:
             print(file=sys.stderr)
+
+
+def run_log_window(args) -> float | None:
+    """s of run log kept in memory: the interactive Meshcat run may be left running, so it
+    keeps the newest `LIVE_RUN_LOG_WINDOW` unless --log asks for the whole run; a headless
+    run ends by itself and keeps it all (`Simulation.run_log_window`)."""
+    if args.headless or args.log is not None:
+        return None
+    return LIVE_RUN_LOG_WINDOW
 
 
 def _run_interactive(sim: Simulation, meshcat, duration: float) -> None:
@@ -322,7 +333,8 @@ def _run(args, scenario, duration: float, foxglove) -> int:
         meshcat = StartMeshcat()
     try:
         sim = Simulation(scenario, meshcat, save_camera=args.save_camera,
-                         record=args.record is not None, foxglove=foxglove)
+                         record=args.record is not None, foxglove=foxglove,
+                         run_log_window=run_log_window(args))
     except (ValueError, RendererUnavailableError) as e:  # the loader missed it: still one line
         print(f"error: {args.scenario}: (top level): {e}", file=sys.stderr)
         return 2

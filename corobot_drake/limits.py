@@ -30,6 +30,10 @@ POSITION = (-1000.0, 1000.0)
 YAW_DEG = (-3600.0, 3600.0)
 """set_pose: heading, degrees."""
 
+LIVE_RUN_LOG_WINDOW = 300.0
+"""s of run log a live run keeps in memory (1.9 MB a robot): a served simulation and the
+interactive Meshcat run, which may be left running for days (`Simulation.run_log_window`)."""
+
 
 def number(name: str, value, low: float = -math.inf, high: float = math.inf, *,
            low_open: bool = False, finite: bool = True) -> float:

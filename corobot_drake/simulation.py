@@ -29,6 +29,7 @@ from pydrake.systems.framework import EventStatus
 from corobot_drake import limits
 from corobot_drake.config import scenario as sc
 from corobot_drake.config.poses import ground_pose, transform_from
+from corobot_drake.config.validate import check_scenario
 from corobot_drake.model import dimensions as dim
 from corobot_drake.readings import (
     BodyPose,
@@ -479,12 +480,18 @@ class Simulation:
     """A scenario built into a Drake diagram with its Simulator and Context."""
 
     def __init__(self, scenario: sc.Scenario, meshcat=None, save_camera=None, *,
-                 record: bool = False, foxglove=None, run_log_window: float | None = None):
+                 record: bool = False, foxglove=None, run_log_window: float | None = None,
+                 check: bool = True):
         """`save_camera`: a directory; each robot's camera frames go to `<dir>/<robot>/`.
         `record`: keep a Meshcat replay of the run (`save_recording`; without `meshcat`, an
         offline one records without a browser). `foxglove`: a `foxglove.Context` to publish
         the run's topics on (`recording.publishers`; its sinks: an MCAP file, a live server).
-        `run_log_window`: see the attribute."""
+        `run_log_window`: see the attribute. The scenario gets the checks `load_scenario`
+        runs (it may have been built or changed in Python): ScenarioError names the field;
+        `check=False` skips them, for a tool that measures beyond the bounds on purpose
+        (`analysis/step_limit.py`)."""
+        if check:
+            check_scenario(scenario)
         self.scenario = scenario
         self._record_live: bool | None = None
         """Recording: True with a browser's Meshcat (frames shown live), False offline."""

@@ -124,3 +124,35 @@ def test_bad_file_has_no_traceback(tmp_path):
     assert "Traceback" not in result.stderr
     assert result.stderr.strip() == (f"error: {path}:1: robots.corobot.drive.slew_rate: "
                                      "expected a number, got a list")
+
+
+def test_the_interactive_run_keeps_a_window_of_run_log(tmp_path, monkeypatch, capsys):
+    """The Meshcat run (left running, it could fill the memory) keeps the newest
+    `LIVE_RUN_LOG_WINDOW` s of run log, as a served one does; its summary at exit and a
+    --summary still come. Here a 2 s window over 15 simulated s: at most the window plus one
+    chunk the sink still holds (`RUN_LOG_CHUNK` samples, 10 s), against the 1500 samples kept
+    headless."""
+    from pydrake.geometry import Meshcat
+
+    import pydrake.geometry
+    from corobot_drake import cli
+    from corobot_drake.systems.runlog import LOG_PERIOD, RUN_LOG_CHUNK
+
+    kept = {}
+
+    def fast_interactive(sim, meshcat, duration):  # the real one paces at real time
+        while sim.time < duration - 1e-9:
+            sim.advance_to(min(duration, sim.time + 1.0 / 30.0))
+        kept["rows"] = len(sim.robot().run_log())
+
+    monkeypatch.setattr(pydrake.geometry, "StartMeshcat", Meshcat)
+    monkeypatch.setattr(cli, "_run_interactive", fast_interactive)
+    monkeypatch.setattr(cli, "LIVE_RUN_LOG_WINDOW", 2.0)
+    summary = tmp_path / "s.json"
+    assert main(["--duration", "15", "--summary", str(summary), "--override",
+                 "robots: {corobot: {camera: {rgb: false}}}"]) == 0
+    assert 2.0 / LOG_PERIOD <= kept["rows"] <= 2.0 / LOG_PERIOD + RUN_LOG_CHUNK + 1
+    assert json.loads(summary.read_text())["time"] == pytest.approx(15.0)
+    assert "simulated 15.00 s" in capsys.readouterr().out
+    assert cli.run_log_window(cli._parser().parse_args(["--log", "x.csv"])) is None
+    assert cli.run_log_window(cli._parser().parse_args(["--headless"])) is None

@@ -106,3 +106,26 @@ def test_a_field_the_layer_does_not_write_is_blamed_on_the_layer_line():
     checks = LayerChecks("study grid", "{}")
     with pytest.raises(ScenarioError, match=r"^study grid:1: robots\.corobot\.drive: bad"):
         checks.fail("robots.corobot.drive", "bad")
+
+
+def test_a_scenario_built_in_python_gets_the_loaders_checks():
+    """`Simulation(scenario)` checks a scenario built or changed in Python as `load_scenario`
+    checks a file: one ScenarioError line naming the field (no line: there is no file), before
+    Drake sees it."""
+    from corobot_drake.config.scenario import Scenario, ScenarioError
+    from corobot_drake.simulation import Simulation
+
+    scenario = load_scenario(DEFAULT_SCENARIO)
+    scenario.robots["corobot"].drive.slew_rate = -1.0
+    with pytest.raises(ScenarioError) as e:
+        Simulation(scenario)
+    assert str(e.value) == ("<Python scenario>: robots.corobot.drive.slew_rate: must be in "
+                            "(0, 10000] rad/s^2; got -1")
+    built = Scenario()
+    built.plant_config.time_step = 1.0
+    with pytest.raises(ScenarioError, match=r"^<Python scenario>: plant_config.time_step: "):
+        Simulation(built)
+    scenario = load_scenario(DEFAULT_SCENARIO)
+    scenario.robots["corobot"].drive = None  # a wrong type: named, not an AttributeError
+    with pytest.raises(ScenarioError, match="robots.corobot.drive: expected Drive, got None"):
+        Simulation(scenario)

@@ -18,6 +18,7 @@ message` (the line of the field in this layer, or of its nearest enclosing field
 """
 
 import dataclasses as dc
+import functools
 import math
 import re
 import types
@@ -45,6 +46,7 @@ from corobot_drake.config.bounds import (
     ELLIPSOID_MAX_ASPECT,
     FINITE,
     POSITION,
+    Range,
     bound_of,
 )
 from corobot_drake.config.sensors import RENDERERS, IrSensorConfig
@@ -368,6 +370,13 @@ class LayerChecks:
         document's first)."""
         _SchemaWalk(source, self.lines).check(node, schema, "")
 
+    @classmethod
+    def of_object(cls, source: str) -> "LayerChecks":
+        """The checks of a scenario built in Python (no text: errors name no line)."""
+        checks = cls.__new__(cls)
+        checks.source, checks.lines = source, {}
+        return checks
+
     def has(self, path: str) -> bool:
         """Whether this layer writes the field `path`."""
         return path in self.lines
@@ -397,9 +406,13 @@ class LayerChecks:
             for key, value in obj.items():
                 self._value(value, f"{path}.{key}", None)
         elif dc.is_dataclass(obj):
+            hints = _hints(type(obj))
             for f in dc.fields(obj):
-                self._value(getattr(obj, f.name), _join(path, f.name), bound_of(f),
-                            f.metadata.get("size"))
+                value = getattr(obj, f.name)
+                if not _has_type(value, hints[f.name]):  # a scenario built in Python
+                    self.fail(_join(path, f.name), f"expected {_type_text(hints[f.name])}, got "
+                              f"{value!r:.60}")
+                self._value(value, _join(path, f.name), bound_of(f), f.metadata.get("size"))
         elif hasattr(type(obj), "__fields__") and not isinstance(obj, Transform):
             table = DRAKE_BOUNDS.get(type(obj), {})
             for f in type(obj).__fields__:
@@ -414,8 +427,10 @@ class LayerChecks:
                             bound[i] if isinstance(bound, tuple) else bound)
         elif isinstance(value, bool) or value is None:
             return
-        elif isinstance(value, int | float):
-            bound = bound or (DRAKE_INT if isinstance(value, int) else FINITE)
+        elif isinstance(bound, Range) and not isinstance(value, int | float | np.number):
+            self.fail(path, f"expected a number, got {value!r}")  # a scenario built in Python
+        elif isinstance(value, int | float | np.number):
+            bound = bound or (DRAKE_INT if isinstance(value, int | np.integer) else FINITE)
             problem = bound.problem(value)
             if problem:
                 self.fail(path, problem)
@@ -611,6 +626,37 @@ class LayerChecks:
         self._mount(f"{path}.X_PB", c.X_PB, s)
 
 
+@functools.cache
+def _hints(cls) -> dict:
+    return typing.get_type_hints(cls)
+
+
+def _has_type(value, tp) -> bool:
+    """Whether `value` is of the schema type `tp`, as far as the walk relies on it (Drake's
+    own types are checked by their own fields)."""
+    if _is_union(tp):
+        return any(_has_type(value, t) for t in typing.get_args(tp))
+    if tp is type(None):
+        return value is None
+    if tp is float:
+        return isinstance(value, int | float | np.number) and not isinstance(value, bool)
+    if tp is int:
+        return isinstance(value, int | np.integer) and not isinstance(value, bool)
+    if tp is bool:
+        return isinstance(value, bool | np.bool_)
+    origin = typing.get_origin(tp)
+    if origin is not None:
+        return isinstance(value, origin)
+    return isinstance(value, tp) if isinstance(tp, type) else True
+
+
+def _type_text(tp) -> str:
+    if _is_union(tp):
+        return " or ".join(_type_text(t) for t in typing.get_args(tp))
+    origin = typing.get_origin(tp)
+    return "None" if tp is type(None) else _type_name(origin or tp)
+
+
 def _join(path: str, name: str) -> str:
     return f"{path}.{name}" if path else name
 
@@ -618,6 +664,23 @@ def _join(path: str, name: str) -> str:
 def _has_normals(obj_filename: str) -> bool:
     with open(obj_filename, errors="replace") as f:
         return any(line.startswith("vn ") for line in f)
+
+
+PYTHON_SOURCE = "<Python scenario>"
+"""What an error names for a scenario built in Python (not loaded from a file)."""
+
+
+def check_scenario(scenario: sc.Scenario, source: str = PYTHON_SOURCE) -> None:
+    """The checks `load_scenario` runs after its typed load (bounds, names, poses, placement),
+    on a scenario built or changed in Python; ScenarioError (one line, no line number)."""
+    if not isinstance(scenario, sc.Scenario):
+        raise sc.ScenarioError(source, "", f"expected a Scenario, got {type(scenario).__name__}")
+    try:
+        LayerChecks.of_object(source).validate(scenario)
+    except sc.ScenarioError:
+        raise
+    except Exception as e:  # a field of the wrong type where the walk expected another
+        raise sc.ScenarioError(source, "", f"not a valid Scenario ({sc.one_line(e)})") from None
 
 
 def load_layer(source: str, text: str, schema, defaults=None):

@@ -20,6 +20,7 @@ from __future__ import annotations
 import contextlib
 import sys
 
+from corobot_drake.limits import LIVE_RUN_LOG_WINDOW
 from corobot_drake.serving.security import is_loopback
 
 SWITCH_INTERVAL = 0.001
@@ -34,9 +35,9 @@ HTTP_STOP_TIMEOUT = 3.0
 """s the HTTP process has, once the simulation stops, to answer the requests in flight (503)
 and exit (uvicorn's graceful shutdown takes up to 1 s) before it is terminated."""
 
-SERVE_RUN_LOG_WINDOW = 300.0
-"""s of run log a served simulation keeps in memory (1.9 MB a robot): serving runs for days,
-and nothing it serves reads the run log (`Simulation.run_log_window`)."""
+SERVE_RUN_LOG_WINDOW = LIVE_RUN_LOG_WINDOW
+"""s of run log a served simulation keeps in memory: serving runs for days, and nothing it
+serves reads the run log (`limits.LIVE_RUN_LOG_WINDOW`)."""
 
 SERVE_CAMERA_FPS = 10.0
 """Hz: the camera's render rate when serving, unless --camera-rate says otherwise. The
