@@ -132,9 +132,9 @@ def test_the_interactive_run_keeps_a_window_of_run_log(tmp_path, monkeypatch, ca
     --summary still come. Here a 2 s window over 15 simulated s: at most the window plus one
     chunk the sink still holds (`RUN_LOG_CHUNK` samples, 10 s), against the 1500 samples kept
     headless."""
+    import pydrake.geometry
     from pydrake.geometry import Meshcat
 
-    import pydrake.geometry
     from corobot_drake import cli
     from corobot_drake.systems.runlog import LOG_PERIOD, RUN_LOG_CHUNK
 

@@ -127,5 +127,5 @@ def test_a_scenario_built_in_python_gets_the_loaders_checks():
         Simulation(built)
     scenario = load_scenario(DEFAULT_SCENARIO)
     scenario.robots["corobot"].drive = None  # a wrong type: named, not an AttributeError
-    with pytest.raises(ScenarioError, match="robots.corobot.drive: expected Drive, got None"):
+    with pytest.raises(ScenarioError, match=r"robots\.corobot\.drive: expected Drive, got None"):
         Simulation(scenario)

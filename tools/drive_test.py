@@ -20,6 +20,7 @@ from corobot_drake.analysis.arguments import (
     WORKERS,
     ToolParser,
     bounded,
+    one_line_errors,
     output_directory,
     output_file,
 )
@@ -67,6 +68,7 @@ def _many_seeds(args) -> None:
     print(f"drift plot: {plot}")
 
 
+@one_line_errors
 def main(argv=None) -> int:
     p = ToolParser(description=__doc__.splitlines()[0])
     p.add_argument("--loops", type=bounded(LOOPS, int), default=3, help="loops of the test")

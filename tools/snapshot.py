@@ -23,7 +23,12 @@ from pathlib import Path
 
 from pydrake.systems.sensors import CameraConfig
 
-from corobot_drake.analysis.arguments import ToolParser, bounded, output_file
+from corobot_drake.analysis.arguments import (
+    ToolParser,
+    bounded,
+    one_line_errors,
+    output_file,
+)
 from corobot_drake.analysis.snapshot import VIEWS, take
 from corobot_drake.config.bounds import DRAKE_BOUNDS, DURATION
 from corobot_drake.config.poses import ground_pose
@@ -92,6 +97,7 @@ def _scenario(args, parser: argparse.ArgumentParser):
     return scenario, name
 
 
+@one_line_errors
 def main(argv: list[str] | None = None) -> int:
     parser = _parser()
     args = parser.parse_args(argv)

@@ -23,6 +23,7 @@ from corobot_drake.analysis.arguments import (
     WORKERS,
     ToolParser,
     bounded,
+    one_line_errors,
     output_directory,
     output_file,
 )
@@ -148,6 +149,7 @@ def _write(args, robot_name: str, scaling: float) -> bool:
     return True
 
 
+@one_line_errors
 def main(argv=None) -> int:
     args = _parser().parse_args(argv)
     quiet_drake_warnings()

@@ -6,7 +6,7 @@
 - `bounded(Range)`, `output_file`, `output_directory`: argparse `type=`s that check a number
   against its bound, or that an output can be written, before anything runs;
 - `one_line_errors(main)`: runs a tool's `main`, turning a bad input file (ScenarioError,
-  LogError) into its one line.
+  LogError) or an output that cannot be written (OSError) into its one line.
 """
 
 from __future__ import annotations
@@ -87,7 +87,8 @@ def existing_file(text: str) -> Path:
 
 
 def one_line_errors(main):
-    """`main` with a bad input file (ScenarioError, LogError) as its one line, exit status 2."""
+    """`main` with a bad input file (ScenarioError, LogError) or an unwritable output
+    (OSError) as its one line, exit status 2."""
 
     @functools.wraps(main)
     def wrapped(argv=None) -> int:
@@ -95,6 +96,9 @@ def one_line_errors(main):
             return main(argv)
         except (ScenarioError, LogError) as e:
             print(f"error: {e}", file=sys.stderr)
+            return 2
+        except OSError as e:  # an output that passed its check but could not be written
+            print(f"error: {e.filename}: cannot write ({e.strerror})", file=sys.stderr)
             return 2
 
     return wrapped

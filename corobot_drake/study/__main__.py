@@ -9,19 +9,26 @@ import argparse
 import sys
 from pathlib import Path
 
+from corobot_drake.analysis.arguments import (
+    WORKERS,
+    ToolParser,
+    bounded,
+    output_directory,
+)
 from corobot_drake.config.scenario import ScenarioError
 from corobot_drake.study.engine import read_rows, run_study
 
 
 def _parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="python -m corobot_drake.study",
-                                description=__doc__.splitlines()[0])
+    p = ToolParser(formatter_class=argparse.HelpFormatter,  # its help states the defaults
+                   prog="python -m corobot_drake.study", description=__doc__.splitlines()[0])
     p.add_argument("study", help="study YAML file")
-    p.add_argument("--workers", type=int, default=None,
+    p.add_argument("--workers", type=bounded(WORKERS, int), default=None,
                    help="Ray workers (default: this machine's cores, or the cluster's CPUs)")
     p.add_argument("--address", help="join this Ray cluster (e.g. 10.0.0.1:6379) instead of "
                    "starting a local instance")
-    p.add_argument("--out", type=Path, help="output directory (default: studies/<study name>)")
+    p.add_argument("--out", type=output_directory,
+                   help="output directory (default: studies/<study name>)")
     p.add_argument("--resume", action="store_true",
                    help="simulate only the runs not yet in OUT/runs.csv")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -30,15 +37,15 @@ def _parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
-    if args.workers is not None and args.workers < 1:
-        print("error: --workers: must be >= 1", file=sys.stderr)
-        return 2
     out = args.out or Path("studies") / Path(args.study).stem
     try:
         runs_csv = run_study(args.study, out, workers=args.workers, address=args.address,
                              resume=args.resume, progress=not args.quiet)
     except ScenarioError as e:
         print(f"error: {e}", file=sys.stderr)
+        return 2
+    except OSError as e:  # the output directory cannot be made or written after all
+        print(f"error: --out: {e.filename or out}: cannot write ({e.strerror})", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print(f"stopped: the finished runs are in {out / 'runs.csv'} (--resume runs the rest)",

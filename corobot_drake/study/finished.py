@@ -21,7 +21,7 @@ from corobot_drake.config.scenario import ScenarioError, read_text
 from corobot_drake.study.spec import Choice, Study, load_study
 
 MAX_RUNS_BYTES = 256 << 20
-"""The largest runs.csv read (256 MiB: the largest study shipped, 512 runs, writes ~150 kB)."""
+"""The largest runs.csv read (256 MiB: `spec.MAX_RUNS` rows of 2.5 kB); larger is refused unread."""
 STATUSES = ("ok", "error")
 
 

@@ -24,16 +24,21 @@ import dataclasses as dc
 import hashlib
 import itertools
 import json
-import math
 from pathlib import Path
 
 import numpy as np
 
+from corobot_drake.config.bounds import Range, bounded
 from corobot_drake.config.scenario import read_text
 from corobot_drake.config.validate import LayerChecks, load_layer
 from corobot_drake.study.programs import PROGRAMS, BoxApproach, DriveTest
 
 UNTIL = ("duration", "commands")
+MAX_RUNS = 100_000
+"""Most runs a study may expand to (grid points x seeds): the largest shipped has 128, and a
+run takes seconds; 10^7 runs would take a year and their list alone gigabytes."""
+RUN_DURATION = Range(0.0, 1e5, low_open=True, unit="s", why="simulated per run; a day at most")
+SETTLE = Range(0.0, 1e3, unit="s")
 
 
 @dc.dataclass
@@ -42,6 +47,7 @@ class Uniform:
 
     min: float = 0.0
     max: float = 1.0
+    """max >= min, both finite."""
 
 
 @dc.dataclass
@@ -49,7 +55,7 @@ class Normal:
     """A value drawn from a normal distribution."""
 
     mean: float = 0.0
-    sd: float = 1.0
+    sd: float = bounded(1.0, Range(0.0, 1e300, why="a standard deviation"))
 
 
 @dc.dataclass
@@ -69,12 +75,12 @@ class Study:
 
     scenario: str = ""
     """The scenario file, relative to the study file (or absolute)."""
-    duration: float = 10.0
+    duration: float = bounded(10.0, RUN_DURATION)
     """Simulated seconds per run; with `until: commands`, the most a run may take."""
     until: str = "duration"
     """`duration`: every run lasts `duration`; `commands`: a run ends `settle` s after every
     robot's last command has ended (or at `duration`)."""
-    settle: float = 1.0
+    settle: float = bounded(1.0, SETTLE)
     """s simulated after the last command ends (`until: commands`), so the robot is at rest."""
     seeds: list[int] | int = 1
     """Runs per grid point: N gives random_seed 1..N; a list gives those seeds."""
@@ -139,7 +145,9 @@ def path_kind(path: str) -> str:
 def load_study(filename: str | Path) -> Study:
     """Reads and checks a study file, as a scenario is read; ScenarioError (one line with the
     file, the line and the field) for anything wrong."""
-    study, checks = load_layer(str(filename), read_text(filename), Study)
+    study, checks = load_layer(str(filename), read_text(filename, kind="a study is a YAML file"),
+                               Study)
+    checks.validate(study)  # every number against its bound (`bounded`), floats finite
     _validate(study, checks)
     return study
 
@@ -150,22 +158,16 @@ def _validate(study: Study, checks: LayerChecks) -> None:
 
     if not study.scenario:
         checks.fail("scenario", "name the scenario file")
-    if not (math.isfinite(study.duration) and study.duration > 0):
-        checks.fail("duration", "must be a finite number of seconds > 0")
     if study.until not in UNTIL:
         checks.fail("until", f"{study.until!r} is not one of {', '.join(UNTIL)}")
-    if not (math.isfinite(study.settle) and study.settle >= 0):
-        checks.fail("settle", "must be a finite number of seconds >= 0")
-    if isinstance(study.seeds, int) and study.seeds < 1:
-        checks.fail("seeds", "must be >= 1 (or a list of seeds)")
-    if isinstance(study.seeds, list) and len(set(study.seeds)) != len(study.seeds):
-        checks.fail("seeds", "a seed is listed twice")
-    for path, values in study.grid.items():
-        if not values:
-            checks.fail(f"grid.{path}", "needs at least one value")
-    for path in study.random:
+    _check_runs(study, checks)
+    for path, dist in study.random.items():
         if path in study.grid:
             checks.fail(f"random.{path}", "is also a grid parameter")
+        if isinstance(dist, Uniform) and not dist.min <= dist.max:
+            checks.fail(f"random.{path}.max", f"must be >= min ({dist.min:g}); got {dist.max:g}")
+        if isinstance(dist, Choice) and not dist.values:
+            checks.fail(f"random.{path}.values", "needs at least one value")
     for name in PROGRAMS:
         program = getattr(study, name)
         if program is not None and (problem := program.check()):
@@ -177,6 +179,26 @@ def _validate(study: Study, checks: LayerChecks) -> None:
         if name not in METRICS:
             checks.fail("metrics", f"unknown metric {name!r}; known: "
                         + ", ".join(sorted(METRICS)))
+
+
+def _check_runs(study: Study, checks: LayerChecks) -> None:
+    """Seeds and grid values that make at least one run and at most MAX_RUNS."""
+    if isinstance(study.seeds, int) and not 1 <= study.seeds <= MAX_RUNS:
+        checks.fail("seeds", f"must be in [1, {MAX_RUNS}] (runs per grid point), or a list "
+                    f"of seeds; got {study.seeds}")
+    if isinstance(study.seeds, list):
+        if not study.seeds:
+            checks.fail("seeds", "an empty list; list at least one seed")
+        if len(set(study.seeds)) != len(study.seeds):
+            checks.fail("seeds", "a seed is listed twice")
+    runs = len(seeds(study)) if isinstance(study.seeds, list) else study.seeds
+    for path, values in study.grid.items():
+        if not values:
+            checks.fail(f"grid.{path}", "needs at least one value")
+        runs *= len(values)
+        if runs > MAX_RUNS:
+            checks.fail(f"grid.{path}", f"the study expands to more than {MAX_RUNS} runs "
+                        "(grid points x seeds), the most a study may have; split it")
 
 
 def _check_program_path(study: Study, checks: LayerChecks, where: str, path: str) -> None:
