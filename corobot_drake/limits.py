@@ -1,6 +1,7 @@
 """The allowed range of every argument a caller gives the running simulation: the Python API
-(`simulation`, which raises ValueError naming the range) and the HTTP contract
-(`serving.schemas`, which answers 422 naming it) read them here, so the two agree.
+(`simulation`, which raises ValueError naming the range), the HTTP contract
+(`serving.schemas`, which answers 422 naming it) and a scenario file's commands
+(`config/bounds.py` makes its `Range`s of these) read them here, so the three agree.
 
 No Drake import here (the HTTP process and `serving.client` read it).
 """
@@ -25,7 +26,11 @@ DISTANCE = (-100.0, 100.0)
 """drive_distance: m (negative: backwards)."""
 DEGREES = (-3600.0, 3600.0)
 """rotate_degrees: degrees (positive: left)."""
-POSITION = (-1000.0, 1000.0)
+POSITION_LIMIT = 1.0e4
+"""m: every position's coordinates within +-10 km of the origin, in a scenario or set_pose
+(float steps there are ~2e-12 m, far below contact's scale; further, the world stops being a
+place)."""
+POSITION = (-POSITION_LIMIT, POSITION_LIMIT)
 """set_pose: x and y, m."""
 YAW_DEG = (-3600.0, 3600.0)
 """set_pose: heading, degrees."""

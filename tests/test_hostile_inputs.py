@@ -167,3 +167,17 @@ def test_the_cli_refuses_special_and_broken_files_within_2_s_of_cpu(make, tmp_pa
     assert result.returncode == 2
     assert result.stderr.count("\n") == 1 and result.stderr.startswith(f"error: {path}")
     assert cpu < hi.CPU_SECONDS  # pydrake's import is most of it (~0.8 s here)
+
+
+@pytest.mark.parametrize("case", hi.STUDIES, ids=lambda c: c.name)
+def test_a_bad_study_file_is_one_clear_line(case, tmp_path):
+    source, outcome = hi.load_study_text(tmp_path, case)
+    assert hi.problems(outcome, source, case.field, case.words) == []
+
+
+@pytest.mark.parametrize("case", hi.TOOLS, ids=lambda c: c.name)
+def test_a_tools_bad_input_is_one_line_and_exit_2(case, tmp_path):
+    status, err, words = hi.run_tool(case, tmp_path)
+    assert status == 2, err
+    (line,) = err.strip().splitlines()
+    assert line.startswith("error: ") and words in line, line

@@ -360,7 +360,7 @@ OVERRIDES = [
     _robot("unknown field", "{colour: red}", "colour", "unknown field; Robot has"),
     # commands
     _robot("power inf", "{commands: [!SetPower {left: .inf, right: 0}]}", "commands[0].left",
-           "must be a finite number; got inf"),
+           "must be in [-1, 1]; got inf"),
     _robot("speed -inf", "{commands: [!SetSpeed {left: 0, right: -.inf}]}",
            "commands[0].right", "got -inf"),
     _robot("power text", "{commands: [!SetPower {left: fast}]}", "commands[0].left",
@@ -373,7 +373,7 @@ OVERRIDES = [
     _robot("drive power 2", "{commands: [!DriveDistance {distance: 1, power: 2}]}",
            "commands[0].power", "got 2"),
     _robot("drive 1e9 m", "{commands: [!DriveDistance {distance: 1e9}]}",
-           "commands[0].distance", "[-10000, 10000] m"),
+           "commands[0].distance", "[-100, 100] m"),
     _robot("rotate inf", "{commands: [!RotateDegrees {degrees: .inf}]}", "commands[0].degrees",
            "got inf"),
     _robot("set pose far", "{commands: [!SetPose {x: 1e300}]}", "commands[0].x",
@@ -682,3 +682,153 @@ def table(tallies: list[Tally]) -> str:
                  f"{sum(t.accepted for t in tallies)} | {sum(len(t.defects) for t in tallies)} "
                  f"| {max(t.slowest for t in tallies):.2f} |")
     return "\n".join(lines)
+
+
+# --- study files and the tools' inputs (`--from DIR`, logs, arguments) ----------------------
+
+
+@dc.dataclass(frozen=True)
+class StudyCase:
+    """A bad study file (its `text` after `scenario: ../corobot.yaml`): the field its error
+    must name and words of its message."""
+
+    name: str
+    text: str
+    field: str
+    words: str
+
+
+_GRID_1E7 = "grid:\n" + "".join(f"  robots.corobot.p{i}: [{', '.join('0' * 10)}]\n"
+                                for i in range(7))
+
+STUDIES = [
+    StudyCase("duration -1", "duration: -1\n", "duration", "(0, 100000] s"),
+    StudyCase("duration inf", "duration: .inf\n", "duration", "got inf"),
+    StudyCase("settle negative", "settle: -1\n", "settle", "[0, 1000] s"),
+    StudyCase("seeds 1e9", "seeds: 1000000000\n", "seeds", "[1, 100000]"),
+    StudyCase("seeds 0", "seeds: 0\n", "seeds", "got 0"),
+    StudyCase("seeds float", "seeds: 1e9\n", "seeds", "expected an integer"),
+    StudyCase("seeds empty", "seeds: []\n", "seeds", "at least one seed"),
+    StudyCase("seed beyond Drake's int", "seeds: [99999999999]\n", "seeds[0]", "Drake's int"),
+    StudyCase("grid of 10^7 points", _GRID_1E7, "grid.robots.corobot.p5", "more than 100000 runs"),
+    StudyCase("uniform min > max", "random:\n  robots.corobot.contact.friction: "
+              "!Uniform {min: 2, max: 1}\n", "random.robots.corobot.contact.friction.max",
+              "must be >= min (2); got 1"),
+    StudyCase("uniform inf", "random:\n  a.b: !Uniform {max: .inf}\n", "random.a.b.max",
+              "finite"),
+    StudyCase("normal sd negative", "random:\n  a.b: !Normal {sd: -1}\n", "random.a.b.sd",
+              "a standard deviation"),
+    StudyCase("choice empty", "random:\n  a.b: !Choice {values: []}\n", "random.a.b.values",
+              "at least one value"),
+]
+
+
+def load_study_text(directory: Path, case: StudyCase) -> tuple[str, Outcome]:
+    """(the file's name, what loading it gave)."""
+    from corobot_drake.study.spec import load_study
+
+    path = directory / "study.yaml"
+    path.write_text("scenario: ../corobot.yaml\n" + case.text)
+    outcome = Outcome()
+    start = time.thread_time()
+    try:
+        load_study(path)
+    except ScenarioError as e:
+        outcome.error = str(e)
+    except Exception as e:  # a defect
+        outcome.other = f"{type(e).__name__}: {str(e)[:200]}"
+    outcome.cpu_seconds = time.thread_time() - start
+    return str(path), outcome
+
+
+@dc.dataclass(frozen=True)
+class ToolCase:
+    """A tool run on a bad input: `argv` (`{tmp}`: a scratch directory holding `files`,
+    path -> bytes); its stderr must be one line starting `error: ` and holding `words`."""
+
+    name: str
+    tool: str
+    argv: tuple[str, ...]
+    words: str
+    files: tuple[tuple[str, bytes], ...] = ()
+
+
+_RUNS_HEADER = b"a,b\n1,2\n"
+_LOG_HEADER = b"time,left_power,right_power,left_ticks,right_ticks,x,y,yaw\n"
+
+TOOLS = [
+    ToolCase("landing: no runs", "landing_errors", ("--from", "{tmp}"),
+             "{tmp}/drive/runs.csv: (top level): no such file: run the study first"),
+    ToolCase("landing: no directory", "landing_errors", ("--from", "{tmp}/nowhere"),
+             "no such directory"),
+    ToolCase("landing: another study's runs", "landing_errors", ("--from", "{tmp}"),
+             "{tmp}/drive/runs.csv:1: columns: lacks run, seed", (("drive/runs.csv",
+                                                                  _RUNS_HEADER),)),
+    ToolCase("landing: runs not UTF-8", "landing_errors", ("--from", "{tmp}"),
+             "{tmp}/drive/runs.csv:1: (top level): not UTF-8", (("drive/runs.csv",
+                                                                 b"\xff\xfe"),)),
+    ToolCase("landing: runs.csv empty", "landing_errors", ("--from", "{tmp}"),
+             "empty: no header", (("drive/runs.csv", b""),)),
+    ToolCase("landing: --workers 0", "landing_errors", ("--workers", "0"),
+             "argument --workers: must be in [1, 1024]"),
+    ToolCase("landing: --plot under a file", "landing_errors",
+             ("--from", "{tmp}", "--plot", "{tmp}/f/x.png"), "is not a directory",
+             (("f", b"x"),)),
+    ToolCase("tire grip: no runs", "tune_tire_grip", ("--from", "{tmp}"),
+             "{tmp}/box/runs.csv: (top level): no such file"),
+    ToolCase("tire grip: --out a file", "tune_tire_grip", ("--out", "{tmp}/f"),
+             "is a file, not a directory", (("f", b"x"),)),
+    ToolCase("odometry: log lacks columns", "calibrate_odometry", ("{tmp}/log.csv",),
+             "header lacks column(s)", (("log.csv", b"time,left_ticks\n1,2\n"),)),
+    ToolCase("odometry: log empty", "calibrate_odometry", ("{tmp}/log.csv",),
+             "empty file", (("log.csv", b""),)),
+    ToolCase("odometry: log not numbers", "calibrate_odometry", ("{tmp}/log.csv",),
+             "{tmp}/log.csv:2: left_ticks is not a number",
+             (("log.csv", _LOG_HEADER + b"0,a,b,c,d,e,f,g\n"),)),
+    ToolCase("odometry: log not UTF-8", "calibrate_odometry", ("{tmp}/log.csv",),
+             "not UTF-8", (("log.csv", b"\xff\xfe"),)),
+    ToolCase("odometry: log a device", "calibrate_odometry", ("/dev/zero",),
+             "cannot read a device"),
+    ToolCase("odometry: ticks 0", "calibrate_odometry",
+             ("{tmp}/log.csv", "--ticks-per-revolution", "0"), "must be in [1, 1000000]"),
+    ToolCase("fit: log a directory", "fit_drive_log", ("{tmp}",), "cannot read a directory"),
+    ToolCase("fit: --write missing", "fit_drive_log", ("x.csv", "--write", "{tmp}/no.yaml"),
+             "no such file"),
+    ToolCase("drive test: --loops -1", "drive_test", ("--loops", "-1"), "[1, 100]"),
+    ToolCase("drive test: --seeds 0", "drive_test", ("--seeds", "0"), "[1, 10000]"),
+    ToolCase("drive test: --power 7", "drive_test", ("--power", "7"), "(0, 1]"),
+    ToolCase("torque: --scaling -1", "tune_motor_torque_scaling", ("--scaling", "-1"),
+             "(0, 200] rad/s"),
+    ToolCase("torque: scenario a directory", "tune_motor_torque_scaling",
+             ("--scenario", "{tmp}"), "cannot read a directory"),
+    ToolCase("snapshot: --width 0", "snapshot", ("--width", "0"), "[1, 4096] pixels"),
+    ToolCase("snapshot: --pose far away", "snapshot",
+             ("--pose", "1e9,0,0", "--output", "{tmp}/s.png"),
+             "<Python scenario>: robots.corobot.pose.translation[0]: must be in [-10000"),
+]
+
+
+def run_tool(case: ToolCase, directory: Path) -> tuple[int, str, str]:
+    """(exit status, stderr, the words with `{tmp}` filled) of the tool run in-process."""
+    import contextlib
+    import importlib.util
+    import io
+    import sys
+
+    for name, data in case.files:
+        path = directory / name
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_bytes(data)
+    tool = Path(__file__).resolve().parents[2] / "tools" / f"{case.tool}.py"
+    spec = importlib.util.spec_from_file_location(f"tool_{case.tool}", tool)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module  # dataclasses look their module up
+    spec.loader.exec_module(module)
+    err = io.StringIO()
+    argv = [a.format(tmp=directory) for a in case.argv]
+    with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
+        try:
+            status = module.main(argv)
+        except SystemExit as e:  # argparse's errors
+            status = e.code
+    return status, err.getvalue(), case.words.format(tmp=directory)

@@ -19,6 +19,8 @@ from pydrake.multibody.plant import MultibodyPlantConfig
 from pydrake.systems.analysis import GetIntegrationSchemes, SimulatorConfig
 from pydrake.systems.sensors import CameraConfig
 
+from corobot_drake import limits as api
+
 
 @dc.dataclass(frozen=True)
 class Range:
@@ -108,9 +110,7 @@ def bound_of(field: dc.Field):
 
 # --- physical limits (each used by the bounds of several fields) -----------------------------
 
-POSITION_LIMIT = 1.0e4
-"""m: every position's coordinates within +-10 km of the origin (float steps there are
-~2e-12 m, far below contact's scale; further, the world stops being a place)."""
+POSITION_LIMIT = api.POSITION_LIMIT
 POSITION = Range(-POSITION_LIMIT, POSITION_LIMIT, unit="m")
 
 LINEAR_SPEED_LIMIT = 50.0
@@ -131,8 +131,18 @@ top speed; 1e9 rad/s froze the plant)."""
 AXLE_SPEED = Range(0.0, AXLE_SPEED_LIMIT, low_open=True, unit="rad/s")
 AXLE_SPEED_RANGE = Range(-AXLE_SPEED_LIMIT, AXLE_SPEED_LIMIT, unit="rad/s")
 ANGLE = Range(-1e6, 1e6, unit="deg")
-POWER = Range(0.0, 1.0, low_open=True)
+POWER = Range(*api.DRIVE_POWER, low_open=True)
 """A completing command's power."""
+
+# The commands' arguments: the same ranges as the Python API's and HTTP's (`limits.py`).
+SIDE_POWER = Range(*api.POWER)
+SIDE_SPEED = Range(*api.SPEED, unit="m/s")
+LINEAR_SPEED = Range(*api.LINEAR, unit="m/s")
+YAW_RATE = Range(*api.ANGULAR, unit="rad/s")
+DISTANCE = Range(*api.DISTANCE, unit="m")
+DEGREES = Range(*api.DEGREES, unit="deg")
+YAW_DEG = Range(*api.YAW_DEG, unit="deg")
+SET_POSITION = Range(*api.POSITION, unit="m")
 
 SHAPE_SIZE = Range(0.001, 100.0, unit="m", why="a shape's dimensions")
 ELLIPSOID_MAX_ASPECT = 4.0

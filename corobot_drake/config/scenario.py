@@ -185,16 +185,16 @@ class Drive:
 class SetPower:
     """Wheel power per side in [-1, 1] (clamped): axle speed = power x MotorTorqueScaling."""
 
-    left: float = 0.0
-    right: float = 0.0
+    left: float = bounded(0.0, lim.SIDE_POWER)
+    right: float = bounded(0.0, lim.SIDE_POWER)
 
 
 @dc.dataclass
 class SetSpeed:
     """Rim speed per side in m/s (axle speed = v / R, clamped to the max axle speed)."""
 
-    left: float = 0.0
-    right: float = 0.0
+    left: float = bounded(0.0, lim.SIDE_SPEED)
+    right: float = bounded(0.0, lim.SIDE_SPEED)
 
 
 @dc.dataclass
@@ -204,8 +204,8 @@ class SetVelocity:
     side by the skid-steer kinematics (`systems.drive.skid_steer_rim_speeds`), then clamped like
     `SetSpeed` (keeping the ratio of the sides, so the path's curvature)."""
 
-    linear: float = 0.0
-    angular: float = 0.0
+    linear: float = bounded(0.0, lim.LINEAR_SPEED)
+    angular: float = bounded(0.0, lim.YAW_RATE)
 
 
 @dc.dataclass
@@ -232,7 +232,7 @@ class DriveDistance:
     """Drive straight until |distance| m from the start pose (negative: backwards), at
     `power` in (0, 1]; ends succeeded on arrival (SPEC "Commands that complete")."""
 
-    distance: float = bounded(0.0, lim.POSITION)
+    distance: float = bounded(0.0, lim.DISTANCE)
     power: float = bounded(0.5, lim.POWER)
     start: list[float] = dc.field(default_factory=list)
     """[x, y, yaw_deg] (m, m, deg): the pose the distance counts from (and, closed loop, the
@@ -245,7 +245,7 @@ class RotateDegrees:
     """Turn in place by `degrees` (positive: counter-clockwise seen from above, i.e. left),
     at `power` in (0, 1]; ends succeeded on arrival."""
 
-    degrees: float = bounded(0.0, lim.ANGLE)
+    degrees: float = bounded(0.0, lim.DEGREES)
     power: float = bounded(0.5, lim.POWER)
     start: list[float] = dc.field(default_factory=list)
     """[x, y, yaw_deg] (m, m, deg): the heading the turn counts from (within +-180 deg of the
@@ -257,9 +257,9 @@ class RotateDegrees:
 class SetPose:
     """Teleport the robot to (x, y) m facing `yaw_deg`: on the ground, at rest, wheels stopped."""
 
-    x: float = bounded(0.0, lim.POSITION)
-    y: float = bounded(0.0, lim.POSITION)
-    yaw_deg: float = bounded(0.0, lim.ANGLE)
+    x: float = bounded(0.0, lim.SET_POSITION)
+    y: float = bounded(0.0, lim.SET_POSITION)
+    yaw_deg: float = bounded(0.0, lim.YAW_DEG)
 
 
 Command = Union[SetPower, SetSpeed, SetVelocity, AllStop, Enable, Wait,  # noqa: UP007
