@@ -72,7 +72,7 @@ def test_seeds_may_be_a_list(tmp_path):
 
 @pytest.mark.parametrize("text, expected", [
     ("scenario: x.yaml\nduration: fast\n", ":2: duration: expected a number"),
-    ("scenario: x.yaml\nseeds: 0\n", ":2: seeds: must be >= 1"),
+    ("scenario: x.yaml\nseeds: 0\n", ":2: seeds: must be in [1, 100000]"),
     ("scenario: x.yaml\nmetrics: [x, wobble]\n", ":2: metrics: unknown metric 'wobble'"),
     ("scenario: x.yaml\nrandom: {a.b: !Gauss {}}\n", ":2: random.a.b: unknown tag !Gauss"),
     ("scenario: x.yaml\ngrid: {a.b: []}\n", ":2: grid.a.b: needs at least one value"),
