@@ -1,10 +1,11 @@
 #!/usr/bin/env python3
-"""Runs the hostile corpus of scenario inputs and tallies what the loader made of them.
+"""Runs the hostile corpus of scenario, study and tool inputs and tallies what became of them.
 
-Every hand-written input is invalid; each generated one (seeded: the same inputs every run)
-puts a hostile value into a numeric field of a shipped scenario or edits a shipped file's
-text, and may happen to be valid. A refusal counts when it is the one line
-`FILE_OR_--override[:LINE]: FIELD: MESSAGE` within 2 s of CPU time; anything else (another
+Every hand-written input (scenarios, study files, the tools' inputs and arguments) is
+invalid; each generated one (seeded: the same inputs every run) puts a hostile value into a
+numeric field of a shipped scenario or edits a shipped file's text, and may happen to be valid.
+A refusal counts when it is the one line `FILE_OR_--override[:LINE]: FIELD: MESSAGE` within
+2 s of CPU time (a tool's: one `error: ` line, exit status 2); anything else (another
 exception, a hang, a missing line, a slow refusal) is a defect, listed after the table.
 Exit status 1 when there is one (`corobot_drake/analysis/hostile_inputs.py`).
 
@@ -31,9 +32,11 @@ def main(argv=None) -> int:
     args = p.parse_args(argv)
     quiet_drake_warnings()
     with tempfile.TemporaryDirectory(prefix="corobot-hostile-") as tmp, tqdm(
-            total=len(hi.HAND_WRITTEN) + 2 * args.examples, unit="input",
+            total=len(hi.HAND_WRITTEN) + len(hi.STUDIES) + len(hi.TOOLS) + 2 * args.examples,
+            unit="input",
             file=sys.stderr) as bar:
         tallies = [hi.run_hand_written(Path(tmp), bar.update),
+                   *hi.run_studies_and_tools(Path(tmp), bar.update),
                    *hi.run_generated(Path(tmp), args.examples, args.seed, bar.update)]
     print(hi.table(tallies))
     defects = [d for t in tallies for d in t.defects]

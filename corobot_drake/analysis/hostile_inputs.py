@@ -832,3 +832,30 @@ def run_tool(case: ToolCase, directory: Path) -> tuple[int, str, str]:
         except SystemExit as e:  # argparse's errors
             status = e.code
     return status, err.getvalue(), case.words.format(tmp=directory)
+
+
+def run_studies_and_tools(directory: Path, progress=None) -> list[Tally]:
+    """Every STUDIES and TOOLS case (each tool's in a directory of its own under
+    `directory`)."""
+    studies = Tally("bad study files (bounds, runs, distributions)")
+    for case in STUDIES:
+        source, outcome = load_study_text(directory, case)
+        studies.add(outcome, problems(outcome, source, case.field, case.words) or (
+            ["accepted"] if outcome.error is None and outcome.other is None else []), case.name)
+        if progress:
+            progress()
+    tools = Tally("the tools' bad inputs (--from DIR, logs, arguments, outputs)")
+    for i, case in enumerate(TOOLS):
+        scratch = directory / f"tool{i}"
+        scratch.mkdir()
+        start = time.process_time()
+        status, err, words = run_tool(case, scratch)
+        lines = err.strip().splitlines()
+        outcome = Outcome(error=lines[0] if lines else None,
+                          cpu_seconds=time.process_time() - start)
+        found = [] if status == 2 and len(lines) == 1 and lines[0].startswith(
+            "error: ") and words in lines[0] else [f"exit {status}: {err.strip()[:200]!r}"]
+        tools.add(outcome, found, case.name)
+        if progress:
+            progress()
+    return [studies, tools]
