@@ -15,6 +15,7 @@ With no LOG, `--simulate SCALING SLEW` first makes a log with the simulator (a s
 `--stall` makes that log end backing into the giant box.
 """
 
+import dataclasses as dc
 import sys
 from pathlib import Path
 
@@ -27,7 +28,8 @@ from corobot_drake.analysis.arguments import (
     one_line_errors,
     output_file,
 )
-from corobot_drake.config.scenario import ScenarioError, load_scenario
+from corobot_drake.config.bounds import bound_of
+from corobot_drake.config.scenario import Drive, ScenarioError, load_scenario
 
 REPO = Path(__file__).resolve().parent.parent
 
@@ -78,6 +80,11 @@ def main(argv=None) -> int:
     args = p.parse_args(argv)
     if args.log is None and args.simulate is None:
         p.error("give a LOG or --simulate SCALING SLEW")
+    for value, field in zip(args.simulate or (), ("motor_torque_scaling", "slew_rate"),
+                            strict=False):
+        problem = bound_of(next(f for f in dc.fields(Drive) if f.name == field)).problem(value)
+        if problem:
+            p.error(f"--simulate: {field} {problem}")
     path = Path(args.log or REPO / "out" / "simulated_drive_log.csv")
     if args.simulate:
         scaling, slew = args.simulate

@@ -794,6 +794,8 @@ TOOLS = [
     ToolCase("fit: log a directory", "fit_drive_log", ("{tmp}",), "cannot read a directory"),
     ToolCase("fit: --write missing", "fit_drive_log", ("x.csv", "--write", "{tmp}/no.yaml"),
              "no such file"),
+    ToolCase("fit: --simulate -1", "fit_drive_log", ("--simulate", "-1", "5"),
+             "--simulate: motor_torque_scaling must be in (0, 200] rad/s; got -1"),
     ToolCase("drive test: --loops -1", "drive_test", ("--loops", "-1"), "[1, 100]"),
     ToolCase("drive test: --seeds 0", "drive_test", ("--seeds", "0"), "[1, 10000]"),
     ToolCase("drive test: --power 7", "drive_test", ("--power", "7"), "(0, 1]"),
