@@ -110,9 +110,18 @@ def base_scenario(config: GoToGoalConfig) -> sc.Scenario:
     giant.pose = ground_pose(*dim.GIANT_BOX_CENTER[:2])
     giant.pose.translation = [*dim.GIANT_BOX_CENTER[:2], dim.GIANT_BOX_CENTER[2] + HOVER]
     for i in range(config.boxes):
+        # Parked in a row away from the robot until `reset` places them (a scenario the
+        # Simulation checks: no body inside the robot).
+        parked = ground_pose(PARKING[0] + i * (config.box_size + 0.5), PARKING[1], 0.0)
+        parked.translation = [*parked.translation[:2], config.box_size / 2 + HOVER]
         scenario.world.bodies[f"box_{i}"] = sc.WorldBody(
-            shape=sc.Box([config.box_size] * 3), mass=HELD_MASS, color=[0.3, 0.45, 0.7, 1.0])
+            shape=sc.Box([config.box_size] * 3), mass=HELD_MASS, color=[0.3, 0.45, 0.7, 1.0],
+            pose=parked)
     return scenario
+
+
+PARKING = (3.0, 6.0)
+"""m: where the first box waits, the others in a row along +x, until `reset` places them."""
 
 
 class GoToGoalEnv(gym.Env):
