@@ -20,6 +20,8 @@ from corobot_drake.config.scenario import (
 )
 from corobot_drake.model import dimensions as dim
 from corobot_drake.systems.drive import (
+    HOLD_SLACK,
+    HOLD_SPEED,
     CommandSource,
     CommandStatus,
     DriveController,
@@ -208,6 +210,55 @@ def test_axle_speed_is_the_measured_wheel_velocities():
     wheel_state = np.array([0.1, 0.2, 0.3, 0.4, 1.5, -2.5, 3.5, -4.5])  # [q, v] per axle
     s = controller(wheel_state)
     np.testing.assert_array_equal(s.output("axle_speed"), [1.5, -2.5, 3.5, -4.5])
+
+
+def wheels(q, v=(0.0, 0.0, 0.0, 0.0)) -> np.ndarray:
+    """The `wheel_state` input [q, v] (rad, rad/s), actuator order."""
+    return np.array([*q, *v], dtype=float)
+
+
+def test_a_resting_wheel_is_held_at_the_angle_it_stopped_at():
+    s = controller(wheels([0.5, -0.2, 0.5, -0.2]))
+    s.tick()  # at rest on zero command: the hold angles latch here
+    np.testing.assert_array_equal(s.output("desired_state"), np.zeros(8))
+    rolled = wheels([0.5 + 2e-5, -0.2 - 3e-5, 0.5, -0.2], [1e-5, -1e-5, 0.0, 0.0])
+    s.fix("wheel_state", rolled)  # the tyres' mesh rolls two wheels (1e-5 rad/s: at rest)
+    s.tick()
+    # Pulled back at hold_gain x the error: the creep's 2e-5 rad gives 2e-4 rad/s at 10/s.
+    gain = DRIVE.hold_gain
+    np.testing.assert_allclose(s.output("desired_state")[4:],
+                               [-gain * 2e-5, gain * 3e-5, 0.0, 0.0], rtol=1e-9)
+    np.testing.assert_array_equal(s.output("axle_speed_command"), [0.0, 0.0])  # still 0
+    s.fix("wheel_state", wheels([0.5 + 2e-3, -0.2, 0.5, -0.2]))
+    s.tick()  # pushed past the slack: held where it is now, no pull back
+    assert HOLD_SLACK < 2e-3
+    np.testing.assert_array_equal(s.output("desired_state"), np.zeros(8))
+
+
+def test_the_hold_pulls_at_most_half_the_rest_speed_and_lets_a_driven_wheel_go():
+    s = controller(wheels([0.0] * 4))
+    s.tick()
+    s.fix("wheel_state", wheels([-HOLD_SLACK] * 4))  # a big error, inside the slack
+    s.tick()
+    np.testing.assert_allclose(s.output("desired_state")[4:], [0.5 * HOLD_SPEED] * 4)
+    s.fix("request", DriveRequest(1, SetPower(0.0, 1.0)))  # the right side drives
+    s.tick()
+    v_d = s.output("desired_state")[4:]
+    np.testing.assert_allclose(v_d, [0.5 * HOLD_SPEED, STEP, 0.5 * HOLD_SPEED, STEP])
+    s.fix("wheel_state", wheels([-HOLD_SLACK] * 4, [0.0, 2 * HOLD_SPEED, 0.0, 0.0]))
+    s.fix("request", DriveRequest(2, AllStop(), immediate=True))
+    s.tick()  # commanded 0 but still turning: not at rest, so not held
+    np.testing.assert_allclose(s.output("desired_state")[4:], [0.5 * HOLD_SPEED, 0.0] * 2)
+
+
+def test_no_hold_at_hold_gain_zero():
+    s = Stepper(DriveController(Drive(hold_gain=0.0)), DRIVE.control_period)
+    s.fix("request", DriveRequest())
+    s.fix("wheel_state", wheels([0.0] * 4))
+    s.tick()
+    s.fix("wheel_state", wheels([1e-5] * 4))
+    s.tick()
+    np.testing.assert_array_equal(s.output("desired_state"), np.zeros(8))
 
 
 # --- CommandSource --------------------------------------------------------------------------

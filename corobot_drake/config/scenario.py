@@ -171,6 +171,11 @@ class Drive:
     """rad/s: set_speed clamps to +-this."""
     control_period: float = bounded(dim.CONTROL_PERIOD, lim.PERIOD)
     """s: the drive controller's update period."""
+    hold_gain: float = bounded(dim.WHEEL_HOLD_GAIN, Range(
+        0.0, 50.0, unit="1/s", why="0: no hold"))
+    """1/s: at zero command each resting wheel is held at the angle it stopped at, as a geared
+    motor's gearbox holds it (`systems.drive.DriveController`); 0 leaves the servo only damping
+    and the robot rolls up to ~2 mm into a facet of its tyres' mesh (docs/tuning.md, "At rest")."""
     effective_wheel_radius: float = bounded(dim.WHEEL_RADIUS, Range(
         0.5 * dim.WHEEL_RADIUS, 1.5 * dim.WHEEL_RADIUS, unit="m", why="within 50% of the wheel's"))
     """m: the rolling radius the dead-reckoning odometry turns encoder ticks into distance with

@@ -120,6 +120,10 @@ CONTROL_PERIOD = 0.01
 """Drive controller update period, seconds: the plant's default 10 ms step, so the drive's
 events fall on the plant's steps (the original ran at 60 Hz; its per-frame rules are expressed
 per second: docs/performance.md)."""
+WHEEL_HOLD_GAIN = 10.0
+"""1/s: at zero command the drive pulls each resting wheel back to the angle it stopped at with
+a velocity target of this times the angle error (docs/tuning.md, "At rest"): the velocity servo
+alone only damps, and the tyres' hydroelastic mesh rolls a resting robot up to ~2 mm."""
 
 # The chapter's world.
 GIANT_BOX_SIZE = 2.0

@@ -381,6 +381,14 @@ def _stop(status) -> None:
         setattr(status, field, 0.0)
 
 
+HOLD_SPEED = 1e-3
+"""rad/s: a wheel turning slower than this is at rest, and can be held (the tyres' mesh rolls a
+resting wheel at up to 3e-5 rad/s; a braking wheel turns far faster)."""
+HOLD_SLACK = 1e-4
+"""rad: a held wheel pushed further than this from its hold angle is held where it is now
+instead (6 um at the rim: the most a hold ever pulls a wheel back)."""
+
+
 def _slew(axle: float, target: float, step: float) -> float:
     """`axle` moved towards `target` by at most `step` (rad/s)."""
     return axle + min(step, max(-step, target - axle))
@@ -404,7 +412,8 @@ class DriveController(LeafSystem):
     Input `request` (DriveRequest, abstract); input `wheel_state` [q, v] of the four axles in
     `dimensions.WHEEL_NAMES` order (rad, rad/s).
     Output `desired_state` [q_d, v_d] for the plant's desired-state input (actuator order;
-    q_d = 0: the servo has kp = 0 and only v_d matters).
+    q_d = 0: the servo has kp = 0 and only v_d matters). v_d is the slewed axle speed of the
+    wheel's side, and for a wheel at rest on a side commanded to 0 the hold's correction.
     Output `axle_speed_command` [left, right] rad/s after the slew limit; rear follows front.
     Output `drive_status` (5, `DriveStatus`: read it by name).
     Output `axle_speed` [front_left, front_right, rear_left, rear_right] measured, rad/s.
@@ -414,6 +423,13 @@ class DriveController(LeafSystem):
     everything is held at zero; the axle speeds then move towards the targets by at most
     `drive.slew_rate * drive.control_period`, or jump to them for a request marked
     `immediate` (the seed profile's stop).
+
+    The hold: a wheel whose side is commanded to 0, turning slower than `HOLD_SPEED` and within
+    `HOLD_SLACK` of its hold angle keeps that angle (any other wheel's hold angle is its angle
+    now), and its v_d pulls it back there at `drive.hold_gain` x the angle error (at most
+    HOLD_SPEED / 2, so it never looks like motion). The servo alone only damps: without the
+    hold a robot at rest rolls, at up to ~2 um/s, into the nearest stable facet of its tyres'
+    hydroelastic mesh, up to ~2 mm (docs/tuning.md, "At rest").
     """
 
     def __init__(self, drive: Drive):
@@ -431,6 +447,7 @@ class DriveController(LeafSystem):
         self._status = self.DeclareDiscreteState(enabled[:])
         self._axle = self.DeclareDiscreteState(2)
         self._desired = self.DeclareDiscreteState(8)
+        self._hold_angle = self.DeclareDiscreteState(4)
         self.DeclarePeriodicDiscreteUpdateEvent(drive.control_period, 0.0, self._update)
         self.DeclareStateOutputPort("desired_state", self._desired)
         self.DeclareStateOutputPort("axle_speed_command", self._axle)
@@ -494,14 +511,38 @@ class DriveController(LeafSystem):
         else:
             new_left = _slew(left, target_left, self._step)
             new_right = _slew(right, target_right, self._step)
-        if (new_left, new_right) != (left, right):
-            self._set_axle(discrete_state, new_left, new_right)
+        correction = self._hold(context, discrete_state, new_left, new_right)
+        if (new_left, new_right) != (left, right) or correction is not None:
+            self._set_axle(discrete_state, new_left, new_right, correction)
 
-    def _set_axle(self, state, left: float, right: float) -> None:
-        """Writes the slewed axle speeds (rad/s) and the desired state made from them into
-        `state` (a Context or DiscreteValues)."""
+    def _hold(self, context, discrete_state, left: float, right: float):
+        """Updates the hold angles; returns the wheels' v_d corrections (rad/s, actuator
+        order), or None when there are none now and were none before (nothing to write)."""
+        gain = self._drive.hold_gain
+        if gain == 0.0:
+            return None
+        wheel_state = self._wheel_state_port.Eval(context)
+        q, v = wheel_state[:4], wheel_state[4:]
+        held = context.get_discrete_state(self._hold_angle).get_value()
+        resting = ((np.array([left, right, left, right]) == 0.0) & (np.abs(v) < HOLD_SPEED)
+                   & (np.abs(q - held) <= HOLD_SLACK))
+        hold = np.where(resting, held, q)
+        discrete_state.set_value(self._hold_angle, hold)
+        correction = np.clip(gain * (hold - q), -0.5 * HOLD_SPEED, 0.5 * HOLD_SPEED)
+        before = context.get_discrete_state(self._desired).get_value()[4:]
+        if not correction.any() and np.array_equal(before, [left, right, left, right]):
+            return None
+        return correction
+
+    def _set_axle(self, state, left: float, right: float, correction=None) -> None:
+        """Writes the slewed axle speeds (rad/s) and the desired state made from them (plus
+        the hold's v_d `correction`, rad/s per wheel) into `state` (a Context or
+        DiscreteValues)."""
         state.set_value(self._axle, [left, right])
-        state.set_value(self._desired, [0.0, 0.0, 0.0, 0.0, left, right, left, right])
+        v_d = np.array([left, right, left, right])
+        if correction is not None:
+            v_d = v_d + correction
+        state.set_value(self._desired, np.concatenate([np.zeros(4), v_d]))
 
     def speeds(self, root_context) -> tuple[list[float], list[float]]:
         """(targets, commanded): the axle speeds [left, right] (rad/s) the drive slews towards
