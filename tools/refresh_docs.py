@@ -681,6 +681,11 @@ def render_step_limit(outs) -> str:
     return f"`{o.command}`:\n\n{_table(o.stdout)}"
 
 
+def render_creep(outs) -> str:
+    o = outs[0][0]
+    return f"`{o.command}`:\n\n{o.stdout.strip()}"
+
+
 def render_hostile_inputs(outs) -> str:
     o = outs[0][0]
     defects = [line for line in o.stdout.splitlines() if line.startswith("defect:")]
@@ -763,6 +768,10 @@ def blocks() -> list[Spec]:
              DETERMINISTIC, 5),
         Spec("step-limit", "docs/tuning.md", (Command("python tools/step_limit.py"),),
              render_step_limit, DETERMINISTIC, 40),
+        Spec("creep-isolate", "docs/tuning.md", (Command("python tools/creep.py --isolate"),),
+             render_creep, DETERMINISTIC, 60),
+        Spec("creep", "docs/tuning.md", (Command("python tools/creep.py"),), render_creep,
+             DETERMINISTIC, 90),
         Spec("fit-drive-log-stall", "docs/tuning.md",
              (Command("python tools/fit_drive_log.py --simulate 12 20 --stall"),),
              render_fit_stall, DETERMINISTIC, 40),
