@@ -339,14 +339,30 @@ class Robot:
         (`systems.contact`), by wheel name; at rest they sum to the robot's weight."""
         return self._by_wheel("wheel_loads")
 
-    def wheel_slip(self) -> dict[str, float]:
-        """Each wheel's longitudinal slip speed, m/s: its centre's speed along the heading
-        minus its rim speed (negative: spinning faster than it travels), by wheel name."""
-        return self._by_wheel("wheel_slip")
+    def wheel_slip_ratio(self) -> dict[str, float]:
+        """Each wheel's longitudinal slip ratio (`systems.contact`), by wheel name:
+        (rim speed - ground speed) / the faster, + traction (the wheel turns faster than it
+        travels, forwards or backwards), - braking; 0 at rest."""
+        return self._by_wheel("wheel_slip_ratio")
 
-    def wheel_lateral_slip(self) -> dict[str, float]:
-        """Each wheel's sideways speed across the heading (+ left), m/s, by wheel name."""
-        return self._by_wheel("wheel_lateral_slip")
+    def wheel_slip_angle(self) -> dict[str, float]:
+        """Each wheel's slip angle, deg (`systems.contact`), by wheel name: atan2(its centre's
+        speed across the heading (+ left), its speed along it); 0 at rest."""
+        return self._by_wheel("wheel_slip_angle")
+
+    def _scalar(self, port: str) -> float:
+        return float(self._sim.station.diagram.GetOutputPort(f"{self.name}.{port}").Eval(
+            self._sim.context)[0])
+
+    def tip_margin_deg(self) -> float:
+        """How far (deg) the robot can still roll or pitch before its centre of mass passes
+        an edge of the wheels' support polygon (`systems.stability`); upright on level
+        ground 37.4 deg (pitch), negative while tipping over."""
+        return self._scalar("tip_margin")
+
+    def min_tip_margin_deg(self) -> float:
+        """The least `tip_margin_deg` so far (sampled at 100 Hz, and now), deg."""
+        return self._scalar("min_tip_margin")
 
     def enable_requested(self) -> bool:
         """The enable level last commanded (is_enabled() follows it at the next control tick)."""
@@ -453,6 +469,10 @@ class Robot:
         return log[-1] if log else None
 
     def summary(self) -> dict:
+        """The robot's figures now. `wheel_loads_N` (N) and `slip`'s `ratio` and
+        `angle_deg` lists are per wheel in `dimensions.WHEEL_NAMES` order: front left, front
+        right, rear left, rear right; `tip_margin_deg` now and `min_tip_margin_deg` over the
+        run (`systems.contact`, `systems.stability`)."""
         pose, velocity = self.pose(), self.velocity()
         return {
             "pose": dc.asdict(pose),
@@ -466,8 +486,10 @@ class Robot:
             "position": list(self.position()),
             "odometry": dc.asdict(self.odometry()),
             "wheel_loads_N": list(self.wheel_loads().values()),
-            "slip": {"longitudinal_mps": list(self.wheel_slip().values()),
-                     "lateral_mps": list(self.wheel_lateral_slip().values())},
+            "slip": {"ratio": list(self.wheel_slip_ratio().values()),
+                     "angle_deg": list(self.wheel_slip_angle().values())},
+            "tip_margin_deg": self.tip_margin_deg(),
+            "min_tip_margin_deg": self.min_tip_margin_deg(),
             "commands": [
                 {"command": r.command, "status": r.status, "reason": r.reason,
                  "start_time": r.start_time, "end_time": r.end_time}

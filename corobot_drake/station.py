@@ -43,6 +43,7 @@ from corobot_drake.systems.monitor import TiltMonitor
 from corobot_drake.systems.motion import MotionCommands
 from corobot_drake.systems.odometry import add_chassis_poses, add_odometry
 from corobot_drake.systems.runlog import add_run_log
+from corobot_drake.systems.stability import add_tip_margin
 
 TILT_SAMPLE_PERIOD = 0.01
 """s. Tilt changes over tenths of a second even in a flip; 100 Hz catches its peak."""
@@ -257,8 +258,14 @@ def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None, foxglov
         contacts = add_wheel_contacts(builder, name, plant, chassis,
                                       [j.child_body() for j in joints],
                                       selector.get_output_port())
-        for port in ("wheel_loads", "wheel_slip", "wheel_lateral_slip"):
+        for port in ("wheel_loads", "wheel_slip_ratio", "wheel_slip_angle"):
             builder.ExportOutput(contacts.GetOutputPort(port), f"{name}.{port}")
+        tip_margin = add_tip_margin(builder, name, plant, instance,
+                                    {w: j.child_body() for w, j in zip(dim.WHEEL_NAMES, joints,
+                                                                       strict=True)},
+                                    TILT_SAMPLE_PERIOD)
+        for port in ("tip_margin", "min_tip_margin"):
+            builder.ExportOutput(tip_margin.GetOutputPort(port), f"{name}.{port}")
         builder.Connect(source.GetOutputPort("request"), motion.GetInputPort("request"))
         builder.Connect(odometry.position, motion.GetInputPort("position"))
         builder.Connect(odometry.heading, motion.GetInputPort("heading"))

@@ -134,9 +134,22 @@ def _wheel_loads(run: RobotRun) -> dict[str, float]:
 
 @metric("wheel_slip")
 def _wheel_slip(run: RobotRun) -> dict[str, float]:
-    """Final longitudinal slip speed of each wheel (m/s: centre speed along the heading minus
-    rim speed), by wheel name."""
-    return run.robot.wheel_slip()
+    """Final longitudinal slip ratio of each wheel ((rim - ground speed) / the faster, +
+    traction, `systems.contact`), by wheel name."""
+    return run.robot.wheel_slip_ratio()
+
+
+@metric("wheel_slip_angle")
+def _wheel_slip_angle(run: RobotRun) -> dict[str, float]:
+    """Final slip angle of each wheel, deg (+ moving to the left of the heading), by wheel
+    name."""
+    return run.robot.wheel_slip_angle()
+
+
+@metric("min_tip_margin_deg")
+def _min_tip_margin_deg(run: RobotRun) -> float:
+    """Least tip-over margin during the run, deg (`systems.stability`)."""
+    return run.robot.min_tip_margin_deg()
 
 
 @metric("odometry_error")

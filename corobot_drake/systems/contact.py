@@ -1,17 +1,25 @@
-"""Contact telemetry: each wheel's load and slip, from the plant's contact results.
+"""Contact telemetry: each wheel's load and slip, from the plant's contact results and
+velocities.
 
 - load: the vertical (world +z) component of the total contact force on the wheel, N: what
   the ground carries on that wheel (at rest the four sum to the robot's weight);
-- longitudinal slip speed: the wheel centre's speed along the chassis heading minus the rim
-  speed omega R (nominal radius), m/s: negative while a driven wheel spins faster than it
-  travels (traction), positive while it is dragged faster than it turns (braking, skidding);
-  free rolling on the compliant tyre reads about -0.8% of the speed (it rolls on a smaller
-  effective radius, `tools/calibrate_odometry.py`);
-- lateral slip speed: the wheel centre's speed across the heading (+ to the left), m/s: a
-  skid-steer turn scrubs every wheel sideways.
+- slip ratio (longitudinal, dimensionless): (rim speed omega R - ground speed) / max(|rim|,
+  |ground|, `SLIP_SPEED_FLOOR`), with the ground speed the wheel centre's speed along the
+  chassis heading and R the nominal radius, signed so that driving forwards and backwards read
+  alike (times the sign of the faster of the two speeds): positive while a wheel turns faster
+  than it travels (traction: +1 spinning on the spot), negative while it is dragged faster
+  than it turns (braking, skidding: -1 locked), beyond +-1 (up to +-2) only while it turns
+  against its travel; free rolling on the compliant tyre reads about +0.8% (it rolls on a
+  smaller effective radius, `tools/calibrate_odometry.py`);
+- slip angle (lateral, deg): atan2(lateral speed, max(|ground speed along the heading|,
+  `SLIP_SPEED_FLOOR`)), the lateral speed being the wheel centre's speed across the heading
+  (+ to the left): the angle between where the wheel points and where it goes; a skid-steer
+  turn scrubs every wheel sideways (a spin in place: atan(half wheelbase / half track) = 39.5
+  deg, front wheels + one way, rear - the other).
 
 Hydroelastic contacts (the tyres' compliant patches) and point contacts (the fallback, e.g. a
-rigid body against a tyre) both count.
+rigid body against a tyre) both count for the loads. The slip is kinematic: it needs the body
+velocities only, not the contact results.
 """
 
 import numpy as np
@@ -22,6 +30,12 @@ from pydrake.multibody.plant import ContactResults
 from pydrake.systems.framework import LeafSystem
 
 from corobot_drake.model import dimensions as dim
+
+SLIP_SPEED_FLOOR = 0.01
+"""m/s: the least denominator of the slip ratio and angle. Below 1 cm/s (the slowest a
+completing command drives, `motion` creep speed; 1.6% of top speed) neither speed says much
+about grip; with the floor a robot at rest, creeping by ~1e-5 m/s, reads ~0 (not NaN, nor its
+noise blown up to +-100%)."""
 
 
 class WheelContacts(LeafSystem):
@@ -37,14 +51,16 @@ class WheelContacts(LeafSystem):
         - wheel_state
         output_ports:
         - wheel_loads
-        - wheel_slip
-        - wheel_lateral_slip
+        - wheel_slip_ratio
+        - wheel_slip_angle
 
     Inputs: `contact_results` (abstract ContactResults of the plant), `body_poses` and
     `body_spatial_velocities` (the plant's, indexed by BodyIndex), `wheel_state` [q, v] of the
-    four axles (rad, rad/s). Outputs (4 each, `dimensions.WHEEL_NAMES` order): `wheel_loads`
-    (N), `wheel_slip` (longitudinal slip speed, m/s), `wheel_lateral_slip` (m/s). No state: the
-    outputs are functions of the plant's latest step.
+    four axles (rad, rad/s). Outputs (4 each, `dimensions.WHEEL_NAMES` order: front left,
+    front right, rear left, rear right): `wheel_loads` (N), `wheel_slip_ratio` (longitudinal,
+    dimensionless, + traction), `wheel_slip_angle` (deg, + moving to the left of the heading).
+    No state: the outputs are functions of the plant's latest step. Only `wheel_loads` reads
+    the contact results.
     """
 
     def __init__(self, plant, chassis, wheels):
@@ -62,10 +78,10 @@ class WheelContacts(LeafSystem):
             "body_spatial_velocities", AbstractValue.Make([SpatialVelocity()]))
         self._wheel_state = self.DeclareVectorInputPort("wheel_state", 8)
         self.DeclareVectorOutputPort("wheel_loads", 4, self._calc_loads)
-        self.DeclareVectorOutputPort("wheel_slip", 4, lambda c, o: o.SetFromVector(
-            self._slip(c)[0]))
-        self.DeclareVectorOutputPort("wheel_lateral_slip", 4, lambda c, o: o.SetFromVector(
-            self._slip(c)[1]))
+        self.DeclareVectorOutputPort("wheel_slip_ratio", 4, lambda c, o: o.SetFromVector(
+            slip_ratio(*self._speeds(c)[:2])))
+        self.DeclareVectorOutputPort("wheel_slip_angle", 4, lambda c, o: o.SetFromVector(
+            slip_angle_deg(*self._speeds(c)[1:])))
 
     def forces(self, context) -> np.ndarray:
         """[4, 3]: the total contact force on each wheel in the world frame, N."""
@@ -91,14 +107,29 @@ class WheelContacts(LeafSystem):
     def _calc_loads(self, context, output):
         output.SetFromVector(self.forces(context)[:, 2])
 
-    def _slip(self, context) -> tuple[np.ndarray, np.ndarray]:
-        """(longitudinal, lateral) slip speeds of the four wheels, m/s."""
+    def _speeds(self, context) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(rim, ground along the heading, ground across it) speeds of the four wheels, m/s."""
         R = self._poses.Eval(context)[self._chassis].rotation().matrix()
         forward, left = R[:, 0], R[:, 1]
         velocities = self._velocities.Eval(context)
         rim = self._wheel_state.Eval(context)[4:] * dim.WHEEL_RADIUS
         v = np.array([velocities[i].translational() for i in self._wheels])
-        return v @ forward - rim, v @ left
+        return rim, v @ forward, v @ left
+
+
+def slip_ratio(rim, ground):
+    """Longitudinal slip ratio +-(rim - ground) / max(|rim|, |ground|, floor), signed by the
+    faster speed (module docstring): + traction, - braking, either way; speeds in m/s."""
+    rim, ground = np.asarray(rim, dtype=float), np.asarray(ground, dtype=float)
+    faster = np.where(np.abs(rim) >= np.abs(ground), rim, ground)
+    scale = np.maximum(np.abs(faster), SLIP_SPEED_FLOOR)
+    return np.sign(faster) * (rim - ground) / scale
+
+
+def slip_angle_deg(ground, lateral):
+    """Slip angle, deg in (-90, 90): atan2(lateral, max(|ground along the heading|, floor))."""
+    ground = np.maximum(np.abs(np.asarray(ground, dtype=float)), SLIP_SPEED_FLOOR)
+    return np.degrees(np.arctan2(lateral, ground))
 
 
 def add_wheel_contacts(builder, name: str, plant, chassis, wheels, wheel_state_port):
