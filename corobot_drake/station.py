@@ -260,10 +260,10 @@ def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None, foxglov
                                       selector.get_output_port())
         for port in ("wheel_loads", "wheel_slip_ratio", "wheel_slip_angle"):
             builder.ExportOutput(contacts.GetOutputPort(port), f"{name}.{port}")
-        tip_margin = add_tip_margin(builder, name, plant, instance,
-                                    {w: j.child_body() for w, j in zip(dim.WHEEL_NAMES, joints,
-                                                                       strict=True)},
-                                    TILT_SAMPLE_PERIOD)
+        tip_margin = add_tip_margin(
+            builder, name, plant, instance, chassis,
+            {w: j.child_body() for w, j in zip(dim.WHEEL_NAMES, joints, strict=True)},
+            chassis_pose, TILT_SAMPLE_PERIOD)
         for port in ("tip_margin", "min_tip_margin"):
             builder.ExportOutput(tip_margin.GetOutputPort(port), f"{name}.{port}")
         builder.Connect(source.GetOutputPort("request"), motion.GetInputPort("request"))

@@ -8,7 +8,6 @@ import numpy as np
 import pytest
 from pydrake.math import RigidTransform, RollPitchYaw
 from pydrake.multibody.plant import MultibodyPlant
-from pydrake.multibody.tree import BodyIndex
 
 from conftest import Stepper
 from corobot_drake.analysis import odometry_calibration as oc
@@ -253,19 +252,14 @@ def test_slip_ratio_signs_traction_plus_and_braking_minus_either_way():
 
 @pytest.fixture(scope="module")
 def robot_plant():
-    """A plant with the robot alone (default contact), its default context and its wheels."""
+    """A plant with the robot alone (default contact) and its default context, the robot's
+    model instance, chassis and wheels ({name: body})."""
     plant = MultibodyPlant(0.0)
     (instance,) = make_parser(plant).AddModelsFromString(corobot_sdf("corobot"), "sdf")
     plant.Finalize()
     wheels = {w: plant.GetBodyByName(f"{w}_wheel", instance) for w in dim.WHEEL_NAMES}
-    return plant, instance, wheels, plant.CreateDefaultContext()
-
-
-def body_poses(plant, context, X_WC: RigidTransform) -> list[RigidTransform]:
-    """Every body's pose with the robot (at its default configuration, chassis at the origin)
-    moved rigidly by X_WC."""
-    return [X_WC @ plant.EvalBodyPoseInWorld(context, plant.get_body(BodyIndex(i)))
-            for i in range(plant.num_bodies())]
+    return plant, plant.CreateDefaultContext(), instance, plant.GetBodyByName("chassis",
+                                                                              instance), wheels
 
 
 def about_line(point, rpy) -> RigidTransform:
@@ -276,18 +270,24 @@ def about_line(point, rpy) -> RigidTransform:
 
 
 def test_tip_margin_alone_follows_the_tilt_about_an_edge(robot_plant):
-    plant, instance, wheels, context = robot_plant
-    s = Stepper(TipMargin(plant, instance, wheels, PERIOD), PERIOD)
+    plant, context, instance, chassis, wheels = robot_plant
+    s = Stepper(TipMargin.of_robot(plant, instance, chassis, wheels, PERIOD), PERIOD)
     a, b, h = dim.HALF_WHEELBASE, dim.HALF_TRACK, com_height()
 
     def margin(X_WC):
-        s.fix("body_poses", body_poses(plant, context, X_WC))
+        s.fix("chassis_pose", X_WC)
         return s.output("tip_margin")[0]
 
-    # Its centre of mass is the plant's (all bodies, wheels included).
-    s.fix("body_poses", body_poses(plant, context, RigidTransform()))
+    # Its centre of mass is the plant's (all bodies, wheels included) at any chassis pose and
+    # wheel angles: the wheels turn about their own centres of mass.
+    X_WC = RigidTransform(RollPitchYaw(0.3, -0.2, 2.0), [3.0, -1.0, 0.5])
+    moved = plant.CreateDefaultContext()
+    plant.SetFreeBodyPose(moved, chassis, X_WC)
+    for k, w in enumerate(dim.WHEEL_NAMES):
+        plant.GetJointByName(f"{w}_axle", instance).set_angle(moved, 0.7 * k + 0.1)
+    s.fix("chassis_pose", X_WC)
     assert s.system.com(s.context) == pytest.approx(
-        plant.CalcCenterOfMassPositionInWorld(context, [instance]), abs=1e-12)
+        plant.CalcCenterOfMassPositionInWorld(moved, [instance]), abs=1e-12)
     # Upright: the pitch margin from the dimensions, wherever the robot stands and faces.
     # (Rigid geometry, no simulation: to 1e-9 deg.)
     upright = math.degrees(math.atan2(a, h))
@@ -308,9 +308,9 @@ def test_tip_margin_alone_follows_the_tilt_about_an_edge(robot_plant):
         assert margin(about_line([0, b, 0], [roll, 0, 0])) == pytest.approx(side + roll,
                                                                             abs=1e-9)
     # The least over the run: sampled every period from time 0, and the margin now.
-    s.fix("body_poses", body_poses(plant, context, about_line([0, b, 0], [-20.0, 0, 0])))
+    s.fix("chassis_pose", about_line([0, b, 0], [-20.0, 0, 0]))
     s.tick()
-    s.fix("body_poses", body_poses(plant, context, RigidTransform()))
+    s.fix("chassis_pose", RigidTransform())
     s.tick(3)
     assert s.output("tip_margin")[0] == pytest.approx(upright, abs=1e-9)
     assert s.output("min_tip_margin")[0] == pytest.approx(side - 20.0, abs=1e-9)
