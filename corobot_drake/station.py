@@ -255,9 +255,8 @@ def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None, foxglov
         builder.Connect(odometry.encoder_ticks, dead_reckoning.GetInputPort("encoder_ticks"))
         builder.Connect(chassis_pose, dead_reckoning.GetInputPort("chassis_pose"))
         builder.ExportOutput(dead_reckoning.GetOutputPort("pose"), f"{name}.odometry")
-        contacts = add_wheel_contacts(builder, name, plant, chassis,
-                                      [j.child_body() for j in joints],
-                                      selector.get_output_port())
+        contacts = add_wheel_contacts(builder, name, plant, [j.child_body() for j in joints],
+                                      chassis_pose, selector.get_output_port())
         for port in ("wheel_loads", "wheel_slip_ratio", "wheel_slip_angle"):
             builder.ExportOutput(contacts.GetOutputPort(port), f"{name}.{port}")
         tip_margin = add_tip_margin(
@@ -282,7 +281,11 @@ def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None, foxglov
         tilt = builder.AddNamedSystem(f"{name}.tilt_monitor", TiltMonitor(TILT_SAMPLE_PERIOD))
         builder.Connect(chassis_pose, tilt.GetInputPort("chassis_pose"))
         add_run_log(builder, name, chassis_pose, controller.GetOutputPort("drive_status"),
-                    odometry.encoder_ticks)
+                    odometry.encoder_ticks,
+                    {"wheel_loads": contacts.GetOutputPort("wheel_loads"),
+                     "wheel_slip_ratio": contacts.GetOutputPort("wheel_slip_ratio"),
+                     "wheel_slip_angle": contacts.GetOutputPort("wheel_slip_angle"),
+                     "tip_margin": tip_margin.GetOutputPort("tip_margin")})
         for port in ("drive_status", "axle_speed_command", "axle_speed"):
             builder.ExportOutput(controller.GetOutputPort(port), f"{name}.{port}")
         builder.ExportOutput(plant.get_state_output_port(instance), f"{name}.state")

@@ -17,6 +17,8 @@ from corobot_drake.systems.monitor import TiltMonitor
 from corobot_drake.systems.runlog import (
     COLUMNS,
     LOG_PERIOD,
+    SAMPLE_COLUMNS,
+    TELEMETRY,
     LogSample,
     RunLogSample,
     add_run_log,
@@ -65,7 +67,7 @@ def test_run_log_sample_reads_pose_status_and_encoders_by_name():
     system.GetInputPort("drive_status").FixValue(context, drive_status())
     system.GetInputPort("encoder_ticks").FixValue(context, [301.9999999999, -12.0000000001])
     sample = LogSample(system.GetOutputPort("sample").Eval(context))
-    assert LogSample.get_fields() == COLUMNS[1:]
+    assert LogSample.get_fields() == SAMPLE_COLUMNS[1:]
     assert (sample.left_power, sample.right_power) == (0.25, -0.5)
     assert (sample.left_ticks, sample.right_ticks) == (302.0, -12.0)  # whole ticks
     assert (sample.x, sample.y) == (1.25, -0.75)
@@ -78,17 +80,24 @@ def test_run_log_samples_every_log_period_and_writes_csv(tmp_path):
     pose = builder.AddSystem(ConstantValueSource(AbstractValue.Make(X)))
     status = builder.AddSystem(ConstantVectorSource(drive_status(left=1.0, right=1.0)))
     ticks = builder.AddSystem(ConstantVectorSource([600.0, 599.9999999999]))
+    # The telemetry ports: 4 loads, 4 slip ratios, 4 slip angles, the tip margin.
+    telemetry = {name: builder.AddSystem(ConstantVectorSource(
+        np.arange(len(columns)) + 10.0 * k)).get_output_port()
+        for k, (name, columns) in enumerate(TELEMETRY, start=1)}
     sink = add_run_log(builder, "robot", pose.get_output_port(), status.get_output_port(),
-                       ticks.get_output_port())
+                       ticks.get_output_port(), telemetry)
     diagram = builder.Build()
     simulator = Simulator(diagram)
     simulator.AdvanceTo(0.1)
     rows = log_rows(sink, simulator.get_context())
     assert rows.shape == (11, len(COLUMNS))  # t = 0, 0.01, ..., 0.1
     np.testing.assert_allclose(rows[:, 0], np.arange(11) * LOG_PERIOD, atol=1e-12)
-    np.testing.assert_allclose(rows[-1, 1:], [1.0, 1.0, 600, 600, 0.5, 0.25, -1.0], atol=1e-12)
+    np.testing.assert_allclose(rows[-1, 1:8], [1.0, 1.0, 600, 600, 0.5, 0.25, -1.0], atol=1e-12)
+    np.testing.assert_allclose(rows[-1, 8:], [10, 11, 12, 13, 20, 21, 22, 23, 30, 31, 32, 33,
+                                              40], atol=1e-12)  # in TELEMETRY's order
     path = tmp_path / "log.csv"
     write_csv(rows, path)
     lines = path.read_text().splitlines()
     assert lines[0] == ",".join(COLUMNS)
-    assert lines[-1] == "0.100000,1,1,600,600,0.500000,0.250000,-1.000000"
+    assert lines[-1] == ("0.100000,1,1,600,600,0.500000,0.250000,-1.000000,"
+                         "10,11,12,13,20,21,22,23,30,31,32,33,40")

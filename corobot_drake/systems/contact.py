@@ -23,11 +23,11 @@ velocities only, not the contact results.
 """
 
 import numpy as np
-from pydrake.common.value import AbstractValue
+from pydrake.common.value import AbstractValue, Value
 from pydrake.math import RigidTransform
 from pydrake.multibody.math import SpatialVelocity
 from pydrake.multibody.plant import ContactResults
-from pydrake.systems.framework import LeafSystem
+from pydrake.systems.framework import LeafSystem, ValueProducer
 
 from corobot_drake.model import dimensions as dim
 
@@ -46,7 +46,7 @@ class WheelContacts(LeafSystem):
         name: WheelContacts
         input_ports:
         - contact_results
-        - body_poses
+        - chassis_pose
         - body_spatial_velocities
         - wheel_state
         output_ports:
@@ -54,34 +54,40 @@ class WheelContacts(LeafSystem):
         - wheel_slip_ratio
         - wheel_slip_angle
 
-    Inputs: `contact_results` (abstract ContactResults of the plant), `body_poses` and
-    `body_spatial_velocities` (the plant's, indexed by BodyIndex), `wheel_state` [q, v] of the
-    four axles (rad, rad/s). Outputs (4 each, `dimensions.WHEEL_NAMES` order: front left,
-    front right, rear left, rear right): `wheel_loads` (N), `wheel_slip_ratio` (longitudinal,
-    dimensionless, + traction), `wheel_slip_angle` (deg, + moving to the left of the heading).
-    No state: the outputs are functions of the plant's latest step. Only `wheel_loads` reads
-    the contact results.
+    Inputs: `contact_results` (abstract ContactResults of the plant), `chassis_pose` (abstract
+    RigidTransform X_WC, from `odometry.ChassisPoses`), `body_spatial_velocities` (the
+    plant's, indexed by BodyIndex), `wheel_state` [q, v] of the four axles (rad, rad/s).
+    Outputs (4 each, `dimensions.WHEEL_NAMES` order: front left, front right, rear left, rear
+    right): `wheel_loads` (N), `wheel_slip_ratio` (longitudinal, dimensionless, + traction),
+    `wheel_slip_angle` (deg, + moving to the left of the heading). No state: the outputs are
+    functions of the plant's latest step. Only `wheel_loads` reads the contact results; the
+    slip's two ports share one computation (a cache entry).
     """
 
-    def __init__(self, plant, chassis, wheels):
+    def __init__(self, plant, wheels):
         super().__init__()
-        self._chassis = int(chassis.index())
         self._wheels = [int(w.index()) for w in wheels]
         self._wheel_of_body = {i: k for k, i in enumerate(self._wheels)}
         self._wheel_of_geometry = {g: k for k, w in enumerate(wheels)
                                    for g in plant.GetCollisionGeometriesForBody(w)}
         self._contacts = self.DeclareAbstractInputPort("contact_results",
                                                        AbstractValue.Make(ContactResults()))
-        self._poses = self.DeclareAbstractInputPort("body_poses",
-                                                    AbstractValue.Make([RigidTransform()]))
+        self._pose = self.DeclareAbstractInputPort("chassis_pose",
+                                                   AbstractValue.Make(RigidTransform()))
         self._velocities = self.DeclareAbstractInputPort(
             "body_spatial_velocities", AbstractValue.Make([SpatialVelocity()]))
         self._wheel_state = self.DeclareVectorInputPort("wheel_state", 8)
-        self.DeclareVectorOutputPort("wheel_loads", 4, self._calc_loads)
+        self.DeclareVectorOutputPort("wheel_loads", 4, self._calc_loads,
+                                     {self.input_port_ticket(self._contacts.get_index())})
+        self._slip = self.DeclareCacheEntry(
+            "slip", ValueProducer(allocate=lambda: Value(np.zeros(8)),
+                                  calc=lambda c, v: v.set_value(self._calc_slip(c))),
+            {self.input_port_ticket(port.get_index())
+             for port in (self._pose, self._velocities, self._wheel_state)})
         self.DeclareVectorOutputPort("wheel_slip_ratio", 4, lambda c, o: o.SetFromVector(
-            slip_ratio(*self._speeds(c)[:2])))
+            self._slip.Eval(c)[:4]), {self._slip.ticket()})
         self.DeclareVectorOutputPort("wheel_slip_angle", 4, lambda c, o: o.SetFromVector(
-            slip_angle_deg(*self._speeds(c)[1:])))
+            self._slip.Eval(c)[4:]), {self._slip.ticket()})
 
     def forces(self, context) -> np.ndarray:
         """[4, 3]: the total contact force on each wheel in the world frame, N."""
@@ -107,14 +113,14 @@ class WheelContacts(LeafSystem):
     def _calc_loads(self, context, output):
         output.SetFromVector(self.forces(context)[:, 2])
 
-    def _speeds(self, context) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(rim, ground along the heading, ground across it) speeds of the four wheels, m/s."""
-        R = self._poses.Eval(context)[self._chassis].rotation().matrix()
-        forward, left = R[:, 0], R[:, 1]
+    def _calc_slip(self, context) -> np.ndarray:
+        """[slip ratios (4), slip angles (4), deg] from the wheels' speeds."""
+        R = self._pose.Eval(context).rotation().matrix()
         velocities = self._velocities.Eval(context)
-        rim = self._wheel_state.Eval(context)[4:] * dim.WHEEL_RADIUS
         v = np.array([velocities[i].translational() for i in self._wheels])
-        return rim, v @ forward, v @ left
+        ground, lateral = v @ R[:, 0], v @ R[:, 1]  # along and across the heading, m/s
+        rim = self._wheel_state.Eval(context)[4:] * dim.WHEEL_RADIUS
+        return np.concatenate([slip_ratio(rim, ground), slip_angle_deg(ground, lateral)])
 
 
 def slip_ratio(rim, ground):
@@ -132,12 +138,12 @@ def slip_angle_deg(ground, lateral):
     return np.degrees(np.arctan2(lateral, ground))
 
 
-def add_wheel_contacts(builder, name: str, plant, chassis, wheels, wheel_state_port):
-    """Adds `<name>.wheel_contacts` fed by the plant and `wheel_state_port`; returns it."""
-    system = builder.AddNamedSystem(f"{name}.wheel_contacts",
-                                    WheelContacts(plant, chassis, wheels))
+def add_wheel_contacts(builder, name: str, plant, wheels, chassis_pose_port, wheel_state_port):
+    """Adds `<name>.wheel_contacts` fed by the plant, `chassis_pose_port` and
+    `wheel_state_port`; returns it."""
+    system = builder.AddNamedSystem(f"{name}.wheel_contacts", WheelContacts(plant, wheels))
     for port_name, port in (("contact_results", plant.get_contact_results_output_port()),
-                            ("body_poses", plant.get_body_poses_output_port()),
+                            ("chassis_pose", chassis_pose_port),
                             ("body_spatial_velocities",
                              plant.get_body_spatial_velocities_output_port()),
                             ("wheel_state", wheel_state_port)):

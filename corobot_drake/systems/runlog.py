@@ -3,15 +3,21 @@
 Each robot of a station carries a `RunLogSample` system (named `<robot>.run_log_sample`)
 feeding a Drake `VectorLogSink` (`<robot>.run_log`) that samples it every `LOG_PERIOD` s. The
 log lives in the Context, like the rest of the run. `write_csv` writes it in the CSV format that
-`corobot_drake.analysis.sysid` reads (columns documented in docs/tuning.md):
+`corobot_drake.analysis.sysid` reads (columns documented in docs/tuning.md), then the
+simulation's contact telemetry, which no real logger has:
 
-    time,left_power,right_power,left_ticks,right_ticks,x,y,yaw
+    time,left_power,right_power,left_ticks,right_ticks,x,y,yaw,
+    load_fl,load_fr,load_rl,load_rr,slip_ratio_fl,...,slip_angle_fl,...,tip_margin
 
 - time: s. left_power, right_power: the drive's commanded power per side in [-1, 1].
 - left_ticks, right_ticks: front-left / front-right encoder counts, `ENCODER_TICKS_PER_REVOLUTION`
   (600) per wheel revolution, floor(600 q / 2 pi) of the integrated wheel angle q (forward
   rolling counts up): the odometry's encoders (`odometry.add_wheel_encoders`).
 - x, y: chassis position in the world, m. yaw: chassis heading about world z, rad, in (-pi, pi].
+- load_*, slip_ratio_*, slip_angle_*: per wheel (fl front left, fr, rl, rr), N,
+  dimensionless (+ traction), deg (+ to the left): `contact.WheelContacts`. tip_margin: deg,
+  `stability.TipMargin`. They go into the sink straight from those systems' ports (a
+  Multiplexer); the tip margin is cached for the step, shared with its running minimum.
 """
 
 from pathlib import Path
@@ -21,8 +27,9 @@ from pydrake.common.containers import namedview
 from pydrake.common.value import AbstractValue
 from pydrake.math import RigidTransform
 from pydrake.systems.framework import BasicVector, LeafSystem
-from pydrake.systems.primitives import LogVectorOutput
+from pydrake.systems.primitives import LogVectorOutput, Multiplexer
 
+from corobot_drake.model import dimensions as dim
 from corobot_drake.systems.drive import DriveStatus
 from corobot_drake.systems.odometry import heading_of
 
@@ -31,10 +38,20 @@ LOG_PERIOD = 0.01
 RUN_LOG_CHUNK = 1000
 """Samples (10 s at 100 Hz) moved out of the sink at a time when the run log is bounded
 (`Simulation.run_log_window`)."""
-COLUMNS = ("time", "left_power", "right_power", "left_ticks", "right_ticks", "x", "y", "yaw")
+SAMPLE_COLUMNS = ("time", "left_power", "right_power", "left_ticks", "right_ticks", "x", "y",
+                  "yaw")
+"""What a real Corobot's logger records (the `RunLogSample`, after the sink's time)."""
+_WHEELS = tuple("".join(word[0] for word in name.split("_")) for name in dim.WHEEL_NAMES)
+TELEMETRY = (("wheel_loads", tuple(f"load_{w}" for w in _WHEELS)),
+             ("wheel_slip_ratio", tuple(f"slip_ratio_{w}" for w in _WHEELS)),
+             ("wheel_slip_angle", tuple(f"slip_angle_{w}" for w in _WHEELS)),
+             ("tip_margin", ("tip_margin",)))
+"""(robot port, its columns) of the contact telemetry, in the log's order."""
+COLUMNS = SAMPLE_COLUMNS + tuple(c for _, columns in TELEMETRY for c in columns)
 
-LogSample = namedview("LogSample", COLUMNS[1:])
-"""`RunLogSample`'s output, read by name: the `COLUMNS` after time (the sink adds time)."""
+LogSample = namedview("LogSample", SAMPLE_COLUMNS[1:])
+"""`RunLogSample`'s output, read by name: the `SAMPLE_COLUMNS` after time (the sink adds
+time)."""
 
 
 class RunLogSample(LeafSystem):
@@ -77,14 +94,22 @@ class RunLogSample(LeafSystem):
         output.SetFromVector([sample[field] for field in LogSample.get_fields()])
 
 
-def add_run_log(builder, name: str, chassis_pose_port, drive_status_port, encoder_ticks_port):
-    """Adds `<name>.run_log_sample` and its sink `<name>.run_log`; returns the sink."""
+def add_run_log(builder, name: str, chassis_pose_port, drive_status_port, encoder_ticks_port,
+                telemetry_ports: dict):
+    """Adds `<name>.run_log_sample`, `<name>.run_log_row` (a Multiplexer of the sample and the
+    `telemetry_ports`, {`TELEMETRY` port name: output port}) and its sink `<name>.run_log`;
+    returns the sink."""
     sample = builder.AddNamedSystem(f"{name}.run_log_sample", RunLogSample())
     for port_name, port in (("chassis_pose", chassis_pose_port),
                             ("drive_status", drive_status_port),
                             ("encoder_ticks", encoder_ticks_port)):
         builder.Connect(port, sample.GetInputPort(port_name))
-    sink = LogVectorOutput(sample.get_output_port(), builder, LOG_PERIOD)
+    sizes = [len(SAMPLE_COLUMNS) - 1, *(len(columns) for _, columns in TELEMETRY)]
+    row = builder.AddNamedSystem(f"{name}.run_log_row", Multiplexer(sizes))
+    builder.Connect(sample.get_output_port(), row.get_input_port(0))
+    for k, (port_name, _) in enumerate(TELEMETRY, start=1):
+        builder.Connect(telemetry_ports[port_name], row.get_input_port(k))
+    sink = LogVectorOutput(row.get_output_port(), builder, LOG_PERIOD)
     sink.set_name(f"{name}.run_log")
     return sink
 
@@ -100,5 +125,6 @@ def write_csv(rows: np.ndarray, path: str | Path) -> None:
     """Writes run-log rows (from `log_rows`) as CSV with a header line."""
     with open(path, "w") as f:
         f.write(",".join(COLUMNS) + "\n")
-        for t, pl, pr, tl, tr, x, y, yaw in rows:
-            f.write(f"{t:.6f},{pl:.6g},{pr:.6g},{int(tl)},{int(tr)},{x:.6f},{y:.6f},{yaw:.6f}\n")
+        for t, pl, pr, tl, tr, x, y, yaw, *telemetry in rows:
+            f.write(f"{t:.6f},{pl:.6g},{pr:.6g},{int(tl)},{int(tr)},{x:.6f},{y:.6f},{yaw:.6f}")
+            f.write("".join(f",{v:.6g}" for v in telemetry) + "\n")

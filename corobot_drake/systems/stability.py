@@ -90,10 +90,13 @@ class TipMargin(LeafSystem):
                                                    AbstractValue.Make(RigidTransform()))
         self._least = self.DeclareDiscreteState([math.inf])
         self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._sample)
-        self.DeclareVectorOutputPort("tip_margin", 1, lambda c, o: o.SetAtIndex(
-            0, self.margin(c)))
+        # A function of the pose alone: cached until the pose changes, so the sample, the
+        # run log and the summary share one computation a step.
+        self._margin = self.DeclareVectorOutputPort(
+            "tip_margin", 1, lambda c, o: o.SetAtIndex(0, self.margin(c)),
+            {self.input_port_ticket(self._pose.get_index())})
         self.DeclareVectorOutputPort("min_tip_margin", 1, lambda c, o: o.SetAtIndex(
-            0, min(c.get_discrete_state(self._least).GetAtIndex(0), self.margin(c))))
+            0, min(c.get_discrete_state(self._least).GetAtIndex(0), self._margin.Eval(c)[0])))
 
     @classmethod
     def of_robot(cls, plant, model_instance, chassis, wheels: dict, period: float):
@@ -129,7 +132,7 @@ class TipMargin(LeafSystem):
 
     def _sample(self, context, discrete_state):
         least = context.get_discrete_state(self._least).GetAtIndex(0)
-        discrete_state.set_value(self._least, [min(least, self.margin(context))])
+        discrete_state.set_value(self._least, [min(least, self._margin.Eval(context)[0])])
 
 
 def add_tip_margin(builder, name: str, plant, model_instance, chassis, wheels: dict,
