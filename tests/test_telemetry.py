@@ -238,28 +238,30 @@ def test_odometry_in_the_simulation_is_calibrated_and_the_nominal_one_overcounts
 # --- the systems alone ---------------------------------------------------------------------
 
 def test_slip_ratio_signs_traction_plus_and_braking_minus_either_way():
-    rim = np.array([0.3, -0.3, 0.0, 0.0, 0.3, -0.3, 0.61, 1e-6])
-    ground = np.array([0.0, 0.0, 0.3, -0.3, 0.3, -0.3, 0.6, 0.0])
+    rim = [0.3, -0.3, 0.0, 0.0, 0.3, -0.3, 0.61, 1e-6, 0.3]
+    ground = [0.0, 0.0, 0.3, -0.3, 0.3, -0.3, 0.6, 0.0, -0.1]
     # spinning on the spot +1 (both ways), locked -1 (both ways), rolling 0, rolling free at
-    # top speed on a tyre 1/61 smaller +1/61, a creep below the floor ~0.
-    assert contact.slip_ratio(rim, ground) == pytest.approx(
-        [1, 1, -1, -1, 0, 0, 0.01 / 0.61, 1e-6 / contact.SLIP_SPEED_FLOOR], abs=1e-12)
+    # top speed on a tyre 1/61 smaller +1/61, a creep below the floor ~0, turning against the
+    # travel beyond 1.
+    assert [contact.slip_ratio(r, g) for r, g in zip(rim, ground, strict=True)] == \
+        pytest.approx([1, 1, -1, -1, 0, 0, 0.01 / 0.61, 1e-6 / contact.SLIP_SPEED_FLOOR, 4 / 3],
+                      abs=1e-12)
     # Sideways 0.1 m/s at 0.1 m/s forwards or backwards: 45 deg to the left; at rest the
     # floor keeps a creep's angle small.
-    assert contact.slip_angle_deg([0.1, -0.1, 0.0], [0.1, 0.1, 1e-5]) == pytest.approx(
-        [45.0, 45.0, math.degrees(math.atan2(1e-5, contact.SLIP_SPEED_FLOOR))], abs=1e-12)
+    assert [contact.slip_angle_deg(g, v) for g, v in ((0.1, 0.1), (-0.1, 0.1), (0.0, 1e-5))] \
+        == pytest.approx([45.0, 45.0, math.degrees(math.atan2(1e-5, contact.SLIP_SPEED_FLOOR))],
+                         abs=1e-12)
 
 
 @pytest.fixture(scope="module")
 def robot_plant():
-    """A plant with the robot alone (default contact) and its default context, the robot's
-    model instance, chassis and wheels ({name: body})."""
+    """A plant with the robot alone (default contact), the robot's model instance, chassis
+    and wheels ({name: body})."""
     plant = MultibodyPlant(0.0)
     (instance,) = make_parser(plant).AddModelsFromString(corobot_sdf("corobot"), "sdf")
     plant.Finalize()
     wheels = {w: plant.GetBodyByName(f"{w}_wheel", instance) for w in dim.WHEEL_NAMES}
-    return plant, plant.CreateDefaultContext(), instance, plant.GetBodyByName("chassis",
-                                                                              instance), wheels
+    return plant, instance, plant.GetBodyByName("chassis", instance), wheels
 
 
 def about_line(point, rpy) -> RigidTransform:
@@ -270,7 +272,7 @@ def about_line(point, rpy) -> RigidTransform:
 
 
 def test_tip_margin_alone_follows_the_tilt_about_an_edge(robot_plant):
-    plant, context, instance, chassis, wheels = robot_plant
+    plant, instance, chassis, wheels = robot_plant
     s = Stepper(TipMargin.of_robot(plant, instance, chassis, wheels, PERIOD), PERIOD)
     a, b, h = dim.HALF_WHEELBASE, dim.HALF_TRACK, com_height()
 

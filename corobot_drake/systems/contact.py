@@ -22,6 +22,8 @@ rigid body against a tyre) both count for the loads. The slip is kinematic: it n
 velocities only, not the contact results.
 """
 
+import math
+
 import numpy as np
 from pydrake.common.value import AbstractValue, Value
 from pydrake.math import RigidTransform
@@ -80,7 +82,7 @@ class WheelContacts(LeafSystem):
         self.DeclareVectorOutputPort("wheel_loads", 4, self._calc_loads,
                                      {self.input_port_ticket(self._contacts.get_index())})
         self._slip = self.DeclareCacheEntry(
-            "slip", ValueProducer(allocate=lambda: Value(np.zeros(8)),
+            "slip", ValueProducer(allocate=lambda: Value([0.0] * 8),
                                   calc=lambda c, v: v.set_value(self._calc_slip(c))),
             {self.input_port_ticket(port.get_index())
              for port in (self._pose, self._velocities, self._wheel_state)})
@@ -113,29 +115,32 @@ class WheelContacts(LeafSystem):
     def _calc_loads(self, context, output):
         output.SetFromVector(self.forces(context)[:, 2])
 
-    def _calc_slip(self, context) -> np.ndarray:
-        """[slip ratios (4), slip angles (4), deg] from the wheels' speeds."""
-        R = self._pose.Eval(context).rotation().matrix()
+    def _calc_slip(self, context) -> list[float]:
+        """[slip ratios (4), slip angles (4), deg] from the wheels' speeds. Plain floats: on
+        four wheels numpy's per-call overhead costs more than the sums, every step."""
+        R = self._pose.Eval(context).rotation().matrix().tolist()
+        (fx, lx), (fy, ly), (fz, lz) = (row[:2] for row in R)  # heading and left, world
         velocities = self._velocities.Eval(context)
-        v = np.array([velocities[i].translational() for i in self._wheels])
-        ground, lateral = v @ R[:, 0], v @ R[:, 1]  # along and across the heading, m/s
-        rim = self._wheel_state.Eval(context)[4:] * dim.WHEEL_RADIUS
-        return np.concatenate([slip_ratio(rim, ground), slip_angle_deg(ground, lateral)])
+        axles = self._wheel_state.Eval(context)[4:].tolist()
+        ratios, angles = [], []
+        for i, omega in zip(self._wheels, axles, strict=True):
+            vx, vy, vz = velocities[i].translational().tolist()
+            ground, lateral = fx * vx + fy * vy + fz * vz, lx * vx + ly * vy + lz * vz  # m/s
+            ratios.append(slip_ratio(omega * dim.WHEEL_RADIUS, ground))
+            angles.append(slip_angle_deg(ground, lateral))
+        return ratios + angles
 
 
-def slip_ratio(rim, ground):
+def slip_ratio(rim: float, ground: float) -> float:
     """Longitudinal slip ratio +-(rim - ground) / max(|rim|, |ground|, floor), signed by the
     faster speed (module docstring): + traction, - braking, either way; speeds in m/s."""
-    rim, ground = np.asarray(rim, dtype=float), np.asarray(ground, dtype=float)
-    faster = np.where(np.abs(rim) >= np.abs(ground), rim, ground)
-    scale = np.maximum(np.abs(faster), SLIP_SPEED_FLOOR)
-    return np.sign(faster) * (rim - ground) / scale
+    faster = rim if abs(rim) >= abs(ground) else ground
+    return math.copysign(1.0, faster) * (rim - ground) / max(abs(faster), SLIP_SPEED_FLOOR)
 
 
-def slip_angle_deg(ground, lateral):
+def slip_angle_deg(ground: float, lateral: float) -> float:
     """Slip angle, deg in (-90, 90): atan2(lateral, max(|ground along the heading|, floor))."""
-    ground = np.maximum(np.abs(np.asarray(ground, dtype=float)), SLIP_SPEED_FLOOR)
-    return np.degrees(np.arctan2(lateral, ground))
+    return math.degrees(math.atan2(lateral, max(abs(ground), SLIP_SPEED_FLOOR)))
 
 
 def add_wheel_contacts(builder, name: str, plant, wheels, chassis_pose_port, wheel_state_port):

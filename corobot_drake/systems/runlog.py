@@ -27,7 +27,7 @@ from pydrake.common.containers import namedview
 from pydrake.common.value import AbstractValue
 from pydrake.math import RigidTransform
 from pydrake.systems.framework import BasicVector, LeafSystem
-from pydrake.systems.primitives import LogVectorOutput, Multiplexer
+from pydrake.systems.primitives import LogVectorOutput, Multiplexer, ZeroOrderHold
 
 from corobot_drake.model import dimensions as dim
 from corobot_drake.systems.drive import DriveStatus
@@ -47,6 +47,13 @@ TELEMETRY = (("wheel_loads", tuple(f"load_{w}" for w in _WHEELS)),
              ("wheel_slip_angle", tuple(f"slip_angle_{w}" for w in _WHEELS)),
              ("tip_margin", ("tip_margin",)))
 """(robot port, its columns) of the contact telemetry, in the log's order."""
+HELD_PERIOD = 0.1
+"""s: the loads and the slip are sampled every 0.1 s (10 Hz) and held between (ZeroOrderHolds):
+every 10 ms step the loads (the plant's contact results) cost ~17% more CPU time a step, the
+slip (the bodies' velocities) ~5% (docs/commands.md, "Contact telemetry"). A row's loads and
+slip are those of the latest 0.1 s sample; its tip margin is the step's (the running minimum
+computes it every step anyway)."""
+HELD = ("wheel_loads", "wheel_slip_ratio", "wheel_slip_angle")
 COLUMNS = SAMPLE_COLUMNS + tuple(c for _, columns in TELEMETRY for c in columns)
 
 LogSample = namedview("LogSample", SAMPLE_COLUMNS[1:])
@@ -97,8 +104,8 @@ class RunLogSample(LeafSystem):
 def add_run_log(builder, name: str, chassis_pose_port, drive_status_port, encoder_ticks_port,
                 telemetry_ports: dict):
     """Adds `<name>.run_log_sample`, `<name>.run_log_row` (a Multiplexer of the sample and the
-    `telemetry_ports`, {`TELEMETRY` port name: output port}) and its sink `<name>.run_log`;
-    returns the sink."""
+    `telemetry_ports`, {`TELEMETRY` port name: output port}; the `HELD` ones through holds
+    `<name>.run_log_<port>`) and its sink `<name>.run_log`; returns the sink."""
     sample = builder.AddNamedSystem(f"{name}.run_log_sample", RunLogSample())
     for port_name, port in (("chassis_pose", chassis_pose_port),
                             ("drive_status", drive_status_port),
@@ -107,8 +114,14 @@ def add_run_log(builder, name: str, chassis_pose_port, drive_status_port, encode
     sizes = [len(SAMPLE_COLUMNS) - 1, *(len(columns) for _, columns in TELEMETRY)]
     row = builder.AddNamedSystem(f"{name}.run_log_row", Multiplexer(sizes))
     builder.Connect(sample.get_output_port(), row.get_input_port(0))
-    for k, (port_name, _) in enumerate(TELEMETRY, start=1):
-        builder.Connect(telemetry_ports[port_name], row.get_input_port(k))
+    for k, (port_name, columns) in enumerate(TELEMETRY, start=1):
+        port = telemetry_ports[port_name]
+        if port_name in HELD:
+            hold = builder.AddNamedSystem(f"{name}.run_log_{port_name}",
+                                          ZeroOrderHold(HELD_PERIOD, len(columns)))
+            builder.Connect(port, hold.get_input_port())
+            port = hold.get_output_port()
+        builder.Connect(port, row.get_input_port(k))
     sink = LogVectorOutput(row.get_output_port(), builder, LOG_PERIOD)
     sink.set_name(f"{name}.run_log")
     return sink

@@ -1,22 +1,24 @@
 """The tip-over margin: how far the robot can still roll or pitch before it tips over.
 
-The static stability margin of the support polygon: for each edge of the polygon the wheels'
-ground contact points make (front, rear, left, right), the rotation about that edge that would
-bring the robot's centre of mass (all its bodies, wheels included) into the vertical plane
-through the edge; the margin is the least of them, deg. Upright at rest on level ground it is
-the pitch one, atan(half wheelbase / CoM height) = 37.4 deg (the roll one, atan(half track /
-CoM height), is 42.9); negative once the CoM is outside the polygon (tipping).
+The static stability margin of the support polygon: for each edge of the rectangle the
+wheels' ground contact points make (front, rear, left, right), the rotation about that edge
+that would bring the robot's centre of mass (all its bodies, wheels included) into the vertical
+plane through the edge; the margin is the least of them, deg. Upright at rest on level ground it
+is the pitch one, atan(half wheelbase / CoM height) = 37.4 deg (the roll one, atan(half track /
+CoM height), is 42.9); 0 as the CoM passes over an edge, negative beyond (tipping).
 
-- Contact points: each wheel's lowest point, the bottom of its tyre's mid-plane circle (the
-  wheel centre, one nominal radius down), from the chassis pose alone: no contact results, so
-  the margin costs what a pose does.
+- Contact points: each wheel's lowest point, the bottom of its tyre's mid-plane circle (one
+  nominal radius from the wheel centre, straight down in the plane of the wheel), from the
+  chassis pose alone: no contact results, so the margin costs what a pose does.
 - Every wheel counts, in contact or not. A rigid robot tips about the edge between the wheels
   that still bear; lifting the others only turns it about that edge, whose margin the least
-  already is, so the margin falls to 0 exactly as it goes over. (It would count a wheel that
-  hangs over a drop, which the scenes here do not have.)
-- A rigid measure, conservative: a round tyre rolls its contact point on under the axle as
-  the chassis pitches (over a locked wheel the robot goes at atan(a / (h - R)) = 57 deg), and
-  the rolled tyre's outer edge widens the track by its half width.
+  already is. (It would count a wheel that hangs over a drop, which the scenes here do not
+  have.)
+- An instantaneous measure: the rotation about the present edge. Pitching, a round tyre rolls
+  its contact point on under the axle, so the margin falls by ~0.68 deg per degree of pitch at
+  first and reaches 0 where the robot really goes over (CoM above the axle: 57 deg from rest).
+  Rolling, the tyre's outer edge bears, not its mid-plane: the margin is 0 a half tyre width
+  (28 mm) early, conservative.
 """
 
 import math
@@ -27,33 +29,6 @@ from pydrake.math import RigidTransform
 from pydrake.systems.framework import LeafSystem
 
 from corobot_drake.model import dimensions as dim
-
-SUPPORT_ORDER = ("front_left", "rear_left", "rear_right", "front_right")
-"""The wheels round the support polygon (anticlockwise seen from above, upright)."""
-
-
-def tip_margin_deg(com, contacts) -> float:
-    """The least rotation (deg) about an edge of the polygon through `contacts` (k points,
-    world, in order round it) that brings `com` (world) over that edge; negative outside it.
-    Plain floats (lists are fastest): on four 3-vectors numpy's per-call overhead costs more
-    than the sums, and this runs every step."""
-    cx, cy, cz = com
-    points = [tuple(p) for p in contacts]
-    mx, my, mz = (sum(p[i] for p in points) / len(points) for i in range(3))
-    least = math.inf
-    for (px, py, pz), (qx, qy, qz) in zip(points, points[1:] + points[:1], strict=True):
-        ax, ay, az = qx - px, qy - py, qz - pz
-        norm = math.sqrt(ax * ax + ay * ay + az * az)
-        ax, ay, az = ax / norm, ay / norm, az / norm
-        vx, vy, vz = -az * ax, -az * ay, 1.0 - az * az  # the upward direction about the edge
-        norm = math.sqrt(vx * vx + vy * vy + vz * vz)
-        vx, vy, vz = vx / norm, vy / norm, vz / norm
-        ix, iy, iz = vy * az - vz * ay, vz * ax - vx * az, vx * ay - vy * ax  # vertical x axis
-        if (mx - px) * ix + (my - py) * iy + (mz - pz) * iz < 0:  # towards the inside
-            ix, iy, iz = -ix, -iy, -iz
-        lx, ly, lz = cx - px, cy - py, cz - pz
-        least = min(least, math.atan2(lx * ix + ly * iy + lz * iz, lx * vx + ly * vy + lz * vz))
-    return math.degrees(least)
 
 
 class TipMargin(LeafSystem):
@@ -74,17 +49,23 @@ class TipMargin(LeafSystem):
 
     The robot is rigid but for its wheels turning on their axles, which pass through their
     centres of mass: its centre of mass `com_C` and the wheel centres `wheel_centers_C` (m)
-    are fixed in the chassis frame C, and the axles lie along C's y (`of_robot` reads them
-    from a plant). So the chassis pose alone places them, as cheaply as the tilt monitor's.
+    are fixed in the chassis frame C, the centres make a rectangle square to C's axes and the
+    axles lie along C's y (`of_robot` reads them from a plant). So the chassis' tilt alone
+    places the support and the CoM, and the margin is a few sums in C (every step: the
+    running minimum's sample, the run log).
     """
 
-    def __init__(self, com_C, wheel_centers_C, period: float,
+    def __init__(self, com_C, wheel_centers_C: dict, period: float,
                  wheel_radius: float = dim.WHEEL_RADIUS):
-        """`wheel_centers_C`: {wheel name: centre} (`dimensions.WHEEL_NAMES`)."""
+        """`wheel_centers_C`: {wheel name: centre}, `dimensions.WHEEL_NAMES`."""
         super().__init__()
-        self._com_C = np.asarray(com_C, dtype=float).tolist()
-        self._centers_C = [np.asarray(wheel_centers_C[name], dtype=float).tolist()
-                           for name in SUPPORT_ORDER]
+        self._com_C = [float(x) for x in com_C]
+        c = {name: [float(x) for x in p] for name, p in wheel_centers_C.items()}
+        self._front = (c["front_left"][0] + c["front_right"][0]) / 2  # edges' x and y, m
+        self._rear = (c["rear_left"][0] + c["rear_right"][0]) / 2
+        self._left = (c["front_left"][1] + c["rear_left"][1]) / 2
+        self._right = (c["front_right"][1] + c["rear_right"][1]) / 2
+        self._axle_z = sum(p[2] for p in c.values()) / len(c)
         self._radius = wheel_radius
         self._pose = self.DeclareAbstractInputPort("chassis_pose",
                                                    AbstractValue.Make(RigidTransform()))
@@ -114,21 +95,23 @@ class TipMargin(LeafSystem):
         return self._pose.Eval(context) @ np.array(self._com_C)
 
     def margin(self, context) -> float:
-        """The tip-over margin now, deg (plain floats, as `tip_margin_deg`)."""
-        R = self._pose.Eval(context).rotation().matrix().tolist()
-
-        def rotate(p):  # about the chassis origin: the margin needs no translation
-            return [R[0][0] * p[0] + R[0][1] * p[1] + R[0][2] * p[2],
-                    R[1][0] * p[0] + R[1][1] * p[1] + R[1][2] * p[2],
-                    R[2][0] * p[0] + R[2][1] * p[1] + R[2][2] * p[2]]
-
-        ax, ay, az = R[0][1], R[1][1], R[2][1]  # the axles' direction
-        dx, dy, dz = az * ax, az * ay, az * az - 1.0  # towards each tyre's bottom, in its plane
-        length = math.sqrt(dx * dx + dy * dy + dz * dz)
-        scale = self._radius / length if length > 1e-9 else 0.0  # 0: lying on its side
-        bottoms = [[x + scale * dx, y + scale * dy, z + scale * dz]
-                   for x, y, z in map(rotate, self._centers_C)]
-        return tip_margin_deg(rotate(self._com_C), bottoms)
+        """The tip-over margin now, deg. In C: u is the world's up; each edge's margin is
+        atan2(lever . inward, lever . up about the edge), the lever from the edge to the CoM,
+        both directions in the plane square to the edge, unnormalized (atan2 needs no norm).
+        Plain floats: numpy's per-call overhead would cost more than the sums, every step."""
+        ux, uy, uz = self._pose.Eval(context).rotation().matrix()[2].tolist()  # R^T z
+        across = math.hypot(ux, uz)
+        # The tyres' bottoms: down in the wheel's plane (x-z of C), a radius from the axle.
+        scale = self._radius / across if across > 1e-9 else 0.0  # 0: lying on its side
+        cx, cy, cz = self._com_C
+        lz = cz - (self._axle_z - scale * uz)  # CoM above the bottoms, along C's z
+        front, rear = cx - (self._front - scale * ux), cx - (self._rear - scale * ux)
+        left, right = cy - self._left, cy - self._right
+        return math.degrees(min(
+            math.atan2(lz * ux - front * uz, front * ux + lz * uz),  # inward -x
+            math.atan2(rear * uz - lz * ux, rear * ux + lz * uz),  # inward +x
+            math.atan2(lz * uy - left * uz, left * uy + lz * uz),  # inward -y
+            math.atan2(right * uz - lz * uy, right * uy + lz * uz)))  # inward +y
 
     def _sample(self, context, discrete_state):
         least = context.get_discrete_state(self._least).GetAtIndex(0)
