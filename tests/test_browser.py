@@ -68,6 +68,11 @@ def test_dashboard_drives_with_the_pad_and_shows_the_camera(page, server):
     page.wait_for_selector("body[data-ready='1']", timeout=30000)
     wait_for(lambda: page.locator("#pos-x").inner_text() != "-", 10, "the first state")
     x0 = number(page, "#pos-x")
+    # The contact panel: at rest the four loads carry the 4.03 kg robot (3%), upright.
+    loads = [f"#load-{w}" for w in ("fl", "fr", "rl", "rr")]
+    wait_for(lambda: abs(sum(number(page, w) for w in loads) - 4.03 * 9.81) < 1.2, 10,
+             "the wheel loads")
+    assert number(page, "#tip-margin") == pytest.approx(37.4, abs=0.2)
     camera = page.locator("#camera")
     has_camera = "no camera" not in page.locator("#camera-info").inner_text() or \
         wait_for(lambda: int(camera.get_attribute("data-frames")) > 0, 10, "a camera frame")

@@ -142,6 +142,22 @@ def test_drive_state_four_wheel_and_two_wheel(http):
     assert two["distance_between_wheels"] == d["distance_between_wheels"]
     encoders = http.get(f"{ROBOT}/encoders").json()
     assert encoders["ticks_per_revolution"] == 600 and "front_left" in encoders
+
+
+def test_drive_state_carries_the_contact_telemetry(http, caps):
+    reset(http, caps)
+    wait_sim(http, 0.5)  # settled on its tyres
+    d = http.get(f"{ROBOT}/drive").json()
+    wheels = d["wheels"].values()
+    # At rest: the loads carry the robot's 4.03 kg (3%: the tolerance; a set_pose
+    # just before may leave it settling), no slip (creep ~1e-5 m/s against a 1 cm/s floor),
+    # the upright tip margin (37.4 deg; 0.1 deg for the settling).
+    assert sum(w["load"] for w in wheels) == pytest.approx(4.03 * 9.81, rel=0.03)
+    assert all(abs(w["slip_ratio"]) < 1e-3 and abs(w["slip_angle_deg"]) < 0.2 for w in wheels)
+    assert d["tip_margin_deg"] == pytest.approx(37.41, abs=0.1)
+    assert d["min_tip_margin_deg"] <= d["tip_margin_deg"]
+    assert http.get(f"{ROBOT}/drive/two_wheel").json()["left"]["load"] == \
+        pytest.approx(d["wheels"]["front_left"]["load"], rel=0.05)
     assert "heading" in http.get(f"{ROBOT}/compass").json()
     assert {"x", "y", "z"} <= set(http.get(f"{ROBOT}/gps").json())
 

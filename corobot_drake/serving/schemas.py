@@ -91,6 +91,11 @@ class Wheel(BaseModel):
     commanded_power: float = Field(description="in [-1, 1]")
     axle_speed: float = Field(description="measured, rad/s")
     encoder_ticks: int | None = Field(None, description="front wheels only")
+    load: float | None = Field(None, description="N: the wheel's vertical contact force")
+    slip_ratio: float | None = Field(
+        None, description="(rim speed - ground speed) / the faster: + traction, - braking")
+    slip_angle_deg: float | None = Field(
+        None, description="deg: the wheel's travel from its heading, + to the left")
 
 
 class Position(BaseModel):
@@ -124,6 +129,10 @@ class DriveState(BaseModel):
     pose: dict[str, float]
     velocity: dict[str, float]
     command: CommandStatus | None
+    tip_margin_deg: float = Field(
+        description="deg: the roll or pitch left before the centre of mass passes an edge of "
+                    "the wheels' support (37.4 upright on level ground)")
+    min_tip_margin_deg: float = Field(description="deg: the least tip_margin_deg so far")
 
 
 class TwoWheelState(BaseModel):

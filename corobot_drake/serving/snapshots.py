@@ -68,12 +68,16 @@ def command_json(record) -> dict:
 
 def drive_state(robot, time: float) -> dict:
     """The drive contract's four-wheel state (MRDS DriveDifferentialFourWheelState in SI
-    units): the Python API's `drive_state()` fields, plus pose, velocity and the latest
-    command."""
+    units): the Python API's `drive_state()` fields, plus pose, velocity, the latest command
+    and the contact telemetry (each wheel's load N, slip ratio and slip angle deg; the tip
+    margin deg, now and its least so far: `systems.contact`, `systems.stability`)."""
     native = robot.drive_state()
+    loads, ratios, angles = robot.wheel_loads(), robot.wheel_slip_ratio(), robot.wheel_slip_angle()
     wheels = {name: {"commanded_power": float(w.commanded_power),
                      "axle_speed": float(w.axle_speed),
-                     "encoder_ticks": w.encoder_ticks}
+                     "encoder_ticks": w.encoder_ticks,
+                     "load": loads[name], "slip_ratio": ratios[name],
+                     "slip_angle_deg": angles[name]}
               for name, w in native.wheels.items()}
     x, y, z = native.position
     heading = float(native.heading)
@@ -92,6 +96,8 @@ def drive_state(robot, time: float) -> dict:
         "pose": dc.asdict(robot.pose()),
         "velocity": dc.asdict(robot.velocity()),
         "command": command_json(last) if last is not None else None,
+        "tip_margin_deg": robot.tip_margin_deg(),
+        "min_tip_margin_deg": robot.min_tip_margin_deg(),
     })
 
 

@@ -1,4 +1,5 @@
-// The dashboard: drive pad (drag or keys), stop/enable, IR gauges, pose, encoders, camera.
+// The dashboard: drive pad (drag or keys), stop/enable, IR gauges, pose, encoders, contact
+// telemetry (wheel loads, slip, tip margin), camera.
 // State arrives by Server-Sent Events from /robots/<name>/subscribe; commands are POSTs to
 // the drive contract; every request carries the server's token (token.js). No framework, no
 // build step.
@@ -162,6 +163,20 @@ function showDrive(d) {
   $("compass-needle").setAttribute("transform", `rotate(${-d.heading_deg})`);
   const c = d.command;
   $("command").textContent = c ? `#${c.seq} ${c.command} ${c.status}${c.reason ? ` (${c.reason})` : ""}` : "-";
+  showContact(d);
+}
+
+// Per wheel: load (N), slip ratio (+ traction), slip angle (deg, + left); the tip margin.
+const WHEELS = { fl: "front_left", fr: "front_right", rl: "rear_left", rr: "rear_right" };
+function showContact(d) {
+  for (const [id, name] of Object.entries(WHEELS)) {
+    const w = d.wheels[name];
+    $(`load-${id}`).textContent = fmt(w.load, 2);
+    $(`slip-${id}`).textContent = fmt(w.slip_ratio, 3);
+    $(`angle-${id}`).textContent = fmt(w.slip_angle_deg, 1);
+  }
+  $("tip-margin").textContent = fmt(d.tip_margin_deg, 1);
+  $("min-tip-margin").textContent = fmt(d.min_tip_margin_deg, 1);
 }
 
 function showIr(name, s) {
