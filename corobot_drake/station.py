@@ -43,6 +43,7 @@ from corobot_drake.systems.monitor import TiltMonitor
 from corobot_drake.systems.motion import MotionCommands
 from corobot_drake.systems.odometry import add_chassis_poses, add_odometry
 from corobot_drake.systems.runlog import add_run_log
+from corobot_drake.systems.slip_markers import add_slip_markers
 from corobot_drake.systems.stability import add_tip_margin
 
 TILT_SAMPLE_PERIOD = 0.01
@@ -259,6 +260,8 @@ def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None, foxglov
                                       chassis_pose, selector.get_output_port())
         for port in ("wheel_loads", "wheel_slip_ratio", "wheel_slip_angle"):
             builder.ExportOutput(contacts.GetOutputPort(port), f"{name}.{port}")
+        if meshcat is not None:
+            add_slip_markers(builder, meshcat, name, chassis_pose, contacts)
         tip_margin = add_tip_margin(
             builder, name, plant, instance, chassis,
             {w: j.child_body() for w, j in zip(dim.WHEEL_NAMES, joints, strict=True)},

@@ -1,6 +1,7 @@
 """Issue 14: dead-reckoning odometry (`systems.dead_reckoning`) and its calibration
-(`analysis.odometry_calibration`), the wheels' contact telemetry (`systems.contact`) and the
-tip-over margin (`systems.stability`): each system alone, and in the simulation."""
+(`analysis.odometry_calibration`), the wheels' contact telemetry (`systems.contact`), the
+tip-over margin (`systems.stability`) and the slip in Meshcat (`systems.slip_markers`): each
+system alone, and in the simulation."""
 
 import math
 
@@ -19,6 +20,7 @@ from corobot_drake.simulation import Simulation, quiet_drake_warnings
 from corobot_drake.study.metrics import METRICS, RobotRun
 from corobot_drake.systems import contact
 from corobot_drake.systems.dead_reckoning import DeadReckoning
+from corobot_drake.systems.slip_markers import MARKER_PERIOD, SlipMarkers
 from corobot_drake.systems.stability import TipMargin
 
 PERIOD = 1 / 60
@@ -316,3 +318,46 @@ def test_tip_margin_alone_follows_the_tilt_about_an_edge(robot_plant):
     s.tick(3)
     assert s.output("tip_margin")[0] == pytest.approx(upright, abs=1e-9)
     assert s.output("min_tip_margin")[0] == pytest.approx(side - 20.0, abs=1e-9)
+
+
+def test_slip_markers_alone_colour_each_wheel_by_its_slip():
+    import msgpack
+    from pydrake.geometry import Meshcat
+
+    meshcat = Meshcat()
+    s = Stepper(SlipMarkers(meshcat, "/slip/r"), MARKER_PERIOD)
+    X_WC = RigidTransform(RollPitchYaw(0, 0, 0.5), [1.0, 2.0, 0.0])
+    s.fix("chassis_pose", X_WC)
+    s.fix("wheel_slip_ratio", [0.0, 0.25, -1.0, 0.004])
+    s.fix("wheel_slip_angle", [0.0, 0.0, 0.0, -40.0])
+    s.tick()
+
+    def sent(path, what):
+        packed = (meshcat._GetPackedProperty(path, "color") if what == "color"
+                  else meshcat._GetPackedTransform(path))
+        return msgpack.unpackb(packed)
+
+    # Gripping green, a quarter slip yellowish, locked red, a 40 deg scrub nearly red.
+    colours = {w: sent(f"/slip/r/{w}", "color")["value"] for w in dim.WHEEL_NAMES}
+    assert colours == {"front_left": [0.0, 0.8, 0.0, 1.0], "front_right": [0.5, 0.8, 0.0, 1.0],
+                       "rear_left": [1.0, 0.0, 0.0, 1.0],
+                       "rear_right": pytest.approx([1.0, 0.8 * 2 * 5 / 45, 0.0, 1.0])}
+    # Each ball beside its wheel, outside the hub: at the wheel centre, moved outward.
+    matrix = sent("/slip/r/front_right", "transform")["matrix"]
+    x, y, z = dim.wheel_center("front_right")
+    expected = X_WC @ np.array([x, y - dim.WHEEL_WIDTH / 2 - 0.015, z])
+    assert matrix[12:15] == pytest.approx(expected, abs=1e-12)
+
+
+def test_a_simulation_with_meshcat_draws_the_slip_markers():
+    from pydrake.geometry import Meshcat
+
+    meshcat = Meshcat()
+    sim = Simulation(load_scenario(DEFAULT_SCENARIO, overrides=[oc.physics_only("corobot")]),
+                     meshcat)
+    sim.advance(0.2)
+    assert all(meshcat.HasPath(f"/slip/corobot/{w}") for w in dim.WHEEL_NAMES)
+    headless = Simulation(load_scenario(DEFAULT_SCENARIO,
+                                        overrides=[oc.physics_only("corobot")]))
+    with pytest.raises(RuntimeError):  # not in headless runs' diagram at all
+        headless.station.diagram.GetSubsystemByName("corobot.slip_markers")
