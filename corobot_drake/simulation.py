@@ -42,7 +42,7 @@ from corobot_drake.sensors.ir_sensor import noise_key
 from corobot_drake.station import RobotParts, Station, build_station
 from corobot_drake.systems.drive import CommandRecord, DriveStatus, check_finite
 from corobot_drake.systems.odometry import DriveState
-from corobot_drake.systems.runlog import RUN_LOG_CHUNK, log_rows, write_csv
+from corobot_drake.systems.runlog import COLUMNS, RUN_LOG_CHUNK, log_rows, write_csv
 
 POSE_CLEARANCE = 1e-3
 """m: a SetPose is `blocked` when the robot at the target would overlap another body by more
@@ -361,8 +361,10 @@ class Robot:
         return self._scalar("tip_margin")
 
     def min_tip_margin_deg(self) -> float:
-        """The least `tip_margin_deg` so far (sampled at 100 Hz, and now), deg."""
-        return self._scalar("min_tip_margin")
+        """The least `tip_margin_deg` so far, deg: over the run log's rows (every 10 ms; with
+        `Simulation.run_log_window`, its window) and now."""
+        column = self.run_log()[:, COLUMNS.index("tip_margin")]
+        return float(min(column.min(initial=math.inf), self.tip_margin_deg()))
 
     def enable_requested(self) -> bool:
         """The enable level last commanded (is_enabled() follows it at the next control tick)."""

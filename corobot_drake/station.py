@@ -265,9 +265,8 @@ def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None, foxglov
         tip_margin = add_tip_margin(
             builder, name, plant, instance, chassis,
             {w: j.child_body() for w, j in zip(dim.WHEEL_NAMES, joints, strict=True)},
-            chassis_pose, TILT_SAMPLE_PERIOD)
-        for port in ("tip_margin", "min_tip_margin"):
-            builder.ExportOutput(tip_margin.GetOutputPort(port), f"{name}.{port}")
+            chassis_pose)
+        builder.ExportOutput(tip_margin.get_output_port(), f"{name}.tip_margin")
         builder.Connect(source.GetOutputPort("request"), motion.GetInputPort("request"))
         builder.Connect(odometry.position, motion.GetInputPort("position"))
         builder.Connect(odometry.heading, motion.GetInputPort("heading"))

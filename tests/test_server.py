@@ -155,7 +155,6 @@ def test_drive_state_carries_the_contact_telemetry(http, caps):
     assert sum(w["load"] for w in wheels) == pytest.approx(4.03 * 9.81, rel=0.03)
     assert all(abs(w["slip_ratio"]) < 1e-3 and abs(w["slip_angle_deg"]) < 0.2 for w in wheels)
     assert d["tip_margin_deg"] == pytest.approx(37.41, abs=0.1)
-    assert d["min_tip_margin_deg"] <= d["tip_margin_deg"]
     assert http.get(f"{ROBOT}/drive/two_wheel").json()["left"]["load"] == \
         pytest.approx(d["wheels"]["front_left"]["load"], rel=0.05)
     assert "heading" in http.get(f"{ROBOT}/compass").json()

@@ -132,7 +132,6 @@ class DriveState(BaseModel):
     tip_margin_deg: float = Field(
         description="deg: the roll or pitch left before the centre of mass passes an edge of "
                     "the wheels' support (37.4 upright on level ground)")
-    min_tip_margin_deg: float = Field(description="deg: the least tip_margin_deg so far")
 
 
 class TwoWheelState(BaseModel):

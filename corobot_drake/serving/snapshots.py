@@ -70,7 +70,7 @@ def drive_state(robot, time: float) -> dict:
     """The drive contract's four-wheel state (MRDS DriveDifferentialFourWheelState in SI
     units): the Python API's `drive_state()` fields, plus pose, velocity, the latest command
     and the contact telemetry (each wheel's load N, slip ratio and slip angle deg; the tip
-    margin deg, now and its least so far: `systems.contact`, `systems.stability`)."""
+    margin deg: `systems.contact`, `systems.stability`)."""
     native = robot.drive_state()
     loads, ratios, angles = robot.wheel_loads(), robot.wheel_slip_ratio(), robot.wheel_slip_angle()
     wheels = {name: {"commanded_power": float(w.commanded_power),
@@ -97,7 +97,6 @@ def drive_state(robot, time: float) -> dict:
         "velocity": dc.asdict(robot.velocity()),
         "command": command_json(last) if last is not None else None,
         "tip_margin_deg": robot.tip_margin_deg(),
-        "min_tip_margin_deg": robot.min_tip_margin_deg(),
     })
 
 

@@ -148,7 +148,7 @@ def _wheel_slip_angle(run: RobotRun) -> dict[str, float]:
 
 @metric("min_tip_margin_deg")
 def _min_tip_margin_deg(run: RobotRun) -> float:
-    """Least tip-over margin during the run, deg (`systems.stability`)."""
+    """Least tip-over margin during the run, deg (`systems.stability`; from the run log)."""
     return run.robot.min_tip_margin_deg()
 
 

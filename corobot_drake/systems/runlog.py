@@ -52,7 +52,8 @@ HELD_PERIOD = 0.1
 evaluated every 10 ms step, the loads (the plant's contact results) and the slip (the bodies'
 velocities) cost well over the ~3% of a step the run log may add (issue 14 point 8; the
 measurement is in the commit that added this). A row's loads and slip are those of the latest
-0.1 s sample; its tip margin is the step's (the running minimum computes it every step)."""
+0.1 s sample; its tip margin is the step's (a few sums from the chassis pose, and the run's
+least margin, `Robot.min_tip_margin_deg`, is read from it)."""
 HELD = ("wheel_loads", "wheel_slip_ratio", "wheel_slip_angle")
 COLUMNS = SAMPLE_COLUMNS + tuple(c for _, columns in TELEMETRY for c in columns)
 

@@ -32,7 +32,7 @@ from corobot_drake.model import dimensions as dim
 
 
 class TipMargin(LeafSystem):
-    """One robot's tip-over margin (module docstring) and the least of it over the run.
+    """One robot's tip-over margin (module docstring).
 
     .. pydrake_system::
 
@@ -41,22 +41,20 @@ class TipMargin(LeafSystem):
         - chassis_pose
         output_ports:
         - tip_margin
-        - min_tip_margin
 
     Input `chassis_pose` (abstract RigidTransform X_WC, e.g. from `odometry.ChassisPoses`).
-    Outputs (1-vectors, deg): `tip_margin` now; `min_tip_margin`, the least of it sampled every
-    `period` s (discrete state, from time 0) and now.
+    Output `tip_margin` (1-vector, deg). No state: the least over the run is the run log's
+    (`runlog`, every 10 ms; a per-step sampling event of its own cost more than the margin).
 
     The robot is rigid but for its wheels turning on their axles, which pass through their
     centres of mass: its centre of mass `com_C` and the wheel centres `wheel_centers_C` (m)
     are fixed in the chassis frame C, the centres make a rectangle square to C's axes and the
     axles lie along C's y (`of_robot` reads them from a plant). So the chassis' tilt alone
-    places the support and the CoM, and the margin is a few sums in C (every step: the
-    running minimum's sample, the run log).
+    places the support and the CoM, and the margin is a few sums in C (every step: the run
+    log's column).
     """
 
-    def __init__(self, com_C, wheel_centers_C: dict, period: float,
-                 wheel_radius: float = dim.WHEEL_RADIUS):
+    def __init__(self, com_C, wheel_centers_C: dict, wheel_radius: float = dim.WHEEL_RADIUS):
         """`wheel_centers_C`: {wheel name: centre}, `dimensions.WHEEL_NAMES`."""
         super().__init__()
         self._com_C = [float(x) for x in com_C]
@@ -69,18 +67,11 @@ class TipMargin(LeafSystem):
         self._radius = wheel_radius
         self._pose = self.DeclareAbstractInputPort("chassis_pose",
                                                    AbstractValue.Make(RigidTransform()))
-        self._least = self.DeclareDiscreteState([math.inf])
-        self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._sample)
-        # A function of the pose alone: cached until the pose changes, so the sample, the
-        # run log and the summary share one computation a step.
-        self._margin = self.DeclareVectorOutputPort(
-            "tip_margin", 1, lambda c, o: o.SetAtIndex(0, self.margin(c)),
-            {self.input_port_ticket(self._pose.get_index())})
-        self.DeclareVectorOutputPort("min_tip_margin", 1, lambda c, o: o.SetAtIndex(
-            0, min(c.get_discrete_state(self._least).GetAtIndex(0), self._margin.Eval(c)[0])))
+        self.DeclareVectorOutputPort("tip_margin", 1, lambda c, o: o.SetAtIndex(
+            0, self.margin(c)), {self.input_port_ticket(self._pose.get_index())})
 
     @classmethod
-    def of_robot(cls, plant, model_instance, chassis, wheels: dict, period: float):
+    def of_robot(cls, plant, model_instance, chassis, wheels: dict):
         """The TipMargin of the robot `model_instance` of the finalized `plant` (its bodies'
         default masses and the default poses of `chassis` and the `wheels`, {name: body})."""
         context = plant.CreateDefaultContext()
@@ -88,7 +79,7 @@ class TipMargin(LeafSystem):
         com_C = X_CW @ plant.CalcCenterOfMassPositionInWorld(context, [model_instance])
         centers = {name: (X_CW @ plant.EvalBodyPoseInWorld(context, body)).translation()
                    for name, body in wheels.items()}
-        return cls(com_C, centers, period)
+        return cls(com_C, centers)
 
     def com(self, context) -> np.ndarray:
         """The robot's centre of mass in the world, m."""
@@ -113,16 +104,12 @@ class TipMargin(LeafSystem):
             math.atan2(lz * uy - left * uz, left * uy + lz * uz),  # inward -y
             math.atan2(right * uz - lz * uy, right * uy + lz * uz)))  # inward +y
 
-    def _sample(self, context, discrete_state):
-        least = context.get_discrete_state(self._least).GetAtIndex(0)
-        discrete_state.set_value(self._least, [min(least, self._margin.Eval(context)[0])])
-
 
 def add_tip_margin(builder, name: str, plant, model_instance, chassis, wheels: dict,
-                   chassis_pose_port, period: float):
+                   chassis_pose_port):
     """Adds `<name>.tip_margin` (`TipMargin.of_robot`) fed by `chassis_pose_port`; returns
     it."""
     system = builder.AddNamedSystem(f"{name}.tip_margin", TipMargin.of_robot(
-        plant, model_instance, chassis, wheels, period))
+        plant, model_instance, chassis, wheels))
     builder.Connect(chassis_pose_port, system.get_input_port())
     return system

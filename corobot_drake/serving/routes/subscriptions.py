@@ -53,7 +53,6 @@ CHANGE_THRESHOLDS = {
     "forward": SPEED_THRESHOLD, "lateral": SPEED_THRESHOLD, "yaw_rate": SPEED_THRESHOLD,
     "axle_speed": SPEED_THRESHOLD, "load": LOAD_THRESHOLD, "slip_ratio": SLIP_RATIO_THRESHOLD,
     "slip_angle_deg": SLIP_ANGLE_THRESHOLD, "tip_margin_deg": math.degrees(ANGLE_THRESHOLD),
-    "min_tip_margin_deg": math.degrees(ANGLE_THRESHOLD),
 }
 """A state's numbers by field name -> the change that counts; any other field (commanded power,
 encoder ticks, the command, ...) counts at any change. Time stamps never count."""

@@ -176,7 +176,6 @@ function showContact(d) {
     $(`angle-${id}`).textContent = fmt(w.slip_angle_deg, 1);
   }
   $("tip-margin").textContent = fmt(d.tip_margin_deg, 1);
-  $("min-tip-margin").textContent = fmt(d.min_tip_margin_deg, 1);
 }
 
 function showIr(name, s) {
