@@ -15,9 +15,9 @@ simulation's contact telemetry, which no real logger has:
   rolling counts up): the odometry's encoders (`odometry.add_wheel_encoders`).
 - x, y: chassis position in the world, m. yaw: chassis heading about world z, rad, in (-pi, pi].
 - load_*, slip_ratio_*, slip_angle_*: per wheel (fl front left, fr, rl, rr), N,
-  dimensionless (+ traction), deg (+ to the left): `contact.WheelContacts`. tip_margin: deg,
-  `stability.TipMargin`. They go into the sink straight from those systems' ports (a
-  Multiplexer); the tip margin is cached for the step, shared with its running minimum.
+  dimensionless (+ traction), deg (+ to the left): `contact.WheelContacts`, sampled every
+  `HELD_PERIOD` (0.1 s) and held. tip_margin: deg, `stability.TipMargin`, every row. They go
+  into the sink straight from those systems' ports (a Multiplexer).
 """
 
 from pathlib import Path
