@@ -10,8 +10,10 @@ station's wiring, each diagram driving the benchmark's figure of eight (`bench.D
 - + the chassis poses, encoders, compass, GPS and drive state (no events of their own: they
   cost only when something reads them);
 - + the command source and motion (the script replaces the fixed request);
-- + dead reckoning, + the tilt monitor, + the run log (each an event every 10 ms);
-- + the wheel contacts (read by nothing per step);
+- + dead reckoning, + the tilt monitor (each an event every 10 ms);
+- + the wheel contacts and the tip margin (read by nothing per step yet);
+- + the run log (an event every 10 ms; its contact telemetry: the tip margin every row, the
+  loads and slip every 0.1 s);
 - the station itself (`Simulation`, physics only), which the last layer should match;
 - the station with one Drake-side setting changed (`VARIANTS`).
 
@@ -32,6 +34,7 @@ from pydrake.systems.primitives import MatrixGain
 
 from corobot_drake.analysis import bench
 from corobot_drake.config import scenario as sc
+from corobot_drake.model import dimensions as dim
 from corobot_drake.resources import DEFAULT_SCENARIO
 from corobot_drake.station import TILT_SAMPLE_PERIOD, _add_robot, _add_world
 from corobot_drake.systems.contact import add_wheel_contacts
@@ -41,11 +44,12 @@ from corobot_drake.systems.monitor import TiltMonitor
 from corobot_drake.systems.motion import MotionCommands
 from corobot_drake.systems.odometry import add_chassis_poses, add_odometry
 from corobot_drake.systems.runlog import add_run_log
+from corobot_drake.systems.stability import add_tip_margin
 
 LAYERS = ("plant alone (desired state fixed)", "+ drive controller (request fixed)",
           "+ chassis poses, encoders, compass, GPS, drive state",
           "+ command source and motion (the script)", "+ dead reckoning", "+ tilt monitor",
-          "+ run log", "+ wheel contacts")
+          "+ wheel contacts and tip margin", "+ run log (with the contact telemetry)")
 STATION = "the station (Simulation, physics only)"
 VARIANTS = {
     "the station, `use_sampled_output_ports: false` (same trajectory)":
@@ -152,11 +156,17 @@ def _add_robot_layers(builder, plant, name, robot, chassis, joints, selector, co
         tilt = builder.AddSystem(TiltMonitor(TILT_SAMPLE_PERIOD))
         builder.Connect(pose, tilt.GetInputPort("chassis_pose"))
     if layers >= 7:
-        add_run_log(builder, name, pose, controller.GetOutputPort("drive_status"),
-                    odometry.encoder_ticks)
+        contacts = add_wheel_contacts(builder, name, plant, [j.child_body() for j in joints],
+                                      pose, selector.get_output_port())
+        tip_margin = add_tip_margin(
+            builder, name, plant, chassis.model_instance(), chassis,
+            {w: j.child_body() for w, j in zip(dim.WHEEL_NAMES, joints, strict=True)}, pose)
     if layers >= 8:
-        add_wheel_contacts(builder, name, plant, chassis, [j.child_body() for j in joints],
-                           selector.get_output_port())
+        add_run_log(builder, name, pose, controller.GetOutputPort("drive_status"),
+                    odometry.encoder_ticks,
+                    {**{port: contacts.GetOutputPort(port) for port in
+                        ("wheel_loads", "wheel_slip_ratio", "wheel_slip_angle")},
+                     "tip_margin": tip_margin.get_output_port()})
 
 
 def _cpu_seconds(layers: int | None, scenario: sc.Scenario, seconds: float) -> float:
