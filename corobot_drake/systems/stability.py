@@ -75,9 +75,11 @@ class TipMargin(LeafSystem):
         """The TipMargin of the robot `model_instance` of the finalized `plant` (its bodies'
         default masses and the default poses of `chassis` and the `wheels`, {name: body})."""
         context = plant.CreateDefaultContext()
-        X_CW = plant.EvalBodyPoseInWorld(context, chassis).inverse()
-        com_C = X_CW @ plant.CalcCenterOfMassPositionInWorld(context, [model_instance])
-        centers = {name: (X_CW @ plant.EvalBodyPoseInWorld(context, body)).translation()
+        # The chassis at the world origin: the figures in C are then exact whatever pose the
+        # scenario starts it at (a reset to another start gives the same bits).
+        plant.SetFreeBodyPose(context, chassis, RigidTransform())
+        com_C = plant.CalcCenterOfMassPositionInWorld(context, [model_instance])
+        centers = {name: plant.EvalBodyPoseInWorld(context, body).translation()
                    for name, body in wheels.items()}
         return cls(com_C, centers)
 
