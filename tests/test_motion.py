@@ -327,6 +327,23 @@ def test_a_command_saved_at_any_time_resumes_to_the_same_landing(profile, kind, 
         assert abs(math.degrees(math.remainder(h - h0, 2 * math.pi))) < 0.1, save
 
 
+def test_a_command_saved_before_its_first_update_resumes_as_issued():
+    """The script issues the drive when the wait ends (at 0.2 s); MotionCommands takes it at
+    the next update: a scene saved in between carries it as issued (it was once lost)."""
+    sim = fast_sim("seed", extra="commands: [!Wait {seconds: 0.2}, "
+                   "!DriveDistance {distance: 0.3, power: 1.0}]")
+    again, saves = _resumer("seed"), {}
+    for t in (0.2, 0.21, 0.22):
+        sim.advance_to(t)
+        saves[t] = _through_yaml(sim.saved_scenario())
+    sim.advance_to(1.5)  # the drive ends near 0.9 s
+    for save, scenario in saves.items():
+        again.reset(scenario)
+        again.advance_to(1.5)
+        assert math.dist(again.robot().position(), sim.robot().position()) < 1e-3, save
+        assert [c["command"] for c in again.robot().summary()["commands"]] == ["DriveDistance"]
+
+
 def test_drive_test_same_seed_same_numbers(tmp_path):
     outputs = []
     for name in ("a.png", "b.png"):
