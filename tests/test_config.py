@@ -129,3 +129,35 @@ def test_a_scenario_built_in_python_gets_the_loaders_checks():
     scenario.robots["corobot"].drive = None  # a wrong type: named, not an AttributeError
     with pytest.raises(ScenarioError, match=r"robots\.corobot\.drive: expected Drive, got None"):
         Simulation(scenario)
+
+
+def _command(fields: str) -> str:
+    return f"robots: {{corobot: {{commands: [{fields}]}}}}"
+
+
+@pytest.mark.parametrize("override, field, words", [
+    (_command("!DriveDistance {distance: 1, recent_progress: [0.1]}"),
+     "commands[0].recent_progress", "needs `start`"),
+    (_command("!RotateDegrees {degrees: 9, start: [0, 0, 0], recent_progress: [" + "0, " * 10
+              + "0]}"), "commands[0].recent_progress", "at most 10 values"),
+    (_command("!RotateDegrees {degrees: 9, start: [0, 0, 0], recent_progress: [-1, 2e6]}"),
+     "commands[0].recent_progress[1]", "must be in [-1e+06, 1e+06] deg; got 2e+06"),
+    (_command("!DriveDistance {distance: 1, start: [0, 0, 0], recent_progress: [.nan]}"),
+     "commands[0].recent_progress[0]", "NaN is not allowed"),
+    (_command("!DriveDistance {distance: 1, start: [0, 0, 0], recent_progress: [1e5]}"),
+     "commands[0].recent_progress[0]", "must be in [-10000, 10000] m; got 100000"),
+    ("robots: {corobot: {drive: {control_period: 0.05}, commands: [!DriveDistance {distance: "
+     "1, start: [0, 0, 0], recent_progress: [0, 0, 0]}]}}", "commands[0].recent_progress",
+     "at most 2 values"),  # the seed profile's 0.1 s at this robot's control period
+    (_command("!DriveDistance {distance: 1, start: [0, 0, 0], recent_progress: [0, 0.01]}"),
+     None, None),
+])
+def test_a_saved_commands_recent_progress_is_checked(override, field, words):
+    """The field a saved scene writes for a running command (docs/commands.md, Saving)."""
+    if field is None:
+        load_scenario(DEFAULT_SCENARIO, overrides=[override])
+        return
+    with pytest.raises(ScenarioError) as e:
+        load_scenario(DEFAULT_SCENARIO, overrides=[override])
+    assert str(e.value).count("\n") == 0
+    assert f"--override:1: robots.corobot.{field}:" in str(e.value) and words in str(e.value)

@@ -15,10 +15,12 @@ from corobot_drake.config.scenario import (
     SetPose,
     SetPower,
 )
+from corobot_drake.model import dimensions as dim
 from corobot_drake.systems.drive import DriveRequest
 from corobot_drake.systems.motion import (
     POSE_SETTLE_TIME,
     POSE_TIMEOUT,
+    SPIN_YAW_PER_RIM_SPEED,
     STILL_TIME,
     MotionCommands,
     wrap,
@@ -83,8 +85,10 @@ def test_closed_loop_drive_cruises_then_succeeds_after_resting_on_the_goal():
     assert out(s).command.right == out(s).command.left
     at(s, 0.3, 0.0)
     s.tick()
-    # Carried on (a saved scene): the distance counted from where it started.
-    assert s.system.remaining_command(s.context) == DriveDistance(1.0, 0.5, [0.0, 0.0, 0.0])
+    # Carried on (a saved scene): the distance counted from where it started, with the
+    # progress at the last update (the closed loop's speed estimate starts from it).
+    assert s.system.remaining_command(s.context) == DriveDistance(1.0, 0.5, [0.0, 0.0, 0.0],
+                                                                  [0.3])
     at(s, 1.0, 0.0)  # on the goal: the first update sees it arrive fast, then at rest
     assert STILL_TIME == 0.05  # docs/commands.md: "succeeds after 0.05 s at rest there"
     assert ticks_until_ended(s) == 1 + STILL_FRAMES
@@ -243,5 +247,83 @@ def test_a_seed_turn_saved_past_its_goal_resumes_as_done():
     s = motion("seed")
     s.fix("request", DriveRequest(1, RotateDegrees(30.0, 1.0)))
     s.tick()
+    at(s, 0.0, math.radians(29.0))
+    s.tick()
     at(s, 0.0, math.radians(31.0))  # overshot since the last update: the next one ends it
-    assert s.system.remaining_command(s.context).degrees == 0.0
+    left = s.system.remaining_command(s.context)
+    assert left.degrees == pytest.approx(1.0, abs=1e-9)  # counted from the last update
+    resumed = motion("seed", heading=math.radians(31.0))
+    resumed.fix("request", DriveRequest(1, left))
+    resumed.tick()  # its first update sees the overshoot, as the saved run's next one would
+    assert (status(resumed).status, out(resumed).command, out(resumed).immediate) == (
+        "succeeded", AllStop(), True)
+
+
+def test_a_request_not_yet_taken_is_saved_as_issued():
+    s = motion("seed")
+    s.fix("request", DriveRequest(1, DriveDistance(0.3, 1.0)))
+    s.tick()
+    s.fix("request", DriveRequest(2, RotateDegrees(-45.0, 0.5)))  # the next update takes it
+    assert s.system.remaining_command(s.context) == RotateDegrees(-45.0, 0.5)
+
+
+def _plant(s: Stepper, x: float, heading: float) -> tuple[float, float]:
+    """One control period of a toy robot whose wheels turn at the commanded power at once
+    (rim speed = axle speed x wheel radius; yaw rate = the skid-steer spin rate)."""
+    command = out(s).command
+    left, right = (command.left, command.right) if isinstance(command, SetPower) else (0, 0)
+    rim_left, rim_right = (p * K * dim.WHEEL_RADIUS for p in (left, right))
+    x += 0.5 * (rim_left + rim_right) * PERIOD
+    heading = wrap(heading + 0.5 * (rim_right - rim_left) * SPIN_YAW_PER_RIM_SPEED * PERIOD)
+    at(s, x, heading)
+    return x, heading
+
+
+def _same_request(resumed: Stepper, s: Stepper) -> None:
+    assert (status(resumed).seq, status(resumed).status) == (status(s).seq, status(s).status)
+    assert out(resumed).immediate == out(s).immediate
+    if isinstance(out(s).command, SetPower):
+        assert out(resumed).command.left == pytest.approx(out(s).command.left, abs=1e-9)
+        assert out(resumed).command.right == pytest.approx(out(s).command.right, abs=1e-9)
+    else:
+        assert out(resumed).command == out(s).command
+
+
+@pytest.mark.parametrize("profile", ["closed_loop", "seed"])
+@pytest.mark.parametrize("command", [DriveDistance(0.3, 1.0), RotateDegrees(-60.0, 1.0),
+                                     DriveDistance(0.3, 0.5), RotateDegrees(-60.0, 0.5)],
+                         ids=lambda c: f"{type(c).__name__}-{c.power:g}")
+def test_a_command_resumed_at_any_update_replays_the_same_requests(profile, command):
+    """Issue 14: what `remaining_command` writes (start, power, `recent_progress`) is all of
+    a command's memory its requests depend on. Saved before each update of a run on a toy
+    robot (through the seed profile's halvings and the refills of its 0.1 s of progress
+    samples after them), a fresh MotionCommands given it requests what the running one does
+    for the next 0.15 s (past a refill), and the seed profile ends it at the same update.
+    Only float rounding differs (degrees and back, the progress counted from the last
+    update), so the powers agree to 1e-9."""
+    follow = round(0.15 / PERIOD)
+    s = motion(profile)
+    s.fix("request", DriveRequest(1, command))
+    runs, x, heading, halvings = [], 0.0, 0.0, 0
+    for tick in range(400):
+        runs = [r for r in runs if r[1] > tick]
+        left = s.system.remaining_command(s.context)
+        if left is not None:
+            resumed = motion(profile, x, heading)
+            resumed.fix("request", DriveRequest(1, left))
+            runs.append((resumed, tick + follow))
+        s.tick()
+        if status(s).seq and profile == "closed_loop":
+            break  # its count of updates at rest on the goal is not saved: a resumed one
+            # may succeed up to STILL_TIME later (at rest on the same spot)
+        for resumed, _ in runs:
+            resumed.tick()
+            _same_request(resumed, s)
+        if status(s).seq:
+            break
+        halvings = max(halvings, round(-math.log2(s.system.get_state(s.context).active.scale)))
+        x, heading = _plant(s, x, heading)
+        for resumed, _ in runs:
+            at(resumed, x, heading)
+    assert status(s).status == "succeeded"
+    assert halvings >= (1 if profile == "seed" else 0)  # the refills are covered

@@ -425,6 +425,12 @@ def render_saved_mid_drive(outs) -> str:
             f"{m['after_3_2_s'] * 1000:.1f} mm after 3.2 s")
 
 
+def render_resume_landing(outs) -> str:
+    o = outs[0][0]
+    first = o.stdout.strip().splitlines()[0]
+    return f"`{o.command}`: {first}\n\n{_table(o.stdout)}"
+
+
 def render_landing_errors(outs) -> str:
     text = outs[0][0].stdout.strip()
     failed = re.search(r"\| [+-][\d.]+ \(\w+\) \|", text)  # an error cell with its status
@@ -782,6 +788,9 @@ def blocks() -> list[Spec]:
              DETERMINISTIC, 5),
         Spec("saved-mid-drive", "docs/commands.md", (_measure("saved-mid-drive"),),
              render_saved_mid_drive, DETERMINISTIC, 10),
+        Spec("resume-landing", "docs/commands.md",
+             (Command("python tools/resume_landing.py"),), render_resume_landing,
+             DETERMINISTIC, 300),
         Spec("landing-errors", "docs/commands.md", (landing,), render_landing_errors,
              DETERMINISTIC, 90),
         Spec("readme-landing-closed-loop", "README.md", (landing,),

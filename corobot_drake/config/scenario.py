@@ -243,6 +243,11 @@ class DriveDistance:
     """[x, y, yaw_deg] (m, m, deg): the pose the distance counts from (and, closed loop, the
     heading held); empty: where the robot is when the command starts. A saved scene resumes
     a running drive so (`Simulation.saved_scenario`)."""
+    recent_progress: list[float] = bounded(list, lim.POSITION)
+    """m from `start` at the drive's last control updates, oldest first (the seed profile's
+    last 0.1 s, the closed loop's last update); only a saved scene writes it (it needs
+    `start`). Given, the drive carries on from its last update: its speed estimates go on
+    from these as the uninterrupted drive's would. Empty: none (a command written by hand)."""
 
 
 @dc.dataclass
@@ -253,9 +258,15 @@ class RotateDegrees:
     degrees: float = bounded(0.0, lim.DEGREES)
     power: float = bounded(0.5, lim.POWER)
     start: list[float] = dc.field(default_factory=list)
-    """[x, y, yaw_deg] (m, m, deg): the heading the turn counts from (within +-180 deg of the
-    heading when it starts; x and y are not used); empty: the heading when the command
-    starts. A saved scene resumes a running turn so (`Simulation.saved_scenario`)."""
+    """[x, y, yaw_deg] (m, m, deg): the heading the turn counts from, as if read at the
+    control update before it starts (within +-180 deg of the heading then; x and y are not
+    used); empty: the heading when the command starts. A saved scene resumes a running turn
+    so (`Simulation.saved_scenario`), from the heading at its last update."""
+    recent_progress: list[float] = bounded(list, lim.ANGLE)
+    """deg turned from `start`'s heading at the turn's last control updates, oldest first
+    (the seed profile's last 0.1 s; a saved scene's last is 0); only a saved scene writes it
+    (it needs `start`). Given, the seed profile's time-left estimate goes on from these as
+    the uninterrupted turn's would. Empty: none (a command written by hand)."""
 
 
 @dc.dataclass

@@ -202,23 +202,31 @@ class MotionCommands(LeafSystem):
         return context.get_abstract_state(self._state_index).get_value()
 
     def remaining_command(self, context):
-        """The running DriveDistance/RotateDegrees as a command that carries it on from now
-        (None if none): a drive with its distance counted from where it started (`start`), a
-        turn with the angle left counted from the heading now, at the power it runs at (the
-        seed profile's halvings kept). What a saved scene resumes."""
-        a = self.get_state(context).active
+        """The DriveDistance/RotateDegrees that carries the running one on from now (None if
+        none), what a saved scene resumes: a drive with its distance counted from where it
+        started, a turn with the angle left from its heading at the last update, both at the
+        power they run at (the seed profile's halvings kept) with their progress at the last
+        updates (`recent_progress`: what the speed estimates need). A request issued but
+        not yet taken (it is taken at the next update) as it was issued."""
+        s = self.get_state(context)
+        request = self._request_port.Eval(context)
+        if request.seq != s.handled_seq:  # the next update starts it (or ends the running one)
+            pending = request.command
+            return pending if isinstance(pending, DriveDistance | RotateDegrees) else None
+        a = s.active
         if a is None or a.kind == "pose":
             return None
         power = a.power * a.scale
         x, y, yaw = a.start
         if a.kind == "drive":
-            return DriveDistance(a.sign * a.target, power, [x, y, math.degrees(yaw)])
-        heading = float(self._heading_port.Eval(context)[0])
-        left = a.target - (a.progress + wrap(heading - a.heading))
-        if self._motion.profile == "seed" and math.copysign(1.0, a.target) * left < (
-                SEED_ROTATION_TOLERANCE):
-            left = 0.0  # arrived: its next update stops it
-        return RotateDegrees(math.degrees(left), power, [x, y, math.degrees(heading)])
+            recent = a.samples if self._motion.profile == "seed" else (a.progress,)
+            return DriveDistance(a.sign * a.target, power, [x, y, math.degrees(yaw)],
+                                 list(recent))
+        # Counted from the heading at the last update, so the progress then is 0 and the
+        # next update measures the same turn since as the uninterrupted command's would.
+        recent = [math.degrees(p - a.progress) for p in a.samples]
+        return RotateDegrees(math.degrees(a.target - a.progress), power,
+                             [x, y, math.degrees(a.heading)], recent)
 
     # --- the state machine ----------------------------------------------------------------
     def _update(self, context, state):
@@ -279,17 +287,23 @@ class MotionCommands(LeafSystem):
             sign = math.copysign(1.0, target)
         if target == 0.0:  # the seed profile's stop is at once (the book's)
             return self._finish(s, request, request.seq, "succeeded", "", now, immediate=seed)
-        start, progress = pose, 0.0
+        start, progress, heading, samples = pose, 0.0, pose[2], ()
         if command.start:  # counted from a given pose (a resumed command)
             x0, y0, yaw0 = command.start[0], command.start[1], math.radians(command.start[2])
+            recent = command.recent_progress
             if kind == "drive":
                 start = (x0, y0, yaw0)
-                progress = self._drive_progress(start, sign, pose[0], pose[1])
-            else:
-                progress = wrap(pose[2] - yaw0)
+                progress = (recent[-1] if recent
+                            else self._drive_progress(start, sign, pose[0], pose[1]))
+            else:  # as if the last update read the heading from which it counts
+                recent = [math.radians(p) for p in recent]
+                progress = recent[-1] if recent else 0.0
+                heading = wrap(yaw0 + progress)
+            if seed:
+                samples = tuple(recent[-self._seed_samples:])
         active = ActiveCommand(request.seq, kind, target, sign, min(abs(power), 1.0), start,
-                               now, pose[2], progress=progress, stall_progress=progress,
-                               stall_time=now)
+                               now, heading, progress=progress, samples=samples,
+                               stall_progress=progress, stall_time=now)
         return dc.replace(s, active=active)
 
     def _drive_progress(self, start, sign: float, x: float, y: float) -> float:
