@@ -1,5 +1,6 @@
 import sys
 
-from corobot_drake.cli import main
+from corobot_drake.cli import ctrl_c_stops, main
 
+ctrl_c_stops()
 sys.exit(main())

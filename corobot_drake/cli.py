@@ -283,6 +283,16 @@ def _one_line_warning(message, category, filename, lineno, line=None) -> str:
     return f"warning: {message}\n"
 
 
+def ctrl_c_stops() -> None:
+    """Makes SIGINT raise KeyboardInterrupt in this process even when it was started with
+    SIGINT ignored (a background job of a non-interactive shell, e.g. a CI script, inherits
+    SIG_IGN, and Python then keeps it): `kill -INT` and Ctrl-C stop a run cleanly. For a
+    program's entry point only (`python -m corobot_drake`, `python -m corobot_drake.study`)."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+
+
 def main(argv: list[str] | None = None) -> int:
     warnings.formatwarning = _one_line_warning  # for a user, not a developer: no source lines
     args = _parser().parse_args(argv)

@@ -156,3 +156,28 @@ def test_the_interactive_run_keeps_a_window_of_run_log(tmp_path, monkeypatch, ca
     assert "simulated 15.00 s" in capsys.readouterr().out
     assert cli.run_log_window(cli._parser().parse_args(["--log", "x.csv"])) is None
     assert cli.run_log_window(cli._parser().parse_args(["--headless"])) is None
+
+
+def test_ctrl_c_stops_a_run_started_with_sigint_ignored():
+    """A background job of a non-interactive shell (a CI script) starts with SIGINT ignored,
+    and Python keeps it so: the entry point restores Ctrl-C, so SIGINT still ends a run
+    cleanly (exit 0, the closing line) rather than never."""
+    import signal
+    import subprocess
+    import sys
+
+    run = subprocess.Popen(  # a server: it runs until stopped
+        [sys.executable, "-m", "corobot_drake", "--headless", "--serve", "--port", "0",
+         "--override", "robots: {corobot: {camera: {rgb: false}}}"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_IGN))
+    try:
+        assert run.stdout.readline().startswith("serving ")  # up and simulating
+        run.send_signal(signal.SIGINT)
+        _, err = run.communicate(timeout=60)
+    finally:
+        if run.poll() is None:
+            run.kill()
+            run.wait(5)
+    assert run.returncode == 0, err
+    assert "simulated " in err  # its closing line

@@ -60,4 +60,7 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
+    from corobot_drake.cli import ctrl_c_stops
+
+    ctrl_c_stops()
     sys.exit(main())
