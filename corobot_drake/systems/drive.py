@@ -521,18 +521,21 @@ class DriveController(LeafSystem):
         gain = self._drive.hold_gain
         if gain == 0.0:
             return None
-        wheel_state = self._wheel_state_port.Eval(context)
+        # Plain floats: on four numbers numpy's per-call overhead costs more than the sums, and
+        # this runs every control update.
+        wheel_state = self._wheel_state_port.Eval(context).tolist()
         q, v = wheel_state[:4], wheel_state[4:]
-        held = context.get_discrete_state(self._hold_angle).get_value()
-        resting = ((np.array([left, right, left, right]) == 0.0) & (np.abs(v) < HOLD_SPEED)
-                   & (np.abs(q - held) <= HOLD_SLACK))
-        hold = np.where(resting, held, q)
+        held = context.get_discrete_state(self._hold_angle).get_value().tolist()
+        sides = [left, right, left, right]
+        hold = [h if side == 0.0 and abs(w) < HOLD_SPEED and abs(a - h) <= HOLD_SLACK else a
+                for side, w, a, h in zip(sides, v, q, held, strict=True)]
         discrete_state.set_value(self._hold_angle, hold)
-        correction = np.clip(gain * (hold - q), -0.5 * HOLD_SPEED, 0.5 * HOLD_SPEED)
-        before = context.get_discrete_state(self._desired).get_value()[4:]
-        if not correction.any() and np.array_equal(before, [left, right, left, right]):
+        limit = 0.5 * HOLD_SPEED
+        correction = [min(max(gain * (h - a), -limit), limit) for h, a in zip(hold, q, strict=True)]
+        before = context.get_discrete_state(self._desired).get_value()[4:].tolist()
+        if not any(correction) and before == sides:
             return None
-        return correction
+        return np.array(correction)
 
     def _set_axle(self, state, left: float, right: float, correction=None) -> None:
         """Writes the slewed axle speeds (rad/s) and the desired state made from them (plus
