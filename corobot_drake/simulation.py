@@ -28,6 +28,7 @@ from pydrake.systems.framework import EventStatus
 
 from corobot_drake import limits
 from corobot_drake.config import scenario as sc
+from corobot_drake.config.bounds import Range, bound_of
 from corobot_drake.config.poses import ground_pose, transform_from
 from corobot_drake.config.validate import check_scenario
 from corobot_drake.model import dimensions as dim
@@ -92,17 +93,11 @@ def check_command(command):
         names = ", ".join(c.__name__ for c in _ISSUABLE)
         raise ValueError(f"a command must be one of {names}; got {command!r}")
     name = type(command).__name__
-    ranges = {
-        sc.SetPower: {"left": limits.POWER, "right": limits.POWER},
-        sc.SetSpeed: {"left": limits.SPEED, "right": limits.SPEED},
-        sc.SetVelocity: {"linear": limits.LINEAR, "angular": limits.ANGULAR},
-        sc.DriveDistance: {"distance": limits.DISTANCE, "power": limits.DRIVE_POWER},
-        sc.RotateDegrees: {"degrees": limits.DEGREES, "power": limits.DRIVE_POWER},
-        sc.SetPose: {"x": limits.POSITION, "y": limits.POSITION, "yaw_deg": limits.YAW_DEG},
-    }.get(type(command), {})
-    checked = {field: limits.number(f"{name}.{field}", getattr(command, field), low, high,
-                                    low_open=(low, high) == limits.DRIVE_POWER)
-               for field, (low, high) in ranges.items()}
+    # The ranges are the command fields' own bounds (`config.bounds`, made of `limits`).
+    checked = {f.name: limits.number(f"{name}.{f.name}", getattr(command, f.name),
+                                     bound.low, bound.high, low_open=bound.low_open)
+               for f in dc.fields(command)
+               if f.type is float and isinstance(bound := bound_of(f), Range)}
     if isinstance(command, sc.Enable) and not isinstance(command.enabled, bool | np.bool_):
         raise ValueError(f"Enable.enabled must be True or False, got {command.enabled!r}")
     command = dc.replace(command, **checked)
