@@ -113,7 +113,7 @@ def _problems(scenario) -> list[Problem]:
         add(f"robot {name!r}", f"robots.{name}.pose", robot.pose.GetDeterministicValue(),
             robot_shapes(), "robot")
     context = scene_graph.CreateDefaultContext()
-    scene_graph.get_source_pose_port(source).FixValue(context, _frame_poses(source, poses))
+    scene_graph.get_source_pose_port(source).FixValue(context, _frame_poses(poses))
     query = scene_graph.get_query_output_port().Eval(context)
     deepest = {}  # (owner, owner) -> the deepest overlap of their shapes
     for pair in query.ComputePointPairPenetration():
@@ -147,7 +147,7 @@ def _problem(a: _Owner, b: _Owner, depth: float) -> Problem:
     return Problem(tuple(o.path for o in (a, b) if o.path), message)
 
 
-def _frame_poses(source, poses) -> FramePoseVector:
+def _frame_poses(poses) -> FramePoseVector:
     vector = FramePoseVector()
     for frame, X_WF in poses.items():
         vector.set_value(frame, X_WF)

@@ -51,9 +51,8 @@ def run_scenario(study: Study, scenario_file: Path, run: Run, base=None):
     for path, value in indexed:
         set_path(scenario, path, value)
     if indexed:
-        checks = LayerChecks("study grid", "{}")
-        checks.lines = {}  # the values come from the study's grid, not from a line of YAML
-        checks.validate(scenario)
+        # The values come from the study's grid, not from a line of YAML.
+        LayerChecks.of_object("study grid").validate(scenario)
     if not study.cameras:
         for robot in scenario.robots.values():
             robot.camera.rgb = False
