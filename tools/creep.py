@@ -13,13 +13,14 @@ a time (servo, contact approximation, step, friction regularization, dissipation
 contact): the experiments that found the cause.
 """
 
-import argparse
 import math
 import sys
 
 from tqdm import tqdm
 
 from corobot_drake.analysis import creep
+from corobot_drake.analysis.arguments import ToolParser, bounded, one_line_errors
+from corobot_drake.config.bounds import Range
 from corobot_drake.config.scenario import load_scenario
 from corobot_drake.resources import DEFAULT_SCENARIO
 
@@ -28,14 +29,19 @@ def _um(metres: float) -> str:
     return f"{metres * 1e6:.3g}"
 
 
+SECONDS = Range(0.0, 3600.0, low_open=True, unit="s")
+POINTS = Range(2, 1000, why="wheel angles over half a facet")
+MINUTES = Range(0.0, 1e4, low_open=True, unit="min")
+
+
+@one_line_errors
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0],
-                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
-    p.add_argument("--seconds", type=float, default=30.0,
+    p = ToolParser(description=__doc__.splitlines()[0])
+    p.add_argument("--seconds", type=bounded(SECONDS), default=30.0,
                    help="simulated seconds each resting robot is measured")
-    p.add_argument("--points", type=int, default=13,
+    p.add_argument("--points", type=bounded(POINTS, int), default=13,
                    help="wheel angles the rate map samples over half a facet")
-    p.add_argument("--minutes", type=float, default=30.0,
+    p.add_argument("--minutes", type=bounded(MINUTES), default=30.0,
                    help="simulated minutes the creep is predicted over")
     p.add_argument("--isolate", action="store_true",
                    help="the one-change-at-a-time table instead (unheld, 5 s each)")

@@ -10,14 +10,15 @@ distance and heading gap between the two landings (docs/commands.md, issue 14).
     python tools/resume_landing.py [--step 0.02] [--settle 1.0]
 """
 
-import argparse
 import math
 import sys
 
 from pydrake.common.yaml import yaml_dump_typed
 from tqdm import tqdm
 
+from corobot_drake.analysis.arguments import ToolParser, bounded, one_line_errors
 from corobot_drake.config import scenario as sc
+from corobot_drake.config.bounds import Range
 from corobot_drake.resources import DEFAULT_SCENARIO
 from corobot_drake.simulation import Simulation, quiet_drake_warnings
 
@@ -80,12 +81,16 @@ def _gap(gap: float, t: float, decimals: int) -> str:
     return text if float(text) == 0.0 else f"{text} (saved at {t:.2f} s)"
 
 
+STEP = Range(0.01, 10.0, unit="s", why="a multiple of the 10 ms control period")
+SETTLE = Range(0.0, 100.0, unit="s")
+
+
+@one_line_errors
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0],
-                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
-    p.add_argument("--step", type=float, default=0.02,
+    p = ToolParser(description=__doc__.splitlines()[0])
+    p.add_argument("--step", type=bounded(STEP), default=0.02,
                    help="s between saves (a multiple of the 10 ms control period)")
-    p.add_argument("--settle", type=float, default=1.0,
+    p.add_argument("--settle", type=bounded(SETTLE), default=1.0,
                    help="s after the command ends when the landings are compared")
     args = p.parse_args(argv)
     quiet_drake_warnings()
