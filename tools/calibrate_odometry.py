@@ -27,7 +27,7 @@ from corobot_drake.analysis.arguments import (
     one_line_errors,
     output_file,
 )
-from corobot_drake.analysis.sysid import LogError, set_drive_field
+from corobot_drake.analysis.sysid import set_drive_field
 from corobot_drake.config.bounds import DRAKE_INT
 from corobot_drake.config.scenario import ScenarioError, load_scenario
 from corobot_drake.model import dimensions as dim
@@ -123,13 +123,9 @@ def main(argv=None) -> int:
     args = p.parse_args(argv)
     if (args.log is None) == (not args.simulate):
         p.error("give a LOG or --simulate (not both)")
-    try:
-        log = (_simulated_log(args) if args.simulate
-               else oc.read_pose_log(args.log, args.ticks_per_revolution))
-        fit = oc.fit_odometry(log)
-    except (LogError, ScenarioError) as e:
-        print(f"error: {e}", file=sys.stderr)
-        return 2
+    log = (_simulated_log(args) if args.simulate
+           else oc.read_pose_log(args.log, args.ticks_per_revolution))
+    fit = oc.fit_odometry(log)  # a bad log or scenario: one_line_errors' one line
     print(fit.describe())
     nominal = (dim.WHEEL_RADIUS, dim.TRACK)
     fitted = (fit.effective_wheel_radius, fit.effective_track_width)

@@ -32,7 +32,7 @@ from corobot_drake.analysis.arguments import (
 from corobot_drake.analysis.snapshot import VIEWS, take
 from corobot_drake.config.bounds import DRAKE_BOUNDS, DURATION
 from corobot_drake.config.poses import ground_pose
-from corobot_drake.config.scenario import ScenarioError, SetPower, load_scenario
+from corobot_drake.config.scenario import SetPower, load_scenario
 from corobot_drake.model import dimensions as dim
 from corobot_drake.resources import DEFAULT_SCENARIO
 from corobot_drake.sensors import render
@@ -102,12 +102,8 @@ def main(argv: list[str] | None = None) -> int:
     parser = _parser()
     args = parser.parse_args(argv)
     quiet_drake_warnings()
-    try:
-        scenario, name = _scenario(args, parser)
-        sim = Simulation(scenario)  # checks the command line's changes (--pose, --drive)
-    except ScenarioError as e:
-        print(f"error: {e}", file=sys.stderr)
-        return 2
+    scenario, name = _scenario(args, parser)
+    sim = Simulation(scenario)  # checks the command line's changes (--pose, --drive)
     if args.time > 0:
         sim.advance(args.time)
     small = args.view == "robot-camera"
