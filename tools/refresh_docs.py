@@ -655,7 +655,8 @@ def render_bench_study(outs) -> str:
     return f"Measured {_measured([o])} (`{o.command}`):\n\n{_as_markdown(o.stdout.strip())}"
 
 
-def render_gym_evaluation(outs) -> str:
+def render_command_table(outs) -> str:
+    """The command and the table it printed (a deterministic block: no load, no date)."""
     o = outs[0][0]
     return f"`{o.command}`:\n\n{_table(o.stdout)}"
 
@@ -680,11 +681,6 @@ def render_camera_cost(outs) -> str:
     return (f"Measured {_measured([o])} (`{o.command}`):\n\n{_table(o.stdout)}\n\n"
             f"Meshes over boxes: {ratios['robot-camera']} for the robot's own camera, "
             f"{ratios['chase']} for the chase view.")
-
-
-def render_step_limit(outs) -> str:
-    o = outs[0][0]
-    return f"`{o.command}`:\n\n{_table(o.stdout)}"
 
 
 def render_creep(outs) -> str:
@@ -773,7 +769,7 @@ def blocks() -> list[Spec]:
              (Command("python tools/fit_drive_log.py --simulate 12 20"),), render_fit,
              DETERMINISTIC, 5),
         Spec("step-limit", "docs/tuning.md", (Command("python tools/step_limit.py"),),
-             render_step_limit, DETERMINISTIC, 40),
+             render_command_table, DETERMINISTIC, 40),
         Spec("creep-isolate", "docs/tuning.md", (Command("python tools/creep.py --isolate"),),
              render_creep, DETERMINISTIC, 60),
         Spec("creep", "docs/tuning.md", (Command("python tools/creep.py"),), render_creep,
@@ -820,7 +816,7 @@ def blocks() -> list[Spec]:
         Spec("bench-recording", "docs/recording.md",
              (Command("python tools/bench_recording.py"),), render_table_with_load, TIMING, 300),
         Spec("gym-evaluation", "docs/gym.md",
-             (Command("python tools/train_policy.py --evaluate"),), render_gym_evaluation,
+             (Command("python tools/train_policy.py --evaluate"),), render_command_table,
              DETERMINISTIC, 90),
         Spec("gym-training", "docs/gym.md", (Command("python tools/train_policy.py"),),
              render_gym_training, PICTURE, 1200),
