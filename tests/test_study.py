@@ -127,6 +127,25 @@ overrides: ["robots: {{corobot: {{commands: [!Wait {{}}, !DriveDistance {{}}]}}}
         run_scenario(study, DEFAULT_SCENARIO, expand(study)[0])
 
 
+def test_a_runs_sensors_scan_only_when_a_metric_reads_them(tmp_path):
+    from corobot_drake.study.runner import run_scenario
+
+    path = tmp_path / "s.yaml"
+    path.write_text(f"scenario: {DEFAULT_SCENARIO}\nmetrics: [x, max_tilt_deg]\n")
+    study = load_study(path)
+    (run,) = expand(study)
+
+    def enabled():
+        robot = run_scenario(study, DEFAULT_SCENARIO, run).robots["corobot"]
+        return robot.camera.rgb, sorted(s.enabled for s in robot.ir_sensors.values())
+
+    assert enabled() == (False, [False, False])  # no metric reads the camera or the IR
+    study.metrics = ["x", "ir"]
+    assert enabled() == (False, [True, True])
+    study.cameras = True
+    assert enabled() == (True, [True, True])
+
+
 def test_a_worker_reads_the_study_scenario_once(tmp_path):
     """Runs on a worker's `study_scenario` are the runs read from the file, and a run's
     programs and grid values never reach the next run; a bad study override is every run's

@@ -23,6 +23,8 @@ CACHE_SIZE = 3
 """Simulations a worker keeps built (each holds a diagram and its Context)."""
 TIMING_COLUMNS = ("setup", "setup_seconds", "wall_seconds", "cpu_seconds")
 """Columns that depend on the clock or the worker (everything else is deterministic)."""
+IR_METRICS = {"ir"}
+"""The metrics that read the IR sensors."""
 CHECK_PERIOD = 0.1
 """s of simulated time between checks whether every command has ended (`until: commands`)."""
 
@@ -36,7 +38,9 @@ def run_scenario(study: Study, scenario_file: Path, run: Run, base=None):
     """The run's scenario: the file, the study's overrides (`base`, their `study_scenario`, if
     given: a worker reads them once), then the run's parameters and seed, the study's
     programs, then the run's parameters through a list index (checked as a scenario is); the
-    cameras off unless the study asks for them."""
+    cameras off unless the study asks for them, the IR sensors off unless a metric reads them
+    (`IR_METRICS`: nothing else in a scripted run does, and their scans cost a few per cent
+    of a run)."""
     # yaml_load_typed merges a layer into a deep copy of `base`: the run never changes it.
     if base is None:
         base = study_scenario(study, scenario_file)
@@ -56,6 +60,10 @@ def run_scenario(study: Study, scenario_file: Path, run: Run, base=None):
     if not study.cameras:
         for robot in scenario.robots.values():
             robot.camera.rgb = False
+    if not IR_METRICS & set(study.metrics):
+        for robot in scenario.robots.values():
+            for sensor in robot.ir_sensors.values():
+                sensor.enabled = False
     return scenario
 
 
