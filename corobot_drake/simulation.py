@@ -29,6 +29,7 @@ from pydrake.systems.framework import EventStatus
 from corobot_drake import limits
 from corobot_drake.config import scenario as sc
 from corobot_drake.config.bounds import Range, bound_of
+from corobot_drake.config.placement import OVERLAP_TOLERANCE
 from corobot_drake.config.poses import ground_pose, transform_from
 from corobot_drake.config.validate import check_scenario
 from corobot_drake.model import dimensions as dim
@@ -44,10 +45,6 @@ from corobot_drake.station import RobotParts, Station, build_station
 from corobot_drake.systems.drive import CommandRecord, DriveStatus, check_finite
 from corobot_drake.systems.odometry import DriveState
 from corobot_drake.systems.runlog import COLUMNS, RUN_LOG_CHUNK, log_rows, write_csv
-
-POSE_CLEARANCE = 1e-3
-"""m: a SetPose is `blocked` when the robot at the target would overlap another body by more
-than this (a robot set down touching a wall is fine)."""
 
 
 class CommandHandle:
@@ -212,7 +209,8 @@ class Robot:
         return True
 
     def obstacle_at(self, X_WB: RigidTransform) -> str | None:
-        """What the robot would overlap (by more than `POSE_CLEARANCE`) with its chassis at
+        """What the robot would overlap (by more than `placement.OVERLAP_TOLERANCE`, the
+        loader's bound on a start pose: what loads, SetPose accepts) with its chassis at
         `X_WB`: the name of the other body (a world body or another robot's part), or None
         if the pose is clear. The ground (any half-space) does not count: a SetPose stands the
         robot on it. The Context is left as it was (the pose is tried, then the plant's
@@ -238,7 +236,7 @@ class Robot:
                     continue
                 if (other.model_instance() == self._parts.model_instance
                         or isinstance(inspector.GetShape(other_id), HalfSpace)
-                        or pair.depth <= POSE_CLEARANCE):
+                        or pair.depth <= OVERLAP_TOLERANCE):
                     continue
                 owner = plant.GetModelInstanceName(other.model_instance())
                 return owner if owner == other.name() else f"{owner}::{other.name()}"

@@ -108,6 +108,30 @@ def test_set_pose_near_the_box_is_clear_but_a_wheel_inside_is_blocked(sim):
     assert robot.obstacle_at(_ground(2.0)) is None
 
 
+@pytest.mark.parametrize("below", [True, False], ids=["just within", "just beyond"])
+def test_set_pose_and_the_loader_allow_the_same_overlap_with_the_box(below):
+    """One bound (`placement.OVERLAP_TOLERANCE`) for both: a rear wheel 0.1 mm less deep in
+    the giant box than it allows loads and is a free SetPose target; 0.1 mm deeper, the
+    loader refuses it and the SetPose is blocked. (The wheel's edge is the robot's rearmost
+    point, half wheelbase + radius behind the chassis origin; the point-pair depth of a
+    cylinder in a box is its x overlap to well under 0.1 mm, measured 2026-11-23.)"""
+    from corobot_drake.config.placement import OVERLAP_TOLERANCE
+    from corobot_drake.model import dimensions as dim
+
+    fresh = make_sim()  # the box where the scenario puts it, untouched
+    box = fresh.scenario.world.bodies["giant_box"]
+    face = box.pose.GetDeterministicValue().translation()[0] + box.shape.size[0] / 2
+    depth = OVERLAP_TOLERANCE + (-1e-4 if below else 1e-4)
+    x = float(face + dim.HALF_WHEELBASE + dim.WHEEL_RADIUS - depth)
+    assert fresh.robot().obstacle_at(_ground(x)) == (None if below else "giant_box")
+    override = f"robots: {{corobot: {{pose: {{translation: [{x!r}, 0.0, 0.0]}}}}}}"
+    if below:
+        make_sim(override)
+    else:
+        with pytest.raises(sc.ScenarioError, match="inside world body 'giant_box'"):
+            make_sim(override)
+
+
 def test_scripted_set_pose_into_the_box_is_blocked_and_the_script_goes_on():
     sim = make_sim("robots: {corobot: {commands: [!SetPose {x: -1.7, y: 0}, "
                    "!SetPower {left: 0.5, right: 0.5}]}}")

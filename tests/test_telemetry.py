@@ -12,6 +12,7 @@ from pydrake.multibody.plant import MultibodyPlant
 
 from conftest import Stepper
 from corobot_drake.analysis import odometry_calibration as oc
+from corobot_drake.analysis.bench import physics_only_overrides
 from corobot_drake.config.scenario import Drive, load_scenario
 from corobot_drake.model import dimensions as dim
 from corobot_drake.model.sdf import corobot_sdf
@@ -90,7 +91,7 @@ def test_a_log_that_never_turns_cannot_fit_the_track():
 @pytest.fixture(scope="module")
 def sim():
     quiet_drake_warnings()
-    return Simulation(load_scenario(DEFAULT_SCENARIO, overrides=[oc.physics_only("corobot")]))
+    return Simulation(load_scenario(DEFAULT_SCENARIO, overrides=physics_only_overrides()))
 
 
 def test_loads_at_rest_sum_to_the_robots_weight(sim):
@@ -192,7 +193,7 @@ def test_backing_into_the_giant_box_shrinks_the_tip_margin_as_the_chassis_pitche
     # The box is 0.59 m behind the robot's tyres: full power backwards reaches it in ~1.1 s.
     # The shipped axle effort limit (0.3 N m) only rocks the chassis at the impact (~1.3 deg
     # nose up); an unlimited motor climbs the rear wheels up the face (~13 deg nose down).
-    overrides = [oc.physics_only("corobot")]
+    overrides = physics_only_overrides()
     if effort_limit is not None:
         overrides.append(f"robots: {{corobot: {{contact: {{effort_limit: {effort_limit}}}}}}}")
     sim = Simulation(load_scenario(DEFAULT_SCENARIO, overrides=overrides))
@@ -347,11 +348,10 @@ def test_a_simulation_with_meshcat_draws_the_slip_markers():
     from pydrake.geometry import Meshcat
 
     meshcat = Meshcat()
-    sim = Simulation(load_scenario(DEFAULT_SCENARIO, overrides=[oc.physics_only("corobot")]),
+    sim = Simulation(load_scenario(DEFAULT_SCENARIO, overrides=physics_only_overrides()),
                      meshcat)
     sim.advance(0.2)
     assert all(meshcat.HasPath(f"/slip/corobot/{w}") for w in dim.WHEEL_NAMES)
-    headless = Simulation(load_scenario(DEFAULT_SCENARIO,
-                                        overrides=[oc.physics_only("corobot")]))
+    headless = Simulation(load_scenario(DEFAULT_SCENARIO, overrides=physics_only_overrides()))
     with pytest.raises(RuntimeError):  # not in headless runs' diagram at all
         headless.station.diagram.GetSubsystemByName("corobot.slip_markers")

@@ -17,8 +17,8 @@ stack in processes started with and without the allocator setting that the study
 `corobot_drake.analysis.bench` and the micro-benchmarks' modules beside it.
 """
 
-import argparse
 import statistics
+import sys
 
 from tqdm import tqdm
 
@@ -30,7 +30,16 @@ from corobot_drake.analysis import (
     bench_layers,
     bench_raycast,
 )
+from corobot_drake.analysis.arguments import (
+    BENCH_SECONDS,
+    REPEATS,
+    ToolParser,
+    bounded,
+    bounded_list,
+    one_line_errors,
+)
 from corobot_drake.analysis.bench import DEFAULT_PLANT, ROBOT
+from corobot_drake.config.bounds import Range
 from corobot_drake.simulation import quiet_drake_warnings
 
 
@@ -122,18 +131,22 @@ def _micro_benchmarks() -> None:
           f"{bench_camera.camera_frame_ms():.2f} ms (tools/bench_camera.py)", flush=True)
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0],
-                                     formatter_class=argparse.ArgumentDefaultsHelpFormatter)
-    parser.add_argument("--seconds", type=float, default=10.0, help="simulated s per run")
-    parser.add_argument("--repeats", type=int, default=3, help="runs of each; the median")
+FLEET = Range(1, 256, why="robots in a fleet")
+
+
+def _parser() -> ToolParser:
+    parser = ToolParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seconds", type=bounded(BENCH_SECONDS), default=10.0,
+                        help="simulated s per run")
+    parser.add_argument("--repeats", type=bounded(REPEATS, int), default=3,
+                        help="runs of each; the median")
     parser.add_argument("--stacks", help="only stacks containing this text (None: all)")
     parser.add_argument("--plants", help="only plant settings containing this text (None: all)")
     parser.add_argument("--no-micro", action="store_true",
                         help="skip the IR and camera micro-benchmarks")
-    parser.add_argument("--robots", default="",
+    parser.add_argument("--robots", type=bounded_list(FLEET), default=None,
                         help="also fleets of these sizes, e.g. 1,2,4,8,16: robot-seconds per "
-                             "second, physics only (default: none)")
+                             "second, physics only (None: no fleets)")
     parser.add_argument("--layers", action="store_true",
                         help="also the physics-only stack layer by layer, from the plant "
                              "alone (CPU time, the layers interleaved)")
@@ -142,19 +155,33 @@ def main() -> None:
                              "with and without the allocator setting (in turn)")
     parser.add_argument("--no-table", action="store_true",
                         help="skip the stacks x plants table")
-    args = parser.parse_args()
+    return parser
+
+
+def _chosen(parser: ToolParser, flag: str, text: str | None, names: dict) -> dict:
+    """The entries of `names` whose name contains `text` (all for None); at least one."""
+    chosen = {k: v for k, v in names.items() if not text or text in k}
+    if not chosen:
+        parser.error(f"argument {flag}: {text!r} is in none of: {', '.join(names)}")
+    return chosen
+
+
+@one_line_errors
+def main(argv=None) -> int:
+    parser = _parser()
+    args = parser.parse_args(argv)
+    stacks = _chosen(parser, "--stacks", args.stacks, bench.STACKS)
+    plants = _chosen(parser, "--plants", args.plants, bench.PLANTS)
     quiet_drake_warnings()
     print(f"machine: {bench.machine()}", flush=True)
     print(f"{args.seconds:g} s of driving per run, median of {args.repeats}; wall real-time "
           "factor (CPU-time one in parentheses)\n", flush=True)
-    stacks = {k: v for k, v in bench.STACKS.items() if not args.stacks or args.stacks in k}
-    plants = {k: v for k, v in bench.PLANTS.items() if not args.plants or args.plants in k}
     if not args.no_table:
         results = _table(stacks, plants, args.seconds, args.repeats)
         print()
         _in_place(results)
     if args.robots:
-        _fleets([int(n) for n in args.robots.split(",")], args.seconds, args.repeats)
+        _fleets(args.robots, args.seconds, args.repeats)
         print()
     if args.layers:
         _layers(args.seconds, args.repeats)
@@ -164,7 +191,8 @@ def main() -> None:
         print()
     if not args.no_micro:
         _micro_benchmarks()
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

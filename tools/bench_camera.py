@@ -8,21 +8,34 @@ render itself (`camera_frame_ms`), and what the camera adds to a simulation at 3
 `corobot_drake.analysis.bench_camera`. Prints a markdown table, medians of `--repeats` runs.
 """
 
-import argparse
 import statistics
+import sys
 
+from corobot_drake.analysis.arguments import (
+    BENCH_SECONDS,
+    REPEATS,
+    ToolParser,
+    bounded,
+    one_line_errors,
+)
 from corobot_drake.analysis.bench_camera import RENDERERS, camera_frame_ms, camera_overhead_ms
+from corobot_drake.config.bounds import Range
+
+FRAMES = Range(1, 100_000, why="frames rendered per run")
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0],
-                                     formatter_class=argparse.ArgumentDefaultsHelpFormatter)
-    parser.add_argument("--frames", type=int, default=90, help="frames rendered per run")
-    parser.add_argument("--seconds", type=float, default=3.0, help="simulated s per run")
-    parser.add_argument("--repeats", type=int, default=3, help="median of this many runs")
+@one_line_errors
+def main(argv=None) -> int:
+    parser = ToolParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--frames", type=bounded(FRAMES, int), default=90,
+                        help="frames rendered per run")
+    parser.add_argument("--seconds", type=bounded(BENCH_SECONDS), default=3.0,
+                        help="simulated s per run")
+    parser.add_argument("--repeats", type=bounded(REPEATS, int), default=3,
+                        help="median of this many runs")
     parser.add_argument("--renderers", nargs="+", default=list(RENDERERS), choices=RENDERERS,
                         help="renderers to measure")
-    args = parser.parse_args()
+    args = parser.parse_args(argv)
 
     def median(fn, **kwargs):
         return statistics.median(fn(**kwargs) for _ in range(args.repeats))
@@ -46,7 +59,8 @@ def main() -> None:
         cells = [f"{median(fn, renderer=r, **kwargs):.2f}" if r in renderers else "-"
                  for r in args.renderers]
         print(f"| {label} | " + " | ".join(cells) + " |", flush=True)
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

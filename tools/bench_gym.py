@@ -7,22 +7,26 @@ workers (`corobot_drake.gym.bench`).
     python tools/bench_gym.py [--steps 100] [--episodes 4]
 """
 
-import argparse
 import os
 import sys
 
 from tqdm import tqdm
 
+from corobot_drake.analysis.arguments import ToolParser, bounded, one_line_errors
+from corobot_drake.config.bounds import Range
 from corobot_drake.gym import bench
 from corobot_drake.simulation import quiet_drake_warnings
 
+STEPS = Range(1, 1_000_000, why="env steps per case")
+EPISODES = Range(1, 10_000, why="episodes per Ray run")
 
+
+@one_line_errors
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0],
-                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
-    p.add_argument("--steps", type=int, default=100,
+    p = ToolParser(description=__doc__.splitlines()[0])
+    p.add_argument("--steps", type=bounded(STEPS, int), default=100,
                    help="env steps in process; vector steps per vector env")
-    p.add_argument("--episodes", type=int, default=4,
+    p.add_argument("--episodes", type=bounded(EPISODES, int), default=4,
                    help="episodes (60 steps each with random actions) per Ray run")
     args = p.parse_args(argv)
     quiet_drake_warnings()

@@ -22,11 +22,18 @@ Run: ``.venv/bin/python tools/bench_ir.py [--seconds 10] [--repeats 5]``. It pri
 The measurements (and the no-op sensor) are `corobot_drake.analysis.bench_ir`.
 """
 
-import argparse
 import os
+import sys
 import time
 
 from corobot_drake.analysis import bench_ir
+from corobot_drake.analysis.arguments import (
+    BENCH_SECONDS,
+    REPEATS,
+    ToolParser,
+    bounded,
+    one_line_errors,
+)
 from corobot_drake.analysis.bench_ir import (
     NO_OP,
     NO_OP_200,
@@ -87,12 +94,14 @@ def _print_in_place(med: dict[str, Run]) -> None:
               f"{(1 / ir.realtime_factor - 1 / base.realtime_factor) / rate * 1e3:.3f} ms")
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0],
-                                     formatter_class=argparse.ArgumentDefaultsHelpFormatter)
-    parser.add_argument("--seconds", type=float, default=10.0, help="simulated s per RTF run")
-    parser.add_argument("--repeats", type=int, default=5, help="runs of each; the median")
-    args = parser.parse_args()
+@one_line_errors
+def main(argv=None) -> int:
+    parser = ToolParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seconds", type=bounded(BENCH_SECONDS), default=10.0,
+                        help="simulated s per RTF run")
+    parser.add_argument("--repeats", type=bounded(REPEATS, int), default=5,
+                        help="runs of each; the median")
+    args = parser.parse_args(argv)
     quiet_drake_warnings()
     print(f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
     _print_scan_costs(args.seconds)
@@ -100,7 +109,8 @@ def main() -> None:
     _print_in_place(med)
     print(f"(the median of {args.repeats} runs of {args.seconds:g} simulated s each; "
           f"load average now {os.getloadavg()[0]:.1f})")
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

@@ -10,27 +10,36 @@ a shorter run the growth so far plus the slope for the rest of the hour). The me
 `corobot_drake.analysis.bench_memory`.
 """
 
-import argparse
 import shlex
 import sys
 
 from tqdm import tqdm
 
 from corobot_drake.analysis import bench_memory
+from corobot_drake.analysis.arguments import ToolParser, bounded, one_line_errors
+from corobot_drake.config.bounds import Range
+
+SIM_MINUTES = Range(0.0, 10_000.0, low_open=True, unit="min")
+WARMUP_MINUTES = Range(0.0, 10_000.0, unit="min", why="less than --sim-minutes")
+POLL_HZ = Range(0.0, 1000.0, low_open=True, unit="Hz")
+SAMPLE_EVERY = Range(0.0, 3600.0, low_open=True, unit="s")
 
 
+@one_line_errors
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0],
-                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
-    p.add_argument("--sim-minutes", type=float, default=60.0,
+    p = ToolParser(description=__doc__.splitlines()[0])
+    p.add_argument("--sim-minutes", type=bounded(SIM_MINUTES), default=60.0,
                    help="simulated minutes to serve")
-    p.add_argument("--warmup-minutes", type=float, default=2.0,
+    p.add_argument("--warmup-minutes", type=bounded(WARMUP_MINUTES), default=2.0,
                    help="simulated minutes before the growth is counted")
-    p.add_argument("--poll-hz", type=float, default=10.0,
+    p.add_argument("--poll-hz", type=bounded(POLL_HZ), default=10.0,
                    help="the poller's rate, wall clock")
-    p.add_argument("--sample-every", type=float, default=30.0,
+    p.add_argument("--sample-every", type=bounded(SAMPLE_EVERY), default=30.0,
                    help="simulated s between memory samples")
     args = p.parse_args(argv)
+    if args.warmup_minutes >= args.sim_minutes:
+        p.error(f"argument --warmup-minutes: must be less than --sim-minutes "
+                f"({args.sim_minutes:g}); got {args.warmup_minutes:g}")
     bar = tqdm(total=round(args.sim_minutes * 60), unit="sim s", file=sys.stderr)
 
     print("sim_min  rss_MB", flush=True)

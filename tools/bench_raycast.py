@@ -11,9 +11,10 @@ best batch, wall clock).
 Run: ``.venv/bin/python tools/bench_raycast.py``.
 """
 
-import argparse
 import statistics
+import sys
 
+from corobot_drake.analysis.arguments import ToolParser, one_line_errors
 from corobot_drake.analysis.bench_raycast import (
     MAXIMUM_RANGE,
     SAMPLES,
@@ -24,9 +25,9 @@ from corobot_drake.analysis.bench_raycast import (
 )
 
 
-def main() -> None:
-    argparse.ArgumentParser(description=__doc__.splitlines()[0],
-                            formatter_class=argparse.ArgumentDefaultsHelpFormatter).parse_args()
+@one_line_errors
+def main(argv=None) -> int:
+    ToolParser(description=__doc__.splitlines()[0]).parse_args(argv)
     _, context, plant, scene_graph, chassis, robot = build_scene()
     caster, scan = make_fan_scan(plant, scene_graph, chassis, robot, context)
     distances = scan()
@@ -51,7 +52,8 @@ def main() -> None:
         samples = batch_seconds(fn, 5000)
         print(f"{label:50s} median {statistics.median(samples) * 1e6:6.1f} us"
               f"   (best batch {min(samples) * 1e6:6.1f} us)")
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

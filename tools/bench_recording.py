@@ -6,24 +6,31 @@ Runs of the default scene (IR and camera on, driving a circle), plain and with e
 median wall time (run and file writing), its ratio to the plain run's, and the file sizes.
 """
 
-import argparse
 import os
 import statistics
+import sys
 import tempfile
 
 from tqdm import tqdm
 
+from corobot_drake.analysis.arguments import (
+    BENCH_SECONDS,
+    REPEATS,
+    ToolParser,
+    bounded,
+    one_line_errors,
+)
 from corobot_drake.analysis.bench_recording import KINDS, recording_run
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0],
-                                     formatter_class=argparse.ArgumentDefaultsHelpFormatter)
-    parser.add_argument("--seconds", type=float, default=10.0,
+@one_line_errors
+def main(argv=None) -> int:
+    parser = ToolParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seconds", type=bounded(BENCH_SECONDS), default=10.0,
                         help="simulated seconds per run")
-    parser.add_argument("--repeats", type=int, default=3,
+    parser.add_argument("--repeats", type=bounded(REPEATS, int), default=3,
                         help="runs of each kind, the median kept")
-    args = parser.parse_args()
+    args = parser.parse_args(argv)
     times: dict[str, list[float]] = {k: [] for k in KINDS}
     sizes: dict[str, int] = {}
     load = [os.getloadavg()[0]]
@@ -42,7 +49,8 @@ def main() -> None:
         t = statistics.median(times[kind])
         size = f"{sizes[kind] / 1e6:.1f} MB" if sizes[kind] else "-"
         print(f"| {kind} | {t:.2f} | {t / plain:.2f}x | {size} |")
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

@@ -8,7 +8,6 @@ time of a big study on a cluster (`corobot_drake.analysis.bench_study`).
     python tools/bench_study.py [--seeds 12] [--duration 4]
 """
 
-import argparse
 import os
 import sys
 import tempfile
@@ -17,14 +16,20 @@ from pathlib import Path
 from tqdm import tqdm
 
 from corobot_drake.analysis import bench_study
+from corobot_drake.analysis.arguments import BENCH_SECONDS, ToolParser, bounded, one_line_errors
+from corobot_drake.config.bounds import Range
 from corobot_drake.simulation import quiet_drake_warnings
 
+SEEDS = Range(1, 10_000, why="runs of the study")
 
+
+@one_line_errors
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0],
-                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
-    p.add_argument("--seeds", type=int, default=12, help="runs (seeds of one scenario)")
-    p.add_argument("--duration", type=float, default=4.0, help="simulated s per run")
+    p = ToolParser(description=__doc__.splitlines()[0])
+    p.add_argument("--seeds", type=bounded(SEEDS, int), default=12,
+                   help="runs (seeds of one scenario)")
+    p.add_argument("--duration", type=bounded(BENCH_SECONDS), default=4.0,
+                   help="simulated s per run")
     args = p.parse_args(argv)
     quiet_drake_warnings()
     load = [os.getloadavg()[0]]

@@ -288,6 +288,7 @@ def measure_event_times(repeats: int = 5, seconds: float = 10.0) -> dict:
     """Real-time factors (wall, median of `repeats`) and simulator steps per simulated second
     of the default scene driving, physics only, with the periodic events on and between the
     plant's 10 ms steps."""
+    from corobot_drake.analysis.bench import physics_only_overrides
     from corobot_drake.config.scenario import load_scenario
     from corobot_drake.simulation import Simulation, quiet_drake_warnings
 
@@ -296,27 +297,25 @@ def measure_event_times(repeats: int = 5, seconds: float = 10.0) -> dict:
                "!Wait {seconds: 3}, !SetPower {left: 0.6, right: 1.0}, !Wait {seconds: 3}, "
                "!SetPower {left: -1.0, right: 1.0}]}}")
 
-    def ir(rate: float | None) -> str:
-        if rate is None:
-            return ("robots: {corobot: {ir_sensors: {front: {enabled: false}, "
-                    "rear: {enabled: false}}}}")
-        return (f"robots: {{corobot: {{ir_sensors: {{front: {{scan_rate_hz: {rate}}}, "
-                f"rear: {{scan_rate_hz: {rate}}}}}}}}}")
+    def ir(rate: float) -> list[str]:
+        return [NO_CAMERA, f"robots: {{corobot: {{ir_sensors: {{front: {{scan_rate_hz: "
+                           f"{rate}}}, rear: {{scan_rate_hz: {rate}}}}}}}}}"]
 
+    physics = physics_only_overrides()
     cases = {
-        "shipped": [ir(None)],
-        "control_60_hz": [ir(None), f"robots: {{corobot: {{drive: {{control_period: "
+        "shipped": physics,
+        "control_60_hz": [*physics, f"robots: {{corobot: {{drive: {{control_period: "
                                     f"{1 / 60!r}}}}}}}"],
-        "control_50_hz": [ir(None), "robots: {corobot: {drive: {control_period: 0.02}}}"],
-        "ir_20_hz": [ir(20.0)],
-        "ir_19_9_hz": [ir(19.9)],
+        "control_50_hz": [*physics, "robots: {corobot: {drive: {control_period: 0.02}}}"],
+        "ir_20_hz": ir(20.0),
+        "ir_19_9_hz": ir(19.9),
     }
     runs: dict[str, list[float]] = {name: [] for name in cases}
     steps: dict[str, float] = {}
     for _ in range(repeats):  # in turn: a slow drift of the load spreads over all
         for name, overrides in cases.items():
             sim = Simulation(load_scenario(DEFAULT_SCENARIO,
-                                           overrides=[NO_CAMERA, driving, *overrides]))
+                                           overrides=[driving, *overrides]))
             taken = sim.simulator.get_num_steps_taken()
             start = time.perf_counter()
             sim.advance(seconds)

@@ -8,11 +8,18 @@ Saves the policy, plots the learning curve and prints the held-out success rates
     python tools/train_policy.py --evaluate     # the saved policy and random actions only
 """
 
-import argparse
 import dataclasses as dc
 import sys
 from pathlib import Path
 
+from corobot_drake.analysis.arguments import (
+    WORKERS,
+    ToolParser,
+    bounded,
+    one_line_errors,
+    output_file,
+)
+from corobot_drake.config.bounds import OneOf, bound_of
 from corobot_drake.gym.policy import SHIPPED, LinearPolicy
 from corobot_drake.gym.rollouts import episode_pool
 from corobot_drake.gym.train import HELD_OUT, CemSettings, evaluate, plot_curve, train
@@ -33,25 +40,43 @@ def _print_evaluation(policy: dict, start: dict, random: dict) -> None:
               f"{s['mean_steps']:.1f} | {s['collision_steps']:.1f} | {s['stall_steps']:.1f} |")
 
 
-def main(argv=None) -> int:
+def _setting(parser: ToolParser, field: dc.Field, default) -> None:
+    """A --flag for one CemSettings field, checked against the field's bound."""
+    bound = bound_of(field)
+    kwargs = ({"choices": bound.names} if isinstance(bound, OneOf)
+              else {"type": bounded(bound, type(default))})
+    parser.add_argument(f"--{field.name.replace('_', '-')}", default=default,
+                        help=f"CEM {field.name}", **kwargs)
+
+
+def _parser() -> ToolParser:
+    p = ToolParser(description=__doc__.splitlines()[0])
     defaults = CemSettings()
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0],
-                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     for field in dc.fields(CemSettings):
-        p.add_argument(f"--{field.name.replace('_', '-')}", type=type(getattr(defaults,
-                                                                                field.name)),
-                       default=getattr(defaults, field.name), help=f"CEM {field.name}")
-    p.add_argument("--workers", type=int, default=None,
+        _setting(p, field, getattr(defaults, field.name))
+    p.add_argument("--workers", type=bounded(WORKERS, int), default=None,
                    help="Ray workers (None: this machine's cores)")
     p.add_argument("--address", default=None,
                    help="a Ray cluster's address (None: a local instance)")
-    p.add_argument("--out", type=Path, default=SHIPPED, help="where the policy is saved")
-    p.add_argument("--plot", type=Path, default=REPO / "docs/images/gym_learning_curve.png",
+    p.add_argument("--out", type=output_file, default=SHIPPED, help="where the policy is saved")
+    p.add_argument("--plot", type=output_file,
+                   default=REPO / "docs/images/gym_learning_curve.png",
                    help="the learning curve's picture")
     p.add_argument("--evaluate", action="store_true",
                    help="only evaluate the policy at --out and random actions on the held-out "
                         "seeds")
+    return p
+
+
+@one_line_errors
+def main(argv=None) -> int:
+    p = _parser()
     args = p.parse_args(argv)
+    if args.elite > args.population:
+        p.error(f"argument --elite: must be at most --population ({args.population}); "
+                f"got {args.elite}")
+    if args.evaluate and not args.out.is_file():
+        p.error(f"argument --out: {args.out}: no such file (--evaluate reads a saved policy)")
     quiet_drake_warnings()
     settings = CemSettings(**{f.name: getattr(args, f.name) for f in dc.fields(CemSettings)})
     with episode_pool(args.workers, args.address) as pool:

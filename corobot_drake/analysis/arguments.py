@@ -3,8 +3,9 @@
 
 - `ToolParser`: argparse with each option's default in `--help` and argparse's own errors on
   one line;
-- `bounded(Range)`, `output_file`, `output_directory`: argparse `type=`s that check a number
-  against its bound, or that an output can be written, before anything runs;
+- `bounded(Range)`, `bounded_list(Range)`, `output_file`, `output_directory`: argparse
+  `type=`s that check a number (or each of a comma-separated list) against its bound, or that
+  an output can be written, before anything runs;
 - `one_line_errors(main)`: runs a tool's `main`, turning a bad input file (ScenarioError,
   LogError) or an output that cannot be written (OSError) into its one line.
 """
@@ -24,6 +25,10 @@ from corobot_drake.config.scenario import ScenarioError
 WORKERS = Range(1, 1024, why="Ray workers; None: the machine's cores")
 """--workers of the tools that run a study (as `python -m corobot_drake.study`)."""
 TICKS_PER_REVOLUTION = Range(1, 1_000_000, why="encoder counts per wheel revolution")
+BENCH_SECONDS = Range(0.0, 3600.0, low_open=True, unit="s")
+"""--seconds of the benchmarks: simulated seconds per timed run."""
+REPEATS = Range(1, 1000, why="runs of each, the median kept")
+"""--repeats of the benchmarks."""
 
 
 class ToolParser(argparse.ArgumentParser):
@@ -53,6 +58,17 @@ def bounded(bound: Range, kind=float):
         return value
 
     parse.__name__ = kind.__name__  # argparse's "invalid int value" names the type
+    return parse
+
+
+def bounded_list(bound: Range, kind=int):
+    """An argparse `type`: comma-separated `kind` numbers, each within `bound` (`1,2,4`)."""
+    each = bounded(bound, kind)
+
+    def parse(text: str) -> list:
+        return [each(item.strip()) for item in text.split(",")]
+
+    parse.__name__ = f"list of {kind.__name__}"
     return parse
 
 

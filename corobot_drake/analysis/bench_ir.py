@@ -25,19 +25,18 @@ from typing import ClassVar
 
 from pydrake.systems.framework import EventStatus
 
-from corobot_drake.analysis.bench import DRIVING
+from corobot_drake.analysis.bench import DRIVING, physics_only_overrides
 from corobot_drake.config.scenario import load_scenario
 from corobot_drake.resources import DEFAULT_SCENARIO
 from corobot_drake.sensors import ir_sensor
 from corobot_drake.simulation import Simulation
 
 NO_CAMERA = ["robots: {corobot: {camera: {rgb: false}}}"]
-NO_IR = "robots: {corobot: {ir_sensors: {front: {enabled: false}, rear: {enabled: false}}}}"
 IR_200_HZ = ("robots: {corobot: {ir_sensors: {front: {scan_rate_hz: 200}, "
              "rear: {scan_rate_hz: 200}}}}")
 
 CONFIGURATIONS = {
-    "physics + drive, no IR, no camera": [*NO_CAMERA, NO_IR],
+    "physics + drive, no IR, no camera": physics_only_overrides(),
     "physics + drive + 2 IR at 20 Hz, no camera": [*NO_CAMERA],
     "physics + drive + 2 IR at 200 Hz, no camera": [*NO_CAMERA, IR_200_HZ],
 }

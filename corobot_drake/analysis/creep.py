@@ -69,7 +69,7 @@ def rest_run(start_angle: float = 0.0, seconds: float = 30.0, hold: bool = True,
     """Leaves the robot of `scenario` (its first) at rest, wheels at `start_angle`, with the
     drive's hold on or off (`drive.hold_gain` 0), and measures it over `seconds` after
     `SETTLE`."""
-    from corobot_drake.analysis.odometry_calibration import physics_only
+    from corobot_drake.analysis.bench import physics_only_overrides
     from corobot_drake.config.scenario import load_scenario
     from corobot_drake.simulation import Simulation, quiet_drake_warnings
 
@@ -79,7 +79,7 @@ def rest_run(start_angle: float = 0.0, seconds: float = 30.0, hold: bool = True,
     angles = ", ".join([repr(float(start_angle))] * 4)
     robot_override = f"robots: {{{name}: {{wheel_angles: [{angles}], commands: []"
     robot_override += "}}" if hold else ", drive: {hold_gain: 0.0}}}"
-    sim = Simulation(load_scenario(scenario, overrides=[physics_only(name), *overrides,
+    sim = Simulation(load_scenario(scenario, overrides=[*physics_only_overrides(name), *overrides,
                                                          robot_override]))
     robot = sim.robot(name)
     plant = sim.station.plant

@@ -137,19 +137,16 @@ def square_commands(side: float = SQUARE_SIDE, power: float = CALIBRATION_POWER)
             for c in (sc.DriveDistance(side, power), sc.RotateDegrees(sign * 90.0, power))]
 
 
-def physics_only(robot: str) -> str:
-    """An override without the camera and the IR sensors (the odometry needs neither)."""
-    return (f"robots: {{{robot}: {{camera: {{rgb: false}}, ir_sensors: "
-            f"{{front: {{enabled: false}}, rear: {{enabled: false}}}}}}}}")
-
-
 def run_script(scenario_path, robot: str, commands: list, overrides=(), progress=None):
-    """Runs `commands` on `robot` (physics only) until they end; returns the Simulation."""
+    """Runs `commands` on `robot` (physics only: the odometry needs neither the camera nor
+    the IR sensors) until they end; returns the Simulation."""
+    from corobot_drake.analysis.bench import physics_only_overrides
     from corobot_drake.simulation import Simulation, quiet_drake_warnings
     from corobot_drake.study.runner import commands_ended
 
     quiet_drake_warnings()
-    scenario = sc.load_scenario(scenario_path, overrides=[physics_only(robot), *overrides])
+    scenario = sc.load_scenario(scenario_path, overrides=[*physics_only_overrides(robot),
+                                                               *overrides])
     scenario.robots[robot].commands = list(commands)
     sim = Simulation(scenario)
     while not commands_ended(sim):

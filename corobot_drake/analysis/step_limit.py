@@ -22,14 +22,11 @@ SAMPLE = 0.05
 def measure(time_step: float) -> dict:
     """{time_step, sink_mm (deepest the chassis frame went below the ground), rise_mm
     (highest above), tilt_deg (largest)} over the drive."""
+    from corobot_drake.analysis.bench import physics_only_overrides
     from corobot_drake.simulation import Simulation
 
-    scenario = load_scenario(DEFAULT_SCENARIO, overrides=[SCRIPT])
+    scenario = load_scenario(DEFAULT_SCENARIO, overrides=[SCRIPT, *physics_only_overrides()])
     scenario.plant_config.time_step = time_step
-    for robot in scenario.robots.values():
-        robot.camera.rgb = False
-        for ir in robot.ir_sensors.values():
-            ir.enabled = False
     sim = Simulation(scenario, check=False)  # steps beyond the bound: what it measures
     plant, chassis = sim.station.plant, sim.robot()._parts.chassis
     heights, tilts = [], []

@@ -16,6 +16,7 @@ import time
 import numpy as np
 from tqdm import tqdm
 
+from corobot_drake.config.bounds import OneOf, Range, bounded
 from corobot_drake.gym.policy import NUM_FEATURES, LinearPolicy
 from corobot_drake.gym.rollouts import EpisodePool, summary
 
@@ -27,19 +28,22 @@ HELD_OUT = tuple(range(10))
 
 @dc.dataclass(frozen=True)
 class CemSettings:
-    generations: int = 5
-    population: int = 8
-    episodes: int = 4
+    """The training's settings, each with its bound (`tools/train_policy.py` checks its flags
+    against them)."""
+
+    generations: int = bounded(5, Range(1, 1000))
+    population: int = bounded(8, Range(1, 10_000, why="candidates per generation"))
+    episodes: int = bounded(4, Range(1, 1000))
     """Training seeds per generation (every candidate plays all of them)."""
-    elite: int = 2
-    start: str = "goal_seeker"
+    elite: int = bounded(2, Range(1, 10_000, why="at most the population"))
+    start: str = bounded("goal_seeker", OneOf(("goal_seeker", "zero")))
     """The initial mean: `goal_seeker` (`LinearPolicy.goal_seeker`, hand-written) or `zero`
     (a robot that stays; it needs many more generations)."""
-    sigma: float = 0.7
+    sigma: float = bounded(0.7, Range(0.0, 100.0, low_open=True))
     """Initial standard deviation of every weight."""
-    extra_sigma: float = 0.2
+    extra_sigma: float = bounded(0.2, Range(0.0, 100.0))
     """Spread added to the refitted one, decaying linearly to 0 at the last generation."""
-    seed: int = 0
+    seed: int = bounded(0, Range(0, 2**32 - 1, why="numpy's seed"))
     """Seeds the sampling of candidates."""
 
 
