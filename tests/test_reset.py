@@ -83,7 +83,8 @@ def test_reset_checks_its_scenario_as_the_constructor_does():
     assert str(reset.value) == str(built.value)
     assert "robots.corobot.pose" in str(built.value) and "below the ground" in str(built.value)
     sim.scenario.robots["corobot"].velocity[0] = math.nan  # a list, in place
-    with pytest.raises(ScenarioError, match=r"robots\.corobot\.velocity\[0\]: must be in .*; got nan$"):
+    with pytest.raises(ScenarioError,
+                       match=r"robots\.corobot\.velocity\[0\]: must be in .*; got nan$"):
         sim.reset()
     sim.reset(bad, check=False)  # taken as it is: what a tool measuring beyond bounds asks
     assert sim.scenario is bad

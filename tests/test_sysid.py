@@ -102,9 +102,12 @@ def test_fit_tool_reports_bad_csv(tmp_path):
     assert f"{path}:3: left_ticks is not a number" in run.stderr
 
 
-def test_set_motor_torque_scaling_keeps_the_file():
+def test_set_drive_field_keeps_the_file():
+    def set_motor_torque_scaling(text, robot, value):
+        return sysid.set_drive_field(text, robot, "motor_torque_scaling", value)
+
     text = DEFAULT_SCENARIO.read_text()
-    updated = sysid.set_motor_torque_scaling(text, "corobot", 10.07)
+    updated = set_motor_torque_scaling(text, "corobot", 10.07)
     changed = [(a, b) for a, b in zip(text.splitlines(), updated.splitlines(), strict=True)
                if a != b]
     assert len(changed) == 1
@@ -113,13 +116,12 @@ def test_set_motor_torque_scaling_keeps_the_file():
     assert after.split("#")[1] == before.split("#")[1]  # the comment survives
     two = ("robots:\n  a:\n    drive: {motor_torque_scaling: 5.0, slew_rate: 3}  # a\n"
            "  b:\n    drive:\n      motor_torque_scaling: 7  # b's\n")
-    assert sysid.set_motor_torque_scaling(two, "b", 9.5) == two.replace("7  # b's", "9.5  # b's")
-    assert sysid.set_motor_torque_scaling(two, "a", 6.25) == two.replace("5.0,", "6.25,")
+    assert set_motor_torque_scaling(two, "b", 9.5) == two.replace("7  # b's", "9.5  # b's")
+    assert set_motor_torque_scaling(two, "a", 6.25) == two.replace("5.0,", "6.25,")
     with pytest.raises(ValueError, match="not found"):
-        sysid.set_motor_torque_scaling(two, "c", 1.0)
+        set_motor_torque_scaling(two, "c", 1.0)
     with pytest.raises(ValueError, match="no `motor_torque_scaling:`"):
-        sysid.set_motor_torque_scaling("robots:\n  a:\n    pose: {translation: [1, 0, 0]}\n", "a",
-                                       1.0)
+        set_motor_torque_scaling("robots:\n  a:\n    pose: {translation: [1, 0, 0]}\n", "a", 1.0)
 
 
 def test_tuner_steps_toward_the_target(tmp_path):

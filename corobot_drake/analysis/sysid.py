@@ -431,20 +431,6 @@ def set_drive_field(text: str, robot: str, field: str, value: float, comment: st
     return "".join(lines)
 
 
-def set_motor_torque_scaling(text: str, robot: str, value: float) -> str:
-    """`text` (a scenario YAML) with robot `robot`'s drive.motor_torque_scaling set to `value`.
-
-    Only the number on that robot's `motor_torque_scaling:` line changes: comments, layout and
-    every other line stay as they are. Raises ValueError if the robot or the field is absent.
-    """
-    lines = text.splitlines(keepends=True)
-    start, end = _robot_block(lines, robot)
-    if not any("motor_torque_scaling" in ln.partition("#")[0] for ln in lines[start:end]):
-        raise ValueError(f"robot {robot!r} has no `motor_torque_scaling:` line; add one under "
-                         "its `drive:` (e.g. `drive: {motor_torque_scaling: 10.16}`)")
-    return set_drive_field(text, robot, "motor_torque_scaling", value)
-
-
 @dc.dataclass(frozen=True)
 class DriveField:
     """One value for a robot's `drive:` block: the field, its value (in the field's unit), the
