@@ -507,7 +507,7 @@ class Simulation:
         the run's topics on (`recording.publishers`; its sinks: an MCAP file, a live server).
         `run_log_window`: see the attribute. The scenario gets the checks `load_scenario`
         runs (it may have been built or changed in Python): ScenarioError names the field;
-        one unchanged since `load_scenario` returned it is not checked twice (~1 ms to tell).
+        one unchanged since `load_scenario` returned it is not checked twice (`mark_checked`).
         `check=False` skips them, for a tool that measures beyond the bounds on purpose
         (`analysis/step_limit.py`); `reset` then skips them too unless asked."""
         if check:

@@ -14,7 +14,9 @@ For each layer (a file, YAML text, an `--override`), `LayerChecks`:
 
 Either way a problem stops the load with one `ScenarioError` line, `FILE:LINE: field.path:
 message` (the line of the field in this layer, or of its nearest enclosing field).
-`build_station` and the systems trust what `load_scenario` returns and do not check again.
+`build_station` and the systems trust what `load_scenario` returns and do not check again;
+`check_scenario` (what `Simulation` runs on a scenario changed in Python) skips one unchanged
+since it passed (`mark_checked`).
 """
 
 import dataclasses as dc
