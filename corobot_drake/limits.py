@@ -35,6 +35,10 @@ POSITION = (-POSITION_LIMIT, POSITION_LIMIT)
 YAW_DEG = (-3600.0, 3600.0)
 """set_pose: heading, degrees."""
 
+WORKERS = (1, 1024)
+"""A study's Ray workers (`study.engine.run_study`, `ray_session`; the tools' --workers), a
+whole number; None means this machine's cores (or a joined cluster's CPUs)."""
+
 LIVE_RUN_LOG_WINDOW = 300.0
 """s of run log a live run keeps in memory (1.9 MB a robot): a served simulation and the
 interactive Meshcat run, which may be left running for days (`Simulation.run_log_window`)."""

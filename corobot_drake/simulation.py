@@ -505,10 +505,12 @@ class Simulation:
         the run's topics on (`recording.publishers`; its sinks: an MCAP file, a live server).
         `run_log_window`: see the attribute. The scenario gets the checks `load_scenario`
         runs (it may have been built or changed in Python): ScenarioError names the field;
+        one unchanged since `load_scenario` returned it is not checked twice (`mark_checked`).
         `check=False` skips them, for a tool that measures beyond the bounds on purpose
-        (`analysis/step_limit.py`)."""
+        (`analysis/step_limit.py`); `reset` then skips them too unless asked."""
         if check:
             check_scenario(scenario)
+        self._check = check
         self.scenario = scenario
         self._record_live: bool | None = None
         """Recording: True with a browser's Meshcat (frames shown live), False offline."""
@@ -550,13 +552,17 @@ class Simulation:
         self.simulator.Initialize()
         self._wall_seconds = 0.0
 
-    def reset(self, scenario: sc.Scenario | None = None, *, key: str | None = None) -> None:
+    def reset(self, scenario: sc.Scenario | None = None, *, key: str | None = None,
+              check: bool | None = None) -> None:
         """Starts again from the beginning of `scenario` (default: this simulation's) on the
         diagram already built: the Context goes back to its defaults, then takes the
         scenario's seed, start time, scripts and initial poses and velocities. A run after a
-        reset is bit for bit a run of a freshly built simulation. The scenario may differ from
-        the built one only in those values (`diagram_key`; pass `key` if you have it: it
-        costs more than the reset); ValueError otherwise."""
+        reset is bit for bit a run of a freshly built simulation. The scenario gets the
+        constructor's checks (ScenarioError; `check` defaults to the constructor's), then may
+        differ from the built one only in those values (`diagram_key`; pass `key` if you have
+        it: it costs more than the reset); ValueError otherwise."""
+        if self._check if check is None else check:
+            check_scenario(scenario or self.scenario)
         if self._diagram_key is None:
             self._diagram_key = diagram_key(self.scenario)
         if scenario is not None and (key or diagram_key(scenario)) != self._diagram_key:

@@ -1,5 +1,7 @@
 """The scenario's one pose convention (Drake's schema Transform) and its one validation pass."""
 
+import copy
+import dataclasses as dc
 import math
 
 import numpy as np
@@ -161,3 +163,83 @@ def test_a_saved_commands_recent_progress_is_checked(override, field, words):
         load_scenario(DEFAULT_SCENARIO, overrides=[override])
     assert str(e.value).count("\n") == 0
     assert f"--override:1: robots.corobot.{field}:" in str(e.value) and words in str(e.value)
+
+
+def test_a_loaded_scenario_is_checked_once_until_it_changes(monkeypatch):
+    """`load_scenario`'s result is marked checked: `Simulation` does not validate it again,
+    but any change since (a field set, an array or a list changed in place) is checked."""
+    from corobot_drake.config import validate
+
+    calls = []
+    validate_once = validate.LayerChecks.validate
+    monkeypatch.setattr(validate.LayerChecks, "validate",
+                        lambda self, s: (calls.append(s), validate_once(self, s)))
+    scenario = load_scenario(DEFAULT_SCENARIO)
+    loaded = len(calls)
+    assert loaded == 1  # one layer: validated once as it loads
+    validate.check_scenario(scenario)
+    assert len(calls) == loaded  # unchanged: not again
+    for change in (lambda s: setattr(s.robots["corobot"].drive, "slew_rate", 29.0),
+                   lambda s: s.robots["corobot"].velocity.__setitem__(0, 0.01),  # in place
+                   lambda s: s.robots["corobot"].commands.append(sc.Wait(1.0)),
+                   lambda s: setattr(s.robots["corobot"].camera, "fps", 15.0),
+                   lambda s: setattr(s.plant_config, "time_step", 0.005)):
+        change(scenario)
+        before = len(calls)
+        validate.check_scenario(scenario)
+        validate.check_scenario(scenario)
+        assert len(calls) == before + 1  # the change checked, once
+
+
+def _other(number):
+    """Another number of the same type, in [0, 1] if `number` is (a colour channel)."""
+    if isinstance(number, int | np.integer):
+        return number + 1
+    return 0.0 if not math.isfinite(number) else number - 0.25 if number >= 0.25 else (
+        number + 0.25)
+
+
+def _leaves(value, path=""):
+    """(path, setter) of every number and string in a scenario (dataclass and Drake fields,
+    dicts, lists, arrays: Drake's are read-only, set whole)."""
+    children = (value.items() if isinstance(value, dict) else enumerate(value)
+                if isinstance(value, list) else
+                [(f.name, getattr(value, f.name)) for f in dc.fields(value)]
+                if dc.is_dataclass(value) else
+                [(f.name, getattr(value, f.name)) for f in type(value).__fields__]
+                if hasattr(type(value), "__fields__") else [])
+    for key, child in children:
+        if isinstance(child, np.ndarray):
+            for i in range(child.size):
+                def bump_item(obj=value, name=key, old=child, i=i):
+                    new = old.copy()
+                    new.flat[i] = _other(new.flat[i])
+                    setattr(obj, name, new)
+                yield f"{path}.{key}[{i}]", bump_item
+        elif isinstance(child, bool | int | float | str) and isinstance(value, list):
+            def bump_entry(obj=value, i=key, old=child):
+                obj[i] = _other(old)
+            yield f"{path}[{key}]", bump_entry
+        elif isinstance(child, bool | int | float | str) and not isinstance(value, dict):
+            def bump(obj=value, name=key, old=child):
+                setattr(obj, name, (not old) if isinstance(old, bool) else old + "x"
+                        if isinstance(old, str) else _other(old))
+            yield f"{path}.{key}", bump
+        else:
+            yield from _leaves(child, f"{path}.{key}")
+
+
+def test_the_checked_marker_sees_every_field_change():
+    """Every number, flag and string of the default scenario, changed alone, makes the
+    scenario's content differ from the one marked at load: nothing changes unseen."""
+    from corobot_drake.config import validate
+
+    loaded = load_scenario(DEFAULT_SCENARIO)
+    leaves = list(_leaves(loaded))
+    assert len(leaves) > 150  # the walk reaches the Drake structs' fields too
+    for i, (path, _) in enumerate(leaves):
+        scenario = copy.deepcopy(loaded)  # the marker too
+        marked = scenario._checked_content
+        assert marked == validate._content(scenario)
+        list(_leaves(scenario))[i][1]()
+        assert validate._content(scenario) != marked, path

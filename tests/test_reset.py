@@ -1,6 +1,8 @@
 """Simulation.reset: a run after a reset is bit for bit the run of a freshly built
 simulation, for the same scenario and for one that differs in per-run values only."""
 
+import math
+
 import numpy as np
 import pytest
 
@@ -63,3 +65,30 @@ def test_reset_refuses_a_scenario_that_needs_another_diagram():
     sim = Simulation(scenario())
     with pytest.raises(ValueError, match="build a new Simulation"):
         sim.reset(scenario("robots: {corobot: {drive: {motor_torque_scaling: 6.0}}}"))
+
+
+def test_reset_checks_its_scenario_as_the_constructor_does():
+    """A scenario made bad in Python (the robot sunk 0.5 m: a per-run value, so the diagram
+    would take it) is refused by `reset` with the constructor's very error, also when changed
+    in place in the simulation's own scenario; `check=False` is the same opt-out."""
+    from corobot_drake.config.scenario import ScenarioError
+
+    bad = scenario()
+    bad.robots["corobot"].pose.translation = [0.0, 0.0, -0.5]
+    with pytest.raises(ScenarioError) as built:
+        Simulation(bad)
+    sim = Simulation(scenario())
+    with pytest.raises(ScenarioError) as reset:
+        sim.reset(bad)
+    assert str(reset.value) == str(built.value)
+    assert "robots.corobot.pose" in str(built.value) and "below the ground" in str(built.value)
+    sim.scenario.robots["corobot"].velocity[0] = math.nan  # a list, in place
+    with pytest.raises(ScenarioError,
+                       match=r"robots\.corobot\.velocity\[0\]: must be in .*; got nan$"):
+        sim.reset()
+    sim.reset(bad, check=False)  # taken as it is: what a tool measuring beyond bounds asks
+    assert sim.scenario is bad
+    unchecked = Simulation(bad, check=False)
+    unchecked.reset()  # built without checks: reset skips them too unless asked
+    with pytest.raises(ScenarioError, match="below the ground"):
+        unchecked.reset(check=True)

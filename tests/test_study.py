@@ -89,6 +89,38 @@ def test_a_bad_study_is_one_line_naming_the_field(tmp_path, text, expected):
     assert message.startswith(str(path)) and expected in message and "\n" not in message
 
 
+@pytest.mark.parametrize("arguments, expected", [
+    ({"workers": -1}, r"^workers must be None .* or a whole number in \[1, 1024\], got -1$"),
+    ({"workers": 0}, r"got 0$"),
+    ({"workers": 1025}, r"got 1025$"),
+    ({"workers": 2.5}, r"^workers must be .*got 2\.5$"),
+    ({"workers": True}, r"^workers must be .*got True$"),
+    ({"workers": "4"}, r"^workers must be .*got '4'$"),
+    ({"address": 6379}, r"^address must be None .* as a string .*got 6379$"),
+    ({"resume": "no"}, r"^resume must be True or False, got 'no'$"),
+    ({"progress": None}, r"^progress must be True or False, got None$"),
+    ({"out_dir": None}, r"^out_dir must be a non-empty path \(str or Path\), got None$"),
+    ({"study_file": ""}, r"^study_file must be a non-empty path"),
+])
+def test_run_study_checks_its_arguments_before_anything_runs(tmp_path, arguments, expected):
+    """From Python as on the command line: a bad argument is a ValueError naming it and what
+    it allows, before the study is read, the output made or Ray started."""
+    call = {"study_file": write_study(tmp_path), "out_dir": tmp_path / "out", **arguments}
+    with pytest.raises(ValueError, match=expected):
+        engine.run_study(call.pop("study_file"), call.pop("out_dir"), **call)
+    assert not (tmp_path / "out").exists()
+    with pytest.raises(ValueError, match=r"^workers must be"), engine.ray_session(None, 0):
+        pass  # not reached: the check comes before Ray
+
+
+def test_the_engine_takes_numpy_worker_counts():
+    import numpy as np
+
+    assert engine.check_session(None, np.int64(3)) == 3
+    assert type(engine.check_session(None, np.int64(3))) is int
+    assert engine.check_session("10.0.0.1:6379", None) is None
+
+
 def test_paths_reach_command_fields_and_programs(tmp_path):
     from corobot_drake.config.scenario import DriveDistance, SetPower
     from corobot_drake.study.runner import run_scenario

@@ -102,9 +102,12 @@ def test_fit_tool_reports_bad_csv(tmp_path):
     assert f"{path}:3: left_ticks is not a number" in run.stderr
 
 
-def test_set_motor_torque_scaling_keeps_the_file():
+def test_set_drive_field_keeps_the_file():
+    def set_motor_torque_scaling(text, robot, value):
+        return sysid.set_drive_field(text, robot, "motor_torque_scaling", value)
+
     text = DEFAULT_SCENARIO.read_text()
-    updated = sysid.set_motor_torque_scaling(text, "corobot", 10.07)
+    updated = set_motor_torque_scaling(text, "corobot", 10.07)
     changed = [(a, b) for a, b in zip(text.splitlines(), updated.splitlines(), strict=True)
                if a != b]
     assert len(changed) == 1
@@ -113,13 +116,12 @@ def test_set_motor_torque_scaling_keeps_the_file():
     assert after.split("#")[1] == before.split("#")[1]  # the comment survives
     two = ("robots:\n  a:\n    drive: {motor_torque_scaling: 5.0, slew_rate: 3}  # a\n"
            "  b:\n    drive:\n      motor_torque_scaling: 7  # b's\n")
-    assert sysid.set_motor_torque_scaling(two, "b", 9.5) == two.replace("7  # b's", "9.5  # b's")
-    assert sysid.set_motor_torque_scaling(two, "a", 6.25) == two.replace("5.0,", "6.25,")
+    assert set_motor_torque_scaling(two, "b", 9.5) == two.replace("7  # b's", "9.5  # b's")
+    assert set_motor_torque_scaling(two, "a", 6.25) == two.replace("5.0,", "6.25,")
     with pytest.raises(ValueError, match="not found"):
-        sysid.set_motor_torque_scaling(two, "c", 1.0)
+        set_motor_torque_scaling(two, "c", 1.0)
     with pytest.raises(ValueError, match="no `motor_torque_scaling:`"):
-        sysid.set_motor_torque_scaling("robots:\n  a:\n    pose: {translation: [1, 0, 0]}\n", "a",
-                                       1.0)
+        set_motor_torque_scaling("robots:\n  a:\n    pose: {translation: [1, 0, 0]}\n", "a", 1.0)
 
 
 def test_tuner_steps_toward_the_target(tmp_path):
@@ -194,3 +196,33 @@ def test_a_log_that_is_mostly_a_stall_is_refused(tmp_path):
     assert run.returncode == 2
     assert run.stderr.startswith(f"error: {path}: the drive model does not hold")
     assert "refusing to fit" in run.stderr and len(run.stderr.splitlines()) == 1
+
+
+def test_write_drive_fields_writes_loads_back_and_refuses_a_bad_value(tmp_path):
+    """The one writer of the tools' results: the fields written, read back equal (to the
+    digits asked), each with its comment; the other lines as they were; a value out of its
+    bound refused with the loader's one line naming the target, which is left untouched."""
+    from corobot_drake.config.scenario import ScenarioError, load_scenario
+
+    source, out = tmp_path / "s.yaml", tmp_path / "out.yaml"
+    source.write_text(DEFAULT_SCENARIO.read_text())
+    written = sysid.write_drive_fields(source, "corobot", [
+        sysid.DriveField("slew_rate", 23.456789, "from a test"),
+        sysid.DriveField("effective_wheel_radius", 0.0612345, digits=5)], out)
+    assert written == out and source.read_text() == DEFAULT_SCENARIO.read_text()
+    drive = load_scenario(out).robots["corobot"].drive
+    assert drive.slew_rate == 23.46  # 4 significant digits, the default
+    assert drive.effective_wheel_radius == 0.061234  # 5 (the float's own rounding: ...4499)
+    changed = [b for a, b in zip(source.read_text().splitlines(), out.read_text().splitlines(),
+                                 strict=False) if a != b]
+    assert len(changed) == 2 and changed[0].endswith("slew_rate: 23.46  # from a test")
+    with pytest.raises(ScenarioError) as e:
+        sysid.write_drive_fields(out, "corobot", [sysid.DriveField("slew_rate", -5.0)])
+    line = 1 + next(i for i, ln in enumerate(out.read_text().splitlines()) if "slew_rate" in ln)
+    assert str(e.value) == (f"{out}:{line}: robots.corobot.drive.slew_rate: must be in "
+                            "(0, 10000] rad/s^2; got -5")
+    assert load_scenario(out).robots["corobot"].drive.slew_rate == 23.46  # left as it was
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out.yaml", "s.yaml"]  # no probe
+    with pytest.raises(ScenarioError, match=r"^.*s\.yaml: robots\.nobody\.drive\.slew_rate: "
+                                            r"robot 'nobody' not found"):
+        sysid.write_drive_fields(source, "nobody", [sysid.DriveField("slew_rate", 5.0)])

@@ -34,7 +34,7 @@ from corobot_drake.analysis.drive_tuning import (
     run_sweep,
     scaling_for,
 )
-from corobot_drake.analysis.sysid import set_motor_torque_scaling
+from corobot_drake.analysis.sysid import DriveField, write_drive_fields
 from corobot_drake.config.bounds import AXLE_SPEED, Range
 from corobot_drake.config.scenario import ScenarioError, load_scenario
 from corobot_drake.model import dimensions as dim
@@ -130,23 +130,19 @@ def _sweep(args, robot_name: str) -> int:
         return 1
     plot_sweep(scalings, speeds, args.target, tuned, Path(args.plot))
     print(f"plot: {args.plot}")
-    if args.write and not _write(args, robot_name, tuned):
-        return 2
+    if args.write:
+        _write(args, robot_name, tuned)
     print(f"motor_torque_scaling: {tuned:.4f}  (interpolated between the sweep's scalings for "
           f"{args.target:.4f} m/s)")
     return 0
 
 
-def _write(args, robot_name: str, scaling: float) -> bool:
-    """Puts the value in --scenario (only that number changes); False after saying why not."""
-    path = Path(args.scenario)
-    try:
-        path.write_text(set_motor_torque_scaling(path.read_text(), robot_name, scaling))
-    except ValueError as e:
-        print(f"error: {path}: {e}", file=sys.stderr)
-        return False
+def _write(args, robot_name: str, scaling: float) -> None:
+    """Puts the value in --scenario (only that number changes); a scenario it cannot write:
+    ScenarioError, one_line_errors' one line."""
+    path = write_drive_fields(args.scenario, robot_name,
+                              [DriveField("motor_torque_scaling", scaling)])
     print(f"wrote motor_torque_scaling {scaling:.4g} for {robot_name} in {path}")
-    return True
 
 
 @one_line_errors
@@ -173,8 +169,8 @@ def main(argv=None) -> int:
               f"iterations", flush=True)
     else:
         print(f"converged in {len(curves)} iteration(s) (within {args.tolerance * 100:g}%)")
-    if args.write and not _write(args, robot_name, scaling):
-        return 2
+    if args.write:
+        _write(args, robot_name, scaling)
     print(f"motor_torque_scaling: {scaling:.4f}  (top speed {measured:.4f} m/s, "
           f"target {args.target:.4f})")
     return 0 if converged else 1

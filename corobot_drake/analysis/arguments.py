@@ -17,12 +17,13 @@ import functools
 import sys
 from pathlib import Path
 
+from corobot_drake import limits
 from corobot_drake.analysis.sysid import LogError
 from corobot_drake.cli import directory_problem, file_problem
 from corobot_drake.config.bounds import Range
 from corobot_drake.config.scenario import ScenarioError
 
-WORKERS = Range(1, 1024, why="Ray workers; None: the machine's cores")
+WORKERS = Range(*limits.WORKERS, why="Ray workers; None: the machine's cores")
 """--workers of the tools that run a study (as `python -m corobot_drake.study`)."""
 TICKS_PER_REVOLUTION = Range(1, 1_000_000, why="encoder counts per wheel revolution")
 BENCH_SECONDS = Range(0.0, 3600.0, low_open=True, unit="s")

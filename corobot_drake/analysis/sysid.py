@@ -16,11 +16,13 @@ import contextlib
 import csv
 import dataclasses as dc
 import math
+import os
+import tempfile
 from pathlib import Path
 
 import numpy as np
 
-from corobot_drake.config.scenario import ScenarioError, read_text
+from corobot_drake.config.scenario import ScenarioError, load_scenario, read_text
 from corobot_drake.model import dimensions as dim
 
 MAX_LOG_BYTES = 64 << 20
@@ -429,15 +431,50 @@ def set_drive_field(text: str, robot: str, field: str, value: float, comment: st
     return "".join(lines)
 
 
-def set_motor_torque_scaling(text: str, robot: str, value: float) -> str:
-    """`text` (a scenario YAML) with robot `robot`'s drive.motor_torque_scaling set to `value`.
+@dc.dataclass(frozen=True)
+class DriveField:
+    """One value for a robot's `drive:` block: the field, its value (in the field's unit), the
+    comment saying where it came from (None keeps the line's own) and its significant digits."""
 
-    Only the number on that robot's `motor_torque_scaling:` line changes: comments, layout and
-    every other line stay as they are. Raises ValueError if the robot or the field is absent.
-    """
-    lines = text.splitlines(keepends=True)
-    start, end = _robot_block(lines, robot)
-    if not any("motor_torque_scaling" in ln.partition("#")[0] for ln in lines[start:end]):
-        raise ValueError(f"robot {robot!r} has no `motor_torque_scaling:` line; add one under "
-                         "its `drive:` (e.g. `drive: {motor_torque_scaling: 10.16}`)")
-    return set_drive_field(text, robot, "motor_torque_scaling", value)
+    name: str
+    value: float
+    comment: str | None = None
+    digits: int = 4
+
+
+def write_drive_fields(scenario_path: str | Path, robot: str, fields: list[DriveField],
+                       out_path: str | Path | None = None) -> Path:
+    """Writes the scenario `scenario_path` with robot `robot`'s `fields` set (`set_drive_field`:
+    only their lines change) to `out_path` (default: in place); returns `out_path`.
+
+    The result is loaded back (`load_scenario`) before `out_path` is touched, so a tool never
+    leaves a scenario that does not load. ScenarioError (one line: the file, the line, the
+    field) when the robot or a field cannot be written, or when the result does not load (a
+    value out of its bound, not finite)."""
+    scenario_path = Path(scenario_path)
+    out_path = Path(out_path or scenario_path)
+    text = read_text(scenario_path)
+    for field in fields:
+        try:
+            text = set_drive_field(text, robot, field.name, field.value, field.comment,
+                                   field.digits)
+        except ValueError as e:
+            raise ScenarioError(str(scenario_path), f"robots.{robot}.drive.{field.name}",
+                                str(e)) from None
+    _check_loads(text, out_path)
+    out_path.write_text(text)
+    return out_path
+
+
+def _check_loads(text: str, out_path: Path) -> None:
+    """Loads `text` as the scenario `out_path` would be (from a file beside it: its relative
+    mesh and model paths resolve the same); ScenarioError naming `out_path` if it does not."""
+    fd, probe = tempfile.mkstemp(suffix=".yaml", dir=out_path.parent)
+    try:
+        with os.fdopen(fd, "w") as f:
+            f.write(text)
+        load_scenario(probe)
+    except ScenarioError as e:
+        raise ScenarioError(str(out_path), e.field, e.message, e.line) from None
+    finally:
+        os.unlink(probe)

@@ -434,7 +434,7 @@ def load_scenario(filename: str | Path | None = None, *, data: str | None = None
 
     Raises ScenarioError (one line: file, line, field, problem) for anything wrong.
     """
-    from corobot_drake.config.validate import load_layer  # it imports this schema
+    from corobot_drake.config.validate import load_layer, mark_checked  # it imports the schema
 
     scenario = defaults or Scenario()
     # (source, text, the directory its relative file references are relative to)
@@ -448,6 +448,8 @@ def load_scenario(filename: str | Path | None = None, *, data: str | None = None
         scenario, checks = load_layer(source, text, Scenario, scenario)
         resolve_paths(scenario, base)
         checks.validate(scenario)  # what the types cannot say
+    if layers:  # the merged scenario passed every check: `Simulation` need not repeat them
+        mark_checked(scenario)
     return scenario
 
 

@@ -14,7 +14,9 @@ For each layer (a file, YAML text, an `--override`), `LayerChecks`:
 
 Either way a problem stops the load with one `ScenarioError` line, `FILE:LINE: field.path:
 message` (the line of the field in this layer, or of its nearest enclosing field).
-`build_station` and the systems trust what `load_scenario` returns and do not check again.
+`build_station` and the systems trust what `load_scenario` returns and do not check again;
+`check_scenario` (what `Simulation` runs on a scenario changed in Python) skips one unchanged
+since it passed (`mark_checked`).
 """
 
 import dataclasses as dc
@@ -682,15 +684,68 @@ PYTHON_SOURCE = "<Python scenario>"
 
 def check_scenario(scenario: sc.Scenario, source: str = PYTHON_SOURCE) -> None:
     """The checks `load_scenario` runs after its typed load (bounds, names, poses, placement),
-    on a scenario built or changed in Python; ScenarioError (one line, no line number)."""
+    on a scenario built or changed in Python; ScenarioError (one line, no line number).
+    A scenario unchanged since it passed them (`load_scenario`'s, or here) is not checked
+    again (`mark_checked`)."""
     if not isinstance(scenario, sc.Scenario):
         raise sc.ScenarioError(source, "", f"expected a Scenario, got {type(scenario).__name__}")
+    content = _content(scenario)
+    if content is not None and getattr(scenario, _CHECKED, None) == content:
+        return
     try:
         LayerChecks.of_object(source).validate(scenario)
     except sc.ScenarioError:
         raise
     except Exception as e:  # a field of the wrong type where the walk expected another
         raise sc.ScenarioError(source, "", f"not a valid Scenario ({sc.one_line(e)})") from None
+    setattr(scenario, _CHECKED, content)
+
+
+# --- checked once ----------------------------------------------------------------------------
+
+_CHECKED = "_checked_content"
+"""The attribute of a Scenario that passed the checks: its `_content` then. Any change since
+(a field set, a list or array changed in place) gives another content, and the checks again."""
+
+
+def mark_checked(scenario: sc.Scenario) -> None:
+    """Notes that `scenario`, as it is now, passed the checks (`load_scenario` marks what it
+    returns), so that `check_scenario` (`Simulation`) does not repeat them until it changes."""
+    setattr(scenario, _CHECKED, _content(scenario))
+
+
+class _OpaqueValueError(Exception):
+    """A value whose content `_content` cannot see: such a scenario is always checked."""
+
+
+def _content(scenario: sc.Scenario):
+    """Every value of the scenario as nested tuples of immutable values (arrays as bytes),
+    equal for two states exactly when no field differs; None when a part is of a type it does
+    not know (then there is no marker and the checks always run)."""
+    try:
+        return _value_content(scenario)
+    except _OpaqueValueError:
+        return None
+
+
+def _value_content(value):
+    if value is None or isinstance(value, bool | int | float | str | np.number):
+        return (type(value), value)  # the type too: 1 and 1.0 and True differ to the checks
+    if isinstance(value, list | tuple):
+        return (type(value), *map(_value_content, value))
+    if isinstance(value, dict):
+        return (dict, *((key, _value_content(v)) for key, v in value.items()))
+    if isinstance(value, np.ndarray):
+        return (np.ndarray, value.dtype.str, value.shape, value.tobytes())
+    if isinstance(value, Rgba):
+        return (Rgba, value.r(), value.g(), value.b(), value.a())
+    if dc.is_dataclass(value):
+        names = [f.name for f in dc.fields(value)]
+    elif hasattr(type(value), "__fields__"):  # Drake's structs: Transform, CameraConfig, ...
+        names = [f.name for f in type(value).__fields__]
+    else:
+        raise _OpaqueValueError
+    return (type(value), *(_value_content(getattr(value, name)) for name in names))
 
 
 def load_layer(source: str, text: str, schema, defaults=None):

@@ -169,6 +169,7 @@ class GoToGoalEnv(gym.Env):
         super().reset(seed=seed)
         self.layout = (options or {}).get("layout") or draw_layout(self.np_random, self.config)
         self._apply_layout(self.layout)
+        # Checked (a small share of an episode): a layout may come from the caller's `options`.
         self.sim.reset(self.scenario, key=self._key)
         self._distance = self._goal_in_robot_frame()[0]
         return self._observation(), self._info(collided=False, stalled=False)

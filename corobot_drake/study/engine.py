@@ -9,6 +9,7 @@ from __future__ import annotations
 import contextlib
 import csv
 import math
+import operator
 import os
 import shutil
 import time
@@ -17,7 +18,7 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from corobot_drake import allocator
+from corobot_drake import allocator, limits
 from corobot_drake.study import report
 from corobot_drake.study.runner import TIMING_COLUMNS, StudyWorker, finite_or_text
 from corobot_drake.study.spec import Run, Study, expand, load_study, scenario_path
@@ -26,11 +27,46 @@ SAVE_EVERY = 2.0
 """Wall-clock seconds between rewrites of runs.csv while runs arrive."""
 
 
+def check_session(address, workers) -> int | None:
+    """`workers` as an int (None stays None), after checking it is None or a whole number in
+    `limits.WORKERS` (numpy's too) and that `address` is None or a string, as the command
+    line's checks; ValueError naming the argument otherwise."""
+    low, high = limits.WORKERS
+    if workers is not None:
+        try:
+            count = None if isinstance(workers, bool) else operator.index(workers)
+        except TypeError:
+            count = None
+        if count is None or not low <= count <= high:
+            raise ValueError(f"workers must be None (this machine's cores, or the cluster's "
+                             f"CPUs) or a whole number in [{low}, {high}], got {workers!r}")
+        workers = count
+    if address is not None and not isinstance(address, str):
+        raise ValueError(f"address must be None (a local Ray instance) or a Ray cluster's "
+                         f"address as a string (e.g. '10.0.0.1:6379'), got {address!r}")
+    return workers
+
+
+def check_run(study_file, out_dir, workers, address, resume, progress) -> int | None:
+    """`run_study`'s arguments: ValueError naming the first wrong one and what it allows (the
+    study file's own content is `load_study`'s to check: ScenarioError); returns `workers` as
+    `check_session` does."""
+    for name, path in (("study_file", study_file), ("out_dir", out_dir)):
+        if not isinstance(path, str | os.PathLike) or not str(path):
+            raise ValueError(f"{name} must be a non-empty path (str or Path), got {path!r}")
+    for name, flag in (("resume", resume), ("progress", progress)):
+        if not isinstance(flag, bool):
+            raise ValueError(f"{name} must be True or False, got {flag!r}")
+    return check_session(address, workers)
+
+
 @contextlib.contextmanager
 def ray_session(address: str | None, workers: int | None) -> Iterator[int]:
     """Connects to Ray for the study; yields the number of workers to start. Without an
     address, starts a local instance with `workers` CPUs (default: this machine's cores) and
-    stops it, with its processes, on exit. The workers start with `allocator`'s setting."""
+    stops it, with its processes, on exit. The workers start with `allocator`'s setting.
+    ValueError for a bad argument (`check_session`)."""
+    workers = check_session(address, workers)
     import ray
 
     if ray.is_initialized():  # the caller's own Ray session (a notebook, a test): use it
@@ -92,7 +128,9 @@ def _results(todo: list[Run], study: Study, scenario_file: Path, workers: int) -
 def run_study(study_file: str | Path, out_dir: str | Path, *, workers: int | None = None,
               address: str | None = None, resume: bool = False, progress: bool = True) -> Path:
     """Simulates every run of the study not yet in `out_dir/runs.csv` and writes the outputs
-    (runs.csv, summary.md, plots, a copy of the study file); returns runs.csv's path."""
+    (runs.csv, summary.md, plots, a copy of the study file); returns runs.csv's path.
+    ValueError for a bad argument (`check_run`), before anything is read or started."""
+    workers = check_run(study_file, out_dir, workers, address, resume, progress)
     study = load_study(study_file)
     scenario_file = scenario_path(study, study_file)
     out = Path(out_dir)
