@@ -43,6 +43,7 @@ from pydrake.math import RigidTransform
 from pydrake.multibody.math import SpatialVelocity
 from pydrake.multibody.tree import BodyIndex
 from pydrake.systems.framework import LeafSystem
+from pydrake.systems.primitives import ZeroOrderHold
 from pydrake.systems.sensors import ImageRgba8U, RgbdSensorAsync
 
 from corobot_drake.config.poses import mount_frame
@@ -51,6 +52,7 @@ from corobot_drake.recording import topics as tp
 from corobot_drake.sensors.camera import frame_look_period
 from corobot_drake.sensors.ir_models import SharpGP2D12
 from corobot_drake.sensors.ir_sensor import DISTANCE, SCAN_TIME, TRUE_DISTANCE, scan_state_layout
+from corobot_drake.systems.runlog import HELD_PERIOD
 
 STATE_PERIOD = 0.02
 """s: /tf, /joint_states, /odom, /drive_state and /commands are published at 50 Hz (a multiple
@@ -59,6 +61,13 @@ SCENE_PERIOD = 1.0
 """s: /scene (the shapes) again every second, for viewers that connect late."""
 JPEG_QUALITY = 80
 """PIL's JPEG quality (0-100) of the camera frames."""
+TELEMETRY_PERIOD = HELD_PERIOD
+"""s: the costly telemetry topics (`topics.TelemetryTopic.costly`: /wheel_loads, /wheel_slip)
+are sampled at 10 Hz by holds of their own at the instants the run log samples them
+(`runlog.HELD_PERIOD`), and published a period later. Sampled in the same discrete update as the
+run log's, they share its evaluation of the ports (one cache); a publish event could not: it
+runs before the updates at its time, whose new commands change the contact results again, so
+each look would evaluate the plant's contact solution once more."""
 TOLERANCE = 1e-9
 """s: an event this close to a look counts as at it (float sums of periods)."""
 
@@ -200,6 +209,53 @@ class RobotStatePublisher(LeafSystem):
                 level = LogLevel.Warning if record.status == "failed" else LogLevel.Info
                 events.append((record.end_time, tp.command_event(record, True), level))
         return sorted(events, key=lambda e: e[0])
+
+
+class TelemetryPublisher(LeafSystem):
+    """One robot's contact telemetry: each of `topics.TELEMETRY_TOPICS` (/wheel_loads,
+    /wheel_slip, /tip_margin), JSON.
+
+    .. pydrake_system::
+
+        name: TelemetryPublisher
+        input_ports:
+        - wheel_loads
+        - wheel_slip_ratio
+        - wheel_slip_angle
+        - tip_margin
+
+    Inputs: the robot's ports of those names (`contact.WheelContacts`: 4 each, N, 1, deg, in
+    `dimensions.WHEEL_NAMES` order; `stability.TipMargin`: 1, deg), those of the costly topics
+    held: sampled every `costly_period` s from 0 (`_add_telemetry`'s ZeroOrderHolds). A look
+    every `period` s publishes the others' values, stamped with its time; a look every
+    `costly_period` s the costly ones' held values, stamped with their sample's time (a period
+    before; at 0 nothing is sampled yet)."""
+
+    def __init__(self, context, names: tp.RobotNames, period: float = STATE_PERIOD,
+                 costly_period: float = TELEMETRY_PERIOD):
+        super().__init__()
+        for topic in tp.TELEMETRY_TOPICS:
+            ports = [self.DeclareVectorInputPort(port, len(dim.WHEEL_NAMES) if topic.per_wheel
+                                                 else 1) for _, port, _ in topic.fields]
+            channel = tp.json_channel(names.topic(topic.name), topic.schema(), context)
+            # The looks on the holds' own schedule (period, offset 0): a look and a sample at
+            # one time are at the same float time, the look first.
+            self.DeclarePeriodicPublishEvent(costly_period if topic.costly else period, 0.0,
+                                             self._publisher(topic, ports, channel,
+                                                             costly_period if topic.costly
+                                                             else 0.0))
+
+    @staticmethod
+    def _publisher(topic: tp.TelemetryTopic, ports: list, channel, age: float):
+        """The publish event of `topic`, whose inputs are `age` s old (a hold's period, or
+        0)."""
+        def publish(context):
+            t = context.get_time() - age
+            if t < -TOLERANCE:
+                return  # nothing sampled yet
+            channel.log(topic.message(t, [port.Eval(context) for port in ports]),
+                        log_time=tp.nanoseconds(t))
+        return publish
 
 
 class IrPublisher(LeafSystem):
@@ -399,6 +455,7 @@ def add_foxglove_topics(builder, plant, scene_graph, robots: dict, scenario, con
             "drive_state"), state.GetInputPort("drive_state"))
         builder.Connect(parts.command_source.GetOutputPort("command_log"),
                         state.GetInputPort("command_log"))
+        _add_telemetry(builder, context, names)
         for sensor, system in parts.ir_sensors.items():
             ir = builder.AddNamedSystem(f"{name}.foxglove_ir.{sensor}",
                                         IrPublisher(context, names, sensor, system))
@@ -413,6 +470,28 @@ def add_foxglove_topics(builder, plant, scene_graph, robots: dict, scenario, con
     builder.Connect(plant.get_body_poses_output_port(), tf.get_input_port())
     builder.AddNamedSystem("foxglove_scene", ScenePublisher(
         context, _scene_entities(plant, scene_graph, frames)))
+
+
+TELEMETRY_SYSTEMS = ("wheel_contacts", "tip_margin")
+"""The station's `<robot>.<system>` whose output ports the telemetry topics read."""
+
+
+def _add_telemetry(builder, context, names: tp.RobotNames) -> None:
+    """Adds `<robot>.foxglove_telemetry`, fed by the robot's telemetry systems' ports, the
+    costly topics' through holds `<robot>.foxglove_<port>` (`TELEMETRY_PERIOD`)."""
+    robot = names.robot
+    publisher = builder.AddNamedSystem(f"{robot}.foxglove_telemetry",
+                                       TelemetryPublisher(context, names))
+    systems = [builder.GetSubsystemByName(f"{robot}.{s}") for s in TELEMETRY_SYSTEMS]
+    for topic in tp.TELEMETRY_TOPICS:
+        for _, name, _ in topic.fields:
+            (source,) = [s.GetOutputPort(name) for s in systems if s.HasOutputPort(name)]
+            if topic.costly:
+                hold = builder.AddNamedSystem(f"{robot}.foxglove_{name}", ZeroOrderHold(
+                    TELEMETRY_PERIOD, source.size()))
+                builder.Connect(source, hold.get_input_port())
+                source = hold.get_output_port()
+            builder.Connect(source, publisher.GetInputPort(name))
 
 
 def _mount(plant, frames: dict, child: str, mount) -> tuple:
@@ -438,4 +517,4 @@ def _add_camera(builder, plant, frames: dict, context, names, parts, config) -> 
 
 
 __all__ = ["CameraPublisher", "IrPublisher", "RobotStatePublisher", "ScenePublisher",
-           "TransformPublisher", "add_foxglove_topics", "in_window"]
+           "TelemetryPublisher", "TransformPublisher", "add_foxglove_topics", "in_window"]

@@ -17,6 +17,9 @@ as a ROS robot's; with several, each robot's are under its name (`/<robot>/odom`
 | `/camera/image/compressed` | foxglove.CompressedImage | each frame, JPEG |
 | `/camera/camera_info` | foxglove.CameraCalibration | with each frame |
 | `/commands` | foxglove.Log | each command issued and how it ended |
+| `/wheel_loads` | corobot.WheelLoads (JSON) | each wheel's load (N) |
+| `/wheel_slip` | corobot.WheelSlip (JSON) | each wheel's slip ratio and slip angle (deg) |
+| `/tip_margin` | corobot.TipMargin (JSON) | the tip-over margin (deg) |
 
 Frames: `world` (z up); `base_link`, the chassis frame (on the ground midway between the axles,
 +x forward, +z up: ROS's base_footprint, REP 103's axes); `<wheel>_wheel` (the wheel links);
@@ -42,6 +45,8 @@ from foxglove.messages import (
     Vector3,
 )
 from pydrake.math import RigidTransform
+
+from corobot_drake.model.dimensions import WHEEL_NAMES
 
 CHASSIS_FRAME = "base_link"
 """The chassis body's frame name (ROS's base frame)."""
@@ -189,6 +194,76 @@ def drive_state_message(state) -> dict:
                               "encoder_ticks": w.encoder_ticks}
                        for name, w in state.wheels.items()},
             "position": list(state.position), "heading": state.heading}
+
+
+TIMESTAMP_SCHEMA = {"type": "object", "properties": {"sec": {"type": "integer"},
+                                                     "nsec": {"type": "integer"}}}
+
+
+@dc.dataclass(frozen=True)
+class TelemetryTopic:
+    """A topic of the robot's contact telemetry (`systems.contact`, `systems.stability`): the
+    values of some of the robot's output ports (`station`'s `<robot>.<port>`), as JSON."""
+
+    name: str
+    """The topic, under the robot's namespace."""
+    title: str
+    description: str
+    fields: tuple
+    """(field, robot output port, what: units) of each value."""
+    per_wheel: bool
+    """Whether the ports have one value per wheel (`dimensions.WHEEL_NAMES` order; then
+    `wheels: {<wheel>: {<field>: value}}`) or one (then `<field>: value`)."""
+    costly: bool
+    """Whether a look evaluates the plant's contact results or velocities (costly every
+    step: looked at like the run log's held samples, `publishers.TELEMETRY_PERIOD`) or the
+    chassis pose alone (a few sums: at the state topics' rate)."""
+
+    def schema(self) -> dict:
+        """The JSON schema of its messages."""
+        values = {field: {"type": "number", "description": what}
+                  for field, _, what in self.fields}
+        if self.per_wheel:
+            values = {"wheels": {"type": "object", "description": "by wheel name",
+                                 "additionalProperties": {"type": "object",
+                                                          "properties": values}}}
+        return {"title": self.title, "description": self.description, "type": "object",
+                "properties": {"timestamp": TIMESTAMP_SCHEMA, **values}}
+
+    def message(self, t: float, values: list) -> dict:
+        """The message at time `t` (s) of the `fields`' port values (each a vector)."""
+        ts = stamp(t)
+        out: dict = {"timestamp": {"sec": ts.sec, "nsec": ts.nsec}}
+        if not self.per_wheel:
+            out.update((field, float(v[0])) for (field, _, _), v in zip(
+                self.fields, values, strict=True))
+            return out
+        out["wheels"] = {wheel: {field: float(v[k]) for (field, _, _), v in zip(
+            self.fields, values, strict=True)} for k, wheel in enumerate(WHEEL_NAMES)}
+        return out
+
+
+TELEMETRY_TOPICS = (
+    TelemetryTopic("wheel_loads", "corobot.WheelLoads",
+                   "Each wheel's load: systems.contact.WheelContacts.",
+                   (("load", "wheel_loads", "N: the vertical (world +z) component of the "
+                     "wheel's contact forces; at rest the four sum to the robot's weight"),),
+                   per_wheel=True, costly=True),
+    TelemetryTopic("wheel_slip", "corobot.WheelSlip",
+                   "Each wheel's slip: systems.contact.WheelContacts.",
+                   (("slip_ratio", "wheel_slip_ratio", "longitudinal, dimensionless: + "
+                     "traction (turns faster than it travels), - braking"),
+                    ("slip_angle_deg", "wheel_slip_angle", "deg: between where the wheel points "
+                     "and where it goes, + moving to the left of the heading")),
+                   per_wheel=True, costly=True),
+    TelemetryTopic("tip_margin", "corobot.TipMargin",
+                   "The tip-over margin: systems.stability.TipMargin.",
+                   (("tip_margin_deg", "tip_margin", "deg the robot can still roll or pitch "
+                     "before its centre of mass passes an edge of the wheels' support; 37.4 "
+                     "upright at rest on level ground, negative tipping over"),),
+                   per_wheel=False, costly=False),
+)
+"""The contact telemetry's topics, in the robot's terms."""
 
 
 def command_event(record, ended: bool) -> str:
