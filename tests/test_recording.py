@@ -14,14 +14,22 @@ from mcap.reader import make_reader
 from conftest import make_sim
 from corobot_drake.cli import main
 from corobot_drake.config.scenario import load_scenario
+from corobot_drake.model import dimensions as dim
 from corobot_drake.recording.foxglove_live import FoxgloveLive
 from corobot_drake.recording.mcap_log import McapLog
 from corobot_drake.recording.meshcat_html import RECORDING_FPS
-from corobot_drake.recording.publishers import STATE_PERIOD, RobotStatePublisher, in_window
+from corobot_drake.recording.publishers import (
+    STATE_PERIOD,
+    TELEMETRY_PERIOD,
+    RobotStatePublisher,
+    TelemetryPublisher,
+    in_window,
+)
 from corobot_drake.recording.topics import RobotNames, command_event
 from corobot_drake.resources import DEFAULT_SCENARIO
 from corobot_drake.simulation import Simulation
 from corobot_drake.systems.drive import CommandRecord
+from corobot_drake.systems.runlog import COLUMNS
 
 CURVE = "robots: {corobot: {commands: [!SetPower {left: 1, right: 0.5}]}}"
 NO_CAMERA = "robots: {corobot: {camera: {rgb: false}}}"
@@ -126,6 +134,8 @@ EXPECTED_SCHEMAS = {
     "/ir/rear": "corobot.Range", "/ir/rear/rays": "foxglove.SceneUpdate",
     "/camera/image/compressed": "foxglove.CompressedImage",
     "/camera/camera_info": "foxglove.CameraCalibration",
+    "/wheel_loads": "corobot.WheelLoads", "/wheel_slip": "corobot.WheelSlip",
+    "/tip_margin": "corobot.TipMargin",
 }
 
 
@@ -145,8 +155,14 @@ def test_mcap_has_every_topic_at_its_rate(mcap_run):
     assert {t: m[0][1] for t, m in topics.items()} == EXPECTED_SCHEMAS
     counts = {t: len(m) for t, m in topics.items()}
     # State topics: a look every 20 ms from 0 to 1 s inclusive.
-    for topic in ("/tf", "/joint_states", "/odom", "/drive_state"):
+    for topic in ("/tf", "/joint_states", "/odom", "/drive_state", "/tip_margin"):
         assert counts[topic] == round(1.0 / STATE_PERIOD) + 1, topic
+    # Loads and slip: the samples at 0, 0.1, ..., 0.9 s, each published a period later (the
+    # one at 1 s when the run goes on).
+    for topic in ("/wheel_loads", "/wheel_slip"):
+        assert counts[topic] == round(1.0 / TELEMETRY_PERIOD), topic
+        assert [t for t, _, _ in topics[topic]] == pytest.approx(
+            [k * TELEMETRY_PERIOD for k in range(10)], abs=1e-9)
     # IR: the scans at 0, 0.05, ..., 0.95 s (the one at 1 s is taken when the run goes on).
     for topic in ("/ir/front", "/ir/front/rays", "/ir/rear", "/ir/rear/rays"):
         assert counts[topic] == 20, topic
@@ -205,6 +221,99 @@ def test_mcap_messages_hold_the_run(mcap_run):
                                         "seq 2 AllStop started", "seq 2 AllStop succeeded"]
     # Events of one instant in either order (sorted as `expected` is).
     assert sorted(events) == [(pytest.approx(t, abs=1e-9), m) for t, m in expected]
+
+
+ROBOT_WEIGHT = (dim.TOTAL_BODY_MASS + len(dim.WHEEL_NAMES) * dim.WHEEL_MASS) * 9.81
+"""N: what the four wheels carry at rest (the plant's gravity, 9.81 m/s^2)."""
+
+
+def test_mcap_telemetry_holds_the_robot_s_loads_slip_and_tip_margin(mcap_run):
+    """The script drives a right-hand curve (left side at full power, right at half) from 0 to
+    0.5 s, then stops."""
+    sim, topics = mcap_run
+    robot = sim.robot()
+    loads = {round(t, 2): m["wheels"] for t, _, m in topics["/wheel_loads"]}
+    slips = {round(t, 2): m["wheels"] for t, _, m in topics["/wheel_slip"]}
+    # Placed at z = 0 the tyres just touch: next to nothing carried at 0 s (under a gram's
+    # weight, 0.01 N; the robot settles onto them within 40 ms). From then on the four carry
+    # m (g + a_z): the chassis rocks on its compliant tyres as the drive's 30 rad/s^2 slew
+    # speeds it up and stops it (measured within 1.5% of m g here), so 5%: a vertical
+    # acceleration of the centre of mass up to 0.5 m/s^2.
+    assert sum(w["load"] for w in loads[0.0].values()) < 0.01
+    for t in sorted(loads)[1:]:
+        assert sum(w["load"] for w in loads[t].values()) == pytest.approx(ROBOT_WEIGHT,
+                                                                           rel=0.05), t
+    # Weight moves to the rear wheels as the robot speeds up (0.1 s), to the front as it
+    # brakes (0.6 s): measured 7.3 vs 12.3 N and 11.8 vs 8.0 N.
+    front, rear = ("front_left", "front_right"), ("rear_left", "rear_right")
+    assert max(loads[0.1][w]["load"] for w in front) < min(loads[0.1][w]["load"] for w in rear)
+    assert min(loads[0.6][w]["load"] for w in front) > max(loads[0.6][w]["load"] for w in rear)
+    # Mid-curve, skid-steering turns the robot clockwise about its middle: the fast left side
+    # pulls (slip ratio +), the slow right side is dragged (-); the front wheels are scrubbed
+    # to the right (slip angle -), the rear ones to the left (+).
+    for t in (0.3, 0.4):
+        w = slips[t]
+        assert w["front_left"]["slip_ratio"] > 0 and w["rear_left"]["slip_ratio"] > 0, t
+        assert w["front_right"]["slip_ratio"] < 0 and w["rear_right"]["slip_ratio"] < 0, t
+        assert w["front_left"]["slip_angle_deg"] < 0 and w["front_right"]["slip_angle_deg"] < 0
+        assert w["rear_left"]["slip_angle_deg"] > 0 and w["rear_right"]["slip_angle_deg"] > 0
+    # Each sample is the run log's (the same holds' instants): the rows half a period later.
+    rows = robot.run_log()
+    for t, wheels in loads.items():
+        (row,) = rows[np.isclose(rows[:, 0], t + TELEMETRY_PERIOD / 2)]
+        assert [wheels[w]["load"] for w in dim.WHEEL_NAMES] == list(
+            row[[COLUMNS.index(f"load_{c}") for c in ("fl", "fr", "rl", "rr")]]), t
+        assert [slips[t][w]["slip_angle_deg"] for w in dim.WHEEL_NAMES] == list(
+            row[[COLUMNS.index(f"slip_angle_{c}") for c in ("fl", "fr", "rl", "rr")]]), t
+    # Upright on level ground: atan(half wheelbase / CoM height) = 37.4 deg at the start (to
+    # its rounding). Driving on flat ground the chassis pitches a fraction of a degree on its
+    # tyres (measured 37.37-37.41 deg): 0.5 deg. The last look is the robot's margin now.
+    margins = [m["tip_margin_deg"] for _, _, m in topics["/tip_margin"]]
+    assert margins[0] == pytest.approx(37.4, abs=0.05)
+    assert margins == pytest.approx([37.4] * len(margins), abs=0.5)
+    assert margins[-1] == robot.tip_margin_deg()
+
+
+def test_telemetry_publisher_alone():
+    """TelemetryPublisher on its own, its inputs fixed: /tip_margin at every look, stamped with
+    it; /wheel_loads and /wheel_slip (held inputs) from the second look on, stamped with their
+    sample's time, a period before."""
+    import io
+
+    from pydrake.systems.analysis import Simulator
+
+    context = foxglove.Context()
+    buffer = io.BytesIO()
+    writer = foxglove.open_mcap(buffer, context=context)
+    publisher = TelemetryPublisher(context, RobotNames("r", namespaced=True), period=0.02,
+                                   costly_period=0.1)
+    simulator = Simulator(publisher)
+    system_context = simulator.get_mutable_context()
+    for name, value in (("wheel_loads", [9.0, 10.0, 11.0, 12.0]),
+                        ("wheel_slip_ratio", [0.1, -0.1, 0.2, -0.2]),
+                        ("wheel_slip_angle", [-5.0, -6.0, 7.0, 8.0]), ("tip_margin", [30.0])):
+        publisher.GetInputPort(name).FixValue(system_context, value)
+    simulator.AdvanceTo(0.25)
+    writer.close()
+    buffer.seek(0)
+    reader = make_reader(buffer)
+    decode = _decoders(reader.get_summary())
+    got: dict[str, list] = {}
+    for schema, channel, message in reader.iter_messages(log_time_order=True):
+        got.setdefault(channel.topic, []).append((message.log_time, schema.name,
+                                                  decode[schema.id](message.data)))
+    assert {t: m[0][1] for t, m in got.items()} == {
+        "/r/wheel_loads": "corobot.WheelLoads", "/r/wheel_slip": "corobot.WheelSlip",
+        "/r/tip_margin": "corobot.TipMargin"}
+    # Looks at 0, 0.02, ..., 0.24 s; the held ones' at 0.1 and 0.2 s publish 0 and 0.1 s.
+    assert [ns for ns, _, _ in got["/r/tip_margin"]] == [k * 20_000_000 for k in range(13)]
+    assert [ns for ns, _, _ in got["/r/wheel_loads"]] == [0, 100_000_000]
+    assert got["/r/tip_margin"][-1][2] == {"timestamp": {"sec": 0, "nsec": 240_000_000},
+                                           "tip_margin_deg": 30.0}
+    assert got["/r/wheel_slip"][-1][2]["wheels"]["rear_right"] == {"slip_ratio": -0.2,
+                                                                   "slip_angle_deg": 8.0}
+    assert {w: v["load"] for w, v in got["/r/wheel_loads"][0][2]["wheels"].items()} == dict(
+        zip(dim.WHEEL_NAMES, [9.0, 10.0, 11.0, 12.0], strict=True))
 
 
 def test_a_reset_run_publishes_the_same_messages(tmp_path):
@@ -377,7 +486,8 @@ def test_several_robots_are_namespaced(tmp_path):
         sim = Simulation(load_scenario(DEFAULT_SCENARIO, overrides=[two]), foxglove=log.context)
         sim.advance(0.2)
     topics = read_mcap(path)
-    per_robot = {"odom", "joint_states", "drive_state", "commands", "ir/front", "ir/rear/rays"}
+    per_robot = {"odom", "joint_states", "drive_state", "commands", "ir/front", "ir/rear/rays",
+                 "wheel_loads", "wheel_slip", "tip_margin"}
     assert {f"/{r}/{t}" for r in ("corobot", "second") for t in per_robot} <= set(topics)
     assert "/odom" not in topics and {"/tf", "/scene"} <= set(topics)
     tf = topics["/tf"][-1][2].transforms

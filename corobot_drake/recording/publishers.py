@@ -55,8 +55,8 @@ from corobot_drake.sensors.ir_sensor import DISTANCE, SCAN_TIME, TRUE_DISTANCE, 
 from corobot_drake.systems.runlog import HELD_PERIOD
 
 STATE_PERIOD = 0.02
-"""s: /tf, /joint_states, /odom, /drive_state and /commands are published at 50 Hz (a multiple
-of the plant steps used here, 1 to 10 ms, so the looks add no Simulator stops)."""
+"""s: /tf, /joint_states, /odom, /drive_state, /commands and /tip_margin are published at 50 Hz
+(a multiple of the plant steps used here, 1 to 10 ms, so the looks add no Simulator stops)."""
 SCENE_PERIOD = 1.0
 """s: /scene (the shapes) again every second, for viewers that connect late."""
 JPEG_QUALITY = 80
