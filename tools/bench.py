@@ -11,9 +11,7 @@ tools/bench_raycast.py, tools/bench_camera.py). `--robots 1,2,4,8,16` adds fleet
 driving, physics only: robot-seconds per second, flat when nothing grows per robot.
 `--layers` adds what physics only is made of: the plant alone (the floor Drake sets), then the
 robot's systems added one layer at a time, CPU ms per simulated second
-(`corobot_drake.analysis.bench_layers`). `--allocator` compares physics only and the full
-stack in processes started with and without the allocator setting that the study workers get
-(`corobot_drake.allocator`). The measurements are
+(`corobot_drake.analysis.bench_layers`). The measurements are
 `corobot_drake.analysis.bench` and the micro-benchmarks' modules beside it.
 """
 
@@ -24,7 +22,6 @@ from tqdm import tqdm
 
 from corobot_drake.analysis import (
     bench,
-    bench_allocator,
     bench_camera,
     bench_ir,
     bench_layers,
@@ -108,20 +105,6 @@ def _layers(seconds: float, repeats: int) -> None:
         previous = median, least
 
 
-def _allocator(seconds: float, repeats: int) -> None:
-    """Prints physics only and the full stack without and with the allocator setting."""
-    stacks = ["physics only", "full stack (IR + camera)"]
-    with tqdm(total=len(stacks) * 2 * repeats, desc="allocator", leave=False) as bar:
-        results = bench_allocator.compare(stacks, seconds, repeats, progress=bar.update)
-    without, tuned = bench_allocator.SETTINGS
-    print(f"| stack ({DEFAULT_PLANT}) | {without} | {tuned} | ratio, wall (CPU) |\n"
-          "|---|---|---|---|", flush=True)
-    for stack, by_setting in results.items():
-        (w0, c0), (w1, c1) = by_setting[without], by_setting[tuned]
-        print(f"| {stack} | {w0:.2f}x ({c0:.2f}x) | {w1:.2f}x ({c1:.2f}x) | {w1 / w0:.2f} "
-              f"({c1 / c0:.2f}) |", flush=True)
-
-
 def _micro_benchmarks() -> None:
     print(f"micro-benchmark: IR scan of both default sensors (2 x 6 rays) in the station: "
           f"{bench_ir.station_scan_cost_seconds() * 1000:.4f} ms (tools/bench_ir.py)", flush=True)
@@ -150,9 +133,6 @@ def _parser() -> ToolParser:
     parser.add_argument("--layers", action="store_true",
                         help="also the physics-only stack layer by layer, from the plant "
                              "alone (CPU time, the layers interleaved)")
-    parser.add_argument("--allocator", action="store_true",
-                        help="also physics only and the full stack in processes started "
-                             "with and without the allocator setting (in turn)")
     parser.add_argument("--no-table", action="store_true",
                         help="skip the stacks x plants table")
     return parser
@@ -185,9 +165,6 @@ def main(argv=None) -> int:
         print()
     if args.layers:
         _layers(args.seconds, args.repeats)
-        print()
-    if args.allocator:
-        _allocator(args.seconds, args.repeats)
         print()
     if not args.no_micro:
         _micro_benchmarks()

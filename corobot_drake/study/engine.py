@@ -18,7 +18,7 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from corobot_drake import allocator, limits
+from corobot_drake import limits
 from corobot_drake.study import report
 from corobot_drake.study.runner import TIMING_COLUMNS, StudyWorker, finite_or_text
 from corobot_drake.study.spec import Run, Study, expand, load_study, scenario_path
@@ -64,22 +64,20 @@ def check_run(study_file, out_dir, workers, address, resume, progress) -> int | 
 def ray_session(address: str | None, workers: int | None) -> Iterator[int]:
     """Connects to Ray for the study; yields the number of workers to start. Without an
     address, starts a local instance with `workers` CPUs (default: this machine's cores) and
-    stops it, with its processes, on exit. The workers start with `allocator`'s setting.
-    ValueError for a bad argument (`check_session`)."""
+    stops it, with its processes, on exit. ValueError for a bad argument (`check_session`)."""
     workers = check_session(address, workers)
     import ray
 
     if ray.is_initialized():  # the caller's own Ray session (a notebook, a test): use it
         yield workers or int(ray.cluster_resources().get("CPU", 1))
         return
-    # The workers start with the allocator's cache setting (glibc reads it at start).
-    options = dict(include_dashboard=False, log_to_driver=False, configure_logging=False,
-                   runtime_env={"env_vars": allocator.tuned_environment()})
     if address:
-        ray.init(address=address, **options)
+        ray.init(address=address, include_dashboard=False, log_to_driver=False,
+                 configure_logging=False)
     else:
         # "local": a new instance even when RAY_ADDRESS or a running cluster would be joined.
-        ray.init(address="local", num_cpus=workers or os.cpu_count(), **options)
+        ray.init(address="local", num_cpus=workers or os.cpu_count(), include_dashboard=False,
+                 log_to_driver=False, configure_logging=False)
     try:
         yield workers or int(ray.cluster_resources().get("CPU", 1))
     finally:
