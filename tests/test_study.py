@@ -426,3 +426,13 @@ def test_every_shipped_study_run_is_a_valid_scenario(study_file):
     study = load_study(study_file)
     for run in expand(study):
         run_scenario(study, scenario_path(study, study_file), run)
+
+
+def test_the_steady_rate_leaves_out_each_workers_first_run():
+    from corobot_drake.analysis.bench_study import steady_rate
+
+    # Two workers: the first two rows carry the start-ups; then 4 runs in 2 s.
+    rows = [{"finished_seconds": t} for t in ("5.0", "5.5", "6.0", "6.5", "7.0", "7.5")]
+    assert steady_rate(rows, 2) == pytest.approx(4 / 2.0)
+    assert steady_rate(rows, 1) == pytest.approx(5 / 2.5)
+    assert steady_rate(rows[:2], 2) is None  # no run after the start-ups

@@ -2,7 +2,8 @@
 """The study engine's throughput in one process and on Ray with 1 and 2 workers.
 
 The same runs in one process (diagram built per run, or reset) and on Ray with 1 and 2
-workers, with and without Ray's start and stop; each run's CPU seconds; and the projected wall
+workers, with and without Ray's start and stop, and steady (once every worker has started);
+each run's CPU seconds; and the projected wall
 time of a big study on a cluster (`corobot_drake.analysis.bench_study`).
 
     python tools/bench_study.py [--seeds 12] [--duration 4]
@@ -55,18 +56,23 @@ def print_table(args, results: dict, load: list[float]) -> None:
           f" {os.cpu_count()} cores, load average {min(load):.1f}-{max(load):.1f}, every case at"
           f" niceness {os.nice(0)} (Ray's workers too)")
     print("| how | wall (s) | runs per s | wall without Ray's start and stop (s) | "
-          "per-run setup (s, median) | per-run CPU (s, median) |")
-    print("|---|---|---|---|---|---|")
+          "runs per s, steady | per-run setup (s, median) | per-run CPU (s, median) |")
+    print("|---|---|---|---|---|---|---|")
     for name, r in results.items():
         study = f"{r['study']:.1f}" if "study" in r else "-"
-        print(f"| {name} | {r['wall']:.1f} | {n / r['wall']:.2f} | {study} | {r['setup']:.3f} "
-              f"| {r['cpu']:.2f} |")
+        steady = f"{r['steady']:.2f}" if r.get("steady") else "-"
+        print(f"| {name} | {r['wall']:.1f} | {n / r['wall']:.2f} | {study} | {steady} | "
+              f"{r['setup']:.3f} | {r['cpu']:.2f} |")
     one, two = results["Ray, 1 worker"], results["Ray, 2 workers"]
+    steady = (f"{two['steady'] / one['steady']:.2f}x" if one.get("steady") and two.get("steady")
+              else "-")
     print(f"\nRay's start and stop: {one['start']:.1f} s (1 worker), {two['start']:.1f} s (2). "
           f"2 workers vs 1: {one['wall'] / two['wall']:.2f}x; without Ray's start and stop: "
-          f"{one['study'] / two['study']:.2f}x. A run's CPU on a Ray worker vs in one process: "
+          f"{one['study'] / two['study']:.2f}x; steady (past each worker's first run, which "
+          f"carries its start-up): {steady}. A run's CPU on a Ray worker vs in one process: "
           f"{one['cpu'] / results['one process, diagram reset per run']['cpu']:.2f}x.")
-    per_run = two["study"] * 2 / n  # core-seconds per run on this machine
+    # Core-seconds per run on this machine: the steady rate, as a long study runs.
+    per_run = 2 / two["steady"] if two.get("steady") else two["study"] * 2 / n
     cores, runs = 320, 10_000
     print(f"A {runs}-run study of these runs on 10 nodes x 32 cores, at this machine's "
           f"{per_run:.2f} core-s per run (Ray's per-task cost included, cores as fast as these, "

@@ -62,7 +62,8 @@ def on_ray(study_file: Path, workers: int) -> dict:
     """The study with `run_study` on a local Ray instance of `workers` CPUs started here, its
     workers at this process's niceness. `wall` is the whole (Ray's start and stop included),
     `study` the study alone (its workers' start-up included: their imports and first build),
-    `start` Ray's start and stop."""
+    `start` Ray's start and stop, `steady` the runs per second past the workers' start-up
+    (`steady_rate`)."""
     with (tempfile.TemporaryDirectory() as out,
           mock.patch.dict(os.environ, {WORKER_NICENESS: str(os.nice(0))})):
         begin = time.perf_counter()
@@ -73,4 +74,14 @@ def on_ray(study_file: Path, workers: int) -> dict:
             ended = time.perf_counter()
         wall = time.perf_counter() - begin
     return {"wall": wall, "study": ended - started, "start": wall - (ended - started),
-            "runs": len(rows), **_medians(rows)}
+            "steady": steady_rate(rows, workers), "runs": len(rows), **_medians(rows)}
+
+
+def steady_rate(rows: list[dict], workers: int) -> float | None:
+    """Runs per second once every worker has finished its first run (which carries its
+    start-up: the imports and the first build), from the rows' `finished_seconds`: the rate a
+    long study keeps. None when no run finished after that."""
+    times = sorted(float(r["finished_seconds"]) for r in rows)
+    if len(times) <= workers or times[-1] <= times[workers - 1]:
+        return None
+    return (len(times) - workers) / (times[-1] - times[workers - 1])

@@ -153,7 +153,11 @@ def _simulate_all(todo, study, scenario_file, rows, runs_csv, workers, address,
     bar = tqdm(total=len(todo), unit="run", disable=not progress, smoothing=0.1)
     try:
         with ray_session(address, workers) as n:
+            start = time.perf_counter()
             for row in _results(todo, study, scenario_file, n):
+                # When the row arrived, from the workers' start: the study's steady rate is
+                # read from these (`analysis.bench_study`).
+                row["finished_seconds"] = round(time.perf_counter() - start, 3)
                 rows.append(row)
                 bar.update()
                 if time.monotonic() - saved > SAVE_EVERY:

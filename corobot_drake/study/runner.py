@@ -21,7 +21,7 @@ from corobot_drake.study.spec import Run, Scalar, Study
 
 CACHE_SIZE = 3
 """Simulations a worker keeps built (each holds a diagram and its Context)."""
-TIMING_COLUMNS = ("setup", "setup_seconds", "wall_seconds", "cpu_seconds")
+TIMING_COLUMNS = ("setup", "setup_seconds", "wall_seconds", "cpu_seconds", "finished_seconds")
 """Columns that depend on the clock or the worker (everything else is deterministic)."""
 IR_METRICS = {"ir"}
 """The metrics that read the IR sensors."""
