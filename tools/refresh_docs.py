@@ -845,6 +845,10 @@ def blocks() -> list[Spec]:
         Spec("bench-layers", "docs/performance.md",
              (Command("python tools/bench.py --layers --no-table --no-micro --seconds 4 "
                       "--repeats 7"),), render_bench_robots, TIMING, 420),
+        Spec("count-instructions", "docs/performance.md",
+             (Command('python tools/count_instructions.py --override '
+                      '"plant_config: {discrete_contact_approximation: similar}"'),),
+             render_command_table, TIMING, 150),
         Spec("bench-full", "docs/performance.md",
              (Command("python tools/bench.py --seconds 5 --repeats 3"),), render_bench_full,
              TIMING, 200),

@@ -1,0 +1,104 @@
+"""Instructions per simulated second, counted by callgrind (`tools/count_instructions.py`).
+
+Wall and CPU time move by 10-30% between identical runs on a shared machine; the instructions a
+simulation executes do not (the same count to 0.1% run after run on one machine). So a change
+to the code is measured here first; its effect on time, which also depends on caches and the
+machine, is measured by `tools/bench.py`.
+
+Each row is a child process under callgrind (`python -m corobot_drake.analysis.instructions
+ROW SECONDS`), started with instrumentation off: it builds the row's diagram (a layer of
+`bench_layers.LAYERS`, or the station, optionally with a scenario override), advances to
+`WARM_UP` s, and counts only `seconds` of simulation after that (`callgrind_control -i on/off`
+around the advance): the first segment of the benchmark's figure of eight (SetPower 1.0/0.6,
+the first 3 s), building and start-up excluded.
+"""
+
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+from corobot_drake.analysis import bench_layers
+
+WARM_UP = 0.05
+"""s simulated before counting: the first steps (the tyres settling) are not the run's."""
+LONGEST = 2.9
+"""s: the most a row counts (the figure of eight's first segment ends at 3 s)."""
+STATION = "station"
+
+
+class ValgrindMissingError(RuntimeError):
+    """valgrind (with callgrind_control) is not installed."""
+
+
+def rows() -> list[str]:
+    """Row names: the layers (cumulative), then the station."""
+    return [*bench_layers.LAYERS, STATION]
+
+
+PLANT_STEP = "MultibodyPlant<double>::CalcStepUnrestricted"
+"""The plant's step (its contact problem, the solve, the new state): callgrind's inclusive count
+of it is the plant's share of a row; the rest is the framework's and the project's systems'."""
+
+
+def require_valgrind() -> None:
+    """ValgrindMissingError unless valgrind and its two scripts are installed."""
+    if not all(shutil.which(t) for t in ("valgrind", "callgrind_control", "callgrind_annotate")):
+        raise ValgrindMissingError("counting instructions needs valgrind (with its "
+                                   "callgrind_control and callgrind_annotate); install it "
+                                   "(e.g. apt install valgrind)")
+
+
+def count(row: str, seconds: float, override: str | None = None) -> tuple[int, int]:
+    """(all, the plant's step) instructions executed simulating `seconds` (<= `LONGEST`) of
+    `row` (`rows()`; an `override`, scenario YAML, applies to the station row only)."""
+    require_valgrind()
+    with tempfile.TemporaryDirectory() as folder:
+        out = Path(folder) / "callgrind.out"
+        argv = ["valgrind", "--tool=callgrind", "--instr-atstart=no",
+                f"--callgrind-out-file={out}", sys.executable, "-m", __name__, row,
+                str(seconds), *([override] if override else [])]
+        done = subprocess.run(argv, capture_output=True, text=True)
+        found = re.search(r"Collected : (\d+)", done.stderr)
+        if done.returncode != 0 or not found:
+            raise RuntimeError(f"callgrind failed on {row!r}: {done.stderr.strip()[-300:]}")
+        annotated = subprocess.run(["callgrind_annotate", "--inclusive=yes", str(out)],
+                                   capture_output=True, text=True, check=True).stdout
+    step = [int(line.split()[0].replace(",", "")) for line in annotated.splitlines()
+            if PLANT_STEP in line]
+    return int(found.group(1)), max(step, default=0)
+
+
+def _instrument(on: bool) -> None:
+    import os
+
+    subprocess.run(["callgrind_control", "-i", "on" if on else "off", str(os.getpid())],
+                   check=True, capture_output=True)
+
+
+def _child(row: str, seconds: float, override: str | None) -> None:
+    """Builds `row`, warms up, counts `seconds` of simulation (under callgrind)."""
+    scenario = bench_layers._scenario(*([override] if override else []))
+    if row == STATION:
+        from corobot_drake.simulation import Simulation
+
+        sim = Simulation(scenario)
+        sim.advance(WARM_UP)
+        _instrument(True)
+        sim.advance(seconds)
+    else:
+        simulator = bench_layers.build_layers(scenario,
+                                              bench_layers.LAYERS.index(row) + 1).simulator
+        simulator.AdvanceTo(WARM_UP)
+        _instrument(True)
+        simulator.AdvanceTo(WARM_UP + seconds)
+    _instrument(False)
+
+
+if __name__ == "__main__":
+    from corobot_drake.simulation import quiet_drake_warnings
+
+    quiet_drake_warnings()
+    _child(sys.argv[1], float(sys.argv[2]), sys.argv[3] if len(sys.argv) > 3 else None)

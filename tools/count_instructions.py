@@ -1,0 +1,65 @@
+#!/usr/bin/env python3
+"""Instructions per simulated second of physics only, layer by layer (valgrind's callgrind).
+
+    python tools/count_instructions.py [--seconds 1] [--override YAML ...]
+
+The rows of `tools/bench.py --layers` (the plant alone, then the robot's systems added one
+layer at a time, then the station), each counted over `--seconds` of the figure of eight's
+first segment (`corobot_drake.analysis.instructions`): a count that is the same run after run,
+where time on this shared machine is not, split into the plant's step and the rest. Each
+`--override` adds a station row with that scenario override (e.g. a Drake setting to try).
+Rows run two at a time, ~20 s each.
+"""
+
+import sys
+from concurrent.futures import ThreadPoolExecutor
+
+from tqdm import tqdm
+
+from corobot_drake.analysis import bench_layers, instructions
+from corobot_drake.analysis.arguments import ToolParser, bounded, one_line_errors
+from corobot_drake.config.bounds import Range
+
+SECONDS = Range(0.0, instructions.LONGEST, low_open=True, unit="s")
+
+
+@one_line_errors
+def main(argv=None) -> int:
+    p = ToolParser(description=__doc__.splitlines()[0])
+    p.add_argument("--seconds", type=bounded(SECONDS), default=1.0,
+                   help="simulated s counted per row (after a 0.05 s warm-up)")
+    p.add_argument("--override", action="append", default=[],
+                   help="scenario YAML: adds a station row with it (repeatable; default: none)")
+    args = p.parse_args(argv)
+    jobs = [(row, None) for row in instructions.rows()]
+    jobs += [(instructions.STATION, override) for override in args.override]
+    try:
+        instructions.require_valgrind()
+    except instructions.ValgrindMissingError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    with ThreadPoolExecutor(2) as pool, tqdm(total=len(jobs), unit="row") as bar:
+        def counted(job):
+            n = instructions.count(job[0], args.seconds, job[1])
+            bar.update()
+            return n
+
+        counts = list(pool.map(counted, jobs))
+    per_second = [(n / args.seconds / 1e6, step / args.seconds / 1e6) for n, step in counts]
+    station = per_second[len(instructions.rows()) - 1][0]
+    print(f"{args.seconds:g} simulated s per row, from {instructions.WARM_UP:g} s of the figure "
+          "of eight; million instructions per simulated s\n\n| layers (cumulative) | all | "
+          "added | of the station's | the plant's step | the rest (framework and systems) |\n"
+          "|---|---|---|---|---|---|")
+    for k, ((row, override), (value, step)) in enumerate(zip(jobs, per_second, strict=True)):
+        name = f"the station, `{override}`" if override else (
+            "the station (Simulation, physics only)" if row == instructions.STATION else row)
+        added = (f"{value - per_second[k - 1][0]:+.1f}"
+                 if row in bench_layers.LAYERS[1:] else "")
+        print(f"| {name} | {value:.1f} | {added} | {value / station:.2f} | {step:.1f} | "
+              f"{value - step:.1f} |")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
