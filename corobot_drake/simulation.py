@@ -524,7 +524,8 @@ class Simulation:
         ApplySimulatorConfig(scenario.simulator_config, self.simulator)
         self.context = self.simulator.get_mutable_context()
         self.robots = {name: Robot(self, parts) for name, parts in self.station.robots.items()}
-        self._diagram_key: str | None = None
+        # The built diagram's key, now: the scenario may be changed in place before a reset.
+        self._diagram_key = diagram_key(scenario)
         self.run_log_window: float | None = run_log_window
         """s of run log kept in memory (the newest, plus up to `runlog.RUN_LOG_CHUNK`
         samples); None keeps the whole run. A long-running simulation (`--serve`) sets it so
@@ -563,9 +564,8 @@ class Simulation:
         it: it costs more than the reset); ValueError otherwise."""
         if self._check if check is None else check:
             check_scenario(scenario or self.scenario)
-        if self._diagram_key is None:
-            self._diagram_key = diagram_key(self.scenario)
-        if scenario is not None and (key or diagram_key(scenario)) != self._diagram_key:
+        # Also without a scenario: this simulation's may have been changed in place.
+        if (key or diagram_key(scenario or self.scenario)) != self._diagram_key:
             raise ValueError("the scenario differs from the built one in more than its seed, "
                              "start time, scripts and initial state: build a new Simulation")
         self.scenario = scenario or self.scenario

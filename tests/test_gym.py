@@ -187,3 +187,16 @@ def test_policy_round_trips_through_json(tmp_path):
 
 def test_the_package_registers_one_env():
     assert corobot_drake.gym.ENV_ID in gymnasium.registry
+
+
+@pytest.mark.parametrize("settings, message", [
+    (dict(elite=9, population=8), "CemSettings.elite: must be at most the population (8)"),
+    (dict(generations=0), "CemSettings.generations: must be in [1, 1000]; got 0"),
+    (dict(start="random"), "CemSettings.start: 'random' is not one of"),
+])
+def test_training_settings_from_python_are_checked_as_the_tools_flags(settings, message):
+    from corobot_drake.gym.train import CemSettings
+
+    with pytest.raises(ValueError) as refused:
+        CemSettings(**settings)
+    assert str(refused.value).startswith(message)

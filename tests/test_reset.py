@@ -65,6 +65,11 @@ def test_reset_refuses_a_scenario_that_needs_another_diagram():
     sim = Simulation(scenario())
     with pytest.raises(ValueError, match="build a new Simulation"):
         sim.reset(scenario("robots: {corobot: {drive: {motor_torque_scaling: 6.0}}}"))
+    # The simulation's own scenario changed in place is refused alike (the diagram would
+    # still drive at the built scaling).
+    sim.scenario.robots["corobot"].drive.motor_torque_scaling = 6.0
+    with pytest.raises(ValueError, match="build a new Simulation"):
+        sim.reset()
 
 
 def test_reset_checks_its_scenario_as_the_constructor_does():

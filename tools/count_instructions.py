@@ -11,6 +11,7 @@ where time on this shared machine is not, split into the plant's step and the re
 Rows run two at a time, ~20 s each.
 """
 
+import subprocess
 import sys
 from concurrent.futures import ThreadPoolExecutor
 
@@ -38,18 +39,26 @@ def main(argv=None) -> int:
     except instructions.ValgrindMissingError as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
+    for override in args.override:  # a bad one is its one line now, not a failed row later
+        bench_layers._scenario(override)
     with ThreadPoolExecutor(2) as pool, tqdm(total=len(jobs), unit="row") as bar:
         def counted(job):
             n = instructions.count(job[0], args.seconds, job[1])
             bar.update()
             return n
 
-        counts = list(pool.map(counted, jobs))
+        futures = [pool.submit(counted, job) for job in jobs]
+        try:
+            counts = [f.result() for f in futures]
+        except (RuntimeError, subprocess.CalledProcessError) as e:
+            pool.shutdown(cancel_futures=True)
+            print(f"error: {e}".splitlines()[0], file=sys.stderr)
+            return 2
     per_second = [(n / args.seconds / 1e6, step / args.seconds / 1e6) for n, step in counts]
     station = per_second[len(instructions.rows()) - 1][0]
     print(f"{args.seconds:g} simulated s per row, from {instructions.WARM_UP:g} s of the figure "
-          "of eight; million instructions per simulated s\n\n| layers (cumulative) | all | "
-          "added | of the station's | the plant's step | the rest (framework and systems) |\n"
+          "of eight\n\n| layers (cumulative) | million instructions per simulated s | added | "
+          "of the station's | in the plant's step | in the rest (framework and systems) |\n"
           "|---|---|---|---|---|---|")
     for k, ((row, override), (value, step)) in enumerate(zip(jobs, per_second, strict=True)):
         name = f"the station, `{override}`" if override else (

@@ -78,9 +78,11 @@ def on_ray(study_file: Path, workers: int) -> dict:
 
 
 def steady_rate(rows: list[dict], workers: int) -> float | None:
-    """Runs per second once every worker has finished its first run (which carries its
-    start-up: the imports and the first build), from the rows' `finished_seconds`: the rate a
-    long study keeps. None when no run finished after that."""
+    """Runs per second after the first `workers` rows arrived (`finished_seconds`): the rate a
+    long study keeps once every worker has started (its first run carries its imports and first
+    build). An approximation: the first rows are taken to be one per worker, as they are when
+    the workers start together (a row does not say which worker ran it). None when no run
+    finished after them."""
     times = sorted(float(r["finished_seconds"]) for r in rows)
     if len(times) <= workers or times[-1] <= times[workers - 1]:
         return None

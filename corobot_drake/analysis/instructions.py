@@ -80,7 +80,7 @@ def _instrument(on: bool) -> None:
 
 def _child(row: str, seconds: float, override: str | None) -> None:
     """Builds `row`, warms up, counts `seconds` of simulation (under callgrind)."""
-    scenario = bench_layers._scenario(*([override] if override else []))
+    scenario = bench_layers._scenario(*([override] if override and row == STATION else []))
     if row == STATION:
         from corobot_drake.simulation import Simulation
 

@@ -469,7 +469,10 @@ def write_drive_fields(scenario_path: str | Path, robot: str, fields: list[Drive
 def _check_loads(text: str, out_path: Path) -> None:
     """Loads `text` as the scenario `out_path` would be (from a file beside it: its relative
     mesh and model paths resolve the same); ScenarioError naming `out_path` if it does not."""
-    fd, probe = tempfile.mkstemp(suffix=".yaml", dir=out_path.parent)
+    try:
+        fd, probe = tempfile.mkstemp(suffix=".yaml", dir=out_path.parent)
+    except OSError as e:  # named as the file asked for, not the probe's random name
+        raise OSError(e.errno, e.strerror, str(out_path)) from None
     try:
         with os.fdopen(fd, "w") as f:
             f.write(text)

@@ -16,7 +16,7 @@ import time
 import numpy as np
 from tqdm import tqdm
 
-from corobot_drake.config.bounds import OneOf, Range, bounded
+from corobot_drake.config.bounds import OneOf, Range, bound_of, bounded
 from corobot_drake.gym.policy import NUM_FEATURES, LinearPolicy
 from corobot_drake.gym.rollouts import EpisodePool, summary
 
@@ -45,6 +45,16 @@ class CemSettings:
     """Spread added to the refitted one, decaying linearly to 0 at the last generation."""
     seed: int = bounded(0, Range(0, 2**32 - 1, why="numpy's seed"))
     """Seeds the sampling of candidates."""
+
+    def __post_init__(self):
+        """ValueError naming the first field out of its bound (as the tool's flags are)."""
+        for field in dc.fields(self):
+            problem = bound_of(field).problem(getattr(self, field.name))
+            if problem:
+                raise ValueError(f"CemSettings.{field.name}: {problem}")
+        if self.elite > self.population:
+            raise ValueError(f"CemSettings.elite: must be at most the population "
+                             f"({self.population}); got {self.elite}")
 
 
 @dc.dataclass(frozen=True)

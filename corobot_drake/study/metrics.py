@@ -2,7 +2,8 @@
 
 A metric is one small function `(RobotRun) -> value`, registered with `@metric("name")`. A
 value is a number or text (one column `<robot>.<name>`), or a dict of them (one column per key,
-`<robot>.<name>.<key>`). Adding a metric is writing one such function here.
+`<robot>.<name>.<key>`). Adding a metric is writing one such function here (`reads_ir=True`
+if it reads the IR sensors, which a study's runs otherwise switch off).
 """
 
 from __future__ import annotations
@@ -33,9 +34,15 @@ class RobotRun:
     """Compass heading at the start, rad."""
 
 
-def metric(name: str):
+READS_IR: set[str] = set()
+"""The metrics that read the IR sensors: a study's runs scan only when one is asked for."""
+
+
+def metric(name: str, reads_ir: bool = False):
     def register(fn):
         METRICS[name] = fn
+        if reads_ir:
+            READS_IR.add(name)
         return fn
     return register
 
@@ -120,7 +127,7 @@ def _max_tilt_deg(run: RobotRun) -> float:
     return run.robot.max_tilt_deg()
 
 
-@metric("ir")
+@metric("ir", reads_ir=True)
 def _ir(run: RobotRun) -> dict[str, float]:
     """Final raw reading of each IR sensor, m."""
     return run.robot.ir_distances()

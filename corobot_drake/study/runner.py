@@ -15,7 +15,7 @@ from pathlib import Path
 from corobot_drake.config.scenario import load_scenario, one_line
 from corobot_drake.config.validate import LayerChecks
 from corobot_drake.simulation import Simulation, diagram_key, quiet_drake_warnings
-from corobot_drake.study.metrics import measure
+from corobot_drake.study.metrics import READS_IR, measure
 from corobot_drake.study.programs import PROGRAMS
 from corobot_drake.study.spec import Run, Scalar, Study
 
@@ -23,8 +23,6 @@ CACHE_SIZE = 3
 """Simulations a worker keeps built (each holds a diagram and its Context)."""
 TIMING_COLUMNS = ("setup", "setup_seconds", "wall_seconds", "cpu_seconds", "finished_seconds")
 """Columns that depend on the clock or the worker (everything else is deterministic)."""
-IR_METRICS = {"ir"}
-"""The metrics that read the IR sensors."""
 CHECK_PERIOD = 0.1
 """s of simulated time between checks whether every command has ended (`until: commands`)."""
 
@@ -39,7 +37,7 @@ def run_scenario(study: Study, scenario_file: Path, run: Run, base=None):
     given: a worker reads them once), then the run's parameters and seed, the study's
     programs, then the run's parameters through a list index (checked as a scenario is); the
     cameras off unless the study asks for them, the IR sensors off unless a metric reads them
-    (`IR_METRICS`: nothing else in a scripted run does, and their scans cost a few per cent
+    (`metrics.READS_IR`: nothing else in a scripted run does, and their scans cost a few per cent
     of a run)."""
     # yaml_load_typed merges a layer into a deep copy of `base`: the run never changes it.
     if base is None:
@@ -60,7 +58,7 @@ def run_scenario(study: Study, scenario_file: Path, run: Run, base=None):
     if not study.cameras:
         for robot in scenario.robots.values():
             robot.camera.rgb = False
-    if not IR_METRICS & set(study.metrics):
+    if not READS_IR & set(study.metrics):
         for robot in scenario.robots.values():
             for sensor in robot.ir_sensors.values():
                 sensor.enabled = False
