@@ -1,7 +1,7 @@
 """Instructions per simulated second, counted by callgrind (`tools/count_instructions.py`).
 
 Wall and CPU time move by 10-30% between identical runs on a shared machine; the instructions a
-simulation executes do not (the same count to 0.1% run after run on one machine). So a change
+simulation executes do not (two counts of one row agree within 0.1% on one machine). So a change
 to the code is measured here first; its effect on time, which also depends on caches and the
 machine, is measured by `tools/bench.py`.
 
