@@ -288,14 +288,11 @@ def measure_event_times(repeats: int = 5, seconds: float = 10.0) -> dict:
     """Real-time factors (wall, median of `repeats`) and simulator steps per simulated second
     of the default scene driving, physics only, with the periodic events on and between the
     plant's 10 ms steps."""
-    from corobot_drake.analysis.bench import physics_only_overrides
+    from corobot_drake.analysis.bench import DRIVING, physics_only_overrides
     from corobot_drake.config.scenario import load_scenario
     from corobot_drake.simulation import Simulation, quiet_drake_warnings
 
     quiet_drake_warnings()
-    driving = ("robots: {corobot: {commands: [!SetPower {left: 1.0, right: 0.6}, "
-               "!Wait {seconds: 3}, !SetPower {left: 0.6, right: 1.0}, !Wait {seconds: 3}, "
-               "!SetPower {left: -1.0, right: 1.0}]}}")
 
     def ir(rate: float) -> list[str]:
         return [NO_CAMERA, f"robots: {{corobot: {{ir_sensors: {{front: {{scan_rate_hz: "
@@ -315,7 +312,7 @@ def measure_event_times(repeats: int = 5, seconds: float = 10.0) -> dict:
     for _ in range(repeats):  # in turn: a slow drift of the load spreads over all
         for name, overrides in cases.items():
             sim = Simulation(load_scenario(DEFAULT_SCENARIO,
-                                           overrides=[driving, *overrides]))
+                                           overrides=[DRIVING, *overrides]))
             taken = sim.simulator.get_num_steps_taken()
             start = time.perf_counter()
             sim.advance(seconds)

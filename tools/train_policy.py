@@ -77,11 +77,17 @@ def main(argv=None) -> int:
                 f"got {args.elite}")
     if args.evaluate and not args.out.is_file():
         p.error(f"argument --out: {args.out}: no such file (--evaluate reads a saved policy)")
+    saved = None
+    if args.evaluate:  # read before any worker starts: a bad file is its one line
+        try:
+            saved = LinearPolicy.load(args.out)
+        except (ValueError, KeyError, TypeError) as e:  # JSONDecodeError is a ValueError
+            p.error(f"argument --out: {args.out}: not a saved policy ({e})")
     quiet_drake_warnings()
     settings = CemSettings(**{f.name: getattr(args, f.name) for f in dc.fields(CemSettings)})
     with episode_pool(args.workers, args.address) as pool:
         if args.evaluate:
-            policy = LinearPolicy.load(args.out)
+            policy = saved
         else:
             policy, curve = train(settings, pool)
         held_out, random = evaluate(pool, policy), evaluate(pool, None)

@@ -826,6 +826,9 @@ TOOLS = [
              "at most --population (8)"),
     ToolCase("train: --evaluate without a policy", "train_policy",
              ("--evaluate", "--out", "{tmp}/none.json"), "no such file"),
+    ToolCase("train: --evaluate a file that is no policy", "train_policy",
+             ("--evaluate", "--out", "{tmp}/policy.json"), "not a saved policy",
+             (("policy.json", b'{"features": ["x"], "weights": {}}'),)),
 ]
 
 
