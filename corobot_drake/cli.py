@@ -133,10 +133,10 @@ def _run_interactive(sim: Simulation, meshcat, duration: float) -> None:
 
     teleop = MeshcatTeleop(meshcat, sim)
     sim.simulator.set_target_realtime_rate(1.0)
-    print(f"Meshcat: {meshcat.web_url()}  (hold the arrows to drive, Space stops, E enables, F "
-          "follows; Ctrl-C quits)", flush=True)
     end = sim.time + duration
-    try:
+    try:  # a Ctrl-C from the first line printed on stops cleanly
+        print(f"Meshcat: {meshcat.web_url()}  (hold the arrows to drive, Space stops, E enables, "
+              "F follows; Ctrl-C quits)", flush=True)
         while sim.time < end:
             teleop.poll()
             sim.advance_to(min(end, sim.time + 1.0 / 30.0))

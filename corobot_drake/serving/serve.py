@@ -86,17 +86,9 @@ def serve(make_sim, host: str = "127.0.0.1", port: int = 50000, meshcat: bool = 
         return 2
     bridge = SimSide(runner, conn)
     shown = f"http://[{host}]:{value}" if ":" in host else f"http://{host}:{value}"
-    print(f"serving {shown}", flush=True)
-    print(f"  dashboard {access.page_url(shown)}  services {shown}/services  API {shown}/docs"
-          + (f"  Meshcat {runner.meshcat_url}" if runner.meshcat_url else ""), flush=True)
-    if access.token:
-        print(f"  token {access.token}  (send 'Authorization: Bearer <token>'; the dashboard "
-              "link carries it)", flush=True)
-    if not is_loopback(host):
-        print(f"warning: serving on {host}: anyone who can reach it and has the token can "
-              "drive the robot", file=sys.stderr, flush=True)
     stats = runner.stats()
-    try:
+    try:  # a Ctrl-C from the first line printed on stops cleanly
+        _announce(shown, host, access, runner)
         while http.is_alive() and runner.alive and not bridge.closed.is_set():
             http.join(0.5)
             stats = runner.stats()
@@ -113,6 +105,19 @@ def serve(make_sim, host: str = "127.0.0.1", port: int = 50000, meshcat: bool = 
     print(f"simulated {runner.sim.time:.2f} s at {stats['realtime_factor'] or 0:.2f}x real "
           f"time ({stats['slips']} slips)", file=sys.stderr)
     return 0 if runner.error is None else 1
+
+
+def _announce(shown: str, host: str, access, runner) -> None:
+    """The lines that say where the server is (and, beyond loopback, the warning)."""
+    print(f"serving {shown}", flush=True)
+    print(f"  dashboard {access.page_url(shown)}  services {shown}/services  API {shown}/docs"
+          + (f"  Meshcat {runner.meshcat_url}" if runner.meshcat_url else ""), flush=True)
+    if access.token:
+        print(f"  token {access.token}  (send 'Authorization: Bearer <token>'; the dashboard "
+              "link carries it)", flush=True)
+    if not is_loopback(host):
+        print(f"warning: serving on {host}: anyone who can reach it and has the token can "
+              "drive the robot", file=sys.stderr, flush=True)
 
 
 def _sim_runner(make_sim, meshcat: bool, rate: float = 1.0):
