@@ -28,10 +28,12 @@ def test_no_valgrind_is_a_clear_error(monkeypatch, capsys):
 
 @pytest.mark.skipif(not shutil.which("valgrind"), reason="valgrind is not installed")
 def test_a_count_is_the_same_twice_and_mostly_the_plants_step():
-    # Two counts of the same 20 ms of the station: callgrind counts exactly what ran; 0.1%
-    # covers Python's hash seeds and allocator addresses (measured: 0.05%).
+    # Two counts of the same 20 ms of the station: callgrind counts what ran, so they differ
+    # only by what lands in the short window besides the steps (Python's garbage collector,
+    # the toggling itself): 0.05-0.15% measured. 1% still tells a count from a time, which
+    # moves 10-30% between identical runs here.
     (first, step), (second, _) = (instructions.count(instructions.STATION, 0.02)
                                   for _ in range(2))
-    assert second == pytest.approx(first, rel=1e-3)
+    assert second == pytest.approx(first, rel=1e-2)
     # The plant's step is most of a step (86% over the first second, tools/count_instructions.py).
     assert 0.6 < step / first < 0.97
