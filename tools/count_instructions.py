@@ -24,39 +24,27 @@ from corobot_drake.config.bounds import Range
 SECONDS = Range(0.0, instructions.LONGEST, low_open=True, unit="s")
 
 
-@one_line_errors
-def main(argv=None) -> int:
-    p = ToolParser(description=__doc__.splitlines()[0])
-    p.add_argument("--seconds", type=bounded(SECONDS), default=1.0,
-                   help="simulated s counted per row (after a 0.05 s warm-up)")
-    p.add_argument("--override", action="append", default=[],
-                   help="scenario YAML: adds a station row with it (repeatable; default: none)")
-    args = p.parse_args(argv)
-    jobs = [(row, None) for row in instructions.rows()]
-    jobs += [(instructions.STATION, override) for override in args.override]
-    try:
-        instructions.require_valgrind()
-    except instructions.ValgrindMissingError as e:
-        print(f"error: {e}", file=sys.stderr)
-        return 2
-    for override in args.override:  # a bad one is its one line now, not a failed row later
-        bench_layers._scenario(override)
+def _counted(jobs: list, seconds: float) -> list[tuple[int, int]] | str:
+    """Each job's (all, plant's step) instructions, two rows at a time; or the one-line error
+    of the first that failed (the rows still queued are dropped)."""
     with ThreadPoolExecutor(2) as pool, tqdm(total=len(jobs), unit="row") as bar:
         def counted(job):
-            n = instructions.count(job[0], args.seconds, job[1])
+            n = instructions.count(job[0], seconds, job[1])
             bar.update()
             return n
 
         futures = [pool.submit(counted, job) for job in jobs]
         try:
-            counts = [f.result() for f in futures]
+            return [f.result() for f in futures]
         except (RuntimeError, subprocess.CalledProcessError) as e:
             pool.shutdown(cancel_futures=True)
-            print(f"error: {e}".splitlines()[0], file=sys.stderr)
-            return 2
-    per_second = [(n / args.seconds / 1e6, step / args.seconds / 1e6) for n, step in counts]
+            return str(e).splitlines()[0]
+
+
+def _print_table(jobs: list, counts: list[tuple[int, int]], seconds: float) -> None:
+    per_second = [(n / seconds / 1e6, step / seconds / 1e6) for n, step in counts]
     station = per_second[len(instructions.rows()) - 1][0]
-    print(f"{args.seconds:g} simulated s per row, from {instructions.WARM_UP:g} s of the figure "
+    print(f"{seconds:g} simulated s per row, from {instructions.WARM_UP:g} s of the figure "
           "of eight\n\n| layers (cumulative) | million instructions per simulated s | added | "
           "of the station's | in the plant's step | in the rest (framework and systems) |\n"
           "|---|---|---|---|---|---|")
@@ -67,6 +55,30 @@ def main(argv=None) -> int:
                  if row in bench_layers.LAYERS[1:] else "")
         print(f"| {name} | {value:.1f} | {added} | {value / station:.2f} | {step:.1f} | "
               f"{value - step:.1f} |")
+
+
+@one_line_errors
+def main(argv=None) -> int:
+    p = ToolParser(description=__doc__.splitlines()[0])
+    p.add_argument("--seconds", type=bounded(SECONDS), default=1.0,
+                   help="simulated s counted per row (after a 0.05 s warm-up)")
+    p.add_argument("--override", action="append", default=[],
+                   help="scenario YAML: adds a station row with it (repeatable; default: none)")
+    args = p.parse_args(argv)
+    try:
+        instructions.require_valgrind()
+    except instructions.ValgrindMissingError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    for override in args.override:  # a bad one is its one line now, not a failed row later
+        bench_layers._scenario(override)
+    jobs = [(row, None) for row in instructions.rows()]
+    jobs += [(instructions.STATION, override) for override in args.override]
+    counts = _counted(jobs, args.seconds)
+    if isinstance(counts, str):
+        print(f"error: {counts}", file=sys.stderr)
+        return 2
+    _print_table(jobs, counts, args.seconds)
     return 0
 
 
