@@ -68,6 +68,20 @@ def test_a_saved_scenario_keeps_every_pose_in_the_one_convention(tmp_path):
     assert yaml_dump_typed(saved, schema=sc.Scenario) == text  # a fixed point
 
 
+def _loads_or_names(override: str, field: str | None, words: str | None,
+                    one_line: bool = False) -> None:
+    """The override loads (`field` None), or is refused naming `field` (in one line if
+    `one_line`)."""
+    if field is None:
+        load_scenario(DEFAULT_SCENARIO, overrides=[override])
+        return
+    with pytest.raises(ScenarioError) as e:
+        load_scenario(DEFAULT_SCENARIO, overrides=[override])
+    if one_line:
+        assert str(e.value).count("\n") == 0
+    assert f"--override:1: {field}:" in str(e.value) and words in str(e.value)
+
+
 @pytest.mark.parametrize("override, field, words", [
     ("world: {bodies: {giant_box: {pose: {translation: [0, 0, -.inf]}}}}",
      "world.bodies.giant_box.pose.translation[2]", "must be in [-10000, 10000] m; got -inf"),
@@ -81,12 +95,7 @@ def test_a_saved_scenario_keeps_every_pose_in_the_one_convention(tmp_path):
      "robots.corobot.ir_sensors.rear.X_PB.base_frame", "not a link of the robot"),
 ])
 def test_pose_errors_name_the_field(override, field, words):
-    if field is None:
-        load_scenario(DEFAULT_SCENARIO, overrides=[override])
-        return
-    with pytest.raises(ScenarioError) as e:
-        load_scenario(DEFAULT_SCENARIO, overrides=[override])
-    assert f"--override:1: {field}:" in str(e.value) and words in str(e.value)
+    _loads_or_names(override, field, words)
 
 
 def test_checks_of_meaning_name_the_line_of_the_field(tmp_path):
@@ -156,13 +165,7 @@ def _command(fields: str) -> str:
 ])
 def test_a_saved_commands_recent_progress_is_checked(override, field, words):
     """The field a saved scene writes for a running command (docs/commands.md, Saving)."""
-    if field is None:
-        load_scenario(DEFAULT_SCENARIO, overrides=[override])
-        return
-    with pytest.raises(ScenarioError) as e:
-        load_scenario(DEFAULT_SCENARIO, overrides=[override])
-    assert str(e.value).count("\n") == 0
-    assert f"--override:1: robots.corobot.{field}:" in str(e.value) and words in str(e.value)
+    _loads_or_names(override, field and f"robots.corobot.{field}", words, one_line=True)
 
 
 def test_a_loaded_scenario_is_checked_once_until_it_changes(monkeypatch):
