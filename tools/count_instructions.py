@@ -1,14 +1,16 @@
 #!/usr/bin/env python3
 """Instructions per simulated second of physics only, layer by layer (valgrind's callgrind).
 
-    python tools/count_instructions.py [--seconds 1] [--override YAML ...]
+    python tools/count_instructions.py [--seconds 1] [--override YAML ...] [--cache-sim]
 
 The rows of `tools/bench.py --layers` (the plant alone, then the robot's systems added one
 layer at a time, then the station), each counted over `--seconds` of the figure of eight's
 first segment (`corobot_drake.analysis.instructions`): a count that is the same run after run,
 where time on this shared machine is not, split into the plant's step and the rest. Each
 `--override` adds a station row with that scenario override (e.g. a Drake setting to try).
-Rows run two at a time, ~20 s each.
+`--cache-sim` adds callgrind's count of first-level instruction-cache misses (its cache model:
+what code the rows keep evicting), at about twice the run time. Rows run two at a time, ~20 s
+each.
 """
 
 import subprocess
@@ -24,12 +26,12 @@ from corobot_drake.config.bounds import Range
 SECONDS = Range(0.0, instructions.LONGEST, low_open=True, unit="s")
 
 
-def _counted(jobs: list, seconds: float) -> list[tuple[int, int]] | str:
-    """Each job's (all, plant's step) instructions, two rows at a time; or the one-line error
-    of the first that failed (the rows still queued are dropped)."""
+def _counted(jobs: list, seconds: float, cache: bool) -> list[instructions.Count] | str:
+    """Each job's `Count`, two rows at a time; or the one-line error of the first that failed
+    (the rows still queued are dropped)."""
     with ThreadPoolExecutor(2) as pool, tqdm(total=len(jobs), unit="row") as bar:
         def counted(job):
-            n = instructions.count(job[0], seconds, job[1])
+            n = instructions.count(job[0], seconds, job[1], cache)
             bar.update()
             return n
 
@@ -41,20 +43,24 @@ def _counted(jobs: list, seconds: float) -> list[tuple[int, int]] | str:
             return str(e).splitlines()[0]
 
 
-def _print_table(jobs: list, counts: list[tuple[int, int]], seconds: float) -> None:
-    per_second = [(n / seconds / 1e6, step / seconds / 1e6) for n, step in counts]
-    station = per_second[len(instructions.rows()) - 1][0]
+def _print_table(jobs: list, counts: list[instructions.Count], seconds: float) -> None:
+    millions = [(c.instructions / seconds / 1e6, c.plant_step / seconds / 1e6,
+                 None if c.i1_misses is None else c.i1_misses / seconds / 1e6) for c in counts]
+    cache = millions[0][2] is not None
+    station = millions[len(instructions.rows()) - 1][0]
     print(f"{seconds:g} simulated s per row, from {instructions.WARM_UP:g} s of the figure "
           "of eight\n\n| layers (cumulative) | million instructions per simulated s | added | "
-          "of the station's | in the plant's step | in the rest (framework and systems) |\n"
-          "|---|---|---|---|---|---|")
-    for k, ((row, override), (value, step)) in enumerate(zip(jobs, per_second, strict=True)):
+          "of the station's | in the plant's step | in the rest (framework and systems) |"
+          + (" million first-level instruction-cache misses per simulated s |" if cache else "")
+          + "\n|---|---|---|---|---|---|" + ("---|" if cache else ""))
+    for k, ((row, override), (value, step, misses)) in enumerate(
+            zip(jobs, millions, strict=True)):
         name = f"the station, `{override}`" if override else (
             "the station (Simulation, physics only)" if row == instructions.STATION else row)
-        added = (f"{value - per_second[k - 1][0]:+.1f}"
+        added = (f"{value - millions[k - 1][0]:+.1f}"
                  if row in bench_layers.LAYERS[1:] else "")
         print(f"| {name} | {value:.1f} | {added} | {value / station:.2f} | {step:.1f} | "
-              f"{value - step:.1f} |")
+              f"{value - step:.1f} |" + (f" {misses:.2f} |" if cache else ""))
 
 
 @one_line_errors
@@ -64,6 +70,8 @@ def main(argv=None) -> int:
                    help="simulated s counted per row (after a 0.05 s warm-up)")
     p.add_argument("--override", action="append", default=[],
                    help="scenario YAML: adds a station row with it (repeatable; default: none)")
+    p.add_argument("--cache-sim", action="store_true",
+                   help="also count first-level instruction-cache misses (~2x slower)")
     args = p.parse_args(argv)
     try:
         instructions.require_valgrind()
@@ -74,7 +82,7 @@ def main(argv=None) -> int:
         bench_layers._scenario(override)
     jobs = [(row, None) for row in instructions.rows()]
     jobs += [(instructions.STATION, override) for override in args.override]
-    counts = _counted(jobs, args.seconds)
+    counts = _counted(jobs, args.seconds, args.cache_sim)
     if isinstance(counts, str):
         print(f"error: {counts}", file=sys.stderr)
         return 2

@@ -27,7 +27,7 @@ from corobot_drake.analysis.arguments import (
 from corobot_drake.config import scenario as sc
 from corobot_drake.config.bounds import DRAKE_INT, POWER, Range
 
-LOOPS = Range(1, 100, why="loops of ~13 simulated s each")
+LOOPS = Range(1, 100, why="loops of ~37 simulated s each at power 0.2")
 SEEDS = Range(1, 10_000, why="runs of the study")
 
 

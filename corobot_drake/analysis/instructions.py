@@ -18,6 +18,7 @@ import shutil
 import subprocess
 import sys
 import tempfile
+import typing
 from pathlib import Path
 
 from corobot_drake.analysis import bench_layers
@@ -38,9 +39,12 @@ def rows() -> list[str]:
     return [*bench_layers.LAYERS, STATION]
 
 
-PLANT_STEP = "MultibodyPlant<double>::CalcStepUnrestricted"
-"""The plant's step (its contact problem, the solve, the new state): callgrind's inclusive count
-of it is the plant's share of a row; the rest is the framework's and the project's systems'."""
+PLANT_STEPS = ("MultibodyPlant<double>::CalcStepUnrestricted",
+               "MultibodyPlant<double>::CalcStepDiscrete")
+"""The plant's step (its contact problem, the solve, the new state): with sampled output ports
+(Drake's default) an unrestricted update, without them a discrete one. Callgrind's inclusive
+count of it is the plant's share of a row; the rest is the framework's and the project's
+systems'."""
 
 
 def require_valgrind() -> None:
@@ -51,24 +55,49 @@ def require_valgrind() -> None:
                                    "(e.g. apt install valgrind)")
 
 
-def count(row: str, seconds: float, override: str | None = None) -> tuple[int, int]:
-    """(all, the plant's step) instructions executed simulating `seconds` (<= `LONGEST`) of
-    `row` (`rows()`; an `override`, scenario YAML, applies to the station row only)."""
+class Count(typing.NamedTuple):
+    """What callgrind counted over a row's `seconds`."""
+
+    instructions: int
+    plant_step: int
+    """Of them, in the plant's step (`PLANT_STEPS`, inclusive)."""
+    i1_misses: int | None = None
+    """First-level instruction-cache misses (callgrind's cache model; None: not simulated)."""
+
+
+def count(row: str, seconds: float, override: str | None = None,
+          cache: bool = False) -> Count:
+    """Instructions executed simulating `seconds` (<= `LONGEST`) of `row` (`rows()`; an
+    `override`, scenario YAML, applies to the station row only); with `cache`, also callgrind's
+    first-level instruction-cache misses (its cache model, ~2x slower to run)."""
     require_valgrind()
     with tempfile.TemporaryDirectory() as folder:
         out = Path(folder) / "callgrind.out"
         argv = ["valgrind", "--tool=callgrind", "--instr-atstart=no",
+                *(["--cache-sim=yes"] if cache else []),
                 f"--callgrind-out-file={out}", sys.executable, "-m", __name__, row,
                 str(seconds), *([override] if override else [])]
         done = subprocess.run(argv, capture_output=True, text=True)
-        found = re.search(r"Collected : (\d+)", done.stderr)
-        if done.returncode != 0 or not found:
+        if done.returncode != 0 or not out.exists():
             raise RuntimeError(f"callgrind failed on {row!r}: {done.stderr.strip()[-300:]}")
-        annotated = subprocess.run(["callgrind_annotate", "--inclusive=yes", str(out)],
-                                   capture_output=True, text=True, check=True).stdout
-    step = [int(line.split()[0].replace(",", "")) for line in annotated.splitlines()
-            if PLANT_STEP in line]
-    return int(found.group(1)), max(step, default=0)
+        annotated = subprocess.run(
+            ["callgrind_annotate", "--inclusive=yes", f"--show={'Ir,I1mr' if cache else 'Ir'}",
+             str(out)], capture_output=True, text=True, check=True).stdout
+    return _parse(row, annotated, cache)
+
+
+def _parse(row: str, annotated: str, cache: bool) -> Count:
+    """The `Count` in `callgrind_annotate --inclusive=yes --show=Ir[,I1mr]` output: the
+    totals' line and the plant step's (each number is followed by its percentage)."""
+    def numbers(line: str) -> list[int]:
+        return [int(n.replace(",", "")) for n in re.findall(r"([\d,]+) \(", line)]
+
+    totals = [numbers(line) for line in annotated.splitlines() if "PROGRAM TOTALS" in line]
+    if not totals:
+        raise RuntimeError(f"callgrind counted nothing on {row!r}")
+    step = [numbers(line)[0] for line in annotated.splitlines()
+            if any(f in line for f in PLANT_STEPS)]
+    return Count(totals[0][0], max(step, default=0), totals[0][1] if cache else None)
 
 
 def _instrument(on: bool) -> None:
