@@ -1,13 +1,12 @@
 """The IR distance sensors, measured through the simulation (SPEC, Sensors; issue 4)."""
 
-import dataclasses as dc
 import math
 
 import numpy as np
 import pytest
 
 from conftest import DEFAULT_SCENARIO, make_sim
-from corobot_drake.config import scenario as sc
+from corobot_drake.analysis.bench import NO_CAMERA
 from corobot_drake.config.scenario import ScenarioError, load_scenario
 from corobot_drake.model import dimensions as dim
 from corobot_drake.sensors.ir_models import SharpGP2D12
@@ -23,8 +22,7 @@ MOUNT_Z = dim.FRONT_IR.position[2]
 HALF_CONE = math.radians(4.0)
 
 # The camera takes no part here: without it a simulation builds and runs faster.
-_NO_CAMERA = (["robots: {corobot: {camera: {rgb: false}}}"]
-              if "camera" in {f.name for f in dc.fields(sc.Robot)} else [])
+_NO_CAMERA = [NO_CAMERA]
 
 
 def ir_sim(*overrides: str):

@@ -12,6 +12,7 @@ from google.protobuf import descriptor_pb2, descriptor_pool, message_factory
 from mcap.reader import make_reader
 
 from conftest import make_sim
+from corobot_drake.analysis.bench import NO_CAMERA
 from corobot_drake.cli import main
 from corobot_drake.config.scenario import load_scenario
 from corobot_drake.model import dimensions as dim
@@ -32,7 +33,6 @@ from corobot_drake.systems.drive import CommandRecord
 from corobot_drake.systems.runlog import COLUMNS
 
 CURVE = "robots: {corobot: {commands: [!SetPower {left: 1, right: 0.5}]}}"
-NO_CAMERA = "robots: {corobot: {camera: {rgb: false}}}"
 SCRIPT = ("robots: {corobot: {commands: [!SetPower {left: 1, right: 0.5}, !Wait {seconds: 0.5},"
           " !AllStop {}]}}")
 

@@ -24,6 +24,8 @@ DRIVING = (f"robots: {{{ROBOT}: {{commands: [!SetPower {{left: 1.0, right: 0.6}}
 """The figure of eight the benchmarks drive (a scenario override)."""
 IR_RATE_HZ = 20.0
 CAMERA_FPS = 30.0
+NO_CAMERA = f"robots: {{{ROBOT}: {{camera: {{rgb: false}}}}}}"
+"""The override that turns the robot's camera off (its IR sensors as the scenario has them)."""
 
 
 def sensor_overrides(robot: str = ROBOT, ir: bool = False, camera: bool = False) -> list[str]:

@@ -25,20 +25,19 @@ from typing import ClassVar
 
 from pydrake.systems.framework import EventStatus
 
-from corobot_drake.analysis.bench import DRIVING, physics_only_overrides
+from corobot_drake.analysis.bench import DRIVING, NO_CAMERA, physics_only_overrides
 from corobot_drake.config.scenario import load_scenario
 from corobot_drake.resources import DEFAULT_SCENARIO
 from corobot_drake.sensors import ir_sensor
 from corobot_drake.simulation import Simulation
 
-NO_CAMERA = ["robots: {corobot: {camera: {rgb: false}}}"]
 IR_200_HZ = ("robots: {corobot: {ir_sensors: {front: {scan_rate_hz: 200}, "
              "rear: {scan_rate_hz: 200}}}}")
 
 CONFIGURATIONS = {
     "physics + drive, no IR, no camera": physics_only_overrides(),
-    "physics + drive + 2 IR at 20 Hz, no camera": [*NO_CAMERA],
-    "physics + drive + 2 IR at 200 Hz, no camera": [*NO_CAMERA, IR_200_HZ],
+    "physics + drive + 2 IR at 20 Hz, no camera": [NO_CAMERA],
+    "physics + drive + 2 IR at 200 Hz, no camera": [NO_CAMERA, IR_200_HZ],
 }
 """Scenario overrides (on top of the default scene and DRIVING) of each RTF configuration."""
 
@@ -89,7 +88,7 @@ def station_scan_cost_seconds(repeats: int = 4000, batch: int = 50,
     handler, as the Simulator runs it (minus Drake's event dispatch), against a QueryObject the
     physics step has already posed. `timer`: process CPU time by default (robust on a shared,
     loaded machine); pass time.perf_counter for wall time."""
-    sim = Simulation(load_scenario(DEFAULT_SCENARIO, overrides=NO_CAMERA))
+    sim = Simulation(load_scenario(DEFAULT_SCENARIO, overrides=[NO_CAMERA]))
     sim.advance(0.1)
     jobs = []
     for sensor in sim.station.robots["corobot"].ir_sensors.values():
@@ -118,7 +117,7 @@ def in_place_scan_cost_seconds(seconds: float = 10.0) -> tuple[float, dict[str, 
     median of each sensor's handler by name."""
     TimedIrSensor.log = []
     with _sensor_class(TimedIrSensor):
-        sim = Simulation(load_scenario(DEFAULT_SCENARIO, overrides=[DRIVING, *NO_CAMERA]))
+        sim = Simulation(load_scenario(DEFAULT_SCENARIO, overrides=[DRIVING, NO_CAMERA]))
     sim.advance(seconds)
     per_scan: dict[float, float] = {}
     per_sensor: dict[str, list[float]] = {}
@@ -135,7 +134,7 @@ def pose_update_probe_seconds(seconds: float = 5.0) -> tuple[float, float]:
     (steps that took a scan, plant steps that didn't). The first is a cache hit (the scan
     computed the poses of the current plant state and nothing invalidated them, so the next
     plant step reuses them); the second is the pose update itself."""
-    sim = Simulation(load_scenario(DEFAULT_SCENARIO, overrides=[DRIVING, *NO_CAMERA]))
+    sim = Simulation(load_scenario(DEFAULT_SCENARIO, overrides=[DRIVING, NO_CAMERA]))
     sensor = sim.station.robots["corobot"].ir_sensors["front"]
     period, h = sensor.period, sim.scenario.plant_config.time_step
     probes: list[tuple[float, float]] = []
