@@ -3,8 +3,8 @@
 
 The same runs in one process (diagram built per run, or reset) and on Ray with 1 and 2
 workers, with and without Ray's start and stop, and steady (once every worker has started);
-each run's CPU seconds; and the projected wall
-time of a big study on a cluster (`corobot_drake.analysis.bench_study`).
+each run's CPU seconds; and the projected wall time of a big study on a cluster
+(`corobot_drake.analysis.bench_study`).
 
     python tools/bench_study.py [--seeds 12] [--duration 4]
 """

@@ -13,6 +13,7 @@ around the advance): the first segment of the benchmark's figure of eight (SetPo
 the first 3 s), building and start-up excluded.
 """
 
+import os
 import re
 import shutil
 import subprocess
@@ -101,8 +102,6 @@ def _parse(row: str, annotated: str, cache: bool) -> Count:
 
 
 def _instrument(on: bool) -> None:
-    import os
-
     subprocess.run(["callgrind_control", "-i", "on" if on else "off", str(os.getpid())],
                    check=True, capture_output=True)
 
