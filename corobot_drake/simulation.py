@@ -519,7 +519,9 @@ class Simulation:
 
             self._record_live = meshcat is not None
             meshcat = meshcat or offline_meshcat()
-        self.station: Station = build_station(scenario, meshcat, save_camera, foxglove=foxglove)
+        # Ctrl-drag only where someone watches: an offline recording stays free of it.
+        self.station: Station = build_station(scenario, meshcat, save_camera, foxglove=foxglove,
+                                              mouse_drag=self._record_live is not False)
         self.simulator = Simulator(self.station.diagram)
         ApplySimulatorConfig(scenario.simulator_config, self.simulator)
         self.context = self.simulator.get_mutable_context()

@@ -203,6 +203,9 @@ class Station:
     meshcat: object = None
     renderers: dict = dc.field(default_factory=dict)
     """The cameras' render engines: renderer name -> "RenderEngineGl" or "RenderEngineVtk"."""
+    visualization_lcm: object = None
+    """With Meshcat: the in-process LCM bus Drake's visualizers publish on (held here: the
+    diagram's publishers only point at it)."""
 
 
 def _add_robot(plant: MultibodyPlant, name: str, robot: sc.Robot):
@@ -214,9 +217,10 @@ def _add_robot(plant: MultibodyPlant, name: str, robot: sc.Robot):
     return instance, chassis, joints
 
 
-def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None, foxglove=None
-                  ) -> Station:
-    """Builds the whole diagram for `scenario`; with `meshcat`, adds its visualizers; with
+def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None, foxglove=None,
+                  mouse_drag: bool = True) -> Station:
+    """Builds the whole diagram for `scenario`; with `meshcat`, adds its visualizers (and,
+    with `mouse_drag`, Ctrl-drag of bodies: `MESHCAT_DRAG_STIFFNESS`); with
     `save_camera` (a directory), each robot's camera frames are saved there as PNG; with
     `foxglove` (a `foxglove.Context`), the publishers of the run's Foxglove topics
     (`recording.publishers`)."""
@@ -306,11 +310,20 @@ def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None, foxglov
         add_foxglove_topics(builder, plant, scene_graph, robots, scenario, foxglove)
     builder.ExportOutput(plant.get_body_poses_output_port(), "body_poses")
     builder.ExportOutput(scene_graph.get_query_output_port(), "query_object")
+    lcm = None
     if meshcat is not None:
-        _add_meshcat(builder, plant, scene_graph, meshcat, scenario.world)
+        lcm = _add_meshcat(builder, plant, scene_graph, meshcat, scenario.world, mouse_drag)
     diagram = builder.Build()
     diagram.set_name("corobot_station")
-    return Station(diagram, plant, scene_graph, robots, bodies, models, meshcat, renderers)
+    return Station(diagram, plant, scene_graph, robots, bodies, models, meshcat, renderers,
+                   lcm)
+
+
+MESHCAT_DRAG_STIFFNESS = 100.0
+"""1/s^2, mass-normalized: the spring of Drake's `MeshcatMouseSpring` that pulls a body
+Ctrl-dragged in Meshcat toward the cursor (10 rad/s, critically damped; a push of the robot
+or a box by hand, like a hand in the lab). Only interactive Meshcat runs have it: headless,
+served-without-Meshcat and scripted runs stay free of outside forces and reproducible."""
 
 
 def visualization_config():
@@ -318,24 +331,35 @@ def visualization_config():
     shapes (`proximity`, translucent red). Drake adds the proximity layer hidden
     (`visible_by_default = false`); tick drake > proximity in Meshcat's Scene panel (and
     untick illustration) for the physics view. (`initial_proximity_alpha` only seeds Drake's
-    optional alpha slider, so the translucency is in the colour.)"""
+    optional alpha slider, so the translucency is in the colour.) Ctrl-drag moves a body
+    (`MESHCAT_DRAG_STIFFNESS`)."""
     from pydrake.geometry import Rgba
     from pydrake.visualization import VisualizationConfig
 
     return VisualizationConfig(publish_contacts=True, publish_proximity=True,
-                               default_proximity_color=Rgba(0.8, 0.0, 0.0, 0.6))
+                               default_proximity_color=Rgba(0.8, 0.0, 0.0, 0.6),
+                               mouse_interaction_stiffness=MESHCAT_DRAG_STIFFNESS)
 
 
-def _add_meshcat(builder, plant, scene_graph, meshcat, world: sc.World) -> None:
+def _add_meshcat(builder, plant, scene_graph, meshcat, world: sc.World, mouse_drag: bool):
+    """Adds Drake's Meshcat visualizers and the scene's looks; returns the LCM bus they use."""
+    from pydrake.lcm import DrakeLcm
     from pydrake.visualization import ApplyVisualizationConfig
 
-    ApplyVisualizationConfig(visualization_config(), builder,
-                             plant=plant, scene_graph=scene_graph, meshcat=meshcat)
+    config = visualization_config()
+    if not mouse_drag:
+        config.mouse_interaction_stiffness = None
+    # Meshcat only: Drake's default LCM bus would also publish every frame as UDP multicast
+    # for Meldis; an in-process bus keeps the run off the network.
+    lcm = DrakeLcm("memq://")
+    ApplyVisualizationConfig(config, builder, plant=plant, scene_graph=scene_graph,
+                             meshcat=meshcat, lcm=lcm)
     sky = list(world.sky_color)
     meshcat.SetProperty("/Background", "top_color", sky)
     meshcat.SetProperty("/Background", "bottom_color", [min(1.0, c * 1.15) for c in sky])
     meshcat.SetProperty("/Grid", "visible", False)
     _set_meshcat_sun(meshcat, world.sun)
+    return lcm
 
 
 MESHCAT_SUN = "/Lights/FillLight/<object>"

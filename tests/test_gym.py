@@ -99,8 +99,16 @@ def test_driving_into_a_box_is_a_collision_and_a_stall_and_the_box_stays(env):
     assert sum(i["stalled"] for i in infos[-10:]) >= 8  # pushing, not moving: stalled
     assert rewards[-1] < -0.5  # time cost + collision + stall, no progress
     assert not terminated and not truncated
-    # 1e5 kg held above the ground: the robot's push moves it less than a millimetre
-    assert np.linalg.norm(_box_pose(env, 0) - start) < 1e-3
+    # locked (RigidBody.Lock): the robot's push does not move it at all
+    assert np.array_equal(_box_pose(env, 0), start)
+
+
+def test_boxes_stay_locked_after_a_reset(env):
+    # Simulation.reset restores the default Context (unlocked): the env locks them again
+    env.reset(seed=1)
+    plant = env.sim.station.plant
+    plant_context = plant.GetMyContextFromRoot(env.sim.context)
+    assert all(body.is_locked(plant_context) for body in env.sim.station.bodies.values())
 
 
 def test_reaching_the_goal_terminates_with_success(env):

@@ -159,3 +159,36 @@ def test_robot_camera_view_sees_the_box_ahead():
     # 0.74 m from a 2 m box with a 30 deg fov: the box fills the view; its lit face is brown.
     r, g, b = image.reshape(-1, 3).mean(axis=0)
     assert r > g > b and r > 60
+
+
+def _mouse_springs(sim) -> list[str]:
+    return [s.get_name() for s in sim.station.diagram.GetSystems()
+            if "mouse_spring" in s.get_name()]
+
+
+def test_ctrl_drag_in_meshcat_only_where_someone_watches():
+    """A Meshcat run gets Drake's MeshcatMouseSpring feeding the plant's applied-force input
+    (Ctrl-drag a body); an offline recording (`--headless --record`) and a plain run do not,
+    so they stay free of outside forces."""
+    from pydrake.geometry import StartMeshcat
+
+    from corobot_drake.simulation import Simulation
+
+    scenario = make_sim().scenario
+    watched = Simulation(scenario, meshcat=StartMeshcat())
+    assert len(_mouse_springs(watched)) == 1
+    offline = Simulation(scenario, record=True)
+    assert _mouse_springs(offline) == []
+    assert _mouse_springs(Simulation(scenario)) == []
+
+
+def test_meshcat_runs_publish_no_lcm_multicast():
+    """Drake's visualization also publishes LCM for Meldis; the station gives it an
+    in-process bus, so a Meshcat run sends nothing to a multicast group."""
+    from pydrake.geometry import StartMeshcat
+
+    from corobot_drake.simulation import Simulation
+
+    sim = Simulation(make_sim().scenario, meshcat=StartMeshcat())
+    assert sim.station.visualization_lcm.get_lcm_url() == "memq://"
+    sim.advance(0.05)

@@ -3,12 +3,11 @@
 A thin env over `Simulation`: the diagram is built once, in the constructor, and every
 `reset` puts the episode's layout (`layout.draw_layout`) into the same diagram with
 `Simulation.reset` (start pose, box poses, seed). The boxes are free bodies, so their poses
-are per-run values of the scenario; they are held still: their weight is balanced by a
-constant applied force (the plant's `applied_spatial_force` input, fixed in the Context) and
-they float 1 mm above the ground, so they cost the plant nothing until the robot touches
-them (a box resting on the ground would be a hydroelastic contact at every step). They weigh
-`HELD_MASS` kg: the robot cannot push them away. (Drake's `RigidBody.Lock` would hold them, but
-in pydrake 1.51 a locked body touching the ground segfaults in the contact solver.)
+are per-run values of the scenario; they are held still by Drake's `RigidBody.Lock` (a
+locked body keeps its pose whatever pushes it: the robot cannot move them), locked again after
+every reset since the lock lives in the Context. They float 1 mm above the ground, so they
+cost the plant nothing until the robot touches them (a box resting on the ground would be a
+hydroelastic contact to compute at every step).
 
 A step is one control period (`GoToGoalConfig.control_period`, 0.1 s): the action's powers
 are issued as `SetPower(left, right)` and the simulation advances. See docs/gym.md for the
@@ -24,8 +23,6 @@ from typing import ClassVar
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
-from pydrake.multibody.math import SpatialForce
-from pydrake.multibody.plant import ExternallyAppliedSpatialForce
 
 from corobot_drake.config import scenario as sc
 from corobot_drake.config.poses import ground_pose
@@ -36,8 +33,8 @@ from corobot_drake.sensors.ir_sensor import scan_state_layout
 from corobot_drake.simulation import Simulation, diagram_key, quiet_drake_warnings
 
 ROBOT = "corobot"
-HELD_MASS = 1.0e5
-"""kg of each held box (the giant box too): 17 N of traction moves it < 1 mm/s in 8 s."""
+BOX_MASS = 10.0
+"""kg of each of the task's boxes (locked: the mass only shows in a contact's impulse)."""
 HOVER = 0.001
 """m between a held box and the ground."""
 MAX_GOAL_DISTANCE = 10.0
@@ -106,7 +103,6 @@ def base_scenario(config: GoToGoalConfig) -> sc.Scenario:
         robot.camera.fps = 1.0 / config.control_period
         robot.camera.output_delay = 0.0
     giant = scenario.world.bodies["giant_box"]
-    giant.mass = HELD_MASS
     giant.pose = ground_pose(*dim.GIANT_BOX_CENTER[:2])
     giant.pose.translation = [*dim.GIANT_BOX_CENTER[:2], dim.GIANT_BOX_CENTER[2] + HOVER]
     for i in range(config.boxes):
@@ -115,7 +111,7 @@ def base_scenario(config: GoToGoalConfig) -> sc.Scenario:
         parked = ground_pose(PARKING[0] + i * (config.box_size + 0.5), PARKING[1], 0.0)
         parked.translation = [*parked.translation[:2], config.box_size / 2 + HOVER]
         scenario.world.bodies[f"box_{i}"] = sc.WorldBody(
-            shape=sc.Box([config.box_size] * 3), mass=HELD_MASS, color=[0.3, 0.45, 0.7, 1.0],
+            shape=sc.Box([config.box_size] * 3), mass=BOX_MASS, color=[0.3, 0.45, 0.7, 1.0],
             pose=parked)
     return scenario
 
@@ -142,7 +138,7 @@ class GoToGoalEnv(gym.Env):
         self._key = diagram_key(self.scenario)
         self.robot = self.sim.robot(ROBOT)
         self._ports = _Ports(self.sim, self.scenario)
-        self._hold_boxes()
+        self._lock_boxes()
         n_rays = self._ports.num_rays
         rng = dim.IR_MAXIMUM_RANGE
         low = np.array([0.0] * n_rays + [0.0, -math.pi, -MAX_SPEED, -MAX_YAW_RATE], np.float32)
@@ -171,6 +167,7 @@ class GoToGoalEnv(gym.Env):
         self._apply_layout(self.layout)
         # Checked (a small share of an episode): a layout may come from the caller's `options`.
         self.sim.reset(self.scenario, key=self._key)
+        self._lock_boxes()
         self._distance = self._goal_in_robot_frame()[0]
         return self._observation(), self._info(collided=False, stalled=False)
 
@@ -185,21 +182,13 @@ class GoToGoalEnv(gym.Env):
             pose.translation = [bx, by, half]
             self.scenario.world.bodies[f"box_{i}"].pose = pose
 
-    def _hold_boxes(self) -> None:
-        """Balances each world body's weight with a constant upward force (fixed in the
-        Context: `Simulation.reset` keeps fixed inputs)."""
+    def _lock_boxes(self) -> None:
+        """Locks every world body in place (`Simulation.reset` restores the default Context,
+        which unlocks them)."""
         plant = self.sim.station.plant
-        g = -plant.gravity_field().gravity_vector()[2]
-        forces = []
-        for name, body in self.sim.station.bodies.items():
-            force = ExternallyAppliedSpatialForce()
-            force.body_index = body.index()
-            force.p_BoBq_B = np.zeros(3)
-            force.F_Bq_W = SpatialForce(np.zeros(3),
-                                        [0.0, 0.0, g * self.scenario.world.bodies[name].mass])
-            forces.append(force)
-        plant.get_applied_spatial_force_input_port().FixValue(
-            plant.GetMyMutableContextFromRoot(self.sim.context), forces)
+        plant_context = plant.GetMyMutableContextFromRoot(self.sim.context)
+        for body in self.sim.station.bodies.values():
+            body.Lock(plant_context)
 
     def step(self, action):
         left, right = np.clip(np.asarray(action, dtype=float), -1.0, 1.0)
