@@ -214,7 +214,22 @@ def check_arguments(args) -> None:
         _check("--foxglove", args.foxglove, PORT)
     if args.record and args.serve:
         raise ArgumentError("--record: not with --serve (the replay is written when a run ends)")
+    check_extras(args)
     check_outputs(args)
+
+
+def check_extras(args) -> None:
+    """Each front end the command line asks for has its extra installed."""
+    from corobot_drake.extras import MissingExtraError, require
+
+    wanted = {"--serve": ("serve", args.serve), "--foxglove": ("record", args.foxglove),
+              "--mcap": ("record", args.mcap)}
+    try:
+        for flag, (extra, value) in wanted.items():
+            if value not in (None, False):
+                require(extra, flag)
+    except MissingExtraError as e:
+        raise ArgumentError(str(e)) from None
 
 
 # --- writing the results ---------------------------------------------------------------------

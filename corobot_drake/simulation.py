@@ -409,7 +409,8 @@ class Robot:
         return np.concatenate([*chunks, rows]) if chunks else rows
 
     def write_log(self, path: str | Path) -> None:
-        """Writes the run log as CSV (columns in docs/tuning.md; read by `analysis.sysid`)."""
+        """Writes the run log as CSV (columns in docs/tuning.md; read by
+        `corobot_drake.tuning.sysid`)."""
         write_csv(self.run_log(), path)
 
     # --- camera ---------------------------------------------------------------------------
@@ -507,7 +508,7 @@ class Simulation:
         runs (it may have been built or changed in Python): ScenarioError names the field;
         one unchanged since `load_scenario` returned it is not checked twice (`mark_checked`).
         `check=False` skips them, for a tool that measures beyond the bounds on purpose
-        (`analysis/step_limit.py`); `reset` then skips them too unless asked."""
+        (`lab/step_limit.py`); `reset` then skips them too unless asked."""
         if check:
             check_scenario(scenario)
         self._check = check

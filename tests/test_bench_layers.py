@@ -2,8 +2,8 @@
 
 import numpy as np
 
-from corobot_drake.analysis import bench_layers as bl
 from corobot_drake.simulation import Simulation
+from lab import bench_layers as bl
 
 
 def _plant_state(simulator) -> np.ndarray:

@@ -1,4 +1,4 @@
-"""Issue 14 point 9: a robot at rest stays where it stopped (`analysis.creep`; docs/tuning.md,
+"""Issue 14 point 9: a robot at rest stays where it stopped (`lab.creep`; docs/tuning.md,
 "At rest"). Without the drive's hold its wheels roll into a stable facet of the tyres'
 hydroelastic mesh; with it they stay."""
 
@@ -7,8 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from corobot_drake.analysis import creep
 from corobot_drake.model.sdf import WheelContact
+from lab import creep
 
 # A quarter facet: the wheels start near the unheld roll's fastest angle (the map in
 # docs/tuning.md: 1.59 um/s at 1.18 deg), where the hold has the most to hold.

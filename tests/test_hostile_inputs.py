@@ -1,4 +1,4 @@
-"""The hostile corpus (`analysis/hostile_inputs.py`): every bad scenario, override or path ends
+"""The hostile corpus (`lab/hostile_inputs.py`): every bad scenario, override or path ends
 in one line `FILE_OR_--override[:LINE]: FIELD: MESSAGE`, exit status 2, within 2 s of CPU time,
 before anything is built. Each load runs in a thread of its own and fails the test if it hangs
 (`HANG_SECONDS`)."""
@@ -14,8 +14,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from conftest import REPO
-from corobot_drake.analysis import hostile_inputs as hi
 from corobot_drake.cli import main
+from lab import hostile_inputs as hi
 
 HOSTILE = st.one_of(
     st.sampled_from(hi.HOSTILE_NUMBERS), st.floats(), st.integers(-(2**80), 2**80),

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from corobot_drake.analysis import instructions
+from lab import instructions
 
 TOOL = Path(__file__).resolve().parent.parent / "tools" / "count_instructions.py"
 

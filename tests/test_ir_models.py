@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from corobot_drake.sensors.ir_models import MODELS, SharpGP2D12, ideal, sharp_gp2d12
+from corobot_drake.model.ir_models import MODELS, SharpGP2D12, ideal, sharp_gp2d12
 
 MAXIMUM_RANGE = 0.762
 

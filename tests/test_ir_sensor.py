@@ -6,11 +6,11 @@ import numpy as np
 import pytest
 
 from conftest import DEFAULT_SCENARIO, make_sim
-from corobot_drake.analysis.bench import NO_CAMERA
 from corobot_drake.config.scenario import ScenarioError, load_scenario
 from corobot_drake.model import dimensions as dim
-from corobot_drake.sensors.ir_models import SharpGP2D12
+from corobot_drake.model.ir_models import SharpGP2D12
 from corobot_drake.sensors.ir_sensor import SCAN_INDEX, counter_normal
+from lab.bench import NO_CAMERA
 
 MM = 1e-3
 RANGE = 30 * dim.INCH

@@ -32,13 +32,13 @@ from pydrake.multibody.plant import AddMultibodyPlantSceneGraph, CoulombFriction
 from pydrake.multibody.tree import SpatialInertia
 from pydrake.systems.framework import DiagramBuilder
 
-from corobot_drake.analysis import bench_raycast
 from corobot_drake.sensors.raycast import (
     RayCaster,
     RayFan,
     cross_of_rays_in_sensor_frame,
     model_instance_geometry_ids,
 )
+from lab import bench_raycast
 from reference_raycast import ReferenceRayCaster, cross_of_rays_directions
 
 CUBE_OBJ = """\
@@ -602,7 +602,7 @@ def test_ray_fans_in_world():
 
 
 def test_bench_scene_reads_the_spec_figures():
-    """corobot_drake.analysis.bench_raycast's scene: the rear IR reads the box face at
+    """lab.bench_raycast's scene: the rear IR reads the box face at
     0.62865 m (SPEC)."""
     _, context, plant, scene_graph, chassis, robot = bench_raycast.build_scene()
     caster, scan = bench_raycast.make_fan_scan(plant, scene_graph, chassis, robot, context)

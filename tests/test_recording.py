@@ -12,7 +12,6 @@ from google.protobuf import descriptor_pb2, descriptor_pool, message_factory
 from mcap.reader import make_reader
 
 from conftest import make_sim
-from corobot_drake.analysis.bench import NO_CAMERA
 from corobot_drake.cli import main
 from corobot_drake.config.scenario import load_scenario
 from corobot_drake.model import dimensions as dim
@@ -31,6 +30,7 @@ from corobot_drake.resources import DEFAULT_SCENARIO
 from corobot_drake.simulation import Simulation
 from corobot_drake.systems.drive import CommandRecord
 from corobot_drake.systems.runlog import COLUMNS
+from lab.bench import NO_CAMERA
 
 CURVE = "robots: {corobot: {commands: [!SetPower {left: 1, right: 0.5}]}}"
 SCRIPT = ("robots: {corobot: {commands: [!SetPower {left: 1, right: 0.5}, !Wait {seconds: 0.5},"

@@ -1,4 +1,4 @@
-"""The generated blocks of README.md and docs/ (corobot_drake/analysis/docs_blocks.py,
+"""The generated blocks of README.md and docs/ (lab/docs_blocks.py,
 tools/refresh_docs.py): the marker logic, and the cheap deterministic blocks against what their
 commands print now."""
 
@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from corobot_drake.analysis.docs_blocks import (
+from lab.docs_blocks import (
     BlockError,
     find_blocks,
     replace_block,

@@ -334,7 +334,7 @@ def test_resume_simulates_only_the_missing_runs(tmp_path, tiny_study):
 
 
 def test_the_drive_test_study_and_the_drive_test_tool_agree(tmp_path, connected):
-    from corobot_drake.analysis import drive_test
+    from lab import drive_test
 
     # Power 1: the loop's legs in a third of the simulated time of the tool's default 0.2.
     table = drive_test.run_study_of_seeds([1], 1, "closed_loop", 1.0, tmp_path, workers=1)
@@ -429,7 +429,7 @@ def test_every_shipped_study_run_is_a_valid_scenario(study_file):
 
 
 def test_the_steady_rate_leaves_out_each_workers_first_run():
-    from corobot_drake.analysis.bench_study import steady_rate
+    from lab.bench_study import steady_rate
 
     # Two workers: the first two rows carry the start-ups; then 4 runs in 2 s.
     rows = [{"finished_seconds": t} for t in ("5.0", "5.5", "6.0", "6.5", "7.0", "7.5")]

@@ -9,9 +9,10 @@ import pytest
 
 from conftest import DEFAULT_SCENARIO, REPO, make_sim
 from corobot_drake import cli
-from corobot_drake.analysis import bench, drive_tuning, sysid
 from corobot_drake.model import dimensions as dim
 from corobot_drake.systems import runlog
+from corobot_drake.tuning import drive_tuning, sysid
+from lab import bench
 
 
 def _tool(name: str, *args: str) -> subprocess.CompletedProcess:

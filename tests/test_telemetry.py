@@ -1,7 +1,7 @@
-"""Issue 14: dead-reckoning odometry (`systems.dead_reckoning`) and its calibration
-(`analysis.odometry_calibration`), the wheels' contact telemetry (`systems.contact`), the
-tip-over margin (`systems.stability`) and the slip in Meshcat (`systems.slip_markers`): each
-system alone, and in the simulation."""
+"""Dead-reckoning odometry (`systems.dead_reckoning`) and its calibration
+(`corobot_drake.tuning.odometry_calibration`), the wheels' contact telemetry
+(`systems.contact`), the tip-over margin (`systems.stability`) and the slip in Meshcat
+(`systems.slip_markers`): each system alone, and in the simulation."""
 
 import math
 
@@ -11,8 +11,6 @@ from pydrake.math import RigidTransform, RollPitchYaw
 from pydrake.multibody.plant import MultibodyPlant
 
 from conftest import Stepper
-from corobot_drake.analysis import odometry_calibration as oc
-from corobot_drake.analysis.bench import physics_only_overrides
 from corobot_drake.config.scenario import Drive, load_scenario
 from corobot_drake.model import dimensions as dim
 from corobot_drake.model.sdf import corobot_sdf
@@ -23,6 +21,8 @@ from corobot_drake.systems import contact
 from corobot_drake.systems.dead_reckoning import DeadReckoning
 from corobot_drake.systems.slip_markers import MARKER_PERIOD, SlipMarkers
 from corobot_drake.systems.stability import TipMargin
+from corobot_drake.tuning import odometry_calibration as oc
+from lab.bench import physics_only_overrides
 
 PERIOD = 1 / 60
 TICK = 2 * math.pi / dim.ENCODER_TICKS_PER_REVOLUTION  # rad per encoder count

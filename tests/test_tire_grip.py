@@ -1,10 +1,10 @@
-"""The effort-limit pick of `tools/tune_tire_grip.py` (analysis.tire_grip), on made-up rows:
-the worst case over every approach and step decides, then the smallest limit that can still
-slip a wheel on level ground."""
+"""The effort-limit pick of `tools/tune_tire_grip.py` (corobot_drake.tuning.tire_grip), on
+made-up rows: the worst case over every approach and step decides, then the smallest limit
+that can still slip a wheel on level ground."""
 
 import pytest
 
-from corobot_drake.analysis import tire_grip
+from corobot_drake.tuning import tire_grip
 
 LEFT = "robots.corobot.commands.0.left"
 

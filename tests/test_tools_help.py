@@ -57,6 +57,6 @@ PLAIN_ARGPARSE = {"camera_cost", "hostile_inputs", "make_meshes", "make_model", 
 def test_a_tool_parses_with_the_tools_parser(tool, monkeypatch):
     """Its bad arguments end in one `error:` line, exit 2 (tests/test_hostile_inputs.py runs
     some of each: `hostile_inputs.TOOLS`)."""
-    from corobot_drake.analysis.arguments import ToolParser
+    from corobot_drake.arguments import ToolParser
 
     assert isinstance(_parser_of(tool, monkeypatch), ToolParser), tool.name

@@ -4,7 +4,8 @@ third-party module the package, the tools, the tests and the examples import is 
 dependency.
 
 `test_the_installed_wheel_runs_from_any_directory` costs ~10 s (pip wheel, a venv, pip install,
-a 1 s headless run) and is marked `wheel` (deselect with `-m "not wheel"`). How it gets the
+a 1 s headless run on the core alone, a front end without its extra, then every module with
+every extra) and is marked `wheel` (deselect with `-m "not wheel"`). How it gets the
 dependencies without downloading them: the fresh venv is created without them, the wheel is
 installed with `--no-deps`, and then the distributions the *wheel's own metadata* requires
 (Requires-Dist, followed transitively, with extras and markers) are linked in from this
@@ -77,7 +78,8 @@ def test_every_package_directory_is_listed_in_pyproject():
 def _third_party_imports(*directories: str) -> dict[str, set[str]]:
     """{top-level module: files importing it} of the absolute imports that are neither the
     standard library, nor corobot_drake, nor a module of the directories (e.g. conftest)."""
-    local = {"corobot_drake", *(p.stem for d in directories for p in (REPO / d).glob("*.py"))}
+    local = {"corobot_drake", "lab",
+             *(p.stem for d in directories for p in (REPO / d).glob("*.py"))}
     out: dict[str, set[str]] = {}
     for directory in directories:
         for path in (REPO / directory).rglob("*.py"):
@@ -94,16 +96,30 @@ def _third_party_imports(*directories: str) -> dict[str, set[str]]:
     return out
 
 
-@pytest.mark.parametrize("directories, extras", [
-    (("corobot_drake", "tools"), ()),
-    (("tests", "examples"), ("dev",)),
-], ids=["package and tools", "tests and examples"])
-def test_every_import_is_a_declared_dependency(directories, extras):
+def _declared(extra: str | None) -> set[str]:
+    """The distributions the core (None) or an extra declares, self-references resolved
+    (`corobot_drake[serve,...]`)."""
     project = _pyproject()["project"]
-    declared = {_normalize(Requirement(r).name) for r in project["dependencies"]}
+    lines = project["dependencies"] if extra is None else project["optional-dependencies"][extra]
+    out = set()
+    for requirement in map(Requirement, lines):
+        if _normalize(requirement.name) == _normalize(project["name"]):
+            for inner in requirement.extras:
+                out |= _declared(inner)
+        else:
+            out.add(_normalize(requirement.name))
+    return out
+
+
+@pytest.mark.parametrize("directories, extras", [
+    (("corobot_drake",), ("all",)),
+    (("tools", "lab"), ("dev",)),
+    (("tests", "examples"), ("dev",)),
+], ids=["package", "tools and lab", "tests and examples"])
+def test_every_import_is_a_declared_dependency(directories, extras):
+    declared = _declared(None)
     for extra in extras:
-        declared |= {_normalize(Requirement(r).name)
-                     for r in project["optional-dependencies"][extra]}
+        declared |= _declared(extra)
     distributions = metadata.packages_distributions()
     missing = {}
     for module, files in _third_party_imports(*directories).items():
@@ -113,19 +129,38 @@ def test_every_import_is_a_declared_dependency(directories, extras):
     assert not missing, f"imported but not declared in pyproject.toml: {missing}"
 
 
+def test_every_extra_brings_the_modules_its_front_end_checks_for():
+    """corobot_drake/extras.py names, per extra, the modules a front end checks for before it
+    starts: the same extras as pyproject's, each module from a distribution of its extra."""
+    from corobot_drake.extras import EXTRAS
+
+    optional = _pyproject()["project"]["optional-dependencies"]
+    assert set(EXTRAS) == set(optional) - {"all", "dev"}
+    assert _declared("all") == set().union(*(_declared(e) for e in EXTRAS))
+    distributions = metadata.packages_distributions()
+    for extra, modules in EXTRAS.items():
+        for module in modules:
+            assert {_normalize(d) for d in distributions[module]} & _declared(extra), \
+                (extra, module)
+
+
 # --- the wheel itself (slow) ------------------------------------------------------------------
 
 
-def _requirements_closure(requires: list[str]) -> list[metadata.Distribution]:
-    """The installed distributions `requires` (Requires-Dist lines) needs, transitively."""
+def _requirements_closure(requires: list[str], extras: tuple[str, ...] = ()
+                          ) -> list[metadata.Distribution]:
+    """The installed distributions `requires` (Requires-Dist lines) needs with `extras`,
+    transitively (the project's own name, in a self-referencing extra, left out)."""
     found: dict[str, metadata.Distribution] = {}
     done: set[tuple[str, str]] = set()  # (distribution, extra) whose requirements are queued
-    todo = [(Requirement(r), "") for r in requires]
+    todo = [(Requirement(r), extra) for r in requires for extra in ("", *extras)]
     while todo:
         requirement, extra = todo.pop()
         if requirement.marker and not requirement.marker.evaluate({"extra": extra}):
             continue
         name = _normalize(requirement.name)
+        if name == _normalize(_pyproject()["project"]["name"]):
+            continue
         if name not in found:
             found[name] = metadata.distribution(requirement.name)
         for wanted in ("", *requirement.extras):
@@ -176,12 +211,30 @@ def test_the_installed_wheel_runs_from_any_directory(tmp_path):
                 .stdout.strip())
     requires = metadata.Distribution.at(
         next(site.glob("corobot_drake-*.dist-info"))).requires or []
-    _link_distributions(_requirements_closure(requires), tmp_path / "dependencies")
-    (site / "dependencies.pth").write_text(f"{tmp_path / 'dependencies'}\n")
-
+    assert not (site / "lab").exists() and not list(site.glob("lab-*")), "the wheel ships no lab"
     elsewhere = tmp_path / "elsewhere"
     elsewhere.mkdir()
     env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "PYTHONHOME")}
+
+    # The core alone: a headless run works, a front end names its extra.
+    _link_distributions(_requirements_closure(requires), tmp_path / "core")
+    (site / "core.pth").write_text(f"{tmp_path / 'core'}\n")
+    run = _run(python, "-m", "corobot_drake", "--headless", "--duration", "1",
+               cwd=elsewhere, env=env, timeout=120)
+    assert "simulated 1.00 s" in run.stdout
+    served = subprocess.run([python, "-m", "corobot_drake", "--serve"], cwd=elsewhere, env=env,
+                            capture_output=True, text=True, timeout=120)
+    assert (served.returncode, served.stderr) == (
+        2, "error: --serve needs the [serve] extra: pip install 'corobot-drake[serve]'\n")
+    gym = subprocess.run([python, "-c", "import corobot_drake.gym"], cwd=elsewhere, env=env,
+                         capture_output=True, text=True, timeout=120)
+    assert "corobot_drake.gym needs the [gym] extra" in gym.stderr.splitlines()[-1]
+
+    # Every extra: every module imports.
+    (everything,) = map(Requirement, _pyproject()["project"]["optional-dependencies"]["all"])
+    extras = tuple(sorted(everything.extras))
+    _link_distributions(_requirements_closure(requires, extras), tmp_path / "extras")
+    (site / "extras.pth").write_text(f"{tmp_path / 'extras'}\n")
     where = _run(python, "-c", IMPORT_EVERYTHING, cwd=elsewhere, env=env).stdout.split()
     assert all(Path(p).is_relative_to(site / "corobot_drake") for p in where), where
     for installed, directory in ((Path(where[1]), "models"),
@@ -189,7 +242,3 @@ def test_the_installed_wheel_runs_from_any_directory(tmp_path):
         assert sorted(p.relative_to(installed) for p in installed.rglob("*") if p.is_file()) \
             == sorted(p.relative_to(REPO / directory) for p in (REPO / directory).rglob("*")
                       if p.is_file() and "__pycache__" not in p.parts), directory
-
-    run = _run(python, "-m", "corobot_drake", "--headless", "--duration", "1",
-               cwd=elsewhere, env=env, timeout=120)
-    assert "simulated 1.00 s" in run.stdout

@@ -11,8 +11,8 @@ tools/bench_raycast.py, tools/bench_camera.py). `--robots 1,2,4,8,16` adds fleet
 driving, physics only: robot-seconds per second, flat when nothing grows per robot.
 `--layers` adds what physics only is made of: the plant alone (the floor Drake sets), then the
 robot's systems added one layer at a time, CPU ms per simulated second
-(`corobot_drake.analysis.bench_layers`). The measurements are
-`corobot_drake.analysis.bench` and the micro-benchmarks' modules beside it.
+(`lab.bench_layers`). The measurements are
+`lab.bench` and the micro-benchmarks' modules beside it.
 """
 
 import statistics
@@ -20,14 +20,7 @@ import sys
 
 from tqdm import tqdm
 
-from corobot_drake.analysis import (
-    bench,
-    bench_camera,
-    bench_ir,
-    bench_layers,
-    bench_raycast,
-)
-from corobot_drake.analysis.arguments import (
+from corobot_drake.arguments import (
     BENCH_SECONDS,
     REPEATS,
     ToolParser,
@@ -35,9 +28,10 @@ from corobot_drake.analysis.arguments import (
     bounded_list,
     one_line_errors,
 )
-from corobot_drake.analysis.bench import DEFAULT_PLANT, ROBOT
 from corobot_drake.config.bounds import Range
 from corobot_drake.simulation import quiet_drake_warnings
+from lab import bench, bench_camera, bench_ir, bench_layers, bench_raycast
+from lab.bench import DEFAULT_PLANT, ROBOT
 
 
 def _table(stacks: dict, plants: dict, seconds: float, repeats: int) -> dict:

@@ -5,21 +5,21 @@ with each renderer (GL through an X display or a private Xvfb, the default here;
 GLX when a display is available), in the default scene with the robot driving a circle: the
 render itself (`camera_frame_ms`), and what the camera adds to a simulation at 30 Hz
 (`camera_overhead_ms`), rendering in the simulation's thread or on a worker thread; both in
-`corobot_drake.analysis.bench_camera`. Prints a markdown table, medians of `--repeats` runs.
+`lab.bench_camera`. Prints a markdown table, medians of `--repeats` runs.
 """
 
 import statistics
 import sys
 
-from corobot_drake.analysis.arguments import (
+from corobot_drake.arguments import (
     BENCH_SECONDS,
     REPEATS,
     ToolParser,
     bounded,
     one_line_errors,
 )
-from corobot_drake.analysis.bench_camera import RENDERERS, camera_frame_ms, camera_overhead_ms
 from corobot_drake.config.bounds import Range
+from lab.bench_camera import RENDERERS, camera_frame_ms, camera_overhead_ms
 
 FRAMES = Range(1, 100_000, why="frames rendered per run")
 

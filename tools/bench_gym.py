@@ -2,7 +2,7 @@
 """GoToGoal environment steps per second, in process, vectorized and on Ray.
 
 One env in this process, AsyncVectorEnv with 1 and 2 envs, and rollouts on Ray with 1 and 2
-workers (`corobot_drake.gym.bench`).
+workers (`lab.bench_gym`).
 
     python tools/bench_gym.py [--steps 100] [--episodes 4]
 """
@@ -12,10 +12,10 @@ import sys
 
 from tqdm import tqdm
 
-from corobot_drake.analysis.arguments import ToolParser, bounded, one_line_errors
+from corobot_drake.arguments import ToolParser, bounded, one_line_errors
 from corobot_drake.config.bounds import Range
-from corobot_drake.gym import bench
 from corobot_drake.simulation import quiet_drake_warnings
+from lab import bench_gym as bench
 
 STEPS = Range(1, 1_000_000, why="env steps per case")
 EPISODES = Range(1, 10_000, why="episodes per Ray run")

@@ -19,22 +19,23 @@ Run: ``.venv/bin/python tools/bench_ir.py [--seconds 10] [--repeats 5]``. It pri
    handlers' (IR minus no-op). At 20 Hz that cost is a few percent of the physics, within
    the run-to-run noise of a shared machine; 200 Hz multiplies it by ten.
 
-The measurements (and the no-op sensor) are `corobot_drake.analysis.bench_ir`.
+The measurements (and the no-op sensor) are `lab.bench_ir`.
 """
 
 import os
 import sys
 import time
 
-from corobot_drake.analysis import bench_ir
-from corobot_drake.analysis.arguments import (
+from corobot_drake.arguments import (
     BENCH_SECONDS,
     REPEATS,
     ToolParser,
     bounded,
     one_line_errors,
 )
-from corobot_drake.analysis.bench_ir import (
+from corobot_drake.simulation import quiet_drake_warnings
+from lab import bench_ir
+from lab.bench_ir import (
     NO_OP,
     NO_OP_200,
     WITH_IR_20,
@@ -42,8 +43,7 @@ from corobot_drake.analysis.bench_ir import (
     WITHOUT_IR,
     Run,
 )
-from corobot_drake.analysis.bench_raycast import scan_cost_seconds
-from corobot_drake.simulation import quiet_drake_warnings
+from lab.bench_raycast import scan_cost_seconds
 
 
 def _print_scan_costs(seconds: float) -> None:

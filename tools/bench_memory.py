@@ -7,7 +7,7 @@ set_pose, a camera frame), and samples the resident memory of the server's proce
 simulated time. Prints a table of the samples and the growth over the run, the slope over its
 second half (MB per simulated hour) and the growth over one simulated hour (measured, or with
 a shorter run the growth so far plus the slope for the rest of the hour). The measurement is
-`corobot_drake.analysis.bench_memory`.
+`lab.bench_memory`.
 """
 
 import shlex
@@ -15,9 +15,9 @@ import sys
 
 from tqdm import tqdm
 
-from corobot_drake.analysis import bench_memory
-from corobot_drake.analysis.arguments import ToolParser, bounded, one_line_errors
+from corobot_drake.arguments import ToolParser, bounded, one_line_errors
 from corobot_drake.config.bounds import Range
+from lab import bench_memory
 
 SIM_MINUTES = Range(0.0, 10_000.0, low_open=True, unit="min")
 WARMUP_MINUTES = Range(0.0, 10_000.0, unit="min", why="less than --sim-minutes")

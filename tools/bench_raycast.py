@@ -1,6 +1,6 @@
 """Benchmark: the IR sensors' ray cast, 2 sensors x 6 rays, in a scene like the default one.
 
-The scene and the scan are `corobot_drake.analysis.bench_raycast`'s: the default scenario's
+The scene and the scan are `lab.bench_raycast`'s: the default scenario's
 proximity geometry rebuilt from dimensions.py (ground, the giant box as a free body, the robot's
 own boxes and wheels excluded), the robot at the origin facing +x, so the rear sensor sees the
 box face at 0.62865 m and the front sensor sees nothing (SPEC, Sensors). Both sensors cast as
@@ -14,8 +14,8 @@ Run: ``.venv/bin/python tools/bench_raycast.py``.
 import statistics
 import sys
 
-from corobot_drake.analysis.arguments import ToolParser, one_line_errors
-from corobot_drake.analysis.bench_raycast import (
+from corobot_drake.arguments import ToolParser, one_line_errors
+from lab.bench_raycast import (
     MAXIMUM_RANGE,
     SAMPLES,
     batch_seconds,

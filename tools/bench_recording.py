@@ -1,7 +1,7 @@
 """What --mcap and --record cost on a headless run (run: python tools/bench_recording.py).
 
 Runs of the default scene (IR and camera on, driving a circle), plain and with each output
-(`corobot_drake.analysis.bench_recording`), interleaved (plain, mcap, record, both; again
+(`lab.bench_recording`), interleaved (plain, mcap, record, both; again
 `--repeats` times) so a shared machine's load falls on all alike. Prints a markdown table: the
 median wall time (run and file writing), its ratio to the plain run's, and the file sizes.
 """
@@ -13,14 +13,14 @@ import tempfile
 
 from tqdm import tqdm
 
-from corobot_drake.analysis.arguments import (
+from corobot_drake.arguments import (
     BENCH_SECONDS,
     REPEATS,
     ToolParser,
     bounded,
     one_line_errors,
 )
-from corobot_drake.analysis.bench_recording import KINDS, recording_run
+from lab.bench_recording import KINDS, recording_run
 
 
 @one_line_errors

@@ -4,7 +4,7 @@
 The same runs in one process (diagram built per run, or reset) and on Ray with 1 and 2
 workers, with and without Ray's start and stop, and steady (once every worker has started);
 each run's CPU seconds; and the projected wall time of a big study on a cluster
-(`corobot_drake.analysis.bench_study`).
+(`lab.bench_study`).
 
     python tools/bench_study.py [--seeds 12] [--duration 4]
 """
@@ -16,10 +16,10 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from corobot_drake.analysis import bench_study
-from corobot_drake.analysis.arguments import BENCH_SECONDS, ToolParser, bounded, one_line_errors
+from corobot_drake.arguments import BENCH_SECONDS, ToolParser, bounded, one_line_errors
 from corobot_drake.config.bounds import Range
 from corobot_drake.simulation import quiet_drake_warnings
+from lab import bench_study
 
 SEEDS = Range(1, 10_000, why="runs of the study")
 

@@ -8,7 +8,7 @@ track) and after calibration, and with `--write` puts both in the scenario's dri
 (`effective_wheel_radius`, `effective_track_width`) with a comment saying where they came from.
 `--drive-test` then runs the book's 3-loop drive test with the calibrated odometry and prints
 the dead-reckoned end position error before and after. The fit is
-`corobot_drake.analysis.odometry_calibration`.
+`corobot_drake.tuning.odometry_calibration`.
 
 Usage: python tools/calibrate_odometry.py [LOG.csv | --simulate] [--write SCENARIO] [--drive-test]
 """
@@ -18,8 +18,7 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from corobot_drake.analysis import odometry_calibration as oc
-from corobot_drake.analysis.arguments import (
+from corobot_drake.arguments import (
     TICKS_PER_REVOLUTION,
     ToolParser,
     bounded,
@@ -27,10 +26,11 @@ from corobot_drake.analysis.arguments import (
     one_line_errors,
     output_file,
 )
-from corobot_drake.analysis.sysid import DriveField, write_drive_fields
 from corobot_drake.config.bounds import DRAKE_INT
 from corobot_drake.model import dimensions as dim
 from corobot_drake.resources import DEFAULT_SCENARIO
+from corobot_drake.tuning import odometry_calibration as oc
+from corobot_drake.tuning.sysid import DriveField, write_drive_fields
 
 REPO = Path(__file__).resolve().parent.parent
 

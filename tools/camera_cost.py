@@ -6,12 +6,12 @@ camera) rendered by VTK with the camera's lighting (sun + fill, no shadows). Vie
 robot's own camera (`robot-camera`) and a 320x240 chase camera that looks at the robot
 (`chase`). The two visuals are rendered alternately, frame by frame, so load from other
 processes slows both alike; the median of each is reported
-(`corobot_drake.analysis.camera_cost`).
+(`lab.camera_cost`).
 """
 
 import argparse
 
-from corobot_drake.analysis.camera_cost import VIEWS, meshes_vs_boxes_ms
+from lab.camera_cost import VIEWS, meshes_vs_boxes_ms
 
 
 def main() -> None:

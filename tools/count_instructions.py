@@ -5,7 +5,7 @@
 
 The rows of `tools/bench.py --layers` (the plant alone, then the robot's systems added one
 layer at a time, then the station), each counted over `--seconds` of the figure of eight's
-first segment (`corobot_drake.analysis.instructions`): a count that is the same run after run,
+first segment (`lab.instructions`): a count that is the same run after run,
 where time on this shared machine is not, split into the plant's step and the rest. Each
 `--override` adds a station row with that scenario override (e.g. a Drake setting to try).
 `--cache-sim` adds callgrind's count of first-level instruction-cache misses (its cache model:
@@ -19,9 +19,9 @@ from concurrent.futures import ThreadPoolExecutor
 
 from tqdm import tqdm
 
-from corobot_drake.analysis import bench_layers, instructions
-from corobot_drake.analysis.arguments import ToolParser, bounded, one_line_errors
+from corobot_drake.arguments import ToolParser, bounded, one_line_errors
 from corobot_drake.config.bounds import Range
+from lab import bench_layers, instructions
 
 SECONDS = Range(0.0, instructions.LONGEST, low_open=True, unit="s")
 

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """How far a robot left at rest creeps, with the drive's hold and without it, and why
-(`corobot_drake/analysis/creep.py`; docs/tuning.md, "At rest").
+(`lab/creep.py`; docs/tuning.md, "At rest").
 
     python tools/creep.py [--seconds 30] [--points 13] [--minutes 30]
     python tools/creep.py --isolate
@@ -18,11 +18,11 @@ import sys
 
 from tqdm import tqdm
 
-from corobot_drake.analysis import creep
-from corobot_drake.analysis.arguments import ToolParser, bounded, one_line_errors
+from corobot_drake.arguments import ToolParser, bounded, one_line_errors
 from corobot_drake.config.bounds import Range
 from corobot_drake.config.scenario import load_scenario
 from corobot_drake.resources import DEFAULT_SCENARIO
+from lab import creep
 
 
 def _um(metres: float) -> str:

@@ -4,7 +4,7 @@
 Each loop: rotate a random angle in [-45, 45] deg, drive a random 0.5-1.5 m, rotate 180 deg,
 drive the same distance back, rotate 180 deg - angle (all at `--power`, default 0.2). The drift
 is the distance from the start position after each loop. Same seed, same numbers
-(`corobot_drake.analysis.drive_test`).
+(`lab.drive_test`).
 
     python tools/drive_test.py --loops 3 --seed 1 [--profile seed] [--plot path.png]
     python tools/drive_test.py --loops 3 --seeds 20 --workers 2 [--profile seed]  # on Ray
@@ -15,8 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from corobot_drake.analysis import drive_test
-from corobot_drake.analysis.arguments import (
+from corobot_drake.arguments import (
     WORKERS,
     ToolParser,
     bounded,
@@ -26,6 +25,7 @@ from corobot_drake.analysis.arguments import (
 )
 from corobot_drake.config import scenario as sc
 from corobot_drake.config.bounds import DRAKE_INT, POWER, Range
+from lab import drive_test
 
 LOOPS = Range(1, 100, why="loops of ~37 simulated s each at power 0.2")
 SEEDS = Range(1, 10_000, why="runs of the study")

@@ -6,8 +6,8 @@ measured vs modelled front-wheel speeds. A malformed CSV stops with one line nam
 Stalls (power commanded, the wheels still: e.g. pushing the giant box) and outliers are dropped
 with a warning naming their times; a log that is mostly stalls is refused (exit status 2).
 `--write` puts every fitted parameter (motor_torque_scaling, slew_rate) in the scenario, each
-with a comment saying where it came from. The fit is `corobot_drake.analysis.sysid`; the
-simulated log and the plot `corobot_drake.analysis.drive_tuning`.
+with a comment saying where it came from. The fit is `corobot_drake.tuning.sysid`; the
+simulated log and the plot `corobot_drake.tuning.drive_tuning`.
 
 Usage: python tools/fit_drive_log.py LOG.csv [--plot out/fit_drive_log.png] [--write SCENARIO]
 
@@ -19,8 +19,7 @@ import dataclasses as dc
 import sys
 from pathlib import Path
 
-from corobot_drake.analysis import drive_tuning, sysid
-from corobot_drake.analysis.arguments import (
+from corobot_drake.arguments import (
     TICKS_PER_REVOLUTION,
     ToolParser,
     bounded,
@@ -30,6 +29,7 @@ from corobot_drake.analysis.arguments import (
 )
 from corobot_drake.config.bounds import bound_of
 from corobot_drake.config.scenario import Drive
+from corobot_drake.tuning import drive_tuning, sysid
 
 REPO = Path(__file__).resolve().parent.parent
 

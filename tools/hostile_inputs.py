@@ -7,7 +7,7 @@ numeric field of a shipped scenario or edits a shipped file's text, and may happ
 A refusal counts when it is the one line `FILE_OR_--override[:LINE]: FIELD: MESSAGE` within
 2 s of CPU time (a tool's: one `error: ` line, exit status 2); anything else (another
 exception, a hang, a missing line, a slow refusal) is a defect, listed after the table.
-Exit status 1 when there is one (`corobot_drake/analysis/hostile_inputs.py`).
+Exit status 1 when there is one (`lab/hostile_inputs.py`).
 
     python tools/hostile_inputs.py [--examples 200] [--seed 1]
 """
@@ -19,8 +19,8 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from corobot_drake.analysis import hostile_inputs as hi
 from corobot_drake.simulation import quiet_drake_warnings
+from lab import hostile_inputs as hi
 
 
 def main(argv=None) -> int:

@@ -7,7 +7,7 @@ profiles, on the study engine (Ray); or, with `--from DIR`, reads their finished
 Each run starts at the origin facing +x (the giant box behind), runs the command, rests 1 s
 and measures from the run log: distance error = straight-line distance from the start - target
 (mm), angle error = heading change - target (deg, wrapped); also the command's duration (s)
-(`corobot_drake.analysis.landing`). Prints the tables; plots error against target and power.
+(`lab.landing`). Prints the tables; plots error against target and power.
 
     python tools/landing_errors.py [--workers N] [--out out/landing] [--plot out/landing.png]
     python tools/landing_errors.py --from out/landing     # the tables and plot, no simulation
@@ -16,8 +16,7 @@ and measures from the run log: distance error = straight-line distance from the 
 import sys
 from pathlib import Path
 
-from corobot_drake.analysis import landing
-from corobot_drake.analysis.arguments import (
+from corobot_drake.arguments import (
     WORKERS,
     ToolParser,
     bounded,
@@ -25,6 +24,7 @@ from corobot_drake.analysis.arguments import (
     output_directory,
     output_file,
 )
+from lab import landing
 
 
 @one_line_errors

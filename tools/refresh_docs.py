@@ -10,7 +10,7 @@ and COMMAND is what produces it: a tool of tools/ (or examples/, or a test run w
 `python tools/refresh_docs.py --measure NAME` for a few simple measurements this tool makes
 itself through the Python API. This tool runs each block's command(s), renders the output as
 Markdown and replaces the block's content (and writes the pictures the commands write).
-Text outside the markers is never touched (corobot_drake/analysis/docs_blocks.py).
+Text outside the markers is never touched (lab/docs_blocks.py).
 
     python tools/refresh_docs.py                 # every block: deterministic ones first,
                                                  # pictures, timings last (~30 min here)
@@ -41,13 +41,13 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
-from corobot_drake.analysis.docs_blocks import (
+from corobot_drake.resources import DEFAULT_SCENARIO
+from lab.docs_blocks import (
     BlockError,
     find_blocks,
     replace_block,
     wrap_markdown,
 )
-from corobot_drake.resources import DEFAULT_SCENARIO
 
 REPO = Path(__file__).resolve().parent.parent
 DOCS = ("README.md", *sorted(f"docs/{p.name}" for p in (REPO / "docs").glob("*.md")))
@@ -288,9 +288,9 @@ def measure_event_times(repeats: int = 5, seconds: float = 10.0) -> dict:
     """Real-time factors (wall, median of `repeats`) and simulator steps per simulated second
     of the default scene driving, physics only, with the periodic events on and between the
     plant's 10 ms steps."""
-    from corobot_drake.analysis.bench import DRIVING, physics_only_overrides
     from corobot_drake.config.scenario import load_scenario
     from corobot_drake.simulation import Simulation, quiet_drake_warnings
+    from lab.bench import DRIVING, physics_only_overrides
 
     quiet_drake_warnings()
 

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """How far a command resumed from a saved scene lands from the uninterrupted one
-(`corobot_drake/analysis/resume_landing.py`).
+(`lab/resume_landing.py`).
 
 For each landing profile, command (DriveDistance 0.3 m, RotateDegrees -60 deg) and power, runs
 the command in the default scene (camera off) uninterrupted, saving the scene every `--step`
@@ -15,10 +15,10 @@ import sys
 
 from tqdm import tqdm
 
-from corobot_drake.analysis import resume_landing as rl
-from corobot_drake.analysis.arguments import ToolParser, bounded, one_line_errors
+from corobot_drake.arguments import ToolParser, bounded, one_line_errors
 from corobot_drake.config.bounds import Range
 from corobot_drake.simulation import quiet_drake_warnings
+from lab import resume_landing as rl
 
 STEP = Range(0.01, 10.0, unit="s", why="a multiple of the 10 ms control period")
 SETTLE = Range(0.0, 100.0, unit="s")

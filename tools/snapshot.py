@@ -11,7 +11,7 @@ colour behind it. `--time` simulates that many seconds first (the scenario's com
 `--drive` power), so the wheels, the robot and anything it pushed are where the drive put them.
 Views: `chase` (behind and above the robot), `overview` (the robot and the world's bodies from
 the side), `robot-camera` (the robot's own camera: SPEC mount, 320x240, 30 deg vertical fov).
-The rendering is `corobot_drake.analysis.snapshot`.
+The rendering is `lab.snapshot`.
 """
 
 from __future__ import annotations
@@ -23,13 +23,12 @@ from pathlib import Path
 
 from pydrake.systems.sensors import CameraConfig
 
-from corobot_drake.analysis.arguments import (
+from corobot_drake.arguments import (
     ToolParser,
     bounded,
     one_line_errors,
     output_file,
 )
-from corobot_drake.analysis.snapshot import VIEWS, take
 from corobot_drake.config.bounds import DRAKE_BOUNDS, DURATION
 from corobot_drake.config.poses import ground_pose
 from corobot_drake.config.scenario import SetPower, load_scenario
@@ -37,6 +36,7 @@ from corobot_drake.model import dimensions as dim
 from corobot_drake.resources import DEFAULT_SCENARIO
 from corobot_drake.sensors import render
 from corobot_drake.simulation import Simulation, quiet_drake_warnings
+from lab.snapshot import VIEWS, take
 
 PIXELS = DRAKE_BOUNDS[CameraConfig]["width"]
 

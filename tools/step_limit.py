@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """How the robot stands on the ground at each plant step: the measurement behind the loader's
-largest `plant_config.time_step` (`corobot_drake/analysis/step_limit.py`): a markdown table.
+largest `plant_config.time_step` (`lab/step_limit.py`): a markdown table.
 
     python tools/step_limit.py [--steps 0.005 0.01 ...]
 """
@@ -10,9 +10,9 @@ import sys
 
 from tqdm import tqdm
 
-from corobot_drake.analysis import step_limit
 from corobot_drake.config.bounds import MAX_TIME_STEP
 from corobot_drake.simulation import quiet_drake_warnings
+from lab import step_limit
 
 STEPS = (0.005, 0.01, 0.02, 0.025, 0.03, 0.05, 0.1, 1.0)
 

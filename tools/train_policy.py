@@ -12,7 +12,7 @@ import dataclasses as dc
 import sys
 from pathlib import Path
 
-from corobot_drake.analysis.arguments import (
+from corobot_drake.arguments import (
     WORKERS,
     ToolParser,
     bounded,

@@ -6,7 +6,7 @@ new = old x target / measured and repeats with the new value until the top speed
 `--tolerance` of the target. The last line is `motor_torque_scaling: <value>` and the speed it
 gives. `--write` puts the value in the scenario file (only that number changes).
 A plot of speed vs time per iteration goes to `--plot`. The measurement is
-`corobot_drake.analysis.drive_tuning.measure_top_speed`.
+`corobot_drake.tuning.drive_tuning.measure_top_speed`.
 
 `--sweep` instead runs `scenarios/studies/motor_torque_scaling.yaml` on the study engine (the
 same steady speed over a grid of scalings, in parallel) and interpolates the target's scaling.
@@ -19,7 +19,7 @@ import sys
 import time
 from pathlib import Path
 
-from corobot_drake.analysis.arguments import (
+from corobot_drake.arguments import (
     WORKERS,
     ToolParser,
     bounded,
@@ -27,19 +27,19 @@ from corobot_drake.analysis.arguments import (
     output_directory,
     output_file,
 )
-from corobot_drake.analysis.drive_tuning import (
+from corobot_drake.config.bounds import AXLE_SPEED, Range
+from corobot_drake.config.scenario import ScenarioError, load_scenario
+from corobot_drake.model import dimensions as dim
+from corobot_drake.resources import DEFAULT_SCENARIO
+from corobot_drake.simulation import quiet_drake_warnings
+from corobot_drake.tuning.drive_tuning import (
     measure_top_speed,
     plot_sweep,
     plot_top_speed,
     run_sweep,
     scaling_for,
 )
-from corobot_drake.analysis.sysid import DriveField, write_drive_fields
-from corobot_drake.config.bounds import AXLE_SPEED, Range
-from corobot_drake.config.scenario import ScenarioError, load_scenario
-from corobot_drake.model import dimensions as dim
-from corobot_drake.resources import DEFAULT_SCENARIO
-from corobot_drake.simulation import quiet_drake_warnings
+from corobot_drake.tuning.sysid import DriveField, write_drive_fields
 
 REPO = Path(__file__).resolve().parent.parent
 TOP_SPEED = Range(0.0, 5.0, low_open=True, unit="m/s", why="the top speed wanted")

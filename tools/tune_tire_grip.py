@@ -6,7 +6,7 @@ power, backwards and forwards, square and at 30 deg, plant steps 1-10 ms) and
 `tire_grip_drive.yaml` (straight speed and spin rate at full power) on the study engine, or
 reads them with `--from DIR`; prints a table per limit and the pick: no flip in the worst case
 (largest tilt below 20 deg), not slower on open ground, then the most margin
-(`corobot_drake.analysis.tire_grip`). Exit status 1 when no limit passes.
+(`corobot_drake.tuning.tire_grip`). Exit status 1 when no limit passes.
 
     python tools/tune_tire_grip.py [--quick] [--workers N] [--out out/tire_grip]
 """
@@ -15,8 +15,7 @@ import sys
 import time
 from pathlib import Path
 
-from corobot_drake.analysis import tire_grip
-from corobot_drake.analysis.arguments import (
+from corobot_drake.arguments import (
     WORKERS,
     ToolParser,
     bounded,
@@ -24,6 +23,7 @@ from corobot_drake.analysis.arguments import (
     output_directory,
     output_file,
 )
+from corobot_drake.tuning import tire_grip
 
 
 @one_line_errors

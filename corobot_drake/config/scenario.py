@@ -232,6 +232,11 @@ class Wait:
     seconds: float = bounded(1.0, lim.DURATION)
 
 
+SEED_WINDOW = 6 / 60
+"""s: the seed profile estimates the time left from the progress over this last stretch (the
+book's 6 samples of 1/60 s); a saved command's `recent_progress` holds at most this much."""
+
+
 @dc.dataclass
 class DriveDistance:
     """Drive straight until |distance| m from the start pose (negative: backwards), at

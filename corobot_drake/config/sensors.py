@@ -16,7 +16,7 @@ from pydrake.systems.sensors import CameraConfig
 from corobot_drake.config.bounds import RATE, OneOf, Range, bounded
 from corobot_drake.config.poses import mount
 from corobot_drake.model import dimensions as dim
-from corobot_drake.sensors.ir_models import MODELS as IR_MODELS
+from corobot_drake.model.ir_models import MODELS as IR_MODELS
 
 # --- IR distance sensors (the scenario's `robots.<name>.ir_sensors.<sensor>`) ----------------
 

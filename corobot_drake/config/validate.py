@@ -54,7 +54,6 @@ from corobot_drake.config.bounds import (
 from corobot_drake.config.sensors import RENDERERS, IrSensorConfig
 from corobot_drake.model.sdf import LINKS
 from corobot_drake.resources import make_parser, resolve_file
-from corobot_drake.systems.motion import SEED_WINDOW
 
 # --- 1. the YAML against the schema --------------------------------------------------------
 
@@ -535,7 +534,7 @@ class LayerChecks:
         (empty, or a full vector)."""
         if len(robot.axle_speed_command) not in (0, 2):
             self.fail(f"{path}.axle_speed_command", "needs [] or 2 numbers [left, right]")
-        window = max(1, round(SEED_WINDOW / robot.drive.control_period))
+        window = max(1, round(sc.SEED_WINDOW / robot.drive.control_period))
         for i, cmd in enumerate(robot.commands):
             if not isinstance(cmd, sc.DriveDistance | sc.RotateDegrees):
                 continue
@@ -548,7 +547,7 @@ class LayerChecks:
             if len(cmd.recent_progress) > window:
                 self.fail(f"{path}.commands[{i}].recent_progress",
                           f"at most {window} values (one per control update in the seed "
-                          f"profile's last {SEED_WINDOW:g} s); got {len(cmd.recent_progress)}")
+                          f"profile's last {sc.SEED_WINDOW:g} s); got {len(cmd.recent_progress)}")
 
     def _placement(self, s: sc.Scenario) -> None:
         """Robots on or above the ground, clear of the world's bodies and of each other; free

@@ -12,12 +12,16 @@
 - `rollouts.py`: episodes of a policy, in one process or on Ray (the study engine's
   `ray_session`), and their summary;
 - `train.py`: the cross-entropy method over a LinearPolicy, episodes evaluated on Ray
-  (`tools/train_policy.py`); `bench.py`: environment steps per second (`tools/bench_gym.py`).
+  (`tools/train_policy.py`); environment steps per second: `lab/bench_gym.py`.
 
 docs/gym.md has the spaces, the reward and the measured figures.
 """
 
-import gymnasium
+from corobot_drake.extras import require
+
+require("gym", "corobot_drake.gym")
+
+import gymnasium  # noqa: E402 (after the one-line check of the extra)
 
 ENV_ID = "corobot_drake/GoToGoal-v0"
 

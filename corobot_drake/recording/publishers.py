@@ -48,9 +48,9 @@ from pydrake.systems.sensors import ImageRgba8U, RgbdSensorAsync
 
 from corobot_drake.config.poses import mount_frame
 from corobot_drake.model import dimensions as dim
+from corobot_drake.model.ir_models import SharpGP2D12
 from corobot_drake.recording import topics as tp
 from corobot_drake.sensors.camera import frame_look_period
-from corobot_drake.sensors.ir_models import SharpGP2D12
 from corobot_drake.sensors.ir_sensor import DISTANCE, SCAN_TIME, TRUE_DISTANCE, scan_state_layout
 from corobot_drake.systems.runlog import HELD_PERIOD
 

@@ -1,7 +1,7 @@
 """The robot's sensors as Drake systems, and what they need.
 
-- `ir_sensor.py`: `IrSensor` (the IR distance sensor, a ray cast per scan) and its Meshcat view;
-- `ir_models.py`: output models (ideal, the Sharp GP2D12's curve, ADC and noise);
+- `ir_sensor.py`: `IrSensor` (the IR distance sensor, a ray cast per scan, its reading through
+  an output model of `model/ir_models.py`) and its Meshcat view;
 - `raycast.py`: exact ray casts against SceneGraph's shapes (Drake has none);
 - `camera.py`: the front camera (Drake's RgbdSensor / RgbdSensorAsync), frame hold and saver;
 - `render.py`: pictures of a scene (tools/snapshot.py); `xdisplay.py`: an X server for GL.

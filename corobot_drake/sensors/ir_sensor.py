@@ -19,7 +19,7 @@ one vector (written once per scan) holding
 - ``ray_origin`` (3), ``ray_end`` (3 N), ``ray_hit`` (N): where each of the N = 2 x samples rays
   started, where it stopped (its hit point, or its end at maximum_range) and whether it hit.
 
-Output models (``model``, :mod:`corobot_drake.sensors.ir_models`):
+Output models (``model``, :mod:`corobot_drake.model.ir_models`):
 
 ``ideal``
     distance = the nearest hit, ``maximum_range`` when nothing is hit (the book's sensor).
@@ -57,8 +57,8 @@ from pydrake.systems.framework import BasicVector, LeafSystem
 
 from corobot_drake.config.poses import mount_frame
 from corobot_drake.config.sensors import IrSensorConfig
+from corobot_drake.model.ir_models import SharpGP2D12
 from corobot_drake.readings import IrReading
-from corobot_drake.sensors.ir_models import SharpGP2D12
 from corobot_drake.sensors.raycast import (
     RayCaster,
     RayFan,

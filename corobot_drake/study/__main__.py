@@ -9,14 +9,14 @@ import argparse
 import sys
 from pathlib import Path
 
-from corobot_drake.analysis.arguments import (
+from corobot_drake.arguments import (
     WORKERS,
     ToolParser,
     bounded,
     output_directory,
 )
 from corobot_drake.config.scenario import ScenarioError
-from corobot_drake.study.engine import read_rows, run_study
+from corobot_drake.extras import MissingExtraError, require
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -37,6 +37,13 @@ def _parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
+    try:
+        require("study", "python -m corobot_drake.study")
+    except MissingExtraError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    from corobot_drake.study.engine import read_rows, run_study
+
     out = args.out or Path("studies") / Path(args.study).stem
     try:
         runs_csv = run_study(args.study, out, workers=args.workers, address=args.address,

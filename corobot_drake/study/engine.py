@@ -156,7 +156,7 @@ def _simulate_all(todo, study, scenario_file, rows, runs_csv, workers, address,
             start = time.perf_counter()
             for row in _results(todo, study, scenario_file, n):
                 # When the row arrived, from the workers' start: the study's steady rate is
-                # read from these (`analysis.bench_study`).
+                # read from these (`lab.bench_study`).
                 row["finished_seconds"] = round(time.perf_counter() - start, 3)
                 rows.append(row)
                 bar.update()

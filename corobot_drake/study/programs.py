@@ -24,7 +24,7 @@ def _robot(scenario: Scenario, field: str, name: str):
 class DriveTest:
     """The book's drive test: each loop rotates a random angle in [-45, 45] deg, drives a
     random 0.5-1.5 m, rotates 180 deg, drives back the same distance and rotates
-    180 deg - angle, all at `power`. The legs are drawn as `analysis.drive_test` draws them
+    180 deg - angle, all at `power`. The legs are drawn as `lab.drive_test` draws them
     (numpy's default_rng(seed)), so a seed gives the same legs in both."""
 
     loops: int = 3

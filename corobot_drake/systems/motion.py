@@ -32,6 +32,7 @@ import math
 from pydrake.common.value import Value
 from pydrake.systems.framework import LeafSystem
 
+from corobot_drake.config.scenario import SEED_WINDOW as SEED_WINDOW
 from corobot_drake.config.scenario import (
     AllStop,
     Drive,
@@ -44,9 +45,8 @@ from corobot_drake.config.scenario import (
 from corobot_drake.model import dimensions as dim
 from corobot_drake.systems.drive import CommandStatus, DriveRequest, _Immutable
 
-# The seed profile (the book's constants, per second: it counted 1/60 s frames).
-SEED_WINDOW = 6 / 60
-"""s: the progress over this last stretch estimates the time left (the book's 6 samples)."""
+# The seed profile (the book's constants, per second: it counted 1/60 s frames); its window,
+# `SEED_WINDOW`, is the scenario's (a saved command's progress fills it).
 SEED_DECELERATE_TIME = 6 / 60
 """s: halve the speed when less time than this is estimated to remain (the book's 6
 frames)."""

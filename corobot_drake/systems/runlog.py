@@ -3,7 +3,7 @@
 Each robot of a station carries a `RunLogSample` system (named `<robot>.run_log_sample`)
 feeding a Drake `VectorLogSink` (`<robot>.run_log`) that samples it every `LOG_PERIOD` s. The
 log lives in the Context, like the rest of the run. `write_csv` writes it in the CSV format that
-`corobot_drake.analysis.sysid` reads (columns documented in docs/tuning.md), then the
+`corobot_drake.tuning.sysid` reads (columns documented in docs/tuning.md), then the
 simulation's contact telemetry, which no real logger has:
 
     time,left_power,right_power,left_ticks,right_ticks,x,y,yaw,

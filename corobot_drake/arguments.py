@@ -18,10 +18,10 @@ import sys
 from pathlib import Path
 
 from corobot_drake import limits
-from corobot_drake.analysis.sysid import LogError
 from corobot_drake.cli import directory_problem, file_problem
 from corobot_drake.config.bounds import Range
 from corobot_drake.config.scenario import ScenarioError
+from corobot_drake.tuning.sysid import LogError
 
 WORKERS = Range(*limits.WORKERS, why="Ray workers; None: the machine's cores")
 """--workers of the tools that run a study (as `python -m corobot_drake.study`)."""

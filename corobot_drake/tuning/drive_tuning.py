@@ -14,10 +14,10 @@ from pathlib import Path
 
 import numpy as np
 
-from corobot_drake.analysis import sysid
 from corobot_drake.config.scenario import load_scenario
 from corobot_drake.resources import DEFAULT_SCENARIO, SCENARIOS_DIR
 from corobot_drake.simulation import Simulation, quiet_drake_warnings
+from corobot_drake.tuning import sysid
 
 SAMPLE_PERIOD = 0.02
 """s between the speed samples of `measure_top_speed`."""

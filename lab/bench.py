@@ -12,7 +12,12 @@ import time
 from importlib.metadata import version
 from pathlib import Path
 
-from corobot_drake.config import scenario as sc
+from corobot_drake.config.presets import (  # noqa: F401 (the lab's names for them)
+    CAMERA_FPS,
+    IR_RATE_HZ,
+    physics_only_overrides,
+    sensor_overrides,
+)
 from corobot_drake.config.scenario import load_scenario
 from corobot_drake.resources import DEFAULT_SCENARIO
 from corobot_drake.simulation import Simulation
@@ -22,23 +27,8 @@ DRIVING = (f"robots: {{{ROBOT}: {{commands: [!SetPower {{left: 1.0, right: 0.6}}
            "!Wait {seconds: 3}, !SetPower {left: 0.6, right: 1.0}, !Wait {seconds: 3}, "
            "!SetPower {left: -1.0, right: 1.0}]}}")
 """The figure of eight the benchmarks drive (a scenario override)."""
-IR_RATE_HZ = 20.0
-CAMERA_FPS = 30.0
 NO_CAMERA = f"robots: {{{ROBOT}: {{camera: {{rgb: false}}}}}}"
 """The override that turns the robot's camera off (its IR sensors as the scenario has them)."""
-
-
-def sensor_overrides(robot: str = ROBOT, ir: bool = False, camera: bool = False) -> list[str]:
-    """Overrides that turn the robot's IR sensors and camera on (at the bench rates) or off."""
-    sensors = ", ".join(f"{n}: {{enabled: {str(ir).lower()}, scan_rate_hz: {IR_RATE_HZ}}}"
-                        for n in sc.Robot().ir_sensors)
-    return [f"robots: {{{robot}: {{ir_sensors: {{{sensors}}}}}}}",
-            f"robots: {{{robot}: {{camera: {{rgb: {str(camera).lower()}, fps: {CAMERA_FPS}}}}}}}"]
-
-
-def physics_only_overrides(robot: str = ROBOT) -> list[str]:
-    """No camera, no IR: the physics and the drive alone."""
-    return sensor_overrides(robot, ir=False, camera=False)
 
 
 def realtime_factor(overrides: list[str], seconds: float,

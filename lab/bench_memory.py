@@ -109,7 +109,7 @@ class Result:
 
 
 def _start_server(rate: float) -> tuple[subprocess.Popen, str]:
-    code = ("import sys; from corobot_drake.analysis.bench_memory import serve_child; "
+    code = ("import sys; from lab.bench_memory import serve_child; "
             f"sys.exit(serve_child({rate!r}))")
     process = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE,
                                stderr=subprocess.DEVNULL, text=True)

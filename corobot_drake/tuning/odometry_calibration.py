@@ -21,11 +21,11 @@ from pathlib import Path
 
 import numpy as np
 
-from corobot_drake.analysis.sysid import LogError, read_columns
 from corobot_drake.config import scenario as sc
 from corobot_drake.model import dimensions as dim
 from corobot_drake.study.programs import DriveTest
 from corobot_drake.systems.dead_reckoning import advance_pose
+from corobot_drake.tuning.sysid import LogError, read_columns
 
 COLUMNS = ("time", "left_ticks", "right_ticks", "x", "y", "yaw")
 WINDOW = 0.5
@@ -140,7 +140,7 @@ def square_commands(side: float = SQUARE_SIDE, power: float = CALIBRATION_POWER)
 def run_script(scenario_path, robot: str, commands: list, overrides=(), progress=None):
     """Runs `commands` on `robot` (physics only: the odometry needs neither the camera nor
     the IR sensors) until they end; returns the Simulation."""
-    from corobot_drake.analysis.bench import physics_only_overrides
+    from corobot_drake.config.presets import physics_only_overrides
     from corobot_drake.simulation import Simulation, quiet_drake_warnings
     from corobot_drake.study.runner import commands_ended
 

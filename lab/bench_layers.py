@@ -32,7 +32,6 @@ from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import MatrixGain
 
-from corobot_drake.analysis import bench
 from corobot_drake.config import scenario as sc
 from corobot_drake.model import dimensions as dim
 from corobot_drake.resources import DEFAULT_SCENARIO
@@ -45,6 +44,7 @@ from corobot_drake.systems.motion import MotionCommands
 from corobot_drake.systems.odometry import add_chassis_poses, add_odometry
 from corobot_drake.systems.runlog import add_run_log
 from corobot_drake.systems.stability import add_tip_margin
+from lab import bench
 
 LAYERS = ("plant alone (desired state fixed)", "+ drive controller (request fixed)",
           "+ chassis poses, encoders, compass, GPS, drive state",

@@ -69,9 +69,9 @@ def rest_run(start_angle: float = 0.0, seconds: float = 30.0, hold: bool = True,
     """Leaves the robot of `scenario` (its first) at rest, wheels at `start_angle`, with the
     drive's hold on or off (`drive.hold_gain` 0), and measures it over `seconds` after
     `SETTLE`."""
-    from corobot_drake.analysis.bench import physics_only_overrides
     from corobot_drake.config.scenario import load_scenario
     from corobot_drake.simulation import Simulation, quiet_drake_warnings
+    from lab.bench import physics_only_overrides
 
     quiet_drake_warnings()
     loaded = load_scenario(scenario)

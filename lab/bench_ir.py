@@ -25,11 +25,11 @@ from typing import ClassVar
 
 from pydrake.systems.framework import EventStatus
 
-from corobot_drake.analysis.bench import DRIVING, NO_CAMERA, physics_only_overrides
 from corobot_drake.config.scenario import load_scenario
 from corobot_drake.resources import DEFAULT_SCENARIO
 from corobot_drake.sensors import ir_sensor
 from corobot_drake.simulation import Simulation
+from lab.bench import DRIVING, NO_CAMERA, physics_only_overrides
 
 IR_200_HZ = ("robots: {corobot: {ir_sensors: {front: {scan_rate_hz: 200}, "
              "rear: {scan_rate_hz: 200}}}}")

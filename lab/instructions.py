@@ -5,7 +5,7 @@ simulation executes do not (two counts of one row agree within 0.1% on one machi
 to the code is measured here first; its effect on time, which also depends on caches and the
 machine, is measured by `tools/bench.py`.
 
-Each row is a child process under callgrind (`python -m corobot_drake.analysis.instructions
+Each row is a child process under callgrind (`python -m lab.instructions
 ROW SECONDS`), started with instrumentation off: it builds the row's diagram (a layer of
 `bench_layers.LAYERS`, or the station, optionally with a scenario override), advances to
 `WARM_UP` s, and counts only `seconds` of simulation after that (`callgrind_control -i on/off`
@@ -22,7 +22,7 @@ import tempfile
 import typing
 from pathlib import Path
 
-from corobot_drake.analysis import bench_layers
+from lab import bench_layers
 
 WARM_UP = 0.05
 """s simulated before counting: the first steps (the tyres settling) are not the run's."""

@@ -22,8 +22,8 @@ SAMPLE = 0.05
 def measure(time_step: float) -> dict:
     """{time_step, sink_mm (deepest the chassis frame went below the ground), rise_mm
     (highest above), tilt_deg (largest)} over the drive."""
-    from corobot_drake.analysis.bench import physics_only_overrides
     from corobot_drake.simulation import Simulation
+    from lab.bench import physics_only_overrides
 
     scenario = load_scenario(DEFAULT_SCENARIO, overrides=[SCRIPT, *physics_only_overrides()])
     scenario.plant_config.time_step = time_step

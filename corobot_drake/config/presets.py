@@ -1,0 +1,26 @@
+"""Scenario overrides that switch a robot's sensors, shared by the tuning tools and the lab.
+
+Each is YAML text for `load_scenario(..., overrides=[...])`.
+"""
+
+from corobot_drake.config import scenario as sc
+
+IR_RATE_HZ = 20.0
+"""Hz: the IR scan rate `sensor_overrides` sets (SPEC: 20 Hz)."""
+CAMERA_FPS = 30.0
+"""Hz: the camera frame rate `sensor_overrides` sets (SPEC: 30 Hz)."""
+
+
+def sensor_overrides(robot: str = "corobot", ir: bool = False, camera: bool = False
+                     ) -> list[str]:
+    """Overrides that turn the robot's IR sensors and camera on (at `IR_RATE_HZ` and
+    `CAMERA_FPS`) or off."""
+    sensors = ", ".join(f"{n}: {{enabled: {str(ir).lower()}, scan_rate_hz: {IR_RATE_HZ}}}"
+                        for n in sc.Robot().ir_sensors)
+    return [f"robots: {{{robot}: {{ir_sensors: {{{sensors}}}}}}}",
+            f"robots: {{{robot}: {{camera: {{rgb: {str(camera).lower()}, fps: {CAMERA_FPS}}}}}}}"]
+
+
+def physics_only_overrides(robot: str = "corobot") -> list[str]:
+    """No camera, no IR: the physics and the drive alone."""
+    return sensor_overrides(robot, ir=False, camera=False)

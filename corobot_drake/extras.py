@@ -1,0 +1,33 @@
+"""The optional front ends and the pip extras that carry them.
+
+The core (`pip install corobot-drake`) runs a scenario headless or in Meshcat; each front end
+needs its extra. A front end used without it stops with one line naming the extra.
+`tests/test_wheel.py` holds this table to pyproject's `[project.optional-dependencies]`.
+"""
+
+import importlib.util
+
+EXTRAS = {
+    "serve": ("fastapi", "uvicorn", "httpx", "pydantic", "starlette", "fastapi_offline"),
+    "study": ("ray", "tqdm", "matplotlib"),
+    "gym": ("gymnasium", "ray", "tqdm", "matplotlib"),
+    "record": ("foxglove",),
+}
+"""{extra: the top-level modules it brings}."""
+
+
+class MissingExtraError(ImportError):
+    """A front end was used without its extra; the message is the one line to show."""
+
+
+def missing_modules(extra: str) -> list[str]:
+    """The modules of `extra` this environment cannot import."""
+    return [m for m in EXTRAS[extra] if importlib.util.find_spec(m) is None]
+
+
+def require(extra: str, what: str) -> None:
+    """Raises MissingExtraError ("`what` needs the [extra] extra: pip install ...") unless every
+    module of `extra` is importable."""
+    if missing_modules(extra):
+        raise MissingExtraError(f"{what} needs the [{extra}] extra: "
+                           f"pip install 'corobot-drake[{extra}]'")
