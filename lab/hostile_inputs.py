@@ -843,7 +843,7 @@ def run_tool(case: ToolCase, directory: Path) -> tuple[int, str, str]:
         path = directory / name
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_bytes(data)
-    tool = Path(__file__).resolve().parents[2] / "tools" / f"{case.tool}.py"
+    tool = Path(__file__).resolve().parents[1] / "tools" / f"{case.tool}.py"
     spec = importlib.util.spec_from_file_location(f"tool_{case.tool}", tool)
     module = importlib.util.module_from_spec(spec)
     sys.modules[spec.name] = module  # dataclasses look their module up
