@@ -193,3 +193,8 @@ def test_the_installed_wheel_runs_from_any_directory(tmp_path):
     run = _run(python, "-m", "corobot_drake", "--headless", "--duration", "1",
                cwd=elsewhere, env=env, timeout=120)
     assert "simulated 1.00 s" in run.stdout
+    for scenario in sorted((REPO / "scenarios").glob("*.yaml")):  # each shipped one by name
+        run = _run(python, "-m", "corobot_drake", scenario.name, "--headless", "--duration",
+                   "0.1", cwd=elsewhere, env=env, timeout=120)
+        assert "simulated 0.10 s" in run.stdout, scenario.name
+    assert sorted(p.name for p in elsewhere.iterdir()) == []  # nothing written there
