@@ -172,7 +172,7 @@ robots:
 
 @pytest.mark.parametrize("override, message", [
     ("directives: [{add_model: {name: m, file: 'package://corobot_drake/none.sdf'}}]",
-     r"directives: .*none\.sdf.* does not exist"),
+     r"directives\[0\]\.add_model\.file: .*none\.sdf.* does not exist"),
     ("directives: [{add_model: {name: corobot, file: 'package://corobot_drake/maze.sdf'}}]",
      r"directives\[0\]\.add_model\.name: 'corobot' already names a robot"),
     ("directives: [{add_model: {name: m, file: 'package://corobot_drake/maze.sdf'}}, "

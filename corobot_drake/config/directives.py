@@ -120,11 +120,16 @@ class _DrakeWarnings(logging.Handler):
 
 
 def _check_files(directive, path: str, base: Path, chain: tuple[Path, ...]) -> None:
-    if directive.add_model is not None:
-        _check_model_file(resolve(directive.add_model.file, base), f"{path}.add_model.file")
-    if directive.add_directives is not None:
-        _check_included(resolve(directive.add_directives.file, base),
-                        f"{path}.add_directives.file", chain)
+    for field, check in (("add_model", _check_model_file), ("add_directives", _check_included)):
+        value = getattr(directive, field)
+        if value is None:
+            continue
+        try:
+            file = resolve(value.file, base)
+        except RuntimeError as e:  # an unknown package, a file it does not have
+            raise DirectiveError(f"{path}.{field}.file",
+                                 sc.one_line(e).removeprefix("error: ")) from None
+        check(file, f"{path}.{field}.file", *(() if field == "add_model" else (chain,)))
 
 
 def _check_included(file: Path, path: str, chain: tuple[Path, ...]) -> None:
