@@ -24,7 +24,7 @@ from pydrake.systems.sensors import CameraConfig
 from corobot_drake.config.bounds import DRAKE_BOUNDS, DURATION, SIMULATION_DURATION, Range
 from corobot_drake.config.scenario import ScenarioError, load_scenario
 from corobot_drake.limits import LIVE_RUN_LOG_WINDOW
-from corobot_drake.resources import DEFAULT_SCENARIO
+from corobot_drake.resources import DEFAULT_SCENARIO, scenario_path
 
 if TYPE_CHECKING:  # imported when a run starts: a bad input stops before pydrake's systems load
     from corobot_drake.simulation import Simulation
@@ -52,7 +52,8 @@ class ArgumentError(Exception):
 def _parser() -> argparse.ArgumentParser:
     p = _ArgumentParser(prog="python -m corobot_drake", description=__doc__.splitlines()[0])
     p.add_argument("scenario", nargs="?", default=str(DEFAULT_SCENARIO),
-                   help="scenario YAML (default: scenarios/corobot.yaml)")
+                   help="scenario YAML, or a shipped scenario's name (maze.yaml) from any "
+                   "folder (default: scenarios/corobot.yaml)")
     p.add_argument("--headless", action="store_true",
                    help="no Meshcat; run as fast as possible")
     p.add_argument("--duration", type=float, default=None,
@@ -163,10 +164,15 @@ def _check(flag: str, value, bound: Range) -> None:
 
 
 def file_problem(path: Path) -> str | None:
-    """Why a file cannot be written at `path` (its directory must exist), else None."""
+    """Why a file cannot be written at `path` (its directory must exist), else None. A FIFO
+    or a device is refused: writing would wait for a reader, or go nowhere."""
     directory = path.parent
     if path.is_dir():
         return "is a directory; name a file"
+    if path.exists() and not path.is_file():
+        kind = "a FIFO" if path.is_fifo() else "a device" if (
+            path.is_char_device() or path.is_block_device()) else "not a regular file"
+        return f"is {kind}; name a regular file"
     if not directory.is_dir():
         return f"the directory {directory} does not exist"
     if path.exists() and not os.access(path, os.W_OK):
@@ -244,18 +250,24 @@ def _write_logs(sim: Simulation, path: Path) -> None:
 
 def write_output(flag: str, path: str, write) -> bool:
     """`write(path)`; if that fails (the disk filled, the directory went), `write` into a
-    fallback file in the temporary directory, named in the one-line error. False then."""
+    fallback file in the temporary directory, named in the one-line error. False then (and
+    when the fallback fails too: its own line)."""
     try:
         write(Path(path))
         return True
     except OSError as e:
+        problem = f"error: {flag}: {path}: cannot write ({e.strerror})"
+    try:
         fd, fallback = tempfile.mkstemp(prefix=f"corobot-{flag.strip('-')}-",
                                         suffix=Path(path).suffix)
         os.close(fd)
         write(Path(fallback))
-        print(f"error: {flag}: {path}: cannot write ({e.strerror}); written to {fallback} "
-              "instead", file=sys.stderr)
+    except OSError as e:
+        print(f"{problem}; nor to the temporary directory ({e.strerror}): lost",
+              file=sys.stderr)
         return False
+    print(f"{problem}; written to {fallback} instead", file=sys.stderr)
+    return False
 
 
 def _write_results(sim: Simulation, args, summary: dict) -> int:
@@ -272,11 +284,12 @@ def _write_results(sim: Simulation, args, summary: dict) -> int:
 
 class _FoxgloveSinks(contextlib.ExitStack):
     """--mcap and --foxglove: one foxglove Context with its MCAP file and live server,
-    closed (the file finished, the server stopped) on leaving the block."""
+    closed (the file finished, the server stopped) on leaving the block; `finished` False
+    when the MCAP file could not be finished (one line said so)."""
 
     def __init__(self, args):
         super().__init__()
-        self.context = None
+        self.context, self.finished = None, True
         if args.mcap is None and args.foxglove is None:
             return
         import foxglove
@@ -291,21 +304,60 @@ class _FoxgloveSinks(contextlib.ExitStack):
             print(f"Foxglove: {live.url}  (Foxglove: Open connection > Foxglove WebSocket)",
                   file=sys.stderr, flush=True)
         if args.mcap is not None:
-            self.enter_context(McapLog(args.mcap, self.context))
+            log = McapLog(args.mcap, self.context)
+            self.callback(self._finish, log)
+
+    def _finish(self, log) -> None:
+        try:
+            log.close()
+        except OSError as e:
+            self.finished = False
+            print(f"error: --mcap: {log.path}: cannot write ({e}); the file is incomplete",
+                  file=sys.stderr)
 
 
 def _one_line_warning(message, category, filename, lineno, line=None) -> str:
     return f"warning: {message}\n"
 
 
+STOPPED_BY: int | None = None
+"""The signal that stopped this process's run (`ctrl_c_stops`), else None."""
+
+
+def _stop(signum, frame) -> None:
+    """The first SIGINT or SIGTERM raises KeyboardInterrupt where the program is; later ones
+    are ignored, so that the outputs of the run so far are written whole."""
+    global STOPPED_BY
+    if STOPPED_BY is None:
+        STOPPED_BY = signum
+        raise KeyboardInterrupt
+
+
 def ctrl_c_stops() -> None:
-    """Makes SIGINT raise KeyboardInterrupt in this process even when it was started with
-    SIGINT ignored (a background job of a non-interactive shell, e.g. a CI script, inherits
-    SIG_IGN, and Python then keeps it): `kill -INT` and Ctrl-C stop a run cleanly. For a
-    program's entry point only (`python -m corobot_drake`, `python -m corobot_drake.study`)."""
+    """Makes SIGINT (Ctrl-C) and SIGTERM (`kill`, a service manager) raise KeyboardInterrupt in
+    this process, once (`_stop`), even when it was started with SIGINT ignored (a background
+    job of a non-interactive shell, e.g. a CI script, inherits SIG_IGN, and Python then keeps
+    it): a run stops cleanly and writes what was asked. For a program's entry point only
+    (`python -m corobot_drake`, `python -m corobot_drake.study`)."""
     import signal
 
-    signal.signal(signal.SIGINT, signal.default_int_handler)
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(signum, _stop)
+
+
+def stopped_status() -> int:
+    """The exit status of a run a signal stopped: 128 + the signal (130 for Ctrl-C)."""
+    import signal
+
+    return 128 + (STOPPED_BY or signal.SIGINT)
+
+
+def _stopped_line(sim: Simulation, duration: float) -> None:
+    import signal
+
+    name = signal.Signals(STOPPED_BY or signal.SIGINT).name
+    print(f"stopped by {name} at t = {sim.time:.2f} s of {duration:.2f} s; writing the "
+          "outputs of the run so far", file=sys.stderr, flush=True)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -313,7 +365,7 @@ def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     try:
         check_arguments(args)
-        scenario = load_scenario(args.scenario, overrides=args.override)
+        scenario = load_scenario(scenario_path(args.scenario), overrides=args.override)
     except (ArgumentError, ScenarioError) as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
@@ -333,8 +385,13 @@ def main(argv: list[str] | None = None) -> int:
         print(f"error: --{'foxglove' if isinstance(e, RuntimeError) else 'mcap'}: "
               f"{str(e).splitlines()[0]}", file=sys.stderr)
         return 2
-    with sinks:
-        return _run(args, scenario, duration, sinks.context)
+    try:
+        with sinks:
+            status = _run(args, scenario, duration, sinks.context)
+    except KeyboardInterrupt:  # before the run started (building it): nothing to write
+        print("stopped before the run started", file=sys.stderr)
+        return stopped_status()
+    return status if sinks.finished else max(status, 1)
 
 
 def _run(args, scenario, duration: float, foxglove) -> int:
@@ -369,13 +426,19 @@ def _run(args, scenario, duration: float, foxglove) -> int:
         progress = _HeadlessProgress(duration)
         if args.foxglove is not None:  # live: watched as it happens
             sim.simulator.set_target_realtime_rate(1.0)
-        sim.run(duration, progress=progress)
-        progress.finish()
+        try:
+            sim.run(duration, progress=progress)
+        except KeyboardInterrupt:  # SIGINT or SIGTERM (`ctrl_c_stops`): keep the run so far
+            progress.finish()
+            _stopped_line(sim, duration)
+        else:
+            progress.finish()
     else:
         _run_interactive(sim, meshcat, duration)
     summary = sim.summary()
     print(f"simulated {summary['time']:.2f} s at {summary['realtime_factor']:.1f}x real time")
-    return _write_results(sim, args, summary)
+    status = _write_results(sim, args, summary)
+    return stopped_status() if STOPPED_BY is not None and status == 0 else status
 
 
 if __name__ == "__main__":

@@ -24,6 +24,15 @@ SCENARIOS_DIR = _data_dir("scenarios")
 DEFAULT_SCENARIO = SCENARIOS_DIR / "corobot.yaml"
 """The book chapter's scene: the robot at the origin facing +x, the giant box behind it."""
 
+def scenario_path(name: str) -> Path:
+    """The scenario file `name` names: a path as it is when it exists, else, for a bare file
+    name, the shipped scenario of that name (`maze.yaml` from any folder, also from a wheel)."""
+    path = Path(name)
+    if path.exists() or path.name != name or not (SCENARIOS_DIR / name).is_file():
+        return path
+    return SCENARIOS_DIR / name
+
+
 PACKAGE_XML = MODELS_DIR / "package.xml"
 """Drake's package file for `models/`: its `package://corobot_drake/...` URIs."""
 

@@ -21,6 +21,7 @@ from pydrake.geometry import (
     HalfSpace,
     Mesh,
     ProximityProperties,
+    RoleAssign,
     Sphere,
 )
 from pydrake.math import RigidTransform
@@ -78,15 +79,15 @@ _HYDRO_RESOLUTION_FRACTION = 0.1
 
 
 def _size(shape) -> float:
-    """A shape's characteristic size, m."""
-    if isinstance(shape, sc.Box):
-        return min(shape.size)
-    if isinstance(shape, sc.Ellipsoid):
-        return 2 * min(shape.a, shape.b, shape.c)
-    if isinstance(shape, sc.Mesh):
-        low, high = _collision_geometry(shape).GetConvexHull().CalcBoundingBox()
+    """A collision shape's (Drake's) characteristic size, m: its thinnest extent."""
+    if isinstance(shape, Box):
+        return float(min(shape.size()))
+    if isinstance(shape, Ellipsoid):
+        return 2 * min(shape.a(), shape.b(), shape.c())
+    if isinstance(shape, Mesh | Convex):
+        low, high = shape.GetConvexHull().CalcBoundingBox()
         return float(min(high - low))
-    return 2 * shape.radius
+    return 2 * shape.radius()
 
 
 def _spatial_inertia(shape, mass: float) -> SpatialInertia:
@@ -149,21 +150,49 @@ def _body_contact(spec: sc.WorldBody) -> ProximityProperties:
     AddContactMaterial(friction=CoulombFriction(spec.friction, spec.friction), properties=props)
     if spec.hydroelastic_modulus > 0:
         AddCompliantHydroelasticProperties(
-            resolution_hint=_HYDRO_RESOLUTION_FRACTION * _size(spec.shape),
+            resolution_hint=_HYDRO_RESOLUTION_FRACTION * _size(_collision_geometry(spec.shape)),
             hydroelastic_modulus=spec.hydroelastic_modulus, properties=props)
     elif isinstance(spec.shape, sc.Mesh) and spec.shape.collision == "mesh":
         AddRigidHydroelasticProperties(properties=props)
     return props
 
 
-def _add_directives(plant: MultibodyPlant, directives: list) -> dict:
+def _add_directives(plant: MultibodyPlant, scene_graph, directives: list) -> dict:
     """The scenario's model directives (Drake's `ProcessModelDirectives`); returns {model
     name: model instance} of the models they add."""
     if not directives:
         return {}
     added = ProcessModelDirectives(ModelDirectives(directives=directives), plant,
                                    make_parser(plant))
-    return {info.model_name: info.model_instance for info in added}
+    models = {info.model_name: info.model_instance for info in added}
+    for gid in free_point_contact_geometries(plant, scene_graph, models.values()):
+        props = ProximityProperties(scene_graph.model_inspector().GetProximityProperties(gid))
+        shape = scene_graph.model_inspector().GetShape(gid)
+        AddCompliantHydroelasticProperties(
+            resolution_hint=_HYDRO_RESOLUTION_FRACTION * _size(shape),
+            hydroelastic_modulus=sc.WorldBody.hydroelastic_modulus, properties=props)
+        scene_graph.AssignRole(plant.get_source_id(), gid, props, RoleAssign.kReplace)
+    return models
+
+
+def free_point_contact_geometries(plant: MultibodyPlant, scene_graph, instances) -> list:
+    """The collision geometries of the models' free bodies (not welded to the world) that
+    their files give no hydroelastic properties: point contact holds a free body on the rigid
+    ground at one point and a face sinks through it (`config/validate.py`, RIGID_ON_GROUND), so
+    they touch as a world body does by default, compliant-hydroelastic (half-spaces aside)."""
+    inspector = scene_graph.model_inspector()
+    anchored = {body.index() for body in plant.GetBodiesWeldedTo(plant.world_body())}
+    geometries = []
+    for instance in instances:
+        for index in plant.GetBodyIndices(instance):
+            if index in anchored:
+                continue
+            for gid in plant.GetCollisionGeometriesForBody(plant.get_body(index)):
+                props = inspector.GetProximityProperties(gid)
+                if not (props.HasProperty("hydroelastic", "compliance_type")
+                        or isinstance(inspector.GetShape(gid), HalfSpace)):
+                    geometries.append(gid)
+    return geometries
 
 
 @dc.dataclass
@@ -227,7 +256,7 @@ def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None, foxglov
     builder = DiagramBuilder()
     plant, scene_graph = AddMultibodyPlant(scenario.plant_config, builder)
     bodies = _add_world(plant, scenario.world)
-    models = _add_directives(plant, scenario.directives)
+    models = _add_directives(plant, scene_graph, scenario.directives)
     added = {name: _add_robot(plant, name, robot) for name, robot in scenario.robots.items()}
     plant.Finalize()
 

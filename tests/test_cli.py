@@ -181,3 +181,106 @@ def test_ctrl_c_stops_a_run_started_with_sigint_ignored():
             run.wait(5)
     assert run.returncode == 0, err
     assert "simulated " in err  # its closing line
+
+
+NO_CAMERA = "robots: {corobot: {camera: {rgb: false}}}"
+
+
+@pytest.mark.parametrize("signame, foxglove", [("SIGINT", False), ("SIGTERM", True)])
+def test_a_stopped_headless_run_writes_every_output_whole(tmp_path, signame, foxglove):
+    """SIGINT or SIGTERM mid-run: one line, no traceback, exit 128 + the signal, and every
+    requested output holds the run so far (the MCAP file finished and readable)."""
+    import signal
+
+    from mcap.reader import make_reader
+
+    out = {name: tmp_path / name for name in ("s.json", "r.html", "r.mcap", "r.csv", "r.yaml")}
+    run = subprocess.Popen(
+        [sys.executable, "-m", "corobot_drake", "--headless", "--duration", "600",
+         "--override", NO_CAMERA, "--summary", str(out["s.json"]), "--record", str(out["r.html"]),
+         "--mcap", str(out["r.mcap"]), "--log", str(out["r.csv"]),
+         "--save-scenario", str(out["r.yaml"]), *(["--foxglove", "0"] if foxglove else [])],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        seen = ""
+        while "t = " not in seen:  # the progress line: the run is under way
+            character = run.stderr.read(1)
+            assert character, seen
+            seen += character
+        run.send_signal(getattr(signal, signame))
+        _, err = run.communicate(timeout=120)
+    finally:
+        if run.poll() is None:
+            run.kill()
+            run.wait(5)
+    assert run.returncode == 128 + getattr(signal, signame), err
+    assert "Traceback" not in err
+    assert f"stopped by {signame} at t = " in err
+    time = json.loads(out["s.json"].read_text())["time"]
+    assert 0 < time < 600
+    with open(out["r.mcap"], "rb") as f:
+        assert make_reader(f).get_summary().statistics.message_count > 0
+    assert out["r.html"].read_text().rstrip().endswith("</html>")
+    assert len(out["r.csv"].read_text().splitlines()) > 1
+    assert "robots:" in out["r.yaml"].read_text()
+
+
+def test_outputs_that_are_fifos_or_devices_are_refused_before_the_run(tmp_path, capsys):
+    import os
+
+    fifo = tmp_path / "fifo"
+    os.mkfifo(fifo)
+    for flag in ("--summary", "--record", "--mcap", "--log", "--save-scenario"):
+        for path, kind in ((fifo, "a FIFO"), ("/dev/null", "a device")):
+            assert main(["--headless", flag, str(path)]) == 2
+            assert capsys.readouterr().err == (f"error: {flag}: {path}: is {kind}; name a "
+                                               "regular file\n")
+
+
+def test_a_full_disk_ends_in_one_line_naming_the_file(tmp_path, capsys, monkeypatch):
+    """The output, then its fallback in the temporary directory, both on full disks."""
+    import errno
+    import tempfile
+
+    from corobot_drake import cli
+
+    def full(path):
+        raise OSError(errno.ENOSPC, os_strerror(errno.ENOSPC))
+
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    assert not cli.write_output("--summary", "/x/s.json", full)
+    assert capsys.readouterr().err == ("error: --summary: /x/s.json: cannot write (No space "
+                                       "left on device); nor to the temporary directory (No "
+                                       "space left on device): lost\n")
+
+
+def os_strerror(code: int) -> str:
+    import os
+
+    return os.strerror(code)
+
+
+def test_an_mcap_file_on_a_full_disk_is_named(tmp_path):
+    """A 64 KiB tmpfs, nearly full (as root; else skipped): the MCAP writer fails as it
+    finishes the file; the summary goes to its fallback."""
+    import os
+
+    disk = tmp_path / "disk"
+    disk.mkdir()
+    if os.geteuid() != 0 or subprocess.run(
+            ["mount", "-t", "tmpfs", "-o", "size=64k", "tmpfs", str(disk)],
+            capture_output=True).returncode != 0:
+        pytest.skip("needs root to mount a small tmpfs")
+    try:
+        (disk / "filler").write_bytes(bytes(60 << 10))  # 4 KiB left
+        run = subprocess.run(
+            [sys.executable, "-m", "corobot_drake", "--headless", "--duration", "1",
+             "--override", NO_CAMERA, "--mcap", str(disk / "r.mcap"),
+             "--summary", str(disk / "s.json")], capture_output=True, text=True, timeout=300)
+    finally:
+        subprocess.run(["umount", str(disk)], check=True)
+    assert run.returncode == 1
+    assert "Traceback" not in run.stderr
+    assert f"error: --mcap: {disk}/r.mcap: cannot write (" in run.stderr
+    assert f"error: --summary: {disk}/s.json: cannot write (No space left on device); " \
+           "written to " in run.stderr

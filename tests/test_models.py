@@ -172,7 +172,7 @@ robots:
 
 @pytest.mark.parametrize("override, message", [
     ("directives: [{add_model: {name: m, file: 'package://corobot_drake/none.sdf'}}]",
-     r"directives: .*none\.sdf.* does not exist"),
+     r"directives\[0\]\.add_model\.file: .*none\.sdf.* does not exist"),
     ("directives: [{add_model: {name: corobot, file: 'package://corobot_drake/maze.sdf'}}]",
      r"directives\[0\]\.add_model\.name: 'corobot' already names a robot"),
     ("directives: [{add_model: {name: m, file: 'package://corobot_drake/maze.sdf'}}, "
@@ -180,9 +180,10 @@ robots:
     ("world: {bodies: {rock: {shape: !Mesh {filename: rock.stl}}}}",
      r"world\.bodies\.rock\.shape\.filename: .*a mesh file is one of \.obj"),
     ("world: {bodies: {rock: {shape: !Mesh {filename: 'package://corobot_drake/meshes/"
-     "chassis.obj', scale: -1}}}}", r"world\.bodies\.rock\.shape\.scale: must be > 0"),
+     "chassis.obj', scale: -1}}}}",
+     r"world\.bodies\.rock\.shape\.scale: must be in \[0\.0001, 10000\]"),
     ("world: {bodies: {rock: {shape: !Mesh {filename: 'package://corobot_drake/meshes/"
-     "chassis.obj', collision: mesh}}}}",
+     "chassis.obj', collision: mesh}, fixed: true}}}",
      r"world\.bodies\.rock\.shape\.collision: a surface mesh touches rigidly"),
 ])
 def test_bad_models_stop_with_one_line(override, message):

@@ -242,3 +242,8 @@ def test_the_installed_wheel_runs_from_any_directory(tmp_path):
         assert sorted(p.relative_to(installed) for p in installed.rglob("*") if p.is_file()) \
             == sorted(p.relative_to(REPO / directory) for p in (REPO / directory).rglob("*")
                       if p.is_file() and "__pycache__" not in p.parts), directory
+    for scenario in sorted((REPO / "scenarios").glob("*.yaml")):  # each shipped one by name
+        run = _run(python, "-m", "corobot_drake", scenario.name, "--headless", "--duration",
+                   "0.1", cwd=elsewhere, env=env, timeout=120)
+        assert "simulated 0.10 s" in run.stdout, scenario.name
+    assert sorted(p.name for p in elsewhere.iterdir()) == []  # nothing written there

@@ -46,7 +46,7 @@ def _parser() -> ToolParser:
     p.add_argument("--ticks-per-revolution", type=bounded(TICKS_PER_REVOLUTION, int),
                    default=dim.ENCODER_TICKS_PER_REVOLUTION,
                    help="encoder counts per wheel revolution")
-    p.add_argument("--plot", type=output_file, default=str(REPO / "out" / "calibrate_odometry.png"),
+    p.add_argument("--plot", type=output_file, default="out/calibrate_odometry.png",
                    help="before/after plot of the log")
     p.add_argument("--write", metavar="SCENARIO", type=existing_file,
                    help="put the fit in this scenario file")
@@ -69,7 +69,7 @@ def _simulated_log(args) -> oc.PoseLog:
     bar, update = _progress(110, "UMBmark squares")
     with bar:
         sim = oc.run_script(args.scenario, args.robot, commands, progress=update)
-    path = REPO / "out" / "odometry_squares_log.csv"
+    path = Path("out") / "odometry_squares_log.csv"  # under the working directory
     path.parent.mkdir(parents=True, exist_ok=True)
     sim.robot(args.robot).write_log(path)
     print(f"simulated UMBmark squares ({sim.time:.1f} s) -> {path}", flush=True)

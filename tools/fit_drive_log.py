@@ -66,7 +66,7 @@ def main(argv=None) -> int:
                    help="make the log with the simulator at these parameters first")
     p.add_argument("--stall", action="store_true",
                    help="with --simulate: end the log backing into the giant box")
-    p.add_argument("--plot", type=output_file, default=str(REPO / "out" / "fit_drive_log.png"),
+    p.add_argument("--plot", type=output_file, default="out/fit_drive_log.png",
                    help="PNG of the fit")
     p.add_argument("--ticks-per-revolution", type=bounded(TICKS_PER_REVOLUTION, int), default=600,
                    help="encoder counts")
@@ -81,7 +81,7 @@ def main(argv=None) -> int:
         problem = bound_of(next(f for f in dc.fields(Drive) if f.name == field)).problem(value)
         if problem:
             p.error(f"--simulate: {field} {problem}")
-    path = Path(args.log or REPO / "out" / "simulated_drive_log.csv")
+    path = Path(args.log or Path("out") / "simulated_drive_log.csv")
     if args.simulate:
         scaling, slew = args.simulate
         print(f"simulating a log at motor_torque_scaling {scaling:g}, slew {slew:g} rad/s^2"

@@ -847,7 +847,7 @@ def blocks() -> list[Spec]:
                       '--override "plant_config: {discrete_contact_approximation: similar}" '
                       '--override "plant_config: {use_sampled_output_ports: false}" '
                       '--override "robots: {corobot: {contact: {resolution_hint: 0.007}}}" '
-                      '--override "world: {bodies: {giant_box: {hydroelastic_modulus: 0}}}" '
+                      '--override "world: {bodies: {giant_box: {fixed: true}}}" '
                       '--override "robots: {corobot: {drive: {control_period: 0.02}}}"'),),
              render_command_table, TIMING, 450),
         Spec("bench-full", "docs/performance.md",

@@ -62,7 +62,7 @@ def _parser() -> ToolParser:
     p.add_argument("--measure", type=bounded(Range(0.0, 60.0, low_open=True, unit="s")),
                    default=1.0, help="s averaged for the top speed")
     p.add_argument("--plot", type=output_file,
-                   default=str(REPO / "out" / "tune_motor_torque_scaling.png"),
+                   default="out/tune_motor_torque_scaling.png",
                    help="PNG: speed against time per iteration (or against scaling, --sweep)")
     p.add_argument("--write", action="store_true",
                    help="write the value into --scenario (only that number changes)")
@@ -71,7 +71,7 @@ def _parser() -> ToolParser:
     p.add_argument("--workers", type=bounded(WORKERS, int), default=None,
                    help="Ray workers for --sweep (None: the machine's cores)")
     p.add_argument("--out", type=output_directory,
-                   default=str(REPO / "out" / "motor_torque_scaling"),
+                   default="out/motor_torque_scaling",
                    help="the sweep study's output directory")
     return p
 

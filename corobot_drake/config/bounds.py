@@ -145,6 +145,8 @@ YAW_DEG = Range(*api.YAW_DEG, unit="deg")
 SET_POSITION = Range(*api.POSITION, unit="m")
 
 SHAPE_SIZE = Range(0.001, 100.0, unit="m", why="a shape's dimensions")
+MESH_SCALE = Range(1e-4, 1e4, why="from a file's units to metres (0.1 mm to 10 km units)")
+"""A mesh's scale; the scaled mesh must also be a shape's size across (`config/mesh_files.py`)."""
 ELLIPSOID_MAX_ASPECT = 4.0
 """A compliant ellipsoid's largest semi-axis over its smallest, at most. Its hydroelastic mesh
 is refined to a tenth of its smallest size (`station.py`) all over: its mesh took 0.2 s of CPU

@@ -8,11 +8,13 @@ embedded, one below the ground fell through it.
 
 import dataclasses as dc
 import logging
+import math
 
 import numpy as np
 from pydrake.geometry import (
     Box,
     Capsule,
+    Convex,
     Cylinder,
     Ellipsoid,
     FramePoseVector,
@@ -26,6 +28,9 @@ from pydrake.geometry import (
 from pydrake.math import RigidTransform, RollPitchYaw
 
 from corobot_drake.model import dimensions as dim
+
+GRAVITY = 9.81
+"""m/s^2: Drake's default gravity."""
 
 OVERLAP_TOLERANCE = 0.005
 """m: the deepest a start pose may overlap the ground or a body, so that a scene saved mid-run
@@ -70,23 +75,59 @@ def body_shape(shape):
         return Capsule(shape.radius, shape.length)
     if kind is sc.Ellipsoid:
         return Ellipsoid(shape.a, shape.b, shape.c)
+    if kind is sc.Mesh:  # its convex hull (the file was checked before: `mesh_files`)
+        from corobot_drake.resources import resolve_file
+
+        return Convex(resolve_file(shape.filename), shape.scale)
     return None  # a shape this check does not know: not checked
 
 
-def problems(scenario) -> list[Problem]:
-    """Every robot's start pose that overlaps the ground, a body or another robot by more
-    than OVERLAP_TOLERANCE, and every free body's that overlaps the ground (bodies may meet
-    each other, and fixed bodies sink into the ground, as a scene is built)."""
+def static_sink(body, max_sink: float) -> tuple[float, float, float]:
+    """How deep a free compliant world body sinks into the rigid ground under its weight at
+    rest, m (an estimate), its thickness, m, and the modulus, Pa, that would hold it within
+    `max_sink` of that. A hydroelastic pressure field grows from 0 at the surface to the modulus E
+    at the body's inner-most point, its half-thickness h in: a flat face of area A sinks
+    d = m g h / (E A); a round one (a sphere's cap) d = sqrt(m g / (pi E))."""
+    from corobot_drake.config import scenario as sc  # it imports the loader, which imports this
+
+    weight, shape, E = body.mass * GRAVITY, body.shape, body.hydroelastic_modulus
+    if isinstance(shape, sc.Box | sc.Mesh):
+        extents = sorted(_extents(shape))
+        h, area = extents[0] / 2, extents[0] * extents[1]
+        sink, thickness = weight * h / (E * area), 2 * h
+        return sink, thickness, weight * h / (area * max_sink * thickness)
+    thickness = (2 * min(shape.a, shape.b, shape.c) if isinstance(shape, sc.Ellipsoid)
+                 else 2 * shape.radius)
+    return (math.sqrt(weight / (math.pi * E)), thickness,
+            weight / (math.pi * (max_sink * thickness) ** 2))
+
+
+def _extents(shape) -> list[float]:
+    from corobot_drake.config import scenario as sc
+    from corobot_drake.config.mesh_files import check_mesh_file
+    from corobot_drake.resources import resolve_file
+
+    if isinstance(shape, sc.Box):
+        return list(shape.size)
+    info = check_mesh_file(resolve_file(shape.filename))  # checked before: a small file
+    return list((info.high - info.low) * shape.scale)
+
+
+def problems(scenario, models=()) -> list[Problem]:
+    """Every robot's start pose that overlaps the ground, a body, a model's body or another
+    robot by more than OVERLAP_TOLERANCE, and every free body's that overlaps the ground (bodies
+    may meet each other, and fixed bodies sink into the ground, as a scene is built).
+    `models`: the directives' collision shapes (`directives.ModelShape`)."""
     drake_log = logging.getLogger("drake")
     level = drake_log.level
     drake_log.setLevel(logging.ERROR)  # not its warning that half-spaces skip deformable contact
     try:
-        return _problems(scenario)
+        return _problems(scenario, models)
     finally:
         drake_log.setLevel(level)
 
 
-def _problems(scenario) -> list[Problem]:
+def _problems(scenario, models) -> list[Problem]:
     scene_graph = SceneGraph()
     source = scene_graph.RegisterSource("placement")
     props = ProximityProperties()
@@ -97,7 +138,7 @@ def _problems(scenario) -> list[Problem]:
     owner[ground] = _Owner("the ground", None, "ground")
 
     def add(name: str, path: str, X_WF, shapes, kind: str) -> None:
-        frame = scene_graph.RegisterFrame(source, GeometryFrame(name))
+        frame = scene_graph.RegisterFrame(source, GeometryFrame(f"{name} {len(poses)}"))
         poses[frame] = X_WF
         for shape_name, shape, X_FG in shapes:
             geometry = scene_graph.RegisterGeometry(
@@ -111,6 +152,9 @@ def _problems(scenario) -> list[Problem]:
             add(f"world body {name!r}", f"world.bodies.{name}.pose",
                 body.pose.GetDeterministicValue(), [("", shape, RigidTransform())],
                 "fixed body" if body.fixed else "free body")
+    for shape in models:
+        add(f"model body {shape.name!r}", shape.path, shape.X_WG, [("", shape.shape,
+            RigidTransform())], "fixed body" if shape.anchored else "free body")
     for name, robot in scenario.robots.items():
         add(f"robot {name!r}", f"robots.{name}.pose", robot.pose.GetDeterministicValue(),
             robot_shapes(), "robot")

@@ -77,19 +77,20 @@ class Mesh:
     """A path relative to the scenario file (an --override's: to the working directory), an
     absolute path or a `package://` URI (`package://corobot_drake/...`: the project's
     `models/`)."""
-    scale: float = 1.0
+    scale: float = bounded(1.0, lim.MESH_SCALE)
     """Uniform scale from the file's units to metres."""
     collision: str = "convex_hull"
     """`convex_hull`: contact with the mesh's convex hull (compliant hydroelastic, or point
     contact when `hydroelastic_modulus` is 0); `mesh`: with the mesh's own surface, rigid
-    hydroelastic (`hydroelastic_modulus` must be 0): the one way Drake takes a concave surface
-    into contact (its point contact uses the convex hull)."""
+    hydroelastic (`hydroelastic_modulus` must be 0; a fixed body only): the one way Drake takes
+    a concave surface into contact (its point contact uses the convex hull)."""
 
 
 MESH_COLLISIONS = ("convex_hull", "mesh")
-MESH_EXTENSIONS = (".obj", ".gltf", ".glb")
-"""The mesh files a world body may use: what Meshcat, the cameras' renderers and Drake's
-convex hull all read."""
+MESH_EXTENSIONS = (".obj", ".gltf")
+"""The mesh files a world body may use (any case): what Meshcat, the cameras' renderers and
+Drake's convex hull all read (not GLB: Drake 1.58 builds no convex hull from it);
+`config/mesh_files.py` checks them."""
 
 # typing.Union, not `|`: the YAML tags (!Box ...) are read from a Union's members.
 Shape = Union[Box, Sphere, Cylinder, Capsule, Ellipsoid, Mesh]  # noqa: UP007
@@ -120,7 +121,8 @@ class WorldBody:
     friction: float = bounded(0.5, lim.FRICTION)
     hydroelastic_modulus: float = bounded(1.0e7, lim.HYDROELASTIC_MODULUS)
     """Pa: the body is compliant-hydroelastic (a cheap contact patch on the ground and with
-    the tyres); 0 makes it rigid, touching everything by point contact."""
+    the tyres); 0 makes it rigid, touching everything by point contact: for a fixed body, or a
+    free sphere (point contact holds a free body on the ground at one point: a face sinks)."""
     color: list[float] = bounded(lambda: [0.75, 0.55, 0.3, 1.0], lim.COLOR, size=4)
 
 
@@ -394,6 +396,15 @@ def read_text(path: str | Path, *, kind: str = "a scenario is a YAML file",
     """A file's UTF-8 text (a scenario's, a study's, a log's: `kind` says what it should be);
     ScenarioError (one line) when it cannot be read, is not a regular file (a FIFO, a device:
     never waited on), is over `max_bytes` or not UTF-8."""
+    data = read_bytes(path, kind=kind, max_bytes=max_bytes)
+    return decode(str(path), data) if kind == "a scenario is a YAML file" else decode(
+        str(path), data, f"{kind}, in UTF-8")
+
+
+def read_bytes(path: str | Path, *, kind: str, max_bytes: int) -> bytes:
+    """A regular file's bytes, at most `max_bytes` (`kind`: what the file should be, for the
+    errors); ScenarioError (one line) for a file that cannot be read, is not a regular file
+    (a FIFO, a device, `/dev/zero`: refused before any read, never waited on) or is larger."""
     source = str(path)
     try:
         # O_NONBLOCK: opening a FIFO with no writer returns at once (then refused below).
@@ -407,16 +418,19 @@ def read_text(path: str | Path, *, kind: str = "a scenario is a YAML file",
                    else "a device" if stat.S_ISCHR(mode) or stat.S_ISBLK(mode)
                    else "a socket" if stat.S_ISSOCK(mode) else "a special file")
         raise ScenarioError(source, "", f"cannot read {special}; {kind}")
+    too_large = ScenarioError(source, "", f"the file is larger than {_size(max_bytes)}, the "
+                              f"most {kind.split(' is ')[0]} may be")
+    if os.fstat(fd).st_size > max_bytes:  # refused unread
+        os.close(fd)
+        raise too_large
     with os.fdopen(fd, "rb") as f:
         try:
             data = f.read(max_bytes + 1)
         except OSError as e:
             raise ScenarioError(source, "", f"cannot read the file ({e.strerror})") from None
-    if len(data) > max_bytes:
-        raise ScenarioError(source, "", f"the file is larger than {_size(max_bytes)}, the most "
-                            f"{kind.split(' is ')[0]} may be")
-    return decode(source, data) if kind == "a scenario is a YAML file" else decode(
-        source, data, f"{kind}, in UTF-8")
+    if len(data) > max_bytes:  # it grew since
+        raise too_large
+    return data
 
 
 def _size(n: int) -> str:

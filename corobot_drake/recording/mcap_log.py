@@ -24,10 +24,14 @@ class McapLog:
         self._writer = foxglove.open_mcap(self.path, allow_overwrite=True, context=self.context)
 
     def close(self) -> None:
-        """Finishes the file. Idempotent."""
+        """Finishes the file. Idempotent. OSError when it cannot be written (a full disk:
+        foxglove-sdk's writer reports it only here, as a RuntimeError)."""
         if self._writer is not None:
-            self._writer.close()
-            self._writer = None
+            writer, self._writer = self._writer, None
+            try:
+                writer.close()
+            except RuntimeError as e:
+                raise OSError(str(e).splitlines()[0]) from None
 
     def __enter__(self) -> "McapLog":
         return self

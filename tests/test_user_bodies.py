@@ -1,0 +1,299 @@
+"""Bodies of the user's own: world bodies and the directives' models rest on the ground and
+stay on it when the robot pushes them, at the coarsest and the default plant step; what the
+contact model cannot hold, and every bad model or mesh file, stops the load with one line."""
+
+import base64
+import json
+import math
+import os
+
+import numpy as np
+import pytest
+
+from conftest import make_sim
+from corobot_drake.config.bounds import MAX_TIME_STEP
+from corobot_drake.config.mesh_files import MAX_MESH_BYTES, MAX_MESH_TRIANGLES
+from corobot_drake.config.scenario import ScenarioError, load_scenario
+from corobot_drake.simulation import Simulation
+
+STEPS = [MAX_TIME_STEP, 0.01]
+"""The coarsest allowed plant step and the default: a rigid box sank through the ground at
+both (at 1 ms it held)."""
+SINK_TOLERANCE = 0.003
+"""m: how far a 2 kg, 0.2 m compliant box may sink or rock into the ground while pushed (the
+1e7 Pa patch under its weight is ~0.05 mm; pushed at 20 ms its lowest centre was 0.6 mm
+down). A box that sinks as the rigid ones did loses 8 cm to 50 cm."""
+
+CUBE_OBJ = "\n".join(
+    [f"v {x} {y} {z}" for x in (-0.1, 0.1) for y in (-0.1, 0.1) for z in (-0.1, 0.1)]
+    + ["vn 0 0 1"]
+    + [f"f {a}//1 {b}//1 {c}//1" for a, b, c in (
+        (1, 2, 4), (1, 4, 3), (5, 7, 8), (5, 8, 6), (1, 5, 6), (1, 6, 2),
+        (3, 4, 8), (3, 8, 7), (1, 3, 7), (1, 7, 5), (2, 6, 8), (2, 8, 4))]) + "\n"
+"""A 0.2 m cube centred on its origin."""
+
+CRATE_URDF = """<?xml version="1.0"?>
+<robot name="crate">
+  <link name="crate">
+    <inertial><mass value="{mass}"/>
+      <inertia ixx="{ixx}" ixy="0" ixz="0" iyy="0.0133" iyz="0" izz="0.0133"/></inertial>
+    <collision><geometry>{geometry}</geometry>{contact}</collision>
+  </link>
+</robot>
+"""
+BOX = '<box size="0.2 0.2 0.2"/>'
+
+
+def crate(tmp_path, mass="2.0", ixx="0.0133", geometry=BOX, contact="", name="crate.urdf"):
+    """A 0.2 m, 2 kg URDF crate (no hydroelastic properties unless `contact`), its path."""
+    path = tmp_path / name
+    path.write_text(CRATE_URDF.format(mass=mass, ixx=ixx, geometry=geometry, contact=contact))
+    return path
+
+
+def crate_directive(path, x=0.5) -> str:
+    return (f"directives: [{{add_model: {{name: crate, file: 'file://{path}', "
+            f"default_free_body_pose: {{crate: {{translation: [{x}, 0.0, 0.1]}}}}}}}}]")
+
+
+def lowest_height(sim: Simulation, body, seconds: float) -> tuple[float, float]:
+    """The body's lowest centre height over `seconds` (sampled every 0.05 s) and its final x."""
+    plant, lowest = sim.station.plant, math.inf
+    end = sim.time + seconds
+    while sim.time < end - 1e-9:
+        sim.advance(0.05)
+        X = plant.EvalBodyPoseInWorld(plant.GetMyContextFromRoot(sim.context), body)
+        lowest = min(lowest, X.translation()[2])
+    return lowest, X.translation()[0]
+
+
+PUSH = "robots: {corobot: {commands: [!SetPower {left: 0.5, right: 0.5}]}}"
+
+
+@pytest.mark.parametrize("step", STEPS)
+def test_a_pushed_box_stays_on_the_ground(step):
+    """A compliant world box in front of the robot, pushed at power 0.5 for 3 s."""
+    sim = make_sim(f"plant_config: {{time_step: {step}}}", PUSH,
+                   "world: {bodies: {crate: {shape: !Box {size: [0.2, 0.2, 0.2]}, mass: 2.0, "
+                   "pose: {translation: [0.5, 0.0, 0.1]}}}}")
+    lowest, x = lowest_height(sim, sim.station.bodies["crate"], 3.0)
+    assert x > 0.52  # it was pushed
+    assert lowest > 0.1 - SINK_TOLERANCE
+
+
+@pytest.mark.parametrize("step", STEPS)
+def test_a_pushed_urdf_crate_stays_on_the_ground(tmp_path, step):
+    """A model without hydroelastic properties: its free body touches as a world body does
+    (compliant), not by point contact, which let it sink through the ground."""
+    sim = make_sim(f"plant_config: {{time_step: {step}}}", PUSH,
+                   crate_directive(crate(tmp_path)))
+    body = sim.station.plant.GetBodyByName("crate", sim.station.models["crate"])
+    lowest, _ = lowest_height(sim, body, 3.0)
+    assert lowest > 0.1 - SINK_TOLERANCE
+
+
+def test_a_mesh_body_rests_and_obj_in_capitals_loads(tmp_path):
+    """A free `!Mesh` cube (convex hull, compliant) at rest at the coarsest step, its file
+    named `.OBJ`; the camera on (the renderer reads the file too)."""
+    (tmp_path / "CUBE.OBJ").write_text(CUBE_OBJ)
+    sim = make_sim(f"plant_config: {{time_step: {MAX_TIME_STEP}}}",
+                   f"world: {{bodies: {{m: {{shape: !Mesh {{filename: '{tmp_path}/CUBE.OBJ'}}, "
+                   "mass: 2.0, pose: {translation: [0.8, 0.8, 0.1]}}}}", camera=True)
+    lowest, _ = lowest_height(sim, sim.station.bodies["m"], 2.0)
+    assert lowest > 0.1 - SINK_TOLERANCE
+    assert sim.robot().camera_image() is not None
+
+
+@pytest.mark.parametrize("override, message", [
+    ("world: {bodies: {b: {shape: !Box {size: [0.2, 0.2, 0.2]}, hydroelastic_modulus: 0, "
+     "pose: {translation: [0.5, 0, 0.1]}}}}",
+     r"world\.bodies\.b\.hydroelastic_modulus: a free rigid Box touches the rigid ground at a "
+     r"single point .* give it a modulus"),
+    ("world: {bodies: {giant_box: {hydroelastic_modulus: 0}}}",
+     r"world\.bodies\.giant_box\.hydroelastic_modulus: a free rigid Box"),
+    ("world: {bodies: {b: {mass: 20, hydroelastic_modulus: 1e4, shape: !Box {size: [0.2, 0.2, "
+     "0.2]}, pose: {translation: [0.5, 0, 0.1]}}}}",
+     r"world\.bodies\.b\.hydroelastic_modulus: too soft for its mass: it would sink ~49 mm"),
+])
+def test_bodies_the_contact_cannot_hold_are_refused(override, message):
+    with pytest.raises(ScenarioError, match=rf"^--override:1: {message}"):
+        make_sim(override)
+
+
+def test_a_free_surface_mesh_is_refused_a_fixed_one_is_not(tmp_path):
+    (tmp_path / "cube.obj").write_text(CUBE_OBJ)
+    body = (f"world: {{bodies: {{m: {{shape: !Mesh {{filename: '{tmp_path}/cube.obj', "
+            "collision: mesh}, hydroelastic_modulus: 0, pose: {translation: [0.8, 0.8, 0.1]}")
+    with pytest.raises(ScenarioError, match=r"m\.shape\.collision: a surface mesh touches "
+                       r"rigidly, and a free rigid body .* make the body fixed"):
+        make_sim(body + "}}}")
+    make_sim(body + ", fixed: true}}}")
+
+
+def test_a_rigid_sphere_rolls_on_the_ground():
+    """The one free rigid shape point contact holds: pushed, it rolls away on the ground."""
+    sim = make_sim(f"plant_config: {{time_step: {MAX_TIME_STEP}}}", PUSH,
+                   "world: {bodies: {ball: {shape: !Sphere {radius: 0.1}, "
+                   "hydroelastic_modulus: 0, pose: {translation: [0.5, 0, 0.1]}}}}")
+    lowest, x = lowest_height(sim, sim.station.bodies["ball"], 3.0)
+    assert x > 0.6
+    assert lowest > 0.1 - SINK_TOLERANCE
+
+
+# --- the directives' models, checked as world bodies are ----------------------------------
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    ({"mass": "0"}, r".*crate\.urdf:4: a mass or inertia no body has \(mass > 0 failed\)"),
+    ({"mass": "-1"}, r".*crate\.urdf:4: a mass or inertia no body has \(mass > 0 failed\)"),
+    ({"mass": "nan"}, r".*crate\.urdf:4: error: Expected single value for attribute 'value'"),
+    ({"ixx": "nan"}, r".*crate\.urdf:5: error: Expected single value for attribute 'ixx'"),
+    ({"ixx": "-0.1"}, r".*crate\.urdf:4: a mass or inertia no body has"),
+    ({"ixx": "0"}, r"crate::crate: a free body needs a rotational inertia > 0 about every axis"),
+    ({"contact": "<drake:proximity_properties><drake:rigid_hydroelastic/>"
+      "</drake:proximity_properties>"}, r"crate::crate: a free body with a rigid hydroelastic "
+     r"shape touches the rigid ground at a single point"),
+])
+def test_bad_model_bodies_are_refused(tmp_path, kwargs, message):
+    with pytest.raises(ScenarioError, match=rf"^--override:1: directives(\[0\]\.add_model)?: "
+                       rf"{message}"):
+        load_scenario(None, overrides=[crate_directive(crate(tmp_path, **kwargs))])
+
+
+def test_a_model_and_a_robot_may_not_start_inside_each_other(tmp_path):
+    path = crate(tmp_path)
+    with pytest.raises(ScenarioError, match=r"^--override:1: directives\[0\]\.add_model: robot "
+                       r"'corobot' starts \d+ mm inside model body 'crate::crate'"):
+        make_sim(crate_directive(path, x=0.1))
+    with pytest.raises(ScenarioError, match=r"^--override:1: robots\.corobot\.pose: robot "
+                       r"'corobot' starts \d+ mm inside model body 'crate::crate'"):
+        make_sim(crate_directive(path, x=1.0),
+                 "robots: {corobot: {pose: {translation: [0.95, 0, 0]}}}")
+
+
+def special_files(tmp_path):
+    fifo = tmp_path / "fifo.obj"
+    os.mkfifo(fifo)
+    zero = tmp_path / "zero.obj"
+    zero.symlink_to("/dev/zero")
+    return {"a FIFO": fifo, "a device": zero}
+
+
+def test_special_model_and_mesh_files_are_refused_unread(tmp_path):
+    """A FIFO with no writer (it would block) and /dev/zero (endless): refused at once."""
+    for kind, path in special_files(tmp_path).items():
+        with pytest.raises(ScenarioError, match=rf"directives\[0\]\.add_model\.file: {path}: "
+                           rf"cannot read {kind}"):
+            load_scenario(None, overrides=[
+                f"directives: [{{add_model: {{name: m, file: 'file://{path}'}}}}]"])
+        with pytest.raises(ScenarioError, match=rf"directives\[0\]\.add_model\.file: .*crate"
+                           rf"\.urdf: mesh '{path}': cannot read {kind}"):
+            load_scenario(None, overrides=[crate_directive(crate(
+                tmp_path, geometry=f'<mesh filename="{path}"/>'))])
+        with pytest.raises(ScenarioError, match=rf"world\.bodies\.m\.shape\.filename: {path}: "
+                           rf"cannot read {kind}"):
+            make_sim(f"world: {{bodies: {{m: {{shape: !Mesh {{filename: '{path}'}}}}}}}}")
+
+
+def test_a_directives_file_that_includes_itself_is_refused(tmp_path):
+    (tmp_path / "a.yaml").write_text(
+        f"directives: [{{add_directives: {{file: 'file://{tmp_path}/b.yaml'}}}}]\n")
+    (tmp_path / "b.yaml").write_text(
+        f"directives: [{{add_directives: {{file: 'file://{tmp_path}/a.yaml'}}}}]\n")
+    with pytest.raises(ScenarioError, match=r"directives\[0\]\.add_directives\.file: .*a\.yaml: "
+                       r"a directives file includes itself \(a\.yaml -> b\.yaml -> a\.yaml\)"):
+        load_scenario(None, overrides=[
+            f"directives: [{{add_directives: {{file: 'file://{tmp_path}/a.yaml'}}}}]"])
+
+
+def gltf(vertices, indices, glb=False) -> bytes:
+    """A glTF 2.0 mesh of `vertices` (n x 3) and triangle `indices`: JSON with its buffer in
+    a data URI, or GLB."""
+    blob = np.asarray(vertices, "<f4").tobytes() + np.asarray(indices, "<u2").tobytes()
+    n, m = len(vertices), len(indices)
+    document = {
+        "asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],
+        "nodes": [{"mesh": 0}], "meshes": [{"primitives": [
+            {"attributes": {"POSITION": 0}, "indices": 1}]}],
+        "buffers": [{"byteLength": len(blob)}],
+        "bufferViews": [{"buffer": 0, "byteLength": 12 * n},
+                        {"buffer": 0, "byteOffset": 12 * n, "byteLength": 2 * m}],
+        "accessors": [{"bufferView": 0, "componentType": 5126, "count": n, "type": "VEC3"},
+                      {"bufferView": 1, "componentType": 5123, "count": m, "type": "SCALAR"}]}
+    if not glb:
+        document["buffers"][0]["uri"] = ("data:application/octet-stream;base64,"
+                                         + base64.b64encode(blob).decode())
+        return json.dumps(document).encode()
+    text = json.dumps(document).encode().ljust(-(-len(json.dumps(document)) // 4) * 4)
+    blob = blob.ljust(-(-len(blob) // 4) * 4, b"\0")
+    chunks = (len(text).to_bytes(4, "little") + b"JSON" + text
+              + len(blob).to_bytes(4, "little") + b"BIN\0" + blob)
+    return b"glTF" + (2).to_bytes(4, "little") + (12 + len(chunks)).to_bytes(4, "little") + chunks
+
+
+CORNERS = [[x, y, z] for x in (-0.1, 0.1) for y in (-0.1, 0.1) for z in (-0.1, 0.1)]
+TRIANGLES = [0, 1, 3, 0, 3, 2, 4, 6, 7, 4, 7, 5, 0, 4, 5, 0, 5, 1,
+             2, 3, 7, 2, 7, 6, 0, 2, 6, 0, 6, 4, 1, 5, 7, 1, 7, 3]
+
+
+def bad_meshes(tmp_path) -> dict:
+    """{file name: (content, the error's text)}."""
+    many = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\n" + "f 1 2 3\n" * (MAX_MESH_TRIANGLES + 1)
+    nan = [[math.nan, 0, 0], *CORNERS[1:]]
+    return {
+        "nofaces.obj": ("v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\n", "has no faces"),
+        "nan.obj": (CUBE_OBJ.replace("v -0.1 -0.1 -0.1", "v nan 0 0"), "not a finite number"),
+        "many.obj": (many, f"more than {MAX_MESH_TRIANGLES} triangles"),
+        "badindex.obj": ("v 0 0 0\nvn 0 0 1\nf 1 2 3\n", "a face names vertex 2"),
+        "nonormals.obj": (CUBE_OBJ.replace("vn 0 0 1\n", "").replace("//1", ""),
+                          r"no vertex normals \(vn\)"),
+        "bad.gltf": (b"{not json", "not a glTF file"),
+        "truncated.gltf": (gltf(CORNERS, TRIANGLES)[:-20] + b'"}]}', "not a glTF file"),
+        "nan.gltf": (gltf(nan, TRIANGLES), "not a finite number"),
+        "empty.glb": (gltf(CORNERS, [], glb=True), "has no faces"),
+        "bad.glb": (b"glTF" + b"\0" * 30, "not a glTF 2.0 binary file"),
+        "nan.glb": (gltf(nan, TRIANGLES, glb=True), "not a finite number"),
+    }
+
+
+def test_bad_meshes_are_refused_with_one_line(tmp_path):
+    for name, (content, message) in bad_meshes(tmp_path).items():
+        path = tmp_path / name
+        (path.write_bytes if isinstance(content, bytes) else path.write_text)(content)
+        world = ("a mesh file is one of .obj, .gltf" if name.endswith(".glb")  # Drake's hull
+                 else message)
+        with pytest.raises(ScenarioError, match=rf"world\.bodies\.m\.shape\.filename: {path}: "
+                           rf".*{world}"):
+            make_sim(f"world: {{bodies: {{m: {{shape: !Mesh {{filename: '{path}'}}}}}}}}")
+        with pytest.raises(ScenarioError, match=rf"directives\[0\]\.add_model\.file: .*: mesh "
+                           rf"'{path}': .*{message}"):
+            load_scenario(None, overrides=[crate_directive(crate(
+                tmp_path, geometry=f'<mesh filename="{path}"/>'))])
+
+
+def test_a_good_gltf_mesh_loads_and_rests(tmp_path):
+    (tmp_path / "cube.gltf").write_bytes(gltf(CORNERS, TRIANGLES))
+    sim = make_sim(f"world: {{bodies: {{m: {{shape: !Mesh {{filename: '{tmp_path}/cube.gltf'}}, "
+                   "pose: {translation: [0.8, 0.8, 0.1]}}}}")
+    sim.advance(0.5)
+    assert sim.summary()["bodies"]["m"]["pose"]["z"] == pytest.approx(0.1, abs=1e-3)
+
+
+def test_a_large_sparse_mesh_is_refused_by_its_size_unread(tmp_path):
+    path = tmp_path / "huge.obj"
+    with open(path, "wb") as f:
+        f.truncate(512 << 20)  # sparse: no disk used
+    with pytest.raises(ScenarioError, match=rf"{path}: the file is larger than "
+                       rf"{MAX_MESH_BYTES >> 20} MiB"):
+        make_sim(f"world: {{bodies: {{m: {{shape: !Mesh {{filename: '{path}'}}}}}}}}")
+
+
+@pytest.mark.parametrize("scale, message", [
+    ("1e-5", r"scale: must be in \[0\.0001, 10000\]"),
+    ("1000", r"scale: scaled, the mesh is 200 m across"),
+])
+def test_a_mesh_scale_outside_its_range_is_refused(tmp_path, scale, message):
+    (tmp_path / "cube.obj").write_text(CUBE_OBJ)
+    with pytest.raises(ScenarioError, match=rf"world\.bodies\.m\.shape\.{message}"):
+        make_sim(f"world: {{bodies: {{m: {{shape: !Mesh {{filename: '{tmp_path}/cube.obj', "
+                 f"scale: {scale}}}}}}}}}")
