@@ -416,6 +416,15 @@ OVERRIDES = [
     _ir("threshold inf", "{change_threshold: .inf}", "change_threshold", "got inf"),
     _ir("mount inf", "{X_PB: {translation: [.inf, 0, 0]}}", "X_PB.translation[0]", "got inf"),
     _robot("sensor name", "{ir_sensors: {a.b: {}}}", "ir_sensors.a.b", "without '.'"),
+    # directives Drake's parser would crash on, or take a NaN pose from
+    _override("empty add_frame", "directives: [{add_frame: {}}]", "directives[0].add_frame.name",
+              "must not be empty"),
+    _override("empty add_model", "directives: [{add_model: {}}]", "directives[0].add_model.file",
+              "needs the model's URI"),
+    _override("frame at inf", "directives: [{add_frame: {name: f, X_PF: {base_frame: world, "
+              "translation: [0, 0, .inf]}}}]", "directives[0].add_frame.X_PF", "finite pose"),
+    _override("two kinds", "directives: [{add_frame: {name: f, X_PF: {base_frame: world}}, "
+              "add_model_instance: {name: m}}]", "directives[0]", "exactly one of"),
 ]
 
 HAND_WRITTEN = FILES + READS + OVERRIDES

@@ -119,7 +119,49 @@ class _DrakeWarnings(logging.Handler):
         log.level, log.propagate = self._saved
 
 
+REQUIRED = {
+    "add_model": ("file", "name"),
+    "add_model_instance": ("name",),
+    "add_frame": ("name",),
+    "add_weld": ("parent", "child"),
+    "add_collision_filter_group": ("name",),
+    "add_directives": ("file",),
+}
+"""What each kind of directive must name (Drake checks these with an assertion, or not at all:
+an empty `add_frame` or `add_model` crashed the parser)."""
+
+
+def directive_problem(directive) -> tuple[str, str] | None:
+    """(field, what is wrong) when a directive is not exactly one kind with its names given."""
+    kinds = [k for k in REQUIRED if getattr(directive, k) is not None]
+    if len(kinds) != 1:
+        return "", (f"needs exactly one of {', '.join(REQUIRED)}; got "
+                    f"{', '.join(kinds) or 'none'}")
+    (kind,) = kinds
+    value = getattr(directive, kind)
+    for name in REQUIRED[kind]:
+        if not getattr(value, name):
+            return f".{kind}.{name}", "must not be empty"
+    if kind == "add_frame" and not value.X_PF.base_frame:
+        return f".{kind}.X_PF.base_frame", "must name the frame the new frame is fixed to"
+    for name in ("X_PF", "X_PC"):
+        transform = getattr(value, name, None)
+        if transform is not None and not _finite_pose(transform):
+            return f".{kind}.{name}", "must be a finite pose (a translation in m, a rotation)"
+    return None
+
+
+def _finite_pose(transform) -> bool:
+    try:
+        return bool(np.isfinite(transform.GetDeterministicValue().GetAsMatrix4()).all())
+    except Exception:  # a random pose, or a rotation Drake cannot make
+        return False
+
+
 def _check_files(directive, path: str, base: Path, chain: tuple[Path, ...]) -> None:
+    problem = directive_problem(directive)
+    if problem is not None:
+        raise DirectiveError(path + problem[0], problem[1])
     for field, check in (("add_model", _check_model_file), ("add_directives", _check_included)):
         value = getattr(directive, field)
         if value is None:
