@@ -535,6 +535,11 @@ class LayerChecks:
         (empty, or a full vector)."""
         if len(robot.axle_speed_command) not in (0, 2):
             self.fail(f"{path}.axle_speed_command", "needs [] or 2 numbers [left, right]")
+        if len(robot.wheel_hold_angles) not in (0, 4):
+            self.fail(f"{path}.wheel_hold_angles", "needs [] or 4 angles (rad)")
+        if len(robot.odometry) not in (0, 3, 5):
+            self.fail(f"{path}.odometry", "needs [], [x, y, yaw] or [x, y, yaw, left ticks, "
+                      "right ticks]")
         window = max(1, round(SEED_WINDOW / robot.drive.control_period))
         for i, cmd in enumerate(robot.commands):
             if not isinstance(cmd, sc.DriveDistance | sc.RotateDegrees):

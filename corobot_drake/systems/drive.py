@@ -418,7 +418,8 @@ class DriveController(LeafSystem):
     Output `drive_status` (5, `DriveStatus`: read it by name).
     Output `axle_speed` [front_left, front_right, rear_left, rear_right] measured, rad/s.
     Discrete state, updated every `drive.control_period` s: the seq of the last request acted
-    on, the `DriveStatus` and the slewed axle speeds (and the desired state made from them).
+    on, the `DriveStatus`, the slewed axle speeds (and the desired state made from them) and
+    the wheels' hold angles.
     A new request sets the enable level and (when enabled) the motion target; disabled,
     everything is held at zero; the axle speeds then move towards the targets by at most
     `drive.slew_rate * drive.control_period`, or jump to them for a request marked
@@ -553,6 +554,17 @@ class DriveController(LeafSystem):
         context = self.GetMyContextFromRoot(root_context)
         return ([float(v) for v in context.get_discrete_state(self._status).get_value()[
             _TARGETS]], [float(v) for v in context.get_discrete_state(self._axle).get_value()])
+
+    def hold_angles(self, root_context) -> list[float]:
+        """rad, per wheel (`dimensions.WHEEL_NAMES` order): where the hold keeps each wheel
+        while it rests (a wheel not held: its angle at the last update)."""
+        context = self.GetMyContextFromRoot(root_context)
+        return [float(a) for a in context.get_discrete_state(self._hold_angle).get_value()]
+
+    def SetHoldAngles(self, context, angles) -> None:
+        """Sets the hold angles (rad, per wheel): an initial condition (a saved scene; the
+        wheels' own angles when none is given). `context` is this system's."""
+        context.SetDiscreteState(self._hold_angle, np.asarray(angles, dtype=float))
 
     def Halt(self, context) -> None:
         """Stops the wheels at once (powers, targets and slewed axle speeds to 0): what a
