@@ -274,8 +274,10 @@ class Robot:
     def continuation_commands(self) -> list:
         """Commands that carry on from now: the enable level, the running command (a
         DriveDistance/RotateDegrees carried on from where it is, the last
-        SetPower/SetSpeed/SetVelocity, or an AllStop while the drive slews down to 0), then the
-        script's unissued rest (after what is left of a running Wait)."""
+        SetPower/SetSpeed/SetVelocity, or an AllStop while the drive slews down to 0, also
+        one not yet taken), then the script's unissued rest (after what is left of a running
+        Wait, or a Wait of 0 s when it is due: it then starts at the update the saved run's
+        would have)."""
         root = self._sim.context
         source, motion = self._parts.command_source, self._parts.motion
         state = source.current_state(source.GetMyContextFromRoot(root))
@@ -287,7 +289,8 @@ class Robot:
             commands.append(state.request.command)
         else:
             target, commanded = self._parts.drive_controller.speeds(root)
-            if not any(target) and any(commanded):
+            stopping = isinstance(state.request.command, sc.AllStop)  # maybe not yet taken
+            if (stopping or not any(target)) and any(commanded):
                 # Slewing down to 0 (an AllStop, an ended command): the reloaded drive starts
                 # from the commanded speeds and must stop, not hold them.
                 commands.append(sc.AllStop())
@@ -295,6 +298,10 @@ class Robot:
         if state.next_script_index < len(script):
             if state.script_blocked_until > self._sim.time:
                 commands.append(sc.Wait(state.script_blocked_until - self._sim.time))
+            elif remaining is None:
+                # Due now: the source issues it at its next update (also one at this very
+                # instant, not yet run), not with what is carried on at the start.
+                commands.append(sc.Wait(0.0))
             commands += script[state.next_script_index:]
         return commands
 

@@ -227,7 +227,10 @@ class Enable:
 
 @dc.dataclass
 class Wait:
-    """Let the previous command run for this long (s) before the next one."""
+    """Let the previous command run for this long (s) before the next one. 0 s: the next one
+    is issued at the next control update (not with the commands before it when the
+    simulation starts: what a saved scene writes before a script's rest that is due), and
+    the log records no Wait."""
 
     seconds: float = bounded(1.0, lim.DURATION)
 

@@ -312,7 +312,9 @@ class CommandSource(LeafSystem):
             self._set_state(state, current)
 
     def _initialize(self, context, state):
-        """The script's commands up to its first Wait or completing command, at once."""
+        """The script's commands up to its first Wait (even of 0 s: what follows it is
+        issued at an update, as a saved scene's rest was going to be) or completing command,
+        at once."""
         original = current = self.get_state(context)
         script, now = self.script(context), context.get_time()
         while True:
@@ -322,6 +324,8 @@ class CommandSource(LeafSystem):
             # Handed to the drive at this instant, as at an update (and so the tail that
             # `_with_ended` looks at never holds more than the last few running commands).
             current = self._with_ended(issued, now)
+            if isinstance(script[issued.next_script_index - 1], Wait):
+                break
         if current is not original:
             self._set_state(state, current)
 
@@ -334,7 +338,9 @@ class CommandSource(LeafSystem):
         command = script[current.next_script_index]
         current = dc.replace(current, next_script_index=current.next_script_index + 1)
         if isinstance(command, Wait):
-            log = _bounded([*current.log, CommandRecord(seq=0, command="Wait", start_time=now)])
+            log = current.log
+            if command.seconds > 0:  # a 0 s Wait only defers the rest to an update: no record
+                log = _bounded([*log, CommandRecord(seq=0, command="Wait", start_time=now)])
             return dc.replace(current, script_blocked_until=now + command.seconds, log=log)
         current = self._with_command(current, command, now)
         completing = isinstance(command, COMPLETING_COMMANDS)
