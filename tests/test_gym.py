@@ -232,6 +232,11 @@ def test_a_config_out_of_range_is_refused_before_anything_is_built(overrides, me
     assert "\n" not in str(refused.value)
 
 
+def test_a_config_that_is_not_one_is_refused():
+    with pytest.raises(ValueError, match="config: must be a GoToGoalConfig; got"):
+        GoToGoalEnv({"boxes": 2})
+
+
 def test_the_goal_clearance_bound_is_where_goals_run_out():
     """Under the bound (less a margin) every seed finds a goal; over it no goal exists, and
     `draw_layout` given such a config unchecked says so instead of drawing forever. With

@@ -54,6 +54,8 @@ corner)."""
 
 def make_config(config, overrides: dict):
     """`config` with `overrides` (field names of `GoToGoalConfig`), checked (`check_config`)."""
+    if not dc.is_dataclass(config) or isinstance(config, type):
+        raise ValueError(f"config: must be a GoToGoalConfig; got {reprlib.repr(config)}")
     names = {f.name for f in dc.fields(config)}
     unknown = sorted(set(overrides) - names)
     if unknown:
