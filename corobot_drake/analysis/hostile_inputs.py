@@ -317,7 +317,7 @@ OVERRIDES = [
     _override("robot named like a body", "robots: {giant_box: {pose: {translation: [2, 0, 0]}}}",
               "robots.giant_box", "a world body already has this name"),
     _override("robot name with ::", "robots: {'a::b': {pose: {translation: [2, 0, 0]}}}",
-              "robots.a::b", "without :: or /"),
+              "robots.a::b", "a URL path segment"),
     _robot("wheel speed 1e9", "{wheel_speeds: [1e9, 0, 0, 0]}", "wheel_speeds[0]",
            "[-200, 200] rad/s"),
     _robot("wheel speeds short", "{wheel_speeds: [0, 0]}", "wheel_speeds", "needs 4 numbers"),
@@ -415,7 +415,10 @@ OVERRIDES = [
     _ir("noise", "{noise_std: -1}", "noise_std", "[0, 10] V"),
     _ir("threshold inf", "{change_threshold: .inf}", "change_threshold", "got inf"),
     _ir("mount inf", "{X_PB: {translation: [.inf, 0, 0]}}", "X_PB.translation[0]", "got inf"),
-    _robot("sensor name", "{ir_sensors: {a.b: {}}}", "ir_sensors.a.b", "without '.'"),
+    _robot("sensor name", "{ir_sensors: {a.b: {}}}", "ir_sensors.a.b",
+           "a sensor name must be letters, digits"),
+    _override("robot name with ?", "robots: {'a?b': {pose: {translation: [2, 0, 0]}}}",
+              "robots.a?b", "a URL path segment"),
 ]
 
 HAND_WRITTEN = FILES + READS + OVERRIDES
