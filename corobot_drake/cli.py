@@ -69,10 +69,10 @@ def _parser() -> argparse.ArgumentParser:
                    help="--serve: TCP port (default 50000; 0 picks a free one)")
     p.add_argument("--host", default="127.0.0.1",
                    help="--serve, --foxglove: address to listen on (default 127.0.0.1, "
-                   "loopback only; --serve anywhere else needs a token, docs/services.md)")
+                   "loopback only; anywhere else needs a token, docs/services.md)")
     p.add_argument("--token", default=None,
-                   help="--serve: the bearer token clients must send (default: none on "
-                   "loopback; off loopback one is generated and printed)")
+                   help="--serve, --foxglove: the token clients must send (default: none on "
+                   "loopback; off loopback one is generated and printed; both servers share it)")
     p.add_argument("--save-camera", metavar="DIR",
                    help="write each robot's camera frames as PNG: "
                    "DIR/<robot>/frame_000000.png, ...")
@@ -207,6 +207,19 @@ def check_outputs(args) -> None:
                 raise ArgumentError(f"--{dest.replace('_', '-')}: {value}: {problem}")
 
 
+def shared_token(args) -> str | None:
+    """The token --serve and --foxglove ask for (`serving.security.Access.for_host`): --token;
+    else none on loopback; else one made here, so that both servers on --host share it."""
+    from corobot_drake.serving.security import Access
+
+    if not args.serve and args.foxglove is None:
+        return args.token
+    try:
+        return Access.for_host(args.host, args.token).token
+    except ValueError as e:
+        raise ArgumentError(str(e)) from None  # "--token must not be empty"
+
+
 def check_arguments(args) -> None:
     """The command line's numbers within their bounds and its outputs writable."""
     if args.duration is not None:
@@ -296,13 +309,18 @@ class _FoxgloveSinks(contextlib.ExitStack):
 
         from corobot_drake.recording.foxglove_live import FoxgloveLive
         from corobot_drake.recording.mcap_log import McapLog
+        from corobot_drake.serving.security import is_loopback
 
         self.context = foxglove.Context()
         if args.foxglove is not None:  # first: a taken port leaves no file behind
-            live = self.enter_context(FoxgloveLive(args.foxglove, args.host, self.context))
+            live = self.enter_context(FoxgloveLive(args.foxglove, args.host, self.context,
+                                                   token=args.token))
             # stderr: --serve's first stdout line is its URL (scripts read it)
             print(f"Foxglove: {live.url}  (Foxglove: Open connection > Foxglove WebSocket)",
                   file=sys.stderr, flush=True)
+            if not is_loopback(args.host):
+                print(f"warning: Foxglove on {args.host}: anyone who can reach it and has the "
+                      "token sees every topic", file=sys.stderr, flush=True)
         if args.mcap is not None:
             log = McapLog(args.mcap, self.context)
             self.callback(self._finish, log)
@@ -365,6 +383,7 @@ def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     try:
         check_arguments(args)
+        args.token = shared_token(args)
         scenario = load_scenario(scenario_path(args.scenario), overrides=args.override)
     except (ArgumentError, ScenarioError) as e:
         print(f"error: {e}", file=sys.stderr)

@@ -8,10 +8,10 @@ needs its extra. A front end used without it stops with one line naming the extr
 import importlib.util
 
 EXTRAS = {
-    "serve": ("fastapi", "uvicorn", "httpx", "pydantic", "starlette", "fastapi_offline"),
+    "serve": ("fastapi", "uvicorn", "httpx", "pydantic", "starlette", "fastapi_offline", "h11"),
     "study": ("ray", "tqdm", "matplotlib"),
     "gym": ("gymnasium", "ray", "tqdm", "matplotlib"),
-    "record": ("foxglove",),
+    "record": ("foxglove", "websockets"),
 }
 """{extra: the top-level modules it brings}."""
 

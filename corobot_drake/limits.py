@@ -9,6 +9,7 @@ No Drake import here (the HTTP process and `serving.client` read it).
 from __future__ import annotations
 
 import math
+import reprlib
 
 POWER = (-1.0, 1.0)
 """set_power: power per side."""
@@ -50,13 +51,18 @@ def number(name: str, value, low: float = -math.inf, high: float = math.inf, *,
     also finite); otherwise ValueError naming `name`, the allowed range and the value.
     Booleans are not numbers here (True is not a power)."""
     allowed = _describe(low, high, low_open, finite)
-    if isinstance(value, bool) or (not isinstance(value, int | float) and not hasattr(
-            value, "__float__")):
-        raise ValueError(f"{name} must be {allowed}, got {value!r}")
-    x = float(value)
+    # Not a number: a bool (True is not a power), a string, an array (even of one element:
+    # numpy would make it a float, hiding a caller's mix-up).
+    if isinstance(value, bool) or getattr(value, "ndim", 0) != 0 or (
+            not isinstance(value, int | float) and not hasattr(value, "__float__")):
+        raise ValueError(f"{name} must be {allowed}, got {reprlib.repr(value)}")
+    try:
+        x = shown = float(value)
+    except OverflowError:  # an int beyond any float: outside every finite range
+        x, shown = (math.inf if value > 0 else -math.inf), reprlib.repr(value)
     inside = (low < x if low_open else low <= x) and x <= high
     if not inside or (finite and not math.isfinite(x)):
-        raise ValueError(f"{name} must be {allowed}, got {x!r}")
+        raise ValueError(f"{name} must be {allowed}, got {shown}")
     return x
 
 

@@ -12,8 +12,10 @@ All of a run's memory is in the Drake Context, so two runs of one scenario agree
 import collections
 import copy
 import dataclasses as dc
+import functools
 import logging
 import math
+import threading
 import time
 import typing
 from pathlib import Path
@@ -45,6 +47,29 @@ from corobot_drake.station import RobotParts, Station, build_station
 from corobot_drake.systems.drive import CommandRecord, DriveStatus, check_finite
 from corobot_drake.systems.odometry import DriveState
 from corobot_drake.systems.runlog import COLUMNS, RUN_LOG_CHUNK, log_rows, write_csv
+
+MIN_RUN_CHUNK = 1e-4
+"""s: the shortest chunk `Simulation.run` advances by (a smaller one is refused: at 1e-300 s
+the time never moved and `run` never ended)."""
+
+
+def _one_thread(method):
+    """`method` (of a Simulation or a Robot) run holding its Simulation's lock; RuntimeError
+    at once if another thread holds it. A Drake Context is not thread-safe: two threads
+    advancing one simulation corrupt its time and state."""
+
+    @functools.wraps(method)
+    def guarded(self, *args, **kwargs):
+        lock = getattr(self, "_sim", self)._thread_lock
+        if not lock.acquire(blocking=False):
+            raise RuntimeError(f"{method.__name__}: another thread is advancing or commanding "
+                               "this Simulation; use it from one thread at a time")
+        try:
+            return method(self, *args, **kwargs)
+        finally:
+            lock.release()
+
+    return guarded
 
 
 class CommandHandle:
@@ -120,6 +145,7 @@ class Robot:
         self.name = parts.name
 
     # --- commands -------------------------------------------------------------------------
+    @_one_thread
     def issue(self, command) -> int:
         """Issues a scenario command dataclass now; returns its sequence number. ValueError
         (naming the allowed range) for a command the API does not take or an argument out of
@@ -175,6 +201,7 @@ class Robot:
         _check_timeout(timeout)
         return self.rotate_degrees_async(degrees, power).wait(timeout)
 
+    @_one_thread
     def set_pose(self, x: float, y: float, yaw_deg: float = 0.0) -> CommandHandle:
         """Teleports the robot now to (x, y) m facing `yaw_deg`, on the ground, at rest, the
         wheels stopped; a running command fails as superseded. The returned handle ends
@@ -247,8 +274,10 @@ class Robot:
     def continuation_commands(self) -> list:
         """Commands that carry on from now: the enable level, the running command (a
         DriveDistance/RotateDegrees carried on from where it is, the last
-        SetPower/SetSpeed/SetVelocity, or an AllStop while the drive slews down to 0), then the
-        script's unissued rest (after what is left of a running Wait)."""
+        SetPower/SetSpeed/SetVelocity, or an AllStop while the drive slews down to 0, also
+        one not yet taken), then the script's unissued rest (after what is left of a running
+        Wait, or a Wait of 0 s when it is due: it then starts at the update the saved run's
+        would have)."""
         root = self._sim.context
         source, motion = self._parts.command_source, self._parts.motion
         state = source.current_state(source.GetMyContextFromRoot(root))
@@ -260,7 +289,8 @@ class Robot:
             commands.append(state.request.command)
         else:
             target, commanded = self._parts.drive_controller.speeds(root)
-            if not any(target) and any(commanded):
+            stopping = isinstance(state.request.command, sc.AllStop)  # maybe not yet taken
+            if (stopping or not any(target)) and any(commanded):
                 # Slewing down to 0 (an AllStop, an ended command): the reloaded drive starts
                 # from the commanded speeds and must stop, not hold them.
                 commands.append(sc.AllStop())
@@ -268,6 +298,10 @@ class Robot:
         if state.next_script_index < len(script):
             if state.script_blocked_until > self._sim.time:
                 commands.append(sc.Wait(state.script_blocked_until - self._sim.time))
+            elif remaining is None:
+                # Due now: the source issues it at its next update (also one at this very
+                # instant, not yet run), not with what is carried on at the start.
+                commands.append(sc.Wait(0.0))
             commands += script[state.next_script_index:]
         return commands
 
@@ -511,6 +545,8 @@ class Simulation:
         (`lab/step_limit.py`); `reset` then skips them too unless asked."""
         if check:
             check_scenario(scenario)
+        self._thread_lock = threading.RLock()
+        """Held while a thread advances, resets or commands the simulation (`_one_thread`)."""
         self._check = check
         self.scenario = scenario
         self._record_live: bool | None = None
@@ -556,6 +592,7 @@ class Simulation:
         self.simulator.Initialize()
         self._wall_seconds = 0.0
 
+    @_one_thread
     def reset(self, scenario: sc.Scenario | None = None, *, key: str | None = None,
               check: bool | None = None) -> None:
         """Starts again from the beginning of `scenario` (default: this simulation's) on the
@@ -622,7 +659,8 @@ class Simulation:
 
     def _set_initial_velocities(self) -> None:
         """The scenario's robot and free-body velocities, the robots' wheel angles and
-        speeds (and the drive's commanded axle speeds from the front wheels')."""
+        speeds, the drive's commanded axle speeds (default: the front wheels') and hold
+        angles (default: the wheel angles), the odometry's start (default: the true pose)."""
         plant = self.station.plant
         plant_context = plant.GetMyMutableContextFromRoot(self.context)
         for name, parts in self.station.robots.items():
@@ -633,16 +671,23 @@ class Simulation:
                                            spec.wheel_speeds, strict=True):
                 joint.set_angle(plant_context, angle)
                 joint.set_angular_rate(plant_context, speed)
+            controller = parts.drive_controller
+            controller_context = controller.GetMyMutableContextFromRoot(self.context)
             command = spec.axle_speed_command or spec.wheel_speeds[:2]
             if any(command):
-                controller = parts.drive_controller
-                controller.SetAxleSpeeds(controller.GetMyMutableContextFromRoot(self.context),
-                                         *command)
+                controller.SetAxleSpeeds(controller_context, *command)
+            controller.SetHoldAngles(controller_context,
+                                     spec.wheel_hold_angles or spec.wheel_angles)
+            odometry = self._dead_reckoning(name)
+            odometry.SetStart(odometry.GetMyMutableContextFromRoot(self.context), spec.odometry)
         for name, body in self.station.bodies.items():
             spec = self.scenario.world.bodies[name]
             if not spec.fixed:
                 plant.SetFreeBodySpatialVelocity(plant_context, body, SpatialVelocity(
                     np.asarray(spec.velocity[:3]), np.asarray(spec.velocity[3:])))
+
+    def _dead_reckoning(self, name: str):
+        return self.station.diagram.GetSubsystemByName(f"{name}.dead_reckoning")
 
     def _teleport_monitor(self, root_context) -> EventStatus:
         for parts in self.station.robots.values():
@@ -651,6 +696,7 @@ class Simulation:
                 return EventStatus.ReachedTermination(source, "teleport")
         return EventStatus.Succeeded()
 
+    @_one_thread
     def advance_to(self, t: float) -> None:
         """Advances to simulated time `t` (s; finite, not before now: ValueError otherwise),
         applying scripted SetPose teleports."""
@@ -687,9 +733,9 @@ class Simulation:
 
     def saved_scenario(self) -> sc.Scenario:
         """This scenario with the current state: time, every robot's and free body's pose
-        and velocity, the wheels' angles and speeds, the drives' commanded axle speeds, and
-        each robot's commands from now on (`Robot.continuation_commands`). Running it
-        continues from here."""
+        and velocity, the wheels' angles, speeds and hold angles, the drives' commanded axle
+        speeds, the dead-reckoned odometry, and each robot's commands from now on
+        (`Robot.continuation_commands`). Running it continues from here."""
         saved = sc.load_scenario(data=yaml_dump_typed(self.scenario, schema=sc.Scenario),
                                  defaults=sc.Scenario())
         saved.simulator_config.start_time = self.time
@@ -708,6 +754,9 @@ class Simulation:
             spec.wheel_speeds = [float(j.get_angular_rate(plant_context))
                                  for j in parts.wheel_joints]
             spec.axle_speed_command = parts.drive_controller.speeds(self.context)[1]
+            spec.wheel_hold_angles = parts.drive_controller.hold_angles(self.context)
+            odometry = self._dead_reckoning(name)
+            spec.odometry = odometry.State(odometry.GetMyContextFromRoot(self.context))
             spec.commands = robot.continuation_commands()
         for name, body in self.station.bodies.items():
             spec = saved.world.bodies[name]
@@ -754,14 +803,17 @@ class Simulation:
         otherwise)."""
         self.advance_to(self.time + limits.number("seconds", seconds, 0.0))
 
+    @_one_thread
     def run(self, duration: float, progress=None, chunk: float = 0.5) -> None:
-        """Advances by `duration` s (finite, >= 0) in chunks of `chunk` s (finite, > 0),
-        calling `progress(sim)` after each."""
+        """Advances by `duration` s (finite, >= 0) in chunks of `chunk` s (finite, at least
+        `MIN_RUN_CHUNK`), calling `progress(sim)` after each."""
         duration = limits.number("duration", duration, 0.0)
-        chunk = limits.number("chunk", chunk, 0.0, low_open=True)
+        chunk = limits.number("chunk", chunk, MIN_RUN_CHUNK)
         end = self.time + duration
         while self.time < end - 1e-12:
-            self.advance_to(min(end, self.time + chunk))
+            # At a time so large that adding the chunk rounds to it, the last step goes to end.
+            step_end = self.time + chunk
+            self.advance_to(min(end, step_end) if step_end > self.time else end)
             if progress is not None:
                 progress(self)
 
@@ -802,13 +854,14 @@ class Simulation:
 
 
 _PER_RUN_ROBOT_FIELDS = ("pose", "velocity", "wheel_angles", "wheel_speeds",
-                         "axle_speed_command", "commands")
+                         "axle_speed_command", "wheel_hold_angles", "odometry", "commands")
 
 
 def diagram_key(scenario: sc.Scenario) -> str:
     """The scenario as YAML without what `Simulation.reset` sets in the Context (the seed,
     start time and duration, the robots' and free bodies' initial poses and velocities, the
-    wheels' initial angles and speeds, the scripts): scenarios with one key build one diagram."""
+    wheels' initial angles, speeds and hold angles, the odometry's start, the scripts):
+    scenarios with one key build one diagram."""
     s = copy.deepcopy(scenario)
     s.random_seed, s.simulation_duration = 0, math.inf
     s.simulator_config.start_time = 0.0

@@ -3,7 +3,10 @@ SystemExit, never a hang), and leaves the simulation as it was; a SetPose into a
 `blocked` and leaves the robot where it was."""
 
 import math
+import reprlib
+import threading
 
+import numpy as np
 import pytest
 
 from conftest import make_sim
@@ -24,7 +27,15 @@ BAD_CALLS = [
     ("advance_to", (math.nan,), "t must be a finite number >="),
     ("advance_to", (-5.0,), "t must be a finite number >="),
     ("run", (math.inf,), "duration must be a finite number >= 0"),
-    ("run", (1.0, None, 0.0), "chunk must be a finite number > 0"),
+    ("run", (1.0, None, 0.0), "chunk must be a finite number >= 0.0001"),
+    ("run", (1.0, None, 1e-300), "chunk must be a finite number >= 0.0001, got 1e-300"),
+    ("advance", (10**400,), "seconds must be a finite number >= 0, got 1000"),
+    ("set_power", (10**400, 0), "SetPower.left must be a finite number in [-1, 1], got 1000"),
+    ("set_power", (0, -10**400), "SetPower.right must be a finite number in [-1, 1], got -1000"),
+    ("set_power", (np.array([0.5, 0.5]), 0), "SetPower.left must be a finite number in [-1, "
+     "1], got array([0.5, 0.5])"),
+    ("set_power", (np.array([0.5]), 0), "got array([0.5])"),  # numpy would make it 0.5
+    ("set_speed", ([1.0], 0), "SetSpeed.left must be a finite number in [-5, 5], got [1.0]"),
     ("set_power", (1.5, 0), "SetPower.left must be a finite number in [-1, 1], got 1.5"),
     ("set_power", (0, -2), "SetPower.right must be a finite number in [-1, 1]"),
     ("set_power", (math.nan, 0), "SetPower.left must be a finite number in [-1, 1], got nan"),
@@ -52,7 +63,7 @@ BAD_CALLS = [
 
 
 @pytest.mark.parametrize(("method", "args", "words"), BAD_CALLS,
-                         ids=[f"{m}{a}" for m, a, _ in BAD_CALLS])
+                         ids=[f"{m}{reprlib.repr(a)}" for m, a, _ in BAD_CALLS])
 def test_bad_arguments_raise_value_error_and_change_nothing(sim, method, args, words):
     robot = sim.robot()
     target = sim if hasattr(sim, method) else robot
@@ -72,6 +83,45 @@ def test_valid_calls_still_work(sim):
     robot.all_stop()
     sim.advance(0.0)
     sim.run(0.02, chunk=0.01)
+
+
+def test_numpy_scalars_are_numbers(sim):
+    sim.robot().set_power(np.float64(0.25), np.float32(-0.25))
+    assert sim.robot().command_log()[-1].command == "SetPower"
+    sim.run(0.01, chunk=np.float64(0.005))
+
+
+def test_a_second_thread_advancing_or_commanding_is_refused_while_one_advances(sim):
+    """While one thread is inside `run` (held in its progress call), another's advance,
+    command or reset fails at once with one clear line, and the first run carries on."""
+    inside, tried = threading.Event(), threading.Event()
+    errors: list[str] = []
+
+    def progress(s):
+        if not inside.is_set():
+            inside.set()
+            assert tried.wait(30)
+
+    def other():
+        assert inside.wait(30)
+        for call in (lambda: sim.advance(0.01), lambda: sim.robot().set_power(0.1, 0.1),
+                     sim.reset, lambda: sim.robot().set_pose(0.0, 0.0)):
+            try:
+                call()
+            except RuntimeError as e:
+                errors.append(str(e))
+        tried.set()
+
+    t0, log0 = sim.time, sim.robot().command_log()
+    thread = threading.Thread(target=other)
+    thread.start()
+    sim.run(0.04, progress=progress, chunk=0.02)
+    thread.join(30)
+    assert [e.split(":")[0] for e in errors] == ["advance_to", "issue", "reset", "set_pose"]
+    assert all("another thread is advancing or commanding this Simulation" in e
+               for e in errors)
+    assert sim.time == pytest.approx(t0 + 0.04) and sim.robot().command_log() == log0
+    sim.advance(0.01)  # the lock is free again
 
 
 def test_set_pose_into_the_giant_box_is_blocked_and_leaves_the_robot_there(sim):

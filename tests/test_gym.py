@@ -208,3 +208,104 @@ def test_training_settings_from_python_are_checked_as_the_tools_flags(settings, 
     with pytest.raises(ValueError) as refused:
         CemSettings(**settings)
     assert str(refused.value).startswith(message)
+
+
+# --- what the env refuses ---------------------------------------------------------------------
+
+BAD_CONFIGS = [
+    (dict(control_period=0), "GoToGoalConfig.control_period: must be in [0.01, 10] s"),
+    (dict(time_limit=math.nan), "GoToGoalConfig.time_limit: must be in (0, 86400] s; got nan"),
+    (dict(time_limit=math.inf), "GoToGoalConfig.time_limit: must be in (0, 86400] s; got inf"),
+    (dict(time_limit=0.05), "GoToGoalConfig.time_limit: must be from one to 1000000 control "
+     "periods (0.1 s); got 0.05 s"),
+    (dict(boxes=-1), "GoToGoalConfig.boxes: must be in [0, 100]"),
+    (dict(boxes=2.5), "GoToGoalConfig.boxes: must be a whole number in [0, 100]"),
+    (dict(box_size=10**400), "GoToGoalConfig.box_size: must be in [0.01, 2] m; got inf"),
+    (dict(goal_distance=(1.8, 1.0)), "GoToGoalConfig.goal_distance: must be (low, high) with "
+     "low <= high"),
+    (dict(goal_distance=3.0), "GoToGoalConfig.goal_distance: must be (low, high) in m"),
+    (dict(goal_clearance=50.0), "GoToGoalConfig.goal_clearance: must be under 2.337 m"),
+    (dict(start_spread=1.0), "GoToGoalConfig.start_spread: must be under 0.530 m"),
+    (dict(camera="yes"), "GoToGoalConfig.camera: must be True or False"),
+    (dict(speed=1.0), "GoToGoalConfig has no field 'speed'"),
+]
+
+
+@pytest.mark.parametrize("overrides, message", BAD_CONFIGS,
+                         ids=[next(iter(o)) + str(i) for i, (o, _) in enumerate(BAD_CONFIGS)])
+def test_a_config_out_of_range_is_refused_before_anything_is_built(overrides, message):
+    with pytest.raises(ValueError) as refused:
+        gymnasium.make(ENV_ID, **overrides)
+    assert str(refused.value).startswith(message)
+    assert "\n" not in str(refused.value)
+
+
+def test_a_config_that_is_not_one_is_refused():
+    with pytest.raises(ValueError, match="config: must be a GoToGoalConfig; got"):
+        GoToGoalEnv({"boxes": 2})
+
+
+def test_the_goal_clearance_bound_is_where_goals_run_out():
+    """Under the bound (less a margin) every seed finds a goal; over it no goal exists, and
+    `draw_layout` given such a config unchecked says so instead of drawing forever. With
+    `start_spread` 0 the start is the origin, 0.7366 m from the giant box's face: the farthest
+    goal at 1.8 m is 2.5366 m from it."""
+    import dataclasses as dc
+
+    from corobot_drake.gym.checks import check_config
+    from corobot_drake.gym.env import GoToGoalConfig
+    from corobot_drake.gym.layout import _giant_box_gap, draw_layout
+
+    config = GoToGoalConfig(start_spread=0.0, goal_clearance=2.3)
+    check_config(config)
+    for seed in range(5):
+        layout = draw_layout(np.random.default_rng(seed), config)
+        assert _giant_box_gap(*layout.goal) > 2.3
+    too_far = dc.replace(config, goal_clearance=2.54)
+    with pytest.raises(ValueError, match=r"goal_clearance: must be under 2\.537 m"):
+        check_config(too_far)
+    with pytest.raises(ValueError, match=r"no goal 2\.54 m clear of the giant box in 10000 draws"):
+        draw_layout(np.random.default_rng(0), too_far)
+
+
+def test_reset_options_and_actions_are_checked(env):
+    env.reset(seed=0)
+    bad_options = [
+        ("garbage", "reset(options=...): must be a dict or None; got 'garbage'"),
+        ({"seed": 3}, "reset(options=...): unknown option 'seed'; the only one is 'layout'"),
+        ({"layout": (0, 0, 0)}, "reset(options={'layout': ...}): must be a gym.layout.Layout"),
+        ({"layout": Layout((0, 0, 0), (1.5, 0), PARKED[:2])},
+         "layout.boxes: must hold the env's 3 boxes (GoToGoalConfig.boxes); got 2"),
+        ({"layout": Layout((0, 0, 0), (1.5, 0), (*PARKED, (6.0, 50.0, 0.0)))},
+         "layout.boxes: must hold the env's 3 boxes (GoToGoalConfig.boxes); got 4"),
+        ({"layout": Layout((0, 0, math.nan), (1.5, 0), PARKED)},
+         "layout.start.yaw must be a finite number, got nan"),
+        ({"layout": Layout((0, 0, 0), (1e9, 0), PARKED)},
+         "layout.goal.x must be a finite number in [-10000, 10000], got 1000000000.0"),
+        ({"layout": Layout((0, 0, 0), (1.5, 0), ((0.1, 0.0, 0.0), *PARKED[1:]))},
+         "reset: the layout: robots.corobot.pose: robot 'corobot' starts"),
+    ]
+    for options, message in bad_options:
+        with pytest.raises(ValueError) as refused:
+            env.reset(seed=0, options=options)
+        assert str(refused.value).startswith(message), options
+    with pytest.raises(gymnasium.error.ResetNeeded):  # the last reset failed: no episode
+        env.step([0.0, 0.0])
+    env.reset(options={"layout": OPEN_FIELD})
+    for action, message in [([math.nan, 0.0], "action: must be 2 finite numbers"),
+                            ([0.1, 0.2, 0.3], "action: must be 2 finite numbers"),
+                            ("ab", "action: must be 2 numbers"),
+                            ([10**400, 0], "action: must be 2 numbers")]:
+        with pytest.raises(ValueError, match=message.replace("(", r"\(")):
+            env.step(action)
+    assert env.sim.time == env.scenario.simulator_config.start_time  # nothing stepped
+
+
+def test_a_closed_env_refuses_to_step_or_reset():
+    env = GoToGoalEnv(boxes=0)
+    env.reset(seed=0)
+    env.close()
+    env.close()  # idempotent
+    for call in (lambda: env.step([0.0, 0.0]), lambda: env.reset(seed=1)):
+        with pytest.raises(gymnasium.error.ClosedEnvironmentError, match="env is closed"):
+            call()

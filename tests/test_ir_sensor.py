@@ -184,7 +184,8 @@ def test_samples_below_two_is_a_clear_scenario_error():
     ("{rear: {position: [0, 0, 0]}}", "rear.position", "unknown field"),
     ("{rear: {dispersion_cone_angle: 200}}", "rear.dispersion_cone_angle", "[0, 180)"),
     ("{rear: {samples: 2.5}}", "rear.samples", "expected an integer"),
-    ("{a.b: {}}", "a.b", "without '.'"),
+    ("{a.b: {}}", "a.b", "a sensor name must be letters, digits, '_', '-' or '~'"),
+    ("{'a?b': {}}", "a?b", "a sensor name must be letters, digits, '_', '-' or '~'"),
 ])
 def test_bad_ir_configuration_names_the_field(override, field, words):
     with pytest.raises(ScenarioError) as e:

@@ -314,8 +314,8 @@ def test_a_command_saved_at_any_time_resumes_to_the_same_landing(profile, kind, 
     The saved scene carries the command on from where it started (its `start`), at the power
     it runs at, with its progress at the last updates (`recent_progress`: the seed profile's
     0.1 s window, the closed loop's speed) and the drive's commanded axle speeds; the script
-    restarts at the saved time. Measured: within 0.001 mm and 0.0001 deg (the drive's hold
-    angles are not saved; docs/commands.md: `python tools/resume_landing.py`)."""
+    restarts at the saved time. Measured: within 0.001 mm and 0.0001 deg (the hold's last
+    correction is not saved; docs/commands.md: `python tools/resume_landing.py`)."""
     end, (x0, y0, h0), saves = _uninterrupted(profile, kind, power)
     again = _resumer(profile)
     for save, scenario in saves.items():
@@ -325,6 +325,45 @@ def test_a_command_saved_at_any_time_resumes_to_the_same_landing(profile, kind, 
         (x, y, _), h = robot.position(), robot.heading()
         assert math.hypot(x - x0, y - y0) < 1e-3, save
         assert abs(math.degrees(math.remainder(h - h0, 2 * math.pi))) < 0.1, save
+
+
+STOP_SCRIPT = ("commands: [!SetPower {left: 0.6, right: 0.4}, !Wait {seconds: 1.0}, "
+               "!AllStop {}]")
+
+
+def _wheel_angles(sim: Simulation) -> np.ndarray:
+    plant_context = sim.station.plant.GetMyContextFromRoot(sim.context)
+    return np.array([j.get_angle(plant_context) for j in sim.robot()._parts.wheel_joints])
+
+
+def test_a_saved_scene_keeps_the_odometry_and_the_hold_angles():
+    """The dead-reckoned odometry drifts from the true pose (4-12 mm on this curve); a saved scene
+    carries it on as it was (it once restarted at the true pose), and the drive's hold angles
+    (where a resting wheel is pulled back to: a few urad from where the ground pushed it).
+    Saved while driving between two updates, when the AllStop is due (1.0 s) and issued but
+    not yet taken (1.005 s), and at rest: each resumed run ends as the uninterrupted one.
+    Measured: the odometry to the bit, the wheel angles within 3e-9 rad (the hold's last
+    correction is not saved); without the hold angles they differed by 2e-6 rad."""
+    extra = STOP_SCRIPT.replace("left: 0.6", "left: 0.8")
+    sim, saves = fast_sim(extra=extra), {}
+    for t in (0.505, 1.0, 1.005, 3.0):
+        sim.advance_to(t)
+        saves[t] = _through_yaml(sim.saved_scenario())
+    sim.advance_to(5.0)
+    again = _resumer("closed_loop")
+    for save, scenario in saves.items():
+        robot = scenario.robots["corobot"]
+        x, y, _ = robot.pose.translation
+        assert math.hypot(robot.odometry[0] - x, robot.odometry[1] - y) > 4e-3  # 4-12 mm
+        again.reset(scenario)
+        again.advance_to(5.0)
+        assert again.robot().odometry() == sim.robot().odometry(), save
+        assert again.robot().pose().x == pytest.approx(sim.robot().pose().x, abs=1e-9), save
+        np.testing.assert_allclose(_wheel_angles(again), _wheel_angles(sim), rtol=0,
+                                   atol=1e-7, err_msg=str(save))
+    resting = saves[3.0].robots["corobot"]
+    assert max(abs(h - a) for h, a in zip(resting.wheel_hold_angles, resting.wheel_angles,
+                                          strict=True)) > 1e-6  # the hold angles matter
 
 
 def test_a_command_saved_before_its_first_update_resumes_as_issued():

@@ -354,15 +354,18 @@ def test_command_events_alone():
 # --- live ------------------------------------------------------------------------------------
 
 
-def test_foxglove_live_serves_the_topics_and_stops():
+@pytest.mark.parametrize("offered", [["foxglove.sdk.v1", "foxglove.websocket.v1"],
+                                     ["foxglove.websocket.v1"]])
+def test_foxglove_live_serves_the_topics_and_stops(offered):
+    """Clients offering the SDK's subprotocol name or only the older one get the topics."""
     from websockets.sync.client import connect
 
     live = FoxgloveLive(port=0)
     try:
         sim = Simulation(load_scenario(DEFAULT_SCENARIO, overrides=[NO_CAMERA]),
                          foxglove=live.context)
-        with connect(live.url, subprotocols=["foxglove.sdk.v1", "foxglove.websocket.v1"],
-                     open_timeout=10) as ws:
+        with connect(live.url, subprotocols=offered, open_timeout=10) as ws:
+            assert ws.subprotocol == offered[0]
             advertised = {}
             while "/odom" not in advertised:
                 message = json.loads(ws.recv(timeout=10))
@@ -392,6 +395,79 @@ def test_foxglove_live_serves_the_topics_and_stops():
             break
         assert time.monotonic() < deadline, "still listening 5 s after stop()"
         time.sleep(0.05)
+
+
+def _handshake_status(url: str, **kwargs) -> int:
+    """The HTTP status of a WebSocket handshake with `url` (101: connected)."""
+    from websockets.exceptions import InvalidStatus
+    from websockets.sync.client import connect
+
+    try:
+        with connect(url, open_timeout=10, proxy=None, **kwargs) as ws:
+            json.loads(ws.recv(timeout=10))  # the serverInfo: the protocol runs
+            return 101
+    except InvalidStatus as e:
+        return e.response.status_code
+
+
+def test_foxglove_live_holds_clients_to_the_http_servers_rules():
+    """A token (when there is one) in the URL or an Authorization header, the served Host, one
+    Host header, a Foxglove subprotocol: else the handshake is refused with a 4xx."""
+    import socket
+
+    sdk = {"subprotocols": ["foxglove.sdk.v1"]}
+    with FoxgloveLive(port=0, token="s3cret") as live:
+        base = f"ws://127.0.0.1:{live.port}"
+        assert live.url == f"{base}/?token=s3cret"
+        assert _handshake_status(live.url, **sdk) == 101
+        assert _handshake_status(base, additional_headers={"Authorization": "Bearer s3cret"},
+                                 **sdk) == 101
+        assert _handshake_status(base, **sdk) == 401
+        assert _handshake_status(f"{base}/?token=wrong", **sdk) == 401
+        assert _handshake_status(live.url, subprotocols=["chat"]) == 400
+        assert _handshake_status(live.url) == 400  # no subprotocol offered
+        with socket.create_connection(("127.0.0.1", live.port), timeout=10) as raw:
+            raw.sendall(b"GET /?token=s3cret HTTP/1.1\r\nHost: evil.example\r\n"
+                        b"Upgrade: websocket\r\nConnection: Upgrade\r\nSec-WebSocket-Key: "
+                        b"dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n"
+                        b"Sec-WebSocket-Protocol: foxglove.sdk.v1\r\n\r\n")
+            assert raw.recv(100).startswith(b"HTTP/1.1 421 ")
+        with socket.create_connection(("127.0.0.1", live.port), timeout=10) as raw:
+            raw.sendall(b"GET /?token=s3cret HTTP/1.1\r\nHost: 127.0.0.1\r\n"
+                        b"Host: evil.example\r\nUpgrade: websocket\r\n"
+                        b"Connection: Upgrade\r\nSec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\n"
+                        b"Sec-WebSocket-Version: 13\r\nSec-WebSocket-Protocol: foxglove.sdk.v1"
+                        b"\r\n\r\n")
+            assert raw.recv(100).startswith(b"HTTP/1.1 400 ")
+    with FoxgloveLive(port=0) as live:  # loopback without --token: none needed
+        assert live.token is None and _handshake_status(live.url, **sdk) == 101
+
+
+def test_cli_foxglove_and_serve_share_one_token_off_loopback():
+    """Off loopback --serve and --foxglove need a token: --token, or one made once for both
+    (the address is not bound here: tests listen on loopback only)."""
+    import argparse
+
+    from corobot_drake.cli import ArgumentError, shared_token
+
+    def args(**kw):
+        return argparse.Namespace(**{"serve": False, "foxglove": None, "host": "127.0.0.1",
+                                     "token": None, **kw})
+
+    made = shared_token(args(foxglove=8765, serve=True, host="0.0.0.0"))
+    assert made and len(made) >= 32
+    assert shared_token(args(foxglove=8765, host="192.0.2.7")) not in (None, made)
+    assert shared_token(args(foxglove=8765, host="0.0.0.0", token="T")) == "T"
+    assert shared_token(args(foxglove=8765)) is None
+    with pytest.raises(ArgumentError, match="--token must not be empty"):
+        shared_token(args(foxglove=8765, token=" "))
+
+
+def test_cli_foxglove_with_a_token_prints_the_url_carrying_it(capsys):
+    assert main(["--headless", "--duration", "0.05", "--override", NO_CAMERA, "--foxglove",
+                 "0", "--token", "s3cret"]) == 0
+    url = capsys.readouterr().err.split("Foxglove: ")[1].split()[0]
+    assert re.fullmatch(r"ws://127\.0\.0\.1:\d+/\?token=s3cret", url)
 
 
 # --- the command line ------------------------------------------------------------------------

@@ -235,6 +235,19 @@ def test_a_resting_wheel_is_held_at_the_angle_it_stopped_at():
     np.testing.assert_array_equal(s.output("desired_state"), np.zeros(8))
 
 
+def test_hold_angles_given_at_the_start_pull_the_wheels_back_to_them():
+    """A saved scene's hold angles: a resting wheel a little off its hold angle is pulled
+    back to it from the first update (without them it would be held where it is)."""
+    s = controller(wheels([0.5, -0.2, 0.5, -0.2]))
+    hold = [0.5 - 3e-5, -0.2, 0.5, -0.2 + 1e-5]
+    s.system.SetHoldAngles(s.context, hold)
+    s.tick()
+    gain = DRIVE.hold_gain
+    np.testing.assert_allclose(s.output("desired_state")[4:],
+                               [-gain * 3e-5, 0.0, 0.0, gain * 1e-5], rtol=1e-9, atol=1e-15)
+    assert s.system.hold_angles(s.context) == hold
+
+
 def test_the_hold_pulls_at_most_half_the_rest_speed_and_lets_a_driven_wheel_go():
     s = controller(wheels([0.0] * 4))
     s.tick()
@@ -312,6 +325,18 @@ def test_script_runs_in_order_with_waits_and_completing_commands():
     assert log(s)[3].end_time == 0.2  # the reported end time
     s.tick()
     assert log(s)[4].status == "succeeded"
+
+
+def test_a_zero_wait_defers_the_rest_of_the_script_to_an_update():
+    """What a saved scene writes before a script's rest that is due: the start issues what
+    comes before the 0 s Wait alone, the update at the start time the rest (as the saved run
+    would have issued it), and the log holds no Wait."""
+    s = source([SetPower(0.1, 0.1), Wait(0.0), AllStop()], CommandStatus())
+    s.simulator.Initialize()
+    assert (request(s).seq, request(s).command) == (1, SetPower(0.1, 0.1))
+    s.tick()  # the update at t = 0
+    assert (request(s).seq, request(s).command, request(s).time) == (2, AllStop(), 0.0)
+    assert [r.command for r in log(s)] == ["SetPower", "AllStop"]
 
 
 def test_api_commands_take_the_next_sequence_numbers_at_once():

@@ -47,6 +47,29 @@ def test_odometry_starts_at_the_start_pose_and_integrates_straight_rolling():
                                              abs=1e-12)
 
 
+def test_odometry_given_a_start_carries_on_from_it():
+    """A saved scene's start: the pose (yaw unwrapped) and the counts last integrated, so the
+    counts since then (one revolution here) are motion at the first update; with the pose
+    alone the counts at the start are the baseline."""
+    s = odometry(start=(0.0, 0.0, 0.0))
+    context = s.system.GetMyMutableContextFromRoot(s.context)
+    s.system.SetStart(context, [3.0, 4.0, 2 * math.pi + 0.1, -500.0, -500.0])
+    s.tick()
+    d = 2 * math.pi * 0.06
+    assert s.output("pose") == pytest.approx([3 + d * math.cos(0.1), 4 + d * math.sin(0.1), 0.1],
+                                             abs=1e-12)
+    assert s.system.State(context) == pytest.approx(
+        [3 + d * math.cos(0.1), 4 + d * math.sin(0.1), 2 * math.pi + 0.1, 100.0, 100.0],
+        abs=1e-12)
+    posed = odometry(start=(0.0, 0.0, 0.0))
+    posed.system.SetStart(posed.system.GetMyMutableContextFromRoot(posed.context),
+                          [3.0, 4.0, 0.1])
+    posed.tick()
+    assert posed.output("pose") == pytest.approx([3.0, 4.0, 0.1], abs=1e-15)
+    with pytest.raises(ValueError, match="needs 0, 3 or 5 values, got 4"):
+        s.system.SetStart(context, [1.0, 2.0, 3.0, 4.0])
+
+
 def test_odometry_turns_by_the_wheel_difference_over_the_track():
     s = odometry(start=(0.0, 0.0, 0.0))
     s.tick()

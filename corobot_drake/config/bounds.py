@@ -131,6 +131,11 @@ top speed; 1e9 rad/s froze the plant)."""
 AXLE_SPEED = Range(0.0, AXLE_SPEED_LIMIT, low_open=True, unit="rad/s")
 AXLE_SPEED_RANGE = Range(-AXLE_SPEED_LIMIT, AXLE_SPEED_LIMIT, unit="rad/s")
 ANGLE = Range(-1e6, 1e6, unit="deg")
+HEADING = Range(-1e6, 1e6, unit="rad")
+"""An unwrapped heading (rad; it counts whole turns)."""
+ENCODER_COUNT = Range(-1e9, 1e9, unit="ticks")
+"""An encoder's count (600 a turn: 1e9 ticks are 1.6 million turns, beyond any wheel angle
+a scenario may start at)."""
 POWER = Range(*api.DRIVE_POWER, low_open=True)
 """A completing command's power."""
 

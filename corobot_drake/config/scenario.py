@@ -229,7 +229,10 @@ class Enable:
 
 @dc.dataclass
 class Wait:
-    """Let the previous command run for this long (s) before the next one."""
+    """Let the previous command run for this long (s) before the next one. 0 s: the next one
+    is issued at the next control update (not with the commands before it when the
+    simulation starts: what a saved scene writes before a script's rest that is due), and
+    the log records no Wait."""
 
     seconds: float = bounded(1.0, lim.DURATION)
 
@@ -334,6 +337,16 @@ class Robot:
     """The drive's initial commanded (slewed) axle speeds [left, right], rad/s; empty: the
     front wheels' `wheel_speeds`. A saved scene records them (they differ from the wheels'
     while the drive accelerates or brakes)."""
+    wheel_hold_angles: list[float] = bounded(list, Range(-1e6, 1e6, unit="rad"))
+    """The angles (rad, `dimensions.WHEEL_NAMES` order) the drive holds the wheels at while
+    they rest (`systems.drive.DriveController`); empty: their `wheel_angles`. A saved scene
+    records them (a held wheel the ground has pushed is pulled back to its hold angle)."""
+    odometry: list[float] = bounded(list, (lim.POSITION, lim.POSITION, lim.HEADING,
+                                           lim.ENCODER_COUNT, lim.ENCODER_COUNT))
+    """The dead-reckoned odometry's start (`systems.dead_reckoning`): [x, y, yaw] (m, m, rad),
+    then optionally the front wheels' encoder counts [left, right] it last integrated
+    (default: the counts at the start); empty: the true start pose. A saved scene records all
+    five (the odometry has drifted from the true pose, and carries on from its last update)."""
     camera: CameraConfig = dc.field(default_factory=default_camera_config)
     """The front camera, Drake's CameraConfig (SPEC defaults; `config/sensors.py`).
     `X_PB.base_frame` names a link of this robot (`chassis`); `{rgb: false}`: no camera."""

@@ -553,8 +553,10 @@ class LayerChecks:
 
     def _robot(self, name: str, robot: sc.Robot, s: sc.Scenario) -> None:
         path = f"robots.{name}"
-        if not name or "::" in name or "/" in name:
-            self.fail(path, "a robot name must be non-empty, without :: or /")
+        if not ROBOT_NAME.fullmatch(name) or name in (".", ".."):
+            # It is a URL path segment (/robots/<name>/...) and names the robot's systems.
+            self.fail(path, "a robot name must be letters, digits, '_', '-', '.' or '~' (it is "
+                      f"a URL path segment, /robots/<name>), not '.' or '..'; got {name!r}")
         if name in s.world.bodies:
             self.fail(path, "a world body already has this name")
         self._world_pose(f"{path}.pose", robot.pose)
@@ -568,6 +570,11 @@ class LayerChecks:
         (empty, or a full vector)."""
         if len(robot.axle_speed_command) not in (0, 2):
             self.fail(f"{path}.axle_speed_command", "needs [] or 2 numbers [left, right]")
+        if len(robot.wheel_hold_angles) not in (0, 4):
+            self.fail(f"{path}.wheel_hold_angles", "needs [] or 4 angles (rad)")
+        if len(robot.odometry) not in (0, 3, 5):
+            self.fail(f"{path}.odometry", "needs [], [x, y, yaw] or [x, y, yaw, left ticks, "
+                      "right ticks]")
         window = max(1, round(sc.SEED_WINDOW / robot.drive.control_period))
         for i, cmd in enumerate(robot.commands):
             if not isinstance(cmd, sc.DriveDistance | sc.RotateDegrees):
@@ -665,9 +672,10 @@ class LayerChecks:
             self.fail(path, " ".join(str(e).split()))
 
     def _ir_sensor(self, path: str, name: str, c: IrSensorConfig, s: sc.Scenario) -> None:
-        if not name or any(ch in name for ch in "./: "):
-            # It appears in port names and Meshcat paths.
-            self.fail(path, "a sensor name must be non-empty, without '.', '/', ':' or spaces")
+        if not SENSOR_NAME.fullmatch(name):
+            # It appears in port names, Meshcat paths and URLs (/robots/<robot>/<sensor>).
+            self.fail(path, "a sensor name must be letters, digits, '_', '-' or '~'; got "
+                      f"{name!r}")
         self._mount(f"{path}.X_PB", c.X_PB, s)
 
 
@@ -705,6 +713,12 @@ def _type_text(tp) -> str:
 def _join(path: str, name: str) -> str:
     return f"{path}.{name}" if path else name
 
+
+ROBOT_NAME = re.compile(r"[A-Za-z0-9_.~-]+")
+"""A robot's name: RFC 3986's unreserved characters, so that it is a URL path segment as it
+is (the services' URLs, /robots/<name>)."""
+SENSOR_NAME = re.compile(r"[A-Za-z0-9_~-]+")
+"""An IR sensor's name: as a robot's, without '.' (it joins port names: `<robot>.<sensor>`)."""
 
 PYTHON_SOURCE = "<Python scenario>"
 """What an error names for a scenario built in Python (not loaded from a file)."""

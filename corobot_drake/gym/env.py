@@ -26,6 +26,7 @@ from gymnasium import spaces
 
 from corobot_drake.config import scenario as sc
 from corobot_drake.config.poses import ground_pose
+from corobot_drake.gym.checks import check_action, check_options, make_config
 from corobot_drake.gym.layout import Layout, draw_layout
 from corobot_drake.model import dimensions as dim
 from corobot_drake.resources import DEFAULT_SCENARIO
@@ -132,7 +133,7 @@ class GoToGoalEnv(gym.Env):
         """`overrides` replace fields of `config` (default `GoToGoalConfig()`), e.g.
         `camera=True`, as `gymnasium.make("corobot_drake/GoToGoal-v0", camera=True)`."""
         quiet_drake_warnings()
-        self.config = dc.replace(config or GoToGoalConfig(), **overrides)
+        self.config = make_config(config or GoToGoalConfig(), overrides)  # ValueError
         self.scenario = base_scenario(self.config)
         self.sim = Simulation(self.scenario)
         self._key = diagram_key(self.scenario)
@@ -161,12 +162,19 @@ class GoToGoalEnv(gym.Env):
 
     # --- episodes -------------------------------------------------------------------------
     def reset(self, *, seed: int | None = None, options: dict | None = None):
-        """A new episode: its layout drawn from the seed, or `options={"layout": Layout}`."""
+        """A new episode: its layout drawn from the seed, or `options={"layout": Layout}`
+        (ValueError for other options or a layout not of this env's shape)."""
+        self._check_open()
+        layout = check_options(options, self.config)
         super().reset(seed=seed)
-        self.layout = (options or {}).get("layout") or draw_layout(self.np_random, self.config)
+        self.layout = layout or draw_layout(self.np_random, self.config)
         self._apply_layout(self.layout)
         # Checked (a small share of an episode): a layout may come from the caller's `options`.
-        self.sim.reset(self.scenario, key=self._key)
+        try:
+            self.sim.reset(self.scenario, key=self._key)
+        except sc.ScenarioError as e:  # a start or box inside another body
+            self.layout = None  # no episode: step() asks for a reset
+            raise ValueError(f"reset: the layout: {str(e).partition(': ')[2]}") from None
         self._lock_boxes()
         self._distance = self._goal_in_robot_frame()[0]
         return self._observation(), self._info(collided=False, stalled=False)
@@ -191,7 +199,10 @@ class GoToGoalEnv(gym.Env):
             body.Lock(plant_context)
 
     def step(self, action):
-        left, right = np.clip(np.asarray(action, dtype=float), -1.0, 1.0)
+        self._check_open()
+        if self.layout is None:
+            raise gym.error.ResetNeeded("call reset() before step()")
+        left, right = check_action(action, self.action_space)  # ValueError
         self.robot.set_power(left, right)
         self.sim.advance(self.config.control_period)
         c = self.config
@@ -211,6 +222,14 @@ class GoToGoalEnv(gym.Env):
             c.time_limit - 1e-9 + self.scenario.simulator_config.start_time)
         info = self._info(collided, stalled, success=success, flipped=flipped)
         return self._observation(), float(reward), bool(success or flipped), truncated, info
+
+    def close(self) -> None:
+        """Releases the simulation; `reset` and `step` then fail (idempotent)."""
+        self.sim = self.robot = None
+
+    def _check_open(self) -> None:
+        if self.sim is None:
+            raise gym.error.ClosedEnvironmentError("this env is closed: make a new one")
 
     # --- measurements ---------------------------------------------------------------------
     def _goal_in_robot_frame(self) -> tuple[float, float]:

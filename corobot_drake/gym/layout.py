@@ -20,6 +20,8 @@ PARKING = (0.0, 50.0)
 """m: where a box that found no place stands (x, y of the first; the next ones 2 m apart in x)."""
 _TRIES = 50
 """Rejection-sampling attempts per box before it is parked."""
+_GOAL_TRIES = 10_000
+"""Rejection-sampling attempts for the goal before the config is refused."""
 
 
 @dc.dataclass(frozen=True)
@@ -47,12 +49,16 @@ def draw_layout(rng: np.random.Generator, config) -> Layout:
     """A layout for `config` (a `GoToGoalConfig`) from `rng`."""
     sx, sy = rng.uniform(-config.start_spread, config.start_spread, 2)
     start = (float(sx), float(sy), float(rng.uniform(-math.pi, math.pi)))
-    while True:
+    for _ in range(_GOAL_TRIES):
         bearing = rng.uniform(-math.pi, math.pi)
         distance = rng.uniform(*config.goal_distance)
         goal = (float(sx + distance * math.cos(bearing)), float(sy + distance * math.sin(bearing)))
         if _giant_box_gap(*goal) > config.goal_clearance:
             break
+    else:  # the config's check leaves only a sliver of goals far enough out
+        raise ValueError(f"GoToGoalConfig.goal_clearance: no goal {config.goal_clearance:g} m "
+                         f"clear of the giant box in {_GOAL_TRIES} draws from start "
+                         f"({sx:.3f}, {sy:.3f}): ask for less clearance or a farther goal")
     boxes = []
     for i in range(config.boxes):
         in_the_way = i == 0 and rng.uniform() < config.blocking_probability

@@ -120,7 +120,7 @@ def public(path: str) -> bool:
             or any(p.fullmatch(path) for p in PUBLIC_PATTERNS))
 
 
-def _host_name(host_header: str) -> str:
+def host_header_name(host_header: str) -> str:
     """The name in a Host header, without its port ("[::1]:8000" -> "::1")."""
     if host_header.startswith("["):
         return host_header[1:].partition("]")[0]
@@ -153,7 +153,7 @@ class AccessGuard:
 
     def refusal(self, method: str, path: str, headers: dict[str, str]):
         """(status, detail, extra headers) for a request to refuse; None to let it through."""
-        host = _host_name(headers.get("host", ""))
+        host = host_header_name(headers.get("host", ""))
         if not self.access.host_allowed(host):
             return 421, (f"this server does not answer to host {host!r} (DNS rebinding "
                          "protection; use the address it printed)"), []

@@ -152,12 +152,14 @@ def http_main(conn, access, port: int, log_level: str, niceness: int) -> None:
 
     import uvicorn
 
+    from corobot_drake.serving.http_limits import http_config, raise_file_limit
     from corobot_drake.serving.transport import RemoteRunner
     from corobot_drake.serving.webapp import create_app
 
     if niceness:
         with contextlib.suppress(OSError):
             os.nice(niceness)
+    raise_file_limit()
     sock = _listen(conn, access.host, port)
     if sock is None:
         return
@@ -171,8 +173,8 @@ def http_main(conn, access, port: int, log_level: str, niceness: int) -> None:
         runner = RemoteRunner(conn, on_close=closed)
     except (TimeoutError, EOFError, OSError):
         return
-    config = uvicorn.Config(create_app(runner, access), log_level=log_level, access_log=False,
-                            lifespan="off", timeout_graceful_shutdown=1)
+    config = http_config(create_app(runner, access), log_level=log_level,
+                         timeout_graceful_shutdown=1)
     server = uvicorn.Server(config)
     server_box.append(server)
     with contextlib.suppress(KeyboardInterrupt):

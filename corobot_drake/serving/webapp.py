@@ -11,6 +11,7 @@ from fastapi import FastAPI
 from fastapi.staticfiles import StaticFiles
 from fastapi_offline import FastAPIOffline
 
+from corobot_drake.serving.http_limits import RequestLimits
 from corobot_drake.serving.routes import ROUTERS, errors
 from corobot_drake.serving.routes.backend import STATIC_DIR, Backend
 from corobot_drake.serving.runner import Runner
@@ -46,6 +47,7 @@ def create_app(runner: Runner, access: Access | None = None) -> FastAPI:
         app.include_router(router)
     app.mount("/static", StaticFiles(directory=STATIC_DIR), name="static")
     app.add_middleware(AccessGuard, access=access)
+    app.add_middleware(RequestLimits)  # added last: it runs first, before any access check
     _declare_bearer(app)
     return app
 

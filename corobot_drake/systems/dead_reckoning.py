@@ -14,7 +14,7 @@ import math
 import numpy as np
 from pydrake.common.value import AbstractValue
 from pydrake.math import RigidTransform
-from pydrake.systems.framework import LeafSystem
+from pydrake.systems.framework import BasicVector, LeafSystem
 
 from corobot_drake.config.scenario import Drive
 from corobot_drake.model import dimensions as dim
@@ -22,6 +22,9 @@ from corobot_drake.systems.odometry import heading_of
 
 _X, _Y, _YAW, _LEFT, _RIGHT = range(5)
 """The state: pose (m, m, rad unwrapped) and the encoder counts it last used."""
+_GIVEN = 5
+"""The `start` parameter: the state's five values, then how many of them are given (0: none,
+3: the pose, 5: the pose and the counts)."""
 
 
 def advance_pose(x: float, y: float, yaw: float, left: float, right: float,
@@ -47,10 +50,11 @@ class DeadReckoning(LeafSystem):
 
     Input `encoder_ticks` (2: front left, front right counts, 600 per revolution, forward
     rolling counts up). Input `chassis_pose` (abstract RigidTransform X_WB) is read once, at
-    initialization: the start pose (x, y, yaw) the odometry integrates from. Output `pose`
-    (3): x, y (m, the chassis origin in the world frame) and yaw (rad in (-pi, pi]) as dead
-    reckoned. Discrete state [x, y, yaw (unwrapped), left ticks, right ticks], updated every
-    `period` s and at initialization.
+    initialization: the start pose (x, y, yaw) the odometry integrates from, unless
+    `SetStart` gave one (a saved scene's). Output `pose` (3): x, y (m, the chassis origin in
+    the world frame) and yaw (rad in (-pi, pi]) as dead reckoned. Discrete state [x, y, yaw
+    (unwrapped), left ticks, right ticks], updated every `period` s and at initialization.
+    Numeric parameter `start` (6): what `SetStart` gave.
     """
 
     def __init__(self, drive: Drive, period: float,
@@ -62,16 +66,35 @@ class DeadReckoning(LeafSystem):
         self._pose = self.DeclareAbstractInputPort("chassis_pose",
                                                    AbstractValue.Make(RigidTransform()))
         self._state = self.DeclareDiscreteState(5)
+        self._start = self.DeclareNumericParameter(BasicVector(np.zeros(6)))
         self.DeclareInitializationDiscreteUpdateEvent(self._initialize)
         self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._update)
         self.DeclareVectorOutputPort("pose", 3, self._calc,
                                      {self.discrete_state_ticket(self._state)})
 
+    def SetStart(self, context, values) -> None:
+        """The state initialization gives: `values` [x, y, yaw] (m, m, rad unwrapped), then
+        optionally the encoder counts [left, right] last integrated (default: the counts at
+        initialization); empty: from the chassis pose. `context` is this system's."""
+        if len(values) not in (0, 3, 5):
+            raise ValueError(f"odometry start: needs 0, 3 or 5 values, got {len(values)}")
+        start = np.zeros(6)
+        start[:len(values)], start[_GIVEN] = values, len(values)
+        context.get_mutable_numeric_parameter(self._start).SetFromVector(start)
+
+    def State(self, context) -> list[float]:
+        """[x, y, yaw (rad, unwrapped), left ticks, right ticks]: what `SetStart` takes to
+        carry on from here. `context` is this system's."""
+        return context.get_discrete_state(self._state).get_value().tolist()
+
     def _initialize(self, context, discrete_state):
+        start = context.get_numeric_parameter(self._start).get_value()
+        given = round(start[_GIVEN])
         X_WB = self._pose.Eval(context)
         x, y, _ = X_WB.translation()
-        left, right = np.rint(self._ticks.Eval(context))
-        discrete_state.set_value(self._state, [x, y, heading_of(X_WB), left, right])
+        state = [x, y, heading_of(X_WB), *np.rint(self._ticks.Eval(context))]
+        state[:given] = start[:given]
+        discrete_state.set_value(self._state, state)
 
     def _update(self, context, discrete_state):
         x, y, yaw, last_left, last_right = context.get_discrete_state(self._state).get_value()

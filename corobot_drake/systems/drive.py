@@ -312,7 +312,9 @@ class CommandSource(LeafSystem):
             self._set_state(state, current)
 
     def _initialize(self, context, state):
-        """The script's commands up to its first Wait or completing command, at once."""
+        """The script's commands up to its first Wait (even of 0 s: what follows it is
+        issued at an update, as a saved scene's rest was going to be) or completing command,
+        at once."""
         original = current = self.get_state(context)
         script, now = self.script(context), context.get_time()
         while True:
@@ -322,6 +324,8 @@ class CommandSource(LeafSystem):
             # Handed to the drive at this instant, as at an update (and so the tail that
             # `_with_ended` looks at never holds more than the last few running commands).
             current = self._with_ended(issued, now)
+            if isinstance(script[issued.next_script_index - 1], Wait):
+                break
         if current is not original:
             self._set_state(state, current)
 
@@ -334,7 +338,9 @@ class CommandSource(LeafSystem):
         command = script[current.next_script_index]
         current = dc.replace(current, next_script_index=current.next_script_index + 1)
         if isinstance(command, Wait):
-            log = _bounded([*current.log, CommandRecord(seq=0, command="Wait", start_time=now)])
+            log = current.log
+            if command.seconds > 0:  # a 0 s Wait only defers the rest to an update: no record
+                log = _bounded([*log, CommandRecord(seq=0, command="Wait", start_time=now)])
             return dc.replace(current, script_blocked_until=now + command.seconds, log=log)
         current = self._with_command(current, command, now)
         completing = isinstance(command, COMPLETING_COMMANDS)
@@ -418,7 +424,8 @@ class DriveController(LeafSystem):
     Output `drive_status` (5, `DriveStatus`: read it by name).
     Output `axle_speed` [front_left, front_right, rear_left, rear_right] measured, rad/s.
     Discrete state, updated every `drive.control_period` s: the seq of the last request acted
-    on, the `DriveStatus` and the slewed axle speeds (and the desired state made from them).
+    on, the `DriveStatus`, the slewed axle speeds (and the desired state made from them) and
+    the wheels' hold angles.
     A new request sets the enable level and (when enabled) the motion target; disabled,
     everything is held at zero; the axle speeds then move towards the targets by at most
     `drive.slew_rate * drive.control_period`, or jump to them for a request marked
@@ -553,6 +560,17 @@ class DriveController(LeafSystem):
         context = self.GetMyContextFromRoot(root_context)
         return ([float(v) for v in context.get_discrete_state(self._status).get_value()[
             _TARGETS]], [float(v) for v in context.get_discrete_state(self._axle).get_value()])
+
+    def hold_angles(self, root_context) -> list[float]:
+        """rad, per wheel (`dimensions.WHEEL_NAMES` order): where the hold keeps each wheel
+        while it rests (a wheel not held: its angle at the last update)."""
+        context = self.GetMyContextFromRoot(root_context)
+        return [float(a) for a in context.get_discrete_state(self._hold_angle).get_value()]
+
+    def SetHoldAngles(self, context, angles) -> None:
+        """Sets the hold angles (rad, per wheel): an initial condition (a saved scene; the
+        wheels' own angles when none is given). `context` is this system's."""
+        context.SetDiscreteState(self._hold_angle, np.asarray(angles, dtype=float))
 
     def Halt(self, context) -> None:
         """Stops the wheels at once (powers, targets and slewed axle speeds to 0): what a

@@ -1,0 +1,147 @@
+"""The HTTP server against slow and oversized clients (`serving.http_limits`): the real uvicorn
+server as `--serve` configures it, on a loopback socket, serving the app of a real simulation
+behind a token; raw sockets play the clients. The request deadline is 1 s here (10 s served),
+so that waiting for it stays short; every wait is on an event (a closed socket, an answer)
+with a bound."""
+
+import socket
+import threading
+
+import httpx
+import pytest
+
+from conftest import make_sim
+from corobot_drake.serving.http_limits import MAX_BODY_BYTES, MAX_HEAD_BYTES, http_config
+from corobot_drake.serving.security import Access
+
+TOKEN = "s3cret"
+DEADLINE = 1.0
+"""s: the request deadline the test server has."""
+WAIT = 20.0
+"""s: the most any socket waits for the server (far beyond the deadline)."""
+ROBOT = "/robots/corobot"
+
+
+@pytest.fixture(scope="module")
+def server():
+    """(host, port) of the served app, with the token TOKEN."""
+    import uvicorn
+
+    from corobot_drake.serving.runner import SimRunner
+    from corobot_drake.serving.webapp import create_app
+
+    runner = SimRunner(make_sim()).start()
+    sock = socket.create_server(("127.0.0.1", 0), backlog=2048)
+    app = create_app(runner, Access("127.0.0.1", TOKEN))
+    uv = uvicorn.Server(http_config(app, request_timeout=DEADLINE))
+    thread = threading.Thread(target=uv.run, kwargs={"sockets": [sock]}, daemon=True)
+    thread.start()  # connections queue on the listening socket until it serves
+    yield sock.getsockname()
+    uv.should_exit = True
+    thread.join(WAIT)
+    runner.stop()
+
+
+def _connect(address) -> socket.socket:
+    client = socket.create_connection(address, timeout=WAIT)
+    return client
+
+
+def _answer(client: socket.socket) -> bytes:
+    """Everything the server sends until it closes the connection."""
+    data = b""
+    while chunk := client.recv(65536):
+        data += chunk
+    return data
+
+
+def _legitimate(address) -> httpx.Response:
+    return httpx.get(f"http://{address[0]}:{address[1]}/simulation", timeout=WAIT,
+                     headers={"Authorization": f"Bearer {TOKEN}"})
+
+
+def test_slow_clients_are_cut_off_at_the_deadline_and_others_are_served(server):
+    """300 connections that send half a request head, and one that sends its head a byte at
+    a time, are all closed by the server once the deadline passes; meanwhile and after, a
+    whole request is answered."""
+    slow = [_connect(server) for _ in range(300)]
+    for client in slow:
+        client.sendall(b"GET /simulation HTTP/1.1\r\nHost: 127.0.0.1\r\n")
+    assert _legitimate(server).status_code == 200  # served while they hang
+    drip = _connect(server)
+    drip.settimeout(0.05)  # paces the drip: one byte per 50 ms unless the server closes
+    head = b"GET /simulation HTTP/1.1\r\nHost: 127.0.0.1\r\nX-Slow: " + b"a" * 2000
+    sent, closed = 0, False
+    while sent < len(head) and not closed:
+        try:
+            drip.sendall(head[sent:sent + 1])
+            sent += 1
+            closed = drip.recv(1) == b""
+        except TimeoutError:
+            continue
+        except OSError:  # reset: the server closed it
+            closed = True
+    assert closed and sent < len(head), f"sent {sent} of {len(head)} bytes unhindered"
+    for client in slow:
+        assert _answer(client) == b""  # closed by the server, nothing answered
+        client.close()
+    assert _legitimate(server).status_code == 200
+
+
+def test_an_oversized_head_is_refused_before_the_token_check(server):
+    """A head of over MAX_HEAD_BYTES gets 400 as soon as the limit is passed (not read to
+    its end, and not 401: no token was sent)."""
+    with _connect(server) as client:
+        client.sendall(b"GET /simulation HTTP/1.1\r\nHost: 127.0.0.1\r\nX-Big: "
+                       + b"a" * (4 * MAX_HEAD_BYTES))
+        assert _answer(client).startswith(b"HTTP/1.1 400 ")
+
+
+@pytest.mark.parametrize("headers, status", [
+    (f"Content-Length: {10 * 1024 * 1024}", b"413"),
+    (f"Content-Length: {MAX_BODY_BYTES + 1}", b"413"),
+    ("Transfer-Encoding: chunked", b"411"),
+])
+def test_an_oversized_or_unsized_body_is_refused_unread(server, headers, status):
+    """Answered on the head alone (the body is never sent here), before the token check (no
+    token is sent), and the connection closed."""
+    with _connect(server) as client:
+        client.sendall(f"POST {ROBOT}/drive/set_power HTTP/1.1\r\nHost: 127.0.0.1\r\n"
+                       f"Content-Type: application/json\r\n{headers}\r\n\r\n".encode())
+        answer = _answer(client)
+    assert answer.startswith(b"HTTP/1.1 " + status + b" "), answer[:200]
+    assert b'"detail"' in answer
+
+
+def test_two_host_headers_get_400(server):
+    """h11 refuses them on the wire; `RequestLimits` too, for a server that would not."""
+    from corobot_drake.serving.http_limits import RequestLimits
+
+    with _connect(server) as client:
+        client.sendall(b"GET /simulation HTTP/1.1\r\nHost: 127.0.0.1\r\nHost: evil.example\r\n"
+                       b"Authorization: Bearer " + TOKEN.encode() + b"\r\n\r\n")
+        answer = _answer(client)
+    assert answer.startswith(b"HTTP/1.1 400 ")
+    limits = RequestLimits(app=None)
+    assert limits.refusal([(b"host", b"127.0.0.1"), (b"host", b"evil.example")]) == (
+        400, "a request has one Host header (RFC 9112)")
+    assert limits.refusal([(b"host", b"127.0.0.1"), (b"content-length", b"12")]) is None
+
+
+def test_a_request_within_the_limits_is_served(server):
+    base = f"http://{server[0]}:{server[1]}"
+    auth = {"Authorization": f"Bearer {TOKEN}"}
+    r = httpx.post(f"{base}{ROBOT}/drive/set_power", json={"left": 0.0, "right": 0.0},
+                   headers=auth, timeout=WAIT)
+    assert r.status_code == 200, r.text
+    r = httpx.get(f"{base}/services", headers=auth, timeout=WAIT)
+    assert r.status_code == 200 and r.json()["services"][0]["state_url"] == f"{ROBOT}/drive"
+
+
+@pytest.mark.parametrize("name", ["r?x", "a b", "r%20", "..", "ü"])
+def test_robot_names_that_are_not_url_path_segments_are_refused_at_load(name):
+    from corobot_drake.config.scenario import ScenarioError, load_scenario
+
+    with pytest.raises(ScenarioError, match="a robot name must be letters, digits"):
+        load_scenario(data=f'robots: {{"{name}": {{}}}}')
+    assert list(load_scenario(data='robots: {"r_1.b-c~": {}}').robots) == ["r_1.b-c~"]
