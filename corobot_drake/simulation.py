@@ -28,10 +28,10 @@ from pydrake.systems.framework import EventStatus
 
 from corobot_drake import limits
 from corobot_drake.config import scenario as sc
-from corobot_drake.config.bounds import Range, bound_of
 from corobot_drake.config.placement import OVERLAP_TOLERANCE
 from corobot_drake.config.poses import ground_pose, transform_from
 from corobot_drake.config.validate import check_scenario
+from corobot_drake.limits import Range, bound_of
 from corobot_drake.model import dimensions as dim
 from corobot_drake.readings import (
     BodyPose,
@@ -90,7 +90,7 @@ def check_command(command):
         names = ", ".join(c.__name__ for c in _ISSUABLE)
         raise ValueError(f"a command must be one of {names}; got {command!r}")
     name = type(command).__name__
-    # The ranges are the command fields' own bounds (`config.bounds`, made of `limits`).
+    # The ranges are the command fields' own bounds (`limits`).
     checked = {f.name: limits.number(f"{name}.{f.name}", getattr(command, f.name),
                                      bound.low, bound.high, low_open=bound.low_open)
                for f in dc.fields(command)

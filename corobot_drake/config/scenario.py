@@ -23,9 +23,9 @@ from pydrake.multibody.plant import MultibodyPlantConfig
 from pydrake.systems.analysis import SimulatorConfig
 from pydrake.systems.sensors import CameraConfig
 
-from corobot_drake.config import bounds as lim
-from corobot_drake.config.bounds import OneOf, Range, bounded
+from corobot_drake import limits as lim
 from corobot_drake.config.sensors import IrSensorConfig, default_camera_config, default_ir_sensors
+from corobot_drake.limits import OneOf, Range, bounded
 from corobot_drake.model import dimensions as dim
 from corobot_drake.model.sdf import VISUALS, WheelContact
 
@@ -243,7 +243,7 @@ class DriveDistance:
     `power` in (0, 1]; ends succeeded on arrival (SPEC "Commands that complete")."""
 
     distance: float = bounded(0.0, lim.DISTANCE)
-    power: float = bounded(0.5, lim.POWER)
+    power: float = bounded(0.5, lim.DRIVE_POWER)
     start: list[float] = dc.field(default_factory=list)
     """[x, y, yaw_deg] (m, m, deg): the pose the distance counts from (and, closed loop, the
     heading held); empty: where the robot is when the command starts. A saved scene resumes
@@ -261,7 +261,7 @@ class RotateDegrees:
     at `power` in (0, 1]; ends succeeded on arrival."""
 
     degrees: float = bounded(0.0, lim.DEGREES)
-    power: float = bounded(0.5, lim.POWER)
+    power: float = bounded(0.5, lim.DRIVE_POWER)
     start: list[float] = dc.field(default_factory=list)
     """[x, y, yaw_deg] (m, m, deg): the heading the turn counts from, as if read at the
     control update before it starts (within +-180 deg of the heading then; x and y are not
@@ -278,8 +278,8 @@ class RotateDegrees:
 class SetPose:
     """Teleport the robot to (x, y) m facing `yaw_deg`: on the ground, at rest, wheels stopped."""
 
-    x: float = bounded(0.0, lim.SET_POSITION)
-    y: float = bounded(0.0, lim.SET_POSITION)
+    x: float = bounded(0.0, lim.POSITION)
+    y: float = bounded(0.0, lim.POSITION)
     yaw_deg: float = bounded(0.0, lim.YAW_DEG)
 
 

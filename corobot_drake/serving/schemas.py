@@ -25,11 +25,11 @@ class _Body(BaseModel):
     model_config = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False)
 
 
-Power = Annotated[float, Field(ge=limits.POWER[0], le=limits.POWER[1],
+Power = Annotated[float, Field(ge=limits.SIDE_POWER.low, le=limits.SIDE_POWER.high,
                                description="power in [-1, 1]")]
-DrivePower = Annotated[float, Field(gt=limits.DRIVE_POWER[0], le=limits.DRIVE_POWER[1],
+DrivePower = Annotated[float, Field(gt=limits.DRIVE_POWER.low, le=limits.DRIVE_POWER.high,
                                     description="power in (0, 1]")]
-Speed = Annotated[float, Field(ge=limits.SPEED[0], le=limits.SPEED[1],
+Speed = Annotated[float, Field(ge=limits.SIDE_SPEED.low, le=limits.SIDE_SPEED.high,
                                description="rim speed, m/s")]
 WaitTimeout = Annotated[float, Field(gt=0.0, le=600.0,
                                      description="s to hold the request open (wall clock)")]
@@ -46,9 +46,9 @@ class SpeedRequest(_Body):
 
 
 class VelocityRequest(_Body):
-    linear: Annotated[float, Field(ge=limits.LINEAR[0], le=limits.LINEAR[1],
+    linear: Annotated[float, Field(ge=limits.LINEAR_SPEED.low, le=limits.LINEAR_SPEED.high,
                                    description="m/s forward (the drive clamps the axle speed)")]
-    angular: Annotated[float, Field(ge=limits.ANGULAR[0], le=limits.ANGULAR[1],
+    angular: Annotated[float, Field(ge=limits.YAW_RATE.low, le=limits.YAW_RATE.high,
                                     description="rad/s yaw rate, positive turns left")]
 
 
@@ -67,21 +67,21 @@ class _Completing(_Body):
 
 
 class DriveDistanceRequest(_Completing):
-    distance: Annotated[float, Field(ge=limits.DISTANCE[0], le=limits.DISTANCE[1],
+    distance: Annotated[float, Field(ge=limits.DISTANCE.low, le=limits.DISTANCE.high,
                                      description="m; negative: backwards")]
     power: DrivePower = 0.2
 
 
 class RotateDegreesRequest(_Completing):
-    degrees: Annotated[float, Field(ge=limits.DEGREES[0], le=limits.DEGREES[1],
+    degrees: Annotated[float, Field(ge=limits.DEGREES.low, le=limits.DEGREES.high,
                                     description="degrees; positive turns left (CCW)")]
     power: DrivePower = 0.2
 
 
 class SetPoseRequest(_Completing):
-    x: Annotated[float, Field(ge=limits.POSITION[0], le=limits.POSITION[1], description="m")]
-    y: Annotated[float, Field(ge=limits.POSITION[0], le=limits.POSITION[1], description="m")]
-    yaw_deg: Annotated[float, Field(ge=limits.YAW_DEG[0], le=limits.YAW_DEG[1])] = 0.0
+    x: Annotated[float, Field(ge=limits.POSITION.low, le=limits.POSITION.high, description="m")]
+    y: Annotated[float, Field(ge=limits.POSITION.low, le=limits.POSITION.high, description="m")]
+    yaw_deg: Annotated[float, Field(ge=limits.YAW_DEG.low, le=limits.YAW_DEG.high)] = 0.0
 
 
 # --- response descriptions (for the OpenAPI document) --------------------------------------
