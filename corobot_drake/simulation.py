@@ -15,7 +15,6 @@ import dataclasses as dc
 import logging
 import math
 import time
-import typing
 from pathlib import Path
 
 import numpy as np
@@ -26,12 +25,11 @@ from pydrake.multibody.math import SpatialVelocity
 from pydrake.systems.analysis import ApplySimulatorConfig, Simulator
 from pydrake.systems.framework import EventStatus
 
-from corobot_drake import limits
+from corobot_drake import commands, limits
 from corobot_drake.config import scenario as sc
 from corobot_drake.config.placement import OVERLAP_TOLERANCE
 from corobot_drake.config.poses import ground_pose, transform_from
 from corobot_drake.config.validate import check_scenario
-from corobot_drake.limits import Range, bound_of
 from corobot_drake.model import dimensions as dim
 from corobot_drake.readings import (
     BodyPose,
@@ -42,7 +40,7 @@ from corobot_drake.readings import (
 )
 from corobot_drake.sensors.ir_sensor import noise_key
 from corobot_drake.station import RobotParts, Station, build_station
-from corobot_drake.systems.drive import CommandRecord, DriveStatus, check_finite
+from corobot_drake.systems.drive import CommandRecord, DriveStatus
 from corobot_drake.systems.odometry import DriveState
 from corobot_drake.systems.runlog import COLUMNS, RUN_LOG_CHUNK, log_rows, write_csv
 
@@ -78,32 +76,6 @@ class CommandHandle:
         return self.result()
 
 
-_ISSUABLE = tuple(c for c in typing.get_args(sc.Command) if c is not sc.Wait)
-"""The commands `Robot.issue` takes: the scenario's, but `Wait` (a script's pause; from Python,
-`Simulation.advance`)."""
-
-
-def check_command(command):
-    """`command` with its numbers as floats; ValueError, naming the field and its allowed
-    range (`limits`), unless it is a command the API can issue with every argument in range."""
-    if not isinstance(command, _ISSUABLE):
-        names = ", ".join(c.__name__ for c in _ISSUABLE)
-        raise ValueError(f"a command must be one of {names}; got {command!r}")
-    name = type(command).__name__
-    # The ranges are the command fields' own bounds (`limits`).
-    checked = {f.name: limits.number(f"{name}.{f.name}", getattr(command, f.name),
-                                     bound.low, bound.high, low_open=bound.low_open)
-               for f in dc.fields(command)
-               if f.type is float and isinstance(bound := bound_of(f), Range)}
-    if isinstance(command, sc.Enable) and not isinstance(command.enabled, bool | np.bool_):
-        raise ValueError(f"Enable.enabled must be True or False, got {command.enabled!r}")
-    command = dc.replace(command, **checked)
-    if isinstance(command, sc.Enable):
-        command = sc.Enable(bool(command.enabled))
-    check_finite(command)  # the fields of commands added later
-    return command
-
-
 def _check_timeout(timeout: float | None) -> float | None:
     """A command's wait limit: None (no limit) or a number of simulated s > 0."""
     if timeout is None:
@@ -123,37 +95,48 @@ class Robot:
     def issue(self, command) -> int:
         """Issues a scenario command dataclass now; returns its sequence number. ValueError
         (naming the allowed range) for a command the API does not take or an argument out of
-        its range (`limits`)."""
-        command = check_command(command)
+        its range (`commands.check`)."""
+        command = commands.check(command)
         source = self._parts.command_source
-        return source.Issue(source.GetMyMutableContextFromRoot(self._sim.context), command)
+        seq = source.Issue(source.GetMyMutableContextFromRoot(self._sim.context), command)
+        self._apply_teleport()  # a SetPose takes the robot there now
+        return seq
+
+    def command(self, method: str, *args, **kwargs):
+        """Issues the command `method` names (`commands.COMMANDS`: `set_power`, ...) with its
+        arguments, as the methods below do: returns its sequence number, or a `CommandHandle`
+        for a command that completes (without waiting). ValueError for an unknown command or
+        an argument out of its range, TypeError for arguments it does not take."""
+        spec = commands.by_method(method)
+        seq = self.issue(commands.make(method, *args, **kwargs))
+        return CommandHandle(self, seq) if spec.completing else seq
 
     def set_power(self, left: float, right: float) -> int:
         """Power per side in [-1, 1]: axle speed = power x MotorTorqueScaling."""
-        return self.issue(sc.SetPower(left, right))
+        return self.command("set_power", left, right)
 
     def set_speed(self, left: float, right: float) -> int:
-        """Rim speed per side, m/s, in [-5, 5] (`limits.SPEED`; the drive clamps the axle
+        """Rim speed per side, m/s, in [-5, 5] (`limits.SIDE_SPEED`; the drive clamps the axle
         speed to its max axle speed)."""
-        return self.issue(sc.SetSpeed(left, right))
+        return self.command("set_speed", left, right)
 
     def set_velocity(self, linear: float, angular: float) -> int:
         """Chassis velocity, ROS `cmd_vel` style: `linear` m/s forward, `angular` rad/s
-        (positive: left), through the skid-steer kinematics (`sc.SetVelocity`); in
+        (positive: left), through the skid-steer kinematics (`commands.SetVelocity`); in
         [-5, 5] m/s and [-50, 50] rad/s (`limits`; ValueError otherwise)."""
-        return self.issue(sc.SetVelocity(linear, angular))
+        return self.command("set_velocity", linear, angular)
 
     def all_stop(self) -> int:
-        return self.issue(sc.AllStop())
+        return self.command("all_stop")
 
     def enable(self, enabled: bool = True) -> int:
         """Enables (True) or disables (False) the drive."""
-        return self.issue(sc.Enable(enabled))
+        return self.command("enable", enabled)
 
     def drive_distance_async(self, distance: float, power: float = 0.5) -> CommandHandle:
         """Starts driving straight |distance| m (distance in [-100, 100]; negative: backwards)
         at `power` in (0, 1]."""
-        return CommandHandle(self, self.issue(sc.DriveDistance(distance, power)))
+        return self.command("drive_distance", distance, power)
 
     def drive_distance(self, distance: float, power: float = 0.5,
                        timeout: float | None = 300.0) -> CommandResult:
@@ -166,7 +149,7 @@ class Robot:
     def rotate_degrees_async(self, degrees: float, power: float = 0.5) -> CommandHandle:
         """Starts turning in place by `degrees` in [-3600, 3600] (positive: counter-clockwise,
         left) at `power` in (0, 1]."""
-        return CommandHandle(self, self.issue(sc.RotateDegrees(degrees, power)))
+        return self.command("rotate_degrees", degrees, power)
 
     def rotate_degrees(self, degrees: float, power: float = 0.5,
                        timeout: float | None = 300.0) -> CommandResult:
@@ -181,10 +164,8 @@ class Robot:
         (succeeded) once the robot has settled there (`motion.POSE_SETTLE_TIME`), or at once
         failed, reason `blocked`, if the robot there would be inside another body
         (`obstacle_at`): then it stays where it was (its drive stopping). x, y in
-        [-1000, 1000] m, yaw_deg in [-3600, 3600] (ValueError otherwise)."""
-        handle = CommandHandle(self, self.issue(sc.SetPose(x, y, yaw_deg)))
-        self._apply_teleport()
-        return handle
+        [-10000, 10000] m, yaw_deg in [-3600, 3600] (ValueError otherwise)."""
+        return self.command("set_pose", x, y, yaw_deg)
 
     def _apply_teleport(self) -> bool:
         """Applies a pending SetPose to the plant (and stops the drive); True if there was one."""

@@ -11,6 +11,7 @@ import dataclasses as dc
 import math
 from typing import Any
 
+from corobot_drake import commands
 from corobot_drake.model import dimensions as dim
 from corobot_drake.readings import IrReading
 
@@ -54,8 +55,8 @@ class RobotInfo:
     def capabilities(self) -> dict[str, bool]:
         """The HTTP contract's `capabilities`: every robot has the whole drive API and the IR
         API (with the sensors its scenario gives it); the camera depends on the scenario."""
-        return {"drive_distance": True, "rotate_degrees": True, "set_pose": True,
-                "drive_state": True, "ir": True, "camera": self.has_camera}
+        completing = {spec.method: True for spec in commands.ISSUABLE if spec.completing}
+        return {**completing, "drive_state": True, "ir": True, "camera": self.has_camera}
 
 
 def command_json(record) -> dict:
