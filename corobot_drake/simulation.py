@@ -25,7 +25,7 @@ from pydrake.multibody.math import SpatialVelocity
 from pydrake.systems.analysis import ApplySimulatorConfig, Simulator
 from pydrake.systems.framework import EventStatus
 
-from corobot_drake import commands, limits
+from corobot_drake import commands, limits, signals
 from corobot_drake.config import scenario as sc
 from corobot_drake.config.placement import OVERLAP_TOLERANCE
 from corobot_drake.config.poses import ground_pose, transform_from
@@ -303,36 +303,38 @@ class Robot:
             self._sim.context)
         return OdometryPose(float(p[0]), float(p[1]), float(p[2]))
 
-    def _by_wheel(self, port: str) -> dict[str, float]:
-        v = self._sim.station.diagram.GetOutputPort(f"{self.name}.{port}").Eval(
+    def signal(self, name: str):
+        """The value now of the signal `name` read from its port (`signals.SIGNALS`), floats: by
+        wheel name for a per-wheel signal (`dimensions.WHEEL_NAMES` order), else the port's
+        value (a list when it has several)."""
+        spec = signals.SIGNALS[name]
+        v = self._sim.station.diagram.GetOutputPort(f"{self.name}.{spec.port}").Eval(
             self._sim.context)
-        return {w: float(x) for w, x in zip(dim.WHEEL_NAMES, v, strict=True)}
+        if spec.per_wheel:
+            return {w: float(x) for w, x in zip(dim.WHEEL_NAMES, v, strict=True)}
+        return float(v[0]) if len(v) == 1 else [float(x) for x in v]
 
     def wheel_loads(self) -> dict[str, float]:
         """Each wheel's load, N: the vertical component of its contact forces
         (`systems.contact`), by wheel name; at rest they sum to the robot's weight."""
-        return self._by_wheel("wheel_loads")
+        return self.signal("wheel_loads")
 
     def wheel_slip_ratio(self) -> dict[str, float]:
         """Each wheel's longitudinal slip ratio (`systems.contact`), by wheel name:
         (rim speed - ground speed) / the faster, + traction (the wheel turns faster than it
         travels, forwards or backwards), - braking; 0 at rest."""
-        return self._by_wheel("wheel_slip_ratio")
+        return self.signal("wheel_slip_ratio")
 
     def wheel_slip_angle(self) -> dict[str, float]:
         """Each wheel's slip angle, deg (`systems.contact`), by wheel name: atan2(its centre's
         speed across the heading (+ left), its speed along it); 0 at rest."""
-        return self._by_wheel("wheel_slip_angle")
-
-    def _scalar(self, port: str) -> float:
-        return float(self._sim.station.diagram.GetOutputPort(f"{self.name}.{port}").Eval(
-            self._sim.context)[0])
+        return self.signal("wheel_slip_angle")
 
     def tip_margin_deg(self) -> float:
         """How far (deg) the robot can still roll or pitch before its centre of mass passes
         an edge of the wheels' support polygon (`systems.stability`); upright on level
         ground 37.4 deg (pitch), negative while tipping over."""
-        return self._scalar("tip_margin")
+        return self.signal("tip_margin")
 
     def min_tip_margin_deg(self) -> float:
         """The least `tip_margin_deg` so far, deg: over the run log's rows (every 10 ms; with
@@ -445,6 +447,14 @@ class Robot:
         log = source.current_state(source.GetMyContextFromRoot(self._sim.context)).log
         return log[-1] if log else None
 
+    def telemetry(self) -> dict:
+        """The contact telemetry now, as `summary` reports it (`signals.TELEMETRY`: each
+        signal at its `summary` key)."""
+        out: dict = {}
+        for spec in signals.TELEMETRY:
+            signals.put(out, spec.summary, spec.summary_value(self.signal(spec.name)))
+        return out
+
     def summary(self) -> dict:
         """The robot's figures now. `wheel_loads_N` (N) and `slip`'s `ratio` and
         `angle_deg` lists are per wheel in `dimensions.WHEEL_NAMES` order: front left, front
@@ -462,10 +472,7 @@ class Robot:
             "heading": self.heading(),
             "position": list(self.position()),
             "odometry": dc.asdict(self.odometry()),
-            "wheel_loads_N": list(self.wheel_loads().values()),
-            "slip": {"ratio": list(self.wheel_slip_ratio().values()),
-                     "angle_deg": list(self.wheel_slip_angle().values())},
-            "tip_margin_deg": self.tip_margin_deg(),
+            **self.telemetry(),
             "min_tip_margin_deg": self.min_tip_margin_deg(),
             "commands": [
                 {"command": r.command, "status": r.status, "reason": r.reason,
