@@ -19,11 +19,11 @@ from pathlib import Path
 
 from corobot_drake import limits
 from corobot_drake.cli import directory_problem, file_problem
-from corobot_drake.config.bounds import Range
 from corobot_drake.config.scenario import ScenarioError
+from corobot_drake.limits import Range
 from corobot_drake.tuning.sysid import LogError
 
-WORKERS = Range(*limits.WORKERS, why="Ray workers; None: the machine's cores")
+WORKERS = limits.WORKERS
 """--workers of the tools that run a study (as `python -m corobot_drake.study`)."""
 TICKS_PER_REVOLUTION = Range(1, 1_000_000, why="encoder counts per wheel revolution")
 BENCH_SECONDS = Range(0.0, 3600.0, low_open=True, unit="s")

@@ -21,9 +21,9 @@ from typing import TYPE_CHECKING
 
 from pydrake.systems.sensors import CameraConfig
 
-from corobot_drake.config.bounds import DRAKE_BOUNDS, DURATION, SIMULATION_DURATION, Range
+from corobot_drake.config.bounds import DRAKE_BOUNDS
 from corobot_drake.config.scenario import ScenarioError, load_scenario
-from corobot_drake.limits import LIVE_RUN_LOG_WINDOW
+from corobot_drake.limits import DURATION, LIVE_RUN_LOG_WINDOW, SIMULATION_DURATION, Range
 from corobot_drake.resources import DEFAULT_SCENARIO, scenario_path
 
 if TYPE_CHECKING:  # imported when a run starts: a bad input stops before pydrake's systems load

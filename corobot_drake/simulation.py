@@ -17,7 +17,6 @@ import logging
 import math
 import threading
 import time
-import typing
 from pathlib import Path
 
 import numpy as np
@@ -28,9 +27,8 @@ from pydrake.multibody.math import SpatialVelocity
 from pydrake.systems.analysis import ApplySimulatorConfig, Simulator
 from pydrake.systems.framework import EventStatus
 
-from corobot_drake import limits
+from corobot_drake import commands, limits, signals
 from corobot_drake.config import scenario as sc
-from corobot_drake.config.bounds import Range, bound_of
 from corobot_drake.config.placement import OVERLAP_TOLERANCE
 from corobot_drake.config.poses import ground_pose, transform_from
 from corobot_drake.config.validate import check_scenario
@@ -44,7 +42,7 @@ from corobot_drake.readings import (
 )
 from corobot_drake.sensors.ir_sensor import noise_key
 from corobot_drake.station import RobotParts, Station, build_station
-from corobot_drake.systems.drive import CommandRecord, DriveStatus, check_finite
+from corobot_drake.systems.drive import CommandRecord, DriveStatus
 from corobot_drake.systems.odometry import DriveState
 from corobot_drake.systems.runlog import COLUMNS, RUN_LOG_CHUNK, log_rows, write_csv
 
@@ -103,32 +101,6 @@ class CommandHandle:
         return self.result()
 
 
-_ISSUABLE = tuple(c for c in typing.get_args(sc.Command) if c is not sc.Wait)
-"""The commands `Robot.issue` takes: the scenario's, but `Wait` (a script's pause; from Python,
-`Simulation.advance`)."""
-
-
-def check_command(command):
-    """`command` with its numbers as floats; ValueError, naming the field and its allowed
-    range (`limits`), unless it is a command the API can issue with every argument in range."""
-    if not isinstance(command, _ISSUABLE):
-        names = ", ".join(c.__name__ for c in _ISSUABLE)
-        raise ValueError(f"a command must be one of {names}; got {command!r}")
-    name = type(command).__name__
-    # The ranges are the command fields' own bounds (`config.bounds`, made of `limits`).
-    checked = {f.name: limits.number(f"{name}.{f.name}", getattr(command, f.name),
-                                     bound.low, bound.high, low_open=bound.low_open)
-               for f in dc.fields(command)
-               if f.type is float and isinstance(bound := bound_of(f), Range)}
-    if isinstance(command, sc.Enable) and not isinstance(command.enabled, bool | np.bool_):
-        raise ValueError(f"Enable.enabled must be True or False, got {command.enabled!r}")
-    command = dc.replace(command, **checked)
-    if isinstance(command, sc.Enable):
-        command = sc.Enable(bool(command.enabled))
-    check_finite(command)  # the fields of commands added later
-    return command
-
-
 def _check_timeout(timeout: float | None) -> float | None:
     """A command's wait limit: None (no limit) or a number of simulated s > 0."""
     if timeout is None:
@@ -149,37 +121,48 @@ class Robot:
     def issue(self, command) -> int:
         """Issues a scenario command dataclass now; returns its sequence number. ValueError
         (naming the allowed range) for a command the API does not take or an argument out of
-        its range (`limits`)."""
-        command = check_command(command)
+        its range (`commands.check`)."""
+        command = commands.check(command)
         source = self._parts.command_source
-        return source.Issue(source.GetMyMutableContextFromRoot(self._sim.context), command)
+        seq = source.Issue(source.GetMyMutableContextFromRoot(self._sim.context), command)
+        self._apply_teleport()  # a SetPose takes the robot there now
+        return seq
+
+    def command(self, method: str, *args, **kwargs):
+        """Issues the command `method` names (`commands.COMMANDS`: `set_power`, ...) with its
+        arguments, as the methods below do: returns its sequence number, or a `CommandHandle`
+        for a command that completes (without waiting). ValueError for an unknown command or
+        an argument out of its range, TypeError for arguments it does not take."""
+        spec = commands.by_method(method)
+        seq = self.issue(commands.make(method, *args, **kwargs))
+        return CommandHandle(self, seq) if spec.completing else seq
 
     def set_power(self, left: float, right: float) -> int:
         """Power per side in [-1, 1]: axle speed = power x MotorTorqueScaling."""
-        return self.issue(sc.SetPower(left, right))
+        return self.command("set_power", left, right)
 
     def set_speed(self, left: float, right: float) -> int:
-        """Rim speed per side, m/s, in [-5, 5] (`limits.SPEED`; the drive clamps the axle
+        """Rim speed per side, m/s, in [-5, 5] (`limits.SIDE_SPEED`; the drive clamps the axle
         speed to its max axle speed)."""
-        return self.issue(sc.SetSpeed(left, right))
+        return self.command("set_speed", left, right)
 
     def set_velocity(self, linear: float, angular: float) -> int:
         """Chassis velocity, ROS `cmd_vel` style: `linear` m/s forward, `angular` rad/s
-        (positive: left), through the skid-steer kinematics (`sc.SetVelocity`); in
+        (positive: left), through the skid-steer kinematics (`commands.SetVelocity`); in
         [-5, 5] m/s and [-50, 50] rad/s (`limits`; ValueError otherwise)."""
-        return self.issue(sc.SetVelocity(linear, angular))
+        return self.command("set_velocity", linear, angular)
 
     def all_stop(self) -> int:
-        return self.issue(sc.AllStop())
+        return self.command("all_stop")
 
     def enable(self, enabled: bool = True) -> int:
         """Enables (True) or disables (False) the drive."""
-        return self.issue(sc.Enable(enabled))
+        return self.command("enable", enabled)
 
     def drive_distance_async(self, distance: float, power: float = 0.5) -> CommandHandle:
         """Starts driving straight |distance| m (distance in [-100, 100]; negative: backwards)
         at `power` in (0, 1]."""
-        return CommandHandle(self, self.issue(sc.DriveDistance(distance, power)))
+        return self.command("drive_distance", distance, power)
 
     def drive_distance(self, distance: float, power: float = 0.5,
                        timeout: float | None = 300.0) -> CommandResult:
@@ -192,7 +175,7 @@ class Robot:
     def rotate_degrees_async(self, degrees: float, power: float = 0.5) -> CommandHandle:
         """Starts turning in place by `degrees` in [-3600, 3600] (positive: counter-clockwise,
         left) at `power` in (0, 1]."""
-        return CommandHandle(self, self.issue(sc.RotateDegrees(degrees, power)))
+        return self.command("rotate_degrees", degrees, power)
 
     def rotate_degrees(self, degrees: float, power: float = 0.5,
                        timeout: float | None = 300.0) -> CommandResult:
@@ -208,10 +191,8 @@ class Robot:
         (succeeded) once the robot has settled there (`motion.POSE_SETTLE_TIME`), or at once
         failed, reason `blocked`, if the robot there would be inside another body
         (`obstacle_at`): then it stays where it was (its drive stopping). x, y in
-        [-1000, 1000] m, yaw_deg in [-3600, 3600] (ValueError otherwise)."""
-        handle = CommandHandle(self, self.issue(sc.SetPose(x, y, yaw_deg)))
-        self._apply_teleport()
-        return handle
+        [-10000, 10000] m, yaw_deg in [-3600, 3600] (ValueError otherwise)."""
+        return self.command("set_pose", x, y, yaw_deg)
 
     def _apply_teleport(self) -> bool:
         """Applies a pending SetPose to the plant (and stops the drive); True if there was one."""
@@ -356,36 +337,38 @@ class Robot:
             self._sim.context)
         return OdometryPose(float(p[0]), float(p[1]), float(p[2]))
 
-    def _by_wheel(self, port: str) -> dict[str, float]:
-        v = self._sim.station.diagram.GetOutputPort(f"{self.name}.{port}").Eval(
+    def signal(self, name: str):
+        """The value now of the signal `name` read from its port (`signals.SIGNALS`), floats: by
+        wheel name for a per-wheel signal (`dimensions.WHEEL_NAMES` order), else the port's
+        value (a list when it has several)."""
+        spec = signals.SIGNALS[name]
+        v = self._sim.station.diagram.GetOutputPort(f"{self.name}.{spec.port}").Eval(
             self._sim.context)
-        return {w: float(x) for w, x in zip(dim.WHEEL_NAMES, v, strict=True)}
+        if spec.per_wheel:
+            return {w: float(x) for w, x in zip(dim.WHEEL_NAMES, v, strict=True)}
+        return float(v[0]) if len(v) == 1 else [float(x) for x in v]
 
     def wheel_loads(self) -> dict[str, float]:
         """Each wheel's load, N: the vertical component of its contact forces
         (`systems.contact`), by wheel name; at rest they sum to the robot's weight."""
-        return self._by_wheel("wheel_loads")
+        return self.signal("wheel_loads")
 
     def wheel_slip_ratio(self) -> dict[str, float]:
         """Each wheel's longitudinal slip ratio (`systems.contact`), by wheel name:
         (rim speed - ground speed) / the faster, + traction (the wheel turns faster than it
         travels, forwards or backwards), - braking; 0 at rest."""
-        return self._by_wheel("wheel_slip_ratio")
+        return self.signal("wheel_slip_ratio")
 
     def wheel_slip_angle(self) -> dict[str, float]:
         """Each wheel's slip angle, deg (`systems.contact`), by wheel name: atan2(its centre's
         speed across the heading (+ left), its speed along it); 0 at rest."""
-        return self._by_wheel("wheel_slip_angle")
-
-    def _scalar(self, port: str) -> float:
-        return float(self._sim.station.diagram.GetOutputPort(f"{self.name}.{port}").Eval(
-            self._sim.context)[0])
+        return self.signal("wheel_slip_angle")
 
     def tip_margin_deg(self) -> float:
         """How far (deg) the robot can still roll or pitch before its centre of mass passes
         an edge of the wheels' support polygon (`systems.stability`); upright on level
         ground 37.4 deg (pitch), negative while tipping over."""
-        return self._scalar("tip_margin")
+        return self.signal("tip_margin")
 
     def min_tip_margin_deg(self) -> float:
         """The least `tip_margin_deg` so far, deg: over the run log's rows (every 10 ms; with
@@ -498,6 +481,14 @@ class Robot:
         log = source.current_state(source.GetMyContextFromRoot(self._sim.context)).log
         return log[-1] if log else None
 
+    def telemetry(self) -> dict:
+        """The contact telemetry now, as `summary` reports it (`signals.TELEMETRY`: each
+        signal at its `summary` key)."""
+        out: dict = {}
+        for spec in signals.TELEMETRY:
+            signals.put(out, spec.summary, spec.summary_value(self.signal(spec.name)))
+        return out
+
     def summary(self) -> dict:
         """The robot's figures now. `wheel_loads_N` (N) and `slip`'s `ratio` and
         `angle_deg` lists are per wheel in `dimensions.WHEEL_NAMES` order: front left, front
@@ -515,10 +506,7 @@ class Robot:
             "heading": self.heading(),
             "position": list(self.position()),
             "odometry": dc.asdict(self.odometry()),
-            "wheel_loads_N": list(self.wheel_loads().values()),
-            "slip": {"ratio": list(self.wheel_slip_ratio().values()),
-                     "angle_deg": list(self.wheel_slip_angle().values())},
-            "tip_margin_deg": self.tip_margin_deg(),
+            **self.telemetry(),
             "min_tip_margin_deg": self.min_tip_margin_deg(),
             "commands": [
                 {"command": r.command, "status": r.status, "reason": r.reason,

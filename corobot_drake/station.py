@@ -31,6 +31,7 @@ from pydrake.multibody.tree import CalcSpatialInertia, SpatialInertia, UnitInert
 from pydrake.systems.framework import Diagram, DiagramBuilder
 from pydrake.systems.primitives import MatrixGain
 
+from corobot_drake import signals
 from corobot_drake.config import scenario as sc
 from corobot_drake.model import dimensions as dim
 from corobot_drake.model.sdf import corobot_sdf
@@ -291,15 +292,19 @@ def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None, foxglov
         builder.ExportOutput(dead_reckoning.GetOutputPort("pose"), f"{name}.odometry")
         contacts = add_wheel_contacts(builder, name, plant, [j.child_body() for j in joints],
                                       chassis_pose, selector.get_output_port())
-        for port in ("wheel_loads", "wheel_slip_ratio", "wheel_slip_angle"):
-            builder.ExportOutput(contacts.GetOutputPort(port), f"{name}.{port}")
         if meshcat is not None:
             add_slip_markers(builder, meshcat, name, chassis_pose, contacts)
         tip_margin = add_tip_margin(
             builder, name, plant, instance, chassis,
             {w: j.child_body() for w, j in zip(dim.WHEEL_NAMES, joints, strict=True)},
             chassis_pose)
-        builder.ExportOutput(tip_margin.get_output_port(), f"{name}.tip_margin")
+        # The contact telemetry's ports (`signals.TELEMETRY`), each from the system that has it.
+        telemetry = {spec.port: next(system.GetOutputPort(spec.port)
+                                     for system in (contacts, tip_margin)
+                                     if system.HasOutputPort(spec.port))
+                     for spec in signals.TELEMETRY}
+        for port_name, port in telemetry.items():
+            builder.ExportOutput(port, f"{name}.{port_name}")
         builder.Connect(source.GetOutputPort("request"), motion.GetInputPort("request"))
         builder.Connect(odometry.position, motion.GetInputPort("position"))
         builder.Connect(odometry.heading, motion.GetInputPort("heading"))
@@ -316,11 +321,7 @@ def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None, foxglov
         tilt = builder.AddNamedSystem(f"{name}.tilt_monitor", TiltMonitor(TILT_SAMPLE_PERIOD))
         builder.Connect(chassis_pose, tilt.GetInputPort("chassis_pose"))
         add_run_log(builder, name, chassis_pose, controller.GetOutputPort("drive_status"),
-                    odometry.encoder_ticks,
-                    {"wheel_loads": contacts.GetOutputPort("wheel_loads"),
-                     "wheel_slip_ratio": contacts.GetOutputPort("wheel_slip_ratio"),
-                     "wheel_slip_angle": contacts.GetOutputPort("wheel_slip_angle"),
-                     "tip_margin": tip_margin.GetOutputPort("tip_margin")})
+                    odometry.encoder_ticks, telemetry)
         for port in ("drive_status", "axle_speed_command", "axle_speed"):
             builder.ExportOutput(controller.GetOutputPort(port), f"{name}.{port}")
         builder.ExportOutput(plant.get_state_output_port(instance), f"{name}.state")

@@ -1,4 +1,4 @@
-"""The coarsest plant step the tyres' contact resolves (`config/bounds.py`, MAX_TIME_STEP).
+"""The coarsest plant step the tyres' contact resolves (`limits.py`, MAX_TIME_STEP).
 
 The default scene, cameras and IR sensors off, drives 5 s (1.5 s full power forward, 1.5 s
 spinning left, 2 s full power back) at each plant step; every 50 ms the chassis frame's

@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 from conftest import make_sim
-from corobot_drake.config.bounds import MAX_TIME_STEP
 from corobot_drake.config.mesh_files import MAX_MESH_BYTES, MAX_MESH_TRIANGLES
 from corobot_drake.config.scenario import ScenarioError, load_scenario
+from corobot_drake.limits import MAX_TIME_STEP
 from corobot_drake.simulation import Simulation
 
 STEPS = [MAX_TIME_STEP, 0.01]

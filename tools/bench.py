@@ -28,7 +28,7 @@ from corobot_drake.arguments import (
     bounded_list,
     one_line_errors,
 )
-from corobot_drake.config.bounds import Range
+from corobot_drake.limits import Range
 from corobot_drake.simulation import quiet_drake_warnings
 from lab import bench, bench_camera, bench_ir, bench_layers, bench_raycast
 from lab.bench import DEFAULT_PLANT, ROBOT

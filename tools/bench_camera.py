@@ -18,7 +18,7 @@ from corobot_drake.arguments import (
     bounded,
     one_line_errors,
 )
-from corobot_drake.config.bounds import Range
+from corobot_drake.limits import Range
 from lab.bench_camera import RENDERERS, camera_frame_ms, camera_overhead_ms
 
 FRAMES = Range(1, 100_000, why="frames rendered per run")

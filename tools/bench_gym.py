@@ -13,7 +13,7 @@ import sys
 from tqdm import tqdm
 
 from corobot_drake.arguments import ToolParser, bounded, one_line_errors
-from corobot_drake.config.bounds import Range
+from corobot_drake.limits import Range
 from corobot_drake.simulation import quiet_drake_warnings
 from lab import bench_gym as bench
 

@@ -16,7 +16,7 @@ import sys
 from tqdm import tqdm
 
 from corobot_drake.arguments import ToolParser, bounded, one_line_errors
-from corobot_drake.config.bounds import Range
+from corobot_drake.limits import Range
 from lab import bench_memory
 
 SIM_MINUTES = Range(0.0, 10_000.0, low_open=True, unit="min")

@@ -17,7 +17,7 @@ from pathlib import Path
 from tqdm import tqdm
 
 from corobot_drake.arguments import BENCH_SECONDS, ToolParser, bounded, one_line_errors
-from corobot_drake.config.bounds import Range
+from corobot_drake.limits import Range
 from corobot_drake.simulation import quiet_drake_warnings
 from lab import bench_study
 

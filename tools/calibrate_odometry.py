@@ -26,7 +26,7 @@ from corobot_drake.arguments import (
     one_line_errors,
     output_file,
 )
-from corobot_drake.config.bounds import DRAKE_INT
+from corobot_drake.limits import DRAKE_INT
 from corobot_drake.model import dimensions as dim
 from corobot_drake.resources import DEFAULT_SCENARIO
 from corobot_drake.tuning import odometry_calibration as oc

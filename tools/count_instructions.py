@@ -20,7 +20,7 @@ from concurrent.futures import ThreadPoolExecutor
 from tqdm import tqdm
 
 from corobot_drake.arguments import ToolParser, bounded, one_line_errors
-from corobot_drake.config.bounds import Range
+from corobot_drake.limits import Range
 from lab import bench_layers, instructions
 
 SECONDS = Range(0.0, instructions.LONGEST, low_open=True, unit="s")

@@ -19,8 +19,8 @@ import sys
 from tqdm import tqdm
 
 from corobot_drake.arguments import ToolParser, bounded, one_line_errors
-from corobot_drake.config.bounds import Range
 from corobot_drake.config.scenario import load_scenario
+from corobot_drake.limits import Range
 from corobot_drake.resources import DEFAULT_SCENARIO
 from lab import creep
 

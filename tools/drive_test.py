@@ -24,7 +24,7 @@ from corobot_drake.arguments import (
     output_file,
 )
 from corobot_drake.config import scenario as sc
-from corobot_drake.config.bounds import DRAKE_INT, POWER, Range
+from corobot_drake.limits import DRAKE_INT, DRIVE_POWER, Range
 from lab import drive_test
 
 LOOPS = Range(1, 100, why="loops of ~37 simulated s each at power 0.2")
@@ -76,7 +76,7 @@ def main(argv=None) -> int:
                    help="the legs' seed (the first, with --seeds)")
     p.add_argument("--profile", choices=sc.PROFILES, default="closed_loop",
                    help="landing profile")
-    p.add_argument("--power", type=bounded(POWER), default=0.2, help="power of every command")
+    p.add_argument("--power", type=bounded(DRIVE_POWER), default=0.2, help="power of every command")
     p.add_argument("--plot", type=output_file, default=None,
                    help="PNG: the path (one seed) or the drift per loop over seeds (None: "
                    "drive_test.png, or OUT/drift.png with --seeds)")

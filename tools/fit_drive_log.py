@@ -27,8 +27,8 @@ from corobot_drake.arguments import (
     one_line_errors,
     output_file,
 )
-from corobot_drake.config.bounds import bound_of
 from corobot_drake.config.scenario import Drive
+from corobot_drake.limits import bound_of
 from corobot_drake.tuning import drive_tuning, sysid
 
 REPO = Path(__file__).resolve().parent.parent

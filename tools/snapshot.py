@@ -29,9 +29,10 @@ from corobot_drake.arguments import (
     one_line_errors,
     output_file,
 )
-from corobot_drake.config.bounds import DRAKE_BOUNDS, DURATION
+from corobot_drake.config.bounds import DRAKE_BOUNDS
 from corobot_drake.config.poses import ground_pose
 from corobot_drake.config.scenario import SetPower, load_scenario
+from corobot_drake.limits import DURATION
 from corobot_drake.model import dimensions as dim
 from corobot_drake.resources import DEFAULT_SCENARIO
 from corobot_drake.sensors import render

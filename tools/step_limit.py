@@ -10,7 +10,7 @@ import sys
 
 from tqdm import tqdm
 
-from corobot_drake.config.bounds import MAX_TIME_STEP
+from corobot_drake.limits import MAX_TIME_STEP
 from corobot_drake.simulation import quiet_drake_warnings
 from lab import step_limit
 

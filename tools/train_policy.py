@@ -19,10 +19,10 @@ from corobot_drake.arguments import (
     one_line_errors,
     output_file,
 )
-from corobot_drake.config.bounds import OneOf, bound_of
 from corobot_drake.gym.policy import SHIPPED, LinearPolicy
 from corobot_drake.gym.rollouts import episode_pool
 from corobot_drake.gym.train import HELD_OUT, CemSettings, evaluate, plot_curve, train
+from corobot_drake.limits import OneOf, bound_of
 from corobot_drake.simulation import quiet_drake_warnings
 
 REPO = Path(__file__).resolve().parent.parent

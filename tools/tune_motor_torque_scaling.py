@@ -27,8 +27,8 @@ from corobot_drake.arguments import (
     output_directory,
     output_file,
 )
-from corobot_drake.config.bounds import AXLE_SPEED, Range
 from corobot_drake.config.scenario import ScenarioError, load_scenario
+from corobot_drake.limits import AXLE_SPEED, Range
 from corobot_drake.model import dimensions as dim
 from corobot_drake.resources import DEFAULT_SCENARIO
 from corobot_drake.simulation import quiet_drake_warnings

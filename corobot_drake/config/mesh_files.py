@@ -18,8 +18,8 @@ from pathlib import Path
 
 import numpy as np
 
-from corobot_drake.config.bounds import SHAPE_SIZE
 from corobot_drake.config.scenario import ScenarioError, read_bytes
+from corobot_drake.limits import SHAPE_SIZE
 
 MESH_EXTENSIONS = (".obj", ".gltf", ".glb")
 """The mesh files this module reads (any case): a model's visual mesh may be GLB; a world

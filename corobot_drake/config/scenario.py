@@ -23,9 +23,22 @@ from pydrake.multibody.plant import MultibodyPlantConfig
 from pydrake.systems.analysis import SimulatorConfig
 from pydrake.systems.sensors import CameraConfig
 
-from corobot_drake.config import bounds as lim
-from corobot_drake.config.bounds import OneOf, Range, bounded
+from corobot_drake import limits as lim
+from corobot_drake.commands import (  # noqa: F401 (the scenario's commands, `sc.SetPower`)
+    COMPLETING_COMMANDS,
+    AllStop,
+    Command,
+    DriveDistance,
+    Enable,
+    RotateDegrees,
+    SetPose,
+    SetPower,
+    SetSpeed,
+    SetVelocity,
+    Wait,
+)
 from corobot_drake.config.sensors import IrSensorConfig, default_camera_config, default_ir_sensors
+from corobot_drake.limits import OneOf, Range, bounded
 from corobot_drake.model import dimensions as dim
 from corobot_drake.model.sdf import VISUALS, WheelContact
 
@@ -188,110 +201,10 @@ class Drive:
     skid-steer robot's is wider than its geometric one (default the geometric track)."""
 
 
-@dc.dataclass
-class SetPower:
-    """Wheel power per side in [-1, 1] (clamped): axle speed = power x MotorTorqueScaling."""
-
-    left: float = bounded(0.0, lim.SIDE_POWER)
-    right: float = bounded(0.0, lim.SIDE_POWER)
-
-
-@dc.dataclass
-class SetSpeed:
-    """Rim speed per side in m/s (axle speed = v / R, clamped to the max axle speed)."""
-
-    left: float = bounded(0.0, lim.SIDE_SPEED)
-    right: float = bounded(0.0, lim.SIDE_SPEED)
-
-
-@dc.dataclass
-class SetVelocity:
-    """The chassis' velocity, ROS `cmd_vel` style: `linear` forward speed (m/s, +x of the
-    chassis) and `angular` yaw rate (rad/s, positive turns left), turned into rim speeds per
-    side by the skid-steer kinematics (`systems.drive.skid_steer_rim_speeds`), then clamped like
-    `SetSpeed` (keeping the ratio of the sides, so the path's curvature)."""
-
-    linear: float = bounded(0.0, lim.LINEAR_SPEED)
-    angular: float = bounded(0.0, lim.YAW_RATE)
-
-
-@dc.dataclass
-class AllStop:
-    """Command both sides to zero speed."""
-
-
-@dc.dataclass
-class Enable:
-    """Enable or disable the drive (disabled: wheels held at zero speed, motion ignored)."""
-
-    enabled: bool = True
-
-
-@dc.dataclass
-class Wait:
-    """Let the previous command run for this long (s) before the next one. 0 s: the next one
-    is issued at the next control update (not with the commands before it when the
-    simulation starts: what a saved scene writes before a script's rest that is due), and
-    the log records no Wait."""
-
-    seconds: float = bounded(1.0, lim.DURATION)
-
-
 SEED_WINDOW = 6 / 60
 """s: the seed profile estimates the time left from the progress over this last stretch (the
 book's 6 samples of 1/60 s); a saved command's `recent_progress` holds at most this much."""
 
-
-@dc.dataclass
-class DriveDistance:
-    """Drive straight until |distance| m from the start pose (negative: backwards), at
-    `power` in (0, 1]; ends succeeded on arrival (SPEC "Commands that complete")."""
-
-    distance: float = bounded(0.0, lim.DISTANCE)
-    power: float = bounded(0.5, lim.POWER)
-    start: list[float] = dc.field(default_factory=list)
-    """[x, y, yaw_deg] (m, m, deg): the pose the distance counts from (and, closed loop, the
-    heading held); empty: where the robot is when the command starts. A saved scene resumes
-    a running drive so (`Simulation.saved_scenario`)."""
-    recent_progress: list[float] = bounded(list, lim.POSITION)
-    """m from `start` at the drive's last control updates, oldest first (the seed profile's
-    last 0.1 s, the closed loop's last update); only a saved scene writes it (it needs
-    `start`). Given, the drive carries on from its last update: its speed estimates go on
-    from these as the uninterrupted drive's would. Empty: none (a command written by hand)."""
-
-
-@dc.dataclass
-class RotateDegrees:
-    """Turn in place by `degrees` (positive: counter-clockwise seen from above, i.e. left),
-    at `power` in (0, 1]; ends succeeded on arrival."""
-
-    degrees: float = bounded(0.0, lim.DEGREES)
-    power: float = bounded(0.5, lim.POWER)
-    start: list[float] = dc.field(default_factory=list)
-    """[x, y, yaw_deg] (m, m, deg): the heading the turn counts from, as if read at the
-    control update before it starts (within +-180 deg of the heading then; x and y are not
-    used); empty: the heading when the command starts. A saved scene resumes a running turn
-    so (`Simulation.saved_scenario`), from the heading at its last update."""
-    recent_progress: list[float] = bounded(list, lim.ANGLE)
-    """deg turned from `start`'s heading at the turn's last control updates, oldest first
-    (the seed profile's last 0.1 s; a saved scene's last is 0); only a saved scene writes it
-    (it needs `start`). Given, the seed profile's time-left estimate goes on from these as
-    the uninterrupted turn's would. Empty: none (a command written by hand)."""
-
-
-@dc.dataclass
-class SetPose:
-    """Teleport the robot to (x, y) m facing `yaw_deg`: on the ground, at rest, wheels stopped."""
-
-    x: float = bounded(0.0, lim.SET_POSITION)
-    y: float = bounded(0.0, lim.SET_POSITION)
-    yaw_deg: float = bounded(0.0, lim.YAW_DEG)
-
-
-Command = Union[SetPower, SetSpeed, SetVelocity, AllStop, Enable, Wait,  # noqa: UP007
-                DriveDistance, RotateDegrees, SetPose]
-COMPLETING_COMMANDS = (DriveDistance, RotateDegrees, SetPose)
-"""Commands that run until they end (succeeded or failed); the script waits for each."""
 
 PROFILES = ("closed_loop", "seed")
 

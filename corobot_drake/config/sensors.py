@@ -13,8 +13,8 @@ import math
 from pydrake.common.schema import Transform
 from pydrake.systems.sensors import CameraConfig
 
-from corobot_drake.config.bounds import RATE, OneOf, Range, bounded
 from corobot_drake.config.poses import mount
+from corobot_drake.limits import RATE, OneOf, Range, bounded
 from corobot_drake.model import dimensions as dim
 from corobot_drake.model.ir_models import MODELS as IR_MODELS
 

@@ -7,7 +7,7 @@ For each layer (a file, YAML text, an `--override`), `LayerChecks`:
 2. walks the YAML node tree beside the schema before the typed load (unknown fields, wrong
    types, unknown or misplaced tags, duplicate names, vectors of the wrong size), noting the
    line of every field;
-3. after the typed load, checks every value against its bound (`config/bounds.py`: declared
+3. after the typed load, checks every value against its bound (`limits.py`: declared
    beside the schema; a float without one must be finite), then what involves several fields
    (names, the camera, every pose, and the start poses against the ground, the world's bodies
    and each other: `config/placement.py`), on the merged scenario.
@@ -36,10 +36,13 @@ from pydrake.geometry import RenderEngineGlParams, RenderEngineVtkParams, Rgba
 
 from corobot_drake.config import placement
 from corobot_drake.config import scenario as sc
-from corobot_drake.config.bounds import (
+from corobot_drake.config.bounds import DRAKE_BOUNDS
+from corobot_drake.config.directives import DirectiveError, check_directives
+from corobot_drake.config.mesh_files import MeshFileError, check_mesh_file, scale_problem
+from corobot_drake.config.sensors import RENDERERS, IrSensorConfig
+from corobot_drake.limits import (
     ANGLE,
     COLOR,
-    DRAKE_BOUNDS,
     DRAKE_INT,
     ELLIPSOID_MAX_ASPECT,
     FINITE,
@@ -48,9 +51,6 @@ from corobot_drake.config.bounds import (
     Range,
     bound_of,
 )
-from corobot_drake.config.directives import DirectiveError, check_directives
-from corobot_drake.config.mesh_files import MeshFileError, check_mesh_file, scale_problem
-from corobot_drake.config.sensors import RENDERERS, IrSensorConfig
 from corobot_drake.model.sdf import LINKS
 from corobot_drake.resources import resolve_file
 
@@ -405,7 +405,7 @@ class LayerChecks:
         raise sc.ScenarioError(self.source, path, message, self.lines.get(where))
 
     def validate(self, s) -> None:
-        """Every value against its bound (`config/bounds.py`), then, for a Scenario, the
+        """Every value against its bound (`limits.py`), then, for a Scenario, the
         checks of meaning that involve several fields."""
         self._bounds(s, "")
         if isinstance(s, sc.Scenario):

@@ -13,8 +13,8 @@ from numbers import Real
 import numpy as np
 
 from corobot_drake import limits
-from corobot_drake.config.bounds import Range
 from corobot_drake.gym.layout import Layout
+from corobot_drake.limits import Range
 from corobot_drake.model import dimensions as dim
 
 MAX_BOXES = 100

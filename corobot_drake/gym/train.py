@@ -16,9 +16,9 @@ import time
 import numpy as np
 from tqdm import tqdm
 
-from corobot_drake.config.bounds import OneOf, Range, bound_of, bounded
 from corobot_drake.gym.policy import NUM_FEATURES, LinearPolicy
 from corobot_drake.gym.rollouts import EpisodePool, summary
+from corobot_drake.limits import OneOf, Range, bound_of, bounded
 
 TRAIN_SEEDS = 10_000
 """The first training seed (generation g uses TRAIN_SEEDS + g * episodes + 0..episodes-1)."""

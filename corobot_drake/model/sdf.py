@@ -8,8 +8,8 @@ same function with that robot's own name and contact parameters.
 
 from dataclasses import dataclass
 
-from corobot_drake.config import bounds as lim
-from corobot_drake.config.bounds import Range, bounded
+from corobot_drake import limits as lim
+from corobot_drake.limits import Range, bounded
 from corobot_drake.model import dimensions as dim
 
 PACKAGE_NAME = "corobot_drake"

@@ -46,6 +46,7 @@ from foxglove.messages import (
 )
 from pydrake.math import RigidTransform
 
+from corobot_drake import signals
 from corobot_drake.model.dimensions import WHEEL_NAMES
 
 CHASSIS_FRAME = "base_link"
@@ -243,26 +244,26 @@ class TelemetryTopic:
         return out
 
 
-TELEMETRY_TOPICS = (
-    TelemetryTopic("wheel_loads", "corobot.WheelLoads",
-                   "Each wheel's load: systems.contact.WheelContacts.",
-                   (("load", "wheel_loads", "N: the vertical (world +z) component of the "
-                     "wheel's contact forces; at rest the four sum to the robot's weight"),),
-                   per_wheel=True, costly=True),
-    TelemetryTopic("wheel_slip", "corobot.WheelSlip",
-                   "Each wheel's slip: systems.contact.WheelContacts.",
-                   (("slip_ratio", "wheel_slip_ratio", "longitudinal, dimensionless: + "
-                     "traction (turns faster than it travels), - braking"),
-                    ("slip_angle_deg", "wheel_slip_angle", "deg: between where the wheel points "
-                     "and where it goes, + moving to the left of the heading")),
-                   per_wheel=True, costly=True),
-    TelemetryTopic("tip_margin", "corobot.TipMargin",
-                   "The tip-over margin: systems.stability.TipMargin.",
-                   (("tip_margin_deg", "tip_margin", "deg the robot can still roll or pitch "
-                     "before its centre of mass passes an edge of the wheels' support; 37.4 "
-                     "upright at rest on level ground, negative tipping over"),),
-                   per_wheel=False, costly=False),
-)
+_TOPIC_TEXT = {
+    "wheel_loads": ("corobot.WheelLoads", "Each wheel's load: systems.contact.WheelContacts."),
+    "wheel_slip": ("corobot.WheelSlip", "Each wheel's slip: systems.contact.WheelContacts."),
+    "tip_margin": ("corobot.TipMargin", "The tip-over margin: systems.stability.TipMargin."),
+}
+"""Each telemetry topic's schema title and description."""
+
+
+def _telemetry_topic(name: str) -> TelemetryTopic:
+    """The topic `name` of the telemetry signals it carries (`signals.TELEMETRY`)."""
+    carried = [s for s in signals.TELEMETRY if s.topic == name]
+    title, description = _TOPIC_TEXT[name]
+    return TelemetryTopic(
+        name, title, description,
+        tuple((s.field, s.port, f"{s.unit + ': ' if s.unit else ''}{s.doc}") for s in carried),
+        per_wheel=carried[0].per_wheel, costly=carried[0].costly)
+
+
+TELEMETRY_TOPICS = tuple(_telemetry_topic(name)
+                         for name in dict.fromkeys(s.topic for s in signals.TELEMETRY))
 """The contact telemetry's topics, in the robot's terms."""
 
 

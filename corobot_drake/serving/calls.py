@@ -9,35 +9,24 @@ from __future__ import annotations
 import math
 from typing import Any
 
+from corobot_drake import commands
 from corobot_drake.readings import CommandResult
 
-SIMPLE_COMMANDS = ("set_power", "set_speed", "set_velocity", "all_stop", "enable")
-"""Drive commands that take effect at once (no operation to follow)."""
-COMPLETING_COMMANDS = ("drive_distance", "rotate_degrees", "set_pose")
-"""Drive commands that complete: followed as operations."""
 
-
-def issue(robot: str, command: str, args: tuple, sim) -> tuple[int, float]:
-    """Issues a simple drive command (`Robot.set_power(*args)`, ...); returns (its sequence
-    number, the simulated time)."""
-    if command not in SIMPLE_COMMANDS:
+def issue(robot: str, command: str, arguments: dict, sim) -> tuple[int, float]:
+    """Issues a simple drive command (`Robot.command("set_power", left=..., right=...)`, ...);
+    returns (its sequence number, the simulated time)."""
+    if commands.by_method(command).completing:
         raise ValueError(f"{command!r} is not a simple drive command")
-    seq = getattr(sim.robot(robot), command)(*args)
+    seq = sim.robot(robot).command(command, **arguments)
     return seq, sim.time
 
 
 def start_operation(robot: str, command: str, arguments: dict, sim) -> CommandResult:
     """Starts a command that completes, without waiting; returns its record as of now."""
-    r = sim.robot(robot)
-    if command == "drive_distance":
-        handle = r.drive_distance_async(**arguments)
-    elif command == "rotate_degrees":
-        handle = r.rotate_degrees_async(**arguments)
-    elif command == "set_pose":
-        handle = r.set_pose(**arguments)
-    else:
+    if not commands.by_method(command).completing:
         raise ValueError(f"{command!r} is not a completing drive command")
-    return handle.result()
+    return sim.robot(robot).command(command, **arguments).result()
 
 
 def command_result(robot: str, seq: int, sim) -> CommandResult:

@@ -9,11 +9,12 @@ docstrings unless their schema has a description.
 
 from __future__ import annotations
 
+import dataclasses as dc
 from typing import Annotated, Any
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, create_model
 
-from corobot_drake import limits
+from corobot_drake import commands
 
 DEFAULT_WAIT_TIMEOUT = 120.0
 """s a completing command may hold its request open before answering 202 with a status URL."""
@@ -25,39 +26,8 @@ class _Body(BaseModel):
     model_config = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False)
 
 
-Power = Annotated[float, Field(ge=limits.POWER[0], le=limits.POWER[1],
-                               description="power in [-1, 1]")]
-DrivePower = Annotated[float, Field(gt=limits.DRIVE_POWER[0], le=limits.DRIVE_POWER[1],
-                                    description="power in (0, 1]")]
-Speed = Annotated[float, Field(ge=limits.SPEED[0], le=limits.SPEED[1],
-                               description="rim speed, m/s")]
 WaitTimeout = Annotated[float, Field(gt=0.0, le=600.0,
                                      description="s to hold the request open (wall clock)")]
-
-
-class PowerRequest(_Body):
-    left: Power
-    right: Power
-
-
-class SpeedRequest(_Body):
-    left: Speed
-    right: Speed
-
-
-class VelocityRequest(_Body):
-    linear: Annotated[float, Field(ge=limits.LINEAR[0], le=limits.LINEAR[1],
-                                   description="m/s forward (the drive clamps the axle speed)")]
-    angular: Annotated[float, Field(ge=limits.ANGULAR[0], le=limits.ANGULAR[1],
-                                    description="rad/s yaw rate, positive turns left")]
-
-
-class EnableRequest(_Body):
-    enabled: bool = True
-
-
-class EmptyRequest(_Body):
-    pass
 
 
 class _Completing(_Body):
@@ -66,22 +36,29 @@ class _Completing(_Body):
     timeout: WaitTimeout = DEFAULT_WAIT_TIMEOUT
 
 
-class DriveDistanceRequest(_Completing):
-    distance: Annotated[float, Field(ge=limits.DISTANCE[0], le=limits.DISTANCE[1],
-                                     description="m; negative: backwards")]
-    power: DrivePower = 0.2
+def _argument(spec: commands.CommandSpec, arg: commands.Arg) -> tuple[Any, Any]:
+    """An argument's pydantic field: its type, range (`limits`), description and default."""
+    default = spec.http_defaults.get(arg.name, arg.default)
+    default = ... if default is dc.MISSING else default
+    if arg.range is None:
+        return arg.type, Field(default, description=arg.doc or None)
+    r = arg.range
+    bounds = {"gt" if r.low_open else "ge": r.low, "lt" if r.high_open else "le": r.high}
+    description = "; ".join(filter(None, (arg.doc, r.text())))
+    return Annotated[arg.type, Field(**bounds, description=description)], default
 
 
-class RotateDegreesRequest(_Completing):
-    degrees: Annotated[float, Field(ge=limits.DEGREES[0], le=limits.DEGREES[1],
-                                    description="degrees; positive turns left (CCW)")]
-    power: DrivePower = 0.2
+def request_model(spec: commands.CommandSpec) -> type[BaseModel]:
+    """The request body of a command's route, made of its declaration (`commands.py`): its
+    arguments (all required but those with defaults), plus `wait` and `timeout` for a command
+    that completes. Named as published (`spec.http_request`)."""
+    base = _Completing if spec.completing else _Body
+    fields = {arg.name: _argument(spec, arg) for arg in spec.args}
+    return create_model(spec.http_request, __base__=base, __module__=__name__, **fields)
 
 
-class SetPoseRequest(_Completing):
-    x: Annotated[float, Field(ge=limits.POSITION[0], le=limits.POSITION[1], description="m")]
-    y: Annotated[float, Field(ge=limits.POSITION[0], le=limits.POSITION[1], description="m")]
-    yaw_deg: Annotated[float, Field(ge=limits.YAW_DEG[0], le=limits.YAW_DEG[1])] = 0.0
+REQUESTS: dict[str, type[BaseModel]] = {s.method: request_model(s) for s in commands.ISSUABLE}
+"""Each issuable command's request model by its route name (`set_power`: `PowerRequest`)."""
 
 
 # --- response descriptions (for the OpenAPI document) --------------------------------------

@@ -11,6 +11,7 @@ import dataclasses as dc
 import math
 from typing import Any
 
+from corobot_drake import commands, signals
 from corobot_drake.model import dimensions as dim
 from corobot_drake.readings import IrReading
 
@@ -54,8 +55,8 @@ class RobotInfo:
     def capabilities(self) -> dict[str, bool]:
         """The HTTP contract's `capabilities`: every robot has the whole drive API and the IR
         API (with the sensors its scenario gives it); the camera depends on the scenario."""
-        return {"drive_distance": True, "rotate_degrees": True, "set_pose": True,
-                "drive_state": True, "ir": True, "camera": self.has_camera}
+        completing = {spec.method: True for spec in commands.ISSUABLE if spec.completing}
+        return {**completing, "drive_state": True, "ir": True, "camera": self.has_camera}
 
 
 def command_json(record) -> dict:
@@ -72,12 +73,12 @@ def drive_state(robot, time: float) -> dict:
     and the contact telemetry (each wheel's load N, slip ratio and slip angle deg; the tip
     margin deg: `systems.contact`, `systems.stability`)."""
     native = robot.drive_state()
-    loads, ratios, angles = robot.wheel_loads(), robot.wheel_slip_ratio(), robot.wheel_slip_angle()
+    telemetry = {spec: robot.signal(spec.name) for spec in signals.TELEMETRY}
     wheels = {name: {"commanded_power": float(w.commanded_power),
                      "axle_speed": float(w.axle_speed),
                      "encoder_ticks": w.encoder_ticks,
-                     "load": loads[name], "slip_ratio": ratios[name],
-                     "slip_angle_deg": angles[name]}
+                     **{spec.field: value[name] for spec, value in telemetry.items()
+                        if spec.per_wheel}}
               for name, w in native.wheels.items()}
     x, y, z = native.position
     heading = float(native.heading)
@@ -96,7 +97,7 @@ def drive_state(robot, time: float) -> dict:
         "pose": dc.asdict(robot.pose()),
         "velocity": dc.asdict(robot.velocity()),
         "command": command_json(last) if last is not None else None,
-        "tip_margin_deg": robot.tip_margin_deg(),
+        **{spec.field: value for spec, value in telemetry.items() if not spec.per_wheel},
     })
 
 

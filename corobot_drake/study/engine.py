@@ -31,7 +31,7 @@ def check_session(address, workers) -> int | None:
     """`workers` as an int (None stays None), after checking it is None or a whole number in
     `limits.WORKERS` (numpy's too) and that `address` is None or a string, as the command
     line's checks; ValueError naming the argument otherwise."""
-    low, high = limits.WORKERS
+    low, high = limits.WORKERS.low, limits.WORKERS.high
     if workers is not None:
         try:
             count = None if isinstance(workers, bool) else operator.index(workers)

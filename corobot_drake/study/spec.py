@@ -28,9 +28,9 @@ from pathlib import Path
 
 import numpy as np
 
-from corobot_drake.config.bounds import Range, bounded
 from corobot_drake.config.scenario import read_text
 from corobot_drake.config.validate import LayerChecks, load_layer
+from corobot_drake.limits import Range, bounded
 from corobot_drake.study.programs import PROGRAMS, BoxApproach, DriveTest
 
 UNTIL = ("duration", "commands")

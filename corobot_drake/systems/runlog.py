@@ -29,7 +29,7 @@ from pydrake.math import RigidTransform
 from pydrake.systems.framework import BasicVector, LeafSystem
 from pydrake.systems.primitives import LogVectorOutput, Multiplexer, ZeroOrderHold
 
-from corobot_drake.model import dimensions as dim
+from corobot_drake import signals
 from corobot_drake.systems.drive import DriveStatus
 from corobot_drake.systems.odometry import heading_of
 
@@ -41,12 +41,8 @@ RUN_LOG_CHUNK = 1000
 SAMPLE_COLUMNS = ("time", "left_power", "right_power", "left_ticks", "right_ticks", "x", "y",
                   "yaw")
 """What a real Corobot's logger records (the `RunLogSample`, after the sink's time)."""
-_WHEELS = tuple("".join(word[0] for word in name.split("_")) for name in dim.WHEEL_NAMES)
-TELEMETRY = (("wheel_loads", tuple(f"load_{w}" for w in _WHEELS)),
-             ("wheel_slip_ratio", tuple(f"slip_ratio_{w}" for w in _WHEELS)),
-             ("wheel_slip_angle", tuple(f"slip_angle_{w}" for w in _WHEELS)),
-             ("tip_margin", ("tip_margin",)))
-"""(robot port, its columns) of the contact telemetry, in the log's order."""
+TELEMETRY = tuple((signal.port, signal.log) for signal in signals.TELEMETRY)
+"""(robot port, its columns) of the contact telemetry, in the log's order (`signals.TELEMETRY`)."""
 HELD_PERIOD = 0.1
 """s: the loads and the slip are sampled every 0.1 s (10 Hz) and held between (ZeroOrderHolds):
 evaluated every 10 ms step, the loads (the plant's contact results) and the slip (the bodies'
@@ -54,7 +50,7 @@ velocities) cost well over the ~3% of a step the run log may add (issue 14 point
 measurement is in the commit that added this). A row's loads and slip are those of the latest
 0.1 s sample; its tip margin is the step's (a few sums from the chassis pose, and the run's
 least margin, `Robot.min_tip_margin_deg`, is read from it)."""
-HELD = ("wheel_loads", "wheel_slip_ratio", "wheel_slip_angle")
+HELD = tuple(signal.port for signal in signals.TELEMETRY if signal.costly)
 COLUMNS = SAMPLE_COLUMNS + tuple(c for _, columns in TELEMETRY for c in columns)
 
 LogSample = namedview("LogSample", SAMPLE_COLUMNS[1:])

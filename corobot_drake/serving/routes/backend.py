@@ -14,6 +14,7 @@ from typing import Annotated, Any
 from fastapi import Depends, HTTPException, Request
 from fastapi.responses import Response
 
+from corobot_drake import commands
 from corobot_drake.serving.frames import FrameCache
 from corobot_drake.serving.operations import Operations
 from corobot_drake.serving.runner import Runner, SimulationStoppedError
@@ -28,9 +29,8 @@ CONTRACT_COMPASS = "corobot-drake/compass/v1"
 CONTRACT_GPS = "corobot-drake/gps/v1"
 CONTRACT_WEBCAM = "corobot-drake/webcam/v1"
 
-DRIVE_OPERATIONS = ["set_power", "set_speed", "set_velocity", "all_stop", "enable",
-                    "drive_distance", "rotate_degrees", "set_pose"]
-"""The drive service's commands, as the directory lists them."""
+DRIVE_OPERATIONS = list(commands.BY_METHOD)
+"""The drive service's commands, as the directory lists them (`commands.py`)."""
 
 
 def json_response(content: Any, status_code: int = 200,

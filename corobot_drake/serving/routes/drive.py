@@ -1,18 +1,16 @@
 """The drive contract: state, simple commands (answered at once), completing commands (held
 until they end, or 202 with a status URL) and their operations."""
 
-from __future__ import annotations
-
 import asyncio
 from functools import partial
 
 from fastapi import APIRouter, HTTPException
 from fastapi.responses import Response
 
+from corobot_drake import commands
 from corobot_drake.readings import CommandResult
 from corobot_drake.serving import calls, schemas
 from corobot_drake.serving.routes.backend import (
-    DRIVE_OPERATIONS,
     Backend,
     BackendDep,
     json_response,
@@ -37,49 +35,16 @@ async def get_two_wheel(robot: str, backend: BackendDep):
     return json_response(two_wheel_view(backend.snapshot_of(robot)["drive"]))
 
 
-# --- simple commands ---
+# --- the commands: one route each, made of its declaration (`commands.py`) ---
 
 
-async def simple_command(backend: Backend, robot: str, command: str, *args) -> Response:
+async def simple_command(backend: Backend, robot: str, command: str, arguments: dict
+                         ) -> Response:
     """Issues the command in the simulation thread; answers `schemas.Accepted`."""
     backend.robot(robot)
-    seq, t = await backend.in_sim(partial(calls.issue, robot, command, args))
+    seq, t = await backend.in_sim(partial(calls.issue, robot, command, arguments))
     return json_response({"robot": robot, "command": command, "seq": seq,
                           "status": "accepted", "time": t})
-
-
-@router.post("/robots/{robot}/drive/set_power", response_model=schemas.Accepted,
-             responses=ERRORS, summary="Power per side in [-1, 1]")
-async def set_power(robot: str, body: schemas.PowerRequest, backend: BackendDep):
-    return await simple_command(backend, robot, "set_power", body.left, body.right)
-
-
-@router.post("/robots/{robot}/drive/set_speed", response_model=schemas.Accepted,
-             responses=ERRORS, summary="Rim speed per side, m/s")
-async def set_speed(robot: str, body: schemas.SpeedRequest, backend: BackendDep):
-    return await simple_command(backend, robot, "set_speed", body.left, body.right)
-
-
-@router.post("/robots/{robot}/drive/set_velocity", response_model=schemas.Accepted,
-             responses=ERRORS,
-             summary="Chassis velocity (cmd_vel): linear m/s, angular rad/s (positive left)")
-async def set_velocity(robot: str, body: schemas.VelocityRequest, backend: BackendDep):
-    return await simple_command(backend, robot, "set_velocity", body.linear, body.angular)
-
-
-@router.post("/robots/{robot}/drive/all_stop", response_model=schemas.Accepted,
-             responses=ERRORS, summary="Both sides to zero speed")
-async def all_stop(robot: str, body: schemas.EmptyRequest, backend: BackendDep):
-    return await simple_command(backend, robot, "all_stop")
-
-
-@router.post("/robots/{robot}/drive/enable", response_model=schemas.Accepted,
-             responses=ERRORS, summary="Enable or disable the drive")
-async def enable(robot: str, body: schemas.EnableRequest, backend: BackendDep):
-    return await simple_command(backend, robot, "enable", body.enabled)
-
-
-# --- completing commands ---
 
 
 async def completing(backend: Backend, robot: str, command: str, arguments: dict,
@@ -108,28 +73,27 @@ async def _ended(backend: Backend, robot: str, seq: int,
         raise HTTPException(503, str(e)) from None
 
 
-@router.post("/robots/{robot}/drive/drive_distance", response_model=schemas.OperationState,
-             responses=COMPLETING,
-             summary="Drive straight |distance| m (negative: backwards); completes")
-async def drive_distance(robot: str, body: schemas.DriveDistanceRequest, backend: BackendDep):
-    args = {"distance": body.distance, "power": body.power}
-    return await completing(backend, robot, "drive_distance", args, body.wait, body.timeout)
+def add_command_route(spec: commands.CommandSpec) -> None:
+    """`POST /robots/{robot}/drive/<method>` for one command, its body `schemas.REQUESTS`'
+    model: a simple command answers `Accepted`, a completing one its operation's state."""
+    request = schemas.REQUESTS[spec.method]
+    names = [arg.name for arg in spec.args]
+
+    async def endpoint(robot: str, body: request, backend: BackendDep):  # type: ignore[valid-type]
+        arguments = {name: getattr(body, name) for name in names}
+        if spec.completing:
+            return await completing(backend, robot, spec.method, arguments, body.wait,
+                                    body.timeout)
+        return await simple_command(backend, robot, spec.method, arguments)
+
+    router.add_api_route(
+        f"/robots/{{robot}}/drive/{spec.method}", endpoint, methods=["POST"], name=spec.method,
+        response_model=schemas.OperationState if spec.completing else schemas.Accepted,
+        responses=COMPLETING if spec.completing else ERRORS, summary=spec.summary)
 
 
-@router.post("/robots/{robot}/drive/rotate_degrees", response_model=schemas.OperationState,
-             responses=COMPLETING,
-             summary="Turn in place (positive: left, counter-clockwise); completes")
-async def rotate_degrees(robot: str, body: schemas.RotateDegreesRequest, backend: BackendDep):
-    args = {"degrees": body.degrees, "power": body.power}
-    return await completing(backend, robot, "rotate_degrees", args, body.wait, body.timeout)
-
-
-@router.post("/robots/{robot}/drive/set_pose", response_model=schemas.OperationState,
-             responses=COMPLETING,
-             summary="Teleport the robot to (x, y, yaw) on the ground; completes when settled")
-async def set_pose(robot: str, body: schemas.SetPoseRequest, backend: BackendDep):
-    args = {"x": body.x, "y": body.y, "yaw_deg": body.yaw_deg}
-    return await completing(backend, robot, "set_pose", args, body.wait, body.timeout)
+for _spec in commands.ISSUABLE:
+    add_command_route(_spec)
 
 
 @router.get("/robots/{robot}/drive/operations/{op_id}", response_model=schemas.OperationState,
@@ -147,4 +111,4 @@ async def operation(robot: str, op_id: int, backend: BackendDep):
 async def unknown_command(robot: str, command: str, backend: BackendDep):
     backend.robot(robot)
     raise HTTPException(404, f"the drive has no command {command!r}; commands: "
-                        f"{', '.join(DRIVE_OPERATIONS)}")
+                        f"{', '.join(commands.BY_METHOD)}")

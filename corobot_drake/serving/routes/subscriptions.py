@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import asyncio
 import json
-import math
 import time
 from collections.abc import AsyncIterator, Callable
 from typing import Annotated
@@ -19,6 +18,7 @@ from fastapi import APIRouter, HTTPException, Query, Request
 from fastapi.responses import Response
 from starlette.responses import StreamingResponse
 
+from corobot_drake import signals
 from corobot_drake.serving.routes.backend import Backend, BackendDep
 
 router = APIRouter(tags=["subscriptions"])
@@ -33,29 +33,10 @@ SubscribeHeartbeat = Annotated[float | None, Query(
     gt=0, le=3600, description="s: send a service's state anyway when none was sent for this "
     "long (default: only on changes)")]
 
-POSITION_THRESHOLD = 1e-4
-"""m: a position (x, y, z) change that counts (0.1 mm; a robot at rest creeps by nm)."""
-ANGLE_THRESHOLD = 1e-3
-"""rad (0.057 deg): a heading, roll, pitch, yaw or tip margin change that counts."""
-SPEED_THRESHOLD = 1e-3
-"""m/s, rad/s: a velocity, yaw rate or axle speed change that counts."""
-LOAD_THRESHOLD = 0.05
-"""N: a wheel load change that counts (0.5% of a wheel's share at rest, ~9.9 N)."""
-SLIP_RATIO_THRESHOLD = 1e-3
-"""A slip ratio change that counts (free rolling reads ~0.008)."""
-SLIP_ANGLE_THRESHOLD = 0.5
-"""deg: a slip angle change that counts (at rest the wheels creep sideways by ~1e-5 m/s, which
-reads -0.07 to +0.03 deg against `contact.SLIP_SPEED_FLOOR`; a spin reads 39.5)."""
-CHANGE_THRESHOLDS = {
-    "x": POSITION_THRESHOLD, "y": POSITION_THRESHOLD, "z": POSITION_THRESHOLD,
-    "heading": ANGLE_THRESHOLD, "roll": ANGLE_THRESHOLD, "pitch": ANGLE_THRESHOLD,
-    "yaw": ANGLE_THRESHOLD, "heading_deg": math.degrees(ANGLE_THRESHOLD),
-    "forward": SPEED_THRESHOLD, "lateral": SPEED_THRESHOLD, "yaw_rate": SPEED_THRESHOLD,
-    "axle_speed": SPEED_THRESHOLD, "load": LOAD_THRESHOLD, "slip_ratio": SLIP_RATIO_THRESHOLD,
-    "slip_angle_deg": SLIP_ANGLE_THRESHOLD, "tip_margin_deg": math.degrees(ANGLE_THRESHOLD),
-}
-"""A state's numbers by field name -> the change that counts; any other field (commanded power,
-encoder ticks, the command, ...) counts at any change. Time stamps never count."""
+CHANGE_THRESHOLDS = signals.change_thresholds()
+"""A state's numbers by field name -> the change that counts (`signals.py`); any other field
+(commanded power, encoder ticks, the command, ...) counts at any change. Time stamps never
+count."""
 IGNORED = ("time", "time_stamp")
 
 
