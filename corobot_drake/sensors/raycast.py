@@ -531,35 +531,12 @@ class RayCaster:
             if kind == _HALF_SPACE:
                 if frame is not None and ft.R_FG is not None:
                     R, p = _compose(R, p, ft.R_FG, ft.p_FG)
-                nx, ny, nz = R[2], R[5], R[8]  # the solid is n . x <= n . p
-                s = nx * (ox - p[0]) + ny * (oy - p[1]) + nz * (oz - p[2])
-                if s <= 0.0:  # the origin is inside: every ray hits at 0
-                    best = [0.0] * n
-                    continue
-                if s > max_range:
-                    continue
-                # The steepest descent towards the plane over the cone: -n . d <= cos(phi - a).
-                phi = math.acos(max(-1.0, min(1.0, -(nx * ax + ny * ay + nz * az))))
-                if max_range * math.cos(max(0.0, phi - half_angle)) + _MARGIN < s:
-                    continue
-                for i, (dx, dy, dz) in enumerate(directions):
-                    nd = nx * dx + ny * dy + nz * dz
-                    if nd < 0.0:
-                        t = -s / nd
-                        if t <= max_range and t < best[i]:
-                            best[i] = t
+                _half_space_fan(R, p, origin, (ax, ay, az), half_angle, directions, max_range,
+                                best)
                 continue
-            # Bounding sphere against the distance and the cone.
-            vx, vy, vz = cx - ox, cy - oy, cz - oz
-            r = ft.radius
-            dist2 = vx * vx + vy * vy + vz * vz
-            if dist2 > r * r:
-                dist = math.sqrt(dist2)
-                if dist - r > max_range:
-                    continue
-                limit = half_angle + math.asin(r / dist)
-                if limit < math.pi and vx * ax + vy * ay + vz * az < dist * math.cos(limit):
-                    continue
+            if _outside_cone(cx - ox, cy - oy, cz - oz, ft.radius, (ax, ay, az), half_angle,
+                             max_range):
+                continue
             if R is None:
                 R, p = _compose(*X, ft.R_FG, ft.p_FG)
             if kind == _BOX:
@@ -567,22 +544,67 @@ class RayCaster:
             else:
                 others.append((ft.index, R, p))
         if others:
-            o = np.array([origin] * n, dtype=float)
-            d = np.array(directions, dtype=float)
-            for k, R, p in others:
-                X34 = np.array([[*R[0:3], p[0]], [*R[3:6], p[1]], [*R[6:9], p[2]]])
-                target = self._targets[k]
-                if target.normals is not None:
-                    normals, offsets = self._anchored_planes[k] or _posed_planes(target, X34)
-                    t = _polytope_distances(o, d, normals, offsets, [0], max_range)
-                    t = t[:, 0]
-                else:
-                    R_WG = X34[:, :3]
-                    t = target.hit((o - X34[:, 3]) @ R_WG, d @ R_WG, target.params, max_range)
-                for i, v in enumerate(t.tolist()):
-                    if v < best[i]:
-                        best[i] = v
+            self._cast_others(others, origin, directions, max_range, best)
         return best
+
+    def _cast_others(self, others, origin, directions, max_range: float, best: list) -> None:
+        """The fan against the shapes with no scalar test (`others`: (index, R, p) of each),
+        in numpy; lowers `best` where a ray hits nearer."""
+        n = len(directions)
+        o = np.array([origin] * n, dtype=float)
+        d = np.array(directions, dtype=float)
+        for k, R, p in others:
+            X34 = np.array([[*R[0:3], p[0]], [*R[3:6], p[1]], [*R[6:9], p[2]]])
+            target = self._targets[k]
+            if target.normals is not None:
+                normals, offsets = self._anchored_planes[k] or _posed_planes(target, X34)
+                t = _polytope_distances(o, d, normals, offsets, [0], max_range)[:, 0]
+            else:
+                R_WG = X34[:, :3]
+                t = target.hit((o - X34[:, 3]) @ R_WG, d @ R_WG, target.params, max_range)
+            for i, v in enumerate(t.tolist()):
+                if v < best[i]:
+                    best[i] = v
+
+
+def _half_space_fan(R, p, origin, axis, half_angle: float, directions, max_range: float,
+                    best: list) -> None:
+    """A fan against a half space (the solid n . x <= n . p, n the third column of R):
+    lowers `best` in place; every ray 0 when the origin is inside."""
+    ox, oy, oz = origin
+    ax, ay, az = axis
+    nx, ny, nz = R[2], R[5], R[8]
+    s = nx * (ox - p[0]) + ny * (oy - p[1]) + nz * (oz - p[2])
+    if s <= 0.0:  # the origin is inside: every ray hits at 0
+        best[:] = [0.0] * len(best)
+        return
+    if s > max_range:
+        return
+    # The steepest descent towards the plane over the cone: -n . d <= cos(phi - a).
+    phi = math.acos(max(-1.0, min(1.0, -(nx * ax + ny * ay + nz * az))))
+    if max_range * math.cos(max(0.0, phi - half_angle)) + _MARGIN < s:
+        return
+    for i, (dx, dy, dz) in enumerate(directions):
+        nd = nx * dx + ny * dy + nz * dz
+        if nd < 0.0:
+            t = -s / nd
+            if t <= max_range and t < best[i]:
+                best[i] = t
+
+
+def _outside_cone(vx: float, vy: float, vz: float, r: float, axis, half_angle: float,
+                  max_range: float) -> bool:
+    """A bounding sphere (centre v from the fan's origin, radius r) beyond `max_range` or
+    outside the cone about `axis` that holds every ray: no ray can hit what it bounds."""
+    dist2 = vx * vx + vy * vy + vz * vz
+    if dist2 <= r * r:
+        return False
+    dist = math.sqrt(dist2)
+    if dist - r > max_range:
+        return True
+    ax, ay, az = axis
+    limit = half_angle + math.asin(r / dist)
+    return limit < math.pi and vx * ax + vy * ay + vz * az < dist * math.cos(limit)
 
 
 # --------------------------------------------------------------------------------------------
