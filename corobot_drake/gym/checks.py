@@ -170,7 +170,7 @@ def _coordinates(name: str, values, size: int) -> None:
         what = "x, y (m), yaw (rad)" if size == 3 else "x, y (m)"
         raise ValueError(f"{name}: must be {size} numbers ({what}); got {reprlib.repr(values)}")
     for axis, value in zip("xy", values[:2], strict=False):
-        limits.number(f"{name}.{axis}", value, *limits.POSITION)
+        limits.POSITION.check(f"{name}.{axis}", value)
     if size == 3:
         limits.number(f"{name}.yaw", values[2])
 
