@@ -1,4 +1,12 @@
-"""Shared helpers: build a simulation of the default scene with overrides."""
+"""Shared helpers: build a simulation of the default scene with overrides; each test's tier.
+
+The tests live in four tiers, a folder each, and each test carries its folder's marker:
+`unit` (each system, loader and geometry routine alone: the daily tier, under two minutes
+on two cores), `simulation` (the robot measured through whole simulations), `service` (the
+front ends as a user meets them: HTTP, browser, recording, CLI, studies, ROS 2) and
+`packaging` (the wheel, the tools, the hostile corpus, the docs' blocks). `pytest` runs all;
+`pytest tests/unit` (or `-m unit`) the fast tier.
+"""
 
 from pathlib import Path
 
@@ -11,6 +19,17 @@ from corobot_drake.simulation import Simulation, quiet_drake_warnings
 REPO = Path(__file__).resolve().parent.parent
 
 quiet_drake_warnings()
+
+TIERS = ("unit", "simulation", "service", "packaging")
+
+
+def pytest_collection_modifyitems(items):
+    for item in items:
+        tier = item.path.parent.name
+        if tier not in TIERS:
+            raise pytest.UsageError(f"{item.path}: a test file belongs in one of the tiers' "
+                                    f"folders: {', '.join(f'tests/{t}/' for t in TIERS)}")
+        item.add_marker(tier)
 
 
 def make_sim(*overrides: str, scenario: Path = DEFAULT_SCENARIO,

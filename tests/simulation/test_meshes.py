@@ -21,12 +21,12 @@ from pydrake.geometry import (
 from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.systems.framework import DiagramBuilder
 
+from conftest import REPO
 from corobot_drake.model import dimensions as dim
 from corobot_drake.model import meshes
 from corobot_drake.sensors.camera import make_vtk_engine
 from corobot_drake.sensors.render import color_camera, look_at
 
-REPO = Path(__file__).resolve().parents[1]
 TOLERANCE = 0.005
 """Visual and collision geometry agree in overall size within this (metres)."""
 BACKGROUND = (204, 229, 255)

@@ -7,7 +7,9 @@ from pathlib import Path
 
 import pytest
 
-TOOLS = sorted((Path(__file__).resolve().parent.parent / "tools").glob("*.py"))
+from conftest import REPO
+
+TOOLS = sorted((REPO / "tools").glob("*.py"))
 
 
 class _ParsedError(Exception):

@@ -15,14 +15,12 @@ import os
 import statistics
 import threading
 import time
-from pathlib import Path
 
 import httpx
 import pytest
 
 from corobot_drake.serving.serve import ServerProcess
 
-REPO = Path(__file__).resolve().parent.parent
 ROBOT = "/robots/corobot"
 
 

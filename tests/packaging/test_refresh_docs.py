@@ -4,10 +4,10 @@ commands print now."""
 
 import subprocess
 import sys
-from pathlib import Path
 
 import pytest
 
+from conftest import REPO
 from lab.docs_blocks import (
     BlockError,
     find_blocks,
@@ -15,7 +15,6 @@ from lab.docs_blocks import (
     wrap_markdown,
 )
 
-REPO = Path(__file__).resolve().parent.parent
 TOOL = REPO / "tools" / "refresh_docs.py"
 
 DOC = """# Title

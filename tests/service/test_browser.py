@@ -10,9 +10,9 @@ from pathlib import Path
 
 import pytest
 
+from conftest import REPO
 from corobot_drake.serving.serve import ServerProcess
 
-REPO = Path(__file__).resolve().parent.parent
 OUT = REPO / "out"
 CHROMIUM = os.environ.get("COROBOT_CHROMIUM", "/usr/bin/chromium")
 FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",

@@ -2,13 +2,13 @@
 
 import importlib.util
 import shutil
-from pathlib import Path
 
 import pytest
 
+from conftest import REPO
 from lab import instructions
 
-TOOL = Path(__file__).resolve().parent.parent / "tools" / "count_instructions.py"
+TOOL = REPO / "tools" / "count_instructions.py"
 
 
 def _tool_main():

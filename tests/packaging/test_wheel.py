@@ -30,7 +30,8 @@ from pathlib import Path
 import pytest
 from packaging.requirements import Requirement
 
-REPO = Path(__file__).resolve().parent.parent
+from conftest import REPO
+
 tomllib = pytest.importorskip("tomllib")  # Python >= 3.11
 
 COPY_IGNORE = shutil.ignore_patterns(".git", ".venv", "out", "build", "dist", "__pycache__",
