@@ -178,7 +178,7 @@ MESH_SCALE = Range(1e-4, 1e4, why="from a file's units to metres (0.1 mm to 10 k
 ELLIPSOID_MAX_ASPECT = 4.0
 """A compliant ellipsoid's largest semi-axis over its smallest, at most. Its hydroelastic mesh
 is refined to a tenth of its smallest size (`station.py`) all over: its mesh took 0.2 s of CPU
-at 4, 0.8 s at 5, 4 s at 10, 22 s and 600 MB at 20 (a one-off check, 2026-11-23). A rigid
+at 4, 0.8 s at 5, 4 s at 10, 22 s and 600 MB at 20. A rigid
 one (`hydroelastic_modulus: 0`) has no mesh and no limit."""
 FRICTION = Range(0.0, 10.0, why="Coulomb friction; Drake needs >= 0")
 COLOR = Range(0.0, 1.0, why="a colour component")
@@ -188,12 +188,11 @@ HYDROELASTIC_MODULUS = Range(1e4, 1e11, unit="Pa", zero="rigid",
 """A world body's hydroelastic modulus."""
 TYRE_MODULUS = Range(1e5, 1e8, unit="Pa", why="a rubber tyre")
 """The tyres' hydroelastic modulus: at 1e4 Pa they sank 11 mm, at 1e10 the robot bounced and
-drove 0.21 m of the 0.50 m it drives in 1 s at full power, and 1e30 failed the contact solver
-(one-off runs of the default scene, 2026-11-23)."""
+drove 0.21 m of the 0.50 m it drives in 1 s at full power, and 1e30 failed the contact solver."""
 RESOLUTION_HINT = Range(0.001, 0.02, unit="m")
 """The tyres' mesh size: at 1 mm the robot takes 2 s to build (finer grows fast: 1e-6 m took
 2.8 GB and growing); coarser than 2 cm the tyre is a polygon (at 6 cm the robot sinks 2.2 mm
-and drives 8% short, at 1 m it barely moves; one-off runs, 2026-11-23)."""
+and drives 8% short, at 1 m it barely moves)."""
 DISSIPATION = Range(0.0, 100.0, unit="s/m", why="Hunt-Crossley; Drake needs >= 0")
 DURATION = Range(0.0, 1e7, unit="s")
 """Any duration or time of day: finite, under 116 days (where a 0.1 ms step is still 500

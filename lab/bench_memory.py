@@ -1,4 +1,4 @@
-"""The resident memory of `--serve` over a long run (issue 13: memory stays flat).
+"""The resident memory of `--serve` over a long run (memory stays flat).
 
 `measure()` starts the default scenario served headless (`serve.serve`, in a child process,
 at a `rate` the machine cannot keep, so it runs as fast as it can), with clients on it the

@@ -1,5 +1,5 @@
 """How far a command resumed from a saved scene lands from the uninterrupted one
-(`tools/resume_landing.py`; docs/commands.md, issue 14).
+(`tools/resume_landing.py`; docs/commands.md).
 
 For each landing profile, command and power (`CASES`): `saved_run` runs the command in the
 default scene (camera off) uninterrupted, saving the scene every `step` s while it runs

@@ -6,7 +6,7 @@ For each landing profile, command (DriveDistance 0.3 m, RotateDegrees -60 deg) a
 the command in the default scene (camera off) uninterrupted, saving the scene every `--step`
 s while it runs (through the YAML a saved file holds); then runs each saved scene on to the
 time the uninterrupted run ended plus `--settle` s and prints a Markdown table of the largest
-distance and heading gap between the two landings (docs/commands.md, issue 14).
+distance and heading gap between the two landings (docs/commands.md).
 
     python tools/resume_landing.py [--step 0.02] [--settle 1.0]
 """

@@ -36,7 +36,7 @@ OVERLAP_TOLERANCE = 0.005
 """m: the deepest a start pose may overlap the ground or a body, so that a scene saved mid-run
 loads again: its tyres sink up to 2.2 mm into the ground (at the largest plant step: the
 table in docs/tuning.md), and a robot reversing into the giant box at full power pressed 1 mm
-into it (saved every 0.25 s for 5 s at 10 and 20 ms steps; a one-off check, 2026-11-23).
+into it (saved every 0.25 s for 5 s at 10 and 20 ms steps).
 A SetPose (`Robot.obstacle_at`) allows the same overlap with a body: a pose the loader takes
 is a pose the robot can be set to, and back to where a saved scene had it."""
 

@@ -1,6 +1,6 @@
 """Exact, vectorised ray casting against the proximity geometry of a Drake SceneGraph.
 
-Drake's ``QueryObject`` has no ray-cast query (drake issue 15260), so the IR distance sensors
+Drake's ``QueryObject`` has no ray-cast query, so the IR distance sensors
 cast their rays here, analytically, against the shapes that ``SceneGraphInspector`` exposes,
 posed by ``QueryObject.GetPoseInWorld``.
 

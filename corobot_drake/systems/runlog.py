@@ -46,7 +46,7 @@ TELEMETRY = tuple((signal.port, signal.log) for signal in signals.TELEMETRY)
 HELD_PERIOD = 0.1
 """s: the loads and the slip are sampled every 0.1 s (10 Hz) and held between (ZeroOrderHolds):
 evaluated every 10 ms step, the loads (the plant's contact results) and the slip (the bodies'
-velocities) cost well over the ~3% of a step the run log may add (issue 14 point 8; the
+velocities) cost well over the ~3% of a step the run log may add (the
 measurement is in the commit that added this). A row's loads and slip are those of the latest
 0.1 s sample; its tip margin is the step's (a few sums from the chassis pose, and the run's
 least margin, `Robot.min_tip_margin_deg`, is read from it)."""

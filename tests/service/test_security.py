@@ -1,4 +1,4 @@
-"""The live server is safe by default (issue 13, point 6): loopback unless --host says
+"""The live server is safe by default: loopback unless --host says
 otherwise, a bearer token off loopback, the Host header checked (DNS rebinding), JSON bodies
 for every state-changing request (no cross-site form or empty POST drives the robot), 503 for
 a request whose simulation stopped, and /docs and /redoc served offline.

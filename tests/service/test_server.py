@@ -1,4 +1,4 @@
-"""The live services (issue 6): a real server (`python -m corobot_drake --serve --headless
+"""The live services: a real server (`python -m corobot_drake --serve --headless
 --port 0`) in a child process, driven over HTTP.
 
 One server serves the whole module (building the simulation takes seconds); tests that change
@@ -337,7 +337,7 @@ def test_change_thresholds_ignore_creep_and_time_stamps():
 
 def test_subscription_of_a_robot_at_rest_sends_only_the_first_state_and_heartbeats(
         http, server, caps):
-    """Issue 14 point 6: at rest the IR readings move by ~1e-10 m and the pose creeps by
+    """At rest the IR readings move by ~1e-10 m and the pose creeps by
     nanometres; none of that is a change, so each service sends its first state only."""
     reset(http, caps)
     wait_sim(http, 0.5)  # settled after the teleport

@@ -164,7 +164,7 @@ def test_set_pose_and_the_loader_allow_the_same_overlap_with_the_box(below):
     the giant box than it allows loads and is a free SetPose target; 0.1 mm deeper, the
     loader refuses it and the SetPose is blocked. (The wheel's edge is the robot's rearmost
     point, half wheelbase + radius behind the chassis origin; the point-pair depth of a
-    cylinder in a box is its x overlap to well under 0.1 mm, measured 2026-11-23.)"""
+    cylinder in a box is its x overlap to well under 0.1 mm.)"""
     from corobot_drake.config.placement import OVERLAP_TOLERANCE
     from corobot_drake.model import dimensions as dim
 

@@ -1,4 +1,4 @@
-"""The front camera, measured through the simulation (SPEC, Sensors; issue 4).
+"""The front camera, measured through the simulation (SPEC, Sensors).
 
 The box test compares the share of the image the giant box covers with a pinhole projection
 of its near face, from the camera's pose in the simulation (the robot has settled on its

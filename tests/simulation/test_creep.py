@@ -1,4 +1,4 @@
-"""Issue 14 point 9: a robot at rest stays where it stopped (`lab.creep`; docs/tuning.md,
+"""A robot at rest stays where it stopped (`lab.creep`; docs/tuning.md,
 "At rest"). Without the drive's hold its wheels roll into a stable facet of the tyres'
 hydroelastic mesh; with it they stay."""
 

@@ -1,4 +1,4 @@
-"""The IR distance sensors, measured through the simulation (SPEC, Sensors; issue 4)."""
+"""The IR distance sensors, measured through the simulation (SPEC, Sensors)."""
 
 import math
 

@@ -309,7 +309,7 @@ def _resumer(profile: str) -> Simulation:
 @pytest.mark.parametrize("kind", ["drive", "rotate"])
 @pytest.mark.parametrize("profile", ["closed_loop", "seed"])
 def test_a_command_saved_at_any_time_resumes_to_the_same_landing(profile, kind, power):
-    """Issue 14: a resumed command lands within 1 mm and 0.1 deg of the uninterrupted one
+    """A resumed command lands within 1 mm and 0.1 deg of the uninterrupted one
     (the issue's target; tests/test_systems_motion.py checks every update on a toy robot).
     The saved scene carries the command on from where it started (its `start`), at the power
     it runs at, with its progress at the last updates (`recent_progress`: the seed profile's
@@ -418,7 +418,7 @@ def physics_only_sim():
 @pytest.mark.parametrize("first", [sc.SetPower(0.3, 0.3), sc.DriveDistance(0.05, 0.5),
                                    sc.RotateDegrees(10.0, 0.5)], ids=lambda c: type(c).__name__)
 def test_the_summary_shows_every_ended_command_ended(physics_only_sim, first, later):
-    """Issue 14 point 7, end to end: whatever follows a command in the script, the summary
+    """End to end: whatever follows a command in the script, the summary
     shows it `succeeded` (none of these can fail here) with its end time, and the script's
     last command too once the drive has taken it."""
     sim = physics_only_sim

@@ -1,4 +1,4 @@
-"""System identification and tuning tools (issue 5): run log, log fit, scaling tuner."""
+"""System identification and tuning tools: run log, log fit, scaling tuner."""
 
 import math
 import subprocess
@@ -156,7 +156,7 @@ def test_bench_physics_only_scenario_loads():
 
 def test_a_stall_against_the_giant_box_is_dropped_with_a_warning_and_both_fields_written(
         tmp_path):
-    """Issue 14 point 5: the log ends backing into the giant box at full power, the wheels
+    """The log ends backing into the giant box at full power, the wheels
     held for ~2.5 s; a plain fit is pulled far below the true 12 (7.06 with this log), the
     robust one drops the stall and finds 12 again, and --write writes both parameters with
     where they came from."""

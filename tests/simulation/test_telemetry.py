@@ -127,7 +127,7 @@ def test_loads_at_rest_sum_to_the_robots_weight(sim):
     assert mass == pytest.approx(dim.TOTAL_BODY_MASS + 4 * dim.WHEEL_MASS)  # 4.03 kg
     loads = robot.wheel_loads()
     # At rest the ground carries the robot: the solver's equilibrium matches to ~1e-7; 0.5%
-    # allows the creep of a robot at rest (issue 14 point 9) and a coarser step.
+    # allows the creep of a robot at rest and a coarser step.
     assert sum(loads.values()) == pytest.approx(mass * 9.81, rel=5e-3)
     # Centred mass: each wheel a quarter, within 1% (the chassis' own small asymmetries).
     for load in loads.values():

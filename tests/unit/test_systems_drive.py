@@ -418,7 +418,7 @@ LATER = [SetPower(0.2, 0.2), Wait(0.05), AllStop(), Enable(True), Enable(False),
 @pytest.mark.parametrize("first", LEVEL_AND_WAIT, ids=lambda c: type(c).__name__)
 @pytest.mark.parametrize("later", LATER, ids=lambda c: f"then_{c}")
 def test_every_scripted_command_ends_whatever_follows(first, later):
-    """Issue 14 point 7: no command of a script is left `running` once the script is done,
+    """No command of a script is left `running` once the script is done,
     whatever follows it (a Wait's record used to hide the command before it)."""
     s = source([first, later], CommandStatus())
     s.tick(8)  # 8 updates: both issued, the Waits (3 updates each) elapsed

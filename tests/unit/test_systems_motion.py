@@ -294,7 +294,7 @@ def _same_request(resumed: Stepper, s: Stepper) -> None:
                                      DriveDistance(0.3, 0.5), RotateDegrees(-60.0, 0.5)],
                          ids=lambda c: f"{type(c).__name__}-{c.power:g}")
 def test_a_command_resumed_at_any_update_replays_the_same_requests(profile, command):
-    """Issue 14: what `remaining_command` writes (start, power, `recent_progress`) is all of
+    """What `remaining_command` writes (start, power, `recent_progress`) is all of
     a command's memory its requests depend on. Saved before each update of a run on a toy
     robot (through the seed profile's halvings and the refills of its 0.1 s of progress
     samples after them), a fresh MotionCommands given it requests what the running one does
