@@ -41,8 +41,9 @@ from corobot_drake.systems.dead_reckoning import DeadReckoning
 from corobot_drake.systems.drive import CommandSource, DriveController
 from corobot_drake.systems.monitor import TiltMonitor
 from corobot_drake.systems.motion import MotionCommands
-from corobot_drake.systems.odometry import add_chassis_poses, add_odometry
-from corobot_drake.systems.runlog import add_run_log
+from corobot_drake.systems.odometry import add_chassis_poses, add_chassis_states, add_odometry
+from corobot_drake.systems.runlog import HELD, add_run_log
+from corobot_drake.systems.servo import add_servo_sign, servo_velocity_sign
 from corobot_drake.systems.slip_markers import add_slip_markers
 from corobot_drake.systems.stability import add_tip_margin
 
@@ -228,10 +229,15 @@ def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None, foxglov
     plant.Finalize()
 
     robots, renderers = {}, {}
+    servo_sign = servo_velocity_sign(scenario.simulator_config)
+    step = sc.physics_step(scenario.plant_config, scenario.simulator_config)
     # One chassis pose per robot (from the plant's body_poses, converted once per step) for
     # its compass, GPS, tilt monitor and run log.
     chassis_poses = add_chassis_poses(builder, plant,
                                       {name: parts[1] for name, parts in added.items()})
+    # ... and its chassis' state (C++, no pose conversion) for what samples every step.
+    chassis_states = add_chassis_states(builder, plant,
+                                        {name: parts[1] for name, parts in added.items()})
     for name, robot in scenario.robots.items():
         instance, chassis, joints = added[name]
         source = builder.AddNamedSystem(
@@ -278,16 +284,17 @@ def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None, foxglov
                                 ("drive_state", odometry.drive_state),
                                 ("command_status", motion.GetOutputPort("command_status"))):
             builder.ExportOutput(port, f"{name}.{port_name}")
-        builder.Connect(controller.GetOutputPort("desired_state"),
-                        plant.get_desired_state_input_port(instance))
+        desired_state = controller.GetOutputPort("desired_state")
+        if servo_sign != 1.0:
+            fix = add_servo_sign(builder, f"{name}.servo_sign", servo_sign, desired_state.size())
+            builder.Connect(desired_state, fix.get_input_port())
+            desired_state = fix.get_output_port()
+        builder.Connect(desired_state, plant.get_desired_state_input_port(instance))
         tilt = builder.AddNamedSystem(f"{name}.tilt_monitor", TiltMonitor(TILT_SAMPLE_PERIOD))
-        builder.Connect(chassis_pose, tilt.GetInputPort("chassis_pose"))
-        add_run_log(builder, name, chassis_pose, controller.GetOutputPort("drive_status"),
+        builder.Connect(chassis_states[name], tilt.GetInputPort("chassis_state"))
+        add_run_log(builder, name, chassis_states[name], controller.GetOutputPort("drive_status"),
                     odometry.encoder_ticks,
-                    {"wheel_loads": contacts.GetOutputPort("wheel_loads"),
-                     "wheel_slip_ratio": contacts.GetOutputPort("wheel_slip_ratio"),
-                     "wheel_slip_angle": contacts.GetOutputPort("wheel_slip_angle"),
-                     "tip_margin": tip_margin.GetOutputPort("tip_margin")})
+                    {port: contacts.GetOutputPort(port) for port in HELD})
         for port in ("drive_status", "axle_speed_command", "axle_speed"):
             builder.ExportOutput(controller.GetOutputPort(port), f"{name}.{port}")
         builder.ExportOutput(plant.get_state_output_port(instance), f"{name}.state")
@@ -295,7 +302,7 @@ def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None, foxglov
                                   motion=motion)
         robots[name].camera, robots[name].camera_saver = add_camera(
             builder, plant, scene_graph, name, instance, robot.camera, scenario.world,
-            renderers, save_camera)
+            renderers, save_camera, step=step)
         robots[name].ir_sensors = add_ir_sensors(
             builder, plant, scene_graph, name, robot.ir_sensors, model_instance=instance,
             random_seed=scenario.random_seed, meshcat=meshcat)

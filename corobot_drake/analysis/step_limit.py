@@ -9,6 +9,7 @@ The plant step is set on the loaded scenario, past the loader's bound, to measur
 
 import math
 
+from corobot_drake.config import scenario as sc
 from corobot_drake.config.scenario import load_scenario
 from corobot_drake.resources import DEFAULT_SCENARIO
 
@@ -26,7 +27,7 @@ def measure(time_step: float) -> dict:
     from corobot_drake.simulation import Simulation
 
     scenario = load_scenario(DEFAULT_SCENARIO, overrides=[SCRIPT, *physics_only_overrides()])
-    scenario.plant_config.time_step = time_step
+    sc.set_physics_step(scenario, time_step)
     sim = Simulation(scenario, check=False)  # steps beyond the bound: what it measures
     plant, chassis = sim.station.plant, sim.robot()._parts.chassis
     heights, tilts = [], []
