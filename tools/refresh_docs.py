@@ -30,6 +30,7 @@ import dataclasses as dc
 import datetime
 import difflib
 import json
+import math
 import os
 import re
 import shlex
@@ -323,7 +324,40 @@ def measure_event_times(repeats: int = 5, seconds: float = 10.0) -> dict:
                    "steps_per_second": steps[name]} for name, r in runs.items()}
 
 
+def measure_continuous_sensors(seconds: float = 9.0) -> dict:
+    """What the sensors see under CENIC's continuous plant against SAP's discrete one, over
+    the figure of eight (both IR sensors at 20 Hz): each scan's raw reading and the chassis
+    position at that scan, the largest differences (m) and how many readings differ by more
+    than 1 mm; then, under CENIC, the camera on against off: simulator steps per simulated
+    second and the chassis' distance apart (m) at the end."""
+    from corobot_drake.analysis.bench import DRIVING, sensor_overrides
+    from corobot_drake.config.scenario import SAP_PLANT, load_scenario
+    from corobot_drake.simulation import Simulation, quiet_drake_warnings
+
+    quiet_drake_warnings()
+
+    def scans(*overrides: str, camera: bool = False):
+        sim = Simulation(load_scenario(DEFAULT_SCENARIO, overrides=[
+            DRIVING, *sensor_overrides(ir=True, camera=camera), *overrides]))
+        robot, out = sim.robot(), []
+        while sim.time < seconds - 1e-9:
+            sim.advance(0.05)
+            out.append((robot.ir_distances(), robot.position()))
+        return out, sim.simulator.get_num_steps_taken() / seconds
+
+    cenic, steps = scans()
+    sap, _ = scans(SAP_PLANT % 0.01)
+    reading = [abs(a[0][n] - b[0][n]) for a, b in zip(cenic, sap, strict=True) for n in a[0]]
+    moved = [math.dist(a[1], b[1]) for a, b in zip(cenic, sap, strict=True)]
+    with_camera, camera_steps = scans(camera=True)
+    return {"readings": len(reading), "max_reading_m": max(reading),
+            "over_1_mm": sum(d > 1e-3 for d in reading), "max_position_m": max(moved),
+            "steps_per_second": steps, "camera_steps_per_second": camera_steps,
+            "camera_position_m": math.dist(with_camera[-1][1], cenic[-1][1])}
+
+
 MEASUREMENTS = {
+    "continuous-sensors": measure_continuous_sensors,
     "ir-at-start": measure_ir_at_start,
     "saved-mid-drive": measure_saved_mid_drive,
     "wheel-turn": measure_wheel_turn,
