@@ -6,6 +6,7 @@ import pytest
 from pydrake.systems.analysis import SimulatorConfig
 
 from conftest import make_sim
+from corobot_drake.config.scenario import SAP_PLANT
 from corobot_drake.systems.servo import (
     PROBE_DAMPING,
     PROBE_SPEED,
@@ -18,6 +19,7 @@ STEP = 0.01
 CENIC = SimulatorConfig(integration_scheme="cenic", max_step_size=STEP, use_error_control=False)
 CENIC_SCENE = ("{plant_config: {time_step: 0}, simulator_config: {integration_scheme: cenic, "
                f"max_step_size: {STEP}, use_error_control: false}}}}")
+SAP_SCENE = SAP_PLANT % STEP
 IMPLICIT_ONE_STEP = STEP * PROBE_DAMPING * PROBE_SPEED / (1.0 + STEP * PROBE_DAMPING)
 """rad/s: one implicit PD step of the probe's 1 kg m^2 wheel from rest."""
 
@@ -62,7 +64,7 @@ def test_wheels_turn_as_commanded_under_cenic(left, right):
     servo, kd 10 N m s/rad against the tyres' turning load, holds them within 0.5%; SAP and
     CENIC agree within 0.2%)."""
     speeds = {}
-    for name, overrides in (("sap", ()), ("cenic", (CENIC_SCENE,))):
+    for name, overrides in (("sap", (SAP_SCENE,)), ("cenic", (CENIC_SCENE,))):
         sim = make_sim(*overrides)
         bot = sim.robot()
         bot.set_power(left, right)
@@ -76,4 +78,4 @@ def test_wheels_turn_as_commanded_under_cenic(left, right):
     names = make_sim(CENIC_SCENE).station.diagram.GetSystems()
     assert "corobot.servo_sign" in [s.get_name() for s in names]
     assert "corobot.servo_sign" not in [s.get_name() for s in
-                                        make_sim().station.diagram.GetSystems()]
+                                        make_sim(SAP_SCENE).station.diagram.GetSystems()]

@@ -1,0 +1,103 @@
+"""This checkout against another (an older commit's) on this machine, interleaved.
+
+Each round runs every case once in a fresh process per checkout, old then new, so a change
+of the host's load falls on both; the table gives each case's median over the rounds, wall
+real-time factor (CPU-time one in parentheses), and new / old. The other checkout is any
+directory holding a `corobot_drake` package with the same `analysis.bench` and `gym.bench`
+functions, e.g. `git worktree add /tmp/old 268a52c`; it runs on this interpreter and its own
+default scenario.
+
+    python tools/bench_compare.py --old /tmp/old --rounds 5
+"""
+
+import json
+import os
+import statistics
+import subprocess
+import sys
+from pathlib import Path
+
+from corobot_drake.analysis.arguments import ToolParser, bounded, one_line_errors
+from corobot_drake.config.bounds import Range
+
+REPO = Path(__file__).resolve().parent.parent
+CASES = {
+    "physics only": "from corobot_drake.analysis import bench\n"
+                    "r = bench.realtime_factor(bench.physics_only_overrides(), {seconds})\n"
+                    "print(json.dumps({{'wall': r[0], 'cpu': r[1]}}))",
+    "full stack (2 IR at 20 Hz + camera at 30 Hz)":
+        "from corobot_drake.analysis import bench\n"
+        "r = bench.realtime_factor(bench.sensor_overrides(ir=True, camera=True), {seconds})\n"
+        "print(json.dumps({{'wall': r[0], 'cpu': r[1]}}))",
+    "gym env steps per s (one env, in process)":
+        "import time\nfrom corobot_drake.gym.bench import in_process\n"
+        "cpu = time.process_time()\nr = in_process({steps})\n"
+        "print(json.dumps({{'wall': r['steps'] / r['wall'], "
+        "'cpu': r['steps'] / (time.process_time() - cpu - r['startup'])}}))",
+}
+"""Case -> the Python its process runs (printing one JSON line {wall, cpu}: rates, higher is
+faster)."""
+
+
+def run_case(checkout: Path, case: str, seconds: float, steps: int) -> dict:
+    """One run of `case` in a fresh process on `checkout` (its directory first on the path)."""
+    code = "import json\n" + CASES[case].format(seconds=seconds, steps=steps)
+    env = {**os.environ, "PYTHONPATH": str(checkout)}
+    done = subprocess.run([sys.executable, "-c", code], cwd=checkout, env=env,
+                          capture_output=True, text=True, check=False)
+    if done.returncode != 0:
+        tail = (done.stderr.strip().splitlines() or ["no output"])[-1]
+        raise RuntimeError(f"{case} on {checkout}: {tail}")
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def compare(old: Path, rounds: int, seconds: float, steps: int, progress=None) -> dict:
+    """{case: {"old": [runs], "new": [runs]}}, `rounds` interleaved rounds."""
+    runs = {case: {"old": [], "new": []} for case in CASES}
+    for _ in range(rounds):
+        for case in CASES:
+            for label, checkout in (("old", old), ("new", REPO)):
+                runs[case][label].append(run_case(checkout, case, seconds, steps))
+                if progress:
+                    progress(f"{case}, {label}: {runs[case][label][-1]['wall']:.2f}")
+    return runs
+
+
+def table(runs: dict) -> str:
+    lines = ["| case | old, wall (CPU), median | new, wall (CPU), median | new / old, wall "
+             "(CPU) |", "|---|---|---|---|"]
+    for case, by in runs.items():
+        median = {label: [statistics.median(r[key] for r in by[label]) for key in ("wall", "cpu")]
+                  for label in ("old", "new")}
+        o, n = median["old"], median["new"]
+        lines.append(f"| {case} | {o[0]:.2f} ({o[1]:.2f}) | {n[0]:.2f} ({n[1]:.2f}) | "
+                     f"{n[0] / o[0]:.2f}x ({n[1] / o[1]:.2f}x) |")
+    return "\n".join(lines)
+
+
+@one_line_errors
+def main(argv=None) -> int:
+    parser = ToolParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--old", type=Path, required=True,
+                        help="the other checkout (a directory with corobot_drake/)")
+    parser.add_argument("--rounds", type=bounded(Range(1, 100), int), default=5,
+                        help="interleaved rounds; medians")
+    parser.add_argument("--seconds", type=bounded(Range(0.5, 600)), default=5.0,
+                        help="simulated s per real-time-factor run")
+    parser.add_argument("--steps", type=bounded(Range(10, 100000), int), default=100,
+                        help="gym env steps per run")
+    args = parser.parse_args(argv)
+    if not (args.old / "corobot_drake").is_dir():
+        parser.error(f"argument --old: {args.old} holds no corobot_drake/ package")
+    runs = compare(args.old.resolve(), args.rounds, args.seconds, args.steps,
+                   progress=lambda text: print(text, file=sys.stderr, flush=True))
+    from corobot_drake.analysis.bench import machine
+
+    print(f"machine: {machine()}; {args.rounds} interleaved rounds, {args.seconds:g} s per "
+          f"real-time factor, {args.steps} gym steps\n")
+    print(table(runs))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
