@@ -57,6 +57,9 @@ ORDER = {DETERMINISTIC: 0, PICTURE: 1, TIMING: 2}
 CHECK_SECONDS = 30.0
 """`--check` without `--only` re-renders the deterministic blocks estimated to cost this or less."""
 NO_CAMERA = "robots: {corobot: {camera: {rgb: false}}}"
+OLD_CHECKOUT = "/tmp/corobot-268a52c"
+"""The checkout `bench_compare` measures against: `git worktree add /tmp/corobot-268a52c
+268a52c` (the commit before CENIC and the lean per-step path)."""
 
 
 # --- Commands and their outputs ---------------------------------------------------------------
@@ -580,6 +583,20 @@ def render_bench_robots(outs) -> str:
             f"{_table(o.stdout)}")
 
 
+def render_continuous_sensors(outs) -> str:
+    o = outs[0][0]
+    m = _json(outs)
+    return wrap_markdown(
+        f"`{o.command}`: over the figure of eight (9 s), the {m['readings']} readings of both "
+        f"IR sensors at 20 Hz differ between CENIC and SAP by at most "
+        f"{1000 * m['max_reading_m']:.2f} mm ({m['over_1_mm']} by more than 1 mm), while the "
+        f"robot's position at the scans differs by up to {1000 * m['max_position_m']:.1f} mm "
+        f"(the two integrators' trajectories). Under CENIC the simulator takes "
+        f"{m['steps_per_second']:.0f} steps per simulated second without the camera and "
+        f"{m['camera_steps_per_second']:.0f} with it at 30 Hz; with the camera the robot ends "
+        f"{1000 * m['camera_position_m']:.1f} mm from where it ends without.")
+
+
 def _default_column(outs) -> tuple[list[str], list[list[float]], list[Output]]:
     """(stacks, wall RTF per stack per run, outputs) of the default-column runs."""
     runs = outs[0]
@@ -760,7 +777,7 @@ def blocks() -> list[Spec]:
     bench_ir = Command("python tools/bench_ir.py")
     bench_raycast = Command("python tools/bench_raycast.py")
     bench_camera = Command("python tools/bench_camera.py")
-    default_column = Command('python tools/bench.py --plants "hydroelastic 10 ms" --seconds 5 '
+    default_column = Command('python tools/bench.py --plants "CENIC 10 ms" --seconds 5 '
                              '--repeats 5 --no-micro', repeats=3)
     pictures = [
         ("readme-picture-drive-test", "Drive test path", "drive_test.png",
@@ -884,6 +901,11 @@ def blocks() -> list[Spec]:
                       '--override "world: {bodies: {giant_box: {hydroelastic_modulus: 0}}}" '
                       '--override "robots: {corobot: {drive: {control_period: 0.02}}}"'),),
              render_command_table, TIMING, 450),
+        Spec("bench-compare", "docs/performance.md",
+             (Command(f"python tools/bench_compare.py --old {OLD_CHECKOUT} --rounds 5"),),
+             render_bench_robots, TIMING, 600),
+        Spec("continuous-sensors", "docs/performance.md", (_measure("continuous-sensors"),),
+             render_continuous_sensors, DETERMINISTIC, 60),
         Spec("bench-full", "docs/performance.md",
              (Command("python tools/bench.py --seconds 5 --repeats 3"),), render_bench_full,
              TIMING, 200),
