@@ -902,7 +902,7 @@ def blocks() -> list[Spec]:
                       '--override "robots: {corobot: {drive: {control_period: 0.02}}}"'),),
              render_command_table, TIMING, 450),
         Spec("bench-compare", "docs/performance.md",
-             (Command(f"python tools/bench_compare.py --old {OLD_CHECKOUT} --rounds 5"),),
+             (Command(f"python tools/bench_compare.py --old {OLD_CHECKOUT} --rounds 3"),),
              render_bench_robots, TIMING, 600),
         Spec("continuous-sensors", "docs/performance.md", (_measure("continuous-sensors"),),
              render_continuous_sensors, DETERMINISTIC, 60),
