@@ -30,10 +30,14 @@ CASES = {
         "r = bench.realtime_factor(bench.sensor_overrides(ir=True, camera=True), {seconds})\n"
         "print(json.dumps({{'wall': r[0], 'cpu': r[1]}}))",
     "gym env steps per s (one env, in process)":
-        "import time\nfrom corobot_drake.gym.bench import in_process\n"
-        "cpu = time.process_time()\nr = in_process({steps})\n"
-        "print(json.dumps({{'wall': r['steps'] / r['wall'], "
-        "'cpu': r['steps'] / (time.process_time() - cpu - r['startup'])}}))",
+        "import time\nfrom corobot_drake.gym.env import GoToGoalEnv\n"
+        "env = GoToGoalEnv()\nenv.reset(seed=0)\nenv.action_space.seed(0)\n"
+        "wall, cpu = time.perf_counter(), time.process_time()\n"
+        "for _ in range({steps}):\n"
+        "    _, _, terminated, truncated, _ = env.step(env.action_space.sample())\n"
+        "    if terminated or truncated:\n        env.reset()\n"
+        "print(json.dumps({{'wall': {steps} / (time.perf_counter() - wall), "
+        "'cpu': {steps} / (time.process_time() - cpu)}}))",
 }
 """Case -> the Python its process runs (printing one JSON line {wall, cpu}: rates, higher is
 faster)."""
@@ -51,11 +55,12 @@ def run_case(checkout: Path, case: str, seconds: float, steps: int) -> dict:
     return json.loads(done.stdout.strip().splitlines()[-1])
 
 
-def compare(old: Path, rounds: int, seconds: float, steps: int, progress=None) -> dict:
-    """{case: {"old": [runs], "new": [runs]}}, `rounds` interleaved rounds."""
-    runs = {case: {"old": [], "new": []} for case in CASES}
+def compare(old: Path, rounds: int, seconds: float, steps: int, cases=tuple(CASES),
+            progress=None) -> dict:
+    """{case: {"old": [runs], "new": [runs]}} of `cases`, `rounds` interleaved rounds."""
+    runs = {case: {"old": [], "new": []} for case in cases}
     for _ in range(rounds):
-        for case in CASES:
+        for case in cases:
             for label, checkout in (("old", old), ("new", REPO)):
                 runs[case][label].append(run_case(checkout, case, seconds, steps))
                 if progress:
@@ -86,10 +91,14 @@ def main(argv=None) -> int:
                         help="simulated s per real-time-factor run")
     parser.add_argument("--steps", type=bounded(Range(10, 100000), int), default=100,
                         help="gym env steps per run")
+    parser.add_argument("--cases", help="only cases containing this text (None: all)")
     args = parser.parse_args(argv)
     if not (args.old / "corobot_drake").is_dir():
         parser.error(f"argument --old: {args.old} holds no corobot_drake/ package")
-    runs = compare(args.old.resolve(), args.rounds, args.seconds, args.steps,
+    cases = [c for c in CASES if not args.cases or args.cases in c]
+    if not cases:
+        parser.error(f"argument --cases: {args.cases!r} is in none of: {', '.join(CASES)}")
+    runs = compare(args.old.resolve(), args.rounds, args.seconds, args.steps, cases,
                    progress=lambda text: print(text, file=sys.stderr, flush=True))
     from corobot_drake.analysis.bench import machine
 

@@ -60,7 +60,8 @@ def joint_speed(continuous: bool, seconds: float) -> float:
 
 
 def main() -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0],
+                                     formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     parser.parse_args()
     print(f"drake {version('drake')}; kp 0, kd {KD:g} N m s/rad, desired velocity "
           f"{VD:+g} rad/s, 1 kg m^2, step {STEP:g} s")
