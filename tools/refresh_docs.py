@@ -892,7 +892,7 @@ def blocks() -> list[Spec]:
                       "--seconds 5 --repeats 1"),), render_bench_robots, TIMING, 300),
         Spec("bench-layers", "docs/performance.md",
              (Command("python tools/bench.py --layers --no-table --no-micro --seconds 4 "
-                      "--repeats 7"),), render_bench_robots, TIMING, 420),
+                      "--repeats 5"),), render_bench_robots, TIMING, 300),
         Spec("count-instructions", "docs/performance.md",
              (Command('python tools/count_instructions.py --cache-sim '
                       '--override "plant_config: {discrete_contact_approximation: similar}" '
