@@ -8,6 +8,7 @@ functions, e.g. `git worktree add /tmp/old 268a52c`; it runs on this interpreter
 default scenario.
 
     python tools/bench_compare.py --old /tmp/old --rounds 5
+    python tools/bench_compare.py --old /tmp/old --new-override "{plant_config: ...}"
 """
 
 import json
@@ -23,14 +24,21 @@ from corobot_drake.config.bounds import Range
 REPO = Path(__file__).resolve().parent.parent
 CASES = {
     "physics only": "from corobot_drake.analysis import bench\n"
-                    "r = bench.realtime_factor(bench.physics_only_overrides(), {seconds})\n"
+                    "r = bench.realtime_factor([*bench.physics_only_overrides(), *{overrides}], "
+                    "{seconds})\n"
                     "print(json.dumps({{'wall': r[0], 'cpu': r[1]}}))",
     "full stack (2 IR at 20 Hz + camera at 30 Hz)":
         "from corobot_drake.analysis import bench\n"
-        "r = bench.realtime_factor(bench.sensor_overrides(ir=True, camera=True), {seconds})\n"
+        "r = bench.realtime_factor([*bench.sensor_overrides(ir=True, camera=True), "
+        "*{overrides}], {seconds})\n"
         "print(json.dumps({{'wall': r[0], 'cpu': r[1]}}))",
     "gym env steps per s (one env, in process)":
-        "import time\nfrom corobot_drake.gym.env import GoToGoalEnv\n"
+        "import functools\nimport time\nimport corobot_drake.gym.env as gym_env\n"
+        "from corobot_drake.config.scenario import load_scenario\n"
+        "base = gym_env.base_scenario\n"
+        "gym_env.base_scenario = lambda c: functools.reduce(\n"
+        "    lambda s, text: load_scenario(data=text, defaults=s), {overrides}, base(c))\n"
+        "from corobot_drake.gym.env import GoToGoalEnv\n"
         "env = GoToGoalEnv()\nenv.reset(seed=0)\nenv.action_space.seed(0)\n"
         "wall, cpu = time.perf_counter(), time.process_time()\n"
         "for _ in range({steps}):\n"
@@ -40,12 +48,15 @@ CASES = {
         "'cpu': {steps} / (time.process_time() - cpu)}}))",
 }
 """Case -> the Python its process runs (printing one JSON line {wall, cpu}: rates, higher is
-faster)."""
+faster); `{overrides}`: the checkout's scenario overrides (a list's repr)."""
 
 
-def run_case(checkout: Path, case: str, seconds: float, steps: int) -> dict:
-    """One run of `case` in a fresh process on `checkout` (its directory first on the path)."""
-    code = "import json\n" + CASES[case].format(seconds=seconds, steps=steps)
+def run_case(checkout: Path, case: str, seconds: float, steps: int,
+             overrides: list[str] = ()) -> dict:
+    """One run of `case` in a fresh process on `checkout` (its directory first on the path),
+    its scenario with `overrides` (YAML texts) merged on top."""
+    code = "import json\n" + CASES[case].format(seconds=seconds, steps=steps,
+                                                 overrides=repr(list(overrides)))
     env = {**os.environ, "PYTHONPATH": str(checkout)}
     done = subprocess.run([sys.executable, "-c", code], cwd=checkout, env=env,
                           capture_output=True, text=True, check=False)
@@ -56,13 +67,15 @@ def run_case(checkout: Path, case: str, seconds: float, steps: int) -> dict:
 
 
 def compare(old: Path, rounds: int, seconds: float, steps: int, cases=tuple(CASES),
-            progress=None) -> dict:
-    """{case: {"old": [runs], "new": [runs]}} of `cases`, `rounds` interleaved rounds."""
+            new_overrides: list[str] = (), progress=None) -> dict:
+    """{case: {"old": [runs], "new": [runs]}} of `cases`, `rounds` interleaved rounds; this
+    checkout's runs with `new_overrides`."""
     runs = {case: {"old": [], "new": []} for case in cases}
     for _ in range(rounds):
         for case in cases:
-            for label, checkout in (("old", old), ("new", REPO)):
-                runs[case][label].append(run_case(checkout, case, seconds, steps))
+            for label, checkout, overrides in (("old", old, ()),
+                                               ("new", REPO, new_overrides)):
+                runs[case][label].append(run_case(checkout, case, seconds, steps, overrides))
                 if progress:
                     progress(f"{case}, {label}: {runs[case][label][-1]['wall']:.2f}")
     return runs
@@ -92,6 +105,11 @@ def main(argv=None) -> int:
     parser.add_argument("--steps", type=bounded(Range(10, 100000), int), default=100,
                         help="gym env steps per run")
     parser.add_argument("--cases", help="only cases containing this text (None: all)")
+    parser.add_argument("--new-override", action="append", default=[],
+                        help="scenario YAML merged on this checkout's runs (repeatable), e.g. "
+                             "CENIC: \"{plant_config: {time_step: 0}, simulator_config: "
+                             "{integration_scheme: cenic, max_step_size: 0.01, "
+                             "use_error_control: false}}\"")
     args = parser.parse_args(argv)
     if not (args.old / "corobot_drake").is_dir():
         parser.error(f"argument --old: {args.old} holds no corobot_drake/ package")
@@ -99,6 +117,7 @@ def main(argv=None) -> int:
     if not cases:
         parser.error(f"argument --cases: {args.cases!r} is in none of: {', '.join(CASES)}")
     runs = compare(args.old.resolve(), args.rounds, args.seconds, args.steps, cases,
+                   args.new_override,
                    progress=lambda text: print(text, file=sys.stderr, flush=True))
     from corobot_drake.analysis.bench import machine
 

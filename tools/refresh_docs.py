@@ -334,7 +334,7 @@ def measure_continuous_sensors(seconds: float = 9.0) -> dict:
     than 1 mm; then, under CENIC, the camera on against off: simulator steps per simulated
     second and the chassis' distance apart (m) at the end."""
     from corobot_drake.analysis.bench import DRIVING, sensor_overrides
-    from corobot_drake.config.scenario import SAP_PLANT, load_scenario
+    from corobot_drake.config.scenario import CENIC_PLANT, load_scenario
     from corobot_drake.simulation import Simulation, quiet_drake_warnings
 
     quiet_drake_warnings()
@@ -348,11 +348,11 @@ def measure_continuous_sensors(seconds: float = 9.0) -> dict:
             out.append((robot.ir_distances(), robot.position()))
         return out, sim.simulator.get_num_steps_taken() / seconds
 
-    cenic, steps = scans()
-    sap, _ = scans(SAP_PLANT % 0.01)
+    cenic, steps = scans(CENIC_PLANT % 0.01)
+    sap, _ = scans()
     reading = [abs(a[0][n] - b[0][n]) for a, b in zip(cenic, sap, strict=True) for n in a[0]]
     moved = [math.dist(a[1], b[1]) for a, b in zip(cenic, sap, strict=True)]
-    with_camera, camera_steps = scans(camera=True)
+    with_camera, camera_steps = scans(CENIC_PLANT % 0.01, camera=True)
     return {"readings": len(reading), "max_reading_m": max(reading),
             "over_1_mm": sum(d > 1e-3 for d in reading), "max_position_m": max(moved),
             "steps_per_second": steps, "camera_steps_per_second": camera_steps,
@@ -777,7 +777,7 @@ def blocks() -> list[Spec]:
     bench_ir = Command("python tools/bench_ir.py")
     bench_raycast = Command("python tools/bench_raycast.py")
     bench_camera = Command("python tools/bench_camera.py")
-    default_column = Command('python tools/bench.py --plants "CENIC 10 ms" --seconds 5 '
+    default_column = Command('python tools/bench.py --plants "hydroelastic 10 ms" --seconds 5 '
                              '--repeats 5 --no-micro', repeats=3)
     pictures = [
         ("readme-picture-drive-test", "Drive test path", "drive_test.png",

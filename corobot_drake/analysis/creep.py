@@ -159,20 +159,15 @@ def worst_prediction(angles: np.ndarray, rates: np.ndarray, seconds: float,
     return float(candidates[best]), float(rotations[best])
 
 
-SAP = ("{{{{plant_config: {{{{time_step: 0.01, discrete_contact_approximation: {}}}}}, "
-       "simulator_config: {{{{integration_scheme: runge_kutta3}}}}}}}}")
-"""A discrete plant stepped by SAP with the approximation `{}` every 10 ms (`lagged`: the
-former default), as an `ISOLATION` template."""
 ISOLATION = (
-    ("shipped (CENIC, 10 ms, hydroelastic, servo damping 10 N m s/rad)", ""),
+    ("shipped (lagged, 10 ms, hydroelastic, servo damping 10 N m s/rad)", ""),
     ("servo damping 1 N m s/rad", "robots: {{{robot}: {{contact: {{servo_damping: 1}}}}}}"),
     ("servo damping 100 N m s/rad", "robots: {{{robot}: {{contact: {{servo_damping: 100}}}}}}"),
     ("servo damping 1000 N m s/rad", "robots: {{{robot}: {{contact: {{servo_damping: 1000}}}}}}"),
-    ("SAP, approximation lagged, 10 ms", SAP.format("lagged")),
-    ("SAP, approximation similar", SAP.format("similar")),
-    ("SAP, approximation sap", SAP.format("sap")),
-    ("step 1 ms", "simulator_config: {{max_step_size: 0.001}}"),
-    ("step 5 ms", "simulator_config: {{max_step_size: 0.005}}"),
+    ("approximation similar", "plant_config: {{discrete_contact_approximation: similar}}"),
+    ("approximation sap", "plant_config: {{discrete_contact_approximation: sap}}"),
+    ("plant step 1 ms", "plant_config: {{time_step: 0.001}}"),
+    ("plant step 5 ms", "plant_config: {{time_step: 0.005}}"),
     ("stiction tolerance 1e-6 m/s (Drake's default 1e-4)",
      "plant_config: {{stiction_tolerance: 1.0e-6}}"),
     ("stiction tolerance 1e-2 m/s", "plant_config: {{stiction_tolerance: 1.0e-2}}"),

@@ -336,21 +336,14 @@ class Robot:
 
 
 def _default_plant_config() -> MultibodyPlantConfig:
-    """A continuous plant, stepped by CENIC (`_default_simulator_config`). SAP instead:
-    `time_step: 0.01` with any other `integration_scheme` (`lagged` is then the
-    approximation: the SAP family honours the wheels' servo gains)."""
+    """A discrete plant stepped by SAP (`lagged`: the SAP family honours the wheels' servo
+    gains) every 10 ms. CENIC instead: `CENIC_PLANT` (docs/performance.md says what it
+    changes, and why it is not the default)."""
     return MultibodyPlantConfig(
-        time_step=0.0,
+        time_step=0.010,
         discrete_contact_approximation="lagged",
         contact_model="hydroelastic_with_fallback",
     )
-
-
-def _default_simulator_config() -> SimulatorConfig:
-    """Drake's CENIC integrator at fixed 10 ms steps (docs/performance.md: the fidelity
-    figures hold and the physics runs about twice as fast as SAP's)."""
-    return SimulatorConfig(integration_scheme="cenic", max_step_size=0.010,
-                           use_error_control=False)
 
 
 def physics_step(plant_config: MultibodyPlantConfig, simulator_config: SimulatorConfig
@@ -372,7 +365,12 @@ def set_physics_step(scenario: "Scenario", step: float) -> None:
 SAP_PLANT = ("{plant_config: {time_step: %g}, "
              "simulator_config: {integration_scheme: runge_kutta3}}")
 """A scenario override (`SAP_PLANT % step`): a discrete plant stepped by SAP (the scenario's
-`discrete_contact_approximation`, `lagged` by default) every `step` s instead of CENIC."""
+`discrete_contact_approximation`, `lagged` by default) every `step` s (the default's kind)."""
+CENIC_PLANT = ("{plant_config: {time_step: 0}, simulator_config: {integration_scheme: cenic, "
+               "max_step_size: %g, use_error_control: false}}")
+"""A scenario override (`CENIC_PLANT % step`): a continuous plant stepped by Drake's CENIC
+integrator at fixed `step` s (about twice as fast as SAP; what it changes: docs/performance.md,
+"The integrator")."""
 
 
 @dc.dataclass
@@ -383,7 +381,7 @@ class Scenario:
     simulation_duration: float = bounded(math.inf, lim.SIMULATION_DURATION)
     """s; the CLI's --duration overrides it (.inf: until stopped)."""
     plant_config: MultibodyPlantConfig = dc.field(default_factory=_default_plant_config)
-    simulator_config: SimulatorConfig = dc.field(default_factory=_default_simulator_config)
+    simulator_config: SimulatorConfig = dc.field(default_factory=SimulatorConfig)
     world: World = dc.field(default_factory=World)
     directives: list[ModelDirective] = dc.field(default_factory=list)
     """Models from SDFormat, URDF or MJCF files, as Drake's `ModelDirectives` (`add_model`,
