@@ -57,6 +57,9 @@ ORDER = {DETERMINISTIC: 0, PICTURE: 1, TIMING: 2}
 CHECK_SECONDS = 30.0
 """`--check` without `--only` re-renders the deterministic blocks estimated to cost this or less."""
 NO_CAMERA = "robots: {corobot: {camera: {rgb: false}}}"
+CENIC_OVERRIDE = ("{plant_config: {time_step: 0}, simulator_config: {integration_scheme: "
+                  "cenic, max_step_size: 0.01, use_error_control: false}}")
+"""`scenario.CENIC_PLANT` at 10 ms, as the command line writes it."""
 OLD_CHECKOUT = "/tmp/corobot-268a52c"
 """The checkout `bench_compare` measures against: `git worktree add /tmp/corobot-268a52c
 268a52c` (the commit before CENIC and the lean per-step path)."""
@@ -902,7 +905,8 @@ def blocks() -> list[Spec]:
                       '--override "robots: {corobot: {drive: {control_period: 0.02}}}"'),),
              render_command_table, TIMING, 450),
         Spec("bench-compare", "docs/performance.md",
-             (Command(f"python tools/bench_compare.py --old {OLD_CHECKOUT} --rounds 3"),),
+             (Command(f"python tools/bench_compare.py --old {OLD_CHECKOUT} --rounds 3 "
+                      f"--new-override {shlex.quote(CENIC_OVERRIDE)}"),),
              render_bench_robots, TIMING, 600),
         Spec("continuous-sensors", "docs/performance.md", (_measure("continuous-sensors"),),
              render_continuous_sensors, DETERMINISTIC, 60),
