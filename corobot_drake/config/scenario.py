@@ -369,8 +369,8 @@ SAP_PLANT = ("{plant_config: {time_step: %g}, "
 CENIC_PLANT = ("{plant_config: {time_step: 0}, simulator_config: {integration_scheme: cenic, "
                "max_step_size: %g, use_error_control: false}}")
 """A scenario override (`CENIC_PLANT % step`): a continuous plant stepped by Drake's CENIC
-integrator at fixed `step` s (about twice as fast as SAP; what it changes: docs/performance.md,
-"The integrator")."""
+integrator at fixed `step` s (fewer instructions than SAP; what it changes:
+docs/performance.md, "The integrator")."""
 
 
 @dc.dataclass
