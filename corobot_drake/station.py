@@ -215,6 +215,16 @@ def _add_robot(plant: MultibodyPlant, name: str, robot: sc.Robot):
     return instance, chassis, joints
 
 
+def _connect_servos(builder, plant, instance, name: str, desired_state, sign: float) -> None:
+    """The drive's desired state to the robot's wheel servos, through `<name>.servo_sign` when
+    the integrator turns the servos' desired velocity around (`systems/servo.py`)."""
+    if sign != 1.0:
+        fix = add_servo_sign(builder, f"{name}.servo_sign", sign, desired_state.size())
+        builder.Connect(desired_state, fix.get_input_port())
+        desired_state = fix.get_output_port()
+    builder.Connect(desired_state, plant.get_desired_state_input_port(instance))
+
+
 def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None, foxglove=None
                   ) -> Station:
     """Builds the whole diagram for `scenario`; with `meshcat`, adds its visualizers; with
@@ -229,7 +239,6 @@ def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None, foxglov
     plant.Finalize()
 
     robots, renderers = {}, {}
-    servo_sign = servo_velocity_sign(scenario.simulator_config)
     step = sc.physics_step(scenario.plant_config, scenario.simulator_config)
     # One chassis pose per robot (from the plant's body_poses, converted once per step) for
     # its compass, GPS, tilt monitor and run log.
@@ -284,12 +293,8 @@ def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None, foxglov
                                 ("drive_state", odometry.drive_state),
                                 ("command_status", motion.GetOutputPort("command_status"))):
             builder.ExportOutput(port, f"{name}.{port_name}")
-        desired_state = controller.GetOutputPort("desired_state")
-        if servo_sign != 1.0:
-            fix = add_servo_sign(builder, f"{name}.servo_sign", servo_sign, desired_state.size())
-            builder.Connect(desired_state, fix.get_input_port())
-            desired_state = fix.get_output_port()
-        builder.Connect(desired_state, plant.get_desired_state_input_port(instance))
+        _connect_servos(builder, plant, instance, name, controller.GetOutputPort("desired_state"),
+                        servo_velocity_sign(scenario.simulator_config))
         tilt = builder.AddNamedSystem(f"{name}.tilt_monitor", TiltMonitor(TILT_SAMPLE_PERIOD))
         builder.Connect(chassis_states[name], tilt.GetInputPort("chassis_state"))
         add_run_log(builder, name, chassis_states[name], controller.GetOutputPort("drive_status"),
