@@ -210,6 +210,10 @@ the rocking grow fast, and at 1 s it falls through the ground (docs/tuning.md, "
 plant step": `tools/step_limit.py`)."""
 TIME_STEP = Range(MIN_TIME_STEP, MAX_TIME_STEP, unit="s",
                   why="a step the tyres' contact can resolve")
+"""The physics' step: a discrete plant's `time_step`, or a continuous plant's integrator step
+(`simulator_config.max_step_size`)."""
+PLANT_TIME_STEP = dc.replace(TIME_STEP, zero="a continuous plant: simulator_config steps it "
+                             "with integration_scheme cenic")
 
 MAX_RATE_HZ = 1000.0
 """Hz: the fastest periodic event of a sensor or controller (a rate of 1e9 hung the run)."""

@@ -421,9 +421,12 @@ class Robot:
         right_power, left_ticks, right_ticks, x, y, yaw), sampled every `runlog.LOG_PERIOD` s;
         with `Simulation.run_log_window`, only its last part."""
         sim = self._sim
-        rows = log_rows(sim._run_log_sink(self.name), sim.context)
+        rows = log_rows(sim._run_log_sink(self.name), sim.context, self._tip_margin())
         chunks = sim._run_log_chunks[self.name]
         return np.concatenate([*chunks, rows]) if chunks else rows
+
+    def _tip_margin(self):
+        return self._sim.station.diagram.GetSubsystemByName(f"{self.name}.tip_margin")
 
     def write_log(self, path: str | Path) -> None:
         """Writes the run log as CSV (columns in docs/tuning.md; read by
@@ -711,7 +714,7 @@ class Simulation:
             log = sink.GetMutableLog(sink.GetMyMutableContextFromRoot(self.context))
             if log.num_samples() < RUN_LOG_CHUNK:
                 continue
-            chunks.append(log_rows(sink, self.context))
+            chunks.append(log_rows(sink, self.context, self.robots[name]._tip_margin()))
             log.Clear()
             cutoff = self.time - self.run_log_window
             while chunks and chunks[0][-1, 0] < cutoff:

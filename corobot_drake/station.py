@@ -43,8 +43,9 @@ from corobot_drake.systems.dead_reckoning import DeadReckoning
 from corobot_drake.systems.drive import CommandSource, DriveController
 from corobot_drake.systems.monitor import TiltMonitor
 from corobot_drake.systems.motion import MotionCommands
-from corobot_drake.systems.odometry import add_chassis_poses, add_odometry
-from corobot_drake.systems.runlog import add_run_log
+from corobot_drake.systems.odometry import add_chassis_poses, add_chassis_states, add_odometry
+from corobot_drake.systems.runlog import HELD, add_run_log
+from corobot_drake.systems.servo import add_servo_sign, servo_velocity_sign
 from corobot_drake.systems.slip_markers import add_slip_markers
 from corobot_drake.systems.stability import add_tip_margin
 
@@ -247,6 +248,16 @@ def _add_robot(plant: MultibodyPlant, name: str, robot: sc.Robot):
     return instance, chassis, joints
 
 
+def _connect_servos(builder, plant, instance, name: str, desired_state, sign: float) -> None:
+    """The drive's desired state to the robot's wheel servos, through `<name>.servo_sign` when
+    the integrator turns the servos' desired velocity around (`systems/servo.py`)."""
+    if sign != 1.0:
+        fix = add_servo_sign(builder, f"{name}.servo_sign", sign, desired_state.size())
+        builder.Connect(desired_state, fix.get_input_port())
+        desired_state = fix.get_output_port()
+    builder.Connect(desired_state, plant.get_desired_state_input_port(instance))
+
+
 def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None, foxglove=None,
                   mouse_drag: bool = True) -> Station:
     """Builds the whole diagram for `scenario`; with `meshcat`, adds its visualizers (and,
@@ -262,10 +273,14 @@ def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None, foxglov
     plant.Finalize()
 
     robots, renderers = {}, {}
+    step = sc.physics_step(scenario.plant_config, scenario.simulator_config)
     # One chassis pose per robot (from the plant's body_poses, converted once per step) for
     # its compass, GPS, tilt monitor and run log.
     chassis_poses = add_chassis_poses(builder, plant,
                                       {name: parts[1] for name, parts in added.items()})
+    # ... and its chassis' state (C++, no pose conversion) for what samples every step.
+    chassis_states = add_chassis_states(builder, plant,
+                                        {name: parts[1] for name, parts in added.items()})
     for name, robot in scenario.robots.items():
         instance, chassis, joints = added[name]
         source = builder.AddNamedSystem(
@@ -316,12 +331,12 @@ def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None, foxglov
                                 ("drive_state", odometry.drive_state),
                                 ("command_status", motion.GetOutputPort("command_status"))):
             builder.ExportOutput(port, f"{name}.{port_name}")
-        builder.Connect(controller.GetOutputPort("desired_state"),
-                        plant.get_desired_state_input_port(instance))
+        _connect_servos(builder, plant, instance, name, controller.GetOutputPort("desired_state"),
+                        servo_velocity_sign(scenario.simulator_config))
         tilt = builder.AddNamedSystem(f"{name}.tilt_monitor", TiltMonitor(TILT_SAMPLE_PERIOD))
-        builder.Connect(chassis_pose, tilt.GetInputPort("chassis_pose"))
-        add_run_log(builder, name, chassis_pose, controller.GetOutputPort("drive_status"),
-                    odometry.encoder_ticks, telemetry)
+        builder.Connect(chassis_states[name], tilt.GetInputPort("chassis_state"))
+        add_run_log(builder, name, chassis_states[name], controller.GetOutputPort("drive_status"),
+                    odometry.encoder_ticks, {port: telemetry[port] for port in HELD})
         for port in ("drive_status", "axle_speed_command", "axle_speed"):
             builder.ExportOutput(controller.GetOutputPort(port), f"{name}.{port}")
         builder.ExportOutput(plant.get_state_output_port(instance), f"{name}.state")
@@ -329,7 +344,7 @@ def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None, foxglov
                                   motion=motion)
         robots[name].camera, robots[name].camera_saver = add_camera(
             builder, plant, scene_graph, name, instance, robot.camera, scenario.world,
-            renderers, save_camera)
+            renderers, save_camera, step=step)
         robots[name].ir_sensors = add_ir_sensors(
             builder, plant, scene_graph, name, robot.ir_sensors, model_instance=instance,
             random_seed=scenario.random_seed, meshcat=meshcat)

@@ -1,7 +1,8 @@
 """Real-time factors of the default scene driving a figure of eight (`tools/bench.py`).
 
 Stacks (physics only; + 2 IR at 20 Hz; + camera at 30 Hz; both) times plant settings
-(hydroelastic at 10, 5, 2 and 1 ms; point contact at 10 ms): :func:`realtime_factor` of
+(hydroelastic at 10, 5, 2 and 1 ms; point contact at 10 ms; CENIC at 10 ms):
+:func:`realtime_factor` of
 `sensor_overrides(**STACKS[stack])` with `PLANTS[plant]`. Fleets of robots, each driving
 the figure of eight: :func:`robot_seconds_per_second`.
 """
@@ -12,6 +13,7 @@ import time
 from importlib.metadata import version
 from pathlib import Path
 
+from corobot_drake.config import scenario as sc
 from corobot_drake.config.presets import (  # noqa: F401 (the lab's names for them)
     CAMERA_FPS,
     IR_RATE_HZ,
@@ -84,8 +86,9 @@ PLANTS = {
     "hydroelastic 1 ms": "plant_config: {time_step: 0.001, contact_model: "
                          "hydroelastic_with_fallback}",
     "point 10 ms": "plant_config: {time_step: 0.01, contact_model: point}",
+    "CENIC 10 ms (hydroelastic)": sc.CENIC_PLANT % 0.01,
 }
-"""Plant setting name -> scenario override."""
+"""Plant setting name -> scenario override (SAP's discrete plant unless named CENIC)."""
 DEFAULT_PLANT = "hydroelastic 10 ms (default)"
 IN_PLACE = ((f"+ 2 IR at {IR_RATE_HZ:g} Hz", IR_RATE_HZ, "scan (2 sensors)"),
             (f"+ camera at {CAMERA_FPS:g} Hz", CAMERA_FPS, "frame"))

@@ -25,7 +25,7 @@ from typing import ClassVar
 
 from pydrake.systems.framework import EventStatus
 
-from corobot_drake.config.scenario import load_scenario
+from corobot_drake.config.scenario import load_scenario, physics_step
 from corobot_drake.resources import DEFAULT_SCENARIO
 from corobot_drake.sensors import ir_sensor
 from corobot_drake.simulation import Simulation
@@ -136,7 +136,8 @@ def pose_update_probe_seconds(seconds: float = 5.0) -> tuple[float, float]:
     plant step reuses them); the second is the pose update itself."""
     sim = Simulation(load_scenario(DEFAULT_SCENARIO, overrides=[DRIVING, NO_CAMERA]))
     sensor = sim.station.robots["corobot"].ir_sensors["front"]
-    period, h = sensor.period, sim.scenario.plant_config.time_step
+    period, h = sensor.period, physics_step(sim.scenario.plant_config,
+                                             sim.scenario.simulator_config)
     probes: list[tuple[float, float]] = []
 
     def monitor(root_context):

@@ -28,7 +28,7 @@ import time
 
 import numpy as np
 from pydrake.multibody.plant import AddMultibodyPlant
-from pydrake.systems.analysis import Simulator
+from pydrake.systems.analysis import ApplySimulatorConfig, Simulator
 from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import MatrixGain
 
@@ -41,8 +41,9 @@ from corobot_drake.systems.dead_reckoning import DeadReckoning
 from corobot_drake.systems.drive import CommandSource, DriveController, DriveRequest
 from corobot_drake.systems.monitor import TiltMonitor
 from corobot_drake.systems.motion import MotionCommands
-from corobot_drake.systems.odometry import add_chassis_poses, add_odometry
-from corobot_drake.systems.runlog import add_run_log
+from corobot_drake.systems.odometry import add_chassis_poses, add_chassis_states, add_odometry
+from corobot_drake.systems.runlog import HELD, add_run_log
+from corobot_drake.systems.servo import add_servo_sign, servo_velocity_sign
 from corobot_drake.systems.stability import add_tip_margin
 from lab import bench
 
@@ -95,6 +96,7 @@ def build_layers(scenario: sc.Scenario, layers: int) -> _Layered:
     instance, chassis, joints = _add_robot(plant, name, robot)
     plant.Finalize()
     fixed = {}
+    sign = servo_velocity_sign(scenario.simulator_config)  # as the station: systems/servo.py
     if layers == 1:
         fixed["desired_state"] = plant.get_desired_state_input_port(instance)
     else:
@@ -103,18 +105,24 @@ def build_layers(scenario: sc.Scenario, layers: int) -> _Layered:
             [j.index() for j in joints])))
         builder.Connect(plant.get_state_output_port(), selector.get_input_port())
         builder.Connect(selector.get_output_port(), controller.GetInputPort("wheel_state"))
-        builder.Connect(controller.GetOutputPort("desired_state"),
-                        plant.get_desired_state_input_port(instance))
+        desired_state = controller.GetOutputPort("desired_state")
+        if sign != 1.0:
+            fix = add_servo_sign(builder, "servo_sign", sign, desired_state.size())
+            builder.Connect(desired_state, fix.get_input_port())
+            desired_state = fix.get_output_port()
+        builder.Connect(desired_state, plant.get_desired_state_input_port(instance))
         _add_robot_layers(builder, plant, name, robot, chassis, joints, selector, controller,
                           layers, fixed)
     diagram = builder.Build()
     simulator = Simulator(diagram)
+    ApplySimulatorConfig(scenario.simulator_config, simulator)
     context = simulator.get_mutable_context()
     drive = robot.drive
 
     def set_command(root, seq, command):
         if "desired_state" in fixed:
-            left, right = (p * drive.motor_torque_scaling for p in (command.left, command.right))
+            left, right = (sign * p * drive.motor_torque_scaling
+                           for p in (command.left, command.right))
             fixed["desired_state"].FixValue(plant.GetMyMutableContextFromRoot(root),
                                             np.array([0, 0, 0, 0, left, right, left, right]))
         if "request" in fixed:
@@ -134,6 +142,7 @@ def _add_robot_layers(builder, plant, name, robot, chassis, joints, selector, co
         fixed["request"] = controller.GetInputPort("request")
         return
     pose = add_chassis_poses(builder, plant, {name: chassis})[name]
+    state = add_chassis_states(builder, plant, {name: chassis})[name]
     odometry = add_odometry(builder, name, pose, selector.get_output_port(),
                             controller.GetOutputPort("drive_status"),
                             controller.GetOutputPort("axle_speed"),
@@ -154,19 +163,16 @@ def _add_robot_layers(builder, plant, name, robot, chassis, joints, selector, co
         builder.Connect(pose, dead_reckoning.GetInputPort("chassis_pose"))
     if layers >= 6:
         tilt = builder.AddSystem(TiltMonitor(TILT_SAMPLE_PERIOD))
-        builder.Connect(pose, tilt.GetInputPort("chassis_pose"))
+        builder.Connect(state, tilt.GetInputPort("chassis_state"))
     if layers >= 7:
         contacts = add_wheel_contacts(builder, name, plant, [j.child_body() for j in joints],
                                       pose, selector.get_output_port())
-        tip_margin = add_tip_margin(
+        add_tip_margin(
             builder, name, plant, chassis.model_instance(), chassis,
             {w: j.child_body() for w, j in zip(dim.WHEEL_NAMES, joints, strict=True)}, pose)
     if layers >= 8:
-        add_run_log(builder, name, pose, controller.GetOutputPort("drive_status"),
-                    odometry.encoder_ticks,
-                    {**{port: contacts.GetOutputPort(port) for port in
-                        ("wheel_loads", "wheel_slip_ratio", "wheel_slip_angle")},
-                     "tip_margin": tip_margin.get_output_port()})
+        add_run_log(builder, name, state, controller.GetOutputPort("drive_status"),
+                    odometry.encoder_ticks, {port: contacts.GetOutputPort(port) for port in HELD})
 
 
 def _cpu_seconds(layers: int | None, scenario: sc.Scenario, seconds: float) -> float:

@@ -182,7 +182,7 @@ FILES = [
     _file("field on line 6", b"# a scenario\nworld:\n  ground:\n    friction: 0.5\n"
           b"  sun:\n    direction: [0, 0, 0]\n", "world.sun.direction", "must not be zero", 6),
     _file("step on line 3", b"plant_config:\n  discrete_contact_approximation: lagged\n"
-          b"  time_step: 1.0\n", STEP, "must be in [0.0001, 0.02] s", 3),
+          b"  time_step: 1.0\n", STEP, "or in [0.0001, 0.02] s", 3),
     _file("robot in the ground, line 5", b"robots:\n  corobot:\n    drive: {}\n"
           b"    # half a metre down\n    pose: {translation: [0, 0, -0.5]}\n",
           "robots.corobot.pose", "below the ground", 5),
@@ -204,7 +204,13 @@ OVERRIDES = [
     # the plant and the simulator
     _override("step 1e-7", "plant_config: {time_step: 1e-7}", STEP, "[0.0001, 0.02] s"),
     _override("step 1 s", "plant_config: {time_step: 1.0}", STEP, "[0.0001, 0.02] s"),
-    _override("step 0", "plant_config: {time_step: 0}", STEP, "got 0"),
+    _override("step 0 without CENIC", "plant_config: {time_step: 0}",
+              "simulator_config.integration_scheme", "needs cenic"),
+    _override("CENIC on a discrete plant", "simulator_config: {integration_scheme: cenic}", STEP,
+              "cenic needs a continuous plant"),
+    _override("CENIC step 1 s", "{plant_config: {time_step: 0}, simulator_config: "
+              "{integration_scheme: cenic, max_step_size: 1.0}}",
+              "simulator_config.max_step_size", "[0.0001, 0.02] s"),
     _override("step negative", "plant_config: {time_step: -0.01}", STEP, "got -0.01"),
     _override("step inf", "plant_config: {time_step: .inf}", STEP, "got inf"),
     _override("step 1e300", "plant_config: {time_step: 1e300}", STEP, "got 1e+300"),

@@ -30,6 +30,7 @@ import dataclasses as dc
 import datetime
 import difflib
 import json
+import math
 import os
 import re
 import shlex
@@ -56,6 +57,12 @@ ORDER = {DETERMINISTIC: 0, PICTURE: 1, TIMING: 2}
 CHECK_SECONDS = 30.0
 """`--check` without `--only` re-renders the deterministic blocks estimated to cost this or less."""
 NO_CAMERA = "robots: {corobot: {camera: {rgb: false}}}"
+CENIC_OVERRIDE = ("{plant_config: {time_step: 0}, simulator_config: {integration_scheme: "
+                  "cenic, max_step_size: 0.01, use_error_control: false}}")
+"""`scenario.CENIC_PLANT` at 10 ms, as the command line writes it."""
+OLD_CHECKOUT = "/tmp/corobot-268a52c"
+"""The checkout `bench_compare` measures against: `git worktree add /tmp/corobot-268a52c
+268a52c` (the commit before CENIC and the lean per-step path)."""
 
 
 # --- Commands and their outputs ---------------------------------------------------------------
@@ -323,7 +330,40 @@ def measure_event_times(repeats: int = 5, seconds: float = 10.0) -> dict:
                    "steps_per_second": steps[name]} for name, r in runs.items()}
 
 
+def measure_continuous_sensors(seconds: float = 9.0) -> dict:
+    """What the sensors see under CENIC's continuous plant against SAP's discrete one, over
+    the figure of eight (both IR sensors at 20 Hz): each scan's raw reading and the chassis
+    position at that scan, the largest differences (m) and how many readings differ by more
+    than 1 mm; then, under CENIC, the camera on against off: simulator steps per simulated
+    second and the chassis' distance apart (m) at the end."""
+    from corobot_drake.config.scenario import CENIC_PLANT, load_scenario
+    from corobot_drake.simulation import Simulation, quiet_drake_warnings
+    from lab.bench import DRIVING, sensor_overrides
+
+    quiet_drake_warnings()
+
+    def scans(*overrides: str, camera: bool = False):
+        sim = Simulation(load_scenario(DEFAULT_SCENARIO, overrides=[
+            DRIVING, *sensor_overrides(ir=True, camera=camera), *overrides]))
+        robot, out = sim.robot(), []
+        for k in range(1, round(seconds * 20) + 1):  # at the scans' own times, k / 20 s
+            sim.advance_to(k * 0.05)
+            out.append((robot.ir_distances(), robot.position()))
+        return out, sim.simulator.get_num_steps_taken() / seconds
+
+    cenic, steps = scans(CENIC_PLANT % 0.01)
+    sap, _ = scans()
+    reading = [abs(a[0][n] - b[0][n]) for a, b in zip(cenic, sap, strict=True) for n in a[0]]
+    moved = [math.dist(a[1], b[1]) for a, b in zip(cenic, sap, strict=True)]
+    with_camera, camera_steps = scans(CENIC_PLANT % 0.01, camera=True)
+    return {"readings": len(reading), "max_reading_m": max(reading),
+            "over_1_mm": sum(d > 1e-3 for d in reading), "max_position_m": max(moved),
+            "steps_per_second": steps, "camera_steps_per_second": camera_steps,
+            "camera_position_m": math.dist(with_camera[-1][1], cenic[-1][1])}
+
+
 MEASUREMENTS = {
+    "continuous-sensors": measure_continuous_sensors,
     "ir-at-start": measure_ir_at_start,
     "saved-mid-drive": measure_saved_mid_drive,
     "wheel-turn": measure_wheel_turn,
@@ -544,6 +584,20 @@ def render_bench_robots(outs) -> str:
     o = outs[0][0]
     return (f"Measured {o.started:%Y-%m-%d}, load average {_load([o])} (`{o.command}`):\n\n"
             f"{_table(o.stdout)}")
+
+
+def render_continuous_sensors(outs) -> str:
+    o = outs[0][0]
+    m = _json(outs)
+    return wrap_markdown(
+        f"`{o.command}`: over the figure of eight (9 s), the {m['readings']} readings of both "
+        f"IR sensors at 20 Hz differ between CENIC and SAP by at most "
+        f"{1000 * m['max_reading_m']:.2f} mm ({m['over_1_mm']} by more than 1 mm), while the "
+        f"robot's position at the scans differs by up to {1000 * m['max_position_m']:.1f} mm "
+        f"(the two integrators' trajectories). Under CENIC the simulator takes "
+        f"{m['steps_per_second']:.0f} steps per simulated second without the camera and "
+        f"{m['camera_steps_per_second']:.0f} with it at 30 Hz; with the camera the robot ends "
+        f"{1000 * m['camera_position_m']:.1f} mm from where it ends without.")
 
 
 def _default_column(outs) -> tuple[list[str], list[list[float]], list[Output]]:
@@ -841,7 +895,7 @@ def blocks() -> list[Spec]:
                       "--seconds 5 --repeats 1"),), render_bench_robots, TIMING, 300),
         Spec("bench-layers", "docs/performance.md",
              (Command("python tools/bench.py --layers --no-table --no-micro --seconds 4 "
-                      "--repeats 7"),), render_bench_robots, TIMING, 420),
+                      "--repeats 5"),), render_bench_robots, TIMING, 300),
         Spec("count-instructions", "docs/performance.md",
              (Command('python tools/count_instructions.py --cache-sim '
                       '--override "plant_config: {discrete_contact_approximation: similar}" '
@@ -850,6 +904,12 @@ def blocks() -> list[Spec]:
                       '--override "world: {bodies: {giant_box: {fixed: true}}}" '
                       '--override "robots: {corobot: {drive: {control_period: 0.02}}}"'),),
              render_command_table, TIMING, 450),
+        Spec("bench-compare", "docs/performance.md",
+             (Command(f"python tools/bench_compare.py --old {OLD_CHECKOUT} --rounds 3 "
+                      f"--new-override {shlex.quote(CENIC_OVERRIDE)}"),),
+             render_bench_robots, TIMING, 600),
+        Spec("continuous-sensors", "docs/performance.md", (_measure("continuous-sensors"),),
+             render_continuous_sensors, DETERMINISTIC, 60),
         Spec("bench-full", "docs/performance.md",
              (Command("python tools/bench.py --seconds 5 --repeats 3"),), render_bench_full,
              TIMING, 200),

@@ -12,14 +12,14 @@ from corobot_drake.limits import (
     CAMERA_MAX_FPS,
     CAMERA_MAX_PIXELS,
     DURATION,
-    TIME_STEP,
+    PLANT_TIME_STEP,
     OneOf,
     Range,
 )
 
 DRAKE_BOUNDS: dict[type, dict[str, object]] = {
     MultibodyPlantConfig: {
-        "time_step": TIME_STEP,
+        "time_step": PLANT_TIME_STEP,
         "penetration_allowance": Range(0.0, 0.1, low_open=True, unit="m"),
         "stiction_tolerance": Range(0.0, 1.0, low_open=True, unit="m/s"),
         "sap_near_rigid_threshold": Range(0.0, 100.0),

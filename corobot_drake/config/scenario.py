@@ -268,12 +268,46 @@ class Robot:
     SPEC positions; `{enabled: false}` removes one."""
 
 
+CENIC = "cenic"
+"""`SimulatorConfig.integration_scheme` of Drake's CENIC integrator."""
+
+
 def _default_plant_config() -> MultibodyPlantConfig:
+    """A discrete plant stepped by SAP (`lagged`: the SAP family honours the wheels' servo
+    gains) every 10 ms. CENIC instead: `CENIC_PLANT` (docs/performance.md says what it
+    changes, and why it is not the default)."""
     return MultibodyPlantConfig(
         time_step=0.010,
         discrete_contact_approximation="lagged",
         contact_model="hydroelastic_with_fallback",
     )
+
+
+def physics_step(plant_config: MultibodyPlantConfig, simulator_config: SimulatorConfig
+                 ) -> float:
+    """s: the physics' step: a discrete plant's `time_step`, or a continuous plant's (CENIC's)
+    `max_step_size` (its every step with `use_error_control: false`, its longest with)."""
+    return plant_config.time_step or simulator_config.max_step_size
+
+
+def set_physics_step(scenario: "Scenario", step: float) -> None:
+    """Sets the physics' step (s) of `scenario`, whichever steps it: the discrete plant or
+    CENIC (`physics_step`)."""
+    if scenario.plant_config.time_step > 0:
+        scenario.plant_config.time_step = step
+    else:
+        scenario.simulator_config.max_step_size = step
+
+
+SAP_PLANT = ("{plant_config: {time_step: %g}, "
+             "simulator_config: {integration_scheme: runge_kutta3}}")
+"""A scenario override (`SAP_PLANT % step`): a discrete plant stepped by SAP (the scenario's
+`discrete_contact_approximation`, `lagged` by default) every `step` s (the default's kind)."""
+CENIC_PLANT = ("{plant_config: {time_step: 0}, simulator_config: {integration_scheme: cenic, "
+               "max_step_size: %g, use_error_control: false}}")
+"""A scenario override (`CENIC_PLANT % step`): a continuous plant stepped by Drake's CENIC
+integrator at fixed `step` s (fewer instructions than SAP; what it changes:
+docs/performance.md, "The integrator")."""
 
 
 @dc.dataclass
@@ -389,10 +423,10 @@ def load_scenario(filename: str | Path | None = None, *, data: str | None = None
     if data is not None:
         layers.append(("<scenario text>", data, Path.cwd()))
     layers += [("--override", text, Path.cwd()) for text in overrides]
-    for source, text, base in layers:
+    for i, (source, text, base) in enumerate(layers):
         scenario, checks = load_layer(source, text, Scenario, scenario)
         resolve_paths(scenario, base)
-        checks.validate(scenario)  # what the types cannot say
+        checks.validate(scenario, final=i == len(layers) - 1)  # what the types cannot say
     if layers:  # the merged scenario passed every check: `Simulation` need not repeat them
         mark_checked(scenario)
     return scenario

@@ -48,6 +48,7 @@ from corobot_drake.limits import (
     FINITE,
     MESH_SCALE,
     POSITION,
+    TIME_STEP,
     Range,
     bound_of,
 )
@@ -404,12 +405,16 @@ class LayerChecks:
             where = parent if parent != where else ""  # a top-level field: the layer's line
         raise sc.ScenarioError(self.source, path, message, self.lines.get(where))
 
-    def validate(self, s) -> None:
+    def validate(self, s, final: bool = True) -> None:
         """Every value against its bound (`limits.py`), then, for a Scenario, the
-        checks of meaning that involve several fields."""
+        checks of meaning that involve several fields; `final`: also those that a later layer
+        may still settle (the plant's step against the integrator: one override may switch
+        the plant and the next the integrator)."""
         self._bounds(s, "")
         if isinstance(s, sc.Scenario):
             self._scenario(s)
+            if final:
+                self._integrator(s)
 
     # -- every value against its bound ------------------------------------------------------
 
@@ -484,6 +489,23 @@ class LayerChecks:
         for name, robot in s.robots.items():
             self._robot(name, robot, s)
         self._placement(s, models)
+
+    def _integrator(self, s: sc.Scenario) -> None:
+        """A continuous plant (`time_step: 0`) with CENIC, stepped at most `TIME_STEP`; a
+        discrete one (SAP) with any other scheme (Drake's CENIC refuses a discrete plant)."""
+        cenic = s.simulator_config.integration_scheme == sc.CENIC
+        if s.plant_config.time_step == 0 and not cenic:
+            self.fail("simulator_config.integration_scheme", "a continuous plant "
+                      "(plant_config.time_step: 0) needs cenic; got "
+                      f"{s.simulator_config.integration_scheme}")
+        if s.plant_config.time_step > 0 and cenic:
+            self.fail("plant_config.time_step", "cenic needs a continuous plant (0); got "
+                      f"{s.plant_config.time_step:g} (a discrete plant steps with SAP: set "
+                      "simulator_config.integration_scheme: runge_kutta3)")
+        if cenic:
+            problem = TIME_STEP.problem(s.simulator_config.max_step_size)
+            if problem:
+                self.fail("simulator_config.max_step_size", f"{problem} (cenic's step)")
 
     def _mesh(self, path: str, mesh: sc.Mesh, body: sc.WorldBody) -> None:
         try:

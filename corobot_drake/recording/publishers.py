@@ -46,6 +46,7 @@ from pydrake.systems.framework import LeafSystem
 from pydrake.systems.primitives import ZeroOrderHold
 from pydrake.systems.sensors import ImageRgba8U, RgbdSensorAsync
 
+from corobot_drake.config import scenario as sc
 from corobot_drake.config.poses import mount_frame
 from corobot_drake.model import dimensions as dim
 from corobot_drake.model.ir_models import SharpGP2D12
@@ -464,7 +465,8 @@ def add_foxglove_topics(builder, plant, scene_graph, robots: dict, scenario, con
                 plant, parts.model_instance, system.config.X_PB)))
         if parts.camera is not None:
             mounts.append(_add_camera(builder, plant, frames, context, names, parts,
-                                      scenario.robots[name].camera))
+                                      scenario.robots[name].camera, sc.physics_step(
+                                          scenario.plant_config, scenario.simulator_config)))
     tf = builder.AddNamedSystem("foxglove_tf", TransformPublisher(
         context, [(i, f, p) for i, (f, p) in frames.items()], mounts))
     builder.Connect(plant.get_body_poses_output_port(), tf.get_input_port())
@@ -502,13 +504,14 @@ def _mount(plant, frames: dict, child: str, mount) -> tuple:
     return parent, child, X_BS
 
 
-def _add_camera(builder, plant, frames: dict, context, names, parts, config) -> tuple:
+def _add_camera(builder, plant, frames: dict, context, names, parts, config, step: float
+                ) -> tuple:
     """Adds `<robot>.foxglove_camera` for the robot's camera (its `config`); returns the
     camera frame's mount."""
     camera = parts.camera
     delay = config.output_delay if isinstance(camera, RgbdSensorAsync) else 0.0
     publisher = builder.AddNamedSystem(f"{names.robot}.foxglove_camera", CameraPublisher(
-        context, names, config, frame_look_period(config, plant.time_step()), delay))
+        context, names, config, frame_look_period(config, step), delay))
     image = "color_image" if isinstance(camera, RgbdSensorAsync) else "rgb_image"
     builder.Connect(camera.GetOutputPort(image), publisher.GetInputPort("rgb_image"))
     builder.Connect(camera.GetOutputPort("image_time"), publisher.GetInputPort("image_time"))

@@ -296,7 +296,7 @@ def events_near_steps(config: CameraConfig, step: float, ticks: int = 1000) -> b
 
 def add_camera(builder, plant, scene_graph, robot: str, instance, config: CameraConfig,
                world, renderers: dict, save_dir: str | Path | None = None,
-               save_rate: float | None = None):
+               save_rate: float | None = None, step: float | None = None):
     """Adds `robot`'s camera (see the module doc), lit by the scenario's `world` (sun, sky),
     and returns (the system whose outputs are the latest frame, saver or None); nothing when
     `config.rgb` is false. Cameras with the same `renderer_name` share the engine the first
@@ -306,8 +306,9 @@ def add_camera(builder, plant, scene_graph, robot: str, instance, config: Camera
     frame renders on a worker thread (its own clone of the engine, which GL allows) while the
     simulation goes on, and appears `output_delay` s after its capture. Otherwise (VTK cannot
     render on that thread) it is an `RgbdSensor` and a `CameraHold` taking frames on the
-    plant's steps, with no delay."""
-    step = plant.time_step()
+    plant's steps, with no delay. `step`: the physics' step (s; `scenario.physics_step`; None:
+    the plant's time step)."""
+    step = plant.time_step() if step is None else step
     if not config.rgb:
         return None, None
     if not scene_graph.HasRenderer(config.renderer_name):

@@ -97,8 +97,11 @@ class DeadReckoning(LeafSystem):
         discrete_state.set_value(self._state, state)
 
     def _update(self, context, discrete_state):
-        x, y, yaw, last_left, last_right = context.get_discrete_state(self._state).get_value()
-        left, right = np.rint(self._ticks.Eval(context))
+        # Plain floats (round: half to even, as np.rint): numpy's per-call overhead on two
+        # numbers costs more than the sums, every control period.
+        left, right = (round(t) for t in self._ticks.Eval(context).tolist())
+        x, y, yaw, last_left, last_right = context.get_discrete_state(
+            self._state).get_value().tolist()
         if left == last_left and right == last_right:
             return  # at rest: the state stays (no copy)
         k = self._metres_per_tick

@@ -2,14 +2,14 @@
 
 import math
 
-from pydrake.common.value import AbstractValue
-from pydrake.math import RigidTransform
 from pydrake.systems.framework import LeafSystem
 
 
-def tilt_deg(X_WB: RigidTransform) -> float:
-    """Angle (deg) between the body's +z and the world's +z: 0 upright, 180 upside down."""
-    cos_tilt = float(X_WB.GetAsMatrix34()[2, 2])  # R[2, 2]
+def quaternion_tilt_deg(qw: float, qx: float, qy: float, qz: float) -> float:
+    """Angle (deg) between a body's +z and the world's +z (0 upright, 180 upside down) for
+    the quaternion (w, x, y, z; any norm) of its R_WB: R[2, 2] is 1 - 2 (x^2 + y^2) of the
+    normalized quaternion."""
+    cos_tilt = 1.0 - 2.0 * (qx * qx + qy * qy) / (qw * qw + qx * qx + qy * qy + qz * qz)
     return math.degrees(math.acos(min(1.0, max(-1.0, cos_tilt))))
 
 
@@ -20,24 +20,25 @@ class TiltMonitor(LeafSystem):
 
         name: TiltMonitor
         input_ports:
-        - chassis_pose
+        - chassis_state
         output_ports:
         - max_tilt_deg
 
-    Input `chassis_pose` (abstract RigidTransform X_WB, e.g. from `odometry.ChassisPoses`).
-    Output `max_tilt_deg` (1-vector, degrees): the largest `tilt_deg` sampled so far, held in
-    discrete state (0 before the first sample, at time 0).
+    Input `chassis_state` (7: the body's floating-base positions, `odometry.CHASSIS_STATE`:
+    quaternion w, x, y, z, then position; a vector straight from the plant's state, so a
+    sample costs no pose conversion). Output `max_tilt_deg` (1-vector, degrees): the largest
+    tilt sampled so far, held in discrete state (0 before the first sample, at time 0).
     """
 
     def __init__(self, period: float):
         super().__init__()
-        self._pose_port = self.DeclareAbstractInputPort("chassis_pose",
-                                                        AbstractValue.Make(RigidTransform()))
+        self._state_port = self.DeclareVectorInputPort("chassis_state", 7)
         self._state = self.DeclareDiscreteState(1)
         self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._update)
         self.DeclareStateOutputPort("max_tilt_deg", self._state)
 
     def _update(self, context, discrete_state):
         previous = context.get_discrete_state(self._state).get_value()[0]
-        tilt = tilt_deg(self._pose_port.Eval(context))
-        discrete_state.set_value(self._state, [max(previous, tilt)])
+        tilt = quaternion_tilt_deg(*self._state_port.Eval(context)[:4].tolist())
+        if tilt > previous:
+            discrete_state.set_value(self._state, [tilt])

@@ -16,14 +16,19 @@ They change only when the (discrete) plant steps.
 import dataclasses as dc
 import math
 
+import numpy as np
 from pydrake.common.value import AbstractValue, Value
 from pydrake.math import RigidTransform
 from pydrake.systems.framework import LeafSystem, ValueProducer
-from pydrake.systems.primitives import Gain
+from pydrake.systems.primitives import Gain, MatrixGain
 from pydrake.systems.sensors import RotaryEncoders
 
 from corobot_drake.model import dimensions as dim
 from corobot_drake.systems.drive import DriveStatus
+
+CHASSIS_STATE = ("qw", "qx", "qy", "qz", "x", "y", "z")
+"""The chassis' floating-base positions in the plant's state, Drake's order: the quaternion of
+R_WB (w first, not normalized by every integrator), then the origin in the world, m."""
 
 ENCODED_WHEELS = ("front_left", "front_right")
 """Wheels with an encoder (indices 0 and 1 in `dimensions.WHEEL_NAMES`)."""
@@ -60,6 +65,33 @@ def add_chassis_poses(builder, plant, chassis: dict) -> dict:
         {name: body.index() for name, body in chassis.items()}))
     builder.Connect(plant.get_body_poses_output_port(), system.get_input_port())
     return {name: system.GetOutputPort(name) for name in chassis}
+
+
+def add_chassis_states(builder, plant, chassis: dict) -> dict:
+    """Adds `<robot>.chassis_state` (a MatrixGain picking `CHASSIS_STATE` out of the plant's
+    state: C++, no Python call when read) per robot's `chassis` body ({robot name: body});
+    returns {robot name: its output port}."""
+    ports = {}
+    for name, body in chassis.items():
+        pick = np.zeros((len(CHASSIS_STATE), plant.num_multibody_states()))
+        start = body.floating_positions_start()
+        pick[:, start:start + len(CHASSIS_STATE)] = np.eye(len(CHASSIS_STATE))
+        gain = builder.AddNamedSystem(f"{name}.chassis_state", MatrixGain(pick))
+        builder.Connect(plant.get_state_output_port(), gain.get_input_port())
+        ports[name] = gain.get_output_port()
+    return ports
+
+
+def rotation_rows(quaternions: np.ndarray) -> np.ndarray:
+    """[n, 3, 3]: the rotation matrices of `quaternions` [n, 4] (w, x, y, z; normalized
+    here, as Drake does for the body poses)."""
+    q = quaternions / np.linalg.norm(quaternions, axis=1, keepdims=True)
+    w, x, y, z = q.T
+    return np.stack([
+        np.column_stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)]),
+        np.column_stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)]),
+        np.column_stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]),
+    ], axis=1)
 
 
 def add_odometry(builder, name: str, chassis_pose_port, wheel_state_port, drive_status_port,

@@ -21,7 +21,6 @@ CoM height), is 42.9); 0 as the CoM passes over an edge, negative beyond (tippin
   (28 mm) early, conservative.
 """
 
-import math
 
 import numpy as np
 from pydrake.common.value import AbstractValue
@@ -43,15 +42,15 @@ class TipMargin(LeafSystem):
         - tip_margin
 
     Input `chassis_pose` (abstract RigidTransform X_WC, e.g. from `odometry.ChassisPoses`).
-    Output `tip_margin` (1-vector, deg). No state: the least over the run is the run log's
-    (`runlog`, every 10 ms; a per-step sampling event of its own cost more than the margin).
+    Output `tip_margin` (1-vector, deg), evaluated only when read. No state: the least over
+    the run is the run log's (`runlog`: its rows' margins, every 10 ms, made by
+    `margin_of_up` from the logged chassis state when the log is read).
 
     The robot is rigid but for its wheels turning on their axles, which pass through their
     centres of mass: its centre of mass `com_C` and the wheel centres `wheel_centers_C` (m)
     are fixed in the chassis frame C, the centres make a rectangle square to C's axes and the
     axles lie along C's y (`of_robot` reads them from a plant). So the chassis' tilt alone
-    places the support and the CoM, and the margin is a few sums in C (every step: the run
-    log's column).
+    places the support and the CoM, and the margin is a few sums in C.
     """
 
     def __init__(self, com_C, wheel_centers_C: dict, wheel_radius: float = dim.WHEEL_RADIUS):
@@ -88,23 +87,29 @@ class TipMargin(LeafSystem):
         return self._pose.Eval(context) @ np.array(self._com_C)
 
     def margin(self, context) -> float:
-        """The tip-over margin now, deg. In C: u is the world's up; each edge's margin is
-        atan2(lever . inward, lever . up about the edge), the lever from the edge to the CoM,
-        both directions in the plane square to the edge, unnormalized (atan2 needs no norm).
-        Plain floats: numpy's per-call overhead would cost more than the sums, every step."""
-        ux, uy, uz = self._pose.Eval(context).rotation().matrix()[2].tolist()  # R^T z
-        across = math.hypot(ux, uz)
-        # The tyres' bottoms: down in the wheel's plane (x-z of C), a radius from the axle.
-        scale = self._radius / across if across > 1e-9 else 0.0  # 0: lying on its side
+        """The tip-over margin now, deg (`margin_of_up` of the chassis pose)."""
+        ux, uy, uz = self._pose.Eval(context).rotation().matrix()[2]  # R^T z
+        return float(self.margin_of_up(ux, uy, uz))
+
+    def margin_of_up(self, ux, uy, uz):
+        """The tip-over margin, deg, with the world's up (ux, uy, uz) in the chassis frame C
+        (the last row of R_WC): floats or arrays (the run log's rows, `runlog.rows_of`).
+        Each edge's margin is atan2(lever . inward, lever . up about the edge), the lever from
+        the edge to the CoM, both directions in the plane square to the edge, unnormalized
+        (atan2 needs no norm)."""
+        across = np.hypot(ux, uz)
+        # The tyres' bottoms: down in the wheel's plane (x-z of C), a radius from the axle;
+        # 0: lying on its side.
+        scale = np.where(across > 1e-9, self._radius / np.maximum(across, 1e-9), 0.0)
         cx, cy, cz = self._com_C
         lz = cz - (self._axle_z - scale * uz)  # CoM above the bottoms, along C's z
         front, rear = cx - (self._front - scale * ux), cx - (self._rear - scale * ux)
         left, right = cy - self._left, cy - self._right
-        return math.degrees(min(
-            math.atan2(lz * ux - front * uz, front * ux + lz * uz),  # inward -x
-            math.atan2(rear * uz - lz * ux, rear * ux + lz * uz),  # inward +x
-            math.atan2(lz * uy - left * uz, left * uy + lz * uz),  # inward -y
-            math.atan2(right * uz - lz * uy, right * uy + lz * uz)))  # inward +y
+        return np.degrees(np.minimum.reduce([
+            np.arctan2(lz * ux - front * uz, front * ux + lz * uz),  # inward -x
+            np.arctan2(rear * uz - lz * ux, rear * ux + lz * uz),  # inward +x
+            np.arctan2(lz * uy - left * uz, left * uy + lz * uz),  # inward -y
+            np.arctan2(right * uz - lz * uy, right * uy + lz * uz)]))  # inward +y
 
 
 def add_tip_margin(builder, name: str, plant, model_instance, chassis, wheels: dict,

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from conftest import DEFAULT_SCENARIO, make_sim
-from corobot_drake.config.scenario import ScenarioError, load_scenario
+from corobot_drake.config.scenario import ScenarioError, load_scenario, physics_step
 from corobot_drake.model import dimensions as dim
 from corobot_drake.model.ir_models import SharpGP2D12
 from corobot_drake.sensors.ir_sensor import SCAN_INDEX, counter_normal
@@ -83,7 +83,7 @@ def test_backing_toward_the_box_the_reading_falls_with_the_distance():
     robot = sim.robot()
     period = sensor(sim, "rear").period
     robot.set_power(-0.3, -0.3)
-    step = sim.scenario.plant_config.time_step
+    step = physics_step(sim.scenario.plant_config, sim.scenario.simulator_config)
     readings, expected = [], []
     for k in range(1, 60):
         t_scan = k * period
@@ -201,7 +201,7 @@ def test_bad_ir_configuration_names_the_field(override, field, words):
 @pytest.mark.parametrize("rate", [20.0, 7.0])
 def test_scans_happen_at_scan_rate_hz_not_every_step(rate):
     sim = ir_sim(f"robots: {{corobot: {{ir_sensors: {{rear: {{scan_rate_hz: {rate}}}}}}}}}")
-    step = sim.scenario.plant_config.time_step
+    step = physics_step(sim.scenario.plant_config, sim.scenario.simulator_config)
     times = set()
     for k in range(1, round(1.0 / step) + 1):
         sim.advance_to(k * step)

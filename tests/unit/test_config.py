@@ -176,7 +176,7 @@ def test_a_loaded_scenario_is_checked_once_until_it_changes(monkeypatch):
     calls = []
     validate_once = validate.LayerChecks.validate
     monkeypatch.setattr(validate.LayerChecks, "validate",
-                        lambda self, s: (calls.append(s), validate_once(self, s)))
+                        lambda self, s, **kw: (calls.append(s), validate_once(self, s, **kw)))
     scenario = load_scenario(DEFAULT_SCENARIO)
     loaded = len(calls)
     assert loaded == 1  # one layer: validated once as it loads
@@ -186,7 +186,7 @@ def test_a_loaded_scenario_is_checked_once_until_it_changes(monkeypatch):
                    lambda s: s.robots["corobot"].velocity.__setitem__(0, 0.01),  # in place
                    lambda s: s.robots["corobot"].commands.append(sc.Wait(1.0)),
                    lambda s: setattr(s.robots["corobot"].camera, "fps", 15.0),
-                   lambda s: setattr(s.plant_config, "time_step", 0.005)):
+                   lambda s: setattr(s.simulator_config, "max_step_size", 0.005)):
         change(scenario)
         before = len(calls)
         validate.check_scenario(scenario)

@@ -1,30 +1,31 @@
-"""TiltMonitor and the run log's RunLogSample on their own (fixed inputs, evaluated outputs,
-updates stepped by a Simulator on the lone system), and the run-log sink in a small diagram."""
+"""TiltMonitor on its own (fixed inputs, updates stepped by a Simulator on the lone system),
+the run log's conversion of its raw samples, and the run-log sink in a small diagram."""
 
 import math
 
 import numpy as np
 import pytest
-from pydrake.common.value import AbstractValue
 from pydrake.math import RigidTransform, RollPitchYaw
 from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder
-from pydrake.systems.primitives import ConstantValueSource, ConstantVectorSource
+from pydrake.systems.primitives import ConstantVectorSource
 
 from conftest import Stepper
 from corobot_drake.systems.drive import DriveStatus
 from corobot_drake.systems.monitor import TiltMonitor
+from corobot_drake.systems.odometry import heading_of, rotation_rows
 from corobot_drake.systems.runlog import (
     COLUMNS,
+    HELD,
     LOG_PERIOD,
-    SAMPLE_COLUMNS,
+    RAW_COLUMNS,
     TELEMETRY,
-    LogSample,
-    RunLogSample,
     add_run_log,
     log_rows,
+    rows_of,
     write_csv,
 )
+from corobot_drake.systems.stability import TipMargin
 
 DEG = 1e-9  # degrees: acos of a rotation-matrix entry away from +-1
 
@@ -34,20 +35,27 @@ def tilted(roll_deg: float, pitch_deg: float = 0.0, yaw_deg: float = 0.0) -> Rig
     return RigidTransform(rpy, [0.3, -0.2, 0.06])
 
 
+def chassis_state(X: RigidTransform) -> np.ndarray:
+    """[qw, qx, qy, qz, x, y, z] of a pose (`odometry.CHASSIS_STATE`), the quaternion scaled
+    by 1.5: the readers normalize it (a continuous plant's state drifts off unit norm)."""
+    q = X.rotation().ToQuaternion()
+    return np.concatenate([1.5 * np.array([q.w(), q.x(), q.y(), q.z()]), X.translation()])
+
+
 def test_tilt_monitor_holds_the_largest_sampled_tilt():
     period = 0.01
     s = Stepper(TiltMonitor(period), period)
     assert s.output("max_tilt_deg")[0] == 0.0  # nothing sampled yet
-    s.fix("chassis_pose", tilted(30.0, yaw_deg=120.0))  # yaw is no tilt
+    s.fix("chassis_state", chassis_state(tilted(30.0, yaw_deg=120.0)))  # yaw is no tilt
     s.tick()
     assert s.output("max_tilt_deg")[0] == pytest.approx(30.0, abs=DEG)
-    s.fix("chassis_pose", tilted(10.0))
+    s.fix("chassis_state", chassis_state(tilted(10.0)))
     s.tick(5)
     assert s.output("max_tilt_deg")[0] == pytest.approx(30.0, abs=DEG)
-    s.fix("chassis_pose", tilted(0.0, pitch_deg=-45.0))
+    s.fix("chassis_state", chassis_state(tilted(0.0, pitch_deg=-45.0)))
     s.tick()
     assert s.output("max_tilt_deg")[0] == pytest.approx(45.0, abs=DEG)
-    s.fix("chassis_pose", tilted(180.0))  # upside down
+    s.fix("chassis_state", chassis_state(tilted(180.0)))  # upside down
     s.tick()
     assert s.output("max_tilt_deg")[0] == pytest.approx(180.0, abs=1e-6)  # acos near -1
 
@@ -59,37 +67,61 @@ def drive_status(enabled=1.0, left=0.25, right=-0.5) -> np.ndarray:
     return status[:]
 
 
-def test_run_log_sample_reads_pose_status_and_encoders_by_name():
-    system = RunLogSample()
-    context = system.CreateDefaultContext()
+class FlatMargin:
+    """A tip margin of 40 deg whatever the pose (`TipMargin.margin_of_up`'s signature)."""
+
+    def margin_of_up(self, ux, uy, uz):
+        return np.full_like(uz, 40.0)
+
+
+def test_rows_of_makes_the_columns_from_the_raw_samples():
+    """Whole ticks, the heading of the (unnormalized) quaternion as `heading_of` of the pose,
+    x and y, the held telemetry in `TELEMETRY`'s order, the tip margin of the pose."""
     X = RigidTransform(RollPitchYaw(0.02, -0.01, 2.9), [1.25, -0.75, 0.06])
-    system.GetInputPort("chassis_pose").FixValue(context, X)
-    system.GetInputPort("drive_status").FixValue(context, drive_status())
-    system.GetInputPort("encoder_ticks").FixValue(context, [301.9999999999, -12.0000000001])
-    sample = LogSample(system.GetOutputPort("sample").Eval(context))
-    assert LogSample.get_fields() == SAMPLE_COLUMNS[1:]
-    assert (sample.left_power, sample.right_power) == (0.25, -0.5)
-    assert (sample.left_ticks, sample.right_ticks) == (302.0, -12.0)  # whole ticks
-    assert (sample.x, sample.y) == (1.25, -0.75)
-    assert sample.yaw == pytest.approx(2.9, abs=1e-12)
+    raw = np.concatenate([drive_status(), [301.9999999999, -12.0000000001], chassis_state(X),
+                          np.arange(12.0)])
+    assert len(raw) == len(RAW_COLUMNS)
+    row = rows_of(np.array([0.5]), raw[None, :], FlatMargin())[0]
+    assert len(row) == len(COLUMNS)
+    assert row[:5].tolist() == [0.5, 0.25, -0.5, 302.0, -12.0]  # time, powers, whole ticks
+    assert (row[5], row[6]) == (1.25, -0.75)
+    assert row[7] == pytest.approx(heading_of(X), abs=1e-15)
+    assert row[8:20].tolist() == list(np.arange(12.0))
+    assert row[20] == 40.0
+
+
+def test_tip_margin_of_up_matches_the_margin_of_the_pose():
+    """The vectorized margin (the run log's) and the port's (a pose) are one formula."""
+    margin = TipMargin([0.01, 0.0, 0.05], {"front_left": [0.1, 0.15, 0.0],
+                                           "front_right": [0.1, -0.15, 0.0],
+                                           "rear_left": [-0.1, 0.15, 0.0],
+                                           "rear_right": [-0.1, -0.15, 0.0]})
+    poses = [tilted(r, p, y) for r, p, y in ((0, 0, 0), (10, -5, 30), (-20, 15, -100))]
+    states = np.array([chassis_state(X) for X in poses])
+    R = rotation_rows(states[:, :4])
+    vectorized = margin.margin_of_up(R[:, 2, 0], R[:, 2, 1], R[:, 2, 2])
+    context = margin.CreateDefaultContext()
+    for X, value in zip(poses, vectorized, strict=True):
+        margin.get_input_port().FixValue(context, X)
+        assert margin.get_output_port().Eval(context)[0] == pytest.approx(value, abs=1e-12)
 
 
 def test_run_log_samples_every_log_period_and_writes_csv(tmp_path):
     builder = DiagramBuilder()
     X = RigidTransform(RollPitchYaw(0.0, 0.0, -1.0), [0.5, 0.25, 0.06])
-    pose = builder.AddSystem(ConstantValueSource(AbstractValue.Make(X)))
+    pose = builder.AddSystem(ConstantVectorSource(chassis_state(X)))
     status = builder.AddSystem(ConstantVectorSource(drive_status(left=1.0, right=1.0)))
     ticks = builder.AddSystem(ConstantVectorSource([600.0, 599.9999999999]))
-    # The telemetry ports: 4 loads, 4 slip ratios, 4 slip angles, the tip margin.
+    # The held telemetry ports: 4 loads, 4 slip ratios, 4 slip angles.
     telemetry = {name: builder.AddSystem(ConstantVectorSource(
         np.arange(len(columns)) + 10.0 * k)).get_output_port()
-        for k, (name, columns) in enumerate(TELEMETRY, start=1)}
+        for k, (name, columns) in enumerate(TELEMETRY, start=1) if name in HELD}
     sink = add_run_log(builder, "robot", pose.get_output_port(), status.get_output_port(),
                        ticks.get_output_port(), telemetry)
     diagram = builder.Build()
     simulator = Simulator(diagram)
     simulator.AdvanceTo(0.1)
-    rows = log_rows(sink, simulator.get_context())
+    rows = log_rows(sink, simulator.get_context(), FlatMargin())
     assert rows.shape == (11, len(COLUMNS))  # t = 0, 0.01, ..., 0.1
     np.testing.assert_allclose(rows[:, 0], np.arange(11) * LOG_PERIOD, atol=1e-12)
     np.testing.assert_allclose(rows[-1, 1:8], [1.0, 1.0, 600, 600, 0.5, 0.25, -1.0], atol=1e-12)
