@@ -547,8 +547,13 @@ class Simulation:
 
             self._record_live = meshcat is not None
             meshcat = meshcat or offline_meshcat()
+        extras = []
+        if foxglove is not None:  # the run's Foxglove topics, attached as a front end
+            from corobot_drake.recording.publishers import add_foxglove_topics
+
+            extras.append(functools.partial(add_foxglove_topics, context=foxglove))
         # Ctrl-drag only where someone watches: an offline recording stays free of it.
-        self.station: Station = build_station(scenario, meshcat, save_camera, foxglove=foxglove,
+        self.station: Station = build_station(scenario, meshcat, save_camera, extras=extras,
                                               mouse_drag=self._record_live is not False)
         self.simulator = Simulator(self.station.diagram)
         ApplySimulatorConfig(scenario.simulator_config, self.simulator)

@@ -258,13 +258,15 @@ def _connect_servos(builder, plant, instance, name: str, desired_state, sign: fl
     builder.Connect(desired_state, plant.get_desired_state_input_port(instance))
 
 
-def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None, foxglove=None,
+def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None, extras=(),
                   mouse_drag: bool = True) -> Station:
-    """Builds the whole diagram for `scenario`; with `meshcat`, adds its visualizers (and,
-    with `mouse_drag`, Ctrl-drag of bodies: `MESHCAT_DRAG_STIFFNESS`); with
-    `save_camera` (a directory), each robot's camera frames are saved there as PNG; with
-    `foxglove` (a `foxglove.Context`), the publishers of the run's Foxglove topics
-    (`recording.publishers`)."""
+    """Builds the whole diagram for `scenario`, in phases: the plant (world, directives,
+    robots), each robot's drive and monitors, its sensors, then the front ends' `extras`, then
+    Meshcat. With `meshcat`, adds its visualizers (and, with `mouse_drag`, Ctrl-drag of
+    bodies: `MESHCAT_DRAG_STIFFNESS`); with `save_camera` (a directory), each robot's camera
+    frames are saved there as PNG. Each of `extras` is called as `extra(builder, plant,
+    scene_graph, robots, scenario)` before the diagram is built, to add the systems of a
+    front end the station need not know (the Foxglove topics, the ROS 2 topics)."""
     builder = DiagramBuilder()
     plant, scene_graph = AddMultibodyPlant(scenario.plant_config, builder)
     bodies = _add_world(plant, scenario.world)
@@ -272,87 +274,20 @@ def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None, foxglov
     added = {name: _add_robot(plant, name, robot) for name, robot in scenario.robots.items()}
     plant.Finalize()
 
-    robots, renderers = {}, {}
-    step = sc.physics_step(scenario.plant_config, scenario.simulator_config)
+    chassis = {name: parts[1] for name, parts in added.items()}
     # One chassis pose per robot (from the plant's body_poses, converted once per step) for
-    # its compass, GPS, tilt monitor and run log.
-    chassis_poses = add_chassis_poses(builder, plant,
-                                      {name: parts[1] for name, parts in added.items()})
-    # ... and its chassis' state (C++, no pose conversion) for what samples every step.
-    chassis_states = add_chassis_states(builder, plant,
-                                        {name: parts[1] for name, parts in added.items()})
-    for name, robot in scenario.robots.items():
-        instance, chassis, joints = added[name]
-        source = builder.AddNamedSystem(
-            f"{name}.commands", CommandSource(robot.commands, robot.drive.control_period))
-        controller = builder.AddNamedSystem(
-            f"{name}.drive_controller", DriveController(robot.drive))
-        selector = builder.AddNamedSystem(
-            f"{name}.wheel_state", MatrixGain(plant.MakeStateSelectorMatrix(
-                [j.index() for j in joints])))
-        builder.Connect(plant.get_state_output_port(), selector.get_input_port())
-        builder.Connect(selector.get_output_port(), controller.GetInputPort("wheel_state"))
-        # Command source -> motion commands -> drive controller; status back to the source.
-        motion = builder.AddNamedSystem(f"{name}.motion", MotionCommands(robot.drive,
-                                                                          robot.motion))
-        chassis_pose = chassis_poses[name]
-        odometry = add_odometry(
-            builder, name, chassis_pose, selector.get_output_port(),
-            controller.GetOutputPort("drive_status"), controller.GetOutputPort("axle_speed"),
-            robot.drive.motor_torque_scaling)
-        dead_reckoning = builder.AddNamedSystem(
-            f"{name}.dead_reckoning", DeadReckoning(robot.drive, robot.drive.control_period))
-        builder.Connect(odometry.encoder_ticks, dead_reckoning.GetInputPort("encoder_ticks"))
-        builder.Connect(chassis_pose, dead_reckoning.GetInputPort("chassis_pose"))
-        builder.ExportOutput(dead_reckoning.GetOutputPort("pose"), f"{name}.odometry")
-        contacts = add_wheel_contacts(builder, name, plant, [j.child_body() for j in joints],
-                                      chassis_pose, selector.get_output_port())
-        if meshcat is not None:
-            add_slip_markers(builder, meshcat, name, chassis_pose, contacts)
-        tip_margin = add_tip_margin(
-            builder, name, plant, instance, chassis,
-            {w: j.child_body() for w, j in zip(dim.WHEEL_NAMES, joints, strict=True)},
-            chassis_pose)
-        # The contact telemetry's ports (`signals.TELEMETRY`), each from the system that has it.
-        telemetry = {spec.port: next(system.GetOutputPort(spec.port)
-                                     for system in (contacts, tip_margin)
-                                     if system.HasOutputPort(spec.port))
-                     for spec in signals.TELEMETRY}
-        for port_name, port in telemetry.items():
-            builder.ExportOutput(port, f"{name}.{port_name}")
-        builder.Connect(source.GetOutputPort("request"), motion.GetInputPort("request"))
-        builder.Connect(odometry.position, motion.GetInputPort("position"))
-        builder.Connect(odometry.heading, motion.GetInputPort("heading"))
-        builder.Connect(motion.GetOutputPort("drive_request"), controller.GetInputPort("request"))
-        builder.Connect(motion.GetOutputPort("command_status"),
-                        source.GetInputPort("command_status"))
-        for port_name, port in (("encoder_ticks", odometry.encoder_ticks),
-                                ("heading", odometry.heading), ("position", odometry.position),
-                                ("drive_state", odometry.drive_state),
-                                ("command_status", motion.GetOutputPort("command_status"))):
-            builder.ExportOutput(port, f"{name}.{port_name}")
-        _connect_servos(builder, plant, instance, name, controller.GetOutputPort("desired_state"),
-                        servo_velocity_sign(scenario.simulator_config))
-        tilt = builder.AddNamedSystem(f"{name}.tilt_monitor", TiltMonitor(TILT_SAMPLE_PERIOD))
-        builder.Connect(chassis_states[name], tilt.GetInputPort("chassis_state"))
-        add_run_log(builder, name, chassis_states[name], controller.GetOutputPort("drive_status"),
-                    odometry.encoder_ticks, {port: telemetry[port] for port in HELD})
-        for port in ("drive_status", "axle_speed_command", "axle_speed"):
-            builder.ExportOutput(controller.GetOutputPort(port), f"{name}.{port}")
-        builder.ExportOutput(plant.get_state_output_port(instance), f"{name}.state")
-        robots[name] = RobotParts(name, instance, chassis, joints, source, controller, tilt,
-                                  motion=motion)
-        robots[name].camera, robots[name].camera_saver = add_camera(
-            builder, plant, scene_graph, name, instance, robot.camera, scenario.world,
-            renderers, save_camera, step=step)
-        robots[name].ir_sensors = add_ir_sensors(
-            builder, plant, scene_graph, name, robot.ir_sensors, model_instance=instance,
-            random_seed=scenario.random_seed, meshcat=meshcat)
-
-    if foxglove is not None:
-        from corobot_drake.recording.publishers import add_foxglove_topics
-
-        add_foxglove_topics(builder, plant, scene_graph, robots, scenario, foxglove)
+    # its compass, GPS and odometry; and its chassis' state (C++, no pose conversion) for what
+    # samples every step (the tilt monitor, the run log).
+    chassis_ports = (add_chassis_poses(builder, plant, chassis),
+                     add_chassis_states(builder, plant, chassis))
+    robots, renderers = {}, {}
+    for name in scenario.robots:
+        robots[name] = _add_drive(builder, plant, scenario, name, added[name], chassis_ports,
+                                  meshcat)
+        _add_sensors(builder, plant, scene_graph, scenario, robots[name], renderers,
+                     save_camera, meshcat)
+    for extra in extras:
+        extra(builder, plant, scene_graph, robots, scenario)
     builder.ExportOutput(plant.get_body_poses_output_port(), "body_poses")
     builder.ExportOutput(scene_graph.get_query_output_port(), "query_object")
     lcm = None
@@ -362,6 +297,92 @@ def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None, foxglov
     diagram.set_name("corobot_station")
     return Station(diagram, plant, scene_graph, robots, bodies, models, meshcat, renderers,
                    lcm)
+
+
+def _add_drive(builder, plant, scenario: sc.Scenario, name: str, added, chassis_ports,
+               meshcat) -> RobotParts:
+    """One robot's command source, motion commands, drive controller and wheel servos, its
+    odometry and its monitors (contact telemetry, tip margin, tilt, run log)."""
+    robot = scenario.robots[name]
+    instance, chassis, joints = added
+    chassis_pose, chassis_state = (ports[name] for ports in chassis_ports)
+    source = builder.AddNamedSystem(
+        f"{name}.commands", CommandSource(robot.commands, robot.drive.control_period))
+    controller = builder.AddNamedSystem(f"{name}.drive_controller", DriveController(robot.drive))
+    selector = builder.AddNamedSystem(f"{name}.wheel_state", MatrixGain(
+        plant.MakeStateSelectorMatrix([j.index() for j in joints])))
+    builder.Connect(plant.get_state_output_port(), selector.get_input_port())
+    builder.Connect(selector.get_output_port(), controller.GetInputPort("wheel_state"))
+    motion = builder.AddNamedSystem(f"{name}.motion", MotionCommands(robot.drive, robot.motion))
+    odometry = add_odometry(
+        builder, name, chassis_pose, selector.get_output_port(),
+        controller.GetOutputPort("drive_status"), controller.GetOutputPort("axle_speed"),
+        robot.drive.motor_torque_scaling)
+    dead_reckoning = builder.AddNamedSystem(
+        f"{name}.dead_reckoning", DeadReckoning(robot.drive, robot.drive.control_period))
+    builder.Connect(odometry.encoder_ticks, dead_reckoning.GetInputPort("encoder_ticks"))
+    builder.Connect(chassis_pose, dead_reckoning.GetInputPort("chassis_pose"))
+    builder.ExportOutput(dead_reckoning.GetOutputPort("pose"), f"{name}.odometry")
+    # Command source -> motion commands -> drive controller; status back to the source.
+    builder.Connect(source.GetOutputPort("request"), motion.GetInputPort("request"))
+    builder.Connect(odometry.position, motion.GetInputPort("position"))
+    builder.Connect(odometry.heading, motion.GetInputPort("heading"))
+    builder.Connect(motion.GetOutputPort("drive_request"), controller.GetInputPort("request"))
+    builder.Connect(motion.GetOutputPort("command_status"), source.GetInputPort("command_status"))
+    for port_name, port in (("encoder_ticks", odometry.encoder_ticks),
+                            ("heading", odometry.heading), ("position", odometry.position),
+                            ("drive_state", odometry.drive_state),
+                            ("command_status", motion.GetOutputPort("command_status"))):
+        builder.ExportOutput(port, f"{name}.{port_name}")
+    _connect_servos(builder, plant, instance, name, controller.GetOutputPort("desired_state"),
+                    servo_velocity_sign(scenario.simulator_config))
+    telemetry = _add_telemetry(builder, plant, name, added, chassis_pose,
+                               selector.get_output_port(), meshcat)
+    tilt = builder.AddNamedSystem(f"{name}.tilt_monitor", TiltMonitor(TILT_SAMPLE_PERIOD))
+    builder.Connect(chassis_state, tilt.GetInputPort("chassis_state"))
+    add_run_log(builder, name, chassis_state, controller.GetOutputPort("drive_status"),
+                odometry.encoder_ticks, {port: telemetry[port] for port in HELD})
+    for port in ("drive_status", "axle_speed_command", "axle_speed"):
+        builder.ExportOutput(controller.GetOutputPort(port), f"{name}.{port}")
+    builder.ExportOutput(plant.get_state_output_port(instance), f"{name}.state")
+    return RobotParts(name, instance, chassis, joints, source, controller, tilt, motion=motion)
+
+
+def _add_telemetry(builder, plant, name: str, added, chassis_pose, wheel_state, meshcat
+                   ) -> dict:
+    """The wheels' contact telemetry and the tip margin (and, with Meshcat, the slip
+    markers); returns {`signals.TELEMETRY` port name: output port}, each exported as
+    `<name>.<port>`."""
+    instance, chassis, joints = added
+    contacts = add_wheel_contacts(builder, name, plant, [j.child_body() for j in joints],
+                                  chassis_pose, wheel_state)
+    if meshcat is not None:
+        add_slip_markers(builder, meshcat, name, chassis_pose, contacts)
+    tip_margin = add_tip_margin(
+        builder, name, plant, instance, chassis,
+        {w: j.child_body() for w, j in zip(dim.WHEEL_NAMES, joints, strict=True)},
+        chassis_pose)
+    # Each signal's port from the system that has it.
+    telemetry = {spec.port: next(system.GetOutputPort(spec.port)
+                                 for system in (contacts, tip_margin)
+                                 if system.HasOutputPort(spec.port))
+                 for spec in signals.TELEMETRY}
+    for port_name, port in telemetry.items():
+        builder.ExportOutput(port, f"{name}.{port_name}")
+    return telemetry
+
+
+def _add_sensors(builder, plant, scene_graph, scenario: sc.Scenario, parts: RobotParts,
+                 renderers: dict, save_camera, meshcat) -> None:
+    """One robot's camera and IR sensors, into `parts`."""
+    robot = scenario.robots[parts.name]
+    step = sc.physics_step(scenario.plant_config, scenario.simulator_config)
+    parts.camera, parts.camera_saver = add_camera(
+        builder, plant, scene_graph, parts.name, parts.model_instance, robot.camera,
+        scenario.world, renderers, save_camera, step=step)
+    parts.ir_sensors = add_ir_sensors(
+        builder, plant, scene_graph, parts.name, robot.ir_sensors,
+        model_instance=parts.model_instance, random_seed=scenario.random_seed, meshcat=meshcat)
 
 
 MESHCAT_DRAG_STIFFNESS = 100.0
