@@ -41,6 +41,7 @@ import threading
 import time
 from collections.abc import Callable
 from pathlib import Path
+from types import SimpleNamespace
 
 from corobot_drake.resources import DEFAULT_SCENARIO
 from lab.docs_blocks import (
@@ -771,6 +772,13 @@ def render_server_memory(outs) -> str:
 
 def blocks() -> list[Spec]:
     """Every generated block of the docs, in the order a full refresh runs them."""
+    c = _shared_commands()
+    specs = [*_model_and_command_specs(c), *_front_end_specs(c), *_performance_specs(c)]
+    return sorted(specs, key=lambda s: ORDER[s.kind])
+
+
+def _shared_commands() -> SimpleNamespace:
+    """The commands (and pictures) several blocks read."""
     shipped = _shipped_scaling()
     top_speed = Command(f"python tools/tune_motor_torque_scaling.py --scaling {shipped:g} "
                         f"--max-iterations 1", ok=(0, 1))
@@ -798,19 +806,27 @@ def blocks() -> list[Spec]:
          "python tools/snapshot.py --eye 1.1,-0.9,0.55 --target=-0.45,0.1,0.3 --visual boxes "
          "--output docs/images/collision_boxes.png", 8),
     ]
-    specs = [
-        Spec("readme-triangles", "README.md", (meshes,), render_readme_triangles,
+    return SimpleNamespace(
+        top_speed=top_speed, meshes=meshes, ir_start=ir_start, landing=landing,
+        bench_ir=bench_ir, bench_raycast=bench_raycast, bench_camera=bench_camera,
+        default_column=default_column, pictures=pictures)
+
+
+def _model_and_command_specs(c: SimpleNamespace) -> list[Spec]:
+    """The model, tuning, commands and README's pictures."""
+    return [
+        Spec("readme-triangles", "README.md", (c.meshes,), render_readme_triangles,
              DETERMINISTIC, 3),
-        Spec("looks-triangles", "docs/looks.md", (meshes,), render_looks_triangles,
+        Spec("looks-triangles", "docs/looks.md", (c.meshes,), render_looks_triangles,
              DETERMINISTIC, 3),
-        Spec("readme-ir-at-start", "README.md", (ir_start,), render_ir_start_readme,
+        Spec("readme-ir-at-start", "README.md", (c.ir_start,), render_ir_start_readme,
              DETERMINISTIC, 8),
-        Spec("sensors-ir-at-start", "docs/sensors.md", (ir_start,), render_ir_start_sensors,
+        Spec("sensors-ir-at-start", "docs/sensors.md", (c.ir_start,), render_ir_start_sensors,
              DETERMINISTIC, 8),
-        Spec("readme-top-speed", "README.md", (top_speed,), render_readme_top_speed,
+        Spec("readme-top-speed", "README.md", (c.top_speed,), render_readme_top_speed,
              DETERMINISTIC, 5),
         Spec("tune-motor-torque-scaling", "docs/tuning.md",
-             (Command("python tools/tune_motor_torque_scaling.py --scaling 20"), top_speed),
+             (Command("python tools/tune_motor_torque_scaling.py --scaling 20"), c.top_speed),
              render_tune, DETERMINISTIC, 10),
         Spec("tune-motor-torque-scaling-sweep", "docs/tuning.md",
              (Command("python tools/tune_motor_torque_scaling.py --sweep"),), render_tune_sweep,
@@ -834,21 +850,27 @@ def blocks() -> list[Spec]:
              DETERMINISTIC, 5),
         Spec("saved-mid-drive", "docs/commands.md", (_measure("saved-mid-drive"),),
              render_saved_mid_drive, DETERMINISTIC, 10),
-        Spec("resume-landing", "docs/commands.md",
+        Spec("resume-c.landing", "docs/commands.md",
              (Command("python tools/resume_landing.py"),), render_resume_landing,
              DETERMINISTIC, 300),
-        Spec("landing-errors", "docs/commands.md", (landing,), render_landing_errors,
+        Spec("landing-errors", "docs/commands.md", (c.landing,), render_landing_errors,
              DETERMINISTIC, 90),
-        Spec("readme-landing-closed-loop", "README.md", (landing,),
+        Spec("readme-c.landing-closed-loop", "README.md", (c.landing,),
              render_readme_landing_closed_loop, DETERMINISTIC, 90),
-        Spec("readme-landing-seed", "README.md", (landing,), render_readme_landing_seed,
+        Spec("readme-c.landing-seed", "README.md", (c.landing,), render_readme_landing_seed,
              DETERMINISTIC, 90),
         Spec("drive-test-drift", "docs/commands.md", tuple(
             Command(f"python tools/drive_test.py --loops 3 --seeds 20 --workers 1 --profile {p} "
                     f"--out out/drive_test_{p}")
             for p in ("closed_loop", "seed")), render_drive_drift, DETERMINISTIC, 820),
         *(Spec(name, "README.md", (Command(cmd),), _picture(alt, f"docs/images/{png}", cmd),
-               PICTURE, seconds) for name, alt, png, cmd, seconds in pictures),
+               PICTURE, seconds) for name, alt, png, cmd, seconds in c.pictures),
+    ]
+
+
+def _front_end_specs(c: SimpleNamespace) -> list[Spec]:
+    """The services, sensors, recording, gym and studies."""
+    return [
         Spec("drive-legs-server", "docs/services.md",
              (Command("python examples/drive_legs.py --loops 1 --seed 1"),), render_drive_legs,
              TIMING, 45),
@@ -860,9 +882,9 @@ def blocks() -> list[Spec]:
                       "--sample-every 60"),), render_server_memory, TIMING, 2200),
         Spec("camera-cost", "docs/looks.md", (Command("python tools/camera_cost.py"),),
              render_camera_cost, TIMING, 70),
-        Spec("bench-camera", "docs/sensors.md", (bench_camera,), render_table_with_load,
+        Spec("bench-camera", "docs/sensors.md", (c.bench_camera,), render_table_with_load,
              TIMING, 90),
-        Spec("bench-ir", "docs/sensors.md", (bench_ir,), render_bench_ir, TIMING, 50),
+        Spec("bench-ir", "docs/sensors.md", (c.bench_ir,), render_bench_ir, TIMING, 50),
         Spec("bench-recording", "docs/recording.md",
              (Command("python tools/bench_recording.py"),), render_table_with_load, TIMING, 300),
         Spec("gym-evaluation", "docs/gym.md",
@@ -875,7 +897,13 @@ def blocks() -> list[Spec]:
         Spec("bench-study", "docs/studies.md",
              (Command("python tools/bench_study.py --seeds 24 --duration 8"),),
              render_bench_study, TIMING, 150),
-        Spec("unit-costs", "docs/performance.md", (bench_ir, bench_raycast, bench_camera),
+    ]
+
+
+def _performance_specs(c: SimpleNamespace) -> list[Spec]:
+    """docs/performance.md's and the README's costs."""
+    return [
+        Spec("unit-costs", "docs/performance.md", (c.bench_ir, c.bench_raycast, c.bench_camera),
              render_unit_costs, TIMING, 150),
         Spec("event-times", "docs/performance.md", (_measure("event-times"),),
              render_event_times, TIMING, 60),
@@ -883,12 +911,12 @@ def blocks() -> list[Spec]:
              (Command("python tools/tune_tire_grip.py --plot docs/images/tire_grip.png",
                       ok=(0, 1)),),
              render_tire_grip, DETERMINISTIC, 2500),
-        Spec("default-column-runs", "docs/performance.md", (default_column,),
+        Spec("default-column-runs", "docs/performance.md", (c.default_column,),
              render_default_runs, TIMING, 110),
         Spec("readme-hostile-inputs", "README.md",
              (Command("python tools/hostile_inputs.py", ok=(0, 1)),), render_hostile_inputs,
              TIMING, 90),
-        Spec("readme-performance", "README.md", (default_column,), render_readme_performance,
+        Spec("readme-performance", "README.md", (c.default_column,), render_readme_performance,
              TIMING, 110),
         Spec("bench-robots", "docs/performance.md",
              (Command("python tools/bench.py --robots 1,2,4,8,16 --no-table --no-micro "
@@ -914,7 +942,6 @@ def blocks() -> list[Spec]:
              (Command("python tools/bench.py --seconds 5 --repeats 3"),), render_bench_full,
              TIMING, 200),
     ]
-    return sorted(specs, key=lambda s: ORDER[s.kind])
 
 
 # --- The command line ---------------------------------------------------------------------------
