@@ -2,7 +2,7 @@
 
 The core (`pip install corobot-drake`) runs a scenario headless or in Meshcat; each front end
 needs its extra. A front end used without it stops with one line naming the extra.
-`tests/test_wheel.py` holds this table to pyproject's `[project.optional-dependencies]`.
+`tests/packaging/test_wheel.py` holds this table to pyproject's `[project.optional-dependencies]`.
 """
 
 import importlib.util

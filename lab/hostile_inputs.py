@@ -1,5 +1,5 @@
 """A hostile corpus of scenario inputs and what the loader makes of each (tools/hostile_inputs.py,
-tests/test_hostile_inputs.py).
+tests/packaging/test_hostile_inputs.py).
 
 Every input here is invalid, and must end in one line `FILE_OR_--override[:LINE]: FIELD:
 MESSAGE` (the CLI prints it after `error: ` and exits 2) within 2 s of CPU time, before

@@ -247,7 +247,7 @@ def measure_ir_at_start() -> dict:
 
 
 def measure_saved_mid_drive() -> dict:
-    """Saved while a DriveDistance runs (the scene of tests/test_motion.py), reloaded, both run
+    """Saved while a DriveDistance runs (the scene of tests/simulation/test_motion.py), reloaded, both run
     on: the robots' distance apart (m) after 0.2 s and after 3.2 s."""
     from corobot_drake.simulation import Simulation
 
@@ -875,7 +875,7 @@ def _front_end_specs(c: SimpleNamespace) -> list[Spec]:
              (Command("python examples/drive_legs.py --loops 1 --seed 1"),), render_drive_legs,
              TIMING, 45),
         Spec("server-flood", "docs/services.md",
-             (Command("python -m pytest -s -q tests/test_server.py -k flood", ok=(0, 1)),),
+             (Command("python -m pytest -s -q tests/service/test_server.py -k flood", ok=(0, 1)),),
              render_server_flood, TIMING, 30),
         Spec("server-memory", "docs/services.md",
              (Command("python tools/bench_memory.py --sim-minutes 60 --warmup-minutes 1 "

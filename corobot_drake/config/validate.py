@@ -319,7 +319,7 @@ RIGID_ON_GROUND = ("touches the rigid ground at a single point (Drake's point co
                    "sinks through it when pushed; only a rigid sphere rests on its one point")
 """Why a free body may not be rigid unless it is a sphere: a 0.2 m box pushed by the robot at
 power 0.5, and the 100 kg giant box rammed at full power, sank through the ground at the 10
-and 20 ms steps (`tests/test_models.py` pushes one; the compliant ones stay on it)."""
+and 20 ms steps (`tests/simulation/test_models.py` pushes one; the compliant ones stay on it)."""
 
 
 MAX_SINK = 0.1

@@ -176,7 +176,7 @@ def test_meshcat_view_and_a_key_press_that_stops_by_itself(page, meshcat_server)
     page that connects late), an arrow key drives and the move ends by itself (Meshcat sends
     no key release: the teleop holds a move only while the key repeats). Holding the key (its
     auto-repeat, timed in wall-clock tenths of a second) and the follow camera are tested in
-    tests/test_teleop.py with a clock of its own: on a loaded machine this page (software
+    tests/simulation/test_teleop.py with a clock of its own: on a loaded machine this page (software
     WebGL) falls ever further behind the visualizer's stream of poses, so what it shows of a
     moving robot cannot be waited for."""
     import numpy as np

@@ -105,7 +105,7 @@ def test_meshcat_sun_shines_from_the_books_direction():
     """The book's sun, (0.5, -0.75, 0.5) in MRDS's y-up frame, is (-0.5, -0.5, -0.75) here;
     Meshcat's directional light sits up-sun of the origin with the scenario's intensity (a
     property on a path that is no light, as `DirectionalLight` was, only warns in the
-    browser: the page-level check is tests/test_browser.py)."""
+    browser: the page-level check is tests/service/test_browser.py)."""
     import msgpack
     from pydrake.geometry import StartMeshcat
 

@@ -275,7 +275,7 @@ def _uninterrupted(profile: str, kind: str, power: float):
     """The command run uninterrupted: (time to compare at, (x, y, heading) then, the scenes
     saved on the way by time). Saved after its first update (a seed turn has no progress
     sample yet), at 0.6 s, and 0, 40 and 80 ms after the seed profile's first halving, while
-    its 0.1 s of progress samples refill (every update: tests/test_systems_motion.py and
+    its 0.1 s of progress samples refill (every update: tests/unit/test_systems_motion.py and
     tools/resume_landing.py)."""
     sim = fast_sim(profile, extra=f"commands: [{RESUME_COMMANDS[kind] % power}]")
     motion = sim.robot()._parts.motion
@@ -310,7 +310,7 @@ def _resumer(profile: str) -> Simulation:
 @pytest.mark.parametrize("profile", ["closed_loop", "seed"])
 def test_a_command_saved_at_any_time_resumes_to_the_same_landing(profile, kind, power):
     """A resumed command lands within 1 mm and 0.1 deg of the uninterrupted one
-    (the issue's target; tests/test_systems_motion.py checks every update on a toy robot).
+    (the issue's target; tests/unit/test_systems_motion.py checks every update on a toy robot).
     The saved scene carries the command on from where it started (its `start`), at the power
     it runs at, with its progress at the last updates (`recent_progress`: the seed profile's
     0.1 s window, the closed loop's speed) and the drive's commanded axle speeds; the script
