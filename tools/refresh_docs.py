@@ -247,8 +247,8 @@ def measure_ir_at_start() -> dict:
 
 
 def measure_saved_mid_drive() -> dict:
-    """Saved while a DriveDistance runs (the scene of tests/simulation/test_motion.py), reloaded, both run
-    on: the robots' distance apart (m) after 0.2 s and after 3.2 s."""
+    """Saved while a DriveDistance runs (the scene of tests/simulation/test_motion.py),
+    reloaded, both run on: the robots' distance apart (m) after 0.2 s and after 3.2 s."""
     from corobot_drake.simulation import Simulation
 
     script = ("robots: {corobot: {commands: [!DriveDistance {distance: -0.45, power: 1}, "

@@ -58,8 +58,8 @@ PLAIN_ARGPARSE = {"camera_cost", "hostile_inputs", "make_meshes", "make_model", 
 @pytest.mark.parametrize("tool", [t for t in TOOLS if t.stem not in PLAIN_ARGPARSE],
                          ids=lambda t: t.stem)
 def test_a_tool_parses_with_the_tools_parser(tool, monkeypatch):
-    """Its bad arguments end in one `error:` line, exit 2 (tests/packaging/test_hostile_inputs.py runs
-    some of each: `hostile_inputs.TOOLS`)."""
+    """Its bad arguments end in one `error:` line, exit 2
+    (tests/packaging/test_hostile_inputs.py runs some of each: `hostile_inputs.TOOLS`)."""
     from corobot_drake.arguments import ToolParser
 
     assert isinstance(_parser_of(tool, monkeypatch), ToolParser), tool.name
