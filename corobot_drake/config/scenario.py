@@ -290,15 +290,6 @@ def physics_step(plant_config: MultibodyPlantConfig, simulator_config: Simulator
     return plant_config.time_step or simulator_config.max_step_size
 
 
-def set_physics_step(scenario: "Scenario", step: float) -> None:
-    """Sets the physics' step (s) of `scenario`, whichever steps it: the discrete plant or
-    CENIC (`physics_step`)."""
-    if scenario.plant_config.time_step > 0:
-        scenario.plant_config.time_step = step
-    else:
-        scenario.simulator_config.max_step_size = step
-
-
 SAP_PLANT = ("{plant_config: {time_step: %g}, "
              "simulator_config: {integration_scheme: runge_kutta3}}")
 """A scenario override (`SAP_PLANT % step`): a discrete plant stepped by SAP (the scenario's
