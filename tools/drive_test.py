@@ -26,8 +26,8 @@ from corobot_drake.analysis.arguments import (
 )
 from corobot_drake.config import scenario as sc
 from corobot_drake.config.bounds import DRAKE_INT, POWER, Range
+from corobot_drake.study.programs import LOOPS
 
-LOOPS = Range(1, 100, why="loops of ~37 simulated s each at power 0.2")
 SEEDS = Range(1, 10_000, why="runs of the study")
 
 
