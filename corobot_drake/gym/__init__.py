@@ -19,10 +19,18 @@ docs/gym.md has the spaces, the reward and the measured figures.
 
 import gymnasium
 
+from corobot_drake.gym.env import GoToGoalConfig
+
 ENV_ID = "corobot_drake/GoToGoal-v0"
 
+MAX_EPISODE_STEPS = round(GoToGoalConfig.time_limit / GoToGoalConfig.control_period)
+"""The registration's step limit (Gymnasium's TimeLimit): the default `time_limit` over the
+default `control_period`, 60 (the env truncates there itself; `gymnasium.make(...,
+time_limit=10.0, max_episode_steps=100)` for longer episodes)."""
+
 if ENV_ID not in gymnasium.registry:
-    gymnasium.register(ENV_ID, entry_point="corobot_drake.gym.env:GoToGoalEnv")
+    gymnasium.register(ENV_ID, entry_point="corobot_drake.gym.env:GoToGoalEnv",
+                       max_episode_steps=MAX_EPISODE_STEPS)
 
 
 def load_policy(path=None):
@@ -32,4 +40,4 @@ def load_policy(path=None):
     return LinearPolicy.load(path)
 
 
-__all__ = ["ENV_ID", "load_policy"]
+__all__ = ["ENV_ID", "MAX_EPISODE_STEPS", "load_policy"]
