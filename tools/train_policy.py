@@ -24,6 +24,7 @@ from corobot_drake.gym.policy import SHIPPED, LinearPolicy
 from corobot_drake.gym.rollouts import episode_pool
 from corobot_drake.gym.train import HELD_OUT, CemSettings, evaluate, plot_curve, train
 from corobot_drake.simulation import quiet_drake_warnings
+from corobot_drake.study.engine import AddressError
 
 REPO = Path(__file__).resolve().parent.parent
 
@@ -91,14 +92,18 @@ def main(argv=None) -> int:
             p.error(f"argument --out: {args.out}: not a saved policy ({e})")
     quiet_drake_warnings()
     settings = CemSettings(**{f.name: getattr(args, f.name) for f in dc.fields(CemSettings)})
-    with episode_pool(args.workers, args.address) as pool:
-        if args.evaluate:
-            held_out = evaluate(pool, saved)
-            start = evaluate(pool, LinearPolicy.goal_seeker())
-            random = evaluate(pool, None, RANDOM_SEEDS)
-            _print_evaluation(held_out, start, random)
-            return 0
-        policy, curve = train(settings, pool)
+    try:
+        with episode_pool(args.workers, args.address) as pool:
+            if args.evaluate:
+                held_out = evaluate(pool, saved)
+                start = evaluate(pool, LinearPolicy.goal_seeker())
+                random = evaluate(pool, None, RANDOM_SEEDS)
+                _print_evaluation(held_out, start, random)
+                return 0
+            policy, curve = train(settings, pool)
+    except AddressError as e:  # no Ray cluster there: the flag's one line
+        print(f"error: --{e}", file=sys.stderr)
+        return 2
     policy.save(args.out, trained_by="tools/train_policy.py", settings=dc.asdict(settings))
     plot_curve(curve, args.plot)
     print("| generation | population mean return | elite mean return | best | "
