@@ -45,6 +45,10 @@ def _print_evaluation(policy: dict, start: dict, random: dict) -> None:
                      random)):
         print(f"| {name} | {s['success_rate']:.0%} | {s['mean_return']:.1f} | "
               f"{s['mean_steps']:.1f} | {s['collision_steps']:.1f} | {s['stall_steps']:.1f} |")
+    print(f"\nSuccess, trained minus hand-written: "
+          f"{100 * (policy['success_rate'] - start['success_rate']):+.0f} points.")
+    for name, s in (("trained", policy), ("hand-written", start)):
+        print(f"Not reached by the {name} policy: seeds {', '.join(map(str, s['not_reached']))}.")
 
 
 def _setting(parser: ToolParser, field: dc.Field, default) -> None:
