@@ -25,9 +25,9 @@ from corobot_drake.arguments import (
 )
 from corobot_drake.config import scenario as sc
 from corobot_drake.limits import DRAKE_INT, DRIVE_POWER, Range
+from corobot_drake.study.programs import LOOPS
 from lab import drive_test
 
-LOOPS = Range(1, 100, why="loops of ~37 simulated s each at power 0.2")
 SEEDS = Range(1, 10_000, why="runs of the study")
 
 

@@ -254,7 +254,11 @@ class _SchemaWalk:
             size = _vector_size(options)
             if size is not None:
                 return self._list(node, float, path, size)
-            return self.check(node, _untagged_variant(node, options), path)
+            variant = _untagged_variant(node, options)
+            if variant is None:  # no variant is of the node's kind (a list for a number)
+                self.fail(node, path, f"expected {_variants_text(options)}, got "
+                          f"{_describe(node)}")
+            return self.check(node, variant, path)
         names = {_tag_name(o): o for o in options
                  if o is not np.ndarray and not _type_name(o).startswith("_")}
         if tag not in names:
@@ -331,18 +335,36 @@ the ground (estimated 49 mm)."""
 # --- 2. what the types cannot say -----------------------------------------------------------
 
 
+def _node_kind(tp):
+    """The YAML node a value of type `tp` is written as."""
+    origin = typing.get_origin(tp)
+    if origin in (list, typing.List):  # noqa: UP006
+        return yaml.SequenceNode
+    if origin in (dict, typing.Dict) or _fields(tp) is not None:  # noqa: UP006
+        return yaml.MappingNode
+    return yaml.ScalarNode
+
+
+_SCALAR_TEXT = {bool: "true or false", int: "an integer", float: "a number", str: "text"}
+
+
+def _variants_text(options) -> str:
+    """The variants of a union in words: `true or false, an integer, a number or text`."""
+    words = list(dict.fromkeys(_SCALAR_TEXT.get(o) or {
+        yaml.SequenceNode: "a list", yaml.MappingNode: "a mapping"}.get(_node_kind(o),
+                                                                      _type_name(o))
+        for o in options))
+    return ", ".join(words[:-1]) + " or " + words[-1] if len(words) > 1 else words[0]
+
+
 def _untagged_variant(node, options):
     """The variant an untagged node loads as: the first list type for a list, the first
-    mapping type for a mapping, the first scalar type that reads a scalar."""
-    def kind(tp):
-        origin = typing.get_origin(tp)
-        if origin in (list, typing.List):  # noqa: UP006
-            return yaml.SequenceNode
-        if origin in (dict, typing.Dict) or _fields(tp) is not None:  # noqa: UP006
-            return yaml.MappingNode
-        return yaml.ScalarNode
-
-    same_kind = [o for o in options if kind(o) is type(node)] or options
+    mapping type for a mapping, the first scalar type that reads a scalar. When no variant is
+    of the node's kind: the first of a union of structures (its error names it), else None
+    (a union of scalars given a list: the error names them all)."""
+    same_kind = [o for o in options if _node_kind(o) is type(node)]
+    if not same_kind:
+        return options[0] if {_node_kind(o) for o in options} == {yaml.MappingNode} else None
     if isinstance(node, yaml.ScalarNode):
         for option in same_kind:
             if _reads(option, node.value):

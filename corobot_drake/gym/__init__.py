@@ -23,10 +23,18 @@ require("gym", "corobot_drake.gym")
 
 import gymnasium  # noqa: E402 (after the one-line check of the extra)
 
+from corobot_drake.gym.env import GoToGoalConfig  # noqa: E402
+
 ENV_ID = "corobot_drake/GoToGoal-v0"
 
+MAX_EPISODE_STEPS = round(GoToGoalConfig.time_limit / GoToGoalConfig.control_period)
+"""The registration's step limit (Gymnasium's TimeLimit): the default `time_limit` over the
+default `control_period`, 60 (the env truncates there itself; `gymnasium.make(...,
+time_limit=10.0, max_episode_steps=100)` for longer episodes)."""
+
 if ENV_ID not in gymnasium.registry:
-    gymnasium.register(ENV_ID, entry_point="corobot_drake.gym.env:GoToGoalEnv")
+    gymnasium.register(ENV_ID, entry_point="corobot_drake.gym.env:GoToGoalEnv",
+                       max_episode_steps=MAX_EPISODE_STEPS)
 
 
 def load_policy(path=None):
@@ -36,4 +44,4 @@ def load_policy(path=None):
     return LinearPolicy.load(path)
 
 
-__all__ = ["ENV_ID", "load_policy"]
+__all__ = ["ENV_ID", "MAX_EPISODE_STEPS", "load_policy"]

@@ -90,6 +90,13 @@ class GoToGoalConfig:
     """Add the front camera's 240 x 320 RGB image to the observation (a Dict)."""
 
 
+RENDER_MODES = ("rgb_array", "human")
+FRAME_SIZE = (480, 640)
+"""Height, width of an `rgb_array` frame (pixels)."""
+FRAME_FOV_Y_DEG = 45.0
+GOAL_COLOR = (220, 30, 30)
+
+
 IR_SENSORS = ("front", "rear")
 """The sensors whose rays the observation holds, in this order."""
 
@@ -127,15 +134,20 @@ class GoToGoalEnv(gym.Env):
     robot's frame, positive to the left), forward speed (m/s), yaw rate (rad/s). Action:
     left and right power in [-1, 1]."""
 
-    metadata: ClassVar[dict] = {"render_modes": []}
+    metadata: ClassVar[dict] = {"render_modes": list(RENDER_MODES),
+                                "render_fps": round(1.0 / GoToGoalConfig.control_period)}
 
-    def __init__(self, config: GoToGoalConfig | None = None, **overrides):
+    def __init__(self, config: GoToGoalConfig | None = None, render_mode: str | None = None,
+                 **overrides):
         """`overrides` replace fields of `config` (default `GoToGoalConfig()`), e.g.
-        `camera=True`, as `gymnasium.make("corobot_drake/GoToGoal-v0", camera=True)`."""
+        `camera=True`, as `gymnasium.make("corobot_drake/GoToGoal-v0", camera=True)`.
+        `render_mode`: None, `rgb_array` (`render()` returns a picture of the scene) or
+        `human` (the scene live in Meshcat, at real time)."""
         quiet_drake_warnings()
         self.config = make_config(config or GoToGoalConfig(), overrides)  # ValueError
+        self.render_mode = checked_render_mode(render_mode)
         self.scenario = base_scenario(self.config)
-        self.sim = Simulation(self.scenario)
+        self.sim = Simulation(self.scenario, meshcat=_meshcat(self.render_mode))
         self._key = diagram_key(self.scenario)
         self.robot = self.sim.robot(ROBOT)
         self._ports = _Ports(self.sim, self.scenario)
@@ -177,7 +189,16 @@ class GoToGoalEnv(gym.Env):
             raise ValueError(f"reset: the layout: {str(e).partition(': ')[2]}") from None
         self._lock_boxes()
         self._distance = self._goal_in_robot_frame()[0]
+        _show_goal(self.sim, self.layout, self.config)
         return self._observation(), self._info(collided=False, stalled=False)
+
+    def render(self):
+        """`rgb_array`: the scene now, from above and behind the episode's start and goal (an
+        H x W x 3 uint8 picture, the goal a red disc); `human`: None (Meshcat shows the run
+        as it goes); no render mode: None."""
+        if self.render_mode != "rgb_array" or self.layout is None:
+            return None
+        return render_frame(self.sim, self.layout, self.config)
 
     def _apply_layout(self, layout: Layout) -> None:
         x, y, yaw = layout.start
@@ -274,6 +295,71 @@ class GoToGoalEnv(gym.Env):
         return {"is_success": bool(success), "flipped": bool(flipped),
                 "collided": bool(collided), "stalled": bool(stalled),
                 "goal_distance": float(self._distance), "time": float(self.sim.time)}
+
+
+# --- rendering and the config's checks ---------------------------------------------------
+
+def checked_render_mode(render_mode) -> str | None:
+    if render_mode is not None and render_mode not in RENDER_MODES:
+        raise ValueError(f"render_mode must be None or one of {', '.join(RENDER_MODES)}, got "
+                         f"{render_mode!r:.80}")
+    return render_mode
+
+
+def _meshcat(render_mode: str | None):
+    """A Meshcat (on this machine's loopback; its URL in the log) for `human`, else None."""
+    if render_mode != "human":
+        return None
+    from pydrake.geometry import StartMeshcat
+
+    return StartMeshcat()
+
+
+def _show_goal(sim: Simulation, layout: Layout, config: GoToGoalConfig) -> None:
+    """In `human` mode: the goal as a red disc of the goal radius in Meshcat, and the run
+    paced at real time (as Gymnasium's `human` mode is)."""
+    meshcat = sim.station.meshcat
+    if meshcat is None:
+        return
+    from pydrake.geometry import Cylinder, Rgba
+    from pydrake.math import RigidTransform
+
+    meshcat.SetObject("goal", Cylinder(config.goal_radius, 0.005),
+                      Rgba(*(c / 255 for c in GOAL_COLOR), 0.6))
+    meshcat.SetTransform("goal", RigidTransform([*layout.goal, 0.003]))
+    sim.simulator.set_target_realtime_rate(1.0)
+
+
+def frame_view(layout: Layout):
+    """The camera of `rgb_array` frames (Drake camera pose): high above the middle of the
+    start and the goal, looking down at it from the side away from the giant box (which
+    would hide the way from its side), framing both and the boxes near the way."""
+    from corobot_drake.sensors import render
+
+    middle = (np.array(layout.start[:2]) + np.array(layout.goal)) / 2
+    away = middle - np.array(dim.GIANT_BOX_CENTER[:2])
+    away /= max(np.linalg.norm(away), 1e-9)
+    return render.look_at([*(middle + 1.6 * away), 4.0], [*middle, 0.0])
+
+
+def render_frame(sim: Simulation, layout: Layout, config: GoToGoalConfig) -> np.ndarray:
+    """The scene now from `frame_view`, the goal painted as a red disc of the goal radius."""
+    from corobot_drake.sensors import render
+
+    render.add_renderer(sim)
+    height, width = FRAME_SIZE
+    X_WC = frame_view(layout)
+    image = render.render(sim, X_WC, width, height, FRAME_FOV_Y_DEG).copy()
+    focal = (height / 2) / math.tan(math.radians(FRAME_FOV_Y_DEG) / 2)
+    center = X_WC.inverse() @ np.array([*layout.goal, 0.0])
+    edge = X_WC.inverse() @ np.array([layout.goal[0] + config.goal_radius, layout.goal[1], 0.0])
+    if center[2] > 0:
+        u, v = width / 2 + focal * center[0] / center[2], height / 2 + focal * center[1] / center[2]
+        radius = max(2.0, focal * np.linalg.norm(edge[:2] / edge[2] - center[:2] / center[2]))
+        rows, cols = np.ogrid[:height, :width]
+        disc = (cols - u) ** 2 + (rows - v) ** 2 <= radius ** 2
+        image[disc] = (0.35 * image[disc] + 0.65 * np.array(GOAL_COLOR)).astype(np.uint8)
+    return image
 
 
 class _Ports:

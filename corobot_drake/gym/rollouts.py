@@ -126,7 +126,8 @@ def rollouts(policy: Callable | None, seeds: Sequence[int], *, workers: int | No
 
 
 def summary(episodes: Sequence[Episode]) -> dict:
-    """Success rate, mean return, mean steps, collision and stall steps per episode."""
+    """Success rate, mean return, mean steps, collision and stall steps per episode, flips,
+    and the seeds whose goal was not reached."""
     return {
         "episodes": len(episodes),
         "success_rate": float(np.mean([e.success for e in episodes])),
@@ -135,4 +136,5 @@ def summary(episodes: Sequence[Episode]) -> dict:
         "collision_steps": float(np.mean([e.collision_steps for e in episodes])),
         "stall_steps": float(np.mean([e.stall_steps for e in episodes])),
         "flips": int(sum(e.flipped for e in episodes)),
+        "not_reached": [e.seed for e in episodes if not e.success],
     }

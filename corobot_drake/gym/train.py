@@ -22,7 +22,7 @@ from corobot_drake.limits import OneOf, Range, bound_of, bounded
 
 TRAIN_SEEDS = 10_000
 """The first training seed (generation g uses TRAIN_SEEDS + g * episodes + 0..episodes-1)."""
-HELD_OUT = tuple(range(10))
+HELD_OUT = tuple(range(100))
 """Seeds the policy is judged on, never trained on."""
 
 
@@ -31,15 +31,15 @@ class CemSettings:
     """The training's settings, each with its bound (`tools/train_policy.py` checks its flags
     against them)."""
 
-    generations: int = bounded(5, Range(1, 1000))
-    population: int = bounded(8, Range(1, 10_000, why="candidates per generation"))
-    episodes: int = bounded(4, Range(1, 1000))
+    generations: int = bounded(10, Range(1, 1000))
+    population: int = bounded(10, Range(1, 10_000, why="candidates per generation"))
+    episodes: int = bounded(8, Range(1, 1000))
     """Training seeds per generation (every candidate plays all of them)."""
-    elite: int = bounded(2, Range(1, 10_000, why="at most the population"))
+    elite: int = bounded(3, Range(1, 10_000, why="at most the population"))
     start: str = bounded("goal_seeker", OneOf(("goal_seeker", "zero")))
     """The initial mean: `goal_seeker` (`LinearPolicy.goal_seeker`, hand-written) or `zero`
     (a robot that stays; it needs many more generations)."""
-    sigma: float = bounded(0.7, Range(0.0, 100.0, low_open=True))
+    sigma: float = bounded(0.6, Range(0.0, 100.0, low_open=True))
     """Initial standard deviation of every weight."""
     extra_sigma: float = bounded(0.2, Range(0.0, 100.0))
     """Spread added to the refitted one, decaying linearly to 0 at the last generation."""
@@ -106,7 +106,7 @@ def train(settings: CemSettings, pool: EpisodePool,
 
 def evaluate(pool: EpisodePool, policy, seeds=HELD_OUT) -> dict:
     """`summary` of the policy's episodes on `seeds` (None: random actions)."""
-    return summary(pool.run([(policy, s) for s in seeds]))
+    return summary(pool.run([(policy, s) for s in seeds], chunk=max(1, len(seeds) // 20)))
 
 
 def plot_curve(curve: list[Generation], path, held_out: dict | None = None) -> None:

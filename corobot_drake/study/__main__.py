@@ -2,7 +2,8 @@
 [--resume]`: run a study on Ray and write its runs, summary and plots.
 
 Exit status: 0 when every run is ok, 1 when some runs are error rows, 2 for a bad study file
-or arguments, 130 when stopped with Ctrl-C (the finished rows are kept: `--resume`).
+or arguments (an --address where no Ray cluster answers, an OUT/runs.csv that --resume cannot
+continue), 130 when stopped with Ctrl-C (the finished rows are kept: `--resume`).
 """
 
 import argparse
@@ -42,7 +43,7 @@ def main(argv: list[str] | None = None) -> int:
     except MissingExtraError as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
-    from corobot_drake.study.engine import read_rows, run_study
+    from corobot_drake.study.engine import AddressError, ResumeError, read_rows, run_study
 
     out = args.out or Path("studies") / Path(args.study).stem
     try:
@@ -50,6 +51,12 @@ def main(argv: list[str] | None = None) -> int:
                              resume=args.resume, progress=not args.quiet)
     except ScenarioError as e:
         print(f"error: {e}", file=sys.stderr)
+        return 2
+    except AddressError as e:  # before the OSError below: no Ray cluster there is no --out's
+        print(f"error: --{e}", file=sys.stderr)
+        return 2
+    except ResumeError as e:
+        print(f"error: --resume: {e}", file=sys.stderr)
         return 2
     except OSError as e:  # the output directory cannot be made or written after all
         print(f"error: --out: {e.filename or out}: cannot write ({e.strerror})", file=sys.stderr)

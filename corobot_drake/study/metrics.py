@@ -3,14 +3,18 @@
 A metric is one small function `(RobotRun) -> value`, registered with `@metric("name")`. A
 value is a number or text (one column `<robot>.<name>`), or a dict of them (one column per key,
 `<robot>.<name>.<key>`). Adding a metric is writing one such function here (`reads_ir=True`
-if it reads the IR sensors, which a study's runs otherwise switch off).
+if it reads the IR sensors, which a study's runs otherwise switch off), or in a module of your
+own, named in a study as `module:function` (`load_user_metrics`).
 """
 
 from __future__ import annotations
 
 import dataclasses as dc
+import importlib
 import math
-from collections.abc import Callable
+import sys
+from collections.abc import Callable, Iterable
+from pathlib import Path
 
 import numpy as np
 
@@ -45,6 +49,42 @@ def metric(name: str, reads_ir: bool = False):
             READS_IR.add(name)
         return fn
     return register
+
+
+def load_user_metrics(names: Iterable[str], directory: str | Path) -> dict[str, Callable]:
+    """Each `module:function` of `names` (a study's metrics), imported: the module is looked
+    for in `directory` (the study file's) first, then on Python's path. ValueError naming the
+    first that does not load. A user metric is called as a registered one; it sees the IR
+    sensors when the function has `reads_ir = True`."""
+    functions = {}
+    for name in names:
+        if ":" not in name:
+            continue
+        module_name, _, function = name.partition(":")
+        if not all(part.isidentifier() for part in module_name.split(".")) or \
+                not function.isidentifier():
+            raise ValueError(f"{name!r}: a user metric is module:function (e.g. "
+                             "my_metrics:lateral_speed)")
+        sys.path.insert(0, str(directory))
+        try:
+            module = importlib.import_module(module_name)
+        except Exception as e:  # the user's module: any error in it is its one line
+            message = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
+            raise ValueError(f"{name}: cannot import {module_name!r} ({message})") from None
+        finally:
+            sys.path.remove(str(directory))
+        fn = getattr(module, function, None)
+        if not callable(fn):
+            raise ValueError(f"{name}: {module_name} ({module.__file__}) has no function "
+                             f"{function!r}")
+        functions[name] = fn
+    return functions
+
+
+def reads_ir(names: Iterable[str], functions: dict[str, Callable] | None = None) -> bool:
+    """Whether any of the named metrics reads the IR sensors."""
+    return any(name in READS_IR or getattr((functions or {}).get(name), "reads_ir", False)
+               for name in names)
 
 
 @metric("x")
@@ -237,14 +277,16 @@ def _row_at(log, t: float):
 
 
 def measure(sim: Simulation, starts: dict[str, tuple[BodyPose, float]],
-            names: list[str]) -> dict[str, Value]:
-    """The named metrics of every robot, as flat columns `<robot>.<metric>[.<key>]`."""
+            names: list[str], user: dict[str, Callable] | None = None) -> dict[str, Value]:
+    """The named metrics of every robot (`user`: the study's own, `load_user_metrics`), as
+    flat columns `<robot>.<metric>[.<key>]`."""
     row: dict[str, Value] = {}
+    functions = {**METRICS, **(user or {})}
     for robot_name, robot in sim.robots.items():
         start, heading = starts[robot_name]
         run = RobotRun(sim, robot, start, heading)
         for name in names:
-            value = METRICS[name](run)
+            value = functions[name](run)
             if isinstance(value, dict):
                 row.update({f"{robot_name}.{name}.{k}": v for k, v in value.items()})
             else:

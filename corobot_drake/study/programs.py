@@ -10,7 +10,27 @@ import numpy as np
 from pydrake.common.schema import Transform
 from pydrake.math import RigidTransform, RotationMatrix
 
+from corobot_drake.config.bounds import POWER, Range, bound_of, bounded
 from corobot_drake.config.scenario import DriveDistance, RotateDegrees, Scenario, SetPower
+
+LOOPS = Range(1, 100, why="loops of ~37 simulated s each at power 0.2")
+APPROACH_ANGLE = Range(-90.0, 90.0, low_open=True, high_open=True, unit="deg",
+                       why="from the box face's normal")
+_TYPES = {float: "a number", int: "an integer", str: "text"}
+
+
+def check_fields(program) -> str | None:
+    """What is wrong with a program's fields (a grid value included): the first of a wrong
+    type or out of its bound (`bounded` beside the field), or None."""
+    for field in dc.fields(program):
+        value = getattr(program, field.name)
+        wanted = int | float if field.type is float else field.type  # an int is a float
+        if isinstance(value, bool) or not isinstance(value, wanted):
+            return f"{field.name}: expected {_TYPES[field.type]}, got {value!r}"
+        bound = bound_of(field)
+        if bound is not None and (problem := bound.problem(value)):
+            return f"{field.name}: {problem}"
+    return None
 
 
 def _robot(scenario: Scenario, field: str, name: str):
@@ -27,8 +47,8 @@ class DriveTest:
     180 deg - angle, all at `power`. The legs are drawn as `lab.drive_test` draws them
     (numpy's default_rng(seed)), so a seed gives the same legs in both."""
 
-    loops: int = 3
-    power: float = 0.2
+    loops: int = bounded(3, LOOPS)
+    power: float = bounded(0.2, POWER)
     robot: str = "corobot"
 
     def commands(self, seed: int) -> list:
@@ -44,9 +64,7 @@ class DriveTest:
 
     def check(self) -> str | None:
         """What is wrong with the fields, or None."""
-        if not (self.loops >= 1 and 0 < self.power <= 1):
-            return "the drive test needs loops >= 1 and power in (0, 1]"
-        return None
+        return check_fields(self)
 
     def apply(self, scenario: Scenario, seed: int) -> None:
         _robot(scenario, "drive_test", self.robot).commands = self.commands(seed)
@@ -66,18 +84,16 @@ class BoxApproach:
     face at that angle from its normal)."""
 
     direction: str = "backwards"
-    angle_deg: float = 0.0
-    power: float = 1.0
+    angle_deg: float = bounded(0.0, APPROACH_ANGLE)
+    power: float = bounded(1.0, POWER)
     """In (0, 1]: the approach speed is power x top speed (0.61 m/s at 1)."""
     robot: str = "corobot"
 
     def check(self) -> str | None:
+        if problem := check_fields(self):
+            return problem
         if self.direction not in DIRECTIONS:
             return f"direction {self.direction!r} is not one of {', '.join(DIRECTIONS)}"
-        if not 0 < self.power <= 1:
-            return f"power must be in (0, 1], got {self.power:g}"
-        if not abs(self.angle_deg) < 90:
-            return f"angle_deg must be in (-90, 90), got {self.angle_deg:g}"
         return None
 
     def apply(self, scenario: Scenario, seed: int) -> None:

@@ -15,7 +15,7 @@ from pathlib import Path
 from corobot_drake.config.scenario import load_scenario, one_line
 from corobot_drake.config.validate import LayerChecks
 from corobot_drake.simulation import Simulation, diagram_key, quiet_drake_warnings
-from corobot_drake.study.metrics import READS_IR, measure
+from corobot_drake.study.metrics import measure, reads_ir
 from corobot_drake.study.programs import PROGRAMS
 from corobot_drake.study.spec import Run, Scalar, Study
 
@@ -32,13 +32,13 @@ def study_scenario(study: Study, scenario_file: Path):
     return load_scenario(scenario_file, overrides=study.overrides)
 
 
-def run_scenario(study: Study, scenario_file: Path, run: Run, base=None):
+def run_scenario(study: Study, scenario_file: Path, run: Run, base=None, user=None):
     """The run's scenario: the file, the study's overrides (`base`, their `study_scenario`, if
     given: a worker reads them once), then the run's parameters and seed, the study's
     programs, then the run's parameters through a list index (checked as a scenario is); the
     cameras off unless the study asks for them, the IR sensors off unless a metric reads them
-    (`metrics.READS_IR`: nothing else in a scripted run does, and their scans cost a few per cent
-    of a run)."""
+    (`metrics.reads_ir`, of the study's `user` metrics too: nothing else in a scripted run
+    does, and their scans cost a few per cent of a run)."""
     # yaml_load_typed merges a layer into a deep copy of `base`: the run never changes it.
     if base is None:
         base = study_scenario(study, scenario_file)
@@ -58,7 +58,7 @@ def run_scenario(study: Study, scenario_file: Path, run: Run, base=None):
     if not study.cameras:
         for robot in scenario.robots.values():
             robot.camera.rgb = False
-    if not READS_IR & set(study.metrics):
+    if not reads_ir(study.metrics, user):
         for robot in scenario.robots.values():
             for sensor in robot.ir_sensors.values():
                 sensor.enabled = False
@@ -157,38 +157,46 @@ def advance(sim: Simulation, study: Study) -> None:
 
 
 def simulate(study: Study, scenario_file: Path, run: Run,
-             cache: SimulationCache | None = None) -> dict:
+             cache: SimulationCache | None = None, user=None) -> dict:
     """The run's row: run, seed, parameters, metrics, status, error, and the timing columns
     (setup: built or reset; setup_seconds; wall_seconds, the whole run; cpu_seconds, the
-    worker process's CPU time for the whole run, which a loaded machine changes less)."""
+    worker process's CPU time for the whole run, which a loaded machine changes less);
+    `user`: the study's own metrics (`metrics.load_user_metrics`)."""
     start, cpu_start = time.perf_counter(), time.process_time()
     row: dict = {"run": run.index, "seed": run.seed, **dict(run.params)}
     try:
         cache = cache or SimulationCache(0)
-        scenario = run_scenario(study, scenario_file, run, cache.base(study, scenario_file))
+        scenario = run_scenario(study, scenario_file, run, cache.base(study, scenario_file),
+                                user)
         sim, row["setup"] = cache.get(scenario)
         row["setup_seconds"] = round(time.perf_counter() - start, 4)
         starts = {name: (r.pose(), r.heading()) for name, r in sim.robots.items()}
         advance(sim, study)
-        row.update(measure(sim, starts, study.metrics))
+        row.update(measure(sim, starts, study.metrics, user))
         row.update(status="ok", error="")
     except Exception as e:  # any failure is this run's error row
-        row.update(status="error", error=one_line(e))
+        row.update(error_row(run, one_line(e)))
     row["wall_seconds"] = round(time.perf_counter() - start, 3)
     row["cpu_seconds"] = round(time.process_time() - cpu_start, 3)
     return row
 
 
+def error_row(run: Run, error: str) -> dict:
+    """The row of a run that failed: its run, seed and parameters, `error` (one line)."""
+    return {"run": run.index, "seed": run.seed, **dict(run.params), "status": "error",
+            "error": error}
+
+
 class StudyWorker:
     """A worker's side of a study (a Ray actor: `ray.remote(StudyWorker)`)."""
 
-    def __init__(self, study: Study, scenario_file: str):
+    def __init__(self, study: Study, scenario_file: str, user=None):
         quiet_drake_warnings()
-        self.study, self.scenario_file = study, Path(scenario_file)
+        self.study, self.scenario_file, self.user = study, Path(scenario_file), user
         self.cache = SimulationCache()
 
     def run(self, run: Run) -> dict:
-        return simulate(self.study, self.scenario_file, run, self.cache)
+        return simulate(self.study, self.scenario_file, run, self.cache, self.user)
 
 
 def finite_or_text(value):

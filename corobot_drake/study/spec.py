@@ -24,6 +24,8 @@ import dataclasses as dc
 import hashlib
 import itertools
 import json
+import math
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -39,6 +41,7 @@ MAX_RUNS = 100_000
 run takes seconds; 10^7 runs would take a year and their list alone gigabytes."""
 RUN_DURATION = Range(0.0, 1e5, low_open=True, unit="s", why="simulated per run; a day at most")
 SETTLE = Range(0.0, 1e3, unit="s")
+SEED = Range(0, 2**31 - 1, why="a run's random_seed")
 
 
 @dc.dataclass
@@ -91,7 +94,8 @@ class Study:
     overrides: list[str] = dc.field(default_factory=list)
     """YAML texts merged over the scenario in every run (after the file, before the grid)."""
     metrics: list[str] = dc.field(default_factory=lambda: ["x", "y", "yaw_deg"])
-    """Names from the metrics registry (`corobot_drake.study.metrics.METRICS`), per robot."""
+    """Names from the metrics registry (`corobot_drake.study.metrics.METRICS`), or your own
+    as `module:function` (the module beside the study file or importable), per robot."""
     drive_test: DriveTest | None = None
     """The book's drive test as each run's script for one robot (`{loops, power, robot}`):
     random legs drawn from the run's seed, replacing that robot's commands."""
@@ -143,18 +147,22 @@ def path_kind(path: str) -> str:
 
 
 def load_study(filename: str | Path) -> Study:
-    """Reads and checks a study file, as a scenario is read; ScenarioError (one line with the
-    file, the line and the field) for anything wrong."""
+    """Reads and checks a study file, as a scenario is read, and against its scenario
+    (`resolve`); ScenarioError (one line with the file, the line and the field) for anything
+    wrong."""
     study, checks = load_layer(str(filename), read_text(filename, kind="a study is a YAML file"),
                                Study)
     checks.validate(study)  # every number against its bound (`bounded`), floats finite
     _validate(study, checks)
+    from corobot_drake.study.resolve import check_against_scenario
+
+    check_against_scenario(study, filename, checks)
     return study
 
 
 def _validate(study: Study, checks: LayerChecks) -> None:
     """Checks of meaning, failing at the field's line (`checks.fail`)."""
-    from corobot_drake.study.metrics import METRICS
+    from corobot_drake.study.metrics import METRICS, load_user_metrics
 
     if not study.scenario:
         checks.fail("scenario", "name the scenario file")
@@ -166,19 +174,29 @@ def _validate(study: Study, checks: LayerChecks) -> None:
             checks.fail(f"random.{path}", "is also a grid parameter")
         if isinstance(dist, Uniform) and not dist.min <= dist.max:
             checks.fail(f"random.{path}.max", f"must be >= min ({dist.min:g}); got {dist.max:g}")
+        if isinstance(dist, Uniform) and not math.isfinite(dist.max - dist.min):
+            checks.fail(f"random.{path}.max", f"max - min must be a finite number (at most "
+                        f"{sys.float_info.max:.3g}); got {dist.max:g} - {dist.min:g}")
         if isinstance(dist, Choice) and not dist.values:
             checks.fail(f"random.{path}.values", "needs at least one value")
     for name in PROGRAMS:
         program = getattr(study, name)
         if program is not None and (problem := program.check()):
             checks.fail(name, problem)
+    if study.drive_test is not None and study.box_approach is not None:
+        checks.fail("box_approach", "a study has a drive_test or a box_approach, not both: "
+                    "each replaces the robot's commands (split the study)")
     for section, paths in (("grid", study.grid), ("random", study.random)):
         for path in paths:
             _check_program_path(study, checks, f"{section}.{path}", path)
-    for name in study.metrics:
-        if name not in METRICS:
-            checks.fail("metrics", f"unknown metric {name!r}; known: "
-                        + ", ".join(sorted(METRICS)))
+    for i, name in enumerate(study.metrics):
+        if name not in METRICS and ":" not in name:
+            checks.fail(f"metrics[{i}]", f"unknown metric {name!r}; known: "
+                        + ", ".join(sorted(METRICS)) + "; or your own, module:function")
+        try:
+            load_user_metrics([name], Path(checks.source).parent)
+        except ValueError as e:
+            checks.fail(f"metrics[{i}]", str(e))
 
 
 def _check_runs(study: Study, checks: LayerChecks) -> None:
@@ -191,6 +209,9 @@ def _check_runs(study: Study, checks: LayerChecks) -> None:
             checks.fail("seeds", "an empty list; list at least one seed")
         if len(set(study.seeds)) != len(study.seeds):
             checks.fail("seeds", "a seed is listed twice")
+        for i, seed in enumerate(study.seeds):
+            if problem := SEED.problem(seed):
+                checks.fail(f"seeds[{i}]", problem)
     runs = len(seeds(study)) if isinstance(study.seeds, list) else study.seeds
     for path, values in study.grid.items():
         if not values:

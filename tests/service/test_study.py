@@ -3,6 +3,7 @@ instance shared by the module's tests, and a separately started head joined by a
 
 import csv
 import math
+import re
 from pathlib import Path
 
 import pytest
@@ -73,7 +74,7 @@ def test_seeds_may_be_a_list(tmp_path):
 @pytest.mark.parametrize("text, expected", [
     ("scenario: x.yaml\nduration: fast\n", ":2: duration: expected a number"),
     ("scenario: x.yaml\nseeds: 0\n", ":2: seeds: must be in [1, 100000]"),
-    ("scenario: x.yaml\nmetrics: [x, wobble]\n", ":2: metrics: unknown metric 'wobble'"),
+    ("scenario: x.yaml\nmetrics: [x, wobble]\n", ":2: metrics[1]: unknown metric 'wobble'"),
     ("scenario: x.yaml\nrandom: {a.b: !Gauss {}}\n", ":2: random.a.b: unknown tag !Gauss"),
     ("scenario: x.yaml\ngrid: {a.b: []}\n", ":2: grid.a.b: needs at least one value"),
     ("scenario: x.yaml\nuntil: forever\n", "until: 'forever' is not one of"),
@@ -86,6 +87,103 @@ def test_a_bad_study_is_one_line_naming_the_field(tmp_path, text, expected):
         load_study(path)
     message = str(e.value)
     assert message.startswith(str(path)) and expected in message and "\n" not in message
+
+
+S = f"scenario: {DEFAULT_SCENARIO}\n"
+
+
+@pytest.mark.parametrize("text, expected", [
+    # the scenario and the overrides, read at load with the study file's line
+    ("scenario: nowhere.yaml\n", r":1: scenario: .*nowhere.yaml: cannot read the file \(No such"),
+    (S + "overrides:\n  - 'robots: {corobot: {drive: {slew_rate: -1}}}'\n",
+     r":3: overrides\[0\]: robots.corobot.drive.slew_rate: must be in \(0, 10000\]"),
+    # every grid and random path resolved against the scenario, each value typed and bounded
+    (S + "grid: {robots.corobot.drive.slew_rtae: [1]}\n",
+     r":2: grid.robots.corobot.drive.slew_rtae: robots.corobot.drive \(Drive\) has no field "
+     r"'slew_rtae'; fields: motor_torque_scaling, slew_rate"),
+    (S + "random: {robots.corbot.contact.friction: !Uniform {}}\n",
+     r":2: random.robots.corbot.contact.friction: robots has no 'corbot'; it has: corobot"),
+    (S + "grid: {robots.corobot.commands.0.power: [0.5]}\n",
+     r"grid.robots.corobot.commands.0.power: robots.corobot.commands: the list has 0 items"),
+    (S + "grid:\n  robots.corobot.drive.slew_rate:\n    - 5\n    - true\n",
+     r":5: grid.robots.corobot.drive.slew_rate\[1\]: expected a number, got True"),
+    (S + "grid: {robots.corobot.drive.slew_rate: [5, -1]}\n",
+     r"slew_rate\[1\]: must be in \(0, 10000\] rad/s\^2; got -1"),
+    (S + "grid: {robots.corobot.drive.slew_rate: [[1]]}\n",
+     r"slew_rate\[0\]: expected true or false, an integer, a number or text, got a list"),
+    (S + "grid: {plant_config.time_step: [0.001, 0.5]}\n",
+     r"plant_config.time_step\[1\]: must be in \[0.0001, 0.02\] s"),
+    (S + "grid: {robots.corobot.pose: [1]}\n",
+     r"robots.corobot.pose is a Transform, not a single value"),
+    (S + "random: {robots.corobot.ir_sensors.front.samples: !Uniform {min: 1, max: 3}}\n",
+     r"a !Uniform draws a number, and the field takes an integer: use a !Choice"),
+    (S + "random: {robots.corobot.contact.friction: !Uniform {min: -1e308, max: 1.7e308}}\n",
+     r"friction.max: max - min must be a finite number"),
+    # what the study sets itself
+    (S + "grid: {random_seed: [1, 2]}\n", r"grid.random_seed: a study sets random_seed itself"),
+    (S + "grid: {simulation_duration: [1, 2]}\n",
+     r"grid.simulation_duration: a study sets simulation_duration itself: every run lasts the "
+     r"study's `duration`"),
+    (S + "seeds: [3, -1]\n", r"seeds\[1\]: must be in \[0, 2147483647\]"),
+    # programs: bounded and typed fields, one at a time
+    (S + "drive_test: {loops: 1000000}\n", r":2: drive_test.loops: must be in \[1, 100\]"),
+    (S + "drive_test: {}\ngrid: {drive_test.loops: [1, 2.5]}\n",
+     r"grid.drive_test.loops: loops: expected an integer, got 2.5"),
+    (S + "drive_test: {}\nbox_approach: {}\n", r":3: box_approach: a study has a drive_test or "
+     r"a box_approach, not both"),
+    # user metrics: module:function, loaded at load
+    (S + "metrics: [x, no_such_module:f]\n",
+     r"metrics\[1\]: no_such_module:f: cannot import 'no_such_module' \(No module named"),
+    (S + "metrics: [math:no_such_function]\n", r"math .* has no function 'no_such_function'"),
+])
+def test_a_study_is_checked_against_its_scenario_at_load(tmp_path, text, expected):
+    """Everything a run would find wrong with the scenario, its overrides, a path or a value
+    of one path stops the study as it loads, at its line: no worker starts."""
+    path = tmp_path / "bad.yaml"
+    path.write_text(text)
+    with pytest.raises(ScenarioError) as e:
+        load_study(path)
+    message = str(e.value)
+    assert message.startswith(str(path)) and "\n" not in message
+    assert re.search(expected, message), message
+
+
+USER_METRICS = """\
+import math
+
+def lateral_speed(run):
+    return run.robot.velocity().lateral
+
+def front_ir(run):
+    return run.robot.ir("front").raw
+front_ir.reads_ir = True
+"""
+
+
+def test_a_user_metric_is_module_colon_function(tmp_path):
+    """`module:function` beside the study file: loaded at load, measured like a registered
+    metric (a column per robot), the IR sensors kept on when it says it reads them."""
+    from corobot_drake.study.metrics import load_user_metrics
+    from corobot_drake.study.runner import run_scenario, simulate
+
+    (tmp_path / "my_metrics.py").write_text(USER_METRICS)
+    path = tmp_path / "s.yaml"
+    path.write_text(S + "duration: 0.5\nmetrics: [speed, my_metrics:lateral_speed]\n"
+                    "overrides: ['robots: {corobot: {commands: [!SetPower {left: 0.5, right: "
+                    "0.5}]}}']\n")
+    study = load_study(path)
+    user = load_user_metrics(study.metrics, tmp_path)
+    (run,) = expand(study)
+    row = simulate(study, DEFAULT_SCENARIO, run, user=user)
+    assert row["status"] == "ok", row["error"]
+    assert row["corobot.speed"] > 0.1  # driving straight ahead: hardly sideways
+    assert abs(row["corobot.my_metrics:lateral_speed"]) < 0.01 * row["corobot.speed"]
+    sensors = run_scenario(study, DEFAULT_SCENARIO, run, user=user).robots["corobot"].ir_sensors
+    assert not any(s.enabled for s in sensors.values())
+    study.metrics = ["my_metrics:front_ir"]
+    user = load_user_metrics(study.metrics, tmp_path)
+    sensors = run_scenario(study, DEFAULT_SCENARIO, run, user=user).robots["corobot"].ir_sensors
+    assert all(s.enabled for s in sensors.values())
 
 
 @pytest.mark.parametrize("arguments, expected", [
@@ -303,17 +401,31 @@ def test_one_and_two_workers_give_the_same_rows(tmp_path, tiny_study):
     assert without_timing(one) == without_timing(rows(out / "runs.csv"))
 
 
+PICKY = """\
+def slow_only(run):
+    scaling = run.sim.scenario.robots[run.robot.name].drive.motor_torque_scaling
+    if scaling > 8.0:
+        raise ValueError(f"too fast to measure at scaling {scaling}")
+    return scaling
+"""
+
+
 def test_a_bad_run_is_an_error_row_and_the_others_complete(tmp_path, connected, capsys):
+    """A run that fails (here its metric raises; a value the study cannot check alone, or a
+    simulation error, alike) is an error row with its one line; the others complete."""
     from corobot_drake.study.__main__ import main
 
-    study_file = write_study(tmp_path, scalings="-1.0, 10.16")
+    (tmp_path / "picky.py").write_text(PICKY)
+    study_file = write_study(tmp_path, scalings="10.16, 6.0")
+    study_file.write_text(study_file.read_text().replace("metrics: [x, speed, max_tilt_deg, ir]",
+                                                         "metrics: [x, picky:slow_only]"))
     assert main([str(study_file), "--out", str(tmp_path / "out"), "--quiet"]) == 1
     captured = capsys.readouterr()
     assert "4 runs (2 errors)" in captured.out and "run 0: " in captured.err
     table = rows(tmp_path / "out" / "runs.csv")
     assert [r["status"] for r in table] == ["error", "error", "ok", "ok"]
-    assert "motor_torque_scaling: must be in (0, 200] rad/s; got -1" in table[0]["error"]
-    assert table[2]["corobot.x"] != ""
+    assert table[0]["error"] == "too fast to measure at scaling 10.16"
+    assert table[2]["corobot.x"] != "" and table[2]["corobot.picky:slow_only"] == "6.0"
     assert main([str(tmp_path / "missing.yaml")]) == 2
     assert "cannot read the file" in capsys.readouterr().err
 
@@ -331,6 +443,101 @@ def test_resume_simulates_only_the_missing_runs(tmp_path, tiny_study):
     resumed = rows(engine.run_study(study_file, out, workers=2, resume=True, progress=False))
     assert without_timing(resumed) == without_timing(full)
     assert [r["wall_seconds"] == "12345" for r in resumed] == [True, False, False, True]
+
+
+def test_resume_refuses_a_runs_table_not_this_studys(tmp_path, tiny_study):
+    """Another study's rows, a run the study does not have, a corrupt file or a FIFO: one
+    line naming the file and the row's line, before Ray is asked for anything; the file is
+    left as it was."""
+    import os
+
+    from corobot_drake.study.__main__ import main
+
+    study_file, full_out = tiny_study
+    table = (full_out / "runs.csv").read_text()
+    other = write_study(tmp_path, scalings="6.0, 8.0", name="other.yaml")
+    cases = [
+        (table, other, r"runs.csv:4: run 2's robots.corobot.drive.motor_torque_scaling is "
+         r"'10.16', this study's is '8.0': these rows are another study's"),
+        (table.replace("\n3,", "\n7,"), study_file,
+         r"runs.csv:5: run '7' is not one of this study's 4 runs"),
+        (table.replace("\n3,", "\n2,"), study_file, r"runs.csv:5: run 2 is listed twice"),
+        ("seed,x\n1,2\n", study_file, r"runs.csv:1: no column 'run'"),
+        (table.splitlines()[0] + '\n0,1,"6.0\n', study_file,
+         r"runs.csv:2: not a CSV runs table \(unexpected end of data\)"),
+        (table + "4,1,2,3,4,5,6,7,8,9,10,11,12,13,14,15,16,17,18,19,20,21,22,23\n", study_file,
+         r"runs.csv:6: not a CSV runs table \(24 cells under \d+ columns\)"),
+        (None, study_file, r"runs.csv: not a runs table \(a regular file"),
+    ]
+    for i, (text, study, expected) in enumerate(cases):
+        out = tmp_path / f"out{i}"
+        out.mkdir()
+        runs_csv = out / "runs.csv"
+        if text is None:
+            os.mkfifo(runs_csv)
+        else:
+            runs_csv.write_text(text)
+        with pytest.raises(engine.ResumeError, match=expected):
+            engine.run_study(study, out, resume=True, progress=False)
+        assert text is None or runs_csv.read_text() == text
+    assert main([str(other), "--out", str(tmp_path / "out0"), "--resume", "--quiet"]) == 2
+
+
+KILLER = """\
+import os
+import signal
+from pathlib import Path
+
+def die_once(run):
+    # run 1 or 3 (seed 2), whichever comes first: its worker process is killed the first
+    # time, not when the run is tried again
+    marker = Path({marker!r})
+    if run.sim.scenario.random_seed == 2 and not marker.exists():
+        marker.write_text("killed")
+        os.kill(os.getpid(), signal.SIGKILL)
+    return 1.0
+
+def die_always(run):
+    if run.sim.scenario.random_seed == 1 and run.sim.scenario.robots[run.robot.name].drive\
+            .motor_torque_scaling == 6.0:
+        os.kill(os.getpid(), signal.SIGKILL)
+    return 2.0
+"""
+
+
+def test_a_killed_worker_is_retried_then_an_error_row(tmp_path, connected):
+    """A worker process killed under a run (SIGKILL: out of memory, a crash): Ray restarts
+    it and the run is tried again; a run that kills it every time becomes an error row, and
+    the study ends normally with the others."""
+    (tmp_path / "killer.py").write_text(KILLER.format(marker=str(tmp_path / "killed")))
+    study_file = tmp_path / "kill.yaml"
+    study_file.write_text(TINY.format(scenario=DEFAULT_SCENARIO, scalings="6.0, 10.16")
+                          .replace("metrics: [x, speed, max_tilt_deg, ir]",
+                                   "metrics: [x, killer:die_once, killer:die_always]"))
+    table = rows(engine.run_study(study_file, tmp_path / "out", workers=2, progress=False))
+    assert (tmp_path / "killed").exists()  # run 1's or 3's worker was killed once
+    assert [r["status"] for r in table] == ["error", "ok", "ok", "ok"], [r["error"] for r in table]
+    assert re.search(r"its worker process died 2 times running it", table[0]["error"])
+    assert table[1]["corobot.killer:die_once"] == "1.0" and float(table[1]["corobot.x"]) > 0
+
+
+def test_an_address_where_no_cluster_answers_is_one_line(tmp_path):
+    """--address: malformed, or nothing listening there: one line naming --address, exit 2,
+    nothing written (Ray itself would retry for minutes, or print a traceback)."""
+    import subprocess
+    import sys
+
+    study_file = write_study(tmp_path)
+    for address, expected in (("127.0.0.1:1", "no Ray cluster answers there"),
+                              ("not an address", "not a Ray cluster's address; expected "
+                                                 "HOST:PORT")):
+        done = subprocess.run([sys.executable, "-m", "corobot_drake.study", str(study_file),
+                               "--address", address, "--out", str(tmp_path / "out"),
+                               "--quiet"], capture_output=True, text=True, timeout=120)
+        assert done.returncode == 2, done.stderr
+        assert done.stderr.startswith("error: --address") and expected in done.stderr
+        assert done.stderr.count("\n") == 1 and "Traceback" not in done.stderr
+    assert not (tmp_path / "out").exists()
 
 
 def test_the_drive_test_study_and_the_drive_test_tool_agree(tmp_path, connected):

@@ -10,7 +10,7 @@ from gymnasium.utils.env_checker import check_env
 
 import corobot_drake.gym
 from corobot_drake.gym import ENV_ID, load_policy
-from corobot_drake.gym.env import HOVER, GoToGoalEnv
+from corobot_drake.gym.env import HOVER, GoToGoalConfig, GoToGoalEnv
 from corobot_drake.gym.layout import Layout
 from corobot_drake.gym.policy import LinearPolicy
 from corobot_drake.gym.rollouts import rollouts, run_episode
@@ -195,6 +195,68 @@ def test_policy_round_trips_through_json(tmp_path):
 
 def test_the_package_registers_one_env():
     assert corobot_drake.gym.ENV_ID in gymnasium.registry
+    # Gymnasium's TimeLimit at the env's own limit: 6 s of 0.1 s steps
+    spec = gymnasium.spec(ENV_ID)
+    config = GoToGoalConfig()
+    assert spec.max_episode_steps == round(config.time_limit / config.control_period) == 60
+    assert gymnasium.make(ENV_ID).spec.max_episode_steps == 60
+
+
+@pytest.mark.parametrize("arguments, message", [
+    ({"render_mode": "video"}, r"^render_mode must be None or one of rgb_array, human, got "
+                               r"'video'$"),
+    ({"boxs": 2}, r"^GoToGoalEnv has no argument 'boxs'; GoToGoalConfig's fields: "
+                  r"control_period, .*; and render_mode$"),
+    ({"config": "fast"}, r"^config must be a GoToGoalConfig or None, got 'fast'$"),
+])
+def test_bad_env_arguments_are_one_line(arguments, message):
+    with pytest.raises(ValueError, match=message):
+        gymnasium.make(ENV_ID, **arguments)
+
+
+def test_rgb_array_frames_record_a_video(tmp_path):
+    """render_mode="rgb_array": Gymnasium's RecordVideo writes the episode, a frame per step
+    (and the reset's), each a picture of the scene as it was then."""
+    import imageio.v3 as iio
+    from gymnasium.wrappers import RecordVideo
+
+    env = gymnasium.make(ENV_ID, render_mode="rgb_array")
+    check_env(env.unwrapped)  # Gymnasium's checks of the render mode too
+    env = RecordVideo(env, str(tmp_path), episode_trigger=lambda episode: True,
+                      disable_logger=True)
+    layout = Layout(start=(0.0, 0.0, 0.0), goal=(0.6, 0.0), boxes=PARKED)
+    env.reset(seed=0, options={"layout": layout})
+    steps, done = 0, False
+    while not done:
+        _, _, terminated, truncated, info = env.step(np.ones(2, np.float32))
+        done, steps = terminated or truncated, steps + 1
+    env.close()
+    assert info["is_success"]
+    (video,) = tmp_path.glob("*.mp4")
+    frames = iio.imread(video, index=None, plugin="FFMPEG")  # imageio-ffmpeg: moviepy's
+    assert frames.shape == (steps + 1, 480, 640, 3)
+    # The robot drove 0.4 m: the first and last frames differ where it was and is (lossy
+    # video: a few grey levels everywhere else)
+    changed = np.abs(frames[-1].astype(int) - frames[0].astype(int)).max(axis=2) > 40
+    assert 0.002 < changed.mean() < 0.2
+    # the goal painted as a red disc of its 0.2 m radius: ~50 px across from 4 m up
+    red = (frames[0][:, :, 0].astype(int) - frames[0][:, :, 1]) > 80
+    assert 0.003 < red.mean() < 0.015
+
+
+def test_human_render_mode_shows_the_run_in_meshcat():
+    """render_mode="human": the scene in a Meshcat on this machine (loopback), the goal drawn
+    at its place, the run paced at real time; `render()` returns nothing."""
+    env = gymnasium.make(ENV_ID, render_mode="human")
+    env.reset(seed=0, options={"layout": OPEN_FIELD})
+    unwrapped = env.unwrapped
+    meshcat = unwrapped.sim.station.meshcat
+    assert meshcat.web_url().startswith(("http://localhost", "http://127.0.0.1"))
+    assert meshcat.HasPath("goal")
+    assert unwrapped.sim.simulator.get_target_realtime_rate() == 1.0
+    env.step(np.ones(2, np.float32))
+    assert env.render() is None
+    env.close()
 
 
 @pytest.mark.parametrize("settings, message", [
