@@ -445,9 +445,11 @@ def test_unknown_path_is_404_pointing_at_the_directory(http):
 # --- load -----------------------------------------------------------------------------------------
 
 
-def test_malformed_flood_and_pollers_keep_real_time(http, server, caps):
+def test_malformed_flood_and_pollers_are_answered_and_the_simulation_runs_on(http, server, caps):
     """1000 malformed requests and 20 clients polling state at once: every bad request gets
-    a 4xx, every poll a 200, the server survives, and the simulation keeps real time."""
+    a 4xx, every poll a 200, the server survives and the simulation goes on advancing. (The
+    real-time factor it keeps under this load is a benchmark: docs/services.md's
+    `server-flood` block.)"""
     reset(http, caps)
     http.post(f"{ROBOT}/drive/set_power", json={"left": 0.3, "right": -0.3})  # spin in place
     stop = threading.Event()
@@ -496,12 +498,6 @@ def test_malformed_flood_and_pollers_keep_real_time(http, server, caps):
                 time.sleep(0.005)
         return codes
 
-    # The machine may be busy with other work: the baseline is the real-time factor the
-    # simulation keeps here without our load (normally 1.0).
-    t0, wall0 = sim_time(http), time.monotonic()
-    time.sleep(3.0)
-    baseline = (sim_time(http) - t0) / (time.monotonic() - wall0)
-
     t0, wall0 = sim_time(http), time.monotonic()
     pollers = [threading.Thread(target=poller, args=(i,)) for i in range(20)]
     for p in pollers:
@@ -512,13 +508,10 @@ def test_malformed_flood_and_pollers_keep_real_time(http, server, caps):
     stop.set()
     for p in pollers:
         p.join()
-    t1, wall1 = sim_time(http), time.monotonic()
-    rtf = (t1 - t0) / (wall1 - wall0)
-    print(f"\n1000 malformed + 20 pollers ({polls['ok']} polls) for {wall1 - wall0:.1f} s: "
-          f"real-time factor {rtf:.3f} (without the load: {baseline:.3f})")
+    t1 = sim_time(http)
+    assert t1 > t0  # it advanced under the load
     assert len(codes) == 1000 and all(400 <= c < 500 for c in codes), set(codes)
     assert polls["bad"] == 0 and polls["ok"] > 20 * 10
-    assert rtf >= 0.9 * min(1.0, baseline / 0.98), (rtf, baseline)
     stats = http.get("/simulation").json()
     assert stats["running"] and stats["error"] is None
     http.post(f"{ROBOT}/drive/all_stop", json={})
