@@ -10,8 +10,8 @@ import numpy as np
 from pydrake.common.schema import Transform
 from pydrake.math import RigidTransform, RotationMatrix
 
-from corobot_drake.config.bounds import POWER, Range, bound_of, bounded
 from corobot_drake.config.scenario import DriveDistance, RotateDegrees, Scenario, SetPower
+from corobot_drake.limits import DRIVE_POWER, Range, bound_of, bounded
 
 LOOPS = Range(1, 100, why="loops of ~37 simulated s each at power 0.2")
 APPROACH_ANGLE = Range(-90.0, 90.0, low_open=True, high_open=True, unit="deg",
@@ -48,7 +48,7 @@ class DriveTest:
     (numpy's default_rng(seed)), so a seed gives the same legs in both."""
 
     loops: int = bounded(3, LOOPS)
-    power: float = bounded(0.2, POWER)
+    power: float = bounded(0.2, DRIVE_POWER)
     robot: str = "corobot"
 
     def commands(self, seed: int) -> list:
@@ -85,7 +85,7 @@ class BoxApproach:
 
     direction: str = "backwards"
     angle_deg: float = bounded(0.0, APPROACH_ANGLE)
-    power: float = bounded(1.0, POWER)
+    power: float = bounded(1.0, DRIVE_POWER)
     """In (0, 1]: the approach speed is power x top speed (0.61 m/s at 1)."""
     robot: str = "corobot"
 

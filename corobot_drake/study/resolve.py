@@ -17,9 +17,10 @@ import dataclasses as dc
 import typing
 from pathlib import Path
 
-from corobot_drake.config.bounds import DRAKE_BOUNDS, Range, bound_of
+from corobot_drake.config.bounds import DRAKE_BOUNDS
 from corobot_drake.config.scenario import ScenarioError, load_scenario, one_line
 from corobot_drake.config.validate import LayerChecks
+from corobot_drake.limits import Range, bound_of
 from corobot_drake.study.spec import (
     Choice,
     Normal,
