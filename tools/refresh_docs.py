@@ -857,14 +857,14 @@ def _model_and_command_specs(c: SimpleNamespace) -> list[Spec]:
              DETERMINISTIC, 5),
         Spec("saved-mid-drive", "docs/commands.md", (_measure("saved-mid-drive"),),
              render_saved_mid_drive, DETERMINISTIC, 10),
-        Spec("resume-c.landing", "docs/commands.md",
+        Spec("resume-landing", "docs/commands.md",
              (Command("python tools/resume_landing.py"),), render_resume_landing,
              DETERMINISTIC, 300),
         Spec("landing-errors", "docs/commands.md", (c.landing,), render_landing_errors,
              DETERMINISTIC, 90),
-        Spec("readme-c.landing-closed-loop", "README.md", (c.landing,),
+        Spec("readme-landing-closed-loop", "README.md", (c.landing,),
              render_readme_landing_closed_loop, DETERMINISTIC, 90),
-        Spec("readme-c.landing-seed", "README.md", (c.landing,), render_readme_landing_seed,
+        Spec("readme-landing-seed", "README.md", (c.landing,), render_readme_landing_seed,
              DETERMINISTIC, 90),
         Spec("drive-test-drift", "docs/commands.md", tuple(
             Command(f"python tools/drive_test.py --loops 3 --seeds 20 --workers 1 --profile {p} "

@@ -80,7 +80,7 @@ def _third_party_imports(*directories: str) -> dict[str, set[str]]:
     """{top-level module: files importing it} of the absolute imports that are neither the
     standard library, nor corobot_drake, nor a module of the directories (e.g. conftest)."""
     local = {"corobot_drake", "lab",
-             *(p.stem for d in directories for p in (REPO / d).glob("*.py"))}
+             *(p.stem for d in directories for p in (REPO / d).rglob("*.py"))}
     out: dict[str, set[str]] = {}
     for directory in directories:
         for path in (REPO / directory).rglob("*.py"):
