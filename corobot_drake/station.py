@@ -214,12 +214,14 @@ def _add_robot(plant: MultibodyPlant, name: str, robot: sc.Robot):
     return instance, chassis, joints
 
 
-def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None, foxglove=None
-                  ) -> Station:
+def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None, foxglove=None,
+                  extras=()) -> Station:
     """Builds the whole diagram for `scenario`; with `meshcat`, adds its visualizers; with
     `save_camera` (a directory), each robot's camera frames are saved there as PNG; with
     `foxglove` (a `foxglove.Context`), the publishers of the run's Foxglove topics
-    (`recording.publishers`)."""
+    (`recording.publishers`). Each of `extras` is called as `extra(builder, plant,
+    scene_graph, robots, scenario)` before the diagram is built, to add systems of a front end
+    the station need not know (the ROS 2 topics: `ros2.publishers.add_ros2_topics`)."""
     builder = DiagramBuilder()
     plant, scene_graph = AddMultibodyPlant(scenario.plant_config, builder)
     bodies = _add_world(plant, scenario.world)
@@ -304,6 +306,8 @@ def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None, foxglov
         from corobot_drake.recording.publishers import add_foxglove_topics
 
         add_foxglove_topics(builder, plant, scene_graph, robots, scenario, foxglove)
+    for extra in extras:
+        extra(builder, plant, scene_graph, robots, scenario)
     builder.ExportOutput(plant.get_body_poses_output_port(), "body_poses")
     builder.ExportOutput(scene_graph.get_query_output_port(), "query_object")
     if meshcat is not None:
