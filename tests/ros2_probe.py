@@ -1,0 +1,180 @@
+"""The ROS 2 tests' side: a private network, the simulation as a user runs it, and a node of
+the test's own that talks to it as a user's node would.
+
+Every DDS participant of a test (the simulation process and the probe node) lives in a network
+namespace of the test's own with only loopback up (`private_network`: nothing can leave the
+machine), discovers over LOCALHOST, in a domain id of its own (`domain_id`). The probe waits on
+discovery and on messages (a condition variable), never on a fixed sleep; its time limits only
+bound a test that would otherwise hang.
+"""
+
+from __future__ import annotations
+
+import collections
+import contextlib
+import os
+import random
+import subprocess
+import threading
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+
+WAIT = 60.0
+"""s (wall clock) a wait may take before the test fails: discovery takes up to ~5 s, a
+simulated second ~1-2 s of a loaded 2-core machine's time."""
+SHM = Path("/dev/shm")
+
+
+@contextlib.contextmanager
+def private_network():
+    """This thread (and what it starts: processes, DDS threads) in a new network namespace
+    with only loopback up; back in the original one afterwards. Skips without the right (root,
+    as in CI)."""
+    if not hasattr(os, "unshare"):
+        pytest.skip("os.unshare needs Python 3.12 on Linux")
+    original = os.open("/proc/self/ns/net", os.O_RDONLY)
+    try:
+        try:
+            os.unshare(os.CLONE_NEWNET)
+        except PermissionError:
+            pytest.skip("a private network namespace needs root (unshare -n): the ROS 2 tests "
+                        "keep DDS off every real network")
+        subprocess.run(["ip", "link", "set", "lo", "up"], check=True)
+        yield
+    finally:
+        os.setns(original, os.CLONE_NEWNET)
+        os.close(original)
+
+
+def domain_id() -> int:
+    """A ROS_DOMAIN_ID of the test's own (1-100: each maps to its own UDP ports)."""
+    return random.Random(os.getpid() ^ time.time_ns()).randint(1, 100)
+
+
+def _shm_segments() -> set[str]:
+    return {p.name for p in SHM.glob("*fastrtps*")} | {p.name for p in SHM.glob("*fastdds*")}
+
+
+def _mapped_files() -> set[str]:
+    """Every file some live process maps (a DDS segment in use is mapped by its owner)."""
+    mapped = set()
+    for maps in Path("/proc").glob("[0-9]*/maps"):
+        with contextlib.suppress(OSError):
+            mapped |= {line.split(None, 5)[5].strip() for line in maps.read_text().splitlines()
+                       if len(line.split(None, 5)) == 6 and "/dev/shm/" in line}
+    return mapped
+
+
+@contextlib.contextmanager
+def own_shared_memory():
+    """Removes, at the end, the Fast DDS shared-memory segments made meanwhile that no live
+    process maps any more (a crashed participant's leftovers): the test's own, never
+    another's (one still in use is mapped by it; one from before the test is left)."""
+    before = _shm_segments()
+    try:
+        yield
+    finally:
+        in_use = _mapped_files()
+        for name in _shm_segments() - before:
+            path = SHM / name
+            if str(path) not in in_use:
+                with contextlib.suppress(OSError):
+                    path.unlink()
+
+
+class Probe:
+    """The test's node: records what it subscribes to, publishes, calls services and actions."""
+
+    def __init__(self, domain: int, name: str = "corobot_test_probe"):
+        import rclpy
+        from rclpy.executors import MultiThreadedExecutor
+
+        self.context = rclpy.Context()
+        rclpy.init(context=self.context, domain_id=domain)
+        self.node = rclpy.create_node(name, context=self.context)
+        self.messages: dict[str, list] = collections.defaultdict(list)
+        self._changed = threading.Condition()
+        self._executor = MultiThreadedExecutor(context=self.context)
+        self._executor.add_node(self.node)
+        self._thread = threading.Thread(target=self._executor.spin, daemon=True)
+        self._thread.start()
+
+    def subscribe(self, topic: str, msgtype, qos=None) -> None:
+        from rclpy.qos import qos_profile_sensor_data
+
+        def record(msg):
+            with self._changed:
+                self.messages[topic].append(msg)
+                self._changed.notify_all()
+
+        self.node.create_subscription(msgtype, topic, record,
+                                      qos if qos is not None else qos_profile_sensor_data)
+
+    def wait_for(self, topic: str, predicate: Callable = lambda m: True, start: int = 0,
+                 timeout: float = WAIT):
+        """The first message on `topic` from index `start` on that satisfies `predicate`."""
+        deadline = time.monotonic() + timeout
+        with self._changed:
+            while True:
+                for msg in self.messages[topic][start:]:
+                    if predicate(msg):
+                        return msg
+                start = max(start, len(self.messages[topic]))
+                left = deadline - time.monotonic()
+                if left <= 0:
+                    raise AssertionError(f"no message on {topic} as wanted in {timeout} s "
+                                         f"({len(self.messages[topic])} received)")
+                self._changed.wait(left)
+
+    def count(self, topic: str) -> int:
+        with self._changed:
+            return len(self.messages[topic])
+
+    def wait_future(self, future, timeout: float = WAIT):
+        """The result of an rclpy future (the executor's thread completes it)."""
+        event = threading.Event()
+        future.add_done_callback(lambda f: event.set())
+        if not event.wait(timeout):
+            raise AssertionError(f"no answer in {timeout} s")
+        return future.result()
+
+    def call(self, service: str, srvtype, request, timeout: float = WAIT):
+        client = self.node.create_client(srvtype, service)
+        try:
+            if not client.wait_for_service(timeout_sec=timeout):
+                raise AssertionError(f"service {service} not discovered in {timeout} s")
+            return self.wait_future(client.call_async(request), timeout)
+        finally:
+            self.node.destroy_client(client)
+
+    def close(self) -> None:
+        import rclpy
+
+        self._executor.shutdown(timeout_sec=5.0)
+        self._thread.join(5.0)
+        self.node.destroy_node()
+        if self.context.ok():
+            rclpy.shutdown(context=self.context)
+
+
+@contextlib.contextmanager
+def ros2_simulation(args: list[str]):
+    """`python -m corobot_drake [args] --ros2 --serve --port 0` (real time; the HTTP services
+    are the tests' window on the simulation, `robot.pose()` ...) and a `Probe`, both in a
+    private network in a domain of their own: yields (server, probe)."""
+    from corobot_drake.serving.serve import ServerProcess
+
+    domain = domain_id()
+    with contextlib.ExitStack() as stack:
+        stack.enter_context(private_network())
+        stack.enter_context(own_shared_memory())
+        patch = stack.enter_context(pytest.MonkeyPatch.context())
+        patch.setenv("ROS_DOMAIN_ID", str(domain))
+        patch.setenv("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+        server = stack.enter_context(ServerProcess([*args, "--ros2"]))
+        probe = Probe(domain)
+        stack.callback(probe.close)
+        yield server, probe
