@@ -161,10 +161,31 @@ class Probe:
 
 
 @contextlib.contextmanager
-def ros2_simulation(args: list[str]):
-    """`python -m corobot_drake [args] --ros2 --serve --port 0` (real time; the HTTP services
-    are the tests' window on the simulation, `robot.pose()` ...) and a `Probe`, both in a
-    private network in a domain of their own: yields (server, probe)."""
+def _simulation_process(args: list[str]):
+    """`python -m corobot_drake [args]`, stopped at the end by Ctrl-C (SIGINT) to its PID."""
+    import signal
+    import sys
+
+    process = subprocess.Popen([sys.executable, "-m", "corobot_drake", *args],
+                               stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    try:
+        yield process
+    finally:
+        if process.poll() is None:
+            process.send_signal(signal.SIGINT)
+            try:
+                process.wait(30)
+            except subprocess.TimeoutExpired:
+                process.kill()
+                process.wait(5)
+
+
+@contextlib.contextmanager
+def ros2_simulation(args: list[str], serve: bool = True):
+    """`python -m corobot_drake [args] --ros2` and a `Probe`, both in a private network in a
+    domain of their own: yields (server, probe). With `serve`, `--serve --port 0` too (the
+    HTTP services are the tests' window on the simulation: `robot.pose()` ...; `server` is
+    its `ServerProcess`), else `server` is the process."""
     from corobot_drake.serving.serve import ServerProcess
 
     domain = domain_id()
@@ -174,7 +195,8 @@ def ros2_simulation(args: list[str]):
         patch = stack.enter_context(pytest.MonkeyPatch.context())
         patch.setenv("ROS_DOMAIN_ID", str(domain))
         patch.setenv("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
-        server = stack.enter_context(ServerProcess([*args, "--ros2"]))
+        server = stack.enter_context(ServerProcess([*args, "--ros2"]) if serve
+                                     else _simulation_process([*args, "--ros2"]))
         probe = Probe(domain)
         stack.callback(probe.close)
         yield server, probe
