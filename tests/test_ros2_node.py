@@ -5,10 +5,12 @@ the module (real time, headless, with `--serve` beside it), in a private network
 (`ros2_probe`)."""
 
 import inspect
+import io
 import math
 
 import numpy as np
 import pytest
+import yaml
 
 pytest.importorskip("rclpy", reason="the [ros2] extra (tools/setup installs it)")
 pytest.importorskip("corobot_interfaces.msg", reason="python -m corobot_drake.ros2.build")
@@ -27,6 +29,7 @@ from std_srvs.srv import SetBool, Trigger
 from tf2_msgs.msg import TFMessage
 
 from corobot_drake.model import dimensions as dim
+from corobot_drake.ros2 import inspection
 from corobot_drake.serving.client import CorobotClient
 from corobot_drake.serving.runner import SimRunner
 from ros2_probe import ros2_simulation
@@ -269,3 +272,21 @@ def test_services_act(ros):
     rest = at_rest(probe, client.time)
     assert rest.pose.pose.position.y == pytest.approx(0.5, abs=0.01)
     assert yaw_of(rest.pose.pose.orientation) == pytest.approx(-1.0, abs=0.01)
+
+
+def test_the_inspection_tool_lists_echoes_and_counts(ros):
+    out = io.StringIO()
+    assert inspection.main(["list"], out=out) == 0
+    listed = out.getvalue()
+    assert "  /odom [nav_msgs/msg/Odometry]" in listed
+    assert "  /set_pose [corobot_interfaces/srv/SetPose]" in listed
+    assert "  /drive_distance\n" in listed and "  /rotate_degrees\n" in listed
+    out = io.StringIO()
+    assert inspection.main(["echo", "/ir/rear", "-n", "1", "--timeout", "60"], out=out) == 0
+    echoed = yaml.safe_load(out.getvalue().split("---")[0])  # a best-effort stream, read
+    assert echoed["header"]["frame_id"] == "ir_rear" and echoed["radiation_type"] == 1
+    out = io.StringIO()
+    assert inspection.main(["hz", "/clock", "-n", "30", "--timeout", "60"], out=out) == 0
+    assert out.getvalue().splitlines()[-1].endswith(
+        "100.0 per simulated s over 30 messages")  # every 10 ms of its stamps
+    assert inspection.main(["--wait", "1", "echo", "/no_such_topic"]) == 1

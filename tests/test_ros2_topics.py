@@ -35,7 +35,7 @@ from corobot_drake.recording import topics as tp
 from corobot_drake.resources import make_parser
 from corobot_drake.ros2 import interfaces as ifc
 from corobot_drake.ros2.bus import Bus
-from corobot_drake.ros2.node import ros_type
+from corobot_drake.ros2.graph import ros_type
 from corobot_drake.ros2.publishers import ClockPublisher, IrPublisher, RobotStatePublisher
 from corobot_drake.ros2.urdf import corobot_urdf
 from corobot_drake.sensors.ir_sensor import DISTANCE, SCAN_TIME, scan_state_layout

@@ -13,9 +13,7 @@ from __future__ import annotations
 import concurrent.futures
 import contextlib
 import dataclasses as dc
-import importlib
 import math
-import os
 import threading
 from functools import partial
 
@@ -34,10 +32,10 @@ from rclpy.qos import (
 from corobot_drake.config import scenario as sc
 from corobot_drake.recording.topics import RobotNames
 from corobot_drake.ros2 import interfaces as ifc
+from corobot_drake.ros2.graph import configure_discovery, ros_type
 from corobot_drake.serving import calls
 from corobot_drake.serving.runner import SimulationStoppedError
 
-DISCOVERY_VARIABLE = "ROS_AUTOMATIC_DISCOVERY_RANGE"
 ANSWER_TIMEOUT = 10.0
 """s (wall clock) a service or a goal waits for the simulation thread to take its command."""
 FEEDBACK_PERIOD = 0.1
@@ -46,29 +44,12 @@ SERVICE_SETTLE_TIMEOUT = 30.0
 """s (wall clock) /set_pose waits for the robot to settle at its new pose."""
 
 
-def ros_type(name: str):
-    """The rclpy class of `package/msg|srv|action/Name`."""
-    package, kind, cls = name.split("/")
-    return getattr(importlib.import_module(f"{package}.{kind}"), cls)
-
-
 QOS = {
     ifc.Qos.SENSOR: qos_profile_sensor_data,
     ifc.Qos.RELIABLE: QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE),
     ifc.Qos.LATCHED: QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
                                 durability=DurabilityPolicy.TRANSIENT_LOCAL),
 }
-
-
-def configure_discovery(network: bool, environ=os.environ) -> str:
-    """Sets where DDS discovery reaches, before the node starts: `SUBNET` with `network`, else
-    the user's ROS_AUTOMATIC_DISCOVERY_RANGE if set, else `LOCALHOST` (this machine only, as
-    the HTTP server listens on loopback by default). Returns the range in force."""
-    if network:
-        environ[DISCOVERY_VARIABLE] = "SUBNET"
-    else:
-        environ.setdefault(DISCOVERY_VARIABLE, "LOCALHOST")
-    return environ[DISCOVERY_VARIABLE]
 
 
 class LiveSink:
