@@ -30,23 +30,17 @@ SHM = Path("/dev/shm")
 
 @contextlib.contextmanager
 def private_network():
-    """This thread (and what it starts: processes, DDS threads) in a new network namespace
-    with only loopback up; back in the original one afterwards. Skips without the right (root,
-    as in CI)."""
-    if not hasattr(os, "unshare"):
-        pytest.skip("os.unshare needs Python 3.12 on Linux")
-    original = os.open("/proc/self/ns/net", os.O_RDONLY)
+    """`graph.private_network`, skipping the test where it cannot be made (not root)."""
+    from corobot_drake.ros2.graph import PrivateNetworkError
+    from corobot_drake.ros2.graph import private_network as network
+
+    stack = contextlib.ExitStack()
     try:
-        try:
-            os.unshare(os.CLONE_NEWNET)
-        except PermissionError:
-            pytest.skip("a private network namespace needs root (unshare -n): the ROS 2 tests "
-                        "keep DDS off every real network")
-        subprocess.run(["ip", "link", "set", "lo", "up"], check=True)
+        stack.enter_context(network())
+    except PrivateNetworkError as e:
+        pytest.skip(f"{e}: the ROS 2 tests keep DDS off every real network")
+    with stack:
         yield
-    finally:
-        os.setns(original, os.CLONE_NEWNET)
-        os.close(original)
 
 
 def domain_id() -> int:

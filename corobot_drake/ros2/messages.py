@@ -43,6 +43,17 @@ def _covariance(stddevs: tuple) -> list[float]:
     return np.diag(diag).flatten()
 
 
+def rgb_bytes(rgba: np.ndarray) -> np.ndarray:
+    """The RGB bytes (h x w x 3, flat) of an RGBA image, a channel at a time: numpy copies a
+    strided 1-D column several times faster than the h x w x 3 slice (~0.3 ms against ~1.2 ms
+    a 320 x 240 frame)."""
+    pixels = rgba.reshape(-1, 4)
+    out = np.empty((pixels.shape[0], 3), dtype=np.uint8)
+    for c in range(3):
+        out[:, c] = pixels[:, c]
+    return out.reshape(-1)
+
+
 class Messages:
     """Makes the messages; one per bus (its type store's classes looked up once)."""
 
@@ -125,12 +136,12 @@ class Messages:
             max_range=float(max_range), range=float(reading),
             variance=0.0)  # unknown: the sensor's noise is in volts, through a nonlinear curve
 
-    def image(self, t: float, frame: str, rgb: np.ndarray):
-        """sensor_msgs/Image, rgb8, from an h x w x 3 uint8 array."""
-        h, w = rgb.shape[:2]
+    def image(self, t: float, frame: str, rgba: np.ndarray):
+        """sensor_msgs/Image, rgb8, from an h x w x 4 uint8 array (Drake's ImageRgba8U)."""
+        h, w = rgba.shape[:2]
         return self.T["sensor_msgs/msg/Image"](
             header=self.header(t, frame), height=h, width=w, encoding="rgb8", is_bigendian=0,
-            step=3 * w, data=np.ascontiguousarray(rgb, dtype=np.uint8).reshape(-1))
+            step=3 * w, data=rgb_bytes(rgba))
 
     def camera_info(self, t: float, frame: str, config):
         """sensor_msgs/CameraInfo of a Drake `CameraConfig`: a pinhole, no distortion."""

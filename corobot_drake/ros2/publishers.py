@@ -306,8 +306,8 @@ class CameraPublisher(LeafSystem):
         if not in_window(captured + self._delay, context.get_time(), self._look):
             return  # also NaN: no frame yet
         ns = tp.nanoseconds(captured)
-        rgb = self._image.Eval(context).data[:, :, :3]
-        self._image_channel.publish(ns, self._m.image(captured, self._frame, rgb))
+        rgba = self._image.Eval(context).data
+        self._image_channel.publish(ns, self._m.image(captured, self._frame, rgba))
         self._info_channel.publish(ns, self._m.camera_info(captured, self._frame,
                                                            self._config))
 
