@@ -90,7 +90,7 @@ def _parser() -> argparse.ArgumentParser:
                    "file with a timeline, opens offline (also with --headless)")
     p.add_argument("--mcap", metavar="FILE.mcap",
                    help="write the run's Foxglove topics (/tf, /odom, /joint_states, /ir/..., "
-                   "/camera/image/compressed, /commands; README: Coming from ROS 2) as MCAP")
+                   "/camera/image/compressed, /commands; docs/recording.md) as MCAP")
     p.add_argument("--foxglove", nargs="?", type=int, const=DEFAULT_FOXGLOVE_PORT,
                    metavar="PORT",
                    help="serve the same topics live to Foxglove (WebSocket) on --host, in real "
