@@ -53,9 +53,12 @@ def _shm_segments() -> set[str]:
 
 
 def _mapped_files() -> set[str]:
-    """Every file some live process maps (a DDS segment in use is mapped by its owner)."""
+    """Every file some other live process maps (a DDS segment in use is mapped by its owner;
+    this process's Fast DDS keeps its own mapped after its participants are gone)."""
     mapped = set()
     for maps in Path("/proc").glob("[0-9]*/maps"):
+        if maps.parent.name == str(os.getpid()):
+            continue
         with contextlib.suppress(OSError):
             mapped |= {line.split(None, 5)[5].strip() for line in maps.read_text().splitlines()
                        if len(line.split(None, 5)) == 6 and "/dev/shm/" in line}
@@ -64,9 +67,9 @@ def _mapped_files() -> set[str]:
 
 @contextlib.contextmanager
 def own_shared_memory():
-    """Removes, at the end, the Fast DDS shared-memory segments made meanwhile that no live
-    process maps any more (a crashed participant's leftovers): the test's own, never
-    another's (one still in use is mapped by it; one from before the test is left)."""
+    """Removes, at the end, the Fast DDS shared-memory segments made meanwhile that no other
+    live process maps (the test's participants are gone by then): the test's own, never
+    another's (one in use is mapped by its owner; one from before the test is left)."""
     before = _shm_segments()
     try:
         yield
