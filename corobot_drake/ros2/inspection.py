@@ -176,8 +176,12 @@ def _echo(session: _Session, args, out) -> int:
     def on_message(msg):
         if done.is_set():
             return
-        print(yaml.safe_dump(as_data(msg), sort_keys=False).rstrip() + "\n---", file=out,
-              flush=True)
+        try:
+            print(yaml.safe_dump(as_data(msg), sort_keys=False).rstrip() + "\n---", file=out,
+                  flush=True)
+        except BrokenPipeError:  # `| head` had enough
+            done.set()
+            return
         seen[0] += 1
         if args.count and seen[0] >= args.count:
             done.set()
