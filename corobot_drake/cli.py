@@ -391,15 +391,14 @@ def _run(args, scenario, duration: float, foxglove, ros2=None) -> int:
         from corobot_drake.ros2.run import run_live
 
         try:
-            sim = run_live(ros2, lambda meshcat: Simulation(
+            return run_live(ros2, lambda meshcat: Simulation(
                 scenario, meshcat, save_camera=args.save_camera, record=args.record is not None,
                 foxglove=foxglove, run_log_window=run_log_window(args), extras=extras),
                 meshcat=not args.headless, duration=duration,
-                run_log_window=run_log_window(args))
+                run_log_window=run_log_window(args), finish=lambda sim: _finish(sim, args))
         except (ValueError, RendererUnavailableError) as e:
             print(f"error: {args.scenario}: (top level): {e}", file=sys.stderr)
             return 2
-        return _finish(sim, args)
     meshcat = None
     if not args.headless:
         from pydrake.geometry import StartMeshcat

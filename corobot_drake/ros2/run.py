@@ -84,10 +84,11 @@ class Ros2Front(contextlib.ExitStack):
 
 
 def run_live(front: Ros2Front, make_sim, meshcat: bool, duration: float,
-             run_log_window: float | None):
+             run_log_window: float | None, finish):
     """Runs the simulation (`make_sim(meshcat or None)`, built in its thread) in real time with
-    the node attached, until `duration` simulated s have passed or Ctrl-C; returns it (None
-    if it could not be built: the error is raised)."""
+    the node attached, until `duration` simulated s have passed or Ctrl-C; then returns
+    `finish(sim)`, called in the simulation thread (Meshcat, which a replay is written from,
+    answers only the thread that made it). What building it raised is raised."""
     from corobot_drake.serving.runner import SimRunner, SimulationStoppedError
 
     def build():
@@ -114,16 +115,17 @@ def run_live(front: Ros2Front, make_sim, meshcat: bool, duration: float,
         print(f"Meshcat: {runner.meshcat_url}", flush=True)
     end = runner.sim.time + duration
     try:
-        runner.watch(lambda sim: True if sim.time >= end - 1e-9 else None).result()
-    except KeyboardInterrupt:
-        print("\nstopped", file=sys.stderr)
+        try:
+            runner.watch(lambda sim: True if sim.time >= end - 1e-9 else None).result()
+        except KeyboardInterrupt:
+            print("\nstopped", file=sys.stderr)
+        if runner.alive:  # (a second Ctrl-C leaves the outputs unwritten)
+            return runner.call(finish, timeout=None)
     except SimulationStoppedError:
-        pass  # the simulation thread ended: its error, if any, is raised below
+        pass  # the simulation thread ended: its error is raised below
     finally:
         runner.stop()
-    if runner.error is not None:
-        raise runner.error
-    return runner.sim
+    raise runner.error or RuntimeError("the simulation stopped")
 
 
 SWITCH_INTERVAL = 0.001
