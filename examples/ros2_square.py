@@ -7,7 +7,7 @@ client of the simulated robot (`python -m corobot_drake --ros2`), printing each 
     python examples/ros2_square.py --robot corobot_2  # several robots: its namespace
 
 A ROS 2 Jazzy install runs it as it is (it needs corobot_interfaces: copy
-corobot_drake/ros2/interfaces/corobot_interfaces into a colcon workspace).
+corobot_drake/ros2/ros_packages/corobot_interfaces into a colcon workspace).
 """
 
 import argparse

@@ -6,7 +6,7 @@ Foxglove recording's (`recording.topics`: names, frames, the telemetry's fields)
 standard types; the actions' goals are the scenario commands' fields (`config.scenario`), issued
 through the HTTP server's calls (`serving.calls`); corobot_interfaces' telemetry messages are
 written from `recording.topics.TELEMETRY_TOPICS` (`telemetry_definition`; a test keeps the
-files in `interfaces/corobot_interfaces/msg/` in step, and `python -m
+files in `ros_packages/corobot_interfaces/msg/` in step, and `python -m
 corobot_drake.ros2.interfaces` rewrites them).
 
 No ROS import here: the table is read by the bag writer too (no ROS at run time).
@@ -23,7 +23,7 @@ from corobot_drake.config import scenario as sc
 from corobot_drake.model.dimensions import WHEEL_NAMES
 from corobot_drake.recording import topics as tp
 
-INTERFACES_DIR = Path(__file__).resolve().parent / "interfaces"
+INTERFACES_DIR = Path(__file__).resolve().parent / "ros_packages"
 PACKAGE = "corobot_interfaces"
 NODE_NAME = "corobot_drake"
 
