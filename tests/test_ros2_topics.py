@@ -35,8 +35,15 @@ from corobot_drake.recording import topics as tp
 from corobot_drake.resources import make_parser
 from corobot_drake.ros2 import interfaces as ifc
 from corobot_drake.ros2.bus import Bus
-from corobot_drake.ros2.graph import ros_type
-from corobot_drake.ros2.publishers import ClockPublisher, IrPublisher, RobotStatePublisher
+from corobot_drake.ros2.graph import configure_discovery, ros_type
+from corobot_drake.ros2.publishers import (
+    ClockPublisher,
+    IrPublisher,
+    RobotStatePublisher,
+    StaticPublisher,
+    TelemetryPublisher,
+    TransformPublisher,
+)
 from corobot_drake.ros2.urdf import corobot_urdf
 from corobot_drake.sensors.ir_sensor import DISTANCE, SCAN_TIME, scan_state_layout
 from corobot_drake.systems.odometry import DriveState, WheelState
@@ -197,6 +204,59 @@ def test_ir_publisher_sends_each_scan_once():
     assert t_ns == 50_000_000 and msg.range == pytest.approx(0.3)
     assert msg.max_range == pytest.approx(config.maximum_range)
     assert msg.header.frame_id == "ir_front"
+
+
+def test_transform_publisher_odom_to_base_link_to_wheels():
+    memory = Memory()
+    names = tp.RobotNames("corobot")
+    system = TransformPublisher(Bus([memory]), [(names, 1, [(2, "front_left_wheel")])])
+    stepper = Stepper(system, 0.02)
+    X_WB = RigidTransform(RollPitchYaw(0, 0, math.pi / 2), [1.0, 0.0, 0.0])
+    X_WW = RigidTransform(RollPitchYaw(0, 0.7, math.pi / 2), [1.0, 0.1, 0.06])  # the wheel
+    stepper.fix("body_poses", [RigidTransform(), X_WB, X_WW])
+    stepper.tick(2)
+    assert [t for t, _ in memory.messages["/tf"]] == [0, 20_000_000]
+    (_, tf) = memory.messages["/tf"][-1]
+    base, wheel = tf.transforms
+    assert (base.header.frame_id, base.child_frame_id) == ("odom", "base_link")
+    assert (wheel.header.frame_id, wheel.child_frame_id) == ("base_link", "front_left_wheel")
+    w = wheel.transform.translation  # in base_link (facing world +y): 0.1 m ahead of it
+    assert (w.x, w.y, w.z) == pytest.approx((0.1, 0.0, 0.06), abs=1e-12)
+
+
+def test_static_publisher_publishes_once_latched():
+    memory = Memory()
+    names = tp.RobotNames("corobot")
+    mounts = [("base_link", "ir_front", RigidTransform([0.1, 0, 0.07]))]
+    system = StaticPublisher(Bus([memory]), mounts, {names: "<robot/>"})
+    Stepper(system, 0.02).tick(3)
+    (_, static), = memory.messages["/tf_static"]
+    assert static.transforms[0].child_frame_id == "ir_front"
+    assert static.transforms[0].transform.translation.z == pytest.approx(0.07)
+    (_, description), = memory.messages["/robot_description"]
+    assert description.data == "<robot/>"
+
+
+def test_telemetry_publisher_stamps_the_held_samples():
+    memory = Memory()
+    system = TelemetryPublisher(Bus([memory]), tp.RobotNames("corobot"), 0.02, 0.1)
+    stepper = Stepper(system, 0.02)
+    for port, value in (("wheel_loads", [9.0, 9.1, 9.2, 9.3]), ("wheel_slip_ratio", [0.1] * 4),
+                        ("wheel_slip_angle", [2.0] * 4), ("tip_margin", [37.4])):
+        stepper.fix(port, value)
+    stepper.tick(6)  # looks at 0 ... 0.1 s
+    assert len(memory.messages["/tip_margin"]) == 6
+    (t_ns, loads), = memory.messages["/wheel_loads"]  # the look at 0.1: the sample of 0
+    assert t_ns == 0 and list(loads.load) == [9.0, 9.1, 9.2, 9.3]
+    assert list(loads.wheel_names) == list(dim.WHEEL_NAMES)
+    (_, slip), = memory.messages["/wheel_slip"]
+    assert list(slip.slip_angle_deg) == [2.0] * 4
+
+
+def test_discovery_stays_on_this_machine_unless_asked():
+    assert configure_discovery(False, {}) == "LOCALHOST"
+    assert configure_discovery(False, {"ROS_AUTOMATIC_DISCOVERY_RANGE": "SUBNET"}) == "SUBNET"
+    assert configure_discovery(True, {}) == "SUBNET"
 
 
 # --- a bag read back ---
