@@ -290,3 +290,23 @@ def test_the_inspection_tool_lists_echoes_and_counts(ros):
     assert out.getvalue().splitlines()[-1].endswith(
         "100.0 per simulated s over 30 messages")  # every 10 ms of its stamps
     assert inspection.main(["--wait", "1", "echo", "/no_such_topic"]) == 1
+
+
+def test_the_deadman_is_a_parameter(ros):
+    from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
+    from rcl_interfaces.srv import GetParameters, SetParameters
+
+    probe, _, _ = ros
+    got = probe.call("/corobot_drake/get_parameters", GetParameters,
+                     GetParameters.Request(names=["cmd_vel_timeout"]))
+    assert got.values[0].double_value == 0.5
+
+    def set_to(value):
+        request = SetParameters.Request(parameters=[Parameter(
+            name="cmd_vel_timeout", value=ParameterValue(type=ParameterType.PARAMETER_DOUBLE,
+                                                         double_value=value))])
+        return probe.call("/corobot_drake/set_parameters", SetParameters, request).results[0]
+
+    refused = set_to(-1.0)
+    assert not refused.successful and "cmd_vel_timeout" in refused.reason
+    assert set_to(0.5).successful
