@@ -18,6 +18,7 @@ from __future__ import annotations
 import contextlib
 import threading
 import time
+import types
 from functools import partial
 from pathlib import Path
 
@@ -86,12 +87,9 @@ def realtime_run(seconds: float, ros2: bool = True) -> dict:
     quiet_drake_warnings()
     scenario = load_scenario(DEFAULT_SCENARIO, overrides=[CIRCLE])
 
-    class Args:  # the command line's flags, as Ros2Front reads them
-        rosbag, ros2_network = None, False
-
-    Args.ros2 = ros2
+    flags = types.SimpleNamespace(ros2=ros2, ros2_network=False, rosbag=None)  # as parsed
     received = [0]
-    with Ros2Front(Args, list(scenario.robots)) as front:
+    with Ros2Front(flags, list(scenario.robots)) as front:
         runner = SimRunner(lambda: Simulation(scenario, extras=front.extras if ros2 else ()))
         if ros2:
             front.attach(runner)
