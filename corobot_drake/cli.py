@@ -91,12 +91,57 @@ def _parser() -> argparse.ArgumentParser:
                    "file with a timeline, opens offline (also with --headless)")
     p.add_argument("--mcap", metavar="FILE.mcap",
                    help="write the run's Foxglove topics (/tf, /odom, /joint_states, /ir/..., "
-                   "/camera/image/compressed, /commands; README: Coming from ROS 2) as MCAP")
+                   "/camera/image/compressed, /commands; docs/recording.md) as MCAP")
     p.add_argument("--foxglove", nargs="?", type=int, const=DEFAULT_FOXGLOVE_PORT,
                    metavar="PORT",
                    help="serve the same topics live to Foxglove (WebSocket) on --host, in real "
                    f"time (PORT default {DEFAULT_FOXGLOVE_PORT}; 0 picks a free one)")
+    _add_ros2_arguments(p)
     return p
+
+
+# --- ROS 2 (corobot_drake/ros2/; README: ROS 2) ------------------------------------------------
+
+
+def _add_ros2_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--ros2", action="store_true",
+                   help="run in real time as the ROS 2 node corobot_drake (topics, /cmd_vel, "
+                   "actions, services; README: ROS 2); discovery stays on this machine unless "
+                   "ROS_AUTOMATIC_DISCOVERY_RANGE or --ros2-network says otherwise")
+    p.add_argument("--ros2-network", action="store_true",
+                   help="--ros2: discovery on the local network (SUBNET): any ROS 2 node there "
+                   "with the same ROS_DOMAIN_ID can read the topics and drive the robot")
+    p.add_argument("--rosbag", metavar="DIR",
+                   help="write the ROS 2 topics as a rosbag2 directory (MCAP, CDR) that `ros2 "
+                   "bag play` replays; headless at simulation speed, no ROS needed")
+
+
+def check_ros2_arguments(args) -> None:
+    """--ros2 and --rosbag: the extra installed (one line naming it), the bag's directory new."""
+    if not (args.ros2 or args.rosbag is not None):
+        if args.ros2_network:
+            raise ArgumentError("--ros2-network: only with --ros2")
+        return
+    from corobot_drake.ros2.run import missing, rosbag_problem
+
+    if args.ros2:
+        problem = missing("--ros2", live=True)
+        if problem:
+            raise ArgumentError(problem)
+    if args.rosbag is not None:
+        problem = missing("--rosbag", live=False) or rosbag_problem(args.rosbag)
+        if problem:
+            raise ArgumentError(problem if problem.startswith("--rosbag")
+                                else f"--rosbag: {args.rosbag}: {problem}")
+
+
+def _ros2_front(args, scenario):
+    """The run's ROS 2 node and bag (`ros2.run.Ros2Front`), or an empty block."""
+    if not (args.ros2 or args.rosbag is not None):
+        return contextlib.nullcontext()
+    from corobot_drake.ros2.run import Ros2Front
+
+    return Ros2Front(args, list(scenario.robots))
 
 
 class _HeadlessProgress:
@@ -224,7 +269,8 @@ def check_arguments(args) -> None:
     """The command line's numbers within their bounds and its outputs writable."""
     if args.duration is not None:
         _check("--duration", args.duration,
-               HEADLESS_DURATION if args.headless and not args.serve else SIMULATION_DURATION)
+               HEADLESS_DURATION if args.headless and not (args.serve or args.ros2)
+               else SIMULATION_DURATION)
     if args.camera_rate is not None:
         _check("--camera-rate", args.camera_rate, DRAKE_BOUNDS[CameraConfig]["fps"])
     if args.serve:
@@ -235,6 +281,7 @@ def check_arguments(args) -> None:
         raise ArgumentError("--record: not with --serve (the replay is written when a run ends)")
     check_extras(args)
     check_outputs(args)
+    check_ros2_arguments(args)
 
 
 def check_extras(args) -> None:
@@ -405,28 +452,44 @@ def main(argv: list[str] | None = None) -> int:
               f"{str(e).splitlines()[0]}", file=sys.stderr)
         return 2
     try:
-        with sinks:
-            status = _run(args, scenario, duration, sinks.context)
+        with sinks, _ros2_front(args, scenario) as ros2:
+            status = _run(args, scenario, duration, sinks.context, ros2)
     except KeyboardInterrupt:  # before the run started (building it): nothing to write
         print("stopped before the run started", file=sys.stderr)
         return stopped_status()
     return status if sinks.finished else max(status, 1)
 
 
-def _run(args, scenario, duration: float, foxglove) -> int:
+def _run(args, scenario, duration: float, foxglove, ros2=None) -> int:
     """Builds the simulation and runs it (served, in Meshcat or headless), then writes the
-    requested outputs; `foxglove`: the Context the run's topics go to (or None)."""
+    requested outputs; `foxglove`: the Context the run's topics go to (or None); `ros2`: the
+    run's ROS 2 node and bag (`ros2.run.Ros2Front`, or None)."""
     from corobot_drake.sensors.camera import RendererUnavailableError
     from corobot_drake.simulation import Simulation
 
+    extras = ros2.extras if ros2 is not None else ()
     if args.serve:  # Meshcat is made in the simulation thread (it must be used from there)
         from corobot_drake.serving.serve import serve, serve_camera_rate
 
         if args.camera_rate is None:
             serve_camera_rate(scenario)
-        return serve(lambda meshcat: Simulation(scenario, meshcat, foxglove=foxglove),
+        return serve(lambda meshcat: Simulation(scenario, meshcat, foxglove=foxglove,
+                                                extras=extras),
                      host=args.host, port=args.port, meshcat=not args.headless,
-                     label=args.scenario, token=args.token)
+                     label=args.scenario, token=args.token,
+                     attach=ros2.attach if args.ros2 else None)
+    if args.ros2:
+        from corobot_drake.ros2.run import run_live
+
+        try:
+            return run_live(ros2, lambda meshcat: Simulation(
+                scenario, meshcat, save_camera=args.save_camera, record=args.record is not None,
+                foxglove=foxglove, run_log_window=run_log_window(args), extras=extras),
+                meshcat=not args.headless, duration=duration,
+                run_log_window=run_log_window(args), finish=lambda sim: _finish(sim, args))
+        except (ValueError, RendererUnavailableError) as e:
+            print(f"error: {args.scenario}: (top level): {e}", file=sys.stderr)
+            return 2
     meshcat = None
     if not args.headless:
         from pydrake.geometry import StartMeshcat
@@ -435,7 +498,7 @@ def _run(args, scenario, duration: float, foxglove) -> int:
     try:
         sim = Simulation(scenario, meshcat, save_camera=args.save_camera,
                          record=args.record is not None, foxglove=foxglove,
-                         run_log_window=run_log_window(args))
+                         run_log_window=run_log_window(args), extras=extras)
     except (ValueError, RendererUnavailableError) as e:  # the loader missed it: still one line
         print(f"error: {args.scenario}: (top level): {e}", file=sys.stderr)
         return 2
@@ -454,6 +517,11 @@ def _run(args, scenario, duration: float, foxglove) -> int:
             progress.finish()
     else:
         _run_interactive(sim, meshcat, duration)
+    return _finish(sim, args)
+
+
+def _finish(sim: Simulation, args) -> int:
+    """The run's closing line and its outputs (`_write_results`)."""
     summary = sim.summary()
     print(f"simulated {summary['time']:.2f} s at {summary['realtime_factor']:.1f}x real time")
     status = _write_results(sim, args, summary)

@@ -1,8 +1,9 @@
 """The optional front ends and the pip extras that carry them.
 
 The core (`pip install corobot-drake`) runs a scenario headless or in Meshcat; each front end
-needs its extra. A front end used without it stops with one line naming the extra.
-`tests/packaging/test_wheel.py` holds this table to pyproject's `[project.optional-dependencies]`.
+needs its extra. A front end used without it stops with one line naming the extra (`--ros2`
+checks its own, with the interfaces `tools/setup` builds: `ros2/run.py`).
+`tests/packaging/test_wheel.py` holds this table to pyproject's optional dependencies.
 """
 
 import importlib.util
@@ -12,6 +13,7 @@ EXTRAS = {
     "study": ("ray", "tqdm", "matplotlib"),
     "gym": ("gymnasium", "ray", "tqdm", "matplotlib"),
     "record": ("foxglove", "websockets"),
+    "ros2": ("rclpy", "rosbags"),
 }
 """{extra: the top-level modules it brings}."""
 

@@ -524,7 +524,7 @@ class Simulation:
 
     def __init__(self, scenario: sc.Scenario, meshcat=None, save_camera=None, *,
                  record: bool = False, foxglove=None, run_log_window: float | None = None,
-                 check: bool = True):
+                 check: bool = True, extras=()):
         """`save_camera`: a directory; each robot's camera frames go to `<dir>/<robot>/`.
         `record`: keep a Meshcat replay of the run (`save_recording`; without `meshcat`, an
         offline one records without a browser). `foxglove`: a `foxglove.Context` to publish
@@ -533,7 +533,9 @@ class Simulation:
         runs (it may have been built or changed in Python): ScenarioError names the field;
         one unchanged since `load_scenario` returned it is not checked twice (`mark_checked`).
         `check=False` skips them, for a tool that measures beyond the bounds on purpose
-        (`lab/step_limit.py`); `reset` then skips them too unless asked."""
+        (`lab/step_limit.py`); `reset` then skips them too unless asked. `extras`:
+        functions that add systems to the diagram (`station.build_station`'s; the ROS 2
+        topics)."""
         if check:
             check_scenario(scenario)
         self._thread_lock = threading.RLock()
@@ -547,7 +549,7 @@ class Simulation:
 
             self._record_live = meshcat is not None
             meshcat = meshcat or offline_meshcat()
-        extras = []
+        extras = list(extras)
         if foxglove is not None:  # the run's Foxglove topics, attached as a front end
             from corobot_drake.recording.publishers import add_foxglove_topics
 

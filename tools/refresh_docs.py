@@ -732,6 +732,14 @@ def render_table_with_load(outs) -> str:
     return f"Measured {_measured([o])} (`{o.command}`):\n\n{_table(o.stdout)}"
 
 
+def render_tables_with_load(outs) -> str:
+    """Several tables of one command, each kept apart."""
+    o = outs[0][0]
+    tables = [_table(part) for part in o.stdout.split("\n\n")]
+    return f"Measured {_measured([o])} (`{o.command}`):\n\n" + "\n\n".join(t for t in tables
+                                                                            if t)
+
+
 def render_camera_cost(outs) -> str:
     o = outs[0][0]
     ratios = {r.split("|")[1].strip(): r.split("|")[4].strip()
@@ -894,6 +902,8 @@ def _front_end_specs(c: SimpleNamespace) -> list[Spec]:
         Spec("bench-ir", "docs/sensors.md", (c.bench_ir,), render_bench_ir, TIMING, 50),
         Spec("bench-recording", "docs/recording.md",
              (Command("python tools/bench_recording.py"),), render_table_with_load, TIMING, 300),
+        Spec("bench-ros2", "README.md", (Command("python tools/bench_ros2.py"),),
+             render_tables_with_load, TIMING, 400),
         Spec("gym-evaluation", "docs/gym.md",
              (Command("python tools/train_policy.py --evaluate"),), render_gym_evaluation,
              DETERMINISTIC, 900),

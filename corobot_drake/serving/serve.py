@@ -47,14 +47,16 @@ third of the simulation's time budget."""
 
 def serve(make_sim, host: str = "127.0.0.1", port: int = 50000, meshcat: bool = False,
           log_level: str = "warning", label: str = "", token: str | None = None,
-          rate: float = 1.0) -> int:
+          rate: float = 1.0, attach=None) -> int:
     """Builds the simulation (`make_sim(meshcat)`, in the simulation thread, with a Meshcat
     made there too when `meshcat`: Meshcat must be used from the thread that made it) and
     serves it until Ctrl-C. The HTTP server runs in a child process (see the module
     docstring), behind `security.Access.for_host(host, token)` (off loopback a token is
     needed: `token`, or one made and printed). `rate`: simulated s per wall-clock s (a rate
     the machine cannot keep runs as fast as it can; tools/bench_memory.py). Returns the exit
-    status: 2 when the port, the token or the simulation cannot be had."""
+    status: 2 when the port, the token or the simulation cannot be had. `attach(runner)`, if
+    given, is called with the runner before it starts (another front end taking commands
+    through it: the ROS 2 node, `ros2.run.Ros2Front.attach`)."""
     import multiprocessing
 
     from corobot_drake.sensors.camera import RendererUnavailableError
@@ -78,6 +80,8 @@ def serve(make_sim, host: str = "127.0.0.1", port: int = 50000, meshcat: bool = 
         return 2
     sys.setswitchinterval(SWITCH_INTERVAL)
     runner = _sim_runner(make_sim, meshcat, rate)
+    if attach is not None:
+        attach(runner)
     try:
         runner.start()
     except (ValueError, RendererUnavailableError) as e:  # e.g. a non-finite number

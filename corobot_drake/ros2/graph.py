@@ -1,0 +1,70 @@
+"""What every ROS 2 participant of the project shares, without Drake: where discovery reaches,
+rclpy's classes by type name, messages as plain data."""
+
+from __future__ import annotations
+
+import contextlib
+import importlib
+import os
+import subprocess
+
+DISCOVERY_VARIABLE = "ROS_AUTOMATIC_DISCOVERY_RANGE"
+ARRAY_SHOWN = 16
+"""Values of an array printed in full (`as_data`); longer ones (an image) are summarized."""
+
+
+def configure_discovery(network: bool = False, environ=os.environ) -> str:
+    """Sets where DDS discovery reaches, before a node starts: `SUBNET` with `network`, else the
+    user's ROS_AUTOMATIC_DISCOVERY_RANGE if set, else `LOCALHOST` (this machine only, as the
+    HTTP server listens on loopback by default). Returns the range in force."""
+    if network:
+        environ[DISCOVERY_VARIABLE] = "SUBNET"
+    else:
+        environ.setdefault(DISCOVERY_VARIABLE, "LOCALHOST")
+    return environ[DISCOVERY_VARIABLE]
+
+
+def ros_type(name: str):
+    """The rclpy class of `package/msg|srv|action/Name`."""
+    package, kind, cls = name.split("/")
+    return getattr(importlib.import_module(f"{package}.{kind}"), cls)
+
+
+def as_data(msg):
+    """A message as nested dicts, lists and numbers (long arrays summarized), for printing."""
+    if hasattr(msg, "get_fields_and_field_types"):
+        return {name: as_data(getattr(msg, name)) for name in msg.get_fields_and_field_types()}
+    if isinstance(msg, list | tuple) or hasattr(msg, "tolist"):
+        values = msg.tolist() if hasattr(msg, "tolist") else list(msg)
+        if len(values) > ARRAY_SHOWN:
+            return f"<{len(values)} values>"
+        return [as_data(v) for v in values]
+    if isinstance(msg, bytes):
+        return f"<{len(msg)} bytes>"
+    return msg
+
+
+class PrivateNetworkError(RuntimeError):
+    """A private network namespace cannot be made here (not root, or no os.unshare)."""
+
+
+@contextlib.contextmanager
+def private_network():
+    """The calling thread (and what it starts from then on: processes, DDS's threads) in a new
+    network namespace with only loopback up, back in its own afterwards: DDS traffic cannot
+    leave the machine. For tests and benchmarks; needs root (`unshare -n`): PrivateNetworkError
+    otherwise."""
+    if not hasattr(os, "unshare"):
+        raise PrivateNetworkError("os.unshare needs Python 3.12 on Linux")
+    original = os.open("/proc/self/ns/net", os.O_RDONLY)
+    try:
+        try:
+            os.unshare(os.CLONE_NEWNET)
+        except PermissionError:
+            raise PrivateNetworkError("a private network namespace needs root (unshare -n)"
+                                   ) from None
+        subprocess.run(["ip", "link", "set", "lo", "up"], check=True)
+        yield
+    finally:
+        os.setns(original, os.CLONE_NEWNET)
+        os.close(original)

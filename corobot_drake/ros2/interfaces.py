@@ -1,0 +1,175 @@
+"""What the robot says on ROS 2, in one table each: its topics (name, type, QoS), the commands
+its actions and services issue, and the project's own message definitions.
+
+Derived from the project's existing declarations rather than re-declared: the topics are the
+Foxglove recording's (`recording.topics`: names, frames, the telemetry's fields) in ROS's
+standard types; the actions' goals are the scenario commands' fields (`config.scenario`), issued
+through the HTTP server's calls (`serving.calls`); corobot_interfaces' telemetry messages are
+written from `recording.topics.TELEMETRY_TOPICS` (`telemetry_definition`; a test keeps the
+files in `ros_packages/corobot_interfaces/msg/` in step, and `python -m
+corobot_drake.ros2.interfaces` rewrites them).
+
+No ROS import here: the table is read by the bag writer too (no ROS at run time).
+"""
+
+from __future__ import annotations
+
+import dataclasses as dc
+import enum
+import sys
+from pathlib import Path
+
+from corobot_drake.config import scenario as sc
+from corobot_drake.model.dimensions import WHEEL_NAMES
+from corobot_drake.recording import topics as tp
+
+INTERFACES_DIR = Path(__file__).resolve().parent / "ros_packages"
+PACKAGE = "corobot_interfaces"
+NODE_NAME = "corobot_drake"
+
+
+class Qos(enum.Enum):
+    """The QoS a topic is offered with, as ROS users expect it."""
+
+    SENSOR = "sensor"
+    """rclpy's `qos_profile_sensor_data`: best effort, keep last 5 (sensor streams)."""
+    RELIABLE = "reliable"
+    """Reliable, volatile, keep last 10 (state: /tf, /odom, ...; a best-effort subscriber
+    matches it too)."""
+    LATCHED = "latched"
+    """Reliable, transient local, keep last 1 (/tf_static, /robot_description: a late
+    subscriber gets the one message)."""
+
+
+@dc.dataclass(frozen=True)
+class Topic:
+    name: str
+    """Under the robot's namespace (`recording.topics.RobotNames.topic`), except `shared`."""
+    type: str
+    """The ROS type, `package/msg/Name`."""
+    qos: Qos
+    what: str
+    shared: bool = False
+    """One for the whole simulation (/clock, /tf, /tf_static): not under a robot's name."""
+
+
+def _telemetry_type(topic: tp.TelemetryTopic) -> str:
+    return f"{PACKAGE}/msg/{topic.title.split('.')[-1]}"
+
+
+TOPICS = (
+    Topic("clock", "rosgraph_msgs/msg/Clock", Qos.RELIABLE,
+          "simulation time, every 10 ms (use_sim_time)", shared=True),
+    Topic("tf", "tf2_msgs/msg/TFMessage", Qos.RELIABLE,
+          "odom -> base_link (ground truth), base_link -> the wheels, at 50 Hz", shared=True),
+    Topic("tf_static", "tf2_msgs/msg/TFMessage", Qos.LATCHED,
+          "base_link -> camera_link -> camera_optical_frame, ir_front, ir_rear", shared=True),
+    Topic("robot_description", "std_msgs/msg/String", Qos.LATCHED,
+          "the robot's URDF (`ros2.urdf`), for RViz and robot_state_publisher"),
+    Topic("odom", "nav_msgs/msg/Odometry", Qos.RELIABLE,
+          "ground truth: pose in odom, twist in base_link, at 50 Hz"),
+    Topic("wheel_odom", "nav_msgs/msg/Odometry", Qos.RELIABLE,
+          "the encoders' dead reckoning, with a covariance, at 50 Hz"),
+    Topic("joint_states", "sensor_msgs/msg/JointState", Qos.RELIABLE,
+          "the four wheel axles: angle (rad), rate (rad/s), at 50 Hz"),
+    Topic("ir/front", "sensor_msgs/msg/Range", Qos.SENSOR, "each scan, INFRARED"),
+    Topic("ir/rear", "sensor_msgs/msg/Range", Qos.SENSOR, "each scan, INFRARED"),
+    Topic("camera/image_raw", "sensor_msgs/msg/Image", Qos.SENSOR, "each frame, rgb8"),
+    Topic("camera/camera_info", "sensor_msgs/msg/CameraInfo", Qos.SENSOR, "with each frame"),
+    Topic("drive_state", f"{PACKAGE}/msg/DriveState", Qos.RELIABLE,
+          "enabled, power, axle speed, encoder ticks per wheel, GPS and compass, at 50 Hz"),
+    *(Topic(t.name, _telemetry_type(t), Qos.RELIABLE,
+            t.description.split(":")[0].lower() + (" at 10 Hz" if t.costly else " at 50 Hz"))
+      for t in tp.TELEMETRY_TOPICS),
+)
+"""Everything the node publishes (the IR topics are each sensor's: `ir_topic`)."""
+TOPIC = {t.name: t for t in TOPICS}
+
+
+def ir_topic(sensor: str) -> Topic:
+    """The topic of the IR sensor `sensor` (the scenario's sensors: `front`, `rear`, ...)."""
+    return dc.replace(TOPIC["ir/front"], name=f"ir/{sensor}")
+
+
+CMD_VEL = ("cmd_vel", "geometry_msgs/msg/Twist")
+"""Subscribed: issued as `config.scenario.SetVelocity` (linear.x m/s, angular.z rad/s)."""
+DEADMAN_TIMEOUT = 0.5
+"""s of simulated time without a Twist after which the robot stops (ROS parameter
+`cmd_vel_timeout`; 0 turns the deadman off)."""
+
+
+@dc.dataclass(frozen=True)
+class Action:
+    name: str
+    type: str
+    command: type
+    """The scenario command its goal is: the goal's fields are the command's own."""
+    call: str
+    """`serving.calls.start_operation`'s name for it."""
+    feedback: str
+    """The feedback field: what is left of the command (`MotionCommands.remaining_command`)."""
+
+
+ACTIONS = (
+    Action("drive_distance", f"{PACKAGE}/action/DriveDistance", sc.DriveDistance,
+           "drive_distance", "remaining"),
+    Action("rotate_degrees", f"{PACKAGE}/action/RotateDegrees", sc.RotateDegrees,
+           "rotate_degrees", "remaining_degrees"),
+)
+
+
+def goal_fields(command: type) -> tuple[str, ...]:
+    """The fields of a scenario command a user gives (not a saved scene's resume state)."""
+    return tuple(f.name for f in dc.fields(command) if f.name not in ("start", "recent_progress"))
+
+
+@dc.dataclass(frozen=True)
+class Service:
+    name: str
+    type: str
+    call: str
+    """The `Robot` method (through `serving.calls`) it issues."""
+
+
+SERVICES = (
+    Service("all_stop", "std_srvs/srv/Trigger", "all_stop"),
+    Service("enable_drive", "std_srvs/srv/SetBool", "enable"),
+    Service("set_pose", f"{PACKAGE}/srv/SetPose", "set_pose"),
+)
+
+CANCELED = "canceled"
+"""An action's result reason when its goal was cancelled (the robot was stopped)."""
+
+
+# --- corobot_interfaces' telemetry messages, written from the recording's table ---
+
+def telemetry_definition(topic: tp.TelemetryTopic) -> str:
+    """The .msg text of one of `recording.topics.TELEMETRY_TOPICS`."""
+    lines = [f"# {topic.description}", "std_msgs/Header header  # stamp: its sample's time"]
+    array = "[]" if topic.per_wheel else ""
+    if topic.per_wheel:
+        lines.append(f"string[] wheel_names  # {', '.join(WHEEL_NAMES)}")
+    lines += [f"float64{array} {field}  # {what}" for field, _, what in topic.fields]
+    return "\n".join(lines) + "\n"
+
+
+def telemetry_files() -> dict[Path, str]:
+    """{path: text} of the telemetry .msg files."""
+    return {INTERFACES_DIR / PACKAGE / "msg" / f"{_telemetry_type(t).split('/')[-1]}.msg":
+            telemetry_definition(t) for t in tp.TELEMETRY_TOPICS}
+
+
+def message_definitions() -> dict[str, str]:
+    """{`package/msg/Name`: .msg text} of the messages built here (tf2_msgs and
+    corobot_interfaces), for a type store that lacks them (`rosbags`)."""
+    out = {}
+    for package in ("tf2_msgs", PACKAGE):
+        for path in sorted((INTERFACES_DIR / package / "msg").glob("*.msg")):
+            out[f"{package}/msg/{path.stem}"] = path.read_text()
+    return out
+
+
+if __name__ == "__main__":
+    for path, text in telemetry_files().items():
+        path.write_text(text)
+        print(path, file=sys.stderr)

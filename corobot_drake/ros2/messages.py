@@ -1,0 +1,189 @@
+"""The robot's values as ROS 2 messages (`rosbags` type-store instances; `bus.typestore`), in
+ROS's conventions: SI units, REP 103 axes, time stamps in simulation time (a run starts at
+0 s, as a ROS simulation's /clock does).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from pydrake.math import RigidTransform, RollPitchYaw, RotationMatrix
+
+from corobot_drake.model.dimensions import WHEEL_NAMES
+from corobot_drake.recording import topics as tp
+from corobot_drake.ros2.bus import typestore
+
+INFRARED = tp.INFRARED
+"""sensor_msgs/Range's radiation_type for an infrared sensor."""
+
+UNUSED_VARIANCE = 1e6
+"""A covariance's diagonal for what a planar odometry does not measure (z, roll, pitch):
+large, so a fusing filter (robot_localization) ignores it, as ROS drivers of wheeled bases do."""
+WHEEL_ODOM_POSE_STDDEV = (0.05, 0.05, 0.1)
+"""m, m, rad: /wheel_odom's nominal pose uncertainty (x, y, yaw). Dead reckoning drifts
+without bound (a skid-steer base's turns most: docs/tuning.md, the odometry calibration), so
+these are a filter's starting weights, not measured bounds."""
+WHEEL_ODOM_TWIST_STDDEV = (0.05, 0.1)
+"""m/s, rad/s: /wheel_odom's twist uncertainty (forward, yaw rate): the encoders' speeds
+through the calibrated radius and track."""
+
+R_LINK_OPTICAL = RotationMatrix(RollPitchYaw(-math.pi / 2, 0.0, -math.pi / 2))
+"""ROS's camera_link (x forward, y left, z up) to its optical frame (z forward, x right, y
+down): camera_link -> camera_optical_frame on /tf_static."""
+
+
+def _covariance(stddevs: tuple) -> list[float]:
+    """A 6 x 6 row-major covariance (x, y, z, roll, pitch, yaw) from the planar stddevs (x, y,
+    yaw), or (forward, yaw rate) for a twist."""
+    diag = ([stddevs[0] ** 2, stddevs[1] ** 2, UNUSED_VARIANCE, UNUSED_VARIANCE,
+             UNUSED_VARIANCE, stddevs[2] ** 2] if len(stddevs) == 3 else
+            [stddevs[0] ** 2, UNUSED_VARIANCE, UNUSED_VARIANCE, UNUSED_VARIANCE,
+             UNUSED_VARIANCE, stddevs[1] ** 2])
+    return np.diag(diag).flatten()
+
+
+def rgb_bytes(rgba: np.ndarray) -> np.ndarray:
+    """The RGB bytes (h x w x 3, flat) of an RGBA image, a channel at a time: numpy copies a
+    strided 1-D column several times faster than the h x w x 3 slice (~0.3 ms against ~1.2 ms
+    a 320 x 240 frame)."""
+    pixels = rgba.reshape(-1, 4)
+    out = np.empty((pixels.shape[0], 3), dtype=np.uint8)
+    for c in range(3):
+        out[:, c] = pixels[:, c]
+    return out.reshape(-1)
+
+
+class Messages:
+    """Makes the messages; one per bus (its type store's classes looked up once)."""
+
+    def __init__(self, store=None):
+        self.T = (store or typestore()).types
+        self._pose_covariance = _covariance(WHEEL_ODOM_POSE_STDDEV)
+        self._twist_covariance = _covariance(WHEEL_ODOM_TWIST_STDDEV)
+        self._zero_covariance = np.zeros(36)
+
+    def msg(self, name: str):
+        """The class of `package/msg/Name`."""
+        return self.T[name]
+
+    def time(self, t: float):
+        ns = tp.nanoseconds(t)
+        return self.T["builtin_interfaces/msg/Time"](sec=ns // 1_000_000_000,
+                                                     nanosec=ns % 1_000_000_000)
+
+    def header(self, t: float, frame: str):
+        return self.T["std_msgs/msg/Header"](stamp=self.time(t), frame_id=frame)
+
+    def clock(self, t: float):
+        return self.T["rosgraph_msgs/msg/Clock"](clock=self.time(t))
+
+    def vector3(self, v):
+        return self.T["geometry_msgs/msg/Vector3"](x=float(v[0]), y=float(v[1]), z=float(v[2]))
+
+    def quaternion(self, R: RotationMatrix):
+        q = R.ToQuaternion()
+        return self.T["geometry_msgs/msg/Quaternion"](x=float(q.x()), y=float(q.y()),
+                                                      z=float(q.z()), w=float(q.w()))
+
+    def pose(self, X: RigidTransform):
+        p = X.translation()
+        return self.T["geometry_msgs/msg/Pose"](
+            position=self.T["geometry_msgs/msg/Point"](x=float(p[0]), y=float(p[1]),
+                                                       z=float(p[2])),
+            orientation=self.quaternion(X.rotation()))
+
+    def transform(self, t: float, parent: str, child: str, X_PC: RigidTransform):
+        """geometry_msgs/TransformStamped: `child`'s pose in `parent` at `t` (s)."""
+        return self.T["geometry_msgs/msg/TransformStamped"](
+            header=self.header(t, parent), child_frame_id=child,
+            transform=self.T["geometry_msgs/msg/Transform"](
+                translation=self.vector3(X_PC.translation()),
+                rotation=self.quaternion(X_PC.rotation())))
+
+    def tf(self, transforms: list):
+        return self.T["tf2_msgs/msg/TFMessage"](transforms=transforms)
+
+    def odometry(self, t: float, frame: str, child: str, X: RigidTransform, linear, angular,
+                 estimated: bool = False):
+        """nav_msgs/Odometry: pose `X` in `frame`, twist (`linear` m/s, `angular` rad/s) in
+        `child`; `estimated` (dead reckoning) carries the nominal covariances."""
+        T = self.T
+        pose_cov = self._pose_covariance if estimated else self._zero_covariance
+        twist_cov = self._twist_covariance if estimated else self._zero_covariance
+        return T["nav_msgs/msg/Odometry"](
+            header=self.header(t, frame), child_frame_id=child,
+            pose=T["geometry_msgs/msg/PoseWithCovariance"](pose=self.pose(X),
+                                                           covariance=pose_cov),
+            twist=T["geometry_msgs/msg/TwistWithCovariance"](
+                twist=T["geometry_msgs/msg/Twist"](linear=self.vector3(linear),
+                                                   angular=self.vector3(angular)),
+                covariance=twist_cov))
+
+    def joint_state(self, t: float, names: list[str], positions, velocities):
+        return self.T["sensor_msgs/msg/JointState"](
+            header=self.header(t, ""), name=names,
+            position=np.asarray(positions, dtype=np.float64),
+            velocity=np.asarray(velocities, dtype=np.float64),
+            effort=np.zeros(0, dtype=np.float64))
+
+    def range(self, t: float, frame: str, field_of_view: float, min_range: float,
+              max_range: float, reading: float):
+        """sensor_msgs/Range of an infrared sensor (rad, m)."""
+        return self.T["sensor_msgs/msg/Range"](
+            header=self.header(t, frame), radiation_type=INFRARED,
+            field_of_view=float(field_of_view), min_range=float(min_range),
+            max_range=float(max_range), range=float(reading),
+            variance=0.0)  # unknown: the sensor's noise is in volts, through a nonlinear curve
+
+    def image(self, t: float, frame: str, rgba: np.ndarray):
+        """sensor_msgs/Image, rgb8, from an h x w x 4 uint8 array (Drake's ImageRgba8U)."""
+        h, w = rgba.shape[:2]
+        return self.T["sensor_msgs/msg/Image"](
+            header=self.header(t, frame), height=h, width=w, encoding="rgb8", is_bigendian=0,
+            step=3 * w, data=rgb_bytes(rgba))
+
+    def camera_info(self, t: float, frame: str, config):
+        """sensor_msgs/CameraInfo of a Drake `CameraConfig`: a pinhole, no distortion."""
+        fx, fy = config.focal_x(), config.focal_y()
+        cx, cy = config.principal_point()
+        T = self.T
+        return T["sensor_msgs/msg/CameraInfo"](
+            header=self.header(t, frame), height=config.height, width=config.width,
+            distortion_model="plumb_bob", d=np.zeros(5),
+            k=np.array([fx, 0, cx, 0, fy, cy, 0, 0, 1], dtype=np.float64),
+            r=np.eye(3).flatten(),
+            p=np.array([fx, 0, cx, 0, 0, fy, cy, 0, 0, 0, 1, 0], dtype=np.float64),
+            binning_x=0, binning_y=0,
+            roi=T["sensor_msgs/msg/RegionOfInterest"](x_offset=0, y_offset=0, height=0,
+                                                      width=0, do_rectify=False))
+
+    def string(self, text: str):
+        return self.T["std_msgs/msg/String"](data=text)
+
+    def drive_state(self, t: float, frame: str, state):
+        """corobot_interfaces/DriveState of a `systems.odometry.DriveState`."""
+        T = self.T
+        wheels = [T["corobot_interfaces/msg/WheelState"](
+            name=name, commanded_power=float(w.commanded_power), axle_speed=float(w.axle_speed),
+            has_encoder=w.encoder_ticks is not None, encoder_ticks=int(w.encoder_ticks or 0))
+            for name, w in state.wheels.items()]
+        x, y, z = state.position
+        return T["corobot_interfaces/msg/DriveState"](
+            header=self.header(t, frame), is_enabled=bool(state.is_enabled),
+            distance_between_wheels=float(state.distance_between_wheels),
+            power_scaling_factor=float(state.power_scaling_factor), wheels=wheels,
+            position=T["geometry_msgs/msg/Point"](x=float(x), y=float(y), z=float(z)),
+            heading=float(state.heading))
+
+    def telemetry(self, msgtype: str, topic: tp.TelemetryTopic, t: float, frame: str,
+                  values: list):
+        """One of corobot_interfaces' telemetry messages (`interfaces.telemetry_definition`)
+        from its ports' values (each a vector: 4 by wheel, or 1)."""
+        fields = {}
+        for (field, _, _), v in zip(topic.fields, values, strict=True):
+            fields[field] = (np.asarray(v, dtype=np.float64).copy() if topic.per_wheel
+                             else float(v[0]))
+        if topic.per_wheel:
+            fields["wheel_names"] = list(WHEEL_NAMES)
+        return self.T[msgtype](header=self.header(t, frame), **fields)

@@ -1,0 +1,289 @@
+"""The ROS 2 node `corobot_drake`: the bus's topics published live, and the robot's commands
+taken from /cmd_vel, the actions and the services (`interfaces`).
+
+Threads: the node spins in an executor thread of its own (a MultiThreadedExecutor: an action
+waits for its command while others are served). Its callbacks never touch Drake: they hand
+functions to the simulation thread through a `serving.runner.Runner` (`submit`, `watch`), the
+HTTP server's way in (`serving.calls`), and wait on the futures. The topics are written from
+the simulation thread, by the publishers' events (`publishers`), as serialized messages.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures
+import contextlib
+import dataclasses as dc
+import math
+import threading
+from functools import partial
+
+import rclpy
+from rclpy.action import ActionServer, CancelResponse, GoalResponse
+from rclpy.callback_groups import ReentrantCallbackGroup
+from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
+from rclpy.parameter import Parameter
+from rclpy.qos import (
+    DurabilityPolicy,
+    QoSProfile,
+    ReliabilityPolicy,
+    qos_profile_sensor_data,
+)
+
+from corobot_drake.config import scenario as sc
+from corobot_drake.recording.topics import RobotNames
+from corobot_drake.ros2 import interfaces as ifc
+from corobot_drake.ros2.graph import configure_discovery, ros_type
+from corobot_drake.serving import calls
+from corobot_drake.serving.runner import SimulationStoppedError
+
+ANSWER_TIMEOUT = 10.0
+"""s (wall clock) a service or a goal waits for the simulation thread to take its command."""
+FEEDBACK_PERIOD = 0.1
+"""s (wall clock) between an action's feedback messages."""
+SERVICE_SETTLE_TIMEOUT = 30.0
+"""s (wall clock) /set_pose waits for the robot to settle at its new pose."""
+
+
+QOS = {
+    ifc.Qos.SENSOR: qos_profile_sensor_data,
+    ifc.Qos.RELIABLE: QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE),
+    ifc.Qos.LATCHED: QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                                durability=DurabilityPolicy.TRANSIENT_LOCAL),
+}
+
+
+class LiveSink:
+    """A `bus.Bus` sink: publishes each serialized message on the node's publisher."""
+
+    def __init__(self, node):
+        self._node = node
+        self._publishers: dict = {}
+
+    def declare(self, topic: str, msgtype: str, qos: ifc.Qos) -> None:
+        self._publishers[topic] = self._node.create_publisher(ros_type(msgtype), topic,
+                                                              QOS[qos])
+
+    def write(self, topic: str, data, t_ns: int) -> None:
+        self._publishers[topic].publish(bytes(data))
+
+
+@dc.dataclass
+class _Twist:
+    """The command a robot's latest /cmd_vel issued and the simulated time it was issued."""
+
+    seq: int
+    time: float
+
+
+class Ros2Node:
+    """The node; `sink` for the bus (before the simulation is built), `attach(runner,
+    robots)` once the runner exists, `start()`, then `close()`."""
+
+    def __init__(self, network: bool = False, domain_id: int | None = None):
+        self.discovery = configure_discovery(network)
+        self.context = rclpy.Context()
+        rclpy.init(context=self.context, domain_id=domain_id)
+        self.node = rclpy.create_node(ifc.NODE_NAME, context=self.context)
+        self.deadman = self.node.declare_parameter("cmd_vel_timeout",
+                                                   ifc.DEADMAN_TIMEOUT).value
+        self.node.add_on_set_parameters_callback(self._on_parameters)
+        self.sink = LiveSink(self.node)
+        self.runner = None
+        self._group = ReentrantCallbackGroup()
+        self._twists: dict[str, _Twist] = {}
+        self._executor: MultiThreadedExecutor | None = None
+        self._thread: threading.Thread | None = None
+        self._closing = threading.Event()
+        self._servers: list = []
+
+    @property
+    def log(self):
+        return self.node.get_logger()
+
+    def _on_parameters(self, parameters):
+        from rcl_interfaces.msg import SetParametersResult
+
+        for p in parameters:
+            if p.name == "cmd_vel_timeout":
+                if p.type_ not in (Parameter.Type.DOUBLE, Parameter.Type.INTEGER) or not (
+                        math.isfinite(p.value) and p.value >= 0):
+                    return SetParametersResult(successful=False,
+                                               reason="cmd_vel_timeout: a number of s >= 0")
+                self.deadman = float(p.value)
+        return SetParametersResult(successful=True)
+
+    # --- commands ---
+    def attach(self, runner, robots) -> None:
+        """Takes commands for `robots` (names, the scenario's order) through `runner`."""
+        self.runner = runner
+        namespaced = len(robots) > 1
+        for robot in robots:
+            names = RobotNames(robot, namespaced)
+            self.node.create_subscription(
+                ros_type(ifc.CMD_VEL[1]), names.topic(ifc.CMD_VEL[0]),
+                partial(self._on_twist, robot), 10, callback_group=self._group)
+            for action in ifc.ACTIONS:
+                self._servers.append(ActionServer(
+                    self.node, ros_type(action.type), names.topic(action.name),
+                    execute_callback=partial(self._execute, robot, action),
+                    goal_callback=lambda goal: GoalResponse.ACCEPT,
+                    cancel_callback=lambda goal: CancelResponse.ACCEPT,
+                    callback_group=self._group))
+            for service in ifc.SERVICES:
+                self.node.create_service(ros_type(service.type), names.topic(service.name),
+                                         partial(getattr(self, f"_{service.name}"), robot),
+                                         callback_group=self._group)
+        runner.hooks.append(self._check_deadman)
+
+    def _call(self, fn, timeout: float = ANSWER_TIMEOUT):
+        """`fn(sim)` in the simulation thread; its result (or exception)."""
+        return self.runner.submit(fn).result(timeout)
+
+    def _on_twist(self, robot: str, msg) -> None:
+        future = self.runner.submit(partial(self._issue_twist, robot, msg.linear.x,
+                                            msg.angular.z))
+        future.add_done_callback(partial(self._report, f"{robot}: cmd_vel"))
+
+    def _report(self, what: str, future) -> None:
+        error = future.exception() if not future.cancelled() else None
+        if error is not None and not isinstance(error, SimulationStoppedError):
+            self.log.warning(f"{what}: {error}", throttle_duration_sec=1.0)
+
+    def _issue_twist(self, robot: str, linear: float, angular: float, sim) -> None:
+        """In the simulation thread: SetVelocity, remembered for the deadman."""
+        seq = sim.robot(robot).set_velocity(linear, angular)
+        self._twists[robot] = _Twist(seq, sim.time)
+
+    def _check_deadman(self, sim) -> None:
+        """In the simulation thread, between steps: a robot whose latest command is still its
+        latest Twist's, issued more than `deadman` s ago, gets an AllStop."""
+        if not self.deadman:
+            return
+        for robot, twist in list(self._twists.items()):
+            if sim.time - twist.time <= self.deadman:
+                continue
+            del self._twists[robot]
+            last = sim.robot(robot).last_command()
+            if last is not None and last.seq == twist.seq:
+                sim.robot(robot).all_stop()
+
+    # --- actions ---
+    def _execute(self, robot: str, action: ifc.Action, goal_handle):
+        Result = ros_type(action.type).Result
+        goal = goal_handle.request
+        arguments = {name: getattr(goal, name) for name in ifc.goal_fields(action.command)}
+        try:
+            started = self._call(partial(calls.start_operation, robot, action.call, arguments))
+        except (ValueError, SimulationStoppedError, TimeoutError) as e:
+            goal_handle.abort()
+            return Result(success=False, reason=str(e) or type(e).__name__)
+        ended = self.runner.watch(partial(calls.ended_command, robot, started.seq))
+        Feedback = ros_type(action.type).Feedback
+        while True:
+            try:
+                result = ended.result(FEEDBACK_PERIOD)
+                break
+            except concurrent.futures.TimeoutError:
+                pass
+            except SimulationStoppedError as e:
+                goal_handle.abort()
+                return Result(success=False, reason=str(e))
+            if goal_handle.is_cancel_requested:
+                return self._cancel(robot, started.seq, goal_handle, ended, Result)
+            left = self._call(partial(remaining, robot, action.command))
+            if left is not None:
+                goal_handle.publish_feedback(Feedback(**{action.feedback: left}))
+        if result.succeeded:
+            goal_handle.succeed()
+        else:
+            goal_handle.abort()
+        return Result(success=result.succeeded, reason=result.reason)
+
+    def _cancel(self, robot: str, seq: int, goal_handle, ended, Result):
+        """Stops the robot (an AllStop, unless the command ended meanwhile), waits for the
+        command to end, and reports the goal cancelled."""
+        self._call(partial(stop_if_running, robot, seq))
+        with contextlib.suppress(concurrent.futures.TimeoutError, SimulationStoppedError):
+            ended.result(ANSWER_TIMEOUT)
+        goal_handle.canceled()
+        return Result(success=False, reason=ifc.CANCELED)
+
+    # --- services ---
+    def _all_stop(self, robot: str, request, response):
+        return self._simple(robot, "all_stop", (), response, "stopping")
+
+    def _enable_drive(self, robot: str, request, response):
+        enabled = bool(request.data)
+        return self._simple(robot, "enable", (enabled,), response,
+                            "enabled" if enabled else "disabled")
+
+    def _simple(self, robot: str, command: str, args: tuple, response, what: str):
+        try:
+            seq, t = self._call(partial(calls.issue, robot, command, args))
+        except (ValueError, SimulationStoppedError, TimeoutError) as e:
+            response.success, response.message = False, str(e) or type(e).__name__
+            return response
+        response.success, response.message = True, f"{what} (seq {seq}, t = {t:.3f} s)"
+        return response
+
+    def _set_pose(self, robot: str, request, response):
+        arguments = {"x": request.x, "y": request.y, "yaw_deg": math.degrees(request.yaw)}
+        try:
+            result = self._call(partial(calls.start_operation, robot, "set_pose", arguments))
+            if result.end_time is None:
+                result = self.runner.watch(partial(calls.ended_command, robot, result.seq)
+                                           ).result(SERVICE_SETTLE_TIMEOUT)
+        except (ValueError, SimulationStoppedError, TimeoutError) as e:
+            response.success, response.reason = False, str(e) or type(e).__name__
+            return response
+        response.success, response.reason = result.succeeded, result.reason
+        return response
+
+    # --- life cycle ---
+    def start(self) -> Ros2Node:
+        """Spins the node in a thread of its own."""
+        self._executor = MultiThreadedExecutor(context=self.context)
+        self._executor.add_node(self.node)
+        self._thread = threading.Thread(target=self._spin, name="corobot-ros2", daemon=True)
+        self._thread.start()
+        return self
+
+    def _spin(self) -> None:
+        with contextlib.suppress(ExternalShutdownException):
+            self._executor.spin()
+
+    def close(self) -> None:
+        """Stops spinning and shuts the node down, in the order rclpy needs (the executor,
+        its thread, the node, the context)."""
+        if self._closing.is_set():
+            return
+        self._closing.set()
+        if self._executor is not None:
+            self._executor.shutdown(timeout_sec=5.0)
+        if self._thread is not None:
+            self._thread.join(5.0)
+        for server in self._servers:
+            server.destroy()
+        self.node.destroy_node()
+        if self.context.ok():
+            rclpy.shutdown(context=self.context)
+
+
+def remaining(robot: str, command: type, sim) -> float | None:
+    """In the simulation thread: what is left of the robot's running `command` (a
+    DriveDistance: m, signed as its distance; a RotateDegrees: deg, signed), None if none
+    runs (`Robot.continuation_commands`' first)."""
+    for c in sim.robot(robot).continuation_commands():
+        if isinstance(c, command):
+            if isinstance(c, sc.DriveDistance):
+                done = abs(c.recent_progress[-1]) if c.recent_progress else 0.0
+                return math.copysign(max(0.0, abs(c.distance) - done), c.distance)
+            return c.degrees
+    return None
+
+
+def stop_if_running(robot: str, seq: int, sim) -> None:
+    """In the simulation thread: an AllStop if command `seq` still runs."""
+    r = sim.robot(robot)
+    if r.command_result(seq).end_time is None:
+        r.all_stop()

@@ -1,0 +1,403 @@
+"""The LeafSystems that publish the robot's ROS 2 topics (`interfaces.TOPICS`) on a `bus.Bus`.
+
+As the Foxglove recording's (`recording.publishers`, whose schedules and windows they share):
+each publishes on periodic publish events from its input ports alone, so they keep no memory
+and a reset or replayed Context publishes the same messages, at the same simulated times, live
+(`--ros2`) or into a bag (`--rosbag`). A look at t sees what happened in [t - period, t).
+
+`add_ros2_topics` adds them all to a station's builder (`station.build_station`'s `extras`).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from pydrake.common.value import AbstractValue, Value
+from pydrake.math import RigidTransform
+from pydrake.multibody.math import SpatialVelocity
+from pydrake.systems.framework import LeafSystem
+from pydrake.systems.primitives import ZeroOrderHold
+from pydrake.systems.sensors import ImageRgba8U, RgbdSensorAsync
+
+from corobot_drake.config.poses import mount_frame
+from corobot_drake.model import dimensions as dim
+from corobot_drake.recording import topics as tp
+from corobot_drake.recording.publishers import (
+    STATE_PERIOD,
+    TELEMETRY_PERIOD,
+    TELEMETRY_SYSTEMS,
+    TOLERANCE,
+    in_window,
+)
+from corobot_drake.ros2 import interfaces as ifc
+from corobot_drake.ros2.messages import R_LINK_OPTICAL, Messages
+from corobot_drake.sensors.camera import frame_look_period
+from corobot_drake.sensors.ir_models import SharpGP2D12
+from corobot_drake.sensors.ir_sensor import DISTANCE, SCAN_TIME, scan_state_layout
+
+CLOCK_PERIOD = 0.01
+"""s: /clock at 100 Hz (the plant's default step: a look adds no Simulator stop)."""
+ODOM_FRAME = "odom"
+"""The fixed frame /odom's poses are in: the world's origin and axes (ground truth)."""
+WORLD_FRAME = "world"
+"""With several robots, /tf_static joins each robot's odom to this one frame."""
+CAMERA_LINK = "camera_link"
+
+
+def _channel(bus, names: tp.RobotNames | None, topic: ifc.Topic):
+    """The bus channel of `topic`, under the robot's namespace unless shared."""
+    name = f"/{topic.name}" if names is None or topic.shared else names.topic(topic.name)
+    return bus.channel(name, topic.type, topic.qos)
+
+
+class ClockPublisher(LeafSystem):
+    """/clock (rosgraph_msgs/Clock): the simulation time every `period` s. No inputs."""
+
+    def __init__(self, bus, period: float = CLOCK_PERIOD):
+        super().__init__()
+        self._m = Messages(bus.store)
+        self._channel = _channel(bus, None, ifc.TOPIC["clock"])
+        self.DeclarePeriodicPublishEvent(period, 0.0, self._publish)
+
+    def _publish(self, context):
+        t = context.get_time()
+        self._channel.publish(tp.nanoseconds(t), self._m.clock(t))
+
+
+class StaticPublisher(LeafSystem):
+    """/tf_static and each robot's /robot_description, once, at initialization (latched: a
+    late subscriber gets them). No inputs. `mounts`: (parent, child, X_PC) fixed transforms;
+    `descriptions`: {robot names: URDF text}."""
+
+    def __init__(self, bus, mounts: list, descriptions: dict):
+        super().__init__()
+        self._m = Messages(bus.store)
+        self._mounts = mounts
+        self._tf = _channel(bus, None, ifc.TOPIC["tf_static"])
+        self._descriptions = [(_channel(bus, names, ifc.TOPIC["robot_description"]), text)
+                              for names, text in descriptions.items()]
+        self.DeclareInitializationPublishEvent(self._publish)
+
+    def _publish(self, context):
+        t = context.get_time()
+        ns = tp.nanoseconds(t)
+        self._tf.publish(ns, self._m.tf([self._m.transform(t, p, c, X)
+                                         for p, c, X in self._mounts]))
+        for channel, text in self._descriptions:
+            channel.publish(ns, self._m.string(text))
+
+
+class TransformPublisher(LeafSystem):
+    """/tf: each robot's odom -> base_link (its chassis pose in the world: ground truth) and
+    base_link -> its wheels' frames, every `period` s, in one tf2_msgs/TFMessage.
+
+    .. pydrake_system::
+
+        name: TransformPublisher
+        input_ports:
+        - body_poses
+
+    Input `body_poses` (the plant's: abstract list of X_WB by body index). `robots`: for each
+    robot, (its `RobotNames`, chassis body index, [(wheel body index, wheel frame)])."""
+
+    def __init__(self, bus, robots: list, period: float = STATE_PERIOD):
+        super().__init__()
+        self._m = Messages(bus.store)
+        self._robots = [(names.frame(ODOM_FRAME), names.body_frame("chassis"), int(chassis),
+                         [(int(i), frame) for i, frame in wheels])
+                        for names, chassis, wheels in robots]
+        self._poses = self.DeclareAbstractInputPort("body_poses",
+                                                    AbstractValue.Make([RigidTransform()]))
+        self._channel = _channel(bus, None, ifc.TOPIC["tf"])
+        self.DeclarePeriodicPublishEvent(period, 0.0, self._publish)
+
+    def _publish(self, context):
+        t, X_W = context.get_time(), self._poses.Eval(context)
+        transforms = []
+        for odom, base, chassis, wheels in self._robots:
+            X_WB = X_W[chassis]
+            transforms.append(self._m.transform(t, odom, base, X_WB))
+            transforms += [self._m.transform(t, base, frame, X_WB.InvertAndCompose(X_W[i]))
+                           for i, frame in wheels]
+        self._channel.publish(tp.nanoseconds(t), self._m.tf(transforms))
+
+
+class RobotStatePublisher(LeafSystem):
+    """One robot's /odom, /wheel_odom, /joint_states and /drive_state, every `period` s.
+
+    .. pydrake_system::
+
+        name: RobotStatePublisher
+        input_ports:
+        - body_poses
+        - body_spatial_velocities
+        - wheel_state
+        - drive_state
+        - odometry
+
+    Inputs: `body_poses` and `body_spatial_velocities` (the plant's, abstract lists by body
+    index; the chassis is `chassis_index`), `wheel_state` (8: the four axles' angles, rad, then
+    rates, rad/s, `dimensions.WHEEL_NAMES` order), `drive_state` (abstract
+    `odometry.DriveState`), `odometry` (3: the dead-reckoned x, y m, yaw rad). /odom: the
+    chassis pose in odom and its velocity in base_link; /wheel_odom: the dead reckoning, its
+    twist from the front axles' measured speeds through the drive's effective wheel radius and
+    track width (`drive`: the robot's `config.scenario.Drive`)."""
+
+    def __init__(self, bus, names: tp.RobotNames, chassis_index: int, drive,
+                 period: float = STATE_PERIOD):
+        super().__init__()
+        self._m = Messages(bus.store)
+        self._chassis = int(chassis_index)
+        self._odom, self._base = names.frame(ODOM_FRAME), names.body_frame("chassis")
+        self._radius, self._track = drive.effective_wheel_radius, drive.effective_track_width
+        self._poses = self.DeclareAbstractInputPort("body_poses",
+                                                    AbstractValue.Make([RigidTransform()]))
+        self._velocities = self.DeclareAbstractInputPort(
+            "body_spatial_velocities", AbstractValue.Make([SpatialVelocity()]))
+        self._wheels = self.DeclareVectorInputPort("wheel_state", 2 * len(dim.WHEEL_NAMES))
+        self._drive = self.DeclareAbstractInputPort("drive_state", Value(object()))
+        self._odometry = self.DeclareVectorInputPort("odometry", 3)
+        self._joint_names = [f"{w}_axle" for w in dim.WHEEL_NAMES]
+        self._channels = {name: _channel(bus, names, ifc.TOPIC[name]) for name in (
+            "odom", "wheel_odom", "joint_states", "drive_state")}
+        self.DeclarePeriodicPublishEvent(period, 0.0, self._publish)
+
+    def _publish(self, context):
+        t = context.get_time()
+        ns, m, n = tp.nanoseconds(t), self._m, len(dim.WHEEL_NAMES)
+        x = self._wheels.Eval(context)
+        self._channels["joint_states"].publish(ns, m.joint_state(t, self._joint_names, x[:n],
+                                                                 x[n:]))
+        X_WB = self._poses.Eval(context)[self._chassis]
+        V_WB = self._velocities.Eval(context)[self._chassis]
+        R_BW = X_WB.rotation().inverse()
+        self._channels["odom"].publish(ns, m.odometry(
+            t, self._odom, self._base, X_WB, R_BW @ V_WB.translational(),
+            R_BW @ V_WB.rotational()))
+        self._channels["wheel_odom"].publish(ns, self.wheel_odometry(context))
+        self._channels["drive_state"].publish(ns, m.drive_state(t, self._odom,
+                                                                self._drive.Eval(context)))
+
+    def wheel_odometry(self, context):
+        """The dead reckoning as nav_msgs/Odometry, with its nominal covariances."""
+        t = context.get_time()
+        x, y, yaw = self._odometry.Eval(context)
+        left, right = self._wheels.Eval(context)[len(dim.WHEEL_NAMES):][:2]  # front axles
+        forward = 0.5 * self._radius * (left + right)
+        yaw_rate = self._radius * (right - left) / self._track
+        X = RigidTransform(_yaw_rotation(yaw), [x, y, 0.0])
+        return self._m.odometry(t, self._odom, self._base, X, (forward, 0.0, 0.0),
+                                (0.0, 0.0, yaw_rate), estimated=True)
+
+
+def _yaw_rotation(yaw: float):
+    from pydrake.math import RotationMatrix
+
+    return RotationMatrix.MakeZRotation(float(yaw))
+
+
+class TelemetryPublisher(LeafSystem):
+    """One robot's contact telemetry (`recording.topics.TELEMETRY_TOPICS`: /wheel_loads,
+    /wheel_slip, /tip_margin) as corobot_interfaces messages.
+
+    .. pydrake_system::
+
+        name: TelemetryPublisher
+        input_ports:
+        - wheel_loads
+        - wheel_slip_ratio
+        - wheel_slip_angle
+        - tip_margin
+
+    Inputs and schedule as `recording.publishers.TelemetryPublisher`'s: the costly topics'
+    ports held (sampled every `costly_period` s, published a period later with their sample's
+    time), the others' looked at every `period` s."""
+
+    def __init__(self, bus, names: tp.RobotNames, period: float = STATE_PERIOD,
+                 costly_period: float = TELEMETRY_PERIOD):
+        super().__init__()
+        m, frame = Messages(bus.store), names.body_frame("chassis")
+        for topic in tp.TELEMETRY_TOPICS:
+            ports = [self.DeclareVectorInputPort(port, len(dim.WHEEL_NAMES) if topic.per_wheel
+                                                 else 1) for _, port, _ in topic.fields]
+            spec = ifc.TOPIC[topic.name]
+            channel = _channel(bus, names, spec)
+            age = costly_period if topic.costly else 0.0
+
+            def publish(context, topic=topic, ports=ports, channel=channel, age=age,
+                        msgtype=spec.type):
+                t = context.get_time() - age
+                if t < -TOLERANCE:
+                    return  # nothing sampled yet
+                channel.publish(tp.nanoseconds(t), m.telemetry(
+                    msgtype, topic, t, frame, [port.Eval(context) for port in ports]))
+
+            self.DeclarePeriodicPublishEvent(costly_period if topic.costly else period, 0.0,
+                                             publish)
+
+
+class IrPublisher(LeafSystem):
+    """One IR sensor's scans: /ir/<sensor> (sensor_msgs/Range, INFRARED), one per scan,
+    stamped with the scan's time.
+
+    .. pydrake_system::
+
+        name: IrPublisher
+        input_ports:
+        - scan_state
+
+    Input `scan_state` (the IrSensor's, `ir_sensor.scan_state_layout`). It looks once per
+    scan period, at the scans' times, and publishes the scan taken since the previous look."""
+
+    def __init__(self, bus, names: tp.RobotNames, sensor: str, sensor_system):
+        super().__init__()
+        config = sensor_system.config
+        self._m = Messages(bus.store)
+        self._frame = names.ir_frame(sensor)
+        self._period = sensor_system.period
+        self._fov = math.radians(config.dispersion_cone_angle)
+        self._min = SharpGP2D12.min_distance if config.model == "sharp_gp2d12" else 0.0
+        self._max = config.maximum_range
+        size = scan_state_layout(sensor_system.num_rays)[0]
+        self._scan = self.DeclareVectorInputPort("scan_state", size)
+        self._channel = _channel(bus, names, ifc.ir_topic(sensor))
+        # On the scans' own schedule, as the recording's IrPublisher (see there).
+        self.DeclarePeriodicPublishEvent(self._period, self._period, self._publish)
+
+    def _publish(self, context):
+        s = self._scan.Eval(context)
+        when = float(s[SCAN_TIME])
+        if not in_window(when, context.get_time(), self._period):
+            return  # also NaN: no scan yet
+        self._channel.publish(tp.nanoseconds(when), self._m.range(
+            when, self._frame, self._fov, self._min, self._max, s[DISTANCE]))
+
+
+class CameraPublisher(LeafSystem):
+    """One camera's frames: /camera/image_raw (sensor_msgs/Image, rgb8) and
+    /camera/camera_info, stamped with the capture time.
+
+    .. pydrake_system::
+
+        name: CameraPublisher
+        input_ports:
+        - rgb_image
+        - image_time
+
+    Inputs `rgb_image` (abstract ImageRgba8U) and `image_time` (1, s: its capture; NaN before
+    the first), the camera's outputs. It looks every `look` s and publishes a frame that came
+    out (capture + `delay`) since the previous look, as `camera.CameraFrameSaver` does."""
+
+    def __init__(self, bus, names: tp.RobotNames, config, look: float, delay: float):
+        super().__init__()
+        self._m, self._config = Messages(bus.store), config
+        self._look, self._delay = float(look), float(delay)
+        self._frame = names.frame(tp.CAMERA_FRAME)
+        self._image = self.DeclareAbstractInputPort(
+            "rgb_image", AbstractValue.Make(ImageRgba8U(config.width, config.height)))
+        self._image_time = self.DeclareVectorInputPort("image_time", 1)
+        self._image_channel = _channel(bus, names, ifc.TOPIC["camera/image_raw"])
+        self._info_channel = _channel(bus, names, ifc.TOPIC["camera/camera_info"])
+        self.DeclarePeriodicPublishEvent(self._look, 0.0, self._publish)
+
+    def _publish(self, context):
+        captured = float(self._image_time.Eval(context)[0])
+        if not in_window(captured + self._delay, context.get_time(), self._look):
+            return  # also NaN: no frame yet
+        ns = tp.nanoseconds(captured)
+        rgba = self._image.Eval(context).data
+        self._image_channel.publish(ns, self._m.image(captured, self._frame, rgba))
+        self._info_channel.publish(ns, self._m.camera_info(captured, self._frame,
+                                                           self._config))
+
+
+# --- wiring -------------------------------------------------------------------------------
+
+
+def add_ros2_topics(bus, builder, plant, scene_graph, robots: dict, scenario) -> None:
+    """Adds the publishers of every topic (`interfaces.TOPICS`) for a station's plant and
+    robots ({name: station.RobotParts}, built from `scenario`), on `bus`."""
+    from corobot_drake.ros2.urdf import corobot_urdf
+
+    namespaced = len(robots) > 1
+    mounts, descriptions, tf_robots = [], {}, []
+    builder.AddNamedSystem("ros2_clock", ClockPublisher(bus))
+    for name, parts in robots.items():
+        names = tp.RobotNames(name, namespaced)
+        spec = scenario.robots[name]
+        state = builder.AddNamedSystem(f"{name}.ros2_state", RobotStatePublisher(
+            bus, names, parts.chassis.index(), spec.drive))
+        for port, source in (
+                ("body_poses", plant.get_body_poses_output_port()),
+                ("body_spatial_velocities", plant.get_body_spatial_velocities_output_port()),
+                ("wheel_state", builder.GetSubsystemByName(f"{name}.wheel_state")
+                 .get_output_port()),
+                ("drive_state", builder.GetSubsystemByName(f"{name}.drive_state")
+                 .GetOutputPort("drive_state")),
+                ("odometry", builder.GetSubsystemByName(f"{name}.dead_reckoning")
+                 .GetOutputPort("pose"))):
+            builder.Connect(source, state.GetInputPort(port))
+        _add_telemetry(builder, bus, names)
+        tf_robots.append((names, parts.chassis.index(),
+                          [(j.child_body().index(), names.body_frame(j.child_body().name()))
+                           for j in parts.wheel_joints]))
+        mounts += _robot_mounts(builder, bus, plant, names, parts, spec)
+        if namespaced:  # one tree: every robot's odom is the world's origin
+            mounts.append((WORLD_FRAME, names.frame(ODOM_FRAME), RigidTransform()))
+        descriptions[names] = corobot_urdf(spec, name)
+    tf = builder.AddNamedSystem("ros2_tf", TransformPublisher(bus, tf_robots))
+    builder.Connect(plant.get_body_poses_output_port(), tf.get_input_port())
+    builder.AddNamedSystem("ros2_static", StaticPublisher(bus, mounts, descriptions))
+
+
+def _robot_mounts(builder, bus, plant, names, parts, spec) -> list:
+    """Adds the robot's IR and camera publishers; returns their frames' fixed mounts."""
+    mounts = []
+    for sensor, system in parts.ir_sensors.items():
+        ir = builder.AddNamedSystem(f"{names.robot}.ros2_ir.{sensor}",
+                                    IrPublisher(bus, names, sensor, system))
+        builder.Connect(system.GetOutputPort("scan_state"), ir.get_input_port())
+        mounts.append(_mount(plant, parts, names, names.ir_frame(sensor),
+                             system.config.X_PB))
+    if parts.camera is not None:
+        config = spec.camera
+        camera = parts.camera
+        delay = config.output_delay if isinstance(camera, RgbdSensorAsync) else 0.0
+        publisher = builder.AddNamedSystem(f"{names.robot}.ros2_camera", CameraPublisher(
+            bus, names, config, frame_look_period(config, plant.time_step()), delay))
+        image = "color_image" if isinstance(camera, RgbdSensorAsync) else "rgb_image"
+        builder.Connect(camera.GetOutputPort(image), publisher.GetInputPort("rgb_image"))
+        builder.Connect(camera.GetOutputPort("image_time"),
+                        publisher.GetInputPort("image_time"))
+        parent, optical, X_PO = _mount(plant, parts, names, names.frame(tp.CAMERA_FRAME),
+                                       config.X_PB)
+        link = names.frame(CAMERA_LINK)
+        X_LO = RigidTransform(R_LINK_OPTICAL, np.zeros(3))
+        mounts += [(parent, link, X_PO @ X_LO.inverse()), (link, optical, X_LO)]
+    return mounts
+
+
+def _mount(plant, parts, names: tp.RobotNames, child: str, X_PB) -> tuple:
+    """(parent frame, child frame, X_PC) of a sensor mounted at `X_PB` on the robot."""
+    body, X_BS = mount_frame(plant, parts.model_instance, X_PB)
+    if body.index() == plant.world_body().index():
+        return names.frame(ODOM_FRAME), child, X_BS
+    return names.body_frame(body.name()), child, X_BS
+
+
+def _add_telemetry(builder, bus, names: tp.RobotNames) -> None:
+    """Adds `<robot>.ros2_telemetry`, fed by the robot's telemetry systems' ports, the costly
+    topics' through holds `<robot>.ros2_<port>` (`recording.publishers.TELEMETRY_PERIOD`)."""
+    robot = names.robot
+    publisher = builder.AddNamedSystem(f"{robot}.ros2_telemetry", TelemetryPublisher(bus, names))
+    systems = [builder.GetSubsystemByName(f"{robot}.{s}") for s in TELEMETRY_SYSTEMS]
+    for topic in tp.TELEMETRY_TOPICS:
+        for _, port, _ in topic.fields:
+            (source,) = [s.GetOutputPort(port) for s in systems if s.HasOutputPort(port)]
+            if topic.costly:
+                hold = builder.AddNamedSystem(f"{robot}.ros2_{port}", ZeroOrderHold(
+                    TELEMETRY_PERIOD, source.size()))
+                builder.Connect(source, hold.get_input_port())
+                source = hold.get_output_port()
+            builder.Connect(source, publisher.GetInputPort(port))

@@ -1,0 +1,139 @@
+"""The command line's ROS 2 front end: `--ros2` (the live node), `--ros2-network`, `--rosbag`.
+
+`Ros2Front` makes what the flags ask for (the node, the bag) and the station's `extras` that
+publish on them; `run_live` runs a scenario in real time with the node taking commands (the
+simulation in a `serving.runner.SimRunner`, as `--serve` runs it), `attach` joins the node to
+`--serve`'s runner. Imported only when a flag asks for it.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import sys
+from functools import partial
+from pathlib import Path
+
+EXTRA_HINT = "pip install 'corobot-drake[ros2]'"
+INTERFACES_HINT = "python -m corobot_drake.ros2.build (tools/setup runs it)"
+
+
+def missing(flag: str, live: bool) -> str | None:
+    """Why `flag` cannot run here (one line, for `error: ...`), else None: the [ros2] extra
+    (rclpy and Fast DDS for the live node; rosbags for a bag) and, live, the interface
+    packages built into the environment."""
+    modules = ("rclpy", "rosbags") if live else ("rosbags",)
+    for module in modules:
+        try:
+            __import__(module)
+        except ImportError:
+            return f"{flag} needs the [ros2] extra: {EXTRA_HINT}"
+    if live:
+        for package in ("tf2_msgs", "corobot_interfaces"):
+            try:
+                __import__(f"{package}.msg")
+            except ImportError:
+                return f"{flag} needs the {package} interfaces built: {INTERFACES_HINT}"
+    return None
+
+
+class Ros2Front(contextlib.ExitStack):
+    """The node (`args.ros2`) and the bag (`args.rosbag`) of a run, closed on leaving the
+    block (the node shut down, the bag's metadata written); `extras` for the Simulation."""
+
+    def __init__(self, args, robots: list[str]):
+        super().__init__()
+        from corobot_drake.ros2.bus import Bus
+        from corobot_drake.ros2.publishers import add_ros2_topics
+
+        self.robots = robots
+        self.node = None
+        sinks = []
+        if args.rosbag is not None:
+            from corobot_drake.ros2.bag import BagSink
+
+            bag = BagSink(args.rosbag)
+            self.callback(bag.close)
+            sinks.append(bag)
+        if args.ros2:
+            from corobot_drake.ros2.node import Ros2Node
+
+            self.node = Ros2Node(network=args.ros2_network)
+            self.callback(self.node.close)
+            sinks.append(self.node.sink)
+        self.bus = Bus(sinks)
+        self.extras = [partial(add_ros2_topics, self.bus)]
+
+    def attach(self, runner) -> None:
+        """Joins the node to `runner` (before it starts) and starts it spinning."""
+        self.node.attach(runner, self.robots)
+        self.node.start()
+        self.announce()
+
+    def announce(self) -> None:
+        """The line that says where the node is (stderr: --serve's first stdout line is its
+        URL)."""
+        domain = os.environ.get("ROS_DOMAIN_ID", "0")
+        print(f"ROS 2: node /{self.node.node.get_name()}, ROS_DOMAIN_ID {domain}, discovery "
+              f"{self.node.discovery} (python -m corobot_drake.ros2 list)", file=sys.stderr,
+              flush=True)
+        if self.node.discovery != "LOCALHOST":
+            print(f"warning: ROS 2 discovery {self.node.discovery}: any ROS 2 node on the "
+                  "network with this domain id can read the topics and drive the robot",
+                  file=sys.stderr, flush=True)
+
+
+def run_live(front: Ros2Front, make_sim, meshcat: bool, duration: float,
+             run_log_window: float | None, finish):
+    """Runs the simulation (`make_sim(meshcat or None)`, built in its thread) in real time with
+    the node attached, until `duration` simulated s have passed or Ctrl-C; then returns
+    `finish(sim)`, called in the simulation thread (Meshcat, which a replay is written from,
+    answers only the thread that made it). What building it raised is raised."""
+    from corobot_drake.serving.runner import SimRunner, SimulationStoppedError
+
+    def build():
+        viewer = None
+        if meshcat:
+            from pydrake.geometry import StartMeshcat
+
+            viewer = StartMeshcat()
+            runner.meshcat_url = viewer.web_url()
+        sim = make_sim(viewer)
+        sim.run_log_window = run_log_window
+        if viewer is not None:
+            from corobot_drake.serving.teleop import MeshcatTeleop
+
+            teleop = MeshcatTeleop(viewer, sim)
+            runner.hooks.append(lambda s: teleop.poll())
+        return sim
+
+    runner = SimRunner(build)
+    front.attach(runner)
+    sys.setswitchinterval(SWITCH_INTERVAL)
+    runner.start()
+    if runner.meshcat_url:
+        print(f"Meshcat: {runner.meshcat_url}", flush=True)
+    end = runner.sim.time + duration
+    try:
+        try:
+            runner.watch(lambda sim: True if sim.time >= end - 1e-9 else None).result()
+        except KeyboardInterrupt:
+            print("\nstopped", file=sys.stderr)
+        if runner.alive:  # (a second Ctrl-C leaves the outputs unwritten)
+            return runner.call(finish, timeout=None)
+    except SimulationStoppedError:
+        pass  # the simulation thread ended: its error is raised below
+    finally:
+        runner.stop()
+    raise runner.error or RuntimeError("the simulation stopped")
+
+
+SWITCH_INTERVAL = 0.001
+"""s: Python's GIL hand-over interval while the node runs beside the simulation: its callbacks
+wait for the GIL at every hand-over (at the default 5 ms, ~6 ms a callback; at 1 ms ~2 ms)."""
+
+
+def rosbag_problem(path: str) -> str | None:
+    from corobot_drake.ros2.bag import bag_problem
+
+    return bag_problem(Path(path))

@@ -1,0 +1,82 @@
+#!/usr/bin/env python3
+"""Keyboard teleop over ROS 2, as teleop_twist_keyboard: keys to geometry_msgs/Twist on
+/cmd_vel of the simulated robot (`python -m corobot_drake --ros2`).
+
+    u i o      i forward, , back, j / l turn left / right in place,
+    j k l      u o m . forward and back while turning; k or space stops
+    m , .      q / z: all speeds x 1.1 / x 0.9; Ctrl-C quits (and stops the robot)
+
+The Twist is sent again every 0.1 s while a move is on: the simulation stops the robot when
+none has come for 0.5 s (its `cmd_vel_timeout`), as a real base's watchdog would.
+
+    python -m corobot_drake --ros2 &                 # Meshcat shows it; then:
+    python examples/ros2_teleop.py [--robot NAME]
+"""
+
+import argparse
+import select
+import sys
+import termios
+import tty
+
+import rclpy
+from geometry_msgs.msg import Twist
+
+MOVES = {"i": (1, 0), ",": (-1, 0), "j": (0, 1), "l": (0, -1), "u": (1, 1), "o": (1, -1),
+         "m": (-1, -1), ".": (-1, 1), "k": (0, 0), " ": (0, 0)}
+"""key: (forward, turn) as signs of the linear and angular speeds (teleop_twist_keyboard's)."""
+SCALES = {"q": 1.1, "z": 0.9}
+REPEAT = 0.1
+"""s between Twists while a move is on (well inside the simulation's 0.5 s deadman)."""
+
+
+def read_key(timeout: float) -> str | None:
+    """One key from the terminal (raw mode), None if none came within `timeout` s."""
+    ready, _, _ = select.select([sys.stdin], [], [], timeout)
+    return sys.stdin.read(1) if ready else None
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--robot", default="", help="the robot's namespace (several robots)")
+    p.add_argument("--speed", type=float, default=0.3, help="m/s (default 0.3)")
+    p.add_argument("--turn", type=float, default=1.0, help="rad/s (default 1.0)")
+    args = p.parse_args(argv)
+    if not sys.stdin.isatty():
+        print("error: ros2_teleop.py reads keys from a terminal", file=sys.stderr)
+        return 2
+    rclpy.init()
+    node = rclpy.create_node("corobot_teleop")
+    publisher = node.create_publisher(Twist, f"/{args.robot}/cmd_vel" if args.robot
+                                      else "/cmd_vel", 10)
+    speed, turn, move = args.speed, args.turn, (0, 0)
+    saved = termios.tcgetattr(sys.stdin)
+    print(__doc__.split("\n\n")[1])
+    try:
+        tty.setcbreak(sys.stdin.fileno())
+        while True:
+            key = read_key(REPEAT)
+            if key == "\x03":
+                break
+            if key in MOVES:
+                move = MOVES[key]
+            elif key in SCALES:
+                speed, turn = speed * SCALES[key], turn * SCALES[key]
+                print(f"\rspeed {speed:.2f} m/s  turn {turn:.2f} rad/s   ", end="", flush=True)
+            if move != (0, 0) or key in MOVES:
+                twist = Twist()
+                twist.linear.x, twist.angular.z = move[0] * speed, move[1] * turn
+                publisher.publish(twist)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        termios.tcsetattr(sys.stdin, termios.TCSADRAIN, saved)
+        publisher.publish(Twist())  # stop
+        node.destroy_node()
+        rclpy.try_shutdown()
+        print()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,199 @@
+"""The ROS 2 tests' side: a private network, the simulation as a user runs it, and a node of
+the test's own that talks to it as a user's node would.
+
+Every DDS participant of a test (the simulation process and the probe node) lives in a network
+namespace of the test's own with only loopback up (`private_network`: nothing can leave the
+machine), discovers over LOCALHOST, in a domain id of its own (`domain_id`). The probe waits on
+discovery and on messages (a condition variable), never on a fixed sleep; its time limits only
+bound a test that would otherwise hang.
+"""
+
+from __future__ import annotations
+
+import collections
+import contextlib
+import os
+import random
+import subprocess
+import threading
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+
+WAIT = 60.0
+"""s (wall clock) a wait may take before the test fails: discovery takes up to ~5 s, a
+simulated second ~1-2 s of a loaded 2-core machine's time."""
+SHM = Path("/dev/shm")
+
+
+@contextlib.contextmanager
+def private_network():
+    """`graph.private_network`, skipping the test where it cannot be made (not root)."""
+    from corobot_drake.ros2.graph import PrivateNetworkError
+    from corobot_drake.ros2.graph import private_network as network
+
+    stack = contextlib.ExitStack()
+    try:
+        stack.enter_context(network())
+    except PrivateNetworkError as e:
+        pytest.skip(f"{e}: the ROS 2 tests keep DDS off every real network")
+    with stack:
+        yield
+
+
+def domain_id() -> int:
+    """A ROS_DOMAIN_ID of the test's own (1-100: each maps to its own UDP ports)."""
+    return random.Random(os.getpid() ^ time.time_ns()).randint(1, 100)
+
+
+def _shm_segments() -> set[str]:
+    return {p.name for p in SHM.glob("*fastrtps*")} | {p.name for p in SHM.glob("*fastdds*")}
+
+
+def _mapped_files() -> set[str]:
+    """Every file some other live process maps (a DDS segment in use is mapped by its owner;
+    this process's Fast DDS keeps its own mapped after its participants are gone)."""
+    mapped = set()
+    for maps in Path("/proc").glob("[0-9]*/maps"):
+        if maps.parent.name == str(os.getpid()):
+            continue
+        with contextlib.suppress(OSError):
+            mapped |= {line.split(None, 5)[5].strip() for line in maps.read_text().splitlines()
+                       if len(line.split(None, 5)) == 6 and "/dev/shm/" in line}
+    return mapped
+
+
+@contextlib.contextmanager
+def own_shared_memory():
+    """Removes, at the end, the Fast DDS shared-memory segments made meanwhile that no other
+    live process maps (the test's participants are gone by then): the test's own, never
+    another's (one in use is mapped by its owner; one from before the test is left)."""
+    before = _shm_segments()
+    try:
+        yield
+    finally:
+        in_use = _mapped_files()
+        for name in _shm_segments() - before:
+            path = SHM / name
+            if str(path) not in in_use:
+                with contextlib.suppress(OSError):
+                    path.unlink()
+
+
+class Probe:
+    """The test's node: records what it subscribes to, publishes, calls services and actions."""
+
+    def __init__(self, domain: int, name: str = "corobot_test_probe"):
+        import rclpy
+        from rclpy.executors import MultiThreadedExecutor
+
+        self.context = rclpy.Context()
+        rclpy.init(context=self.context, domain_id=domain)
+        self.node = rclpy.create_node(name, context=self.context)
+        self.messages: dict[str, list] = collections.defaultdict(list)
+        self._changed = threading.Condition()
+        self._executor = MultiThreadedExecutor(context=self.context)
+        self._executor.add_node(self.node)
+        self._thread = threading.Thread(target=self._executor.spin, daemon=True)
+        self._thread.start()
+
+    def subscribe(self, topic: str, msgtype, qos=None) -> None:
+        from rclpy.qos import qos_profile_sensor_data
+
+        def record(msg):
+            with self._changed:
+                self.messages[topic].append(msg)
+                self._changed.notify_all()
+
+        self.node.create_subscription(msgtype, topic, record,
+                                      qos if qos is not None else qos_profile_sensor_data)
+
+    def wait_for(self, topic: str, predicate: Callable = lambda m: True, start: int = 0,
+                 timeout: float = WAIT):
+        """The first message on `topic` from index `start` on that satisfies `predicate`."""
+        deadline = time.monotonic() + timeout
+        with self._changed:
+            while True:
+                for msg in self.messages[topic][start:]:
+                    if predicate(msg):
+                        return msg
+                start = max(start, len(self.messages[topic]))
+                left = deadline - time.monotonic()
+                if left <= 0:
+                    raise AssertionError(f"no message on {topic} as wanted in {timeout} s "
+                                         f"({len(self.messages[topic])} received)")
+                self._changed.wait(left)
+
+    def count(self, topic: str) -> int:
+        with self._changed:
+            return len(self.messages[topic])
+
+    def wait_future(self, future, timeout: float = WAIT):
+        """The result of an rclpy future (the executor's thread completes it)."""
+        event = threading.Event()
+        future.add_done_callback(lambda f: event.set())
+        if not event.wait(timeout):
+            raise AssertionError(f"no answer in {timeout} s")
+        return future.result()
+
+    def call(self, service: str, srvtype, request, timeout: float = WAIT):
+        client = self.node.create_client(srvtype, service)
+        try:
+            if not client.wait_for_service(timeout_sec=timeout):
+                raise AssertionError(f"service {service} not discovered in {timeout} s")
+            return self.wait_future(client.call_async(request), timeout)
+        finally:
+            self.node.destroy_client(client)
+
+    def close(self) -> None:
+        import rclpy
+
+        self._executor.shutdown(timeout_sec=5.0)
+        self._thread.join(5.0)
+        self.node.destroy_node()
+        if self.context.ok():
+            rclpy.shutdown(context=self.context)
+
+
+@contextlib.contextmanager
+def _simulation_process(args: list[str]):
+    """`python -m corobot_drake [args]`, stopped at the end by Ctrl-C (SIGINT) to its PID."""
+    import signal
+    import sys
+
+    process = subprocess.Popen([sys.executable, "-m", "corobot_drake", *args],
+                               stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    try:
+        yield process
+    finally:
+        if process.poll() is None:
+            process.send_signal(signal.SIGINT)
+            try:
+                process.wait(30)
+            except subprocess.TimeoutExpired:
+                process.kill()
+                process.wait(5)
+
+
+@contextlib.contextmanager
+def ros2_simulation(args: list[str], serve: bool = True):
+    """`python -m corobot_drake [args] --ros2` and a `Probe`, both in a private network in a
+    domain of their own: yields (server, probe). With `serve`, `--serve --port 0` too (the
+    HTTP services are the tests' window on the simulation: `robot.pose()` ...; `server` is
+    its `ServerProcess`), else `server` is the process."""
+    from corobot_drake.serving.serve import ServerProcess
+
+    domain = domain_id()
+    with contextlib.ExitStack() as stack:
+        stack.enter_context(private_network())
+        stack.enter_context(own_shared_memory())
+        patch = stack.enter_context(pytest.MonkeyPatch.context())
+        patch.setenv("ROS_DOMAIN_ID", str(domain))
+        patch.setenv("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+        server = stack.enter_context(ServerProcess([*args, "--ros2"]) if serve
+                                     else _simulation_process([*args, "--ros2"]))
+        probe = Probe(domain)
+        stack.callback(probe.close)
+        yield server, probe

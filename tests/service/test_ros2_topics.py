@@ -1,0 +1,315 @@
+"""The ROS 2 front end without DDS: the interface files against the tables they come from,
+the URDF against the SDF, each publisher alone (its CDR decoded by rclpy's own type support),
+a rosbag2 written by `--rosbag` read back, and the one-line errors of the flags."""
+
+import dataclasses as dc
+import json
+import math
+import re
+import subprocess
+import sys
+import types
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+pytest.importorskip("rosbags", reason="the [ros2] extra (tools/setup installs it)")
+pytest.importorskip("rclpy", reason="the [ros2] extra (tools/setup installs it)")
+pytest.importorskip("corobot_interfaces.msg", reason="python -m corobot_drake.ros2.build")
+
+from pydrake.math import RigidTransform, RollPitchYaw
+from pydrake.multibody.math import SpatialVelocity
+from pydrake.multibody.parsing import Parser
+from pydrake.multibody.plant import MultibodyPlant
+from rclpy.serialization import deserialize_message
+
+from conftest import Stepper
+from corobot_drake import cli
+from corobot_drake.config import scenario as sc
+from corobot_drake.config.sensors import IrSensorConfig
+from corobot_drake.model import dimensions as dim
+from corobot_drake.model.sdf import corobot_sdf
+from corobot_drake.recording import topics as tp
+from corobot_drake.resources import make_parser
+from corobot_drake.ros2 import interfaces as ifc
+from corobot_drake.ros2.bus import Bus
+from corobot_drake.ros2.graph import configure_discovery, ros_type
+from corobot_drake.ros2.publishers import (
+    ClockPublisher,
+    IrPublisher,
+    RobotStatePublisher,
+    StaticPublisher,
+    TelemetryPublisher,
+    TransformPublisher,
+)
+from corobot_drake.ros2.urdf import corobot_urdf
+from corobot_drake.sensors.ir_sensor import DISTANCE, SCAN_TIME, scan_state_layout
+from corobot_drake.systems.odometry import DriveState, WheelState
+
+
+class Memory:
+    """A bus sink that keeps every message: {topic: [(t_ns, decoded message)]}."""
+
+    def __init__(self):
+        self.types, self.messages = {}, {}
+
+    def declare(self, topic, msgtype, qos):
+        self.types[topic] = msgtype
+        self.messages[topic] = []
+
+    def write(self, topic, data, t_ns):
+        msg = deserialize_message(bytes(data), ros_type(self.types[topic]))
+        self.messages[topic].append((t_ns, msg))
+
+
+def _fields(path: Path) -> list[str]:
+    """The field names of a .msg file (or one section of a .srv/.action)."""
+    return [line.split()[1] for line in path.read_text().splitlines()
+            if line.strip() and not line.startswith("#") and line != "---"]
+
+
+def _sections(path: Path) -> list[list[str]]:
+    return [[line.split()[1] for line in part.splitlines() if line.strip()
+             and not line.startswith("#")] for part in path.read_text().split("\n---\n")]
+
+
+# --- the interfaces against their sources ---
+
+
+def test_telemetry_messages_are_written_from_the_recordings_table():
+    for path, text in ifc.telemetry_files().items():
+        assert path.read_text() == text, f"run python -m corobot_drake.ros2.interfaces ({path})"
+
+
+def test_actions_are_the_scenario_commands():
+    folder = ifc.INTERFACES_DIR / ifc.PACKAGE / "action"
+    for action in ifc.ACTIONS:
+        goal, result, feedback = _sections(folder / f"{action.type.split('/')[-1]}.action")
+        assert goal == list(ifc.goal_fields(action.command))
+        assert result == ["success", "reason"] and feedback == [action.feedback]
+    request, response = _sections(ifc.INTERFACES_DIR / ifc.PACKAGE / "srv" / "SetPose.srv")
+    assert request == [f.name.removesuffix("_deg") for f in dc.fields(sc.SetPose)]
+    assert response == ["success", "reason"]
+
+
+def test_drive_state_message_has_the_drive_states_fields():
+    msg = ifc.INTERFACES_DIR / ifc.PACKAGE / "msg"
+    assert set(_fields(msg / "DriveState.msg")) == {
+        "header", *(f.name for f in dc.fields(DriveState) if f.name != "time_stamp")}
+    assert {f.name for f in dc.fields(WheelState)} <= set(_fields(msg / "WheelState.msg"))
+
+
+def test_bag_type_hashes_are_the_built_packages():
+    """rosbags' hashes (the bag's metadata) equal rosidl's for the messages built here (into
+    the environment: `ros2.build`)."""
+    from corobot_drake.ros2.bus import typestore
+
+    for name in ifc.message_definitions():
+        package, _, cls = name.split("/")
+        built = json.loads((Path(sys.prefix) / "share" / package / "msg" /
+                            f"{cls}.json").read_text())
+        assert typestore().hash_rihs01(name) == built["type_hashes"][0]["hash_string"], name
+
+
+# --- the URDF against the SDF ---
+
+
+def _wheel_frames(text: str, kind: str, base: str) -> dict:
+    plant = MultibodyPlant(0.0)
+    (instance,) = (make_parser(plant) if kind == "sdf" else Parser(plant)
+                   ).AddModelsFromString(text, kind)
+    plant.Finalize()
+    context = plant.CreateDefaultContext()
+    B = plant.GetBodyByName(base, instance)
+    return {w: plant.GetBodyByName(f"{w}_wheel", instance).EvalPoseInWorld(context)
+            .translation() - B.EvalPoseInWorld(context).translation()
+            for w in dim.WHEEL_NAMES}
+
+
+def test_urdf_has_the_sdfs_wheels_where_the_sdf_has_them():
+    urdf = _wheel_frames(corobot_urdf(), "urdf", tp.CHASSIS_FRAME)
+    sdf = _wheel_frames(corobot_sdf(), "sdf", "chassis")
+    for wheel in dim.WHEEL_NAMES:
+        np.testing.assert_allclose(urdf[wheel], sdf[wheel], atol=1e-9)
+    text = corobot_urdf()
+    for part in (dim.CHASSIS, dim.PLATFORM):
+        assert " ".join(f"{v:.9g}" for v in part.size) in text
+
+
+# --- each publisher alone ---
+
+
+def test_clock_publishes_every_10_ms():
+    memory = Memory()
+    stepper = Stepper(ClockPublisher(Bus([memory])), 0.01)
+    stepper.tick(5)
+    stamps = [m.clock.sec + 1e-9 * m.clock.nanosec for _, m in memory.messages["/clock"]]
+    assert stamps == pytest.approx([0.0, 0.01, 0.02, 0.03, 0.04])
+    assert [t for t, _ in memory.messages["/clock"]] == [round(s * 1e9) for s in stamps]
+
+
+def test_robot_state_publisher_odom_and_wheel_odom():
+    memory = Memory()
+    drive = sc.Drive()
+    system = RobotStatePublisher(Bus([memory]), tp.RobotNames("bot", True), 1, drive)
+    stepper = Stepper(system, 0.02)
+    X_WB = RigidTransform(RollPitchYaw(0, 0, 0.5), [1.0, 2.0, 0.0])
+    V = SpatialVelocity([0, 0, 0.3], [0.4 * math.cos(0.5), 0.4 * math.sin(0.5), 0])
+    stepper.fix("body_poses", [RigidTransform(), X_WB])
+    stepper.fix("body_spatial_velocities", [SpatialVelocity.Zero(), V])
+    stepper.fix("wheel_state", [0.1, 0.2, 0.3, 0.4, 2.0, 4.0, 2.0, 4.0])
+    stepper.fix("drive_state", DriveState(0.0, True, dim.TRACK, 10.0, {
+        w: WheelState(0.1, 2.0, 7 if w.startswith("front") else None)
+        for w in dim.WHEEL_NAMES}, (1.0, 2.0, 0.0), 0.5))
+    stepper.fix("odometry", [0.9, 2.1, 0.4])
+    stepper.tick()
+    (_, odom), = memory.messages["/bot/odom"]
+    assert (odom.header.frame_id, odom.child_frame_id) == ("bot/odom", "bot/base_link")
+    p = odom.pose.pose.position
+    assert (p.x, p.y) == pytest.approx((1.0, 2.0))
+    assert odom.twist.twist.linear.x == pytest.approx(0.4)  # in base_link: all forward
+    assert odom.twist.twist.linear.y == pytest.approx(0.0, abs=1e-12)
+    assert odom.twist.twist.angular.z == pytest.approx(0.3)
+    (_, wheel), = memory.messages["/bot/wheel_odom"]
+    assert wheel.pose.pose.position.x == pytest.approx(0.9)
+    r, track = drive.effective_wheel_radius, drive.effective_track_width
+    assert wheel.twist.twist.linear.x == pytest.approx(r * 3.0)  # front axles 2 and 4 rad/s
+    assert wheel.twist.twist.angular.z == pytest.approx(r * 2.0 / track)
+    assert wheel.pose.covariance[0] > 0 and odom.pose.covariance[0] == 0
+    (_, joints), = memory.messages["/bot/joint_states"]
+    assert list(joints.name) == [f"{w}_axle" for w in dim.WHEEL_NAMES]
+    assert list(joints.velocity) == [2.0, 4.0, 2.0, 4.0]
+    (_, state), = memory.messages["/bot/drive_state"]
+    assert [w.has_encoder for w in state.wheels] == [True, True, False, False]
+    assert state.wheels[0].encoder_ticks == 7 and state.heading == 0.5
+
+
+def test_ir_publisher_sends_each_scan_once():
+    memory = Memory()
+    config = IrSensorConfig()
+    sensor = types.SimpleNamespace(config=config, period=0.05, num_rays=3)
+    system = IrPublisher(Bus([memory]), tp.RobotNames("corobot"), "front", sensor)
+    size = scan_state_layout(3)[0]
+    stepper = Stepper(system, 0.05)
+    scan = np.zeros(size)
+    scan[SCAN_TIME], scan[DISTANCE] = math.nan, 0.3
+    stepper.fix("scan_state", scan)
+    stepper.tick()  # no scan yet
+    scan[SCAN_TIME] = 0.05
+    stepper.fix("scan_state", scan)
+    stepper.tick(3)  # the look at 0.1 publishes the scan at 0.05; later looks do not
+    (t_ns, msg), = memory.messages["/ir/front"]
+    assert t_ns == 50_000_000 and msg.range == pytest.approx(0.3)
+    assert msg.max_range == pytest.approx(config.maximum_range)
+    assert msg.header.frame_id == "ir_front"
+
+
+def test_transform_publisher_odom_to_base_link_to_wheels():
+    memory = Memory()
+    names = tp.RobotNames("corobot")
+    system = TransformPublisher(Bus([memory]), [(names, 1, [(2, "front_left_wheel")])])
+    stepper = Stepper(system, 0.02)
+    X_WB = RigidTransform(RollPitchYaw(0, 0, math.pi / 2), [1.0, 0.0, 0.0])
+    X_WW = RigidTransform(RollPitchYaw(0, 0.7, math.pi / 2), [1.0, 0.1, 0.06])  # the wheel
+    stepper.fix("body_poses", [RigidTransform(), X_WB, X_WW])
+    stepper.tick(2)
+    assert [t for t, _ in memory.messages["/tf"]] == [0, 20_000_000]
+    (_, tf) = memory.messages["/tf"][-1]
+    base, wheel = tf.transforms
+    assert (base.header.frame_id, base.child_frame_id) == ("odom", "base_link")
+    assert (wheel.header.frame_id, wheel.child_frame_id) == ("base_link", "front_left_wheel")
+    w = wheel.transform.translation  # in base_link (facing world +y): 0.1 m ahead of it
+    assert (w.x, w.y, w.z) == pytest.approx((0.1, 0.0, 0.06), abs=1e-12)
+
+
+def test_static_publisher_publishes_once_latched():
+    memory = Memory()
+    names = tp.RobotNames("corobot")
+    mounts = [("base_link", "ir_front", RigidTransform([0.1, 0, 0.07]))]
+    system = StaticPublisher(Bus([memory]), mounts, {names: "<robot/>"})
+    Stepper(system, 0.02).tick(3)
+    (_, static), = memory.messages["/tf_static"]
+    assert static.transforms[0].child_frame_id == "ir_front"
+    assert static.transforms[0].transform.translation.z == pytest.approx(0.07)
+    (_, description), = memory.messages["/robot_description"]
+    assert description.data == "<robot/>"
+
+
+def test_telemetry_publisher_stamps_the_held_samples():
+    memory = Memory()
+    system = TelemetryPublisher(Bus([memory]), tp.RobotNames("corobot"), 0.02, 0.1)
+    stepper = Stepper(system, 0.02)
+    for port, value in (("wheel_loads", [9.0, 9.1, 9.2, 9.3]), ("wheel_slip_ratio", [0.1] * 4),
+                        ("wheel_slip_angle", [2.0] * 4), ("tip_margin", [37.4])):
+        stepper.fix(port, value)
+    stepper.tick(6)  # looks at 0 ... 0.1 s
+    assert len(memory.messages["/tip_margin"]) == 6
+    (t_ns, loads), = memory.messages["/wheel_loads"]  # the look at 0.1: the sample of 0
+    assert t_ns == 0 and list(loads.load) == [9.0, 9.1, 9.2, 9.3]
+    assert list(loads.wheel_names) == list(dim.WHEEL_NAMES)
+    (_, slip), = memory.messages["/wheel_slip"]
+    assert list(slip.slip_angle_deg) == [2.0] * 4
+
+
+def test_discovery_stays_on_this_machine_unless_asked():
+    assert configure_discovery(False, {}) == "LOCALHOST"
+    assert configure_discovery(False, {"ROS_AUTOMATIC_DISCOVERY_RANGE": "SUBNET"}) == "SUBNET"
+    assert configure_discovery(True, {}) == "SUBNET"
+
+
+# --- a bag read back ---
+
+
+@pytest.fixture(scope="module")
+def bag(tmp_path_factory):
+    path = tmp_path_factory.mktemp("ros2") / "run"
+    subprocess.run([sys.executable, "-m", "corobot_drake", "--headless", "--duration", "1",
+                    "--rosbag", str(path), "--override",
+                    "robots: {corobot: {commands: [!SetVelocity {linear: 0.2, angular: 0.5}]}}"],
+                   check=True, capture_output=True)
+    return path
+
+
+def test_bag_round_trips(bag):
+    from rosbags.rosbag2 import Reader
+
+    info = yaml.safe_load((bag / "metadata.yaml").read_text())["rosbag2_bagfile_information"]
+    assert (info["version"], info["storage_identifier"]) == (9, "mcap")  # ROS 2 Jazzy's
+    assert all(t["topic_metadata"]["type_description_hash"].startswith("RIHS01_")
+               for t in info["topics_with_message_count"])
+    with Reader(bag) as reader:
+        topics = {c.topic: c.msgtype for c in reader.connections}
+        assert set(topics) >= {"/clock", "/tf", "/tf_static", "/odom", "/ir/front",
+                               "/camera/image_raw", "/drive_state", "/wheel_slip"}
+        counts = dict.fromkeys(topics, 0)
+        for connection, t_ns, data in reader.messages():
+            msg = deserialize_message(data, ros_type(connection.msgtype))
+            counts[connection.topic] += 1
+            stamp = msg.clock if connection.topic == "/clock" else (
+                msg.transforms[0].header.stamp if connection.msgtype.startswith("tf2")
+                else msg.header.stamp if hasattr(msg, "header") else None)
+            if stamp is not None:
+                assert stamp.sec * 1_000_000_000 + stamp.nanosec == t_ns  # logged at its stamp
+            if connection.topic == "/camera/image_raw":
+                assert (msg.width, msg.height, msg.encoding) == (320, 240, "rgb8")
+    assert counts["/clock"] == 101  # 0 to 1 s, both ends, every 10 ms
+    assert counts["/odom"] == 51  # every 20 ms
+    assert counts["/tf_static"] == counts["/robot_description"] == 1
+
+
+# --- the flags' errors ---
+
+
+def test_ros2_without_the_extra_is_one_line(monkeypatch, capsys):
+    monkeypatch.setitem(sys.modules, "rclpy", None)  # as if not installed
+    assert cli.main(["--ros2", "--headless"]) == 2
+    assert capsys.readouterr().err == ("error: --ros2 needs the [ros2] extra: pip install "
+                                       "'corobot-drake[ros2]'\n")
+
+
+def test_rosbag_into_an_existing_directory_is_one_line(tmp_path, capsys):
+    assert cli.main(["--headless", "--rosbag", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert re.fullmatch(r"error: --rosbag: .*: exists already: name a new directory.*\n", err)
