@@ -22,6 +22,7 @@ from pydrake.systems.sensors import ImageRgba8U, RgbdSensorAsync
 
 from corobot_drake.config.poses import mount_frame
 from corobot_drake.model import dimensions as dim
+from corobot_drake.model.ir_models import SharpGP2D12
 from corobot_drake.recording import topics as tp
 from corobot_drake.recording.publishers import (
     STATE_PERIOD,
@@ -33,7 +34,6 @@ from corobot_drake.recording.publishers import (
 from corobot_drake.ros2 import interfaces as ifc
 from corobot_drake.ros2.messages import R_LINK_OPTICAL, Messages
 from corobot_drake.sensors.camera import frame_look_period
-from corobot_drake.model.ir_models import SharpGP2D12
 from corobot_drake.sensors.ir_sensor import DISTANCE, SCAN_TIME, scan_state_layout
 
 CLOCK_PERIOD = 0.01
