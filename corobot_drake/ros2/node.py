@@ -210,16 +210,16 @@ class Ros2Node:
 
     # --- services ---
     def _all_stop(self, robot: str, request, response):
-        return self._simple(robot, "all_stop", (), response, "stopping")
+        return self._simple(robot, "all_stop", {}, response, "stopping")
 
     def _enable_drive(self, robot: str, request, response):
         enabled = bool(request.data)
-        return self._simple(robot, "enable", (enabled,), response,
+        return self._simple(robot, "enable", {"enabled": enabled}, response,
                             "enabled" if enabled else "disabled")
 
-    def _simple(self, robot: str, command: str, args: tuple, response, what: str):
+    def _simple(self, robot: str, command: str, arguments: dict, response, what: str):
         try:
-            seq, t = self._call(partial(calls.issue, robot, command, args))
+            seq, t = self._call(partial(calls.issue, robot, command, arguments))
         except (ValueError, SimulationStoppedError, TimeoutError) as e:
             response.success, response.message = False, str(e) or type(e).__name__
             return response
