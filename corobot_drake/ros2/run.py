@@ -89,25 +89,10 @@ def run_live(front: Ros2Front, make_sim, meshcat: bool, duration: float,
     the node attached, until `duration` simulated s have passed or Ctrl-C; then returns
     `finish(sim)`, called in the simulation thread (Meshcat, which a replay is written from,
     answers only the thread that made it). What building it raised is raised."""
-    from corobot_drake.serving.runner import SimRunner, SimulationStoppedError
+    from corobot_drake.serving.runner import SimulationStoppedError
+    from corobot_drake.serving.serve import sim_runner
 
-    def build():
-        viewer = None
-        if meshcat:
-            from pydrake.geometry import StartMeshcat
-
-            viewer = StartMeshcat()
-            runner.meshcat_url = viewer.web_url()
-        sim = make_sim(viewer)
-        sim.run_log_window = run_log_window
-        if viewer is not None:
-            from corobot_drake.serving.teleop import MeshcatTeleop
-
-            teleop = MeshcatTeleop(viewer, sim)
-            runner.hooks.append(lambda s: teleop.poll())
-        return sim
-
-    runner = SimRunner(build)
+    runner = sim_runner(make_sim, meshcat, run_log_window=run_log_window)
     front.attach(runner)
     sys.setswitchinterval(SWITCH_INTERVAL)
     runner.start()

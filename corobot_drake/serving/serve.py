@@ -79,7 +79,7 @@ def serve(make_sim, host: str = "127.0.0.1", port: int = 50000, meshcat: bool = 
         print(f"error: {value}", file=sys.stderr)
         return 2
     sys.setswitchinterval(SWITCH_INTERVAL)
-    runner = _sim_runner(make_sim, meshcat, rate)
+    runner = sim_runner(make_sim, meshcat, rate)
     if attach is not None:
         attach(runner)
     try:
@@ -124,7 +124,8 @@ def _announce(shown: str, host: str, access, runner) -> None:
               "drive the robot", file=sys.stderr, flush=True)
 
 
-def _sim_runner(make_sim, meshcat: bool, rate: float = 1.0):
+def sim_runner(make_sim, meshcat: bool, rate: float = 1.0,
+               run_log_window: float | None = SERVE_RUN_LOG_WINDOW):
     """A `SimRunner` (not started) whose simulation thread makes the Meshcat (if `meshcat`),
     the simulation (`make_sim(meshcat or None)`) and the Meshcat teleop."""
     from corobot_drake.serving.runner import SimRunner
@@ -137,7 +138,7 @@ def _sim_runner(make_sim, meshcat: bool, rate: float = 1.0):
             viewer = StartMeshcat()
             runner.meshcat_url = viewer.web_url()
         sim = make_sim(viewer)
-        sim.run_log_window = SERVE_RUN_LOG_WINDOW
+        sim.run_log_window = run_log_window
         if viewer is not None:
             from corobot_drake.serving.teleop import MeshcatTeleop
 
