@@ -74,11 +74,13 @@ def _parser() -> argparse.ArgumentParser:
                    help="--serve, --foxglove: the token clients must send (default: none on "
                    "loopback; off loopback one is generated and printed; both servers share it)")
     p.add_argument("--save-camera", metavar="DIR",
-                   help="write each robot's camera frames as PNG: "
-                   "DIR/<robot>/frame_000000.png, ...")
+                   help="write the robots' camera frames as PNG: "
+                   "DIR/<robot>/frame_000000.png, ... (another camera than front: "
+                   "DIR/<robot>/<camera>/...)")
     p.add_argument("--camera-rate", type=float, metavar="HZ",
-                   help="render (and save) camera frames at this rate (default: the scenario's "
-                   f"camera fps, 30); output delays are capped at {CAMERA_DELAY_SHARE} of a frame")
+                   help="render (and save) every camera's frames at this rate (default: the "
+                   f"scenario's fps, 30); output delays are capped at {CAMERA_DELAY_SHARE} of "
+                   "a frame")
     p.add_argument("--save-scenario", metavar="PATH",
                    help="at the end, write a scenario YAML of the current state (poses, "
                    "velocities, settings, commands still to run): running it continues from there")
@@ -436,11 +438,10 @@ def main(argv: list[str] | None = None) -> int:
         print(f"error: {e}", file=sys.stderr)
         return 2
     if args.camera_rate is not None:
-        for robot in scenario.robots.values():
-            robot.camera.fps = args.camera_rate
+        for camera in (c for r in scenario.robots.values() for c in r.cameras.values()):
+            camera.fps = args.camera_rate
             # A frame's output delay must stay under one frame (Drake's RgbdSensorAsync).
-            robot.camera.output_delay = min(robot.camera.output_delay,
-                                            CAMERA_DELAY_SHARE / args.camera_rate)
+            camera.output_delay = min(camera.output_delay, CAMERA_DELAY_SHARE / args.camera_rate)
     duration = args.duration if args.duration is not None else scenario.simulation_duration
     from corobot_drake.simulation import quiet_drake_warnings
 

@@ -31,6 +31,7 @@ from corobot_drake import commands, limits, signals
 from corobot_drake.config import scenario as sc
 from corobot_drake.config.placement import OVERLAP_TOLERANCE
 from corobot_drake.config.poses import ground_pose, transform_from
+from corobot_drake.config.sensors import FRONT_CAMERA
 from corobot_drake.config.validate import check_scenario
 from corobot_drake.model import dimensions as dim
 from corobot_drake.readings import (
@@ -433,36 +434,52 @@ class Robot:
         `corobot_drake.tuning.sysid`)."""
         write_csv(self.run_log(), path)
 
-    # --- camera ---------------------------------------------------------------------------
+    # --- cameras --------------------------------------------------------------------------
+    @property
+    def camera_names(self) -> tuple[str, ...]:
+        """The cameras' names (`front`, ...), in the scenario's order; those turned off
+        (`rgb: false`) left out."""
+        return tuple(self._parts.cameras)
+
     @property
     def has_camera(self) -> bool:
-        return self._parts.camera is not None
+        """Whether the robot has its front camera (`config.sensors.FRONT_CAMERA`), the one
+        `camera_image()` reads without a name."""
+        return FRONT_CAMERA in self._parts.cameras
 
-    def _camera_port(self, which: str):
-        if not self.has_camera:
-            raise RuntimeError(f"robot {self.name!r} has no camera "
-                               f"(robots.{self.name}.camera.rgb is false)")
-        return self._sim.station.diagram.GetOutputPort(f"{self.name}.camera.{which}")
+    def _camera(self, name: str | None):
+        name = FRONT_CAMERA if name is None else name
+        camera = self._parts.cameras.get(name)
+        if camera is None:
+            raise KeyError(f"robot {self.name!r} has no camera {name!r} (turned off or not in "
+                           f"robots.{self.name}.cameras); it has "
+                           f"{', '.join(self._parts.cameras) or 'none'}")
+        return camera
 
-    def camera_image(self):
-        """The latest camera frame: a numpy array height x width x 4 (RGBA), uint8, a copy;
-        None before the first. Frames are captured at the camera's fps and appear
-        `output_delay` s later (the default camera: 30 Hz, 0.03 s, so the first appears at
-        0.03 s); with no delay, the first is rendered at initialization."""
-        image = self._camera_port("rgb_image").Eval(self._sim.context)
+    def camera_image(self, name: str | None = None):
+        """The latest frame of the camera `name` (default: the front camera): a numpy array
+        height x width x 4 (RGBA), uint8, a copy; None before the first. Frames are captured
+        at the camera's fps and appear `output_delay` s later (the default camera: 30 Hz,
+        0.03 s, so the first appears at 0.03 s); with no delay, the first is rendered at
+        initialization. KeyError naming the cameras for one the robot lacks."""
+        camera = self._camera(name)
+        image = camera.image.Eval(camera.system.GetMyContextFromRoot(self._sim.context))
         if image.width() == 0:
             return None
         return np.array(image.data, dtype=np.uint8, copy=True)
 
-    def camera_image_time(self) -> float:
-        """Simulated time (s) at which the latest camera frame was captured (NaN before the
-        first)."""
-        return float(self._camera_port("image_time").Eval(self._sim.context)[0])
+    def camera_image_time(self, name: str | None = None) -> float:
+        """Simulated time (s) at which the latest frame of the camera `name` (default: the
+        front camera) was captured (NaN before the first)."""
+        camera = self._camera(name)
+        return float(camera.image_time.Eval(
+            camera.system.GetMyContextFromRoot(self._sim.context))[0])
 
     def camera_frames_saved(self) -> int:
-        """How many frames were written as PNG (0 unless saving, `--save-camera`)."""
-        saver = self._parts.camera_saver
-        return saver.frames_saved if saver is not None else 0
+        """How many frames the robot's cameras wrote as PNG (0 unless saving,
+        `--save-camera`)."""
+        return sum(c.saver.frames_saved for c in self._parts.cameras.values()
+                   if c.saver is not None)
 
     def command_result(self, seq: int) -> CommandResult:
         """How the command with sequence number `seq` has gone so far (its command-log
@@ -550,6 +567,10 @@ class Simulation:
             self._record_live = meshcat is not None
             meshcat = meshcat or offline_meshcat()
         extras = list(extras)
+        if meshcat is not None:  # the IR rays and slip marks beside Drake's visualizers
+            from corobot_drake.markers import add_meshcat_markers
+
+            extras.append(functools.partial(add_meshcat_markers, meshcat))
         if foxglove is not None:  # the run's Foxglove topics, attached as a front end
             from corobot_drake.recording.publishers import add_foxglove_topics
 

@@ -2,7 +2,10 @@
 
 One function, `build_station`, in the style of Drake's hardware_sim and the manipulation
 station: every robot's systems are named `<robot>.<system>` and its ports are exported as
-`<robot>.<port>`.
+`<robot>.<port>`. It builds in phases (the plant; each robot's drive, telemetry and sensors,
+every sensor through `sensors.registry`; then the hooks; then Meshcat's own visualizers), and
+knows no front end: the Meshcat markers, the Foxglove and MCAP topics and the ROS 2 topics
+attach through its `extras` hooks, which their callers pass.
 """
 
 import dataclasses as dc
@@ -36,8 +39,8 @@ from corobot_drake.config import scenario as sc
 from corobot_drake.model import dimensions as dim
 from corobot_drake.model.sdf import corobot_sdf
 from corobot_drake.resources import make_parser, resolve_file
-from corobot_drake.sensors.camera import add_camera
-from corobot_drake.sensors.ir_sensor import add_ir_sensors
+from corobot_drake.sensors.registry import add_sensors
+from corobot_drake.sensors.site import SensorSite
 from corobot_drake.systems.contact import add_wheel_contacts
 from corobot_drake.systems.dead_reckoning import DeadReckoning
 from corobot_drake.systems.drive import CommandSource, DriveController
@@ -46,7 +49,6 @@ from corobot_drake.systems.motion import MotionCommands
 from corobot_drake.systems.odometry import add_chassis_poses, add_chassis_states, add_odometry
 from corobot_drake.systems.runlog import HELD, add_run_log
 from corobot_drake.systems.servo import add_servo_sign, servo_velocity_sign
-from corobot_drake.systems.slip_markers import add_slip_markers
 from corobot_drake.systems.stability import add_tip_margin
 
 TILT_SAMPLE_PERIOD = 0.01
@@ -208,15 +210,23 @@ class RobotParts:
     command_source: CommandSource
     drive_controller: DriveController
     tilt_monitor: TiltMonitor
-    camera: object = None
-    """The system whose outputs are the latest frame: `RgbdSensorAsync` (the default) or
-    `camera.CameraHold`; None without a camera."""
-    camera_saver: object = None
-    """`camera.CameraFrameSaver` when frames are saved."""
     motion: MotionCommands | None = None
     """DriveDistance / RotateDegrees / SetPose state machine (`motion.py`)."""
-    ir_sensors: dict = dc.field(default_factory=dict)
-    """{sensor name: `ir_sensor.IrSensor`}."""
+    chassis_pose: object = None
+    """The output port of its chassis pose (RigidTransform, world frame)."""
+    sensors: dict = dc.field(default_factory=dict)
+    """{kind (`config.sensors.SENSOR_KINDS`): {name: the sensor as built}}: what
+    `sensors.registry.add_sensors` returns (sensors turned off left out)."""
+
+    @property
+    def ir_sensors(self) -> dict:
+        """{sensor name: `ir_sensor.IrSensor`}."""
+        return self.sensors.get("ir_sensors", {})
+
+    @property
+    def cameras(self) -> dict:
+        """{camera name: `camera.Camera`}."""
+        return self.sensors.get("cameras", {})
 
 
 @dc.dataclass
@@ -262,11 +272,12 @@ def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None, extras=
                   mouse_drag: bool = True) -> Station:
     """Builds the whole diagram for `scenario`, in phases: the plant (world, directives,
     robots), each robot's drive and monitors, its sensors, then the front ends' `extras`, then
-    Meshcat. With `meshcat`, adds its visualizers (and, with `mouse_drag`, Ctrl-drag of
+    Meshcat. With `meshcat`, adds Drake's visualizers (and, with `mouse_drag`, Ctrl-drag of
     bodies: `MESHCAT_DRAG_STIFFNESS`); with `save_camera` (a directory), each robot's camera
-    frames are saved there as PNG. Each of `extras` is called as `extra(builder, plant,
-    scene_graph, robots, scenario)` before the diagram is built, to add the systems of a
-    front end the station need not know (the Foxglove topics, the ROS 2 topics)."""
+    frames are saved there as PNG (`camera.save_directory`). Each of `extras` (the hooks) is
+    called as `extra(builder, plant, scene_graph, robots, scenario)` ({name: RobotParts}) before
+    the diagram is built, to add the systems of a front end the station need not know (the
+    Meshcat markers, the Foxglove topics, the ROS 2 topics)."""
     builder = DiagramBuilder()
     plant, scene_graph = AddMultibodyPlant(scenario.plant_config, builder)
     bodies = _add_world(plant, scenario.world)
@@ -281,11 +292,12 @@ def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None, extras=
     chassis_ports = (add_chassis_poses(builder, plant, chassis),
                      add_chassis_states(builder, plant, chassis))
     robots, renderers = {}, {}
-    for name in scenario.robots:
-        robots[name] = _add_drive(builder, plant, scenario, name, added[name], chassis_ports,
-                                  meshcat)
-        _add_sensors(builder, plant, scene_graph, scenario, robots[name], renderers,
-                     save_camera, meshcat)
+    step = sc.physics_step(scenario.plant_config, scenario.simulator_config)
+    for name, robot in scenario.robots.items():
+        robots[name] = _add_drive(builder, plant, scenario, name, added[name], chassis_ports)
+        robots[name].sensors = add_sensors(SensorSite(
+            builder, plant, scene_graph, name, robots[name].model_instance, scenario.world,
+            scenario.random_seed, step, save_camera, renderers), robot)
     for extra in extras:
         extra(builder, plant, scene_graph, robots, scenario)
     builder.ExportOutput(plant.get_body_poses_output_port(), "body_poses")
@@ -299,8 +311,8 @@ def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None, extras=
                    lcm)
 
 
-def _add_drive(builder, plant, scenario: sc.Scenario, name: str, added, chassis_ports,
-               meshcat) -> RobotParts:
+def _add_drive(builder, plant, scenario: sc.Scenario, name: str, added, chassis_ports
+               ) -> RobotParts:
     """One robot's command source, motion commands, drive controller and wheel servos, its
     odometry and its monitors (contact telemetry, tip margin, tilt, run log)."""
     robot = scenario.robots[name]
@@ -337,7 +349,7 @@ def _add_drive(builder, plant, scenario: sc.Scenario, name: str, added, chassis_
     _connect_servos(builder, plant, instance, name, controller.GetOutputPort("desired_state"),
                     servo_velocity_sign(scenario.simulator_config))
     telemetry = _add_telemetry(builder, plant, name, added, chassis_pose,
-                               selector.get_output_port(), meshcat)
+                               selector.get_output_port())
     tilt = builder.AddNamedSystem(f"{name}.tilt_monitor", TiltMonitor(TILT_SAMPLE_PERIOD))
     builder.Connect(chassis_state, tilt.GetInputPort("chassis_state"))
     add_run_log(builder, name, chassis_state, controller.GetOutputPort("drive_status"),
@@ -345,19 +357,16 @@ def _add_drive(builder, plant, scenario: sc.Scenario, name: str, added, chassis_
     for port in ("drive_status", "axle_speed_command", "axle_speed"):
         builder.ExportOutput(controller.GetOutputPort(port), f"{name}.{port}")
     builder.ExportOutput(plant.get_state_output_port(instance), f"{name}.state")
-    return RobotParts(name, instance, chassis, joints, source, controller, tilt, motion=motion)
+    return RobotParts(name, instance, chassis, joints, source, controller, tilt, motion=motion,
+                      chassis_pose=chassis_pose)
 
 
-def _add_telemetry(builder, plant, name: str, added, chassis_pose, wheel_state, meshcat
-                   ) -> dict:
-    """The wheels' contact telemetry and the tip margin (and, with Meshcat, the slip
-    markers); returns {`signals.TELEMETRY` port name: output port}, each exported as
-    `<name>.<port>`."""
+def _add_telemetry(builder, plant, name: str, added, chassis_pose, wheel_state) -> dict:
+    """The wheels' contact telemetry (`<name>.wheel_contacts`) and the tip margin; returns
+    {`signals.TELEMETRY` port name: output port}, each exported as `<name>.<port>`."""
     instance, chassis, joints = added
     contacts = add_wheel_contacts(builder, name, plant, [j.child_body() for j in joints],
                                   chassis_pose, wheel_state)
-    if meshcat is not None:
-        add_slip_markers(builder, meshcat, name, chassis_pose, contacts)
     tip_margin = add_tip_margin(
         builder, name, plant, instance, chassis,
         {w: j.child_body() for w, j in zip(dim.WHEEL_NAMES, joints, strict=True)},
@@ -370,19 +379,6 @@ def _add_telemetry(builder, plant, name: str, added, chassis_pose, wheel_state, 
     for port_name, port in telemetry.items():
         builder.ExportOutput(port, f"{name}.{port_name}")
     return telemetry
-
-
-def _add_sensors(builder, plant, scene_graph, scenario: sc.Scenario, parts: RobotParts,
-                 renderers: dict, save_camera, meshcat) -> None:
-    """One robot's camera and IR sensors, into `parts`."""
-    robot = scenario.robots[parts.name]
-    step = sc.physics_step(scenario.plant_config, scenario.simulator_config)
-    parts.camera, parts.camera_saver = add_camera(
-        builder, plant, scene_graph, parts.name, parts.model_instance, robot.camera,
-        scenario.world, renderers, save_camera, step=step)
-    parts.ir_sensors = add_ir_sensors(
-        builder, plant, scene_graph, parts.name, robot.ir_sensors,
-        model_instance=parts.model_instance, random_seed=scenario.random_seed, meshcat=meshcat)
 
 
 MESHCAT_DRAG_STIFFNESS = 100.0

@@ -29,7 +29,7 @@ DRIVING = (f"robots: {{{ROBOT}: {{commands: [!SetPower {{left: 1.0, right: 0.6}}
            "!Wait {seconds: 3}, !SetPower {left: 0.6, right: 1.0}, !Wait {seconds: 3}, "
            "!SetPower {left: -1.0, right: 1.0}]}}")
 """The figure of eight the benchmarks drive (a scenario override)."""
-NO_CAMERA = f"robots: {{{ROBOT}: {{camera: {{rgb: false}}}}}}"
+NO_CAMERA = f"robots: {{{ROBOT}: {{cameras: {{front: {{rgb: false}}}}}}}}"
 """The override that turns the robot's camera off (its IR sensors as the scenario has them)."""
 
 

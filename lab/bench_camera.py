@@ -33,11 +33,12 @@ def _sim(camera: bool, fps: float = FPS, overrides=(), renderer: str = "",
          delay: float | None = None) -> Simulation:
     scenario = load_scenario(DEFAULT_SCENARIO, overrides=[CIRCLE, *overrides])
     for robot in scenario.robots.values():
-        robot.camera.rgb = camera
-        robot.camera.fps = fps
-        robot.camera.renderer_class = renderer
+        front = robot.cameras["front"]
+        front.rgb = camera
+        front.fps = fps
+        front.renderer_class = renderer
         if delay is not None:
-            robot.camera.output_delay = delay
+            front.output_delay = delay
     return Simulation(scenario)
 
 
@@ -50,7 +51,7 @@ def camera_frame_ms(frames: int = 90, warmup: int = 5, overrides=(), clock: str 
     quiet_drake_warnings()
     # The hold renders at 1e-3 Hz (at t = 0 only): each timed frame is the only render.
     sim = _sim(True, fps=1e-3, overrides=overrides, renderer=renderer, delay=0.0)
-    sensor = sim.station.diagram.GetSubsystemByName("corobot.camera")
+    sensor = sim.station.diagram.GetSubsystemByName("corobot.camera.front")
     port = sensor.color_image_output_port()
     sensor_context = sensor.GetMyContextFromRoot(sim.context)
     times = []

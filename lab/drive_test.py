@@ -26,7 +26,8 @@ PATH_PERIOD = 0.1
 
 def fast_overrides(profile: str) -> list[str]:
     """The default scene with the chosen profile, without camera rendering (not needed here)."""
-    return [f"robots: {{{ROBOT}: {{motion: {{profile: {profile}}}, camera: {{rgb: false}}}}}}"]
+    return [f"robots: {{{ROBOT}: {{motion: {{profile: {profile}}}, "
+            "cameras: {front: {rgb: false}}}}"]
 
 
 def run(seed: int, loops: int, profile: str, power: float = 0.2, verbose: bool = True) -> dict:

@@ -139,7 +139,7 @@ def _body(name: str, yaml: str, field: str, words: str) -> Case:
 
 
 def _camera(name: str, yaml: str, field: str, words: str) -> Case:
-    return _robot(name, f"{{camera: {yaml}}}", f"camera.{field}", words)
+    return _robot(name, f"{{cameras: {{front: {yaml}}}}}", f"cameras.front.{field}", words)
 
 
 def _ir(name: str, yaml: str, field: str, words: str) -> Case:
@@ -406,8 +406,10 @@ OVERRIDES = [
             "must be RenderEngineGl, RenderEngineVtk"),
     _camera("center negative", "{center_x: -5}", "center_x", "(0, 4096] pixels"),
     _camera("capture offset", "{capture_offset: -1}", "capture_offset", "[0, 1e+07] s"),
-    _robot("one pixel", "{camera: {width: 1, height: 1, focal: !FocalLength {x: 100, y: 100}}}",
-           "camera", "Invalid camera configuration: Center X (0) should lie in the range (0, 1)."),
+    _robot("one pixel",
+           "{cameras: {front: {width: 1, height: 1, focal: !FocalLength {x: 100, y: 100}}}}",
+           "cameras.front",
+           "Invalid camera configuration: Center X (0) should lie in the range (0, 1)."),
     _camera("mount frame", "{X_PB: {base_frame: tail}}", "X_PB.base_frame", "'tail' is not a link"),
     # the IR sensors
     _ir("samples 1", "{samples: 1}", "samples", "[2, 64] (rays per fan)"),

@@ -42,7 +42,7 @@ class Gaps:
 def scenario(profile: str, command: str) -> sc.Scenario:
     """The default scene without the camera, running `command` (its YAML) with `profile`."""
     return sc.load_scenario(DEFAULT_SCENARIO, overrides=[
-        f"robots: {{corobot: {{camera: {{rgb: false}}, motion: {{profile: {profile}}}, "
+        f"robots: {{corobot: {{cameras: {{front: {{rgb: false}}}}, motion: {{profile: {profile}}}, "
         f"commands: [{command}]}}}}"])
 
 

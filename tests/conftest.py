@@ -42,7 +42,8 @@ def make_sim(*overrides: str, scenario: Path = DEFAULT_SCENARIO,
     scenario = load_scenario(scenario, overrides=list(overrides))
     if not camera:
         for robot in scenario.robots.values():
-            robot.camera.rgb = False
+            for config in robot.cameras.values():
+                config.rgb = False
     return Simulation(scenario)
 
 

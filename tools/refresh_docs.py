@@ -57,7 +57,7 @@ DETERMINISTIC, PICTURE, TIMING = "deterministic", "picture", "timing"
 ORDER = {DETERMINISTIC: 0, PICTURE: 1, TIMING: 2}
 CHECK_SECONDS = 30.0
 """`--check` without `--only` re-renders the deterministic blocks estimated to cost this or less."""
-NO_CAMERA = "robots: {corobot: {camera: {rgb: false}}}"
+NO_CAMERA = "robots: {corobot: {cameras: {front: {rgb: false}}}}"
 CENIC_OVERRIDE = ("{plant_config: {time_step: 0}, simulator_config: {integration_scheme: "
                   "cenic, max_step_size: 0.01, use_error_control: false}}")
 """`scenario.CENIC_PLANT` at 10 ms, as the command line writes it."""

@@ -13,12 +13,14 @@ CAMERA_FPS = 30.0
 
 def sensor_overrides(robot: str = "corobot", ir: bool = False, camera: bool = False
                      ) -> list[str]:
-    """Overrides that turn the robot's IR sensors and camera on (at `IR_RATE_HZ` and
+    """Overrides that turn the robot's IR sensors and its camera on (at `IR_RATE_HZ` and
     `CAMERA_FPS`) or off."""
     sensors = ", ".join(f"{n}: {{enabled: {str(ir).lower()}, scan_rate_hz: {IR_RATE_HZ}}}"
                         for n in sc.Robot().ir_sensors)
+    cameras = ", ".join(f"{n}: {{rgb: {str(camera).lower()}, fps: {CAMERA_FPS}}}"
+                        for n in sc.Robot().cameras)
     return [f"robots: {{{robot}: {{ir_sensors: {{{sensors}}}}}}}",
-            f"robots: {{{robot}: {{camera: {{rgb: {str(camera).lower()}, fps: {CAMERA_FPS}}}}}}}"]
+            f"robots: {{{robot}: {{cameras: {{{cameras}}}}}}}"]
 
 
 def physics_only_overrides(robot: str = "corobot") -> list[str]:

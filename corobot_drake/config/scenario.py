@@ -37,7 +37,7 @@ from corobot_drake.commands import (  # noqa: F401 (the scenario's commands, `sc
     SetVelocity,
     Wait,
 )
-from corobot_drake.config.sensors import IrSensorConfig, default_camera_config, default_ir_sensors
+from corobot_drake.config.sensors import IrSensorConfig, default_cameras, default_ir_sensors
 from corobot_drake.limits import OneOf, Range, bounded
 from corobot_drake.model import dimensions as dim
 from corobot_drake.model.sdf import VISUALS, WheelContact
@@ -260,9 +260,10 @@ class Robot:
     then optionally the front wheels' encoder counts [left, right] it last integrated
     (default: the counts at the start); empty: the true start pose. A saved scene records all
     five (the odometry has drifted from the true pose, and carries on from its last update)."""
-    camera: CameraConfig = dc.field(default_factory=default_camera_config)
-    """The front camera, Drake's CameraConfig (SPEC defaults; `config/sensors.py`).
-    `X_PB.base_frame` names a link of this robot (`chassis`); `{rgb: false}`: no camera."""
+    cameras: dict[str, CameraConfig] = dc.field(default_factory=default_cameras)
+    """Cameras by name, Drake's CameraConfig each (`config/sensors.py`); default `front`,
+    the SPEC camera; a new name starts as the SPEC camera too. `X_PB.base_frame` names a
+    link of this robot (`chassis`); `{rgb: false}` removes one."""
     ir_sensors: dict[str, IrSensorConfig] = dc.field(default_factory=default_ir_sensors)
     """IR distance sensors by name (`config/sensors.py`); defaults `front` and `rear` at the
     SPEC positions; `{enabled: false}` removes one."""

@@ -1,6 +1,14 @@
-"""The sensors' configuration: each robot's IR sensors and camera, as the scenario holds them.
+"""The sensors' configuration: each robot's sensors, a typed map per kind, as the scenario
+holds them.
 
-Both are mounted the same way, by Drake's `pydrake.common.schema.Transform` `X_PB`: the
+`SENSOR_KINDS` names them: `robots.<name>.ir_sensors.<sensor>` (`IrSensorConfig`) and
+`robots.<name>.cameras.<camera>` (Drake's `CameraConfig`, as Drake's hardware_sim holds its
+`cameras:`). The map key names the sensor (its systems, ports, topics and URLs); a
+`CameraConfig.name` is not read. A key the defaults lack starts as the Corobot's own sensor of
+that kind (`NEW_SENSOR`: a second camera is a SPEC camera until its fields say otherwise).
+`sensors/registry.py` adds each kind to the diagram (`add_ir_sensor`, `add_camera`).
+
+Every sensor is mounted the same way, by Drake's `pydrake.common.schema.Transform` `X_PB`: the
 sensor's pose in the frame `X_PB.base_frame` (a link of its robot, `chassis` by default; a
 scoped name `model::link` for another model's link; empty for the world). The sensor frame
 of an IR sensor looks along its +x; a camera's is Drake's (+z forward, +x right, +y down).
@@ -58,7 +66,12 @@ def default_ir_sensors() -> dict[str, IrSensorConfig]:
             for name, m in (("front", dim.FRONT_IR), ("rear", dim.REAR_IR))}
 
 
-# --- the camera (the scenario's `robots.<name>.camera`, Drake's CameraConfig) ----------------
+# --- the cameras (the scenario's `robots.<name>.cameras.<camera>`, Drake's CameraConfig) -----
+
+FRONT_CAMERA = "front"
+"""The Corobot's own camera (SPEC), the one every robot has by default. Its front ends keep
+the unqualified names (`/camera/...` topics, `/robots/<robot>/camera` routes, frames saved in
+`<dir>/<robot>/`); any other camera's carry its name (`camera_names`)."""
 
 ENGINES = ("RenderEngineGl", "RenderEngineVtk")
 """The render engines a camera can use, the faster here first."""
@@ -83,7 +96,8 @@ and the output at 0.33000000000000007 never came (its frame was lost)."""
 
 def default_camera_config() -> CameraConfig:
     """The Corobot's camera (SPEC): 320 x 240, 30 deg vertical fov, 30 Hz, on the chassis at
-    `dimensions.CAMERA`, looking forward."""
+    `dimensions.CAMERA`, looking forward; every robot camera renders with one engine
+    (`RENDERER_NAME`)."""
     roll, _, yaw = CAMERA_ROTATION_RPY_DEG
     return CameraConfig(
         width=dim.CAMERA_WIDTH,
@@ -93,7 +107,7 @@ def default_camera_config() -> CameraConfig:
         clipping_far=100.0,
         X_PB=mount(dim.CAMERA.position, (roll, 0.0, yaw + math.degrees(dim.CAMERA.yaw))),
         renderer_name=RENDERER_NAME,
-        name="camera",
+        name=FRONT_CAMERA,
         fps=dim.CAMERA_FPS,
         capture_offset=CAPTURE_OFFSET,
         output_delay=dim.CAMERA_OUTPUT_DELAY,
@@ -101,3 +115,34 @@ def default_camera_config() -> CameraConfig:
         depth=False,
         label=False,
     )
+
+
+def default_cameras() -> dict[str, CameraConfig]:
+    """The Corobot's one camera, `front` (`{rgb: false}` turns it off)."""
+    return {FRONT_CAMERA: default_camera_config()}
+
+
+def camera_names(camera: str) -> tuple[str, str]:
+    """(topic part, frame part) of a camera's front-end names: `camera` for the front camera,
+    `camera/<name>` and `camera_<name>` for another (topics `/camera/<name>/image_raw`, frames
+    `camera_<name>_optical_frame`)."""
+    if camera == FRONT_CAMERA:
+        return "camera", "camera"
+    return f"camera/{camera}", f"camera_{camera}"
+
+
+# --- the kinds ------------------------------------------------------------------------------
+
+SENSOR_KINDS = {"ir_sensors": IrSensorConfig, "cameras": CameraConfig}
+"""{`Robot` field: the config type of its sensors}: each robot's sensors, one typed map per
+kind. A new kind: its config here, a `Robot` field, and its `add_<kind>` in
+`sensors/registry.py`."""
+
+NEW_SENSOR = {"ir_sensors": IrSensorConfig, "cameras": default_camera_config}
+"""{`Robot` field: what a sensor the defaults lack starts as}."""
+
+
+def is_enabled(config) -> bool:
+    """Whether a sensor config asks for a sensor: an IR sensor's `enabled`, a camera's `rgb`
+    (Drake's own convention: no colour image, no camera)."""
+    return bool(config.rgb if isinstance(config, CameraConfig) else config.enabled)

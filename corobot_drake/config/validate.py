@@ -19,6 +19,7 @@ message` (the line of the field in this layer, or of its nearest enclosing field
 since it passed (`mark_checked`).
 """
 
+import copy
 import dataclasses as dc
 import functools
 import math
@@ -39,7 +40,13 @@ from corobot_drake.config import scenario as sc
 from corobot_drake.config.bounds import DRAKE_BOUNDS
 from corobot_drake.config.directives import DirectiveError, check_directives
 from corobot_drake.config.mesh_files import MeshFileError, check_mesh_file, scale_problem
-from corobot_drake.config.sensors import RENDERERS, IrSensorConfig
+from corobot_drake.config.sensors import (
+    FRONT_CAMERA,
+    NEW_SENSOR,
+    RENDERERS,
+    SENSOR_KINDS,
+    IrSensorConfig,
+)
 from corobot_drake.limits import (
     ANGLE,
     COLOR,
@@ -312,11 +319,21 @@ class _SchemaWalk:
             if name in seen:
                 self.fail(key, sub, "duplicate field")
             seen.add(name)
+            if (tp, name) in REPLACED_FIELDS:
+                self.fail(key, sub, REPLACED_FIELDS[tp, name])
             if name not in fields:
                 self.fail(key, sub, f"unknown field; {_type_name(tp)} has "
                           + ", ".join(fields))
             self.lines[sub] = key.start_mark.line + 1
             self.check(value, fields[name], sub)
+
+
+REPLACED_FIELDS = {
+    (sc.Robot, "camera"): "replaced by `cameras`, a map of cameras by name: write "
+                          f"`cameras: {{{FRONT_CAMERA}: {{...}}}}` ({FRONT_CAMERA}: the "
+                          "Corobot's own camera)",
+}
+"""{(schema type, field a scenario may still carry): the one line saying what to write now}."""
 
 
 RIGID_ON_GROUND = ("touches the rigid ground at a single point (Drake's point contact) and "
@@ -402,6 +419,8 @@ class LayerChecks:
         if node is None:
             raise sc.ScenarioError(source, "", f"empty (no YAML document); expected a mapping "
                                    f"of {_type_name(schema)} fields", 1)
+        self.robots_node = _field_node(node, "robots") if schema is sc.Scenario else None
+        """The layer's `robots:` mapping node (None without one), for `_with_new_sensors`."""
         self.lines: dict[str, int] = {"": node.start_mark.line + 1}
         """Field path (`robots.corobot.drive.slew_rate`) -> its line in this layer ("": the
         document's first)."""
@@ -411,7 +430,7 @@ class LayerChecks:
     def of_object(cls, source: str) -> "LayerChecks":
         """The checks of a scenario built in Python (no text: errors name no line)."""
         checks = cls.__new__(cls)
-        checks.source, checks.lines = source, {}
+        checks.source, checks.lines, checks.robots_node = source, {}, None
         return checks
 
     def has(self, path: str) -> bool:
@@ -604,9 +623,9 @@ class LayerChecks:
         if name in s.world.bodies:
             self.fail(path, "a world body already has this name")
         self._world_pose(f"{path}.pose", robot.pose)
-        self._camera(f"{path}.camera", robot.camera, s)
-        for sensor, ir in robot.ir_sensors.items():
-            self._ir_sensor(f"{path}.ir_sensors.{sensor}", sensor, ir, s)
+        for kind in SENSOR_KINDS:
+            for sensor, config in getattr(robot, kind).items():
+                self._sensor(f"{path}.{kind}.{sensor}", sensor, config, s)
         self._resume_fields(path, robot)
 
     def _resume_fields(self, path: str, robot: sc.Robot) -> None:
@@ -691,6 +710,18 @@ class LayerChecks:
 
     # -- sensors ----------------------------------------------------------------------------
 
+    def _sensor(self, path: str, name: str, config, s: sc.Scenario) -> None:
+        """A sensor of any kind (`SENSOR_KINDS`): its name, then its kind's checks."""
+        if not SENSOR_NAME.fullmatch(name):
+            # It appears in port names, Meshcat paths, topics and URLs
+            # (/robots/<robot>/<sensor>).
+            self.fail(path, "a sensor name must be letters, digits, '_', '-' or '~'; got "
+                      f"{name!r}")
+        if isinstance(config, IrSensorConfig):
+            self._mount(f"{path}.X_PB", config.X_PB, s)
+        else:
+            self._camera(path, config, s)
+
     def _camera(self, path: str, config, s: sc.Scenario) -> None:
         """A camera this project can build (nothing to check without one)."""
         if not config.rgb:
@@ -715,12 +746,6 @@ class LayerChecks:
         except Exception as e:  # Drake's own validation, its reasons on lines of their own
             self.fail(path, " ".join(str(e).split()))
 
-    def _ir_sensor(self, path: str, name: str, c: IrSensorConfig, s: sc.Scenario) -> None:
-        if not SENSOR_NAME.fullmatch(name):
-            # It appears in port names, Meshcat paths and URLs (/robots/<robot>/<sensor>).
-            self.fail(path, "a sensor name must be letters, digits, '_', '-' or '~'; got "
-                      f"{name!r}")
-        self._mount(f"{path}.X_PB", c.X_PB, s)
 
 
 @functools.cache
@@ -762,7 +787,7 @@ ROBOT_NAME = re.compile(r"[A-Za-z0-9_.~-]+")
 """A robot's name: RFC 3986's unreserved characters, so that it is a URL path segment as it
 is (the services' URLs, /robots/<name>)."""
 SENSOR_NAME = re.compile(r"[A-Za-z0-9_~-]+")
-"""An IR sensor's name: as a robot's, without '.' (it joins port names: `<robot>.<sensor>`)."""
+"""A sensor's name: as a robot's, without '.' (it joins port names: `<robot>.<sensor>`)."""
 
 PYTHON_SOURCE = "<Python scenario>"
 """What an error names for a scenario built in Python (not loaded from a file)."""
@@ -839,6 +864,8 @@ def load_layer(source: str, text: str, schema, defaults=None):
     `defaults` (a schema instance; None: the schema's defaults). Returns the value and the
     layer's `LayerChecks`, whose `fail` names a field's line for the checks of meaning."""
     checks = LayerChecks(source, text, schema)
+    if schema is sc.Scenario:
+        defaults = _with_new_sensors(checks.robots_node, defaults or sc.Scenario())
     try:
         value = yaml_load_typed(schema=schema, data=text, defaults=defaults,
                                 retain_map_defaults=True)
@@ -847,3 +874,27 @@ def load_layer(source: str, text: str, schema, defaults=None):
     except Exception as e:  # the pre-check missed it: still one clear line
         raise sc.ScenarioError(source, "", sc.one_line(e)) from None
     return value, checks
+
+
+def _field_node(node, name: str):
+    """The value node of field `name` in a mapping node (None if it has none)."""
+    return next((v for k, v in node.value if k.value == name), None) if isinstance(
+        node, yaml.MappingNode) else None
+
+
+def _with_new_sensors(robots_node, defaults: sc.Scenario) -> sc.Scenario:
+    """`defaults`, or a copy of it holding each sensor this layer names that it lacks as its
+    kind's `NEW_SENSOR` (a new camera is the SPEC camera before the layer's fields apply;
+    Drake's typed load would start it from its type's defaults)."""
+    new = [(robot.value, kind, key.value)
+           for robot, fields in getattr(robots_node, "value", ())
+           for kind in SENSOR_KINDS
+           for key, _ in getattr(_field_node(fields, kind), "value", ())
+           if key.value not in getattr(defaults.robots.get(robot.value, sc.Robot()), kind)]
+    if not new:
+        return defaults
+    defaults = copy.deepcopy(defaults)
+    for robot, kind, sensor in new:
+        getattr(defaults.robots.setdefault(robot, sc.Robot()), kind)[sensor] = (
+            NEW_SENSOR[kind]())
+    return defaults

@@ -26,6 +26,7 @@ from gymnasium import spaces
 
 from corobot_drake.config import scenario as sc
 from corobot_drake.config.poses import ground_pose
+from corobot_drake.config.sensors import FRONT_CAMERA
 from corobot_drake.gym.checks import check_action, check_options, make_config
 from corobot_drake.gym.layout import Layout, draw_layout
 from corobot_drake.model import dimensions as dim
@@ -106,10 +107,11 @@ def base_scenario(config: GoToGoalConfig) -> sc.Scenario:
     only with `config.camera` (then one frame per step, rendered synchronously)."""
     scenario = sc.load_scenario(DEFAULT_SCENARIO)
     robot = scenario.robots[ROBOT]
-    robot.camera.rgb = config.camera
+    camera = robot.cameras[FRONT_CAMERA]
+    camera.rgb = config.camera
     if config.camera:
-        robot.camera.fps = 1.0 / config.control_period
-        robot.camera.output_delay = 0.0
+        camera.fps = 1.0 / config.control_period
+        camera.output_delay = 0.0
     giant = scenario.world.bodies["giant_box"]
     giant.pose = ground_pose(*dim.GIANT_BOX_CENTER[:2])
     giant.pose.translation = [*dim.GIANT_BOX_CENTER[:2], dim.GIANT_BOX_CENTER[2] + HOVER]

@@ -44,14 +44,12 @@ from pydrake.multibody.math import SpatialVelocity
 from pydrake.multibody.tree import BodyIndex
 from pydrake.systems.framework import LeafSystem
 from pydrake.systems.primitives import ZeroOrderHold
-from pydrake.systems.sensors import ImageRgba8U, RgbdSensorAsync
+from pydrake.systems.sensors import ImageRgba8U
 
-from corobot_drake.config import scenario as sc
 from corobot_drake.config.poses import mount_frame
 from corobot_drake.model import dimensions as dim
 from corobot_drake.model.ir_models import SharpGP2D12
 from corobot_drake.recording import topics as tp
-from corobot_drake.sensors.camera import frame_look_period
 from corobot_drake.sensors.ir_sensor import DISTANCE, SCAN_TIME, TRUE_DISTANCE, scan_state_layout
 from corobot_drake.systems.runlog import HELD_PERIOD
 
@@ -309,7 +307,8 @@ class IrPublisher(LeafSystem):
 
 class CameraPublisher(LeafSystem):
     """One camera's frames: /camera/image/compressed (foxglove.CompressedImage, JPEG) and
-    /camera/camera_info (foxglove.CameraCalibration), stamped with the capture time.
+    /camera/camera_info (foxglove.CameraCalibration), stamped with the capture time (another
+    camera than `front`: /camera/<camera>/..., `topics.RobotNames.camera_topic`).
 
     .. pydrake_system::
 
@@ -322,17 +321,18 @@ class CameraPublisher(LeafSystem):
     the first), the camera's outputs. It looks every `look` s and publishes a frame that came
     out (capture + `delay`) since the previous look, as `camera.CameraFrameSaver` does."""
 
-    def __init__(self, context, names: tp.RobotNames, config, look: float, delay: float):
+    def __init__(self, context, names: tp.RobotNames, camera: str, config, look: float,
+                 delay: float):
         super().__init__()
         self._names, self._look, self._delay = names, float(look), float(delay)
         self._image = self.DeclareAbstractInputPort(
             "rgb_image", AbstractValue.Make(ImageRgba8U(config.width, config.height)))
         self._image_time = self.DeclareVectorInputPort("image_time", 1)
-        self._image_channel = CompressedImageChannel(names.topic("camera/image/compressed"),
-                                                     context=context)
-        self._info_channel = CameraCalibrationChannel(names.topic("camera/camera_info"),
+        self._image_channel = CompressedImageChannel(
+            names.camera_topic(camera, "image/compressed"), context=context)
+        self._info_channel = CameraCalibrationChannel(names.camera_topic(camera, "camera_info"),
                                                       context=context)
-        self._frame = names.frame(tp.CAMERA_FRAME)
+        self._frame = names.camera_frame(camera)
         fx, fy = config.focal_x(), config.focal_y()
         cx, cy = config.principal_point()
         self._calibration = dict(
@@ -463,10 +463,8 @@ def add_foxglove_topics(builder, plant, scene_graph, robots: dict, scenario, con
             builder.Connect(system.GetOutputPort("scan_state"), ir.get_input_port())
             mounts.append(_mount(plant, frames, names.ir_frame(sensor), mount_frame(
                 plant, parts.model_instance, system.config.X_PB)))
-        if parts.camera is not None:
-            mounts.append(_add_camera(builder, plant, frames, context, names, parts,
-                                      scenario.robots[name].camera, sc.physics_step(
-                                          scenario.plant_config, scenario.simulator_config)))
+        for camera in parts.cameras.values():
+            mounts.append(_add_camera(builder, plant, frames, context, names, parts, camera))
     tf = builder.AddNamedSystem("foxglove_tf", TransformPublisher(
         context, [(i, f, p) for i, (f, p) in frames.items()], mounts))
     builder.Connect(plant.get_body_poses_output_port(), tf.get_input_port())
@@ -504,19 +502,16 @@ def _mount(plant, frames: dict, child: str, mount) -> tuple:
     return parent, child, X_BS
 
 
-def _add_camera(builder, plant, frames: dict, context, names, parts, config, step: float
-                ) -> tuple:
-    """Adds `<robot>.foxglove_camera` for the robot's camera (its `config`); returns the
-    camera frame's mount."""
-    camera = parts.camera
-    delay = config.output_delay if isinstance(camera, RgbdSensorAsync) else 0.0
-    publisher = builder.AddNamedSystem(f"{names.robot}.foxglove_camera", CameraPublisher(
-        context, names, config, frame_look_period(config, step), delay))
-    image = "color_image" if isinstance(camera, RgbdSensorAsync) else "rgb_image"
-    builder.Connect(camera.GetOutputPort(image), publisher.GetInputPort("rgb_image"))
-    builder.Connect(camera.GetOutputPort("image_time"), publisher.GetInputPort("image_time"))
-    return _mount(plant, frames, names.frame(tp.CAMERA_FRAME),
-                  mount_frame(plant, parts.model_instance, config.X_PB))
+def _add_camera(builder, plant, frames: dict, context, names, parts, camera) -> tuple:
+    """Adds `<robot>.foxglove_camera.<camera>` for one of the robot's cameras (a
+    `sensors.camera.Camera`); returns the camera frame's mount."""
+    publisher = builder.AddNamedSystem(
+        f"{names.robot}.foxglove_camera.{camera.name}",
+        CameraPublisher(context, names, camera.name, camera.config, camera.look, camera.delay))
+    builder.Connect(camera.image, publisher.GetInputPort("rgb_image"))
+    builder.Connect(camera.image_time, publisher.GetInputPort("image_time"))
+    return _mount(plant, frames, names.camera_frame(camera.name),
+                  mount_frame(plant, parts.model_instance, camera.config.X_PB))
 
 
 __all__ = ["CameraPublisher", "IrPublisher", "RobotStatePublisher", "ScenePublisher",

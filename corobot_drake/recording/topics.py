@@ -16,6 +16,7 @@ as a ROS robot's; with several, each robot's are under its name (`/<robot>/odom`
 | `/ir/<sensor>/rays` | foxglove.SceneUpdate | each scan's rays, in the world |
 | `/camera/image/compressed` | foxglove.CompressedImage | each frame, JPEG |
 | `/camera/camera_info` | foxglove.CameraCalibration | with each frame |
+| `/camera/<camera>/...` | (the same two) | another camera than `front` |
 | `/commands` | foxglove.Log | each command issued and how it ended |
 | `/wheel_loads` | corobot.WheelLoads (JSON) | each wheel's load (N) |
 | `/wheel_slip` | corobot.WheelSlip (JSON) | each wheel's slip ratio and slip angle (deg) |
@@ -24,8 +25,9 @@ as a ROS robot's; with several, each robot's are under its name (`/<robot>/odom`
 Frames: `world` (z up); `base_link`, the chassis frame (on the ground midway between the axles,
 +x forward, +z up: ROS's base_footprint, REP 103's axes); `<wheel>_wheel` (the wheel links);
 `camera_optical_frame` (Drake's camera frame: +z forward, +x right, +y down, ROS's optical
-frame); `ir_<sensor>` (+x along the beam, as sensor_msgs/Range's frame). Times are simulation
-time (a run starts at 1970-01-01 00:00:00, as a ROS simulation's /clock starts at 0).
+frame; another camera's `camera_<camera>_optical_frame`); `ir_<sensor>` (+x along the beam, as
+sensor_msgs/Range's frame). Times are simulation time (a run starts at 1970-01-01 00:00:00,
+as a ROS simulation's /clock starts at 0).
 """
 
 import dataclasses as dc
@@ -47,11 +49,11 @@ from foxglove.messages import (
 from pydrake.math import RigidTransform
 
 from corobot_drake import signals
+from corobot_drake.config.sensors import camera_names
 from corobot_drake.model.dimensions import WHEEL_NAMES
 
 CHASSIS_FRAME = "base_link"
 """The chassis body's frame name (ROS's base frame)."""
-CAMERA_FRAME = "camera_optical_frame"
 
 
 @dc.dataclass(frozen=True)
@@ -73,6 +75,17 @@ class RobotNames:
 
     def ir_frame(self, sensor: str) -> str:
         return self.frame(f"ir_{sensor}")
+
+    def camera_topic(self, camera: str, name: str) -> str:
+        """A camera's topic `name` (`image/compressed`, `camera_info`, ...): `/camera/<name>`
+        for the front camera, `/camera/<camera>/<name>` for another
+        (`config.sensors.camera_names`)."""
+        return self.topic(f"{camera_names(camera)[0]}/{name}")
+
+    def camera_frame(self, camera: str, suffix: str = "optical_frame") -> str:
+        """A camera's frame: `camera_optical_frame` (`camera_link`) for the front camera,
+        `camera_<camera>_optical_frame` for another."""
+        return self.frame(f"{camera_names(camera)[1]}_{suffix}")
 
 
 def json_channel(topic: str, schema: dict, context) -> Channel:

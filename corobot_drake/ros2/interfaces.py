@@ -20,6 +20,7 @@ import sys
 from pathlib import Path
 
 from corobot_drake.config import scenario as sc
+from corobot_drake.config.sensors import camera_names
 from corobot_drake.model.dimensions import WHEEL_NAMES
 from corobot_drake.recording import topics as tp
 
@@ -82,13 +83,21 @@ TOPICS = (
             t.description.split(":")[0].lower() + (" at 10 Hz" if t.costly else " at 50 Hz"))
       for t in tp.TELEMETRY_TOPICS),
 )
-"""Everything the node publishes (the IR topics are each sensor's: `ir_topic`)."""
+"""Everything the node publishes (the IR topics are each sensor's: `ir_topic`; the camera
+topics each camera's: `camera_topic`)."""
 TOPIC = {t.name: t for t in TOPICS}
 
 
 def ir_topic(sensor: str) -> Topic:
     """The topic of the IR sensor `sensor` (the scenario's sensors: `front`, `rear`, ...)."""
     return dc.replace(TOPIC["ir/front"], name=f"ir/{sensor}")
+
+
+def camera_topic(camera: str, name: str) -> Topic:
+    """The topic `name` (`image_raw`, `camera_info`) of the robot's camera `camera`:
+    `camera/<name>` for the front camera, `camera/<camera>/<name>` for another
+    (`config.sensors.camera_names`)."""
+    return dc.replace(TOPIC[f"camera/{name}"], name=f"{camera_names(camera)[0]}/{name}")
 
 
 CMD_VEL = ("cmd_vel", "geometry_msgs/msg/Twist")

@@ -18,7 +18,7 @@ from pydrake.math import RigidTransform
 from pydrake.multibody.math import SpatialVelocity
 from pydrake.systems.framework import LeafSystem
 from pydrake.systems.primitives import ZeroOrderHold
-from pydrake.systems.sensors import ImageRgba8U, RgbdSensorAsync
+from pydrake.systems.sensors import ImageRgba8U
 
 from corobot_drake.config.poses import mount_frame
 from corobot_drake.model import dimensions as dim
@@ -33,7 +33,6 @@ from corobot_drake.recording.publishers import (
 )
 from corobot_drake.ros2 import interfaces as ifc
 from corobot_drake.ros2.messages import R_LINK_OPTICAL, Messages
-from corobot_drake.sensors.camera import frame_look_period
 from corobot_drake.sensors.ir_sensor import DISTANCE, SCAN_TIME, scan_state_layout
 
 CLOCK_PERIOD = 0.01
@@ -42,7 +41,6 @@ ODOM_FRAME = "odom"
 """The fixed frame /odom's poses are in: the world's origin and axes (ground truth)."""
 WORLD_FRAME = "world"
 """With several robots, /tf_static joins each robot's odom to this one frame."""
-CAMERA_LINK = "camera_link"
 
 
 def _channel(bus, names: tp.RobotNames | None, topic: ifc.Topic):
@@ -276,7 +274,8 @@ class IrPublisher(LeafSystem):
 
 class CameraPublisher(LeafSystem):
     """One camera's frames: /camera/image_raw (sensor_msgs/Image, rgb8) and
-    /camera/camera_info, stamped with the capture time.
+    /camera/camera_info, stamped with the capture time (another camera than `front`:
+    /camera/<camera>/..., `interfaces.camera_topic`).
 
     .. pydrake_system::
 
@@ -289,16 +288,17 @@ class CameraPublisher(LeafSystem):
     the first), the camera's outputs. It looks every `look` s and publishes a frame that came
     out (capture + `delay`) since the previous look, as `camera.CameraFrameSaver` does."""
 
-    def __init__(self, bus, names: tp.RobotNames, config, look: float, delay: float):
+    def __init__(self, bus, names: tp.RobotNames, camera: str, config, look: float,
+                 delay: float):
         super().__init__()
         self._m, self._config = Messages(bus.store), config
         self._look, self._delay = float(look), float(delay)
-        self._frame = names.frame(tp.CAMERA_FRAME)
+        self._frame = names.camera_frame(camera)
         self._image = self.DeclareAbstractInputPort(
             "rgb_image", AbstractValue.Make(ImageRgba8U(config.width, config.height)))
         self._image_time = self.DeclareVectorInputPort("image_time", 1)
-        self._image_channel = _channel(bus, names, ifc.TOPIC["camera/image_raw"])
-        self._info_channel = _channel(bus, names, ifc.TOPIC["camera/camera_info"])
+        self._image_channel = _channel(bus, names, ifc.camera_topic(camera, "image_raw"))
+        self._info_channel = _channel(bus, names, ifc.camera_topic(camera, "camera_info"))
         self.DeclarePeriodicPublishEvent(self._look, 0.0, self._publish)
 
     def _publish(self, context):
@@ -342,7 +342,7 @@ def add_ros2_topics(bus, builder, plant, scene_graph, robots: dict, scenario) ->
         tf_robots.append((names, parts.chassis.index(),
                           [(j.child_body().index(), names.body_frame(j.child_body().name()))
                            for j in parts.wheel_joints]))
-        mounts += _robot_mounts(builder, bus, plant, names, parts, spec)
+        mounts += _robot_mounts(builder, bus, plant, names, parts)
         if namespaced:  # one tree: every robot's odom is the world's origin
             mounts.append((WORLD_FRAME, names.frame(ODOM_FRAME), RigidTransform()))
         descriptions[names] = corobot_urdf(spec, name)
@@ -351,7 +351,7 @@ def add_ros2_topics(bus, builder, plant, scene_graph, robots: dict, scenario) ->
     builder.AddNamedSystem("ros2_static", StaticPublisher(bus, mounts, descriptions))
 
 
-def _robot_mounts(builder, bus, plant, names, parts, spec) -> list:
+def _robot_mounts(builder, bus, plant, names, parts) -> list:
     """Adds the robot's IR and camera publishers; returns their frames' fixed mounts."""
     mounts = []
     for sensor, system in parts.ir_sensors.items():
@@ -360,19 +360,15 @@ def _robot_mounts(builder, bus, plant, names, parts, spec) -> list:
         builder.Connect(system.GetOutputPort("scan_state"), ir.get_input_port())
         mounts.append(_mount(plant, parts, names, names.ir_frame(sensor),
                              system.config.X_PB))
-    if parts.camera is not None:
-        config = spec.camera
-        camera = parts.camera
-        delay = config.output_delay if isinstance(camera, RgbdSensorAsync) else 0.0
-        publisher = builder.AddNamedSystem(f"{names.robot}.ros2_camera", CameraPublisher(
-            bus, names, config, frame_look_period(config, plant.time_step()), delay))
-        image = "color_image" if isinstance(camera, RgbdSensorAsync) else "rgb_image"
-        builder.Connect(camera.GetOutputPort(image), publisher.GetInputPort("rgb_image"))
-        builder.Connect(camera.GetOutputPort("image_time"),
-                        publisher.GetInputPort("image_time"))
-        parent, optical, X_PO = _mount(plant, parts, names, names.frame(tp.CAMERA_FRAME),
-                                       config.X_PB)
-        link = names.frame(CAMERA_LINK)
+    for camera in parts.cameras.values():
+        publisher = builder.AddNamedSystem(
+            f"{names.robot}.ros2_camera.{camera.name}",
+            CameraPublisher(bus, names, camera.name, camera.config, camera.look, camera.delay))
+        builder.Connect(camera.image, publisher.GetInputPort("rgb_image"))
+        builder.Connect(camera.image_time, publisher.GetInputPort("image_time"))
+        parent, optical, X_PO = _mount(plant, parts, names, names.camera_frame(camera.name),
+                                       camera.config.X_PB)
+        link = names.camera_frame(camera.name, "link")
         X_LO = RigidTransform(R_LINK_OPTICAL, np.zeros(3))
         mounts += [(parent, link, X_PO @ X_LO.inverse()), (link, optical, X_LO)]
     return mounts

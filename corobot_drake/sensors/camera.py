@@ -1,24 +1,26 @@
-"""The robot's front camera: Drake's `CameraConfig` in the scenario, rendered by Drake's GL
+"""The robots' cameras: Drake's `CameraConfig` in the scenario, rendered by Drake's GL
 engine (or VTK headless).
 
-Each robot's `camera` (a `pydrake.systems.sensors.CameraConfig`, the scenario field
-`robots.<name>.camera`) becomes, in the diagram, with the default `output_delay` (0.03 s) and
-the GL engine:
+Each camera of a robot (a `pydrake.systems.sensors.CameraConfig`, the scenario field
+`robots.<robot>.cameras.<camera>`) becomes, in the diagram, with the default `output_delay`
+(0.03 s) and the GL engine:
 
-- `<robot>.camera`: Drake's `RgbdSensorAsync` (colour only). At each tick (`capture_offset`
-  + k / `fps`) it captures the poses and renders on a worker thread, with its own clone of
-  the engine, while the simulation goes on; the frame comes out `output_delay` later,
+- `<robot>.camera.<camera>`: Drake's `RgbdSensorAsync` (colour only). At each tick
+  (`capture_offset` + k / `fps`) it captures the poses and renders on a worker thread, with
+  its own clone of the engine, while the simulation goes on; the frame comes out
+  `output_delay` later,
 
 and with `output_delay: 0`, or with VTK (which cannot render on that thread):
 
-- `<robot>.camera`: an `RgbdSensor` (colour only; it renders when asked) and
-- `<robot>.camera_hold`: `CameraHold`, which takes one frame at initialization and one per
-  tick, on the plant's steps, and holds it.
+- `<robot>.camera.<camera>`: an `RgbdSensor` (colour only; it renders when asked) and
+- `<robot>.camera.<camera>.hold`: `CameraHold`, which takes one frame at initialization and
+  one per tick, on the plant's steps, and holds it.
 
-Either way the latest frame is exported as `<robot>.camera.rgb_image` (ImageRgba8U; empty
-before the first) with `<robot>.camera.image_time` (s, its capture; NaN before the first).
-With `save_dir`, `<robot>.camera_saver` (`CameraFrameSaver`) writes the frames as numbered
-PNG files `<save_dir>/<robot>/frame_000000.png`, ... at its own rate.
+Either way the latest frame is exported as `<robot>.camera.<camera>.rgb_image` (ImageRgba8U;
+empty before the first) with `<robot>.camera.<camera>.image_time` (s, its capture; NaN before
+the first). With a save directory, `<robot>.camera.<camera>.saver` (`CameraFrameSaver`) writes
+the frames as numbered PNG files `<dir>/<robot>/frame_000000.png`, ... (another camera than
+`front`: `<dir>/<robot>/<camera>/...`) at its own rate.
 
 This is `ApplyCameraConfig` without its LCM publisher and colour only (Drake's
 `RgbdSensorDiscrete` also renders a depth image every frame, twice the cost).
@@ -32,12 +34,14 @@ frame, a dim fill light from the camera (the sky's scattered light, so faces tur
 sun are shaded, not black) and the sky colour as background. Cameras of all robots share one
 engine.
 
-A robot without a camera: `camera: {rgb: false}` (Drake's own convention: no image, no sensor).
+A camera turned off: `cameras: {front: {rgb: false}}` (Drake's own convention: no image, no
+sensor).
 """
 
 from __future__ import annotations
 
 import copy
+import dataclasses as dc
 import warnings
 from pathlib import Path
 
@@ -55,6 +59,8 @@ from pydrake.systems.framework import EventStatus, LeafSystem
 from pydrake.systems.sensors import CameraConfig, ImageRgba8U, RgbdSensor, RgbdSensorAsync
 
 from corobot_drake.config.poses import mount_frame
+from corobot_drake.config.sensors import FRONT_CAMERA
+from corobot_drake.sensors.site import SensorSite
 from corobot_drake.sensors.xdisplay import x_display
 
 FILL_INTENSITY = 0.5
@@ -294,64 +300,102 @@ def events_near_steps(config: CameraConfig, step: float, ticks: int = 1000) -> b
     return False
 
 
-def add_camera(builder, plant, scene_graph, robot: str, instance, config: CameraConfig,
-               world, renderers: dict, save_dir: str | Path | None = None,
-               save_rate: float | None = None, step: float | None = None):
-    """Adds `robot`'s camera (see the module doc), lit by the scenario's `world` (sun, sky),
-    and returns (the system whose outputs are the latest frame, saver or None); nothing when
-    `config.rgb` is false. Cameras with the same `renderer_name` share the engine the first
-    of them makes; `renderers` (renderer name -> engine class name) records the engines made.
+@dc.dataclass
+class Camera:
+    """One camera as built (`add_camera`): what a front end reads its frames from."""
+
+    name: str
+    config: CameraConfig
+    system: object
+    """The system whose outputs are the latest frame: `RgbdSensorAsync`, or `CameraHold`."""
+    image: object
+    """Its output port of the latest frame (abstract ImageRgba8U; empty before the first)."""
+    image_time: object
+    """Its output port of the frame's capture time (1-vector, s; NaN before the first)."""
+    delay: float
+    """s from a frame's capture to its output (0 but for `RgbdSensorAsync`)."""
+    look: float
+    """s: how often a reader of the frames looks for a new one (`frame_look_period`)."""
+    saver: CameraFrameSaver | None = None
+    """Writes the frames as PNG, with a save directory."""
+
+
+def save_directory(root: str | Path, robot: str, camera: str) -> Path:
+    """Where a camera's frames are saved: `<root>/<robot>` for the front camera, else
+    `<root>/<robot>/<camera>`."""
+    path = Path(root) / robot
+    return path if camera == FRONT_CAMERA else path / camera
+
+
+def add_camera(site: SensorSite, name: str, config: CameraConfig,
+               save_rate: float | None = None) -> Camera | None:
+    """Adds the robot's camera `name` (see the module doc), lit by the site's world (sun,
+    sky), and returns it; None when `config.rgb` is false. Cameras with the same
+    `renderer_name` share the engine the first of them makes (`site.renderers`).
 
     With `output_delay` > 0 and the GL engine, the camera is Drake's `RgbdSensorAsync`: each
     frame renders on a worker thread (its own clone of the engine, which GL allows) while the
     simulation goes on, and appears `output_delay` s after its capture. Otherwise (VTK cannot
     render on that thread) it is an `RgbdSensor` and a `CameraHold` taking frames on the
-    plant's steps, with no delay. `step`: the physics' step (s; `scenario.physics_step`; None:
-    the plant's time step)."""
-    step = plant.time_step() if step is None else step
+    plant's steps, with no delay. `save_rate`: Hz of saved frames (default: every frame)."""
     if not config.rgb:
-        return None, None
+        return None
+    builder, plant, scene_graph = site.builder, site.plant, site.scene_graph
+    step, prefix = site.physics_step, f"{site.robot}.camera.{name}"
     if not scene_graph.HasRenderer(config.renderer_name):
-        engine, renderers[config.renderer_name] = make_render_engine(
+        world = site.world
+        engine, site.renderers[config.renderer_name] = make_render_engine(
             config.renderer_class, world.sun.direction, world.sun.intensity, world.sky_color)
         scene_graph.AddRenderer(config.renderer_name, engine)
-    color, depth = config.MakeCameras()
-    body, X_AB = mount_frame(plant, instance, config.X_PB)
+    body, X_AB = mount_frame(plant, site.model_instance, config.X_PB)
     frame_id = plant.GetBodyFrameIdOrThrow(body.index())
-    delay = 0.0
     look = frame_look_period(config, step)
-    if config.output_delay > 0 and renderers.get(config.renderer_name) == "RenderEngineGl":
-        delay = config.output_delay
-        if step > 0 and events_near_steps(config, step):
-            _warn_once(f"camera {robot}: capture or output times fall within {NEAR_STEP} s "
-                       "of plant steps; Drake may skip such events (lost frames): move "
-                       "capture_offset off the steps (the default is 0.0005 s)")
-        camera = builder.AddNamedSystem(f"{robot}.camera", RgbdSensorAsync(
-            scene_graph, frame_id, X_AB, config.fps, config.capture_offset,
-            config.output_delay, color, None, False))
-        builder.Connect(scene_graph.get_query_output_port(), camera.get_input_port())
-        image = camera.GetOutputPort("color_image")
+    if config.output_delay > 0 and site.renderers.get(config.renderer_name) == "RenderEngineGl":
+        camera = _add_async(builder, scene_graph, prefix, config, frame_id, X_AB, step)
+        image, delay = camera.GetOutputPort("color_image"), config.output_delay
     else:
-        if config.output_delay > 0 and config.renderer_class != "":  # else said at fallback
-            _warn_once("camera: output_delay is not simulated with RenderEngineVtk (it cannot "
-                       "render on RgbdSensorAsync's thread); frames come without delay")
-        sensor = builder.AddNamedSystem(f"{robot}.camera",
-                                        RgbdSensor(frame_id, X_AB, color, depth))
-        builder.Connect(scene_graph.get_query_output_port(), sensor.query_object_input_port())
-        # Frames on the plant's steps, unless the camera is faster than the steps.
-        camera = builder.AddNamedSystem(f"{robot}.camera_hold", CameraHold(
-            config.width, config.height, config.fps, config.capture_offset,
-            look if look == step else 0.0))
-        builder.Connect(sensor.color_image_output_port(), camera.get_input_port())
-        image = camera.GetOutputPort("rgb_image")
+        camera = _add_held(builder, scene_graph, prefix, config, frame_id, X_AB,
+                           look if look == step else 0.0)
+        image, delay = camera.GetOutputPort("rgb_image"), 0.0
     image_time = camera.GetOutputPort("image_time")
-    builder.ExportOutput(image, f"{robot}.camera.rgb_image")
-    builder.ExportOutput(image_time, f"{robot}.camera.image_time")
-    saver = None
-    if save_dir is not None:
-        saver = builder.AddNamedSystem(f"{robot}.camera_saver", CameraFrameSaver(
-            Path(save_dir) / robot, config.width, config.height, config.fps,
-            save_rate or config.fps, config.capture_offset, look, delay))
-        builder.Connect(image, saver.GetInputPort("rgb_image"))
-        builder.Connect(image_time, saver.GetInputPort("image_time"))
-    return camera, saver
+    builder.ExportOutput(image, f"{prefix}.rgb_image")
+    builder.ExportOutput(image_time, f"{prefix}.image_time")
+    built = Camera(name, config, camera, image, image_time, delay, look)
+    if site.save_dir is not None:
+        built.saver = builder.AddNamedSystem(f"{prefix}.saver", CameraFrameSaver(
+            save_directory(site.save_dir, site.robot, name), config.width, config.height,
+            config.fps, save_rate or config.fps, config.capture_offset, look, delay))
+        builder.Connect(image, built.saver.GetInputPort("rgb_image"))
+        builder.Connect(image_time, built.saver.GetInputPort("image_time"))
+    return built
+
+
+def _add_async(builder, scene_graph, prefix: str, config: CameraConfig, frame_id, X_AB,
+               step: float):
+    """The camera as Drake's `RgbdSensorAsync` (GL, with an output delay)."""
+    if step > 0 and events_near_steps(config, step):
+        _warn_once(f"camera {prefix}: capture or output times fall within {NEAR_STEP} s "
+                   "of plant steps; Drake may skip such events (lost frames): move "
+                   "capture_offset off the steps (the default is 0.0005 s)")
+    color, _ = config.MakeCameras()
+    camera = builder.AddNamedSystem(prefix, RgbdSensorAsync(
+        scene_graph, frame_id, X_AB, config.fps, config.capture_offset,
+        config.output_delay, color, None, False))
+    builder.Connect(scene_graph.get_query_output_port(), camera.get_input_port())
+    return camera
+
+
+def _add_held(builder, scene_graph, prefix: str, config: CameraConfig, frame_id, X_AB,
+              step: float):
+    """The camera as an `RgbdSensor` rendering into a `CameraHold` (frames on the plant's
+    `step`s, 0: at the ticks), with no delay; returns the hold."""
+    if config.output_delay > 0 and config.renderer_class != "":  # else said at fallback
+        _warn_once("camera: output_delay is not simulated with RenderEngineVtk (it cannot "
+                   "render on RgbdSensorAsync's thread); frames come without delay")
+    color, depth = config.MakeCameras()
+    sensor = builder.AddNamedSystem(prefix, RgbdSensor(frame_id, X_AB, color, depth))
+    builder.Connect(scene_graph.get_query_output_port(), sensor.query_object_input_port())
+    hold = builder.AddNamedSystem(f"{prefix}.hold", CameraHold(
+        config.width, config.height, config.fps, config.capture_offset, step))
+    builder.Connect(sensor.color_image_output_port(), hold.get_input_port())
+    return hold

@@ -65,6 +65,7 @@ from corobot_drake.sensors.raycast import (
     cross_of_rays_in_sensor_frame,
     model_instance_geometry_ids,
 )
+from corobot_drake.sensors.site import SensorSite
 
 # --- counter-based noise -------------------------------------------------------------------
 
@@ -411,45 +412,42 @@ class IrMeshcatVisualizer(LeafSystem):
 # --- wiring into a station -----------------------------------------------------------------
 
 
-def add_ir_sensors(builder, plant, scene_graph, robot_name: str, configs: dict,
-                   *, model_instance, random_seed: int = 0,
-                   meshcat: Meshcat | None = None) -> dict[str, IrSensor]:
-    """Adds one IrSensor per enabled config to `builder` (named `<robot>.ir.<sensor>`),
-    mounted by its `X_PB` (on a link of `model_instance`, the robot), connected to
-    SceneGraph's query output, and exports its ports as `<robot>.<sensor>.<port>`.
-    With `meshcat`, adds an IrMeshcatVisualizer per sensor under /ir/<robot>/<sensor>.
+def add_ir_sensor(site: SensorSite, name: str, config: IrSensorConfig) -> IrSensor | None:
+    """Adds the robot's IR sensor `name` (`<robot>.ir.<name>`), mounted by its `X_PB` (on a
+    link of the site's model instance, whose own geometry it does not see), reading
+    SceneGraph's query output, and exports its ports as `<robot>.<name>.<port>`; returns it
+    (None when `config.enabled` is false). The plant must be finalized."""
+    if not config.enabled:
+        return None
+    plant, builder, robot = site.plant, site.builder, site.robot
+    body, X_BS = mount_frame(plant, site.model_instance, config.X_PB)
+    sensor = builder.AddNamedSystem(f"{robot}.ir.{name}", IrSensor(
+        config, plant.GetBodyFrameIdOrThrow(body.index()),
+        model_instance_geometry_ids(plant, site.model_instance),
+        noise_key(site.random_seed, robot, name, config.noise_seed), name, X_BS))
+    builder.Connect(site.scene_graph.get_query_output_port(), sensor.get_input_port(0))
+    for i in range(sensor.num_output_ports()):
+        port = sensor.get_output_port(i)
+        builder.ExportOutput(port, f"{robot}.{name}.{port.get_name()}")
+    return sensor
 
-    The plant must be finalized. Returns {sensor name: IrSensor}.
-    """
-    exclude = model_instance_geometry_ids(plant, model_instance)
-    sensors = {}
-    for sensor_name, config in configs.items():
-        if not config.enabled:
-            continue
-        body, X_BS = mount_frame(plant, model_instance, config.X_PB)
-        sensor = builder.AddNamedSystem(
-            f"{robot_name}.ir.{sensor_name}",
-            IrSensor(config, plant.GetBodyFrameIdOrThrow(body.index()), exclude,
-                     noise_key(random_seed, robot_name, sensor_name, config.noise_seed),
-                     sensor_name, X_BS))
-        builder.Connect(scene_graph.get_query_output_port(), sensor.get_input_port(0))
-        for i in range(sensor.num_output_ports()):
-            port = sensor.get_output_port(i)
-            builder.ExportOutput(port, f"{robot_name}.{sensor_name}.{port.get_name()}")
-        if meshcat is not None:
-            viz = builder.AddNamedSystem(
-                f"{robot_name}.ir.{sensor_name}.meshcat",
-                IrMeshcatVisualizer(meshcat, f"/ir/{robot_name}/{sensor_name}",
-                                    sensor.num_rays, sensor.period))
-            builder.Connect(sensor.GetOutputPort("scan_state"), viz.get_input_port())
-        sensors[sensor_name] = sensor
-    return sensors
+
+def add_ir_meshcat(builder, meshcat: Meshcat, robot: str, sensors: dict[str, IrSensor]
+                   ) -> None:
+    """An IrMeshcatVisualizer per sensor ({name: IrSensor} of `robot`), drawing under
+    /ir/<robot>/<sensor> (`<robot>.ir.<sensor>.meshcat`)."""
+    for name, sensor in sensors.items():
+        viz = builder.AddNamedSystem(
+            f"{robot}.ir.{name}.meshcat",
+            IrMeshcatVisualizer(meshcat, f"/ir/{robot}/{name}", sensor.num_rays, sensor.period))
+        builder.Connect(sensor.GetOutputPort("scan_state"), viz.get_input_port())
 
 
 __all__ = [
     "IrMeshcatVisualizer",
     "IrReading",
     "IrSensor",
-    "add_ir_sensors",
+    "add_ir_meshcat",
+    "add_ir_sensor",
     "cross_of_rays_in_sensor_frame",
 ]

@@ -40,13 +40,13 @@ def ended_command(robot: str, seq: int, sim) -> CommandResult | None:
     return None if result.end_time is None else result
 
 
-def grab_frame(robot: str, sim) -> tuple[float, float, Any]:
-    """(sim time, frame time, RGB uint8 image h x w x 3) of the robot's latest camera frame;
-    (sim time, NaN, None) before the first."""
+def grab_frame(robot: str, sim, camera: str | None = None) -> tuple[float, float, Any]:
+    """(sim time, frame time, RGB uint8 image h x w x 3) of the latest frame of the robot's
+    camera (default: its front camera); (sim time, NaN, None) before the first."""
     import numpy as np
 
     r = sim.robot(robot)
-    image = r.camera_image()
+    image = r.camera_image(camera)
     if image is None:  # before the first frame has come out of the camera
         return sim.time, math.nan, None
-    return sim.time, r.camera_image_time(), np.ascontiguousarray(image[:, :, :3])
+    return sim.time, r.camera_image_time(camera), np.ascontiguousarray(image[:, :, :3])

@@ -283,21 +283,26 @@ class RemoteRobot:
         snapshot = self._client._get(self._base)["state"]["ir"]
         return {name.removesuffix("_ir"): s["raw"] for name, s in snapshot.items()}
 
-    def camera_image(self):
-        """The latest camera frame: numpy array height x width x 4 (RGBA), uint8."""
+    def camera_image(self, camera: str | None = None):
+        """The latest frame of the camera `camera` (default: the front camera): numpy array
+        height x width x 4 (RGBA), uint8."""
         import numpy as np
         from PIL import Image
 
         response = self._client._check(self._client._http.get(
-            f"{self._base}/camera/frame.png"))
+            f"{self._camera_base(camera)}/frame.png"))
         self._last_frame_time = float(response.headers.get("x-frame-time", "nan"))
         return np.asarray(Image.open(io.BytesIO(response.content)).convert("RGBA"))
 
-    def camera_image_time(self) -> float:
-        """Simulated time of the latest frame (fetches the frame's header)."""
+    def camera_image_time(self, camera: str | None = None) -> float:
+        """Simulated time of the camera's latest frame (fetches the frame's header)."""
         response = self._client._check(self._client._http.get(
-            f"{self._base}/camera/frame.jpg"))
+            f"{self._camera_base(camera)}/frame.jpg"))
         return float(response.headers.get("x-frame-time", "nan"))
+
+    def _camera_base(self, camera: str | None) -> str:
+        """The camera's routes: `/camera` for the front camera, `/cameras/<camera>`."""
+        return f"{self._base}/camera" if camera is None else f"{self._base}/cameras/{camera}"
 
     def command_log(self) -> list[dict]:
         """The latest command (the server reports the current one)."""

@@ -205,9 +205,10 @@ def _listen(conn, host: str, port: int):
 
 
 def serve_camera_rate(scenario, fps: float = SERVE_CAMERA_FPS) -> None:
-    """Caps each robot's camera rate at `fps`."""
+    """Caps every robot camera's rate at `fps`."""
     for robot in scenario.robots.values():
-        robot.camera.fps = min(robot.camera.fps, fps)
+        for camera in robot.cameras.values():
+            camera.fps = min(camera.fps, fps)
 
 
 class ServerProcess:

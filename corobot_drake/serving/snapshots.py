@@ -12,6 +12,7 @@ import math
 from typing import Any
 
 from corobot_drake import commands, signals
+from corobot_drake.config.sensors import FRONT_CAMERA
 from corobot_drake.model import dimensions as dim
 from corobot_drake.readings import IrReading
 
@@ -39,7 +40,8 @@ class RobotInfo:
     name: str
     ir_services: tuple[str, ...]
     """Its IR sensors' service names (`front_ir`, `rear_ir`, ...)."""
-    has_camera: bool
+    cameras: tuple[str, ...]
+    """Its cameras' names (`front`, ...; those turned off left out)."""
     ir_change_thresholds: tuple[tuple[str, float], ...] = ()
     """(service name, m): the reading change each IR sensor counts as a change."""
 
@@ -47,9 +49,14 @@ class RobotInfo:
     def of(cls, robot) -> RobotInfo:
         """The info of a `simulation.Robot`."""
         return cls(robot.name, tuple(f"{name}_ir" for name in robot.ir_names),
-                   robot.has_camera,
+                   robot.camera_names,
                    tuple((f"{name}_ir", robot.ir_change_threshold(name))
                          for name in robot.ir_names))
+
+    @property
+    def has_camera(self) -> bool:
+        """Whether it has the front camera (the webcam at `/robots/<robot>/camera`)."""
+        return FRONT_CAMERA in self.cameras
 
     @property
     def capabilities(self) -> dict[str, bool]:

@@ -57,7 +57,8 @@ def run_scenario(study: Study, scenario_file: Path, run: Run, base=None, user=No
         LayerChecks.of_object("study grid").validate(scenario)
     if not study.cameras:
         for robot in scenario.robots.values():
-            robot.camera.rgb = False
+            for camera in robot.cameras.values():
+                camera.rgb = False
     if not reads_ir(study.metrics, user):
         for robot in scenario.robots.values():
             for sensor in robot.ir_sensors.values():

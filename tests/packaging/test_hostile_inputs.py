@@ -136,7 +136,7 @@ def test_an_output_that_fails_at_the_end_goes_to_a_named_fallback(tmp_path, caps
     cli._write_results = remove_then_write
     try:
         status = main(["--headless", "--duration", "0.05", "--override",
-                       "robots: {corobot: {camera: {rgb: false}}}",
+                       "robots: {corobot: {cameras: {front: {rgb: false}}}}",
                        "--summary", str(out / "s.json")])
     finally:
         cli._write_results = real

@@ -164,7 +164,7 @@ def test_webcam_page_refreshes_at_the_chosen_interval(page, server):
 def meshcat_server(tmp_path_factory):
     """A server with Meshcat (and its teleop), the camera off (it is not what is tested)."""
     log = tmp_path_factory.mktemp("meshcat_server") / "stderr.log"
-    with ServerProcess(["--override", "robots: {corobot: {camera: {rgb: false}}}"],
+    with ServerProcess(["--override", "robots: {corobot: {cameras: {front: {rgb: false}}}}"],
                        stderr_path=str(log)) as s:
         yield s
 

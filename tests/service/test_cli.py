@@ -91,9 +91,9 @@ BAD_FILES = {
                              "no base_frame"),
     "random_pose.yaml": ("robots:\n  corobot:\n    pose: {rotation: !Uniform {}}\n",
                          ":3: robots.corobot.pose: must be a fixed pose"),
-    "camera_frame.yaml": ("robots:\n  corobot:\n    camera:\n      X_PB:\n"
-                          "        base_frame: tail\n",
-                          ":5: robots.corobot.camera.X_PB.base_frame: 'tail' is not a link"),
+    "camera_frame.yaml": ("robots:\n  corobot:\n    cameras:\n      front:\n        X_PB:\n"
+                          "          base_frame: tail\n",
+                          ":6: robots.corobot.cameras.front.X_PB.base_frame: 'tail' is not a link"),
 }
 
 
@@ -150,7 +150,7 @@ def test_the_interactive_run_keeps_a_window_of_run_log(tmp_path, monkeypatch, ca
     monkeypatch.setattr(cli, "LIVE_RUN_LOG_WINDOW", 2.0)
     summary = tmp_path / "s.json"
     assert main(["--duration", "15", "--summary", str(summary), "--override",
-                 "robots: {corobot: {camera: {rgb: false}}}"]) == 0
+                 "robots: {corobot: {cameras: {front: {rgb: false}}}}"]) == 0
     assert 2.0 / LOG_PERIOD <= kept["rows"] <= 2.0 / LOG_PERIOD + RUN_LOG_CHUNK + 1
     assert json.loads(summary.read_text())["time"] == pytest.approx(15.0)
     assert "simulated 15.00 s" in capsys.readouterr().out
@@ -168,7 +168,7 @@ def test_ctrl_c_stops_a_run_started_with_sigint_ignored():
 
     run = subprocess.Popen(  # a server: it runs until stopped
         [sys.executable, "-m", "corobot_drake", "--headless", "--serve", "--port", "0",
-         "--override", "robots: {corobot: {camera: {rgb: false}}}"],
+         "--override", "robots: {corobot: {cameras: {front: {rgb: false}}}}"],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_IGN))
     try:
@@ -183,7 +183,7 @@ def test_ctrl_c_stops_a_run_started_with_sigint_ignored():
     assert "simulated " in err  # its closing line
 
 
-NO_CAMERA = "robots: {corobot: {camera: {rgb: false}}}"
+NO_CAMERA = "robots: {corobot: {cameras: {front: {rgb: false}}}}"
 
 
 @pytest.mark.parametrize("signame, foxglove", [("SIGINT", False), ("SIGTERM", True)])

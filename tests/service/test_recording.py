@@ -554,9 +554,9 @@ def test_command_source_exports_its_command_log():
 def test_several_robots_are_namespaced(tmp_path):
     """Two robots: each one's topics and frames under its name, as ROS namespaces and tf
     prefixes; /tf and /scene shared."""
-    two = ("robots: {corobot: {camera: {rgb: false}, commands: [!AllStop {}]}, second: {pose: "
-           "{translation: [0, 1.5, 0]},"
-           " camera: {rgb: false}, commands: [!SetPower {left: -1, right: -1}]}}")
+    two = ("robots: {corobot: {cameras: {front: {rgb: false}}, commands: [!AllStop {}]}, "
+           "second: {pose: {translation: [0, 1.5, 0]},"
+           " cameras: {front: {rgb: false}}, commands: [!SetPower {left: -1, right: -1}]}}")
     path = tmp_path / "two.mcap"
     with McapLog(path) as log:
         sim = Simulation(load_scenario(DEFAULT_SCENARIO, overrides=[two]), foxglove=log.context)

@@ -19,8 +19,8 @@ from conftest import REPO
 from ros2_probe import ros2_simulation
 
 ROBOTS = ("corobot", "corobot_2")
-QUIET = ("robots: {corobot: {commands: [], camera: {rgb: false}}, "
-         "corobot_2: {commands: [], camera: {rgb: false}}}")
+QUIET = ("robots: {corobot: {commands: [], cameras: {front: {rgb: false}}}, "
+         "corobot_2: {commands: [], cameras: {front: {rgb: false}}}}")
 RELIABLE = QoSProfile(depth=50, reliability=ReliabilityPolicy.RELIABLE)
 LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
                      durability=DurabilityPolicy.TRANSIENT_LOCAL)

@@ -267,7 +267,7 @@ def test_a_runs_sensors_scan_only_when_a_metric_reads_them(tmp_path):
 
     def enabled():
         robot = run_scenario(study, DEFAULT_SCENARIO, run).robots["corobot"]
-        return robot.camera.rgb, sorted(s.enabled for s in robot.ir_sensors.values())
+        return robot.cameras["front"].rgb, sorted(s.enabled for s in robot.ir_sensors.values())
 
     assert enabled() == (False, [False, False])  # no metric reads the camera or the IR
     study.metrics = ["x", "ir"]

@@ -75,7 +75,7 @@ class StepRunner:
 def sim():
     scenario = load_scenario(DEFAULT_SCENARIO)
     for robot in scenario.robots.values():
-        robot.camera.rgb = False
+        robot.cameras["front"].rgb = False
     return Simulation(scenario)
 
 
@@ -218,7 +218,7 @@ def looked(tmp_path_factory):
     looks = {}
     with McapLog(path) as log:
         scenario = load_scenario(DEFAULT_SCENARIO, overrides=[CURVE])
-        scenario.robots[ROBOT].camera.rgb = False
+        scenario.robots[ROBOT].cameras["front"].rgb = False
         sim = Simulation(scenario, foxglove=log.context)
         for t in LOOKS:
             sim.advance_to(t)

@@ -83,10 +83,10 @@ def area_and_edge_length(poly: list, width: int, height: int) -> tuple[float, fl
 
 def expected_box_share(sim) -> tuple[float, float]:
     """(share of the image, tolerance) for the box's +x face, by pinhole projection."""
-    config = sim.scenario.robots["corobot"].camera
+    config = sim.scenario.robots["corobot"].cameras["front"]
     W, H = config.width, config.height
     f = (H / 2) / math.tan(math.radians(config.focal.y) / 2)
-    sensor = sim.station.diagram.GetSubsystemByName("corobot.camera")
+    sensor = sim.station.diagram.GetSubsystemByName("corobot.camera.front")
     X_WC = sensor.body_pose_in_world_output_port().Eval(sensor.GetMyContextFromRoot(
         sim.context))
     plant = sim.station.plant
@@ -150,10 +150,10 @@ def test_frames_come_at_the_camera_rate_after_the_output_delay():
     """The default camera is asynchronous: a frame captured at a tick (0.5 ms past each
     1/fps, off the plant's steps) appears output_delay (0.03 s) later; before the first there
     is none."""
-    sim = make_sim("robots: {corobot: {camera: {fps: 10}}}", camera=True)
+    sim = make_sim("robots: {corobot: {cameras: {front: {fps: 10}}}}", camera=True)
     robot = sim.robot()
     assert robot.has_camera
-    config = sim.scenario.robots["corobot"].camera
+    config = sim.scenario.robots["corobot"].cameras["front"]
     assert (config.capture_offset, config.output_delay) == (0.0005, 0.03)
     assert robot.camera_image() is None and math.isnan(robot.camera_image_time())
     sim.advance_to(0.03)
@@ -175,7 +175,7 @@ def test_frames_come_at_the_camera_rate_after_the_output_delay():
 def test_a_synchronous_camera_faster_than_the_plant_steps_keeps_every_frame(tmp_path):
     """200 Hz against 10 ms steps: frames at the ticks themselves, all saved."""
     scenario = load_scenario(DEFAULT_SCENARIO, overrides=[
-        "robots: {corobot: {camera: {fps: 200, output_delay: 0}}}"])
+        "robots: {corobot: {cameras: {front: {fps: 200, output_delay: 0}}}}"])
     sim = Simulation(scenario, save_camera=tmp_path)
     sim.advance(0.1)
     assert sim.robot().camera_image_time() == pytest.approx(0.0955)  # tick 19, 0.5 ms past
@@ -184,7 +184,8 @@ def test_a_synchronous_camera_faster_than_the_plant_steps_keeps_every_frame(tmp_
 
 
 def test_without_delay_frames_come_at_the_camera_rate():
-    sim = make_sim("robots: {corobot: {camera: {fps: 10, output_delay: 0, capture_offset: 0}}}",
+    sim = make_sim("robots: {corobot: {cameras: {front: {fps: 10, output_delay: 0, "
+                   "capture_offset: 0}}}}",
                    camera=True)
     robot = sim.robot()
     assert robot.camera_image_time() == 0.0  # rendered at initialization
@@ -194,7 +195,7 @@ def test_without_delay_frames_come_at_the_camera_rate():
     assert robot.camera_image_time() == pytest.approx(0.3)
 
 
-NO_DELAY = "robots: {corobot: {camera: {output_delay: 0, capture_offset: 0}}}"
+NO_DELAY = "robots: {corobot: {cameras: {front: {output_delay: 0, capture_offset: 0}}}}"
 """The synchronous camera with its ticks at multiples of 1/fps."""
 
 SPIN_BY_THE_EDGE = ("robots: {corobot: {pose: {translation: [0.4, -1.0, 0], "
@@ -206,7 +207,7 @@ def test_delayed_frames_show_the_scene_at_their_capture():
     """The asynchronous frame captured at the 16th tick (0.5 ms past 16/30 s, between plant
     steps) is, bit for bit, the synchronous camera's frame for that tick, and it appears
     0.03 s later. The robot spins in front of the box's edge, so consecutive frames differ."""
-    sync = make_sim(SPIN_BY_THE_EDGE, "robots: {corobot: {camera: {output_delay: 0}}}",
+    sync = make_sim(SPIN_BY_THE_EDGE, "robots: {corobot: {cameras: {front: {output_delay: 0}}}}",
                     camera=True)
     sync.advance_to(0.545)
     assert sync.robot().camera_image_time() == pytest.approx(0.54)  # tick 16, on the next step
@@ -222,26 +223,26 @@ def test_delayed_frames_show_the_scene_at_their_capture():
 
 
 def test_no_camera():
-    sim = make_sim("robots: {corobot: {camera: {rgb: false}}}", camera=True)
+    sim = make_sim("robots: {corobot: {cameras: {front: {rgb: false}}}}", camera=True)
     robot = sim.robot()
     assert not robot.has_camera
-    assert not sim.station.diagram.HasSubsystemNamed("corobot.camera")
-    with pytest.raises(RuntimeError, match="has no camera"):
+    assert not sim.station.diagram.HasSubsystemNamed("corobot.camera.front")
+    with pytest.raises(KeyError, match="has no camera 'front'"):
         robot.camera_image()
     assert sim.summary()["robots"]["corobot"]["camera_frames"] == 0
 
 
 @pytest.mark.parametrize("override, field", [
-    ("{depth: true}", "robots.corobot.camera.depth"),
-    ("{output_delay: 0.04}", "robots.corobot.camera.output_delay"),
-    ("{fps: 0}", "robots.corobot.camera.fps"),
-    ("{renderer_class: RenderEngineGltfClient}", "robots.corobot.camera.renderer_class"),
-    ("{clipping_near: 2.0, clipping_far: 1.0}", "robots.corobot.camera.clipping_far"),
+    ("{depth: true}", "robots.corobot.cameras.front.depth"),
+    ("{output_delay: 0.04}", "robots.corobot.cameras.front.output_delay"),
+    ("{fps: 0}", "robots.corobot.cameras.front.fps"),
+    ("{renderer_class: RenderEngineGltfClient}", "robots.corobot.cameras.front.renderer_class"),
+    ("{clipping_near: 2.0, clipping_far: 1.0}", "robots.corobot.cameras.front.clipping_far"),
 ])
 def test_bad_camera_is_a_clear_error(override, field):
     with pytest.raises(ScenarioError, match=field.replace(".", r"\.") + ":"):
         load_scenario(DEFAULT_SCENARIO,
-                      overrides=[f"robots: {{corobot: {{camera: {override}}}}}"])
+                      overrides=[f"robots: {{corobot: {{cameras: {{front: {override}}}}}}}"])
 
 
 def test_cli_saves_numbered_frames(tmp_path, capsys):
@@ -269,7 +270,7 @@ def test_frames_taken_on_plant_steps_are_the_exact_time_images():
     consecutive frames differ."""
     sim = make_sim(SPIN_BY_THE_EDGE, NO_DELAY, camera=True)
     assert physics_step(sim.scenario.plant_config, sim.scenario.simulator_config) == 0.01
-    sensor = sim.station.diagram.GetSubsystemByName("corobot.camera")
+    sensor = sim.station.diagram.GetSubsystemByName("corobot.camera.front")
     tick = 16.0 / 30.0
     sim.advance_to(tick - 0.01)
     previous = sim.robot().camera_image().copy()
@@ -308,7 +309,7 @@ def test_gl_and_vtk_render_the_same_picture():
     for renderer in ("RenderEngineGl", "RenderEngineVtk"):
         sim = make_sim("robots: {corobot: {pose: {translation: [4.0, 1.0, 0], "
                        "rotation: !Rpy {deg: [0, 0, 185]}}, "
-                       f"camera: {{renderer_class: {renderer}, output_delay: 0}}}}}}",
+                       f"cameras: {{front: {{renderer_class: {renderer}, output_delay: 0}}}}}}}}",
                        camera=True)
         assert sim.station.renderers == {"corobot_camera": renderer}
         sim.advance(0.3)
@@ -353,7 +354,7 @@ def test_without_a_display_gl_is_a_clear_error_and_the_default_falls_back(tmp_pa
     assert "camera: rendering with VTK" in fallback.stderr
     image = np.asarray(Image.open(tmp_path / "corobot" / "frame_000000.png"))
     assert image.mean() > 50
-    gl = "robots: {corobot: {camera: {renderer_class: RenderEngineGl}}}"
+    gl = "robots: {corobot: {cameras: {front: {renderer_class: RenderEngineGl}}}}"
     for extra in ((), ("--serve", "--port", "0")):
         result = run("--override", gl, *extra)
         assert result.returncode == 2, (extra, result.stderr)

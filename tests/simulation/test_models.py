@@ -153,7 +153,7 @@ world:
       mass: 2.0
       pose: {translation: [0.0, 1.0, 0.5]}
 robots:
-  corobot: {camera: {rgb: false}}
+  corobot: {cameras: {front: {rgb: false}}}
 """)
     sim = Simulation(load_scenario(scenario))
     sim.advance(0.1)

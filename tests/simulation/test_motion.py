@@ -21,9 +21,7 @@ from corobot_drake.simulation import Simulation
 
 
 def _robot_yaml(profile: str = "closed_loop", extra: str = "") -> str:
-    fields = [f"motion: {{profile: {profile}}}"]
-    if "camera" in {f.name for f in dc.fields(sc.Robot)}:
-        fields.append("camera: {rgb: false}")
+    fields = [f"motion: {{profile: {profile}}}", "cameras: {front: {rgb: false}}"]
     if extra:
         fields.append(extra)
     return "robots: {corobot: {" + ", ".join(fields) + "}}"

@@ -12,7 +12,8 @@ from corobot_drake.simulation import Simulation, diagram_key
 
 # The sharp_gp2d12 model draws seeded noise, so the seed reaches the readings; the camera is
 # off (it has nothing per-run, and rendering is slow).
-BASE = ("robots: {corobot: {camera: {rgb: false}, ir_sensors: {rear: {model: sharp_gp2d12}}, "
+BASE = ("robots: {corobot: {cameras: {front: {rgb: false}}, "
+        "ir_sensors: {rear: {model: sharp_gp2d12}}, "
         "commands: [!SetPower {left: -0.4, right: -0.3}, !Wait {seconds: 0.5}, "
         "!RotateDegrees {degrees: 30, power: 0.6}]}}")
 OTHER_RUN = ["random_seed: 7",

@@ -150,7 +150,7 @@ def test_bench_physics_only_scenario_loads():
     sim = make_sim(*bench.physics_only_overrides(), camera=True)  # the overrides turn it off
     sim.advance(0.1)
     robot = sim.scenario.robots["corobot"]
-    assert not robot.camera.rgb
+    assert not robot.cameras["front"].rgb
     assert not any(sensor.enabled for sensor in robot.ir_sensors.values())
 
 

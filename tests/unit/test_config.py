@@ -185,7 +185,7 @@ def test_a_loaded_scenario_is_checked_once_until_it_changes(monkeypatch):
     for change in (lambda s: setattr(s.robots["corobot"].drive, "slew_rate", 29.0),
                    lambda s: s.robots["corobot"].velocity.__setitem__(0, 0.01),  # in place
                    lambda s: s.robots["corobot"].commands.append(sc.Wait(1.0)),
-                   lambda s: setattr(s.robots["corobot"].camera, "fps", 15.0),
+                   lambda s: setattr(s.robots["corobot"].cameras["front"], "fps", 15.0),
                    lambda s: setattr(s.simulator_config, "max_step_size", 0.005)):
         change(scenario)
         before = len(calls)

@@ -15,6 +15,7 @@ from fastapi import Depends, HTTPException, Request
 from fastapi.responses import Response
 
 from corobot_drake import commands
+from corobot_drake.config.sensors import FRONT_CAMERA
 from corobot_drake.serving.frames import FrameCache
 from corobot_drake.serving.operations import Operations
 from corobot_drake.serving.runner import Runner, SimulationStoppedError
@@ -68,11 +69,16 @@ class Backend:
         self.robot(robot)
         return self.runner.snapshot["robots"][robot]
 
-    def camera(self, robot: str) -> RobotInfo:
-        """The robot's info; 404 for an unknown robot, 501 if it has no camera."""
+    def camera(self, robot: str, camera: str = FRONT_CAMERA) -> RobotInfo:
+        """The robot's info; 404 for an unknown robot, 501 if it lacks its front camera (the
+        `/camera` routes'), 404 naming its cameras if it lacks another."""
         info = self.robot(robot)
-        if not info.has_camera:
-            raise HTTPException(501, "camera is not available in this build of the simulation")
+        if camera not in info.cameras:
+            if camera == FRONT_CAMERA:
+                raise HTTPException(501, "camera is not available in this build of the "
+                                    "simulation")
+            raise HTTPException(404, f"robot {robot!r} has no camera {camera!r}; cameras: "
+                                f"{', '.join(info.cameras) or 'none'}")
         return info
 
     async def in_sim(self, fn, timeout: float = 10.0):
@@ -105,15 +111,22 @@ class Backend:
         out += [entry(name, CONTRACT_ANALOG_SENSOR) for name in info.ir_services]
         out += [entry("encoders", CONTRACT_ENCODERS), entry("compass", CONTRACT_COMPASS),
                 entry("gps", CONTRACT_GPS)]
-        if info.has_camera:
-            out.append(entry("camera", CONTRACT_WEBCAM, subscribe=False,
-                             page_url=f"{base}/camera/page",
+        for camera in info.cameras:
+            path = camera_path(camera)
+            out.append(entry(path, CONTRACT_WEBCAM, subscribe=False,
+                             page_url=f"{base}/{path}/page",
                              operations=["frame.png", "frame.jpg"]))
         return out
 
     def subscribable(self, robot: str) -> list[str]:
         """The services a robot's subscription can send, in the directory's order."""
         return ["drive", *self.robot(robot).ir_services, "encoders", "compass", "gps"]
+
+
+def camera_path(camera: str) -> str:
+    """A camera's routes under `/robots/<robot>/`: `camera` for the front camera (also at
+    `cameras/front`), `cameras/<camera>` for another."""
+    return "camera" if camera == FRONT_CAMERA else f"cameras/{camera}"
 
 
 def get_backend(request: Request) -> Backend:

@@ -1,0 +1,34 @@
+"""Where a robot's sensors are added: what every `add_<kind>` (`registry.py`) is given."""
+
+import dataclasses as dc
+from pathlib import Path
+
+from corobot_drake.config import scenario as sc
+
+
+@dc.dataclass
+class SensorSite:
+    """One robot in a diagram being built: the builder, the finalized plant and its scene
+    graph, the robot's name and model instance (its own links carry its sensors, and its own
+    geometry is not seen by them), and what a sensor of any kind may need of the scenario."""
+
+    builder: object
+    plant: object
+    scene_graph: object
+    robot: str
+    model_instance: object
+    world: sc.World = dc.field(default_factory=sc.World)
+    """The sun and sky the cameras are lit by."""
+    random_seed: int = 0
+    """The scenario's, mixed into each noisy sensor's own key."""
+    step: float | None = None
+    """s: the physics' step (`scenario.physics_step`; None: the plant's time step)."""
+    save_dir: Path | None = None
+    """Where the cameras' frames are written as PNG (None: nowhere)."""
+    renderers: dict = dc.field(default_factory=dict)
+    """The render engines made so far: renderer name -> "RenderEngineGl" or
+    "RenderEngineVtk" (cameras with one renderer name share its engine)."""
+
+    @property
+    def physics_step(self) -> float:
+        return self.plant.time_step() if self.step is None else self.step
