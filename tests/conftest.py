@@ -78,3 +78,12 @@ class Stepper:
     def last_tick_time(self) -> float:
         """s: when the latest tick happened."""
         return (self.ticks - 1) * self.period
+
+
+TWO_CAMERAS = ("robots: {corobot: {cameras: {"
+               "front: {width: 64, height: 48, output_delay: 0}, "
+               "rear: {width: 64, height: 48, output_delay: 0, X_PB: {base_frame: chassis, "
+               "translation: [0, 0, 0.5], rotation: !Rpy {deg: [-90, 0, 90]}}}}}}")
+"""The robot with a second camera, `rear`, 0.5 m above the chassis looking back (the front
+one looks forward from the chassis' front): both 64 x 48, cheap to render, each frame
+rendered on the plant's steps from initialization (no output delay)."""

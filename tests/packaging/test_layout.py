@@ -11,8 +11,12 @@ MAX_FUNCTION_LINES = 80
 CODE = ("corobot_drake", "lab", "tools", "tests", "examples")
 GROUND_FLOOR = ("config", "model", "limits", "resources", "extras", "commands", "signals")
 """The package's modules and folders that import none of the floors above them."""
-UPPER_FLOORS = ("systems", "sensors", "station", "simulation", "serving", "recording", "study",
-                "gym", "tuning", "ros2", "cli")
+UPPER_FLOORS = ("systems", "sensors", "station", "markers", "simulation", "serving", "recording",
+                "study", "gym", "tuning", "ros2", "cli")
+FRONT_ENDS = ("markers", "simulation", "serving", "recording", "study", "gym", "tuning", "ros2",
+              "cli", "systems.slip_markers")
+"""What attaches to the station through its hooks (`build_station`'s `extras`): the Meshcat
+markers, the recording and Foxglove topics, ROS 2, and the front ends above them."""
 
 
 def _python_files(*roots: str):
@@ -53,3 +57,14 @@ def test_the_ground_floor_imports_nothing_above_it(floor):
 def test_the_package_imports_no_lab():
     assert {f"{p.relative_to(REPO)}: {m}" for p in _python_files("corobot_drake")
             for m in _imported_modules(p) if m == "lab" or m.startswith("lab.")} == set()
+
+
+def test_the_station_knows_no_front_end_and_finds_sensors_through_the_registry():
+    """Meshcat markers, recording, Foxglove and ROS 2 attach through the station's hooks; each
+    kind of sensor is added through `sensors.registry`, not by name."""
+    imported = _imported_modules(REPO / "corobot_drake" / "station.py")
+    front_ends = {m for m in imported for f in FRONT_ENDS
+                  if m == f"corobot_drake.{f}" or m.startswith(f"corobot_drake.{f}.")}
+    sensors = {m for m in imported if m.startswith("corobot_drake.sensors.")
+               and m.split(".")[2] not in ("registry", "site")}
+    assert front_ends | sensors == set()

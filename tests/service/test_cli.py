@@ -80,6 +80,9 @@ BAD_FILES = {
                      "robots.corobot.commands[0]: unknown tag !Fly"),
     "out_of_range.yaml": ("robots:\n  corobot:\n    drive:\n      slew_rate: -1\n",
                           ":4: robots.corobot.drive.slew_rate: must be in (0, 10000] rad/s^2"),
+    "old_camera.yaml": ("robots:\n  corobot:\n    camera: {rgb: false}\n",
+                        ":3: robots.corobot.camera: replaced by `cameras`, a map of cameras by "
+                        "name: write `cameras: {front: {...}}` (front: the Corobot's own camera)"),
     "old_pose.yaml": ("robots:\n  corobot:\n    pose: {x: 1.0, yaw_deg: 90}\n",
                       ":3: robots.corobot.pose.x: unknown field; Transform has base_frame, "
                       "translation, rotation"),

@@ -11,7 +11,7 @@ import pytest
 from google.protobuf import descriptor_pb2, descriptor_pool, message_factory
 from mcap.reader import make_reader
 
-from conftest import make_sim
+from conftest import TWO_CAMERAS, make_sim
 from corobot_drake.cli import main
 from corobot_drake.config.scenario import load_scenario
 from corobot_drake.model import dimensions as dim
@@ -221,6 +221,36 @@ def test_mcap_messages_hold_the_run(mcap_run):
                                         "seq 2 AllStop started", "seq 2 AllStop succeeded"]
     # Events of one instant in either order (sorted as `expected` is).
     assert sorted(events) == [(pytest.approx(t, abs=1e-9), m) for t, m in expected]
+
+
+def test_each_camera_has_its_own_topics_and_frame(tmp_path):
+    """Two cameras: the front one on /camera/..., the other on /camera/<name>/..., each
+    image its own camera's (JPEG-decoded: the same picture as the Python API's, to JPEG's
+    loss) in its own optical frame, mounted on base_link."""
+    import io
+
+    from PIL import Image
+
+    path = tmp_path / "two.mcap"
+    with McapLog(path) as log:
+        sim = Simulation(load_scenario(DEFAULT_SCENARIO, overrides=[TWO_CAMERAS]),
+                         foxglove=log.context)
+        sim.advance(0.1)
+    topics = read_mcap(path)
+    robot = sim.robot()
+    for name, topic, frame in (("front", "/camera", "camera_optical_frame"),
+                               ("rear", "/camera/rear", "camera_rear_optical_frame")):
+        t, _, image = topics[f"{topic}/image/compressed"][-1]
+        info = topics[f"{topic}/camera_info"][-1][2]
+        assert image.frame_id == info.frame_id == frame
+        assert (info.width, info.height) == (64, 48)
+        assert t == pytest.approx(robot.camera_image_time(name), abs=1e-9)
+        decoded = np.asarray(Image.open(io.BytesIO(image.data)).convert("RGB"), dtype=int)
+        # JPEG at quality 85 moves a 64 x 48 frame's pixels by a few grey levels on average;
+        # the other camera's picture is tens of levels away (test_camera.py).
+        assert np.abs(decoded - robot.camera_image(name)[:, :, :3]).mean() < 5
+    mounts = {x.child_frame_id: x.parent_frame_id for x in topics["/tf"][-1][2].transforms}
+    assert mounts["camera_optical_frame"] == mounts["camera_rear_optical_frame"] == "base_link"
 
 
 ROBOT_WEIGHT = (dim.TOTAL_BODY_MASS + len(dim.WHEEL_NAMES) * dim.WHEEL_MASS) * 9.81

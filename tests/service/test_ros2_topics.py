@@ -253,6 +253,38 @@ def test_telemetry_publisher_stamps_the_held_samples():
     assert list(slip.slip_angle_deg) == [2.0] * 4
 
 
+def test_each_camera_has_its_own_topics_and_frames():
+    """A robot with two cameras on the bus: the front one on /camera/..., the other on
+    /camera/<name>/..., each image its own camera's frame in its own optical frame, with
+    each camera's link and optical frame on /tf_static."""
+    from functools import partial
+
+    from conftest import TWO_CAMERAS
+    from corobot_drake.config.scenario import load_scenario
+    from corobot_drake.resources import DEFAULT_SCENARIO
+    from corobot_drake.ros2.publishers import add_ros2_topics
+    from corobot_drake.simulation import Simulation
+
+    memory = Memory()
+    sim = Simulation(load_scenario(DEFAULT_SCENARIO, overrides=[TWO_CAMERAS]),
+                     extras=[partial(add_ros2_topics, Bus([memory]))])
+    sim.advance(0.1)
+    robot = sim.robot()
+    for name, topic, frame in (("front", "/camera", "camera_optical_frame"),
+                               ("rear", "/camera/rear", "camera_rear_optical_frame")):
+        t_ns, image = memory.messages[f"{topic}/image_raw"][-1]
+        _, info = memory.messages[f"{topic}/camera_info"][-1]
+        assert image.header.frame_id == info.header.frame_id == frame
+        assert t_ns == round(robot.camera_image_time(name) * 1e9)
+        pixels = np.frombuffer(bytes(image.data), np.uint8).reshape(image.height, image.width, 3)
+        np.testing.assert_array_equal(pixels, robot.camera_image(name)[:, :, :3])
+    (_, static), = memory.messages["/tf_static"]
+    parents = {x.child_frame_id: x.header.frame_id for x in static.transforms}
+    assert parents["camera_rear_optical_frame"] == "camera_rear_link"
+    assert parents["camera_optical_frame"] == "camera_link"
+    assert parents["camera_rear_link"] == parents["camera_link"] == "base_link"
+
+
 def test_discovery_stays_on_this_machine_unless_asked():
     assert configure_discovery(False, {}) == "LOCALHOST"
     assert configure_discovery(False, {"ROS_AUTOMATIC_DISCOVERY_RANGE": "SUBNET"}) == "SUBNET"

@@ -604,6 +604,52 @@ def test_in_process_runner_serves_from_a_thread():
     assert runner.error is None
 
 
+@pytest.mark.filterwarnings("ignore:Using `httpx` with `starlette.testclient`")
+def test_each_camera_is_served_at_its_own_routes():
+    """Two cameras: the front one at /camera (and /cameras/front), the other at
+    /cameras/<name>, each in the directory, each frame its own camera's; a camera the robot
+    lacks is a 404 naming those it has."""
+    import io
+
+    import numpy as np
+    from fastapi.testclient import TestClient
+    from PIL import Image
+
+    from conftest import TWO_CAMERAS
+    from corobot_drake.config.scenario import load_scenario
+    from corobot_drake.resources import DEFAULT_SCENARIO
+    from corobot_drake.serving.runner import SimRunner
+    from corobot_drake.serving.webapp import create_app
+    from corobot_drake.simulation import Simulation
+
+    scenario = load_scenario(DEFAULT_SCENARIO, overrides=[TWO_CAMERAS])
+    runner = SimRunner(lambda: Simulation(scenario)).start()
+    try:
+        with TestClient(create_app(runner), base_url="http://127.0.0.1") as client:
+            directory = client.get("/services").json()["services"]
+            pages = {s["name"]: s["page_url"] for s in directory if "page_url" in s}
+            assert pages == {"camera": f"{ROBOT}/camera/page",
+                             "cameras/rear": f"{ROBOT}/cameras/rear/page"}
+            assert client.get(f"{ROBOT}/cameras/rear").json()["frame_png_url"] == (
+                f"{ROBOT}/cameras/rear/frame.png")
+            # Frames from initialization (no output delay): each camera's image, 64 x 48.
+            front, rear, front_again = (
+                np.asarray(Image.open(io.BytesIO(client.get(f"{ROBOT}/{path}/frame.png")
+                                                  .content)).convert("RGB"), dtype=int)
+                for path in ("camera", "cameras/rear", "cameras/front"))
+            assert front.shape == rear.shape == (48, 64, 3)
+            assert np.abs(front - rear).mean() > 20  # the two views (test_camera.py)
+            assert np.abs(front - front_again).mean() < 20  # one view, moments apart
+            assert "__FRAME_URL__" not in client.get(f"{ROBOT}/cameras/rear/page").text
+            missing = client.get(f"{ROBOT}/cameras/top/frame.jpg")
+            assert missing.status_code == 404
+            assert missing.json()["detail"] == ("robot 'corobot' has no camera 'top'; "
+                                                "cameras: front, rear")
+    finally:
+        runner.stop()
+    assert runner.error is None
+
+
 def test_transport_carries_calls_watches_and_snapshots():
     """`RemoteRunner` over a pipe to `SimSide` is the `Runner` that `SimRunner` is: same
     robots, calls answered (exceptions too), watches resolved when the command log says the

@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from conftest import DEFAULT_SCENARIO, make_sim
+from conftest import DEFAULT_SCENARIO, TWO_CAMERAS, make_sim
 from corobot_drake.cli import main
 from corobot_drake.config.scenario import ScenarioError, load_scenario, physics_step
 from corobot_drake.model import dimensions as dim
@@ -374,6 +374,41 @@ def test_the_webcam_service_has_no_frame_before_the_first_output():
     t, frame_time, image = calls.grab_frame("corobot", sim)
     assert t == pytest.approx(0.035) and frame_time == pytest.approx(0.0005)
     assert image.shape == (dim.CAMERA_HEIGHT, dim.CAMERA_WIDTH, 3) and image.mean() > 50
+
+
+def test_a_robot_with_two_cameras_renders_each_from_its_own_pose(tmp_path):
+    """A second camera, `rear`, looking back from above: both rendered each frame (one
+    engine for both), each through its own ports, its own frames in the webcam's reader and
+    its own saved files. The front one sees the scene ahead, the rear one the scene behind:
+    the two images share only sky and ground, so they differ by far more than rendering
+    noise (tens of grey levels on average, against 0 for one camera twice)."""
+    from corobot_drake.serving import calls
+
+    sim = Simulation(load_scenario(DEFAULT_SCENARIO, overrides=[TWO_CAMERAS]),
+                     save_camera=tmp_path)
+    robot = sim.robot()
+    assert robot.camera_names == ("front", "rear") and robot.has_camera
+    assert list(sim.station.renderers) == ["corobot_camera"]
+    sim.advance(0.1)
+    front, rear = robot.camera_image("front"), robot.camera_image("rear")
+    assert front.shape == rear.shape == (48, 64, 4)
+    # The tick at 0.0005 + 2/30 s, taken on the plant step after it.
+    assert robot.camera_image_time("front") == robot.camera_image_time("rear") == pytest.approx(
+        0.07, abs=1e-9)
+    np.testing.assert_array_equal(robot.camera_image(), front)  # no name: the front camera
+    assert np.abs(front.astype(int) - rear.astype(int)).mean() > 20
+    sky = np.asarray(sim.scenario.world.sky_color[:3]) * 255
+    for image in (front, rear):  # each was rendered: it shows more than the clear colour
+        assert np.abs(image[:, :, :3] - sky).mean() > 20
+    _, _, webcam = calls.grab_frame("corobot", sim, camera="rear")
+    np.testing.assert_array_equal(webcam, rear[:, :, :3])
+    assert sim.station.diagram.HasOutputPort("corobot.camera.rear.rgb_image")
+    # The ticks at 0.0005 + k/30 s for k = 0, 1, 2, each camera's in its own folder.
+    assert robot.camera_frames_saved() == 2 * 3
+    assert len(list((tmp_path / "corobot" / "rear").glob("frame_*.png"))) == 3
+    assert len(list((tmp_path / "corobot").glob("frame_*.png"))) == 3
+    with pytest.raises(KeyError, match=r"has no camera 'top'.*it has front, rear"):
+        robot.camera_image("top")
 
 
 def test_a_stale_display_is_replaced_by_a_private_xvfb(tmp_path):

@@ -246,3 +246,33 @@ def test_the_checked_marker_sees_every_field_change():
         assert marked == validate._content(scenario)
         list(_leaves(scenario))[i][1]()
         assert validate._content(scenario) != marked, path
+
+
+def test_the_old_camera_key_says_what_to_write_instead():
+    """A scenario from before the cameras' map: one line, at the key's line, naming the new
+    key and the front camera, for a file and for an override."""
+    with pytest.raises(ScenarioError) as e:
+        load_scenario(data="robots:\n  corobot:\n    camera: {fps: 10}\n")
+    assert str(e.value) == ("<scenario text>:3: robots.corobot.camera: replaced by `cameras`, a "
+                            "map of cameras by name: write `cameras: {front: {...}}` (front: "
+                            "the Corobot's own camera)")
+    with pytest.raises(ScenarioError, match=r"^--override:1: robots\.corobot\.camera: replaced"):
+        load_scenario(overrides=["robots: {corobot: {camera: {rgb: false}}}"])
+
+
+def test_a_new_camera_starts_as_the_spec_camera():
+    """A camera the defaults lack starts as the Corobot's (its size, rate, renderer), not as
+    Drake's CameraConfig defaults; what the layer writes applies on top, in this layer or a
+    later one, for a new robot too."""
+    from corobot_drake.config.sensors import default_camera_config
+
+    s = load_scenario(overrides=[
+        "robots: {corobot: {cameras: {rear: {fps: 10}}}, other: {pose: {translation: [0, 2, 0]}, "
+        "cameras: {top: {}}}}",
+        "robots: {corobot: {cameras: {rear: {width: 64}}}}"])
+    spec = default_camera_config()
+    rear, top = s.robots["corobot"].cameras["rear"], s.robots["other"].cameras["top"]
+    assert list(s.robots["corobot"].cameras) == ["front", "rear"]
+    assert (rear.fps, rear.width, rear.height) == (10.0, 64, spec.height)
+    assert (top.fps, top.width, top.renderer_name) == (spec.fps, spec.width, spec.renderer_name)
+    assert s.robots["corobot"].cameras["front"].fps == spec.fps
