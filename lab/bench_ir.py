@@ -72,7 +72,7 @@ class TimedIrSensor(ir_sensor.IrSensor):
 
 @contextlib.contextmanager
 def _sensor_class(cls):
-    """Builds stations with `cls` in place of IrSensor (add_ir_sensors looks it up)."""
+    """Builds stations with `cls` in place of IrSensor (add_ir_sensor looks it up)."""
     real = ir_sensor.IrSensor
     ir_sensor.IrSensor = cls
     try:

@@ -387,6 +387,10 @@ OVERRIDES = [
     _robot("unknown command", "{commands: [!Fly {}]}", "commands[0]", "unknown tag !Fly"),
     _robot("command untagged", "{commands: [5]}", "commands[0]", "expected a mapping"),
     # the camera
+    _robot("old camera key", "{camera: {rgb: false}}", "camera",
+           "replaced by `cameras`, a map of cameras by name: write `cameras: {front: {...}}`"),
+    _robot("camera name with a slash", "{cameras: {a/b: {}}}", "cameras.a/b",
+           "a sensor name must be letters, digits"),
     _camera("width -1", "{width: -1}", "width", "[1, 4096] pixels; got -1"),
     _camera("100000 square", "{width: 100000, height: 100000}", "width", "got 100000"),
     _camera("height 0", "{height: 0}", "height", "got 0"),

@@ -31,7 +31,7 @@ PUBLIC_PATHS = ("/", "/dashboard", "/docs", "/docs/oauth2-redirect", "/redoc", "
                 "/favicon.ico")
 """Paths served without the token: page shells and documents that hold no state."""
 PUBLIC_PREFIXES = ("/static/", "/static-offline-docs/")
-PUBLIC_PATTERNS = (re.compile(r"/robots/[^/]+/camera/page"),)
+PUBLIC_PATTERNS = (re.compile(r"/robots/[^/]+/(camera|cameras/[^/]+)/page"),)
 STATE_CHANGING = ("POST", "PUT", "PATCH", "DELETE")
 TOKEN_BYTES = 24
 """Entropy of a generated token (192 bits, URL-safe base64)."""

@@ -118,6 +118,7 @@ def test_a_token_is_required_on_the_api_but_not_on_the_page_shells(runner):
             assert c.get(path).status_code == 200, path
         # The webcam page's shell is public too (this robot has no camera: 501, not 401).
         assert c.get(f"{ROBOT}/camera/page").status_code == 501
+        assert c.get(f"{ROBOT}/cameras/rear/page").status_code == 404  # any camera's: no rear
         doc = c.get("/openapi.json").json()
         assert doc["components"]["securitySchemes"]["bearer"]["scheme"] == "bearer"
 
