@@ -42,7 +42,8 @@ A scan due at time t is taken when the simulator steps away from t (Drake's disc
 semantics): right after ``AdvanceTo(t)`` the latest reading is the previous scan's.
 
 :class:`IrMeshcatVisualizer` draws each sensor's rays and hit points in Meshcat under
-``/ir/<robot>/<sensor>`` (toggle them with the scene tree's checkboxes).
+``/ir/<robot>/<sensor>`` (toggle them with the scene tree's checkboxes); ``add_ir_meshcat``
+adds them, from the station's Meshcat hook (``corobot_drake/markers.py``).
 """
 
 

@@ -1,4 +1,4 @@
-"""The webcam's frames on the HTTP side: each robot's latest frame, fetched from the simulation
+"""The webcams' frames on the HTTP side: each camera's latest frame, fetched from the simulation
 at most `CAMERA_MAX_RATE` times per simulated second however many clients ask, and encoded
 once per format. Used from the HTTP event loop's thread only (encoding runs in a worker).
 """
@@ -30,35 +30,36 @@ class Frame:
 
 
 class FrameCache:
-    """The latest frame of each robot (see the module docstring)."""
+    """The latest frame of each camera, by key (`<robot>/<camera>`; see the module
+    docstring)."""
 
     def __init__(self, max_rate: float = CAMERA_MAX_RATE):
         self.max_rate = max_rate
         self._frames: dict[str, Frame] = {}
         self._fetches: dict[str, asyncio.Future] = {}
 
-    def latest_time(self, robot: str) -> float | None:
-        """The time of the robot's latest frame fetched so far (None: none yet)."""
-        frame = self._frames.get(robot)
+    def latest_time(self, camera: str) -> float | None:
+        """The time of the camera's latest frame fetched so far (None: none yet)."""
+        frame = self._frames.get(camera)
         return None if frame is None else frame.time
 
-    async def latest(self, robot: str, now: float,
+    async def latest(self, camera: str, now: float,
                      fetch: Callable[[], Awaitable[FrameGrab]]) -> Frame | None:
-        """The robot's latest frame as of simulated time `now`: the cached one if it was
+        """The camera's latest frame as of simulated time `now`: the cached one if it was
         checked less than 1 / max_rate s ago, else what `fetch()` brings (concurrent askers
         share one fetch). None before the camera's first frame."""
-        frame = self._frames.get(robot)
+        frame = self._frames.get(camera)
         if frame is not None and now - frame.checked < 1.0 / self.max_rate:
             return frame
-        pending = self._fetches.get(robot)
+        pending = self._fetches.get(camera)
         if pending is None or pending.done():
-            pending = self._fetches[robot] = asyncio.ensure_future(fetch())
+            pending = self._fetches[camera] = asyncio.ensure_future(fetch())
         checked, t, image = await asyncio.shield(pending)
         if image is None:
             return None
-        frame = self._frames.get(robot)
+        frame = self._frames.get(camera)
         if frame is None or frame.time != t:
-            frame = self._frames[robot] = Frame(t, image, checked)
+            frame = self._frames[camera] = Frame(t, image, checked)
         else:
             frame.checked = max(frame.checked, checked)
         return frame
