@@ -542,7 +542,8 @@ class Simulation:
     def __init__(self, scenario: sc.Scenario, meshcat=None, save_camera=None, *,
                  record: bool = False, foxglove=None, run_log_window: float | None = None,
                  check: bool = True, extras=()):
-        """`save_camera`: a directory; each robot's camera frames go to `<dir>/<robot>/`.
+        """`save_camera`: a directory; each robot's front camera frames go to `<dir>/<robot>/`,
+        another camera's to `<dir>/<robot>/<camera>/`.
         `record`: keep a Meshcat replay of the run (`save_recording`; without `meshcat`, an
         offline one records without a browser). `foxglove`: a `foxglove.Context` to publish
         the run's topics on (`recording.publishers`; its sinks: an MCAP file, a live server).

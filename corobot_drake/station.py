@@ -10,6 +10,7 @@ attach through its `extras` hooks, which their callers pass.
 
 import dataclasses as dc
 import math
+from collections.abc import Callable, Iterable
 
 import numpy as np
 from pydrake.geometry import (
@@ -268,16 +269,22 @@ def _connect_servos(builder, plant, instance, name: str, desired_state, sign: fl
     builder.Connect(desired_state, plant.get_desired_state_input_port(instance))
 
 
-def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None, extras=(),
-                  mouse_drag: bool = True) -> Station:
+StationHook = Callable[[DiagramBuilder, MultibodyPlant, object, dict, sc.Scenario], None]
+"""A front end's systems, added by `build_station` before it builds the diagram: called as
+`hook(builder, plant, scene_graph, robots, scenario)`, `robots` {name: RobotParts} (their
+sensors built, `RobotParts.sensors`); e.g. `markers.add_meshcat_markers`,
+`recording.publishers.add_foxglove_topics`, `ros2.publishers.add_ros2_topics`, each bound to
+its sink with `functools.partial`."""
+
+
+def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None,
+                  extras: Iterable[StationHook] = (), mouse_drag: bool = True) -> Station:
     """Builds the whole diagram for `scenario`, in phases: the plant (world, directives,
-    robots), each robot's drive and monitors, its sensors, then the front ends' `extras`, then
-    Meshcat. With `meshcat`, adds Drake's visualizers (and, with `mouse_drag`, Ctrl-drag of
-    bodies: `MESHCAT_DRAG_STIFFNESS`); with `save_camera` (a directory), each robot's camera
-    frames are saved there as PNG (`camera.save_directory`). Each of `extras` (the hooks) is
-    called as `extra(builder, plant, scene_graph, robots, scenario)` ({name: RobotParts}) before
-    the diagram is built, to add the systems of a front end the station need not know (the
-    Meshcat markers, the Foxglove topics, the ROS 2 topics)."""
+    robots), each robot's drive and monitors, its sensors, then the front ends' `extras`
+    (`StationHook`s: the systems of a front end the station need not know), then Meshcat. With
+    `meshcat`, adds Drake's visualizers (and, with `mouse_drag`, Ctrl-drag of bodies:
+    `MESHCAT_DRAG_STIFFNESS`); with `save_camera` (a directory), each robot's camera frames are
+    saved there as PNG (`camera.save_directory`)."""
     builder = DiagramBuilder()
     plant, scene_graph = AddMultibodyPlant(scenario.plant_config, builder)
     bodies = _add_world(plant, scenario.world)
