@@ -94,10 +94,11 @@ camera with a 30 ms delay captured at 0.30000000000000004 s, a plant step stoppe
 and the output at 0.33000000000000007 never came (its frame was lost)."""
 
 
-def default_camera_config() -> CameraConfig:
+def default_camera_config(name: str = FRONT_CAMERA) -> CameraConfig:
     """The Corobot's camera (SPEC): 320 x 240, 30 deg vertical fov, 30 Hz, on the chassis at
     `dimensions.CAMERA`, looking forward; every robot camera renders with one engine
-    (`RENDERER_NAME`)."""
+    (`RENDERER_NAME`). `name`: its map key (kept in `CameraConfig.name` for a reader of the
+    YAML; the key names the camera)."""
     roll, _, yaw = CAMERA_ROTATION_RPY_DEG
     return CameraConfig(
         width=dim.CAMERA_WIDTH,
@@ -107,7 +108,7 @@ def default_camera_config() -> CameraConfig:
         clipping_far=100.0,
         X_PB=mount(dim.CAMERA.position, (roll, 0.0, yaw + math.degrees(dim.CAMERA.yaw))),
         renderer_name=RENDERER_NAME,
-        name=FRONT_CAMERA,
+        name=name,
         fps=dim.CAMERA_FPS,
         capture_offset=CAPTURE_OFFSET,
         output_delay=dim.CAMERA_OUTPUT_DELAY,
@@ -138,11 +139,5 @@ SENSOR_KINDS = {"ir_sensors": IrSensorConfig, "cameras": CameraConfig}
 kind. A new kind: its config here, a `Robot` field, and its `add_<kind>` in
 `sensors/registry.py`."""
 
-NEW_SENSOR = {"ir_sensors": IrSensorConfig, "cameras": default_camera_config}
-"""{`Robot` field: what a sensor the defaults lack starts as}."""
-
-
-def is_enabled(config) -> bool:
-    """Whether a sensor config asks for a sensor: an IR sensor's `enabled`, a camera's `rgb`
-    (Drake's own convention: no colour image, no camera)."""
-    return bool(config.rgb if isinstance(config, CameraConfig) else config.enabled)
+NEW_SENSOR = {"ir_sensors": lambda name: IrSensorConfig(), "cameras": default_camera_config}
+"""{`Robot` field: what a sensor the defaults lack starts as, given its name}."""

@@ -896,5 +896,5 @@ def _with_new_sensors(robots_node, defaults: sc.Scenario) -> sc.Scenario:
     defaults = copy.deepcopy(defaults)
     for robot, kind, sensor in new:
         getattr(defaults.robots.setdefault(robot, sc.Robot()), kind)[sensor] = (
-            NEW_SENSOR[kind]())
+            NEW_SENSOR[kind](sensor))
     return defaults
