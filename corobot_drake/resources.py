@@ -24,13 +24,18 @@ SCENARIOS_DIR = _data_dir("scenarios")
 DEFAULT_SCENARIO = SCENARIOS_DIR / "corobot.yaml"
 """The book chapter's scene: the robot at the origin facing +x, the giant box behind it."""
 
+def shipped_scenario(name: str, folder: str = "") -> Path | None:
+    """The shipped file a bare file name names (`maze.yaml`; `folder="studies"` for the
+    shipped studies), or None when `name` is a path or no such file ships."""
+    shipped = SCENARIOS_DIR / folder / name
+    return shipped if Path(name).name == name and shipped.is_file() else None
+
+
 def scenario_path(name: str) -> Path:
     """The scenario file `name` names: a path as it is when it exists, else, for a bare file
     name, the shipped scenario of that name (`maze.yaml` from any folder, also from a wheel)."""
     path = Path(name)
-    if path.exists() or path.name != name or not (SCENARIOS_DIR / name).is_file():
-        return path
-    return SCENARIOS_DIR / name
+    return path if path.exists() else shipped_scenario(name) or path
 
 
 PACKAGE_XML = MODELS_DIR / "package.xml"

@@ -1,7 +1,8 @@
 """`python -m corobot_drake.study STUDY.yaml [--workers N] [--address ADDR] [--out DIR]
 [--resume]`: run a study on Ray and write its runs, summary and plots.
 
-Exit status: 0 when every run is ok, 1 when some runs are error rows, 2 for a bad study file
+Exit status: 0 when every run is ok, 1 when some runs are error rows or an output file could
+not be written (a full disk: the line names the file), 2 for a bad study file
 or arguments (an --address where no Ray cluster answers, an OUT/runs.csv that --resume cannot
 continue), 130 when stopped with Ctrl-C (the finished rows are kept: `--resume`).
 """
@@ -23,7 +24,7 @@ from corobot_drake.extras import MissingExtraError, require
 def _parser() -> argparse.ArgumentParser:
     p = ToolParser(formatter_class=argparse.HelpFormatter,  # its help states the defaults
                    prog="python -m corobot_drake.study", description=__doc__.splitlines()[0])
-    p.add_argument("study", help="study YAML file")
+    p.add_argument("study", help="study YAML file, or a shipped study's name (tiny.yaml)")
     p.add_argument("--workers", type=bounded(WORKERS, int), default=None,
                    help="Ray workers (default: this machine's cores, or the cluster's CPUs)")
     p.add_argument("--address", help="join this Ray cluster (e.g. 10.0.0.1:6379) instead of "
@@ -44,6 +45,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"error: {e}", file=sys.stderr)
         return 2
     from corobot_drake.study.engine import AddressError, ResumeError, read_rows, run_study
+    from corobot_drake.study.report import OutputError
 
     out = args.out or Path("studies") / Path(args.study).stem
     try:
@@ -58,6 +60,10 @@ def main(argv: list[str] | None = None) -> int:
     except ResumeError as e:
         print(f"error: --resume: {e}", file=sys.stderr)
         return 2
+    except OutputError as e:  # a full disk: the file named is not (wholly) written
+        print(f"error: {e.filename}: cannot write ({e.strerror}); the study did not finish",
+              file=sys.stderr)
+        return 1
     except OSError as e:  # the output directory cannot be made or written after all
         print(f"error: --out: {e.filename or out}: cannot write ({e.strerror})", file=sys.stderr)
         return 2

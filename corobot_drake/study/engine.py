@@ -29,7 +29,14 @@ from corobot_drake.config.scenario import one_line
 from corobot_drake.study import report
 from corobot_drake.study.metrics import load_user_metrics
 from corobot_drake.study.runner import TIMING_COLUMNS, StudyWorker, error_row, finite_or_text
-from corobot_drake.study.spec import Run, Study, expand, load_study, scenario_path
+from corobot_drake.study.spec import (
+    Run,
+    Study,
+    expand,
+    load_study,
+    scenario_path,
+    study_path,
+)
 
 SAVE_EVERY = 2.0
 """Wall-clock seconds between rewrites of runs.csv while runs arrive."""
@@ -229,11 +236,12 @@ def columns(rows: list[dict], study: Study) -> list[str]:
 def write_rows(path: Path, rows: list[dict], study: Study) -> None:
     rows = sorted(rows, key=lambda r: int(r["run"]))
     tmp = path.with_suffix(".csv.tmp")
-    with tmp.open("w", newline="") as f:
-        writer = csv.DictWriter(f, columns(rows, study), restval="")
-        writer.writeheader()
-        writer.writerows({k: finite_or_text(v) for k, v in row.items()} for row in rows)
-    tmp.replace(path)
+    with report.writing(path, partial=tmp):  # a full disk leaves the last runs.csv whole
+        with tmp.open("w", newline="") as f:
+            writer = csv.DictWriter(f, columns(rows, study), restval="")
+            writer.writeheader()
+            writer.writerows({k: finite_or_text(v) for k, v in row.items()} for row in rows)
+        tmp.replace(path)
 
 
 RETRIES = 1
@@ -285,6 +293,7 @@ def run_study(study_file: str | Path, out_dir: str | Path, *, workers: int | Non
     ResumeError for a runs.csv `resume` cannot continue, each before Ray starts or anything is
     written."""
     workers = check_run(study_file, out_dir, workers, address, resume, progress)
+    study_file = study_path(study_file)
     study = load_study(study_file)
     scenario_file = scenario_path(study, study_file)
     user = load_user_metrics(study.metrics, Path(study_file).parent)
@@ -299,7 +308,8 @@ def run_study(study_file: str | Path, out_dir: str | Path, *, workers: int | Non
     todo = [run for run in runs if run.index not in finished]
     copy = out / Path(study_file).name
     if not copy.exists() or not copy.samefile(study_file):
-        shutil.copyfile(study_file, copy)
+        with report.writing(copy):
+            shutil.copyfile(study_file, copy)
     if todo:
         _simulate_all(todo, study, scenario_file, rows, runs_csv, workers, address, progress,
                       user)

@@ -3,8 +3,10 @@ numeric metric) and plots (each metric against each grid parameter; histograms o
 
 from __future__ import annotations
 
+import contextlib
 import math
 import re
+from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
@@ -13,6 +15,24 @@ from corobot_drake.study.runner import TIMING_COLUMNS
 from corobot_drake.study.spec import Study
 
 NOT_METRICS = {"run", "seed", "status", "error", *TIMING_COLUMNS}
+
+
+class OutputError(OSError):
+    """One of a study's output files could not be written (a full disk, a quota); its
+    `filename` is that file."""
+
+
+@contextlib.contextmanager
+def writing(path: Path, partial: Path | None = None) -> Iterator[None]:
+    """Turns an OSError while `path` is written into an OutputError naming `path`, and
+    removes `partial` (the half-written file `path` was to be made from) when there is one."""
+    try:
+        yield
+    except OSError as e:
+        if partial is not None:
+            with contextlib.suppress(OSError):
+                partial.unlink()
+        raise OutputError(e.errno, e.strerror or str(e), str(path)) from e
 
 
 def _number(text: str) -> float | None:
@@ -83,9 +103,12 @@ def plot(out: Path, rows: list[dict], study: Study) -> list[Path]:
             _draw(ax, ok, metric, param)
         fig.tight_layout()
         path = out / "plots" / f"{_file_name(metric)}.png"
-        path.parent.mkdir(exist_ok=True)
-        fig.savefig(path, dpi=90)
-        plt.close(fig)
+        try:
+            with writing(path):
+                path.parent.mkdir(exist_ok=True)
+                fig.savefig(path, dpi=90)
+        finally:
+            plt.close(fig)
         written.append(path)
     return written
 
@@ -113,5 +136,6 @@ def _draw(ax, rows: list[dict], metric: str, param: str | None) -> None:
 
 
 def write(out: Path, study: Study, rows: list[dict]) -> None:
-    (out / "summary.md").write_text(summary_markdown(rows, study))
+    with writing(out / "summary.md"):
+        (out / "summary.md").write_text(summary_markdown(rows, study))
     plot(out, rows, study)

@@ -33,6 +33,7 @@ import numpy as np
 from corobot_drake.config.scenario import read_text
 from corobot_drake.config.validate import LayerChecks, load_layer
 from corobot_drake.limits import Range, bounded
+from corobot_drake.resources import shipped_scenario
 from corobot_drake.study.programs import PROGRAMS, BoxApproach, DriveTest
 
 UNTIL = ("duration", "commands")
@@ -240,7 +241,18 @@ def _check_program_path(study: Study, checks: LayerChecks, where: str, path: str
 
 
 def scenario_path(study: Study, study_file: str | Path) -> Path:
-    return (Path(study_file).resolve().parent / study.scenario).resolve()
+    """The study's scenario file: `scenario` relative to the study file, else, for a bare
+    file name that is not there, the shipped scenario of that name (`maze.yaml`), as the
+    command line finds it (`resources.scenario_path`)."""
+    beside = (Path(study_file).resolve().parent / study.scenario).resolve()
+    return beside if beside.exists() else shipped_scenario(study.scenario) or beside
+
+
+def study_path(name: str | Path) -> Path:
+    """The study file `name` names: a path as it is when it exists, else, for a bare file
+    name, the shipped study of that name (`tiny.yaml` from any folder, also from a wheel)."""
+    path = Path(name)
+    return path if path.exists() else shipped_scenario(str(name), "studies") or path
 
 
 def seeds(study: Study) -> list[int]:

@@ -186,6 +186,28 @@ def test_a_user_metric_is_module_colon_function(tmp_path):
     assert all(s.enabled for s in sensors.values())
 
 
+def test_a_study_names_a_shipped_scenario_or_study_by_name_from_any_folder(tmp_path,
+                                                                          monkeypatch):
+    """`scenario: maze.yaml` where no such file is beside the study is the shipped scenario,
+    as `python -m corobot_drake maze.yaml` finds it; a file beside the study comes first. The
+    study file itself may be a shipped one's name (`tiny.yaml`)."""
+    from corobot_drake.resources import SCENARIOS_DIR
+    from corobot_drake.study.spec import scenario_path, study_path
+
+    monkeypatch.chdir(tmp_path)
+    path = tmp_path / "s.yaml"
+    path.write_text("scenario: maze.yaml\nduration: 0.5\nmetrics: [x]\n")
+    study = load_study(path)  # resolved against the maze's scenario at load
+    assert scenario_path(study, path) == SCENARIOS_DIR / "maze.yaml"
+    (tmp_path / "maze.yaml").write_text((SCENARIOS_DIR / "corobot.yaml").read_text())
+    assert scenario_path(study, path) == tmp_path / "maze.yaml"
+    assert study_path("tiny.yaml") == SCENARIOS_DIR / "studies" / "tiny.yaml"
+    assert study_path("missing.yaml") == Path("missing.yaml")  # read, and refused, as a path
+    with pytest.raises(ScenarioError, match=r"s\.yaml:1: scenario: .*no-such\.yaml"):
+        path.write_text("scenario: no-such.yaml\nduration: 0.5\nmetrics: [x]\n")
+        load_study(path)
+
+
 @pytest.mark.parametrize("arguments, expected", [
     ({"workers": -1}, r"^workers must be None .* or a whole number in \[1, 1024\], got -1$"),
     ({"workers": 0}, r"got 0$"),
@@ -619,6 +641,26 @@ def test_ctrl_c_keeps_the_finished_rows_and_stops_ray(tmp_path, connected, capsy
     resumed = rows(out / "runs.csv")
     assert [r["run"] for r in resumed] == [str(i) for i in range(6)]
     assert [r["wall_seconds"] for r in resumed[:len(kept)]] == [r["wall_seconds"] for r in kept]
+
+
+@pytest.mark.parametrize("full", ["runs.csv", "summary.md"])
+def test_a_full_disk_ends_the_study_in_one_line_naming_the_file(tmp_path, connected, capsys,
+                                                                full):
+    """Writes that fail as on a full disk (the file a link to /dev/full, where every write is
+    ENOSPC): one line naming the file and exit status 1, never the line that reports the
+    runs; runs.csv is replaced whole or not at all (no half-written file left)."""
+    from corobot_drake.study.__main__ import main
+
+    study_file = write_study(tmp_path, scalings="10.16")
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / ("runs.csv.tmp" if full == "runs.csv" else full)).symlink_to("/dev/full")
+    assert main([str(study_file), "--out", str(out), "--workers", "1", "--quiet"]) == 1
+    captured = capsys.readouterr()
+    assert captured.err.splitlines() == [
+        f"error: {out / full}: cannot write (No space left on device); the study did not finish"]
+    assert "runs (" not in captured.out
+    assert not (out / "runs.csv.tmp").exists()
 
 
 @pytest.mark.parametrize("study_file", sorted((DEFAULT_SCENARIO.parent / "studies").glob("*.yaml")),
