@@ -18,7 +18,9 @@ simulation thread. `--port 0` picks a free port; the first line printed to stdou
 from __future__ import annotations
 
 import contextlib
+import os
 import sys
+import threading
 
 from corobot_drake.limits import LIVE_RUN_LOG_WINDOW
 from corobot_drake.serving.security import is_loopback
@@ -70,8 +72,11 @@ def serve(make_sim, host: str = "127.0.0.1", port: int = 50000, meshcat: bool = 
         return 2
     ctx = multiprocessing.get_context("spawn")
     conn, child_conn = ctx.Pipe()
+    # The kernel's parent-death signal follows the thread that starts the child: only the
+    # main thread lives as long as this process.
+    parent = os.getpid() if threading.current_thread() is threading.main_thread() else None
     http = ctx.Process(target=http_main, name="corobot-http", daemon=True, args=(
-        child_conn, access, port, log_level, HTTP_NICENESS))
+        child_conn, access, port, log_level, HTTP_NICENESS, parent))
     http.start()
     kind, value = conn.recv()
     if kind == "error":
@@ -90,12 +95,13 @@ def serve(make_sim, host: str = "127.0.0.1", port: int = 50000, meshcat: bool = 
         return 2
     bridge = SimSide(runner, conn)
     shown = f"http://[{host}]:{value}" if ":" in host else f"http://{host}:{value}"
-    stats = runner.stats()
+    stats, lost = runner.stats(), False
     try:  # a Ctrl-C from the first line printed on stops cleanly
         _announce(shown, host, access, runner)
         while http.is_alive() and runner.alive and not bridge.closed.is_set():
-            http.join(0.5)
+            http.join(0.5)  # wakes at once when the HTTP process ends
             stats = runner.stats()
+        lost = runner.alive  # the simulation runs on: the HTTP side went away
     except KeyboardInterrupt:
         pass
     finally:
@@ -108,7 +114,37 @@ def serve(make_sim, host: str = "127.0.0.1", port: int = 50000, meshcat: bool = 
             http.join(5)
     print(f"simulated {runner.sim.time:.2f} s at {stats['realtime_factor'] or 0:.2f}x real "
           f"time ({stats['slips']} slips)", file=sys.stderr)
-    return 0 if runner.error is None else 1
+    if lost:
+        print(f"error: the HTTP server process ({http.pid}) {_ended(http.exitcode)}: the "
+              f"simulation stopped with it", file=sys.stderr)
+    return 0 if runner.error is None and not lost else 1
+
+
+def _ended(exitcode: int | None) -> str:
+    """How a process ended, from its `multiprocessing` exit code."""
+    import signal
+
+    if exitcode is None:
+        return "closed its end of the pipe"
+    if exitcode < 0:
+        return f"was killed by {signal.Signals(-exitcode).name}"
+    return f"exited with status {exitcode}"
+
+
+def _die_with_parent(parent: int | None) -> bool:
+    """Asks the kernel (Linux's PR_SET_PDEATHSIG) to send this process SIGTERM when the
+    simulation process `parent` dies, however it dies (SIGKILL included; the closed pipe
+    tells the HTTP server too, but only once it is connected). False when `parent` is
+    already gone."""
+    import ctypes
+    import signal
+
+    if parent is None or not sys.platform.startswith("linux"):
+        return True
+    pr_set_pdeathsig = 1
+    libc = ctypes.CDLL(None, use_errno=True)
+    libc.prctl(pr_set_pdeathsig, signal.SIGTERM, 0, 0, 0)
+    return os.getppid() == parent  # it may have died before the request
 
 
 def _announce(shown: str, host: str, access, runner) -> None:
@@ -150,11 +186,13 @@ def sim_runner(make_sim, meshcat: bool, rate: float = 1.0,
     return runner
 
 
-def http_main(conn, access, port: int, log_level: str, niceness: int) -> None:
+def http_main(conn, access, port: int, log_level: str, niceness: int,
+              parent: int | None = None) -> None:
     """The HTTP process: listen on `access.host`, report the port, wait for the simulation,
-    serve behind `access` (`security.Access`)."""
-    import os
-
+    serve behind `access` (`security.Access`); end when the simulation process `parent`
+    ends, however it ends."""
+    if not _die_with_parent(parent):
+        return
     import uvicorn
 
     from corobot_drake.serving.http_limits import http_config, raise_file_limit

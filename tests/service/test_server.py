@@ -699,3 +699,70 @@ def test_transport_carries_calls_watches_and_snapshots():
         assert time.monotonic() < deadline, "the remote runner did not see the pipe close"
         time.sleep(0.05)
     assert remote.submit(start).exception(1) is not None
+
+
+# --- one process dies, the other stops --------------------------------------------------------
+
+def _children(pid: int) -> list[int]:
+    """`pid`'s child processes now (from /proc)."""
+    from pathlib import Path
+
+    found = []
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        with contextlib.suppress(OSError):
+            if int(stat.read_text().rsplit(")", 1)[1].split()[1]) == pid:
+                found.append(int(stat.parent.name))
+    return found
+
+
+def _alive(pid: int) -> bool:
+    from pathlib import Path
+
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
+    except OSError:
+        return False
+
+
+def _http_process(server: ServerProcess) -> int:
+    """The PID of the served simulation's HTTP process (its `multiprocessing` child)."""
+    from pathlib import Path
+
+    (pid,) = [p for p in _children(server.process.pid)
+              if b"spawn_main" in Path(f"/proc/{p}/cmdline").read_bytes()]
+    return pid
+
+
+def test_a_served_simulation_stops_when_its_http_process_dies(tmp_path):
+    """The HTTP process killed (SIGKILL, by its PID): the simulation process stops too, in one
+    line naming what happened, exit status 1."""
+    import signal
+
+    log = tmp_path / "stderr.log"
+    with ServerProcess(["--headless"], stderr_path=str(log)) as server:
+        os.kill(_http_process(server), signal.SIGKILL)
+        assert server.process.wait(30) == 1
+    lines = log.read_text().splitlines()
+    assert any(line.startswith("error: the HTTP server process (") and line.endswith(
+        "was killed by SIGKILL: the simulation stopped with it") for line in lines), lines
+
+
+def test_the_http_process_stops_when_its_served_simulation_dies(tmp_path):
+    """The simulation process killed (SIGKILL, by the PID this test started): its HTTP process
+    ends too (the kernel's parent-death signal), and the port no longer answers."""
+    import signal
+    import socket
+    from urllib.parse import urlsplit
+
+    with ServerProcess(["--headless"], stderr_path=str(tmp_path / "stderr.log")) as server:
+        http_pid = _http_process(server)
+        server.process.send_signal(signal.SIGKILL)
+        server.process.wait(30)
+    deadline = time.monotonic() + 30
+    while _alive(http_pid):
+        assert time.monotonic() < deadline, "the HTTP process outlived its simulation"
+        time.sleep(0.05)
+    address = urlsplit(server.url)
+    with pytest.raises(ConnectionRefusedError), socket.create_connection(
+            (address.hostname, address.port), timeout=5):
+        pass
