@@ -32,8 +32,6 @@ from corobot_drake.resources import DEFAULT_SCENARIO
 from corobot_drake.tuning import odometry_calibration as oc
 from corobot_drake.tuning.sysid import DriveField, write_drive_fields
 
-REPO = Path(__file__).resolve().parent.parent
-
 
 def _parser() -> ToolParser:
     p = ToolParser(description=__doc__.splitlines()[0])

@@ -31,8 +31,6 @@ from corobot_drake.config.scenario import Drive
 from corobot_drake.limits import bound_of
 from corobot_drake.tuning import drive_tuning, sysid
 
-REPO = Path(__file__).resolve().parent.parent
-
 
 def _fit(path: Path, ticks_per_revolution: int):
     """(log, fit, dropped), printing progress; raises sysid.LogError."""

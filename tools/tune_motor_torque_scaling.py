@@ -41,13 +41,13 @@ from corobot_drake.tuning.drive_tuning import (
 )
 from corobot_drake.tuning.sysid import DriveField, write_drive_fields
 
-REPO = Path(__file__).resolve().parent.parent
 TOP_SPEED = Range(0.0, 5.0, low_open=True, unit="m/s", why="the top speed wanted")
 
 
 def _parser() -> ToolParser:
     p = ToolParser(description=__doc__.splitlines()[0])
-    p.add_argument("--scenario", default=str(DEFAULT_SCENARIO), help="scenario file")
+    p.add_argument("--scenario", help="scenario file (None: the shipped default scene, which "
+                   "--write never changes: name the file to write)")
     p.add_argument("--robot", help="robot name (None: the scenario's only robot)")
     p.add_argument("--scaling", type=bounded(AXLE_SPEED), default=dim.MOTOR_TORQUE_SCALING_UNTUNED,
                    help="starting MotorTorqueScaling (20 is the untuned value)")
@@ -148,6 +148,11 @@ def _write(args, robot_name: str, scaling: float) -> None:
 @one_line_errors
 def main(argv=None) -> int:
     args = _parser().parse_args(argv)
+    if args.write and args.scenario is None:
+        print("error: --write: name the scenario file to write with --scenario (the shipped "
+              "scenario is never written by default)", file=sys.stderr)
+        return 2
+    args.scenario = args.scenario or str(DEFAULT_SCENARIO)
     quiet_drake_warnings()
     robot_name = _robot_name(args)
     if robot_name is None:

@@ -63,3 +63,51 @@ def test_a_tool_parses_with_the_tools_parser(tool, monkeypatch):
     from corobot_drake.arguments import ToolParser
 
     assert isinstance(_parser_of(tool, monkeypatch), ToolParser), tool.name
+
+
+OUTPUT_OPTIONS = {"out", "output", "plot", "table"}
+"""The options that name what a tool writes."""
+WRITES_THE_CHECKOUT = {"train_policy"}
+"""Tools whose defaults still write into the checkout (the shipped policy and its picture)."""
+
+
+@pytest.mark.parametrize("tool", [t for t in TOOLS if t.stem not in WRITES_THE_CHECKOUT],
+                         ids=lambda t: t.stem)
+def test_a_tool_writes_under_the_current_directory_by_default(tool, monkeypatch):
+    """No default output is an absolute path or climbs out of the current directory: a tool
+    writes into the package or the checkout only when told to (`--out models/meshes`)."""
+    parser = _parser_of(tool, monkeypatch)
+    for action in parser._actions:
+        if action.dest in OUTPUT_OPTIONS and action.default is not None:
+            path = Path(action.default)
+            assert not path.is_absolute() and ".." not in path.parts, \
+                f"{tool.name}: {action.option_strings[0]} defaults to {path}"
+
+
+def test_the_generators_write_into_the_current_directory(tmp_path):
+    """make_model and make_meshes, run with no option in an empty folder, write there what
+    is shipped, byte for byte, and leave the shipped files alone."""
+    import subprocess
+
+    from corobot_drake.resources import MODELS_DIR
+
+    for tool in ("make_model", "make_meshes"):
+        subprocess.run([sys.executable, str(REPO / "tools" / f"{tool}.py")], cwd=tmp_path,
+                       check=True, capture_output=True)
+    assert (tmp_path / "corobot.sdf").read_bytes() == (MODELS_DIR / "corobot.sdf").read_bytes()
+    written = sorted(p.name for p in (tmp_path / "meshes").iterdir())
+    assert "wheel.obj" in written
+    for name in written:
+        assert (tmp_path / "meshes" / name).read_bytes() == \
+            (MODELS_DIR / "meshes" / name).read_bytes(), name
+
+
+def test_tuning_writes_a_scenario_only_when_it_is_named(tmp_path):
+    import subprocess
+
+    run = subprocess.run([sys.executable, str(REPO / "tools" / "tune_motor_torque_scaling.py"),
+                          "--write"], cwd=tmp_path, capture_output=True, text=True)
+    assert run.returncode == 2
+    assert run.stderr.splitlines() == [
+        "error: --write: name the scenario file to write with --scenario (the shipped scenario "
+        "is never written by default)"]

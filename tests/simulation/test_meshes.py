@@ -71,7 +71,7 @@ def test_regenerated_files_are_byte_identical_to_committed(tmp_path, files):
         committed = meshes.MESH_DIR / name
         assert committed.is_file(), f"{committed} is not committed; run tools/make_meshes.py"
         assert (tmp_path / name).read_bytes() == committed.read_bytes(), (
-            f"{name} is stale; run tools/make_meshes.py")
+            f"{name} is stale; run tools/make_meshes.py --out models/meshes")
 
 
 def test_tool_check_flag(tmp_path):
