@@ -4,10 +4,11 @@ a child process of its own, joined by a pipe (`transport`).
 
 Why a second process: the simulation's Python systems give up and re-take Python's GIL many
 times per step, so in one process a busy HTTP thread makes the simulation wait at every one
-of those hand-overs (measured: 20 polling clients and a flood of bad requests cut the
-real-time factor from 1.0 to 0.7). With the server in its own process the simulation thread
-shares its GIL with nothing busy, and the HTTP process runs at a lower priority (nice), so under
-load the pages slow down, not the simulation.
+of those hand-overs. With the server in its own process the simulation thread shares its GIL
+with nothing busy, and the HTTP process runs at a lower priority (nice), so under load the
+pages slow down, not the simulation (docs/services.md, "Tests and measured figures"). Each
+process ends when the other does: the HTTP process by the kernel's parent-death signal, the
+simulation process by watching the HTTP process's handle.
 
 Meshcat starts too unless `--headless`; its teleop buttons keep working, polled by the
 simulation thread. `--port 0` picks a free port; the first line printed to stdout is always
