@@ -292,43 +292,61 @@ def measure_wheel_turn() -> dict:
                                             for k, t in turned.items()}}
 
 
-def measure_event_times(repeats: int = 5, seconds: float = 10.0) -> dict:
-    """Real-time factors (wall, median of `repeats`) and simulator steps per simulated second
-    of the default scene driving, physics only, with the periodic events on and between the
-    plant's 10 ms steps."""
-    from corobot_drake.config.scenario import load_scenario
-    from corobot_drake.simulation import Simulation, quiet_drake_warnings
-    from lab.bench import DRIVING, physics_only_overrides
-
-    quiet_drake_warnings()
+def _event_cases() -> dict[str, list[str]]:
+    """The default scene's overrides, physics only unless the case adds IR, with the periodic
+    events on and between the plant's 10 ms steps."""
+    from lab.bench import physics_only_overrides
 
     def ir(rate: float) -> list[str]:
         return [NO_CAMERA, f"robots: {{corobot: {{ir_sensors: {{front: {{scan_rate_hz: "
                            f"{rate}}}, rear: {{scan_rate_hz: {rate}}}}}}}}}"]
 
     physics = physics_only_overrides()
-    cases = {
+    return {
         "shipped": physics,
         "control_60_hz": [*physics, f"robots: {{corobot: {{drive: {{control_period: "
                                     f"{1 / 60!r}}}}}}}"],
         "control_50_hz": [*physics, "robots: {corobot: {drive: {control_period: 0.02}}}"],
         "ir_20_hz": ir(20.0),
         "ir_19_9_hz": ir(19.9),
+        "ir_200_hz": ir(200.0),
     }
+
+
+def _driving(overrides: list[str]):
+    from corobot_drake.config.scenario import load_scenario
+    from corobot_drake.simulation import Simulation, quiet_drake_warnings
+    from lab.bench import DRIVING
+
+    quiet_drake_warnings()
+    return Simulation(load_scenario(DEFAULT_SCENARIO, overrides=[DRIVING, *overrides]))
+
+
+def measure_event_times(repeats: int = 5, seconds: float = 10.0) -> dict:
+    """Real-time factors (wall, median of `repeats`) of the default scene driving, physics
+    only, with the periodic events on and between the plant's 10 ms steps (`_event_cases`)."""
+    cases = _event_cases()
     runs: dict[str, list[float]] = {name: [] for name in cases}
-    steps: dict[str, float] = {}
     for _ in range(repeats):  # in turn: a slow drift of the load spreads over all
         for name, overrides in cases.items():
-            sim = Simulation(load_scenario(DEFAULT_SCENARIO,
-                                           overrides=[DRIVING, *overrides]))
-            taken = sim.simulator.get_num_steps_taken()
+            sim = _driving(overrides)
             start = time.perf_counter()
             sim.advance(seconds)
             runs[name].append(seconds / (time.perf_counter() - start))
-            steps[name] = (sim.simulator.get_num_steps_taken() - taken) / seconds
             print(f"{name}: {runs[name][-1]:.2f}x", file=sys.stderr, flush=True)
-    return {name: {"rtf": statistics.median(r), "rtf_min": min(r), "rtf_max": max(r),
-                   "steps_per_second": steps[name]} for name, r in runs.items()}
+    return {name: {"rtf": statistics.median(r), "rtf_min": min(r), "rtf_max": max(r)}
+            for name, r in runs.items()}
+
+
+def measure_step_counts(seconds: float = 3.0) -> dict:
+    """Simulator steps per simulated second of the default scene driving (`_event_cases`):
+    the same on every machine."""
+    counts = {}
+    for name, overrides in _event_cases().items():
+        sim = _driving(overrides)
+        sim.advance(seconds)
+        counts[name] = sim.simulator.get_num_steps_taken() / seconds
+    return counts
 
 
 def measure_continuous_sensors(seconds: float = 9.0) -> dict:
@@ -369,6 +387,7 @@ MEASUREMENTS = {
     "saved-mid-drive": measure_saved_mid_drive,
     "wheel-turn": measure_wheel_turn,
     "event-times": measure_event_times,
+    "step-counts": measure_step_counts,
 }
 
 
@@ -395,49 +414,18 @@ def _top_speed(text: str) -> tuple[float, float]:
     return float(_find(pattern, text, 1)), float(_find(pattern, text, 2))
 
 
-def render_ir_start_readme(outs) -> str:
-    m = _json(outs)
-    rear, d = m["rear"], m["distances"]
-    nothing = " (nothing)" if d["front"] >= rear["range"] else ""
-    return (f"At the start of the default scene the rear sensor reads {d['rear']:.5g} m (the "
-            f"giant box) and the front {d['front']:.5g}{nothing}.\n\n" + _ir_code(m, readme=True))
-
-
-def _ir_code(m: dict, readme: bool) -> str:
+def _ir_code(m: dict) -> str:
     rear, d = m["rear"], m["distances"]
     reading = (f"IrReading(raw={rear['raw']:.5g}, range={rear['range']:.5g}, "
                f"normalized={rear['normalized']:.3g}, time={rear['time']:.1f})")
-    quote = '"' if readme else "'"
-    distances = "{" + ", ".join(f"{quote}{k}{quote}: {v:.5g}" for k, v in d.items()) + "}"
-    lines = ["```python"]
-    if not readme:
-        lines.append("robot = sim.robot()")
-    width = 26 if readme else 24
-    lines.append("robot.ir(\"rear\")".ljust(width) + f"# {reading}")
-    lines.append("robot.ir_distances()".ljust(width) + f"# {distances}")
-    if readme:
-        lines += ["robot.encoders(), robot.heading(), robot.position()   # 600 ticks/rev, "
-                  "compass, GPS",
-                  "robot.camera_image()      # latest 240 x 320 x 4 frame of the front camera "
-                  "(None before the first)"]
-    lines.append("```")
-    return "\n".join(lines)
+    distances = "{" + ", ".join(f"'{k}': {v:.5g}" for k, v in d.items()) + "}"
+    return "\n".join(["```python", "robot = sim.robot()",
+                      "robot.ir(\"rear\")".ljust(24) + f"# {reading}",
+                      "robot.ir_distances()".ljust(24) + f"# {distances}", "```"])
 
 
 def render_ir_start_sensors(outs) -> str:
-    return _ir_code(_json(outs), readme=False)
-
-
-def render_readme_top_speed(outs) -> str:
-    scaling, speed = _top_speed(outs[0][0].stdout)
-    return f"{scaling:g} shipped: {speed:.4f} m/s at full power"
-
-
-def render_readme_triangles(outs) -> str:
-    text = outs[0][0].stdout
-    total = int(_find(r"robot total\s+(\d+) triangles", text))
-    budget = int(_find(r"\(budget (\d+)\)", text))
-    return f"{total / 1000:.1f}k triangles for the whole robot, budget {budget / 1000:g}k"
+    return _ir_code(_json(outs))
 
 
 def render_looks_triangles(outs) -> str:
@@ -473,23 +461,6 @@ def render_landing_errors(outs) -> str:
     failed = re.search(r"\| [+-][\d.]+ \(\w+\) \|", text)  # an error cell with its status
     return text + ("\n\nAll commands succeeded." if not failed else
                    "\n\nSome commands did not succeed: their status follows the error.")
-
-
-def _largest(text: str, profile: str) -> tuple[float, float]:
-    """(mm, deg): the landing table's largest errors of `profile`."""
-    mm, deg = (float(x) for x in re.findall(
-        rf"^Largest \|error\|, {profile}: ([\d.]+) (?:mm|deg)\.", text, re.M))
-    return mm, deg
-
-
-def render_readme_landing_closed_loop(outs) -> str:
-    mm, deg = _largest(outs[0][0].stdout, "closed_loop")
-    return f"{mm:.2g} mm and {deg:.2g} deg"
-
-
-def render_readme_landing_seed(outs) -> str:
-    mm, deg = _largest(outs[0][0].stdout, "seed")
-    return f"{mm:.0f} mm and {deg:.0f} deg: the tables in docs/commands.md"
 
 
 def render_drive_drift(outs) -> str:
@@ -612,15 +583,6 @@ def _default_column(outs) -> tuple[list[str], list[list[float]], list[Output]]:
     return stacks, values, runs
 
 
-def render_readme_performance(outs) -> str:
-    stacks, values, runs = _default_column(outs)
-    lines = ["| default scene, 10 ms step | real-time factor |", "|---|---|"]
-    for i, stack in enumerate(stacks):
-        lines.append(f"| {stack} | {_range([v[i] for v in values], '{:.1f}')}x |")
-    return (f"Measured {_measured(runs)}, no GPU (a shared host), {len(runs)} runs of "
-            f"`{runs[0].command}`, the range of their medians:\n\n" + "\n".join(lines))
-
-
 def render_default_runs(outs) -> str:
     stacks, _, runs = _default_column(outs)
     head = "| stack | " + " | ".join(
@@ -672,26 +634,40 @@ def render_unit_costs(outs) -> str:
     return f"Measured {_measured(_flat(outs))}:\n\n" + "\n".join(lines)
 
 
+EVENT_CASES = (
+    ("shipped", "as shipped (drive, command source and motion every 10 ms: on the plant's "
+                "steps)"),
+    ("control_60_hz", "the same systems at the book's 60 Hz (`drive.control_period: 1/60`: 40 "
+                      "of their 60 event times a second fall between steps)"),
+    ("control_50_hz", "the same systems at 50 Hz (`drive.control_period: 0.02`: every event on "
+                      "a step, half as many)"),
+    ("ir_20_hz", "+ 2 IR sensors at 20 Hz (on steps)"),
+    ("ir_19_9_hz", "+ 2 IR sensors at 19.9 Hz (between steps)"),
+    ("ir_200_hz", "+ 2 IR sensors at 200 Hz (half of them between steps)"),
+)
+"""`_event_cases`' rows as the docs name them."""
+
+
 def render_event_times(outs) -> str:
     runs = outs[0]
     m = json.loads(runs[0].stdout)
-    rows = (("shipped", "as shipped (drive, command source and motion every 10 ms: on the "
-                        "plant's steps)"),
-            ("control_60_hz", "the same systems at the book's 60 Hz (`drive.control_period: "
-                              "1/60`: 40 of their 60 event times a second fall between steps)"),
-            ("control_50_hz", "the same systems at 50 Hz (`drive.control_period: 0.02`: every "
-                              "event on a step, half as many)"),
-            ("ir_20_hz", "+ 2 IR sensors at 20 Hz (on steps)"),
-            ("ir_19_9_hz", "+ 2 IR sensors at 19.9 Hz (between steps)"))
-    lines = ["| change | real-time factor, median (min-max) | simulator steps per simulated s |",
-             "|---|---|---|"]
-    for key, label in rows:
+    lines = ["| change | real-time factor, median (min-max) |", "|---|---|"]
+    for key, label in EVENT_CASES:
         r = m[key]
-        lines.append(f"| {label} | {r['rtf']:.1f}x ({r['rtf_min']:.1f}-{r['rtf_max']:.1f}) | "
-                     f"{r['steps_per_second']:.0f} |")
+        lines.append(f"| {label} | {r['rtf']:.1f}x ({r['rtf_min']:.1f}-{r['rtf_max']:.1f}) |")
     return (f"Measured {_measured(runs)} (`{runs[0].command}`; physics only unless a row adds "
             f"IR, camera off, 5 runs of 10 simulated s each in turn, wall clock):\n\n"
             + "\n".join(lines))
+
+
+def render_step_counts(outs) -> str:
+    """Steps per simulated second: deterministic, so `--check` holds the text to them."""
+    o = outs[0][0]
+    m = json.loads(o.stdout)
+    lines = ["| change | simulator steps per simulated s |", "|---|---|"]
+    lines += [f"| {label} | {m[key]:.1f} |" for key, label in EVENT_CASES]
+    return (f"`{o.command}` (the default scene driving its figure of eight for 3 s, physics only "
+            f"unless a row adds IR):\n\n" + "\n".join(lines))
 
 
 def render_bench_ir(outs) -> str:
@@ -830,16 +806,10 @@ def _shared_commands() -> SimpleNamespace:
 def _model_and_command_specs(c: SimpleNamespace) -> list[Spec]:
     """The model, tuning, commands and README's pictures."""
     return [
-        Spec("readme-triangles", "README.md", (c.meshes,), render_readme_triangles,
-             DETERMINISTIC, 3),
         Spec("looks-triangles", "docs/looks.md", (c.meshes,), render_looks_triangles,
              DETERMINISTIC, 3),
-        Spec("readme-ir-at-start", "README.md", (c.ir_start,), render_ir_start_readme,
-             DETERMINISTIC, 8),
         Spec("sensors-ir-at-start", "docs/sensors.md", (c.ir_start,), render_ir_start_sensors,
              DETERMINISTIC, 8),
-        Spec("readme-top-speed", "README.md", (c.top_speed,), render_readme_top_speed,
-             DETERMINISTIC, 5),
         Spec("tune-motor-torque-scaling", "docs/tuning.md",
              (Command("python tools/tune_motor_torque_scaling.py --scaling 20"), c.top_speed),
              render_tune, DETERMINISTIC, 10),
@@ -869,10 +839,6 @@ def _model_and_command_specs(c: SimpleNamespace) -> list[Spec]:
              (Command("python tools/resume_landing.py"),), render_resume_landing,
              DETERMINISTIC, 300),
         Spec("landing-errors", "docs/commands.md", (c.landing,), render_landing_errors,
-             DETERMINISTIC, 90),
-        Spec("readme-landing-closed-loop", "README.md", (c.landing,),
-             render_readme_landing_closed_loop, DETERMINISTIC, 90),
-        Spec("readme-landing-seed", "README.md", (c.landing,), render_readme_landing_seed,
              DETERMINISTIC, 90),
         Spec("drive-test-drift", "docs/commands.md", tuple(
             Command(f"python tools/drive_test.py --loops 3 --seeds 20 --workers 1 --profile {p} "
@@ -923,7 +889,9 @@ def _performance_specs(c: SimpleNamespace) -> list[Spec]:
         Spec("unit-costs", "docs/performance.md", (c.bench_ir, c.bench_raycast, c.bench_camera),
              render_unit_costs, TIMING, 150),
         Spec("event-times", "docs/performance.md", (_measure("event-times"),),
-             render_event_times, TIMING, 60),
+             render_event_times, TIMING, 70),
+        Spec("step-counts", "docs/performance.md", (_measure("step-counts"),),
+             render_step_counts, DETERMINISTIC, 15),
         Spec("tire-grip", "docs/tuning.md",
              (Command("python tools/tune_tire_grip.py --plot docs/images/tire_grip.png",
                       ok=(0, 1)),),
@@ -933,8 +901,6 @@ def _performance_specs(c: SimpleNamespace) -> list[Spec]:
         Spec("readme-hostile-inputs", "README.md",
              (Command("python tools/hostile_inputs.py", ok=(0, 1)),), render_hostile_inputs,
              TIMING, 90),
-        Spec("readme-performance", "README.md", (c.default_column,), render_readme_performance,
-             TIMING, 110),
         Spec("bench-robots", "docs/performance.md",
              (Command("python tools/bench.py --robots 1,2,4,8,16 --no-table --no-micro "
                       "--seconds 5 --repeats 1"),), render_bench_robots, TIMING, 300),

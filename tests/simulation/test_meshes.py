@@ -69,7 +69,8 @@ def test_regenerated_files_are_byte_identical_to_committed(tmp_path, files):
     meshes.write_files(tmp_path, files)
     for name in files:
         committed = meshes.MESH_DIR / name
-        assert committed.is_file(), f"{committed} is not committed; run tools/make_meshes.py --out models/meshes"
+        assert committed.is_file(), (
+            f"{committed} is not committed; run tools/make_meshes.py --out models/meshes")
         assert (tmp_path / name).read_bytes() == committed.read_bytes(), (
             f"{name} is stale; run tools/make_meshes.py --out models/meshes")
 
