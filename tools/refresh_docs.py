@@ -13,7 +13,7 @@ Markdown and replaces the block's content (and writes the pictures the commands 
 Text outside the markers is never touched (lab/docs_blocks.py).
 
     python tools/refresh_docs.py                 # every block: deterministic ones first,
-                                                 # pictures, timings last (~30 min here)
+                                                 # pictures, timings last (--list: each cost)
     python tools/refresh_docs.py --only NAME ...  # some blocks
     python tools/refresh_docs.py --list          # the blocks, their commands and costs
     python tools/refresh_docs.py --check         # the cheap deterministic blocks: exit 1 on drift
