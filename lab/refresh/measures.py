@@ -1,0 +1,182 @@
+"""The measurements `tools/refresh_docs.py --measure NAME` makes itself through the Python API
+(JSON)."""
+
+from __future__ import annotations
+
+import dataclasses as dc
+import json
+import math
+import statistics
+import sys
+import time
+
+from corobot_drake.resources import DEFAULT_SCENARIO
+from lab.refresh.runner import NO_CAMERA, Command, Output
+
+
+def _sim(*overrides: str):
+    from corobot_drake.simulation import Simulation, quiet_drake_warnings
+
+    quiet_drake_warnings()
+    return Simulation.from_file(DEFAULT_SCENARIO, overrides=[NO_CAMERA, *overrides])
+
+
+def measure_ir_at_start() -> dict:
+    """The default scene's IR readings at t = 0."""
+    robot = _sim().robot()
+    return {"rear": dc.asdict(robot.ir("rear")), "distances": robot.ir_distances()}
+
+
+def measure_saved_mid_drive() -> dict:
+    """Saved while a DriveDistance runs (the scene of tests/simulation/test_motion.py),
+    reloaded, both run on: the robots' distance apart (m) after 0.2 s and after 3.2 s."""
+    from corobot_drake.simulation import Simulation
+
+    script = ("robots: {corobot: {commands: [!DriveDistance {distance: -0.45, power: 1}, "
+              "!RotateDegrees {degrees: 30, power: 0.5}, !Wait {seconds: 1.0}, "
+              "!SetPower {left: 0.3, right: 0.3}]}}")
+    sim = _sim(script)
+    sim.advance(2.0)
+    again = Simulation(sim.saved_scenario())
+
+    def gap() -> float:
+        a, b = sim.robot().position(), again.robot().position()
+        return sum((p - q) ** 2 for p, q in zip(a, b, strict=True)) ** 0.5
+
+    out = {}
+    for label, seconds in (("after_0_2_s", 0.2), ("after_3_2_s", 3.0)):
+        sim.advance(seconds)
+        again.advance(seconds)
+        out[label] = gap()
+    return out
+
+
+def measure_wheel_turn() -> dict:
+    """Driving straight at 0.3 m/s for 1.5 s: front wheel rotation (encoders) over
+    distance / R."""
+    import math
+
+    from corobot_drake.model import dimensions as dim
+
+    sim = _sim()
+    robot = sim.robot()
+    sim.advance(0.3)
+    robot.set_speed(0.3, 0.3)
+    x0, y0, _ = robot.position()
+    ticks0 = robot.encoders()
+    sim.advance(1.5)
+    x, y, _ = robot.position()
+    distance = math.hypot(x - x0, y - y0)
+    ticks = {k: v - ticks0[k] for k, v in robot.encoders().items()}
+    turned = {k: v * 2 * math.pi / dim.ENCODER_TICKS_PER_REVOLUTION for k, v in ticks.items()}
+    return {"distance": distance, "ratio": {k: t / (distance / dim.WHEEL_RADIUS)
+                                            for k, t in turned.items()}}
+
+
+def _event_cases() -> dict[str, list[str]]:
+    """The default scene's overrides, physics only unless the case adds IR, with the periodic
+    events on and between the plant's 10 ms steps."""
+    from lab.bench import physics_only_overrides
+
+    def ir(rate: float) -> list[str]:
+        return [NO_CAMERA, f"robots: {{corobot: {{ir_sensors: {{front: {{scan_rate_hz: "
+                           f"{rate}}}, rear: {{scan_rate_hz: {rate}}}}}}}}}"]
+
+    physics = physics_only_overrides()
+    return {
+        "shipped": physics,
+        "control_60_hz": [*physics, f"robots: {{corobot: {{drive: {{control_period: "
+                                    f"{1 / 60!r}}}}}}}"],
+        "control_50_hz": [*physics, "robots: {corobot: {drive: {control_period: 0.02}}}"],
+        "ir_20_hz": ir(20.0),
+        "ir_19_9_hz": ir(19.9),
+        "ir_200_hz": ir(200.0),
+    }
+
+
+def _driving(overrides: list[str]):
+    from corobot_drake.config.scenario import load_scenario
+    from corobot_drake.simulation import Simulation, quiet_drake_warnings
+    from lab.bench import DRIVING
+
+    quiet_drake_warnings()
+    return Simulation(load_scenario(DEFAULT_SCENARIO, overrides=[DRIVING, *overrides]))
+
+
+def measure_event_times(repeats: int = 5, seconds: float = 10.0) -> dict:
+    """Real-time factors (wall, median of `repeats`) of the default scene driving, physics
+    only, with the periodic events on and between the plant's 10 ms steps (`_event_cases`)."""
+    cases = _event_cases()
+    runs: dict[str, list[float]] = {name: [] for name in cases}
+    for _ in range(repeats):  # in turn: a slow drift of the load spreads over all
+        for name, overrides in cases.items():
+            sim = _driving(overrides)
+            start = time.perf_counter()
+            sim.advance(seconds)
+            runs[name].append(seconds / (time.perf_counter() - start))
+            print(f"{name}: {runs[name][-1]:.2f}x", file=sys.stderr, flush=True)
+    return {name: {"rtf": statistics.median(r), "rtf_min": min(r), "rtf_max": max(r)}
+            for name, r in runs.items()}
+
+
+def measure_step_counts(seconds: float = 3.0) -> dict:
+    """Simulator steps per simulated second of the default scene driving (`_event_cases`):
+    the same on every machine."""
+    counts = {}
+    for name, overrides in _event_cases().items():
+        sim = _driving(overrides)
+        sim.advance(seconds)
+        counts[name] = sim.simulator.get_num_steps_taken() / seconds
+    return counts
+
+
+def measure_continuous_sensors(seconds: float = 9.0) -> dict:
+    """What the sensors see under CENIC's continuous plant against SAP's discrete one, over
+    the figure of eight (both IR sensors at 20 Hz): each scan's raw reading and the chassis
+    position at that scan, the largest differences (m) and how many readings differ by more
+    than 1 mm; then, under CENIC, the camera on against off: simulator steps per simulated
+    second and the chassis' distance apart (m) at the end."""
+    from corobot_drake.config.scenario import CENIC_PLANT, load_scenario
+    from corobot_drake.simulation import Simulation, quiet_drake_warnings
+    from lab.bench import DRIVING, sensor_overrides
+
+    quiet_drake_warnings()
+
+    def scans(*overrides: str, camera: bool = False):
+        sim = Simulation(load_scenario(DEFAULT_SCENARIO, overrides=[
+            DRIVING, *sensor_overrides(ir=True, camera=camera), *overrides]))
+        robot, out = sim.robot(), []
+        for k in range(1, round(seconds * 20) + 1):  # at the scans' own times, k / 20 s
+            sim.advance_to(k * 0.05)
+            out.append((robot.ir_distances(), robot.position()))
+        return out, sim.simulator.get_num_steps_taken() / seconds
+
+    cenic, steps = scans(CENIC_PLANT % 0.01)
+    sap, _ = scans()
+    reading = [abs(a[0][n] - b[0][n]) for a, b in zip(cenic, sap, strict=True) for n in a[0]]
+    moved = [math.dist(a[1], b[1]) for a, b in zip(cenic, sap, strict=True)]
+    with_camera, camera_steps = scans(CENIC_PLANT % 0.01, camera=True)
+    return {"readings": len(reading), "max_reading_m": max(reading),
+            "over_1_mm": sum(d > 1e-3 for d in reading), "max_position_m": max(moved),
+            "steps_per_second": steps, "camera_steps_per_second": camera_steps,
+            "camera_position_m": math.dist(with_camera[-1][1], cenic[-1][1])}
+
+
+MEASUREMENTS = {
+    "continuous-sensors": measure_continuous_sensors,
+    "ir-at-start": measure_ir_at_start,
+    "saved-mid-drive": measure_saved_mid_drive,
+    "wheel-turn": measure_wheel_turn,
+    "event-times": measure_event_times,
+    "step-counts": measure_step_counts,
+}
+
+
+def measure_command(name: str, repeats: int = 1) -> Command:
+    return Command(f"python tools/refresh_docs.py --measure {name}", repeats)
+
+
+def json_output(outs: list[list[Output]], index: int = 0) -> dict:
+    return json.loads(outs[index][0].stdout)
+
+
