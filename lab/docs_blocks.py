@@ -8,7 +8,7 @@ The markers are HTML comments, invisible when the Markdown is rendered. A block 
 marker ends its line holds whole lines (tables, pictures, paragraphs); a block whose markers
 sit inside a line holds a few words of prose. `replace_block` rewrites the content and the
 command in the BEGIN marker and leaves every character outside the markers as it was.
-`tools/refresh_docs.py` knows the blocks and their commands.
+`lab/refresh/` knows the blocks and their commands (`tools/refresh_docs.py` runs them).
 """
 
 from __future__ import annotations
