@@ -97,9 +97,11 @@ class DeadReckoning(LeafSystem):
         discrete_state.set_value(self._state, state)
 
     def _update(self, context, discrete_state):
-        # Plain floats (round: half to even, as np.rint): numpy's per-call overhead on two
-        # numbers costs more than the sums, every control period.
-        left, right = (round(t) for t in self._ticks.Eval(context).tolist())
+        # Plain floats (round: half to even, as np.rint) read as a BasicVector's elements and
+        # written as one numpy array: numpy's per-call overhead and pydrake's input-port copies
+        # cost more than the sums on two numbers, every control period.
+        ticks = self._ticks.EvalBasicVector(context)
+        left, right = round(ticks[0]), round(ticks[1])
         x, y, yaw, last_left, last_right = context.get_discrete_state(
             self._state).get_value().tolist()
         if left == last_left and right == last_right:
@@ -107,7 +109,7 @@ class DeadReckoning(LeafSystem):
         k = self._metres_per_tick
         pose = advance_pose(x, y, yaw, k * (left - last_left), k * (right - last_right),
                             self._track)
-        discrete_state.set_value(self._state, [*pose, left, right])
+        discrete_state.set_value(self._state, np.array([*pose, left, right], dtype=float))
 
     def _calc(self, context, output):
         x, y, yaw = context.get_discrete_state(self._state).get_value()[:3]

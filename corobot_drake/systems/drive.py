@@ -378,6 +378,7 @@ DriveStatus = namedview("DriveStatus", (
 
 _TARGETS = slice(3, 5)
 """Where the targets sit in a `DriveStatus` vector."""
+_TARGET_LEFT, _TARGET_RIGHT = range(_TARGETS.start, _TARGETS.stop)
 assert DriveStatus.get_fields()[_TARGETS] == ("target_left", "target_right")
 
 
@@ -494,12 +495,14 @@ class DriveController(LeafSystem):
 
     def _update(self, context, discrete_state):
         # Only the groups that change are written (the others keep their copied values).
+        # Every read is a BasicVector's element and every write a numpy array: on vectors of
+        # two to eight numbers pydrake's numpy views, input-port copies and list conversions
+        # cost more than the update's arithmetic, and this runs every control period.
         request = self._request_port.Eval(context)
-        status = context.get_discrete_state(self._status).get_value()
         jump = False
-        if request.seq != context.get_discrete_state(self._seq).get_value()[0]:
-            discrete_state.set_value(self._seq, [request.seq])
-            status = DriveStatus(status.copy())
+        if request.seq != context.get_discrete_state(self._seq)[0]:
+            discrete_state.set_value(self._seq, np.array([float(request.seq)]))
+            status = DriveStatus(context.get_discrete_state(self._status).CopyToVector())
             status.enabled = 1.0 if request.enabled else 0.0
             target = self.target_for(request.command, True) if request.enabled else None
             if target is not None:
@@ -510,9 +513,12 @@ class DriveController(LeafSystem):
                 _stop(status)
                 jump = True  # disabled: wheels held at zero at once
             discrete_state.set_value(self._status, status[:])
-            status = status[:]
-        left, right = context.get_discrete_state(self._axle).get_value().tolist()
-        target_left, target_right = status[_TARGETS].tolist()
+            target_left, target_right = (float(v) for v in status[_TARGETS])
+        else:
+            status = context.get_discrete_state(self._status)
+            target_left, target_right = status[_TARGET_LEFT], status[_TARGET_RIGHT]
+        axle = context.get_discrete_state(self._axle)
+        left, right = axle[0], axle[1]
         if jump:
             new_left, new_right = target_left, target_right
         else:
@@ -528,27 +534,28 @@ class DriveController(LeafSystem):
         gain = self._drive.hold_gain
         if gain == 0.0:
             return None
-        # Plain floats: on four numbers numpy's per-call overhead costs more than the sums, and
-        # this runs every control update.
-        wheel_state = self._wheel_state_port.Eval(context).tolist()
+        # Plain floats: on four numbers numpy's per-call overhead costs more than the sums.
+        wheel_state = self._wheel_state_port.EvalBasicVector(context).get_value().tolist()
         q, v = wheel_state[:4], wheel_state[4:]
         held = context.get_discrete_state(self._hold_angle).get_value().tolist()
         sides = [left, right, left, right]
         hold = [h if side == 0.0 and abs(w) < HOLD_SPEED and abs(a - h) <= HOLD_SLACK else a
                 for side, w, a, h in zip(sides, v, q, held, strict=True)]
-        discrete_state.set_value(self._hold_angle, hold)
+        if hold != held:
+            discrete_state.set_value(self._hold_angle, np.array(hold))
         limit = 0.5 * HOLD_SPEED
         correction = [min(max(gain * (h - a), -limit), limit) for h, a in zip(hold, q, strict=True)]
-        before = context.get_discrete_state(self._desired).get_value()[4:].tolist()
-        if not any(correction) and before == sides:
-            return None
+        if not any(correction):
+            desired = context.get_discrete_state(self._desired)
+            if all(desired[4 + k] == side for k, side in enumerate(sides)):
+                return None
         return np.array(correction)
 
     def _set_axle(self, state, left: float, right: float, correction=None) -> None:
         """Writes the slewed axle speeds (rad/s) and the desired state made from them (plus
         the hold's v_d `correction`, rad/s per wheel) into `state` (a Context or
         DiscreteValues)."""
-        state.set_value(self._axle, [left, right])
+        state.set_value(self._axle, np.array([left, right]))
         v_d = np.array([left, right, left, right])
         if correction is not None:
             v_d = v_d + correction

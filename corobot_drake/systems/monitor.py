@@ -38,7 +38,8 @@ class TiltMonitor(LeafSystem):
         self.DeclareStateOutputPort("max_tilt_deg", self._state)
 
     def _update(self, context, discrete_state):
-        previous = context.get_discrete_state(self._state).get_value()[0]
-        tilt = quaternion_tilt_deg(*self._state_port.Eval(context)[:4].tolist())
-        if tilt > previous:
-            discrete_state.set_value(self._state, [tilt])
+        # A BasicVector's elements, not a copy of the input as numpy: this runs every period.
+        q = self._state_port.EvalBasicVector(context)
+        tilt = quaternion_tilt_deg(q[0], q[1], q[2], q[3])
+        if tilt > context.get_discrete_state(self._state)[0]:
+            discrete_state.get_mutable_vector(self._state).SetAtIndex(0, tilt)
