@@ -4,8 +4,10 @@ The default scene's plant and scene graph (the same world and robot model as
 `station.build_station`), then the robot's own systems added one layer at a time with the
 station's wiring, each diagram driving the benchmark's figure of eight (`bench.DRIVING`):
 
-- the plant alone: the wheels' servo fed a fixed desired state (the figure of eight's axle
-  speeds, changed at its 3 s and 6 s), no project system: the floor Drake sets;
+- the plant alone: the wheels' servo fed the desired state the station's drive gave it at each
+  step (recorded from a run of the station, replayed by Drake's `TrajectorySource`), no project
+  system: the floor Drake sets, on the station's very trajectory (bit for bit: the same
+  physics, so the difference is what the robot's systems cost);
 - + the drive controller (its request fixed, changed at the same times);
 - + the chassis poses, encoders, compass, GPS and drive state (no events of their own: they
   cost only when something reads them);
@@ -27,10 +29,12 @@ import statistics
 import time
 
 import numpy as np
+from pydrake.common.yaml import yaml_dump_typed
 from pydrake.multibody.plant import AddMultibodyPlant
 from pydrake.systems.analysis import ApplySimulatorConfig, Simulator
 from pydrake.systems.framework import DiagramBuilder
-from pydrake.systems.primitives import MatrixGain
+from pydrake.systems.primitives import MatrixGain, TrajectorySource
+from pydrake.trajectories import PiecewisePolynomial
 
 from corobot_drake.config import scenario as sc
 from corobot_drake.model import dimensions as dim
@@ -47,7 +51,8 @@ from corobot_drake.systems.servo import add_servo_sign, servo_velocity_sign
 from corobot_drake.systems.stability import add_tip_margin
 from lab import bench
 
-LAYERS = ("plant alone (desired state fixed)", "+ drive controller (request fixed)",
+LAYERS = ("plant alone (the station's desired state replayed)",
+          "+ drive controller (request fixed)",
           "+ chassis poses, encoders, compass, GPS, drive state",
           "+ command source and motion (the script)", "+ dead reckoning", "+ tilt monitor",
           "+ wheel contacts and tip margin", "+ run log (with the contact telemetry)")
@@ -87,8 +92,9 @@ class _Layered:
     """set_command(root context, seq, SetPower): what the fixed inputs get at a segment."""
 
 
-def build_layers(scenario: sc.Scenario, layers: int) -> _Layered:
-    """The default scene's plant with the first `layers` of `LAYERS` (1: the plant alone)."""
+def build_layers(scenario: sc.Scenario, layers: int, seconds: float = 10.0) -> _Layered:
+    """The default scene's plant with the first `layers` of `LAYERS` (1: the plant alone, fed
+    the station's desired state over its first `seconds`: `station_desired_state`)."""
     builder = DiagramBuilder()
     plant, _ = AddMultibodyPlant(scenario.plant_config, builder)
     _add_world(plant, scenario.world)
@@ -96,9 +102,15 @@ def build_layers(scenario: sc.Scenario, layers: int) -> _Layered:
     instance, chassis, joints = _add_robot(plant, name, robot)
     plant.Finalize()
     fixed = {}
-    sign = servo_velocity_sign(scenario.simulator_config)  # as the station: systems/servo.py
     if layers == 1:
-        fixed["desired_state"] = plant.get_desired_state_input_port(instance)
+        times, values = station_desired_state(scenario, seconds)
+        # A zero-order hold whose breaks sit half a step before each step: the plant's step
+        # at t_k reads sample k whatever the rounding of t_k.
+        step = sc.physics_step(scenario.plant_config, scenario.simulator_config)
+        replay = builder.AddSystem(TrajectorySource(PiecewisePolynomial.ZeroOrderHold(
+            np.append(times - step / 2, times[-1] + step / 2),
+            np.column_stack([values, values[:, -1]]))))
+        builder.Connect(replay.get_output_port(), plant.get_desired_state_input_port(instance))
     else:
         controller = builder.AddSystem(DriveController(robot.drive))
         selector = builder.AddSystem(MatrixGain(plant.MakeStateSelectorMatrix(
@@ -106,6 +118,7 @@ def build_layers(scenario: sc.Scenario, layers: int) -> _Layered:
         builder.Connect(plant.get_state_output_port(), selector.get_input_port())
         builder.Connect(selector.get_output_port(), controller.GetInputPort("wheel_state"))
         desired_state = controller.GetOutputPort("desired_state")
+        sign = servo_velocity_sign(scenario.simulator_config)  # as the station: servo.py
         if sign != 1.0:
             fix = add_servo_sign(builder, "servo_sign", sign, desired_state.size())
             builder.Connect(desired_state, fix.get_input_port())
@@ -117,14 +130,8 @@ def build_layers(scenario: sc.Scenario, layers: int) -> _Layered:
     simulator = Simulator(diagram)
     ApplySimulatorConfig(scenario.simulator_config, simulator)
     context = simulator.get_mutable_context()
-    drive = robot.drive
 
     def set_command(root, seq, command):
-        if "desired_state" in fixed:
-            left, right = (sign * p * drive.motor_torque_scaling
-                           for p in (command.left, command.right))
-            fixed["desired_state"].FixValue(plant.GetMyMutableContextFromRoot(root),
-                                            np.array([0, 0, 0, 0, left, right, left, right]))
         if "request" in fixed:
             port = fixed["request"]
             port.FixValue(port.get_system().GetMyMutableContextFromRoot(root),
@@ -133,6 +140,36 @@ def build_layers(scenario: sc.Scenario, layers: int) -> _Layered:
     set_command(context, 1, _segments(robot)[0][1])
     simulator.Initialize()
     return _Layered(simulator, set_command)
+
+
+_RECORDED = {}
+"""{(scenario YAML, seconds): `station_desired_state`}: recorded once per process."""
+
+
+def station_desired_state(scenario: sc.Scenario, seconds: float) -> tuple[np.ndarray, np.ndarray]:
+    """(times [n], values [8, n]): the desired state the station's plant reads at each of
+    its steps over `seconds` of the scenario (its drive's output, after the servo sign), read
+    between steps: the Simulator handles a step's updates at the start of the next advance."""
+    key = (yaml_dump_typed(scenario, schema=sc.Scenario), seconds)
+    if key not in _RECORDED:
+        _RECORDED[key] = _record_desired_state(scenario, seconds)
+    return _RECORDED[key]
+
+
+def _record_desired_state(scenario: sc.Scenario, seconds: float):
+    from corobot_drake.simulation import Simulation
+
+    sim = Simulation(scenario)
+    plant = sim.station.plant
+    port = plant.get_desired_state_input_port(sim.station.robots[bench.ROBOT].model_instance)
+    context = plant.GetMyContextFromRoot(sim.context)
+    step = sc.physics_step(scenario.plant_config, scenario.simulator_config)
+    times = np.arange(round(seconds / step) + 1) * step
+    values = [port.Eval(context)]  # before the first step's updates (not an advance to 0)
+    for t in times[1:]:
+        sim.advance_to(t)
+        values.append(port.Eval(context))
+    return times, np.column_stack(values)
 
 
 def _add_robot_layers(builder, plant, name, robot, chassis, joints, selector, controller,
@@ -185,7 +222,7 @@ def _cpu_seconds(layers: int | None, scenario: sc.Scenario, seconds: float) -> f
         start = time.process_time()
         sim.advance(seconds)
         return time.process_time() - start
-    built = build_layers(scenario, layers)
+    built = build_layers(scenario, layers, seconds)
     context = built.simulator.get_mutable_context()
     segments = [*_segments(scenario.robots[bench.ROBOT]), (seconds, None)]
     start = time.process_time()

@@ -117,8 +117,8 @@ def _child(row: str, seconds: float, override: str | None) -> None:
         _instrument(True)
         sim.advance(seconds)
     else:
-        simulator = bench_layers.build_layers(scenario,
-                                              bench_layers.LAYERS.index(row) + 1).simulator
+        simulator = bench_layers.build_layers(scenario, bench_layers.LAYERS.index(row) + 1,
+                                              WARM_UP + seconds).simulator
         simulator.AdvanceTo(WARM_UP)
         _instrument(True)
         simulator.AdvanceTo(WARM_UP + seconds)
