@@ -91,29 +91,30 @@ class WheelContacts(LeafSystem):
         self.DeclareVectorOutputPort("wheel_slip_angle", 4, lambda c, o: o.SetFromVector(
             self._slip.Eval(c)[4:]), {self._slip.ticket()})
 
-    def forces(self, context) -> np.ndarray:
-        """[4, 3]: the total contact force on each wheel in the world frame, N."""
+    def loads(self, context) -> list[float]:
+        """Each wheel's load: the vertical (world +z) component of the total contact force on
+        it, N. Plain floats: a vector sum per contact in numpy costs more than the sum."""
         results = self._contacts.Eval(context)
-        f = np.zeros((4, 3))
+        loads = [0.0] * 4
         for i in range(results.num_hydroelastic_contacts()):
             info = results.hydroelastic_contact_info(i)
             surface = info.contact_surface()
-            force = info.F_Ac_W().translational()  # on the body of geometry M
+            force_z = float(info.F_Ac_W().translational()[2])  # on the body of geometry M
             for geometry, sign in ((surface.id_M(), 1.0), (surface.id_N(), -1.0)):
                 k = self._wheel_of_geometry.get(geometry)
                 if k is not None:
-                    f[k] += sign * force
+                    loads[k] += sign * force_z
         for i in range(results.num_point_pair_contacts()):
             info = results.point_pair_contact_info(i)
-            force = info.contact_force()  # on body B
+            force_z = float(info.contact_force()[2])  # on body B
             for body, sign in ((info.bodyA_index(), -1.0), (info.bodyB_index(), 1.0)):
                 k = self._wheel_of_body.get(int(body))
                 if k is not None:
-                    f[k] += sign * force
-        return f
+                    loads[k] += sign * force_z
+        return loads
 
     def _calc_loads(self, context, output):
-        output.SetFromVector(self.forces(context)[:, 2])
+        output.SetFromVector(np.array(self.loads(context)))
 
     def _calc_slip(self, context) -> list[float]:
         """[slip ratios (4), slip angles (4), deg] from the wheels' speeds. Plain floats: on
