@@ -166,6 +166,9 @@ def _performance_specs(c: SimpleNamespace) -> list[Spec]:
         Spec("bench-layers", "docs/performance.md",
              (Command("python tools/bench.py --layers --no-table --no-micro --seconds 4 "
                       "--repeats 5"),), r.render_bench_robots, TIMING, 300),
+        Spec("layers-instructions", "docs/performance.md",
+             (Command("python tools/count_instructions.py --seconds 0.5"),),
+             r.render_bench_robots, TIMING, 900),
         Spec("count-instructions", "docs/performance.md",
              (Command('python tools/count_instructions.py --cache-sim '
                       '--override "plant_config: {discrete_contact_approximation: similar}" '
@@ -177,6 +180,9 @@ def _performance_specs(c: SimpleNamespace) -> list[Spec]:
         Spec("bench-compare", "docs/performance.md",
              (Command(f"python tools/bench_compare.py --old {OLD_CHECKOUT} --rounds 3 "
                       f"--new-override {shlex.quote(CENIC_OVERRIDE)}"),),
+             r.render_bench_robots, TIMING, 600),
+        Spec("bench-compare-sap", "docs/performance.md",
+             (Command("python tools/bench_compare.py --old /tmp/corobot-old --rounds 3"),),
              r.render_bench_robots, TIMING, 600),
         Spec("continuous-sensors", "docs/performance.md", (measure_command("continuous-sensors"),),
              r.render_continuous_sensors, DETERMINISTIC, 60),
