@@ -339,15 +339,19 @@ class Robot:
         return OdometryPose(float(p[0]), float(p[1]), float(p[2]))
 
     def signal(self, name: str):
-        """The value now of the signal `name` read from its port (`signals.SIGNALS`), floats: by
-        wheel name for a per-wheel signal (`dimensions.WHEEL_NAMES` order), else the port's
-        value (a list when it has several)."""
+        """The value now of the signal `name` (`signals.SIGNALS`): read from its port, or by
+        its `reader`; a float, or a dict of floats by key (wheel, field or sensor name)."""
         spec = signals.SIGNALS[name]
-        v = self._sim.station.diagram.GetOutputPort(f"{self.name}.{spec.port}").Eval(
-            self._sim.context)
-        if spec.per_wheel:
-            return {w: float(x) for w, x in zip(dim.WHEEL_NAMES, v, strict=True)}
-        return float(v[0]) if len(v) == 1 else [float(x) for x in v]
+        if spec.reader:
+            value = getattr(self, spec.reader)()
+            return dc.asdict(value) if dc.is_dataclass(value) else value
+        return spec.value_of(self._sim.station.diagram.GetOutputPort(
+            f"{self.name}.{spec.port}").Eval(self._sim.context))
+
+    def commanded_power(self) -> dict[str, float]:
+        """The drive's commanded power per wheel (its side's), in [-1, 1], by wheel name."""
+        return {w: float(state.commanded_power)
+                for w, state in self.drive_state().wheels.items()}
 
     def wheel_loads(self) -> dict[str, float]:
         """Each wheel's load, N: the vertical component of its contact forces
@@ -503,30 +507,24 @@ class Robot:
 
     def telemetry(self) -> dict:
         """The contact telemetry now, as `summary` reports it (`signals.TELEMETRY`: each
-        signal at its `summary` key)."""
+        signal at its `summary` place)."""
         out: dict = {}
         for spec in signals.TELEMETRY:
-            signals.put(out, spec.summary, spec.summary_value(self.signal(spec.name)))
+            signals.put_value(out, spec.summary, self.signal(spec.name))
         return out
 
     def summary(self) -> dict:
-        """The robot's figures now. `wheel_loads_N` (N) and `slip`'s `ratio` and
-        `angle_deg` lists are per wheel in `dimensions.WHEEL_NAMES` order: front left, front
-        right, rear left, rear right; `tip_margin_deg` now and `min_tip_margin_deg` over the
-        run (`systems.contact`, `systems.stability`)."""
-        pose, velocity = self.pose(), self.velocity()
+        """The robot's figures now: every signal at its `summary` place (`signals.SIGNALS`:
+        `wheel_loads_N` (N) and `slip`'s `ratio` and `angle_deg` lists are per wheel in
+        `dimensions.WHEEL_NAMES` order), the largest tilt, the frames saved, the least tip
+        margin over the run (`min_tip_margin_deg`) and the command log."""
+        out: dict = {"max_tilt_deg": self.max_tilt_deg(),
+                     "camera_frames": self.camera_frames_saved()}
+        for spec in signals.SIGNALS.values():
+            if spec.summary:
+                signals.put_value(out, spec.summary, self.signal(spec.name))
         return {
-            "pose": dc.asdict(pose),
-            "velocity": dc.asdict(velocity),
-            "max_tilt_deg": self.max_tilt_deg(),
-            "ir": self.ir_distances(),
-            "camera_frames": self.camera_frames_saved(),
-            "wheels": self.axle_speeds(),
-            "encoders": self.encoders(),
-            "heading": self.heading(),
-            "position": list(self.position()),
-            "odometry": dc.asdict(self.odometry()),
-            **self.telemetry(),
+            **out,
             "min_tip_margin_deg": self.min_tip_margin_deg(),
             "commands": [
                 {"command": r.command, "status": r.status, "reason": r.reason,
