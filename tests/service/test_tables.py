@@ -5,7 +5,11 @@ the same simulated time."""
 import concurrent.futures
 import copy
 import functools
+import json
 import math
+import subprocess
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -380,3 +384,25 @@ def test_every_signal_is_carried_by_every_front_end_or_says_why_not():
     assert {s.name for s in signals.SIGNALS.values() if not s.ros2_places} == {"velocity"}
     assert {s.name for s in signals.SIGNALS.values() if not s.mcap_places} == {
         "velocity", "odometry"}
+
+
+def test_a_signal_added_to_the_table_appears_in_every_front_end():
+    """One entry in the table and its system's output port (`signal_added.py`, in a process
+    of its own: the table is read when the front ends are imported) and the new signal is in
+    the summary, the HTTP state (its served JSON too, through the derived response model) and
+    its subscriptions' thresholds, the run log (its CSV too), its own MCAP topic and its own
+    ROS 2 message (made from the table: no rebuilt interfaces needed for the bus and bags),
+    each with the live value."""
+    pytest.importorskip("rosbags", reason="the [ros2] extra (tools/setup installs it)")
+    script = Path(__file__).with_name("signal_added.py")
+    done = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
+                          timeout=300, check=False)
+    assert done.returncode == 0, done.stderr
+    out = json.loads(done.stdout)
+    live = out.pop("live")
+    assert live == pytest.approx(12.6 - 0.5 * 0.3, abs=1e-12)  # the system's value at LOOK
+    assert out.pop("change_threshold") == 0.01
+    assert out.pop("csv_header")[-1] == "battery"
+    assert out.pop("ros2_type") == "corobot_interfaces/msg/Battery"
+    assert out == dict.fromkeys(("summary", "snapshot", "http", "run_log", "mcap", "ros2"),
+                                live)
