@@ -33,7 +33,6 @@ from corobot_drake.config.placement import Owner, Problem, overlap_problems
 from corobot_drake.config.poses import ground_pose, transform_from
 from corobot_drake.config.sensors import FRONT_CAMERA
 from corobot_drake.config.validate import check_scenario
-from corobot_drake.model import dimensions as dim
 from corobot_drake.readings import (
     BodyPose,
     BodyVelocity,
@@ -296,9 +295,7 @@ class Robot:
 
     def axle_speeds(self) -> dict[str, float]:
         """Measured axle speeds, rad/s, by wheel name."""
-        v = self._sim.station.diagram.GetOutputPort(f"{self.name}.axle_speed").Eval(
-            self._sim.context)
-        return {w: float(x) for w, x in zip(dim.WHEEL_NAMES, v, strict=True)}
+        return self.signal("axle_speeds")
 
     def drive_state(self) -> DriveState:
         """The four-wheel drive state (`.two_wheel()`: the differential-drive view)."""
@@ -307,27 +304,20 @@ class Robot:
 
     def encoders(self) -> dict[str, int]:
         """Front-wheel encoder counts, 600 ticks per revolution, by wheel name."""
-        ticks = self._sim.station.diagram.GetOutputPort(f"{self.name}.encoder_ticks").Eval(
-            self._sim.context)
-        return {"front_left": round(ticks[0]), "front_right": round(ticks[1])}
+        return self.signal("encoders")
 
     def heading(self) -> float:
         """Compass: chassis yaw about world z, rad in (-pi, pi]."""
-        return float(self._sim.station.diagram.GetOutputPort(f"{self.name}.heading").Eval(
-            self._sim.context)[0])
+        return self.signal("heading")
 
     def position(self) -> tuple[float, float, float]:
         """GPS: the chassis frame's origin in the world, m."""
-        p = self._sim.station.diagram.GetOutputPort(f"{self.name}.position").Eval(
-            self._sim.context)
-        return (float(p[0]), float(p[1]), float(p[2]))
+        return tuple(self.signal("position").values())
 
     def odometry(self) -> OdometryPose:
         """Dead reckoning from the encoders (`systems.dead_reckoning`, with the drive's
         effective wheel radius and track width) from the start pose: x, y m, yaw rad."""
-        p = self._sim.station.diagram.GetOutputPort(f"{self.name}.odometry").Eval(
-            self._sim.context)
-        return OdometryPose(float(p[0]), float(p[1]), float(p[2]))
+        return OdometryPose(**self.signal("odometry"))
 
     def signal(self, name: str):
         """The value now of the signal `name` (`signals.SIGNALS`): read from its port, or by
