@@ -46,6 +46,9 @@ MADE_WHEN_READ = ("commanded_power", "encoders", "pose", "tip_margin")
 """The signals whose columns `rows_of` makes from the drive status, the encoders' counts and
 the chassis state when the log is read (`_made_when_read`); every other signal with run-log
 columns is sampled from its port."""
+for _spec in signals.SIGNALS.values():
+    if _spec.log and _spec.name not in MADE_WHEN_READ and not _spec.system:
+        raise ValueError(f"signal {_spec.name!r} has run-log columns but no system to sample")
 SAMPLED = tuple((s.port, s.log_columns) for s in signals.SIGNALS.values()
                 if s.log and s.name not in MADE_WHEN_READ)
 """(robot port, its columns) of the signals sampled from their ports, in the table's order."""
