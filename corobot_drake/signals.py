@@ -63,6 +63,7 @@ reads -0.07 to +0.03 deg against `contact.SLIP_SPEED_FLOOR`; a spin reads 39.5).
 DEG = "|deg"
 F32 = "|f32"
 POSE = "|pose"
+"""A place's suffixes (module docstring)."""
 
 
 @dc.dataclass(frozen=True, eq=False)
@@ -153,12 +154,6 @@ class Signal:
         if not self.keys:
             return convert(vector[0])
         return {key: convert(x) for key, x in zip(self.keys, vector, strict=True)}
-
-    def summary_value(self, value):
-        """Its value as `Robot.summary` reports it."""
-        out: dict = {}
-        put_value(out, self.summary, value)
-        return get(out, self.summary.removesuffix("[]"))
 
 
 def _per_wheel(prefix: str) -> tuple[tuple[str, str], ...]:
@@ -369,6 +364,8 @@ def own_topics() -> dict[str, tuple[Signal, ...]]:
         if signal.topic:
             out.setdefault(signal.topic, []).append(signal)
     for topic, carried in out.items():
+        if not all(s.system for s in carried):
+            raise ValueError(f"topic {topic!r}: a signal with a topic of its own needs a system")
         if len({(s.keys, s.costly) for s in carried}) != 1:
             raise ValueError(f"topic {topic!r} carries signals of different keys or costs")
     return {topic: tuple(carried) for topic, carried in out.items()}

@@ -8,7 +8,9 @@ WebSocket server) get every message. A publish event at t runs before the update
 look at t sees what happened in [t - period, t): the event's own time stamps the message and is
 its log time. What happens at the last instant of a run (after the last look) is not published.
 
-`add_foxglove_topics` adds them all to a station's builder.
+`add_foxglove_topics` adds them all to a station's builder. The schedules, the robot state's
+inputs and the wiring of the signals' own topics are shared with ROS 2's publishers
+(`recording.looks`).
 """
 
 import numpy as np

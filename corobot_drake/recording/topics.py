@@ -231,7 +231,7 @@ class TelemetryTopic:
     signal's `<key>: value`)."""
     costly: bool
     """Whether a look evaluates the plant's contact results or velocities (costly every
-    step: looked at like the run log's held samples, `publishers.TELEMETRY_PERIOD`) or the
+    step: looked at like the run log's held samples, `looks.TELEMETRY_PERIOD`) or the
     chassis pose alone (a few sums: at the state topics' rate)."""
 
     @property

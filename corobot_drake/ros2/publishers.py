@@ -1,7 +1,7 @@
 """The LeafSystems that publish the robot's ROS 2 topics (`interfaces.TOPICS`) on a `bus.Bus`.
 
-As the Foxglove recording's (`recording.publishers`, whose schedules and windows they share):
-each publishes on periodic publish events from its input ports alone, so they keep no memory
+As the Foxglove recording's (`recording.publishers`; the schedules, windows, the robot state's
+inputs and the signals' own topics' wiring are shared: `recording.looks`): each publishes on periodic publish events from its input ports alone, so they keep no memory
 and a reset or replayed Context publishes the same messages, at the same simulated times, live
 (`--ros2`) or into a bag (`--rosbag`). A look at t sees what happened in [t - period, t).
 
