@@ -1,9 +1,10 @@
 """The LeafSystems that publish the robot's ROS 2 topics (`interfaces.TOPICS`) on a `bus.Bus`.
 
 As the Foxglove recording's (`recording.publishers`; the schedules, windows, the robot state's
-inputs and the signals' own topics' wiring are shared: `recording.looks`): each publishes on periodic publish events from its input ports alone, so they keep no memory
-and a reset or replayed Context publishes the same messages, at the same simulated times, live
-(`--ros2`) or into a bag (`--rosbag`). A look at t sees what happened in [t - period, t).
+inputs and the signals' own topics' wiring are shared: `recording.looks`): each publishes on
+periodic publish events from its input ports alone, so they keep no memory and a reset or
+replayed Context publishes the same messages, at the same simulated times, live (`--ros2`) or
+into a bag (`--rosbag`). A look at t sees what happened in [t - period, t).
 
 `add_ros2_topics` adds them all to a station's builder (`station.build_station`'s `extras`).
 """
