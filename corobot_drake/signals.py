@@ -38,6 +38,7 @@ No Drake import here (the HTTP process reads it).
 
 
 import dataclasses as dc
+import functools
 import math
 
 from corobot_drake.model.dimensions import WHEEL_NAMES
@@ -302,22 +303,38 @@ def _split(place: str) -> tuple[str, str]:
     return path, conversion
 
 
-def put_value(tree: dict, place: str, value) -> None:
-    """Writes a signal's `value` (a float or a dict by key) at its `place` in `tree` (module
-    docstring; not `|pose`)."""
+@functools.cache
+def _writer(place: str):
+    """(path segments, scale, as a list, keyed) of a place to write (parsed once: the HTTP
+    state is written many times a second)."""
     path, conversion = _split(place)
     if conversion not in ("", "deg"):
         raise ValueError(f"place {place!r}: {conversion!r} is read only")
-    scale = (lambda v: math.degrees(v)) if conversion == "deg" else (lambda v: v)
+    as_list = path.endswith("[]")
+    parts = tuple(path.removesuffix("[]").split("."))
+    keyed = any("*" in part or part == "#" for part in parts)
+    return parts, math.degrees if conversion == "deg" else None, as_list, keyed
+
+
+def _put_at(tree: dict, parts, value) -> None:
+    for key in parts[:-1]:
+        tree = tree.setdefault(key, {})
+    tree[parts[-1]] = value
+
+
+def put_value(tree: dict, place: str, value) -> None:
+    """Writes a signal's `value` (a float or a dict by key) at its `place` in `tree` (module
+    docstring; not `|pose` or `|f32`)."""
+    parts, scale, as_list, keyed = _writer(place)
     if not isinstance(value, dict):
-        put(tree, path, scale(value))
-    elif path.endswith("[]"):
-        put(tree, path[:-2], [scale(v) for v in value.values()])
+        _put_at(tree, parts, scale(value) if scale else value)
+    elif as_list:
+        _put_at(tree, parts, [scale(v) if scale else v for v in value.values()])
     else:
-        if "*" not in path and "#" not in path.split("."):
-            path += ".*"
+        parts = parts if keyed else (*parts, "*")
         for index, (key, v) in enumerate(value.items()):
-            put(tree, _expand(path, key, index), scale(v))
+            _put_at(tree, [str(index) if part == "#" else part.replace("*", key)
+                           for part in parts], scale(v) if scale else v)
 
 
 def read_value(tree, place: str, keys: tuple[str, ...] | None):

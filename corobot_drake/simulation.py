@@ -117,6 +117,8 @@ class Robot:
         self._sim = sim
         self._parts = parts
         self.name = parts.name
+        self._ports: dict = {}
+        """The station's output ports of the signals read so far, by port name."""
 
     # --- commands -------------------------------------------------------------------------
     @_one_thread
@@ -326,8 +328,11 @@ class Robot:
         if spec.reader:
             value = getattr(self, spec.reader)()
             return dc.asdict(value) if dc.is_dataclass(value) else value
-        return spec.value_of(self._sim.station.diagram.GetOutputPort(
-            f"{self.name}.{spec.port}").Eval(self._sim.context))
+        port = self._ports.get(spec.port)
+        if port is None:  # looked up once: a name lookup costs more than a cached Eval
+            port = self._ports[spec.port] = self._sim.station.diagram.GetOutputPort(
+                f"{self.name}.{spec.port}")
+        return spec.value_of(port.Eval(self._sim.context))
 
     def commanded_power(self) -> dict[str, float]:
         """The drive's commanded power per wheel (its side's), in [-1, 1], by wheel name."""

@@ -19,6 +19,8 @@ from corobot_drake.readings import IrReading
 
 def jsonable(value: Any) -> Any:
     """Dataclasses, numpy scalars/arrays and non-finite floats (None) made JSON-safe."""
+    if type(value) is float:  # the most common, first
+        return value if math.isfinite(value) else None
     if dc.is_dataclass(value) and not isinstance(value, type):
         return {f.name: jsonable(getattr(value, f.name)) for f in dc.fields(value)}
     if isinstance(value, dict):
