@@ -74,7 +74,7 @@ def main() -> None:
     bus = Bus([memory])
     folder = Path(tempfile.mkdtemp())
     scenario = load_scenario(DEFAULT_SCENARIO)
-    scenario.robots["corobot"].camera.rgb = False
+    scenario.robots["corobot"].cameras["front"].rgb = False
     with McapLog(folder / "run.mcap") as log:
         sim = Simulation(scenario, foxglove=log.context,
                          extras=[add_battery, functools.partial(add_ros2_topics, bus)])
