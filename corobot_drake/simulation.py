@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 from pydrake.common.yaml import yaml_dump_typed
-from pydrake.geometry import HalfSpace
+from pydrake.geometry import HalfSpace, Role
 from pydrake.math import RigidTransform, RollPitchYaw
 from pydrake.multibody.math import SpatialVelocity
 from pydrake.systems.analysis import ApplySimulatorConfig, Simulator
@@ -29,11 +29,10 @@ from pydrake.systems.framework import EventStatus
 
 from corobot_drake import commands, limits, signals
 from corobot_drake.config import scenario as sc
-from corobot_drake.config.placement import OVERLAP_TOLERANCE
+from corobot_drake.config.placement import Owner, Problem, overlap_problems
 from corobot_drake.config.poses import ground_pose, transform_from
 from corobot_drake.config.sensors import FRONT_CAMERA
 from corobot_drake.config.validate import check_scenario
-from corobot_drake.model import dimensions as dim
 from corobot_drake.readings import (
     BodyPose,
     BodyVelocity,
@@ -50,6 +49,8 @@ from corobot_drake.systems.runlog import COLUMNS, RUN_LOG_CHUNK, log_rows, write
 MIN_RUN_CHUNK = 1e-4
 """s: the shortest chunk `Simulation.run` advances by (a smaller one is refused: at 1e-300 s
 the time never moved and `run` never ended)."""
+
+_log = logging.getLogger(__name__)
 
 
 def _one_thread(method):
@@ -116,6 +117,8 @@ class Robot:
         self._sim = sim
         self._parts = parts
         self.name = parts.name
+        self._ports: dict = {}
+        """The station's output ports of the signals read so far, by port name."""
 
     # --- commands -------------------------------------------------------------------------
     @_one_thread
@@ -191,8 +194,9 @@ class Robot:
         wheels stopped; a running command fails as superseded. The returned handle ends
         (succeeded) once the robot has settled there (`motion.POSE_SETTLE_TIME`), or at once
         failed, reason `blocked`, if the robot there would be inside another body
-        (`obstacle_at`): then it stays where it was (its drive stopping). x, y in
-        [-10000, 10000] m, yaw_deg in [-3600, 3600] (ValueError otherwise)."""
+        (`obstacle_at`, logged in the loader's words): then it stays where it was (its drive
+        stopping). x, y in [-10000, 10000] m, yaw_deg in [-3600, 3600] (ValueError
+        otherwise)."""
         return self.command("set_pose", x, y, yaw_deg)
 
     def _apply_teleport(self) -> bool:
@@ -204,7 +208,9 @@ class Robot:
             return False
         pose = request.command
         X_WB = ground_pose(pose.x, pose.y, pose.yaw_deg).GetDeterministicValue()
-        if self.obstacle_at(X_WB) is not None:
+        problem = self.obstacle_at(X_WB)
+        if problem is not None:
+            _log.warning("SetPose %s blocked: %s", request.seq, problem.message)
             source.Fail(source.GetMyMutableContextFromRoot(root), request.seq, "blocked")
             return True
         plant = self._sim.station.plant
@@ -217,39 +223,25 @@ class Robot:
         controller.Halt(controller.GetMyMutableContextFromRoot(root))
         return True
 
-    def obstacle_at(self, X_WB: RigidTransform) -> str | None:
-        """What the robot would overlap (by more than `placement.OVERLAP_TOLERANCE`, the
-        loader's bound on a start pose: what loads, SetPose accepts) with its chassis at
-        `X_WB`: the name of the other body (a world body or another robot's part), or None
-        if the pose is clear. The ground (any half-space) does not count: a SetPose stands the
-        robot on it. The Context is left as it was (the pose is tried, then the plant's
-        positions are put back exactly)."""
+    def obstacle_at(self, X_WB: RigidTransform) -> Problem | None:
+        """What the robot would overlap with its chassis at `X_WB`, by the loader's check of
+        a start pose (`placement.overlap_problems`: more than `OVERLAP_TOLERANCE`; what loads,
+        SetPose accepts), in its words: the `Problem` (`.message`; `.obstacle.name`: `world
+        body 'giant_box'`, a model's body, another robot), or None if the pose is clear. The
+        ground (any half-space) does not count: a SetPose stands the robot on it. The Context
+        is left as it was (the pose is tried, then the plant's positions are put back
+        exactly)."""
         plant = self._sim.station.plant
         plant_context = plant.GetMyMutableContextFromRoot(self._sim.context)
         q = plant.GetPositions(plant_context)
         try:
             plant.SetFreeBodyPose(plant_context, self._parts.chassis, X_WB)
             query = plant.get_geometry_query_input_port().Eval(plant_context)
-            inspector = query.inspector()
-
-            def body(geometry_id):
-                return plant.GetBodyFromFrameId(inspector.GetFrameId(geometry_id))
-
-            for pair in query.ComputePointPairPenetration():
-                a, b = body(pair.id_A), body(pair.id_B)
-                if a.model_instance() == self._parts.model_instance:
-                    other, other_id = b, pair.id_B
-                elif b.model_instance() == self._parts.model_instance:
-                    other, other_id = a, pair.id_A
-                else:
-                    continue
-                if (other.model_instance() == self._parts.model_instance
-                        or isinstance(inspector.GetShape(other_id), HalfSpace)
-                        or pair.depth <= OVERLAP_TOLERANCE):
-                    continue
-                owner = plant.GetModelInstanceName(other.model_instance())
-                return owner if owner == other.name() else f"{owner}::{other.name()}"
-            return None
+            me = self._sim._placement_owners()[1][self.name]
+            problems = overlap_problems(query.ComputePointPairPenetration(),
+                                        self._sim._placement_owners()[0].get)
+            return next((p for p in problems
+                         if p.subject == me and p.obstacle.kind != "ground"), None)
         finally:
             plant.SetPositions(plant_context, q)
 
@@ -305,9 +297,7 @@ class Robot:
 
     def axle_speeds(self) -> dict[str, float]:
         """Measured axle speeds, rad/s, by wheel name."""
-        v = self._sim.station.diagram.GetOutputPort(f"{self.name}.axle_speed").Eval(
-            self._sim.context)
-        return {w: float(x) for w, x in zip(dim.WHEEL_NAMES, v, strict=True)}
+        return self.signal("axle_speeds")
 
     def drive_state(self) -> DriveState:
         """The four-wheel drive state (`.two_wheel()`: the differential-drive view)."""
@@ -316,38 +306,38 @@ class Robot:
 
     def encoders(self) -> dict[str, int]:
         """Front-wheel encoder counts, 600 ticks per revolution, by wheel name."""
-        ticks = self._sim.station.diagram.GetOutputPort(f"{self.name}.encoder_ticks").Eval(
-            self._sim.context)
-        return {"front_left": round(ticks[0]), "front_right": round(ticks[1])}
+        return self.signal("encoders")
 
     def heading(self) -> float:
         """Compass: chassis yaw about world z, rad in (-pi, pi]."""
-        return float(self._sim.station.diagram.GetOutputPort(f"{self.name}.heading").Eval(
-            self._sim.context)[0])
+        return self.signal("heading")
 
     def position(self) -> tuple[float, float, float]:
         """GPS: the chassis frame's origin in the world, m."""
-        p = self._sim.station.diagram.GetOutputPort(f"{self.name}.position").Eval(
-            self._sim.context)
-        return (float(p[0]), float(p[1]), float(p[2]))
+        return tuple(self.signal("position").values())
 
     def odometry(self) -> OdometryPose:
         """Dead reckoning from the encoders (`systems.dead_reckoning`, with the drive's
         effective wheel radius and track width) from the start pose: x, y m, yaw rad."""
-        p = self._sim.station.diagram.GetOutputPort(f"{self.name}.odometry").Eval(
-            self._sim.context)
-        return OdometryPose(float(p[0]), float(p[1]), float(p[2]))
+        return OdometryPose(**self.signal("odometry"))
 
     def signal(self, name: str):
-        """The value now of the signal `name` read from its port (`signals.SIGNALS`), floats: by
-        wheel name for a per-wheel signal (`dimensions.WHEEL_NAMES` order), else the port's
-        value (a list when it has several)."""
+        """The value now of the signal `name` (`signals.SIGNALS`): read from its port, or by
+        its `reader`; a float, or a dict of floats by key (wheel, field or sensor name)."""
         spec = signals.SIGNALS[name]
-        v = self._sim.station.diagram.GetOutputPort(f"{self.name}.{spec.port}").Eval(
-            self._sim.context)
-        if spec.per_wheel:
-            return {w: float(x) for w, x in zip(dim.WHEEL_NAMES, v, strict=True)}
-        return float(v[0]) if len(v) == 1 else [float(x) for x in v]
+        if spec.reader:
+            value = getattr(self, spec.reader)()
+            return dc.asdict(value) if dc.is_dataclass(value) else value
+        port = self._ports.get(spec.port)
+        if port is None:  # looked up once: a name lookup costs more than a cached Eval
+            port = self._ports[spec.port] = self._sim.station.diagram.GetOutputPort(
+                f"{self.name}.{spec.port}")
+        return spec.value_of(port.Eval(self._sim.context))
+
+    def commanded_power(self) -> dict[str, float]:
+        """The drive's commanded power per wheel (its side's), in [-1, 1], by wheel name."""
+        return {w: float(state.commanded_power)
+                for w, state in self.drive_state().wheels.items()}
 
     def wheel_loads(self) -> dict[str, float]:
         """Each wheel's load, N: the vertical component of its contact forces
@@ -503,30 +493,24 @@ class Robot:
 
     def telemetry(self) -> dict:
         """The contact telemetry now, as `summary` reports it (`signals.TELEMETRY`: each
-        signal at its `summary` key)."""
+        signal at its `summary` place)."""
         out: dict = {}
         for spec in signals.TELEMETRY:
-            signals.put(out, spec.summary, spec.summary_value(self.signal(spec.name)))
+            signals.put_value(out, spec.summary, self.signal(spec.name))
         return out
 
     def summary(self) -> dict:
-        """The robot's figures now. `wheel_loads_N` (N) and `slip`'s `ratio` and
-        `angle_deg` lists are per wheel in `dimensions.WHEEL_NAMES` order: front left, front
-        right, rear left, rear right; `tip_margin_deg` now and `min_tip_margin_deg` over the
-        run (`systems.contact`, `systems.stability`)."""
-        pose, velocity = self.pose(), self.velocity()
+        """The robot's figures now: every signal at its `summary` place (`signals.SIGNALS`:
+        `wheel_loads_N` (N) and `slip`'s `ratio` and `angle_deg` lists are per wheel in
+        `dimensions.WHEEL_NAMES` order), the largest tilt, the frames saved, the least tip
+        margin over the run (`min_tip_margin_deg`) and the command log."""
+        out: dict = {"max_tilt_deg": self.max_tilt_deg(),
+                     "camera_frames": self.camera_frames_saved()}
+        for spec in signals.SIGNALS.values():
+            if spec.summary:
+                signals.put_value(out, spec.summary, self.signal(spec.name))
         return {
-            "pose": dc.asdict(pose),
-            "velocity": dc.asdict(velocity),
-            "max_tilt_deg": self.max_tilt_deg(),
-            "ir": self.ir_distances(),
-            "camera_frames": self.camera_frames_saved(),
-            "wheels": self.axle_speeds(),
-            "encoders": self.encoders(),
-            "heading": self.heading(),
-            "position": list(self.position()),
-            "odometry": dc.asdict(self.odometry()),
-            **self.telemetry(),
+            **out,
             "min_tip_margin_deg": self.min_tip_margin_deg(),
             "commands": [
                 {"command": r.command, "status": r.status, "reason": r.reason,
@@ -579,6 +563,7 @@ class Simulation:
         # Ctrl-drag only where someone watches: an offline recording stays free of it.
         self.station: Station = build_station(scenario, meshcat, save_camera, extras=extras,
                                               mouse_drag=self._record_live is not False)
+        self._owners = None
         self.simulator = Simulator(self.station.diagram)
         ApplySimulatorConfig(scenario.simulator_config, self.simulator)
         self.context = self.simulator.get_mutable_context()
@@ -842,6 +827,36 @@ class Simulation:
         """Simulated seconds per wall-clock second spent in advance calls so far."""
         elapsed = self.time - self.scenario.simulator_config.start_time
         return elapsed / self._wall_seconds if self._wall_seconds > 0 else math.nan
+
+    def _placement_owners(self) -> tuple[dict, dict]:
+        """({collision geometry id: `placement.Owner`}, {robot name: its Owner}) of the
+        built plant's shapes, in the loader's words (made once: the geometry is fixed)."""
+        if self._owners is None:
+            plant, station = self.station.plant, self.station
+            inspector = station.scene_graph.model_inspector()
+            robots = {parts.model_instance: Owner(f"robot {name!r}", f"robots.{name}.pose",
+                                                  "robot")
+                      for name, parts in station.robots.items()}
+            bodies = {body.index(): name for name, body in station.bodies.items()}
+            welded = {b.index() for b in plant.GetBodiesWeldedTo(plant.world_body())}
+            owners = {}
+            for gid in inspector.GetAllGeometryIds(Role.kProximity):
+                body = plant.GetBodyFromFrameId(inspector.GetFrameId(gid))
+                kind = "fixed body" if body.index() in welded else "free body"
+                if isinstance(inspector.GetShape(gid), HalfSpace):
+                    owners[gid] = Owner("the ground", None, "ground")
+                elif body.model_instance() in robots:
+                    owners[gid] = robots[body.model_instance()]
+                elif body.index() in bodies:
+                    name = bodies[body.index()]
+                    owners[gid] = Owner(f"world body {name!r}", f"world.bodies.{name}.pose",
+                                        kind)
+                else:
+                    model = plant.GetModelInstanceName(body.model_instance())
+                    owners[gid] = Owner(f"model body '{model}::{body.name()}'", None, kind)
+            self._owners = owners, {name: robots[parts.model_instance]
+                                    for name, parts in station.robots.items()}
+        return self._owners
 
     def body_pose(self, body) -> BodyPose:
         """A body's pose in the world now (m, rad)."""

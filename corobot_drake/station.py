@@ -48,7 +48,7 @@ from corobot_drake.systems.drive import CommandSource, DriveController
 from corobot_drake.systems.monitor import TiltMonitor
 from corobot_drake.systems.motion import MotionCommands
 from corobot_drake.systems.odometry import add_chassis_poses, add_chassis_states, add_odometry
-from corobot_drake.systems.runlog import HELD, add_run_log
+from corobot_drake.systems.runlog import SAMPLED, add_run_log
 from corobot_drake.systems.servo import add_servo_sign, servo_velocity_sign
 from corobot_drake.systems.stability import add_tip_margin
 
@@ -307,6 +307,8 @@ def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None,
             scenario.random_seed, step, save_camera, renderers), robot)
     for extra in extras:
         extra(builder, plant, scene_graph, robots, scenario)
+    for name in robots:
+        _add_signal_outputs(builder, name)
     builder.ExportOutput(plant.get_body_poses_output_port(), "body_poses")
     builder.ExportOutput(scene_graph.get_query_output_port(), "query_object")
     lcm = None
@@ -355,12 +357,9 @@ def _add_drive(builder, plant, scenario: sc.Scenario, name: str, added, chassis_
         builder.ExportOutput(port, f"{name}.{port_name}")
     _connect_servos(builder, plant, instance, name, controller.GetOutputPort("desired_state"),
                     servo_velocity_sign(scenario.simulator_config))
-    telemetry = _add_telemetry(builder, plant, name, added, chassis_pose,
-                               selector.get_output_port())
+    _add_telemetry(builder, plant, name, added, chassis_pose, selector.get_output_port())
     tilt = builder.AddNamedSystem(f"{name}.tilt_monitor", TiltMonitor(TILT_SAMPLE_PERIOD))
     builder.Connect(chassis_state, tilt.GetInputPort("chassis_state"))
-    add_run_log(builder, name, chassis_state, controller.GetOutputPort("drive_status"),
-                odometry.encoder_ticks, {port: telemetry[port] for port in HELD})
     for port in ("drive_status", "axle_speed_command", "axle_speed"):
         builder.ExportOutput(controller.GetOutputPort(port), f"{name}.{port}")
     builder.ExportOutput(plant.get_state_output_port(instance), f"{name}.state")
@@ -368,24 +367,37 @@ def _add_drive(builder, plant, scenario: sc.Scenario, name: str, added, chassis_
                       chassis_pose=chassis_pose)
 
 
-def _add_telemetry(builder, plant, name: str, added, chassis_pose, wheel_state) -> dict:
-    """The wheels' contact telemetry (`<name>.wheel_contacts`) and the tip margin; returns
-    {`signals.TELEMETRY` port name: output port}, each exported as `<name>.<port>`."""
+def _add_telemetry(builder, plant, name: str, added, chassis_pose, wheel_state) -> None:
+    """The wheels' contact telemetry (`<name>.wheel_contacts`) and the tip margin
+    (`<name>.tip_margin`)."""
     instance, chassis, joints = added
-    contacts = add_wheel_contacts(builder, name, plant, [j.child_body() for j in joints],
-                                  chassis_pose, wheel_state)
-    tip_margin = add_tip_margin(
-        builder, name, plant, instance, chassis,
-        {w: j.child_body() for w, j in zip(dim.WHEEL_NAMES, joints, strict=True)},
-        chassis_pose)
-    # Each signal's port from the system that has it.
-    telemetry = {spec.port: next(system.GetOutputPort(spec.port)
-                                 for system in (contacts, tip_margin)
-                                 if system.HasOutputPort(spec.port))
-                 for spec in signals.TELEMETRY}
-    for port_name, port in telemetry.items():
-        builder.ExportOutput(port, f"{name}.{port_name}")
-    return telemetry
+    add_wheel_contacts(builder, name, plant, [j.child_body() for j in joints], chassis_pose,
+                       wheel_state)
+    add_tip_margin(builder, name, plant, instance, chassis,
+                   {w: j.child_body() for w, j in zip(dim.WHEEL_NAMES, joints, strict=True)},
+                   chassis_pose)
+
+
+def signal_output(builder, robot: str, spec: signals.Signal):
+    """The output port of the signal `spec` (one with a `system`) in a station's builder."""
+    return builder.GetSubsystemByName(f"{robot}.{spec.system}").GetOutputPort(spec.port)
+
+
+def _add_signal_outputs(builder, name: str) -> None:
+    """Exports each signal's port from its system as `<name>.<port>` (`signals.SIGNALS`
+    with a `system`; once every system is in, the front ends' extras too), and adds the run
+    log (`runlog.add_run_log`), which samples those of `runlog.SAMPLED`."""
+    by_port = {}
+    for spec in signals.SIGNALS.values():
+        if spec.system:
+            by_port[spec.port] = signal_output(builder, name, spec)
+            builder.ExportOutput(by_port[spec.port], f"{name}.{spec.port}")
+    add_run_log(builder, name, builder.GetSubsystemByName(f"{name}.chassis_state")
+                .get_output_port(),
+                builder.GetSubsystemByName(f"{name}.drive_controller").GetOutputPort(
+                    "drive_status"),
+                builder.GetSubsystemByName(f"{name}.encoder_ticks").get_output_port(),
+                {port: by_port[port] for port, _ in SAMPLED})
 
 
 MESHCAT_DRAG_STIFFNESS = 100.0

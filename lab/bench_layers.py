@@ -46,7 +46,7 @@ from corobot_drake.systems.drive import CommandSource, DriveController, DriveReq
 from corobot_drake.systems.monitor import TiltMonitor
 from corobot_drake.systems.motion import MotionCommands
 from corobot_drake.systems.odometry import add_chassis_poses, add_chassis_states, add_odometry
-from corobot_drake.systems.runlog import HELD, add_run_log
+from corobot_drake.systems.runlog import SAMPLED, add_run_log
 from corobot_drake.systems.servo import add_servo_sign, servo_velocity_sign
 from corobot_drake.systems.stability import add_tip_margin
 from lab import bench
@@ -209,7 +209,8 @@ def _add_robot_layers(builder, plant, name, robot, chassis, joints, selector, co
             {w: j.child_body() for w, j in zip(dim.WHEEL_NAMES, joints, strict=True)}, pose)
     if layers >= 8:
         add_run_log(builder, name, state, controller.GetOutputPort("drive_status"),
-                    odometry.encoder_ticks, {port: contacts.GetOutputPort(port) for port in HELD})
+                    odometry.encoder_ticks,
+                    {port: contacts.GetOutputPort(port) for port, _ in SAMPLED})
 
 
 def _cpu_seconds(layers: int | None, scenario: sc.Scenario, seconds: float) -> float:

@@ -1,9 +1,14 @@
-"""Where the scene starts: each robot on or above the ground and clear of the world's bodies
-and of the other robots, each free body out of the ground.
+"""Where a robot may stand: on or above the ground and clear of the world's bodies (the
+scenario's and the directives' models) and of the other robots; each free body out of the
+ground. One check (`overlap_problems`) for
 
-Checked by the loader (`config/validate.py`) on the scenario's collision shapes alone, in a
-SceneGraph of their own (no plant is built): a robot started inside the giant box stayed
-embedded, one below the ground fell through it.
+- the scenario's start poses, by the loader (`config/validate.py`: `problems`), on the
+  scenario's collision shapes alone, in a SceneGraph of their own (no plant is built): a robot
+  started inside the giant box stayed embedded, one below the ground fell through it;
+- the directives' models, the same way (their shapes: `directives.ModelShape`);
+- a SetPose (`Robot.obstacle_at`), on the built plant's shapes with the robot set there.
+
+Each says what overlaps what, how deep, and the bound, in the same words.
 """
 
 import dataclasses as dc
@@ -47,6 +52,10 @@ class Problem:
 
     paths: tuple[str, ...]
     message: str
+    subject: "Owner | None" = None
+    """The robot (or free body) at fault."""
+    obstacle: "Owner | None" = None
+    """What it overlaps."""
 
 
 def robot_shapes() -> list[tuple[str, object, RigidTransform]]:
@@ -128,6 +137,7 @@ def problems(scenario, models=()) -> list[Problem]:
 
 
 def _problems(scenario, models) -> list[Problem]:
+    """`problems` in a SceneGraph of the scenario's shapes and the `models`'."""
     scene_graph = SceneGraph()
     source = scene_graph.RegisterSource("placement")
     props = ProximityProperties()
@@ -135,7 +145,7 @@ def _problems(scenario, models) -> list[Problem]:
     ground = scene_graph.RegisterAnchoredGeometry(
         source, GeometryInstance(RigidTransform(), HalfSpace(), "ground"))
     scene_graph.AssignRole(source, ground, props)
-    owner[ground] = _Owner("the ground", None, "ground")
+    owner[ground] = Owner("the ground", None, "ground")
 
     def add(name: str, path: str, X_WF, shapes, kind: str) -> None:
         frame = scene_graph.RegisterFrame(source, GeometryFrame(f"{name} {len(poses)}"))
@@ -144,7 +154,7 @@ def _problems(scenario, models) -> list[Problem]:
             geometry = scene_graph.RegisterGeometry(
                 source, frame, GeometryInstance(X_FG, shape, f"{name} {shape_name}"))
             scene_graph.AssignRole(source, geometry, props)
-            owner[geometry] = _Owner(name, path, kind)
+            owner[geometry] = Owner(name, path, kind)
 
     for name, body in scenario.world.bodies.items():
         shape = body_shape(body.shape)
@@ -161,26 +171,40 @@ def _problems(scenario, models) -> list[Problem]:
     context = scene_graph.CreateDefaultContext()
     scene_graph.get_source_pose_port(source).FixValue(context, _frame_poses(poses))
     query = scene_graph.get_query_output_port().Eval(context)
+    return overlap_problems(query.ComputePointPairPenetration(), owner.get)
+
+
+@dc.dataclass(frozen=True)
+class Owner:
+    """What a collision geometry belongs to, in the problems' words."""
+
+    name: str
+    """`robot 'corobot'`, `world body 'box'`, `model body 'crate::crate'`, `the ground`."""
+    path: str | None
+    """The scenario field of its pose (None: none to name)."""
+    kind: str
+    """`robot`, `free body`, `fixed body` or `ground`."""
+
+
+def overlap_problems(pairs, owner_of) -> list[Problem]:
+    """The problems of the penetration `pairs` (Drake's `PenetrationAsPointPair`s): each
+    robot that overlaps the ground, a body or another robot, each free body that overlaps the
+    ground, by more than OVERLAP_TOLERANCE (their deepest pair), sorted by their paths.
+    `owner_of`: a geometry id's `Owner` (None: not checked)."""
     deepest = {}  # (owner, owner) -> the deepest overlap of their shapes
-    for pair in query.ComputePointPairPenetration():
-        a, b = owner[pair.id_A], owner[pair.id_B]
+    for pair in pairs:
+        a, b = owner_of(pair.id_A), owner_of(pair.id_B)
+        if a is None or b is None or a == b:
+            continue
         if b.kind == "robot" or a.kind == "ground":
             a, b = b, a  # a robot first, else a body before the ground
         if a.kind == "robot" or (a.kind == "free body" and b.kind == "ground"):
             deepest[a, b] = max(deepest.get((a, b), 0.0), pair.depth)
     return sorted((_problem(a, b, depth) for (a, b), depth in deepest.items()
-                   if depth > OVERLAP_TOLERANCE), key=lambda p: p.paths)
+                   if depth > OVERLAP_TOLERANCE), key=lambda p: (p.paths, p.message))
 
 
-@dc.dataclass(frozen=True)
-class _Owner:
-    name: str
-    path: str | None
-    kind: str
-    """`robot`, `free body`, `fixed body` or `ground`."""
-
-
-def _problem(a: _Owner, b: _Owner, depth: float) -> Problem:
+def _problem(a: Owner, b: Owner, depth: float) -> Problem:
     where = "below the ground" if b.kind == "ground" else f"inside {b.name}"
     message = (f"{a.name} starts {depth * 1000:.0f} mm {where} (at most "
                f"{OVERLAP_TOLERANCE * 1000:g} mm allowed); ")
@@ -190,7 +214,7 @@ def _problem(a: _Owner, b: _Owner, depth: float) -> Problem:
         message += "lift it (z = 0 stands an upright robot on the ground)"
     else:
         message += "lift it clear of the ground"
-    return Problem(tuple(o.path for o in (a, b) if o.path), message)
+    return Problem(tuple(o.path for o in (a, b) if o.path), message, a, b)
 
 
 def _frame_poses(poses) -> FramePoseVector:

@@ -8,7 +8,9 @@ WebSocket server) get every message. A publish event at t runs before the update
 look at t sees what happened in [t - period, t): the event's own time stamps the message and is
 its log time. What happens at the last instant of a run (after the last look) is not published.
 
-`add_foxglove_topics` adds them all to a station's builder.
+`add_foxglove_topics` adds them all to a station's builder. The schedules, the robot state's
+inputs and the wiring of the signals' own topics are shared with ROS 2's publishers
+(`recording.looks`).
 """
 
 import numpy as np
@@ -40,40 +42,28 @@ from foxglove.messages import (
 from pydrake.common.value import AbstractValue, Value
 from pydrake.geometry import Box, Cylinder, Rgba, Sphere
 from pydrake.math import RigidTransform
-from pydrake.multibody.math import SpatialVelocity
 from pydrake.multibody.tree import BodyIndex
 from pydrake.systems.framework import LeafSystem
-from pydrake.systems.primitives import ZeroOrderHold
 from pydrake.systems.sensors import ImageRgba8U
 
 from corobot_drake.config.poses import mount_frame
 from corobot_drake.model import dimensions as dim
 from corobot_drake.model.ir_models import SharpGP2D12
 from corobot_drake.recording import topics as tp
+from corobot_drake.recording.looks import (
+    STATE_PERIOD,
+    TELEMETRY_PERIOD,
+    TOLERANCE,
+    RobotStateLooks,
+    connect_signal_topics,
+    in_window,
+)
 from corobot_drake.sensors.ir_sensor import DISTANCE, SCAN_TIME, TRUE_DISTANCE, scan_state_layout
-from corobot_drake.systems.runlog import HELD_PERIOD
 
-STATE_PERIOD = 0.02
-"""s: /tf, /joint_states, /odom, /drive_state, /commands and /tip_margin are published at 50 Hz
-(a multiple of the plant steps used here, 1 to 10 ms, so the looks add no Simulator stops)."""
 SCENE_PERIOD = 1.0
 """s: /scene (the shapes) again every second, for viewers that connect late."""
 JPEG_QUALITY = 80
 """PIL's JPEG quality (0-100) of the camera frames."""
-TELEMETRY_PERIOD = HELD_PERIOD
-"""s: the costly telemetry topics (`topics.TelemetryTopic.costly`: /wheel_loads, /wheel_slip)
-are sampled at 10 Hz by holds of their own at the instants the run log samples them
-(`runlog.HELD_PERIOD`), and published a period later. Sampled in the same discrete update as the
-run log's, they share its evaluation of the ports (one cache); a publish event could not: it
-runs before the updates at its time, whose new commands change the contact results again, so
-each look would evaluate the plant's contact solution once more."""
-TOLERANCE = 1e-9
-"""s: an event this close to a look counts as at it (float sums of periods)."""
-
-
-def in_window(x: float, t: float, period: float) -> bool:
-    """Whether an event at `x` (s) happened in [t - period, t): the look at t publishes it."""
-    return t - period - TOLERANCE <= x < t - TOLERANCE
 
 
 class TransformPublisher(LeafSystem):
@@ -130,7 +120,7 @@ class ScenePublisher(LeafSystem):
                           log_time=tp.nanoseconds(t))
 
 
-class RobotStatePublisher(LeafSystem):
+class RobotStatePublisher(RobotStateLooks):
     """One robot's /joint_states, /odom, /drive_state and /commands.
 
     .. pydrake_system::
@@ -143,24 +133,15 @@ class RobotStatePublisher(LeafSystem):
         - drive_state
         - command_log
 
-    Inputs: `body_poses` and `body_spatial_velocities` (the plant's, abstract lists by body
-    index; the chassis is `chassis_index`), `wheel_state` (8: the four axles' angles, rad, then
-    rates, rad/s, `dimensions.WHEEL_NAMES` order), `drive_state` (abstract
-    `odometry.DriveState`), `command_log` (abstract tuple of `drive.CommandRecord`, the
-    CommandSource's). Every `period` s: the joint states, the odometry (pose in the world,
-    velocity in base_link), the drive state, and a foxglove.Log line for each command that
-    started or ended since the previous look."""
+    Inputs: `looks.RobotStateLooks`' and `command_log` (abstract tuple of
+    `drive.CommandRecord`, the CommandSource's). Every `period` s: the joint states, the
+    odometry (pose in the world, velocity in base_link), the drive state, and a
+    foxglove.Log line for each command that started or ended since the previous look."""
 
     def __init__(self, context, names: tp.RobotNames, chassis_index: int,
                  period: float = STATE_PERIOD):
-        super().__init__()
-        self._names, self._chassis, self._period = names, int(chassis_index), period
-        self._poses = self.DeclareAbstractInputPort("body_poses",
-                                                    AbstractValue.Make([RigidTransform()]))
-        self._velocities = self.DeclareAbstractInputPort(
-            "body_spatial_velocities", AbstractValue.Make([SpatialVelocity()]))
-        self._wheels = self.DeclareVectorInputPort("wheel_state", 2 * len(dim.WHEEL_NAMES))
-        self._drive = self.DeclareAbstractInputPort("drive_state", Value(object()))
+        super().__init__(chassis_index)
+        self._names, self._period = names, period
         self._log = self.DeclareAbstractInputPort("command_log", Value(()))
         self._joint_names = [names.frame(f"{w}_axle") for w in dim.WHEEL_NAMES]
         self._joint_channel = JointStatesChannel(names.topic("joint_states"), context=context)
@@ -173,13 +154,13 @@ class RobotStatePublisher(LeafSystem):
     def _publish(self, context):
         t = context.get_time()
         ns = tp.nanoseconds(t)
-        x = self._wheels.Eval(context)
-        n = len(dim.WHEEL_NAMES)
+        angles, rates = self.wheel_state(context)
         self._joint_channel.log(JointStates(timestamp=tp.stamp(t), joints=[
-            JointState(name=name, position=float(x[i]), velocity=float(x[n + i]))
-            for i, name in enumerate(self._joint_names)]), log_time=ns)
+            JointState(name=name, position=float(q), velocity=float(v))
+            for name, q, v in zip(self._joint_names, angles, rates, strict=True)]),
+            log_time=ns)
         self._odom_channel.log(self.odometry(context), log_time=ns)
-        self._drive_channel.log(tp.drive_state_message(self._drive.Eval(context)), log_time=ns)
+        self._drive_channel.log(tp.drive_state_message(self.drive_state(context)), log_time=ns)
         for when, message, level in self.command_events(context):
             self._command_channel.log(Log(timestamp=tp.stamp(when), level=level,
                                           message=message, name=self._names.robot),
@@ -188,13 +169,10 @@ class RobotStatePublisher(LeafSystem):
     def odometry(self, context) -> Odometry:
         """The chassis pose in the world and its velocity in base_link (ROS's nav_msgs/Odometry:
         twist in the child frame)."""
-        X_WB = self._poses.Eval(context)[self._chassis]
-        V_WB = self._velocities.Eval(context)[self._chassis]
-        R_BW = X_WB.rotation().inverse()
+        X_WB, linear, angular = self.chassis(context)
         return Odometry(timestamp=tp.stamp(context.get_time()), frame_id="world",
                         body_frame_id=self._names.body_frame("chassis"), pose=tp.pose_of(X_WB),
-                        linear_velocity=tp.vector3(R_BW @ V_WB.translational()),
-                        angular_velocity=tp.vector3(R_BW @ V_WB.rotational()))
+                        linear_velocity=tp.vector3(linear), angular_velocity=tp.vector3(angular))
 
     def command_events(self, context) -> list[tuple[float, str, LogLevel]]:
         """(time, line, level) of each command start and end since the previous look, in time
@@ -211,8 +189,8 @@ class RobotStatePublisher(LeafSystem):
 
 
 class TelemetryPublisher(LeafSystem):
-    """One robot's contact telemetry: each of `topics.TELEMETRY_TOPICS` (/wheel_loads,
-    /wheel_slip, /tip_margin), JSON.
+    """One robot's signals with a message of their own: each of `topics.TELEMETRY_TOPICS`
+    (the contact telemetry: /wheel_loads, /wheel_slip, /tip_margin), JSON.
 
     .. pydrake_system::
 
@@ -223,8 +201,9 @@ class TelemetryPublisher(LeafSystem):
         - wheel_slip_angle
         - tip_margin
 
-    Inputs: the robot's ports of those names (`contact.WheelContacts`: 4 each, N, 1, deg, in
-    `dimensions.WHEEL_NAMES` order; `stability.TipMargin`: 1, deg), those of the costly topics
+    Inputs: the robot's ports of its signals (`signals.Signal.port`: the contact telemetry's,
+    `contact.WheelContacts`: 4 each, N, 1, deg, in `dimensions.WHEEL_NAMES` order;
+    `stability.TipMargin`: 1, deg), those of the costly topics
     held: sampled every `costly_period` s from 0 (`_add_telemetry`'s ZeroOrderHolds). A look
     every `period` s publishes the others' values, stamped with its time; a look every
     `costly_period` s the costly ones' held values, stamped with their sample's time (a period
@@ -234,8 +213,7 @@ class TelemetryPublisher(LeafSystem):
                  costly_period: float = TELEMETRY_PERIOD):
         super().__init__()
         for topic in tp.TELEMETRY_TOPICS:
-            ports = [self.DeclareVectorInputPort(port, len(dim.WHEEL_NAMES) if topic.per_wheel
-                                                 else 1) for _, port, _ in topic.fields]
+            ports = [self.DeclareVectorInputPort(spec.port, spec.size) for spec in topic.signals]
             channel = tp.json_channel(names.topic(topic.name), topic.schema(), context)
             # The looks on the holds' own schedule (period, offset 0): a look and a sample at
             # one time are at the same float time, the look first.
@@ -447,13 +425,7 @@ def add_foxglove_topics(builder, plant, scene_graph, robots: dict, scenario, con
         names = tp.RobotNames(name, namespaced)
         state = builder.AddNamedSystem(f"{name}.foxglove_state", RobotStatePublisher(
             context, names, parts.chassis.index()))
-        builder.Connect(plant.get_body_poses_output_port(), state.GetInputPort("body_poses"))
-        builder.Connect(plant.get_body_spatial_velocities_output_port(),
-                        state.GetInputPort("body_spatial_velocities"))
-        builder.Connect(builder.GetSubsystemByName(f"{name}.wheel_state").get_output_port(),
-                        state.GetInputPort("wheel_state"))
-        builder.Connect(builder.GetSubsystemByName(f"{name}.drive_state").GetOutputPort(
-            "drive_state"), state.GetInputPort("drive_state"))
+        RobotStateLooks.connect(builder, plant, name, state)
         builder.Connect(parts.command_source.GetOutputPort("command_log"),
                         state.GetInputPort("command_log"))
         _add_telemetry(builder, context, names)
@@ -472,26 +444,12 @@ def add_foxglove_topics(builder, plant, scene_graph, robots: dict, scenario, con
         context, _scene_entities(plant, scene_graph, frames)))
 
 
-TELEMETRY_SYSTEMS = ("wheel_contacts", "tip_margin")
-"""The station's `<robot>.<system>` whose output ports the telemetry topics read."""
-
-
 def _add_telemetry(builder, context, names: tp.RobotNames) -> None:
-    """Adds `<robot>.foxglove_telemetry`, fed by the robot's telemetry systems' ports, the
-    costly topics' through holds `<robot>.foxglove_<port>` (`TELEMETRY_PERIOD`)."""
-    robot = names.robot
-    publisher = builder.AddNamedSystem(f"{robot}.foxglove_telemetry",
+    """Adds `<robot>.foxglove_telemetry`, fed by the robot's signals' ports, the costly
+    topics' through holds `<robot>.foxglove_<port>` (`looks.connect_signal_topics`)."""
+    publisher = builder.AddNamedSystem(f"{names.robot}.foxglove_telemetry",
                                        TelemetryPublisher(context, names))
-    systems = [builder.GetSubsystemByName(f"{robot}.{s}") for s in TELEMETRY_SYSTEMS]
-    for topic in tp.TELEMETRY_TOPICS:
-        for _, name, _ in topic.fields:
-            (source,) = [s.GetOutputPort(name) for s in systems if s.HasOutputPort(name)]
-            if topic.costly:
-                hold = builder.AddNamedSystem(f"{robot}.foxglove_{name}", ZeroOrderHold(
-                    TELEMETRY_PERIOD, source.size()))
-                builder.Connect(source, hold.get_input_port())
-                source = hold.get_output_port()
-            builder.Connect(source, publisher.GetInputPort(name))
+    connect_signal_topics(builder, names.robot, publisher, tp.TELEMETRY_TOPICS, "foxglove_")
 
 
 def _mount(plant, frames: dict, child: str, mount) -> tuple:
@@ -514,5 +472,6 @@ def _add_camera(builder, plant, frames: dict, context, names, parts, camera) -> 
                   mount_frame(plant, parts.model_instance, camera.config.X_PB))
 
 
-__all__ = ["CameraPublisher", "IrPublisher", "RobotStatePublisher", "ScenePublisher",
-           "TelemetryPublisher", "TransformPublisher", "add_foxglove_topics", "in_window"]
+__all__ = ["STATE_PERIOD", "TELEMETRY_PERIOD", "CameraPublisher", "IrPublisher",
+           "RobotStatePublisher", "ScenePublisher", "TelemetryPublisher", "TransformPublisher",
+           "add_foxglove_topics", "in_window"]

@@ -50,7 +50,6 @@ from pydrake.math import RigidTransform
 
 from corobot_drake import signals
 from corobot_drake.config.sensors import camera_names
-from corobot_drake.model.dimensions import WHEEL_NAMES
 
 CHASSIS_FRAME = "base_link"
 """The chassis body's frame name (ROS's base frame)."""
@@ -216,22 +215,35 @@ TIMESTAMP_SCHEMA = {"type": "object", "properties": {"sec": {"type": "integer"},
 
 @dc.dataclass(frozen=True)
 class TelemetryTopic:
-    """A topic of the robot's contact telemetry (`systems.contact`, `systems.stability`): the
-    values of some of the robot's output ports (`station`'s `<robot>.<port>`), as JSON."""
+    """A topic of signals with a message of their own (`signals.Signal.topic`: the contact
+    telemetry, ...): the values of some of the robot's output ports (`station`'s
+    `<robot>.<port>`), as JSON."""
 
     name: str
     """The topic, under the robot's namespace."""
     title: str
     description: str
-    fields: tuple
-    """(field, robot output port, what: units) of each value."""
+    signals: tuple
+    """The `signals.Signal`s it carries, each at its `own_place`."""
     per_wheel: bool
-    """Whether the ports have one value per wheel (`dimensions.WHEEL_NAMES` order; then
-    `wheels: {<wheel>: {<field>: value}}`) or one (then `<field>: value`)."""
+    """Whether its signals have one value per wheel (`dimensions.WHEEL_NAMES` order; then
+    `wheels: {<wheel>: {<field>: value}}`) or not (then `<field>: value`, or a keyed
+    signal's `<key>: value`)."""
     costly: bool
     """Whether a look evaluates the plant's contact results or velocities (costly every
-    step: looked at like the run log's held samples, `publishers.TELEMETRY_PERIOD`) or the
+    step: looked at like the run log's held samples, `looks.TELEMETRY_PERIOD`) or the
     chassis pose alone (a few sums: at the state topics' rate)."""
+
+    @property
+    def fields(self) -> tuple:
+        """(field, robot output port, what: units) of each value of its messages (a keyed
+        signal's: one per key)."""
+        out = []
+        for s in self.signals:
+            what = f"{s.unit + ': ' if s.unit else ''}{s.doc}"
+            names = (s.field,) if s.per_wheel or not s.keys else s.keys
+            out += [(name, s.port, what) for name in names]
+        return tuple(out)
 
     def schema(self) -> dict:
         """The JSON schema of its messages."""
@@ -245,39 +257,25 @@ class TelemetryTopic:
                 "properties": {"timestamp": TIMESTAMP_SCHEMA, **values}}
 
     def message(self, t: float, values: list) -> dict:
-        """The message at time `t` (s) of the `fields`' port values (each a vector)."""
+        """The message at time `t` (s) of its signals' port values (each a vector)."""
         ts = stamp(t)
         out: dict = {"timestamp": {"sec": ts.sec, "nsec": ts.nsec}}
-        if not self.per_wheel:
-            out.update((field, float(v[0])) for (field, _, _), v in zip(
-                self.fields, values, strict=True))
-            return out
-        out["wheels"] = {wheel: {field: float(v[k]) for (field, _, _), v in zip(
-            self.fields, values, strict=True)} for k, wheel in enumerate(WHEEL_NAMES)}
+        for spec, vector in zip(self.signals, values, strict=True):
+            signals.put_value(out, spec.own_place, spec.value_of(vector))
         return out
 
 
-_TOPIC_TEXT = {
-    "wheel_loads": ("corobot.WheelLoads", "Each wheel's load: systems.contact.WheelContacts."),
-    "wheel_slip": ("corobot.WheelSlip", "Each wheel's slip: systems.contact.WheelContacts."),
-    "tip_margin": ("corobot.TipMargin", "The tip-over margin: systems.stability.TipMargin."),
-}
-"""Each telemetry topic's schema title and description."""
+def _telemetry_topic(name: str, carried: tuple) -> TelemetryTopic:
+    """The topic `name` of the signals it carries."""
+    title = "corobot." + "".join(word.capitalize() for word in name.split("_"))
+    description = signals.TOPIC_DOCS.get(name) or f"{carried[0].doc}."
+    return TelemetryTopic(name, title, description, carried, per_wheel=carried[0].per_wheel,
+                          costly=carried[0].costly)
 
 
-def _telemetry_topic(name: str) -> TelemetryTopic:
-    """The topic `name` of the telemetry signals it carries (`signals.TELEMETRY`)."""
-    carried = [s for s in signals.TELEMETRY if s.topic == name]
-    title, description = _TOPIC_TEXT[name]
-    return TelemetryTopic(
-        name, title, description,
-        tuple((s.field, s.port, f"{s.unit + ': ' if s.unit else ''}{s.doc}") for s in carried),
-        per_wheel=carried[0].per_wheel, costly=carried[0].costly)
-
-
-TELEMETRY_TOPICS = tuple(_telemetry_topic(name)
-                         for name in dict.fromkeys(s.topic for s in signals.TELEMETRY))
-"""The contact telemetry's topics, in the robot's terms."""
+TELEMETRY_TOPICS = tuple(_telemetry_topic(name, carried)
+                         for name, carried in signals.own_topics().items())
+"""The topics of the signals with a message of their own (the contact telemetry, ...)."""
 
 
 def command_event(record, ended: bool) -> str:

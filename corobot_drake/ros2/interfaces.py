@@ -170,11 +170,14 @@ def telemetry_files() -> dict[Path, str]:
 
 def message_definitions() -> dict[str, str]:
     """{`package/msg/Name`: .msg text} of the messages built here (tf2_msgs and
-    corobot_interfaces), for a type store that lacks them (`rosbags`)."""
+    corobot_interfaces), for a type store that lacks them (`rosbags`); the messages of
+    signals' own topics are written from the table (`telemetry_definition`), so a bag or the
+    bus carries a new one before corobot_interfaces is rebuilt."""
     out = {}
     for package in ("tf2_msgs", PACKAGE):
         for path in sorted((INTERFACES_DIR / package / "msg").glob("*.msg")):
             out[f"{package}/msg/{path.stem}"] = path.read_text()
+    out.update((_telemetry_type(t), telemetry_definition(t)) for t in tp.TELEMETRY_TOPICS)
     return out
 
 

@@ -13,6 +13,7 @@ from pydrake.math import RigidTransform, RollPitchYaw, RotationMatrix
 from corobot_drake.model.dimensions import WHEEL_NAMES
 from corobot_drake.recording import topics as tp
 from corobot_drake.ros2.bus import typestore
+from corobot_drake.signals import put_value
 
 INFRARED = tp.INFRARED
 """sensor_msgs/Range's radiation_type for an infrared sensor."""
@@ -178,12 +179,14 @@ class Messages:
 
     def telemetry(self, msgtype: str, topic: tp.TelemetryTopic, t: float, frame: str,
                   values: list):
-        """One of corobot_interfaces' telemetry messages (`interfaces.telemetry_definition`)
-        from its ports' values (each a vector: 4 by wheel, or 1)."""
-        fields = {}
-        for (field, _, _), v in zip(topic.fields, values, strict=True):
-            fields[field] = (np.asarray(v, dtype=np.float64).copy() if topic.per_wheel
-                             else float(v[0]))
+        """One of corobot_interfaces' messages of signals' own (`interfaces.telemetry_definition`)
+        from its signals' port values (each a vector: 4 by wheel, or one per key)."""
+        fields: dict = {}
+        for spec, vector in zip(topic.signals, values, strict=True):
+            if spec.per_wheel:
+                fields[spec.field] = np.asarray(vector, dtype=np.float64).copy()
+            else:
+                put_value(fields, spec.own_place, spec.value_of(vector))
         if topic.per_wheel:
             fields["wheel_names"] = list(WHEEL_NAMES)
         return self.T[msgtype](header=self.header(t, frame), **fields)

@@ -1,9 +1,10 @@
 """The LeafSystems that publish the robot's ROS 2 topics (`interfaces.TOPICS`) on a `bus.Bus`.
 
-As the Foxglove recording's (`recording.publishers`, whose schedules and windows they share):
-each publishes on periodic publish events from its input ports alone, so they keep no memory
-and a reset or replayed Context publishes the same messages, at the same simulated times, live
-(`--ros2`) or into a bag (`--rosbag`). A look at t sees what happened in [t - period, t).
+As the Foxglove recording's (`recording.publishers`; the schedules, windows, the robot state's
+inputs and the signals' own topics' wiring are shared: `recording.looks`): each publishes on
+periodic publish events from its input ports alone, so they keep no memory and a reset or
+replayed Context publishes the same messages, at the same simulated times, live (`--ros2`) or
+into a bag (`--rosbag`). A look at t sees what happened in [t - period, t).
 
 `add_ros2_topics` adds them all to a station's builder (`station.build_station`'s `extras`).
 """
@@ -13,22 +14,21 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from pydrake.common.value import AbstractValue, Value
+from pydrake.common.value import AbstractValue
 from pydrake.math import RigidTransform
-from pydrake.multibody.math import SpatialVelocity
 from pydrake.systems.framework import LeafSystem
-from pydrake.systems.primitives import ZeroOrderHold
 from pydrake.systems.sensors import ImageRgba8U
 
 from corobot_drake.config.poses import mount_frame
 from corobot_drake.model import dimensions as dim
 from corobot_drake.model.ir_models import SharpGP2D12
 from corobot_drake.recording import topics as tp
-from corobot_drake.recording.publishers import (
+from corobot_drake.recording.looks import (
     STATE_PERIOD,
     TELEMETRY_PERIOD,
-    TELEMETRY_SYSTEMS,
     TOLERANCE,
+    RobotStateLooks,
+    connect_signal_topics,
     in_window,
 )
 from corobot_drake.ros2 import interfaces as ifc
@@ -121,7 +121,7 @@ class TransformPublisher(LeafSystem):
         self._channel.publish(tp.nanoseconds(t), self._m.tf(transforms))
 
 
-class RobotStatePublisher(LeafSystem):
+class RobotStatePublisher(RobotStateLooks):
     """One robot's /odom, /wheel_odom, /joint_states and /drive_state, every `period` s.
 
     .. pydrake_system::
@@ -134,27 +134,17 @@ class RobotStatePublisher(LeafSystem):
         - drive_state
         - odometry
 
-    Inputs: `body_poses` and `body_spatial_velocities` (the plant's, abstract lists by body
-    index; the chassis is `chassis_index`), `wheel_state` (8: the four axles' angles, rad, then
-    rates, rad/s, `dimensions.WHEEL_NAMES` order), `drive_state` (abstract
-    `odometry.DriveState`), `odometry` (3: the dead-reckoned x, y m, yaw rad). /odom: the
-    chassis pose in odom and its velocity in base_link; /wheel_odom: the dead reckoning, its
-    twist from the front axles' measured speeds through the drive's effective wheel radius and
-    track width (`drive`: the robot's `config.scenario.Drive`)."""
+    Inputs: `recording.looks.RobotStateLooks`' and `odometry` (3: the dead-reckoned x, y m,
+    yaw rad). /odom: the chassis pose in odom and its velocity in base_link; /wheel_odom: the
+    dead reckoning, its twist from the front axles' measured speeds through the drive's
+    effective wheel radius and track width (`drive`: the robot's `config.scenario.Drive`)."""
 
     def __init__(self, bus, names: tp.RobotNames, chassis_index: int, drive,
                  period: float = STATE_PERIOD):
-        super().__init__()
+        super().__init__(chassis_index)
         self._m = Messages(bus.store)
-        self._chassis = int(chassis_index)
         self._odom, self._base = names.frame(ODOM_FRAME), names.body_frame("chassis")
         self._radius, self._track = drive.effective_wheel_radius, drive.effective_track_width
-        self._poses = self.DeclareAbstractInputPort("body_poses",
-                                                    AbstractValue.Make([RigidTransform()]))
-        self._velocities = self.DeclareAbstractInputPort(
-            "body_spatial_velocities", AbstractValue.Make([SpatialVelocity()]))
-        self._wheels = self.DeclareVectorInputPort("wheel_state", 2 * len(dim.WHEEL_NAMES))
-        self._drive = self.DeclareAbstractInputPort("drive_state", Value(object()))
         self._odometry = self.DeclareVectorInputPort("odometry", 3)
         self._joint_names = [f"{w}_axle" for w in dim.WHEEL_NAMES]
         self._channels = {name: _channel(bus, names, ifc.TOPIC[name]) for name in (
@@ -163,25 +153,22 @@ class RobotStatePublisher(LeafSystem):
 
     def _publish(self, context):
         t = context.get_time()
-        ns, m, n = tp.nanoseconds(t), self._m, len(dim.WHEEL_NAMES)
-        x = self._wheels.Eval(context)
-        self._channels["joint_states"].publish(ns, m.joint_state(t, self._joint_names, x[:n],
-                                                                 x[n:]))
-        X_WB = self._poses.Eval(context)[self._chassis]
-        V_WB = self._velocities.Eval(context)[self._chassis]
-        R_BW = X_WB.rotation().inverse()
-        self._channels["odom"].publish(ns, m.odometry(
-            t, self._odom, self._base, X_WB, R_BW @ V_WB.translational(),
-            R_BW @ V_WB.rotational()))
+        ns, m = tp.nanoseconds(t), self._m
+        angles, rates = self.wheel_state(context)
+        self._channels["joint_states"].publish(ns, m.joint_state(t, self._joint_names, angles,
+                                                                 rates))
+        X_WB, linear, angular = self.chassis(context)
+        self._channels["odom"].publish(ns, m.odometry(t, self._odom, self._base, X_WB, linear,
+                                                      angular))
         self._channels["wheel_odom"].publish(ns, self.wheel_odometry(context))
         self._channels["drive_state"].publish(ns, m.drive_state(t, self._odom,
-                                                                self._drive.Eval(context)))
+                                                                self.drive_state(context)))
 
     def wheel_odometry(self, context):
         """The dead reckoning as nav_msgs/Odometry, with its nominal covariances."""
         t = context.get_time()
         x, y, yaw = self._odometry.Eval(context)
-        left, right = self._wheels.Eval(context)[len(dim.WHEEL_NAMES):][:2]  # front axles
+        left, right = self.wheel_state(context)[1][:2]  # front axles
         forward = 0.5 * self._radius * (left + right)
         yaw_rate = self._radius * (right - left) / self._track
         X = RigidTransform(_yaw_rotation(yaw), [x, y, 0.0])
@@ -196,8 +183,9 @@ def _yaw_rotation(yaw: float):
 
 
 class TelemetryPublisher(LeafSystem):
-    """One robot's contact telemetry (`recording.topics.TELEMETRY_TOPICS`: /wheel_loads,
-    /wheel_slip, /tip_margin) as corobot_interfaces messages.
+    """One robot's signals with a message of their own (`recording.topics.TELEMETRY_TOPICS`:
+    the contact telemetry, /wheel_loads, /wheel_slip, /tip_margin) as corobot_interfaces
+    messages.
 
     .. pydrake_system::
 
@@ -217,8 +205,7 @@ class TelemetryPublisher(LeafSystem):
         super().__init__()
         m, frame = Messages(bus.store), names.body_frame("chassis")
         for topic in tp.TELEMETRY_TOPICS:
-            ports = [self.DeclareVectorInputPort(port, len(dim.WHEEL_NAMES) if topic.per_wheel
-                                                 else 1) for _, port, _ in topic.fields]
+            ports = [self.DeclareVectorInputPort(s.port, s.size) for s in topic.signals]
             spec = ifc.TOPIC[topic.name]
             channel = _channel(bus, names, spec)
             age = costly_period if topic.costly else 0.0
@@ -328,16 +315,9 @@ def add_ros2_topics(bus, builder, plant, scene_graph, robots: dict, scenario) ->
         spec = scenario.robots[name]
         state = builder.AddNamedSystem(f"{name}.ros2_state", RobotStatePublisher(
             bus, names, parts.chassis.index(), spec.drive))
-        for port, source in (
-                ("body_poses", plant.get_body_poses_output_port()),
-                ("body_spatial_velocities", plant.get_body_spatial_velocities_output_port()),
-                ("wheel_state", builder.GetSubsystemByName(f"{name}.wheel_state")
-                 .get_output_port()),
-                ("drive_state", builder.GetSubsystemByName(f"{name}.drive_state")
-                 .GetOutputPort("drive_state")),
-                ("odometry", builder.GetSubsystemByName(f"{name}.dead_reckoning")
-                 .GetOutputPort("pose"))):
-            builder.Connect(source, state.GetInputPort(port))
+        RobotStateLooks.connect(builder, plant, name, state)
+        builder.Connect(builder.GetSubsystemByName(f"{name}.dead_reckoning").GetOutputPort(
+            "pose"), state.GetInputPort("odometry"))
         _add_telemetry(builder, bus, names)
         tf_robots.append((names, parts.chassis.index(),
                           [(j.child_body().index(), names.body_frame(j.child_body().name()))
@@ -383,17 +363,8 @@ def _mount(plant, parts, names: tp.RobotNames, child: str, X_PB) -> tuple:
 
 
 def _add_telemetry(builder, bus, names: tp.RobotNames) -> None:
-    """Adds `<robot>.ros2_telemetry`, fed by the robot's telemetry systems' ports, the costly
-    topics' through holds `<robot>.ros2_<port>` (`recording.publishers.TELEMETRY_PERIOD`)."""
-    robot = names.robot
-    publisher = builder.AddNamedSystem(f"{robot}.ros2_telemetry", TelemetryPublisher(bus, names))
-    systems = [builder.GetSubsystemByName(f"{robot}.{s}") for s in TELEMETRY_SYSTEMS]
-    for topic in tp.TELEMETRY_TOPICS:
-        for _, port, _ in topic.fields:
-            (source,) = [s.GetOutputPort(port) for s in systems if s.HasOutputPort(port)]
-            if topic.costly:
-                hold = builder.AddNamedSystem(f"{robot}.ros2_{port}", ZeroOrderHold(
-                    TELEMETRY_PERIOD, source.size()))
-                builder.Connect(source, hold.get_input_port())
-                source = hold.get_output_port()
-            builder.Connect(source, publisher.GetInputPort(port))
+    """Adds `<robot>.ros2_telemetry`, fed by the robot's signals' ports, the costly topics'
+    through holds `<robot>.ros2_<port>` (`recording.looks.connect_signal_topics`)."""
+    publisher = builder.AddNamedSystem(f"{names.robot}.ros2_telemetry",
+                                       TelemetryPublisher(bus, names))
+    connect_signal_topics(builder, names.robot, publisher, tp.TELEMETRY_TOPICS, "ros2_")

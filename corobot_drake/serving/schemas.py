@@ -14,7 +14,7 @@ from typing import Annotated, Any
 
 from pydantic import BaseModel, ConfigDict, Field, create_model
 
-from corobot_drake import commands
+from corobot_drake import commands, signals
 
 DEFAULT_WAIT_TIMEOUT = 120.0
 """s a completing command may hold its request open before answering 202 with a status URL."""
@@ -64,7 +64,27 @@ REQUESTS: dict[str, type[BaseModel]] = {s.method: request_model(s) for s in comm
 # --- response descriptions (for the OpenAPI document) --------------------------------------
 
 
-class Wheel(BaseModel):
+def _with_signals(base: type[BaseModel], name: str, prefix: str) -> type[BaseModel]:
+    """`base` as the model `name`, with a field for each signal placed at `<prefix><field>` in
+    the HTTP state (`signals.Signal.http`) that it does not declare (null when missing)."""
+    fields = {}
+    for spec in signals.SIGNALS.values():
+        for place in spec.http:
+            path = place.partition("|")[0]
+            field = path.removeprefix(prefix)
+            if (not path.startswith(prefix) or "." in field or field in base.model_fields
+                    or field in fields):
+                continue
+            kind = int if spec.integer else float
+            if "*" not in prefix and (spec.keys or spec.reader):  # a dict by key
+                kind = dict[str, kind]
+            unit = f"{spec.unit}: " if spec.unit else ""
+            fields[field] = (kind | None, Field(None, description=unit + spec.doc))
+    return create_model(name, __base__=base, __module__=__name__, __doc__=base.__doc__,
+                        **fields)
+
+
+class _Wheel(BaseModel):
     commanded_power: float = Field(description="in [-1, 1]")
     axle_speed: float = Field(description="measured, rad/s")
     encoder_ticks: int | None = Field(None, description="front wheels only")
@@ -73,6 +93,9 @@ class Wheel(BaseModel):
         None, description="(rim speed - ground speed) / the faster: + traction, - braking")
     slip_angle_deg: float | None = Field(
         None, description="deg: the wheel's travel from its heading, + to the left")
+
+
+Wheel = _with_signals(_Wheel, "Wheel", "drive.wheels.*.")
 
 
 class Position(BaseModel):
@@ -90,7 +113,7 @@ class CommandStatus(BaseModel):
     end_time: float | None
 
 
-class DriveState(BaseModel):
+class _DriveState(BaseModel):
     """Four-wheel drive state (MRDS DriveDifferentialFourWheelState in SI units)."""
 
     time_stamp: float = Field(description="simulation time, s")
@@ -99,7 +122,8 @@ class DriveState(BaseModel):
     distance_between_wheels: float
     wheel_radius: float
     encoder_ticks_per_revolution: int
-    wheels: dict[str, Wheel] = Field(description="front_left, front_right, rear_left, rear_right")
+    wheels: dict[str, Wheel] = Field(
+        description="front_left, front_right, rear_left, rear_right")
     position: Position
     heading: float = Field(description="rad, counter-clockwise from +x")
     heading_deg: float
@@ -109,6 +133,9 @@ class DriveState(BaseModel):
     tip_margin_deg: float = Field(
         description="deg: the roll or pitch left before the centre of mass passes an edge of "
                     "the wheels' support (37.4 upright on level ground)")
+
+
+DriveState = _with_signals(_DriveState, "DriveState", "drive.")
 
 
 class TwoWheelState(BaseModel):

@@ -19,6 +19,8 @@ from corobot_drake.readings import IrReading
 
 def jsonable(value: Any) -> Any:
     """Dataclasses, numpy scalars/arrays and non-finite floats (None) made JSON-safe."""
+    if type(value) is float:  # the most common, first
+        return value if math.isfinite(value) else None
     if dc.is_dataclass(value) and not isinstance(value, type):
         return {f.name: jsonable(getattr(value, f.name)) for f in dc.fields(value)}
     if isinstance(value, dict):
@@ -76,36 +78,22 @@ def command_json(record) -> dict:
 
 def drive_state(robot, time: float) -> dict:
     """The drive contract's four-wheel state (MRDS DriveDifferentialFourWheelState in SI
-    units): the Python API's `drive_state()` fields, plus pose, velocity, the latest command
-    and the contact telemetry (each wheel's load N, slip ratio and slip angle deg; the tip
-    margin deg: `systems.contact`, `systems.stability`)."""
+    units) without its signals: the drive's fixed figures, whether it is enabled and the
+    latest command; `robot_snapshot` puts the signals in (`signals.Signal.http`: the wheels'
+    power, axle speed, ticks and contact telemetry, position, heading, pose, velocity and
+    tip margin)."""
     native = robot.drive_state()
-    telemetry = {spec: robot.signal(spec.name) for spec in signals.TELEMETRY}
-    wheels = {name: {"commanded_power": float(w.commanded_power),
-                     "axle_speed": float(w.axle_speed),
-                     "encoder_ticks": w.encoder_ticks,
-                     **{spec.field: value[name] for spec, value in telemetry.items()
-                        if spec.per_wheel}}
-              for name, w in native.wheels.items()}
-    x, y, z = native.position
-    heading = float(native.heading)
     last = robot.last_command()
-    return jsonable({
+    return {
         "time_stamp": time,
         "is_enabled": bool(native.is_enabled),
         "power_scaling_factor": float(native.power_scaling_factor),
         "distance_between_wheels": float(native.distance_between_wheels),
         "wheel_radius": dim.WHEEL_RADIUS,
         "encoder_ticks_per_revolution": dim.ENCODER_TICKS_PER_REVOLUTION,
-        "wheels": wheels,
-        "position": {"x": x, "y": y, "z": z},
-        "heading": heading,
-        "heading_deg": math.degrees(heading),
-        "pose": dc.asdict(robot.pose()),
-        "velocity": dc.asdict(robot.velocity()),
+        "wheels": {name: {} for name in dim.WHEEL_NAMES},
         "command": command_json(last) if last is not None else None,
-        **{spec.field: value for spec, value in telemetry.items() if not spec.per_wheel},
-    })
+    }
 
 
 def two_wheel_view(state: dict) -> dict:
@@ -134,21 +122,26 @@ def analog_sensor(reading: IrReading) -> dict:
 
 def robot_snapshot(robot, time: float) -> dict:
     """Every service's state of one robot: drive, ir (by service name), encoders, compass,
-    gps."""
-    drive = drive_state(robot, time)
-    return {
-        "drive": drive,
+    gps; each signal at its places (`signals.Signal.http`). A per-wheel field that some
+    wheels lack (the rear wheels' encoder ticks) is null."""
+    stamp = {"time_stamp": time}
+    state = {
+        "drive": drive_state(robot, time),
         "ir": {f"{name}_ir": analog_sensor(robot.ir(name)) for name in robot.ir_names},
-        "encoders": {
-            "time_stamp": drive["time_stamp"],
-            "ticks_per_revolution": dim.ENCODER_TICKS_PER_REVOLUTION,
-            "front_left": drive["wheels"]["front_left"]["encoder_ticks"],
-            "front_right": drive["wheels"]["front_right"]["encoder_ticks"],
-        },
-        "compass": {"time_stamp": drive["time_stamp"], "heading": drive["heading"],
-                    "heading_deg": drive["heading_deg"]},
-        "gps": {"time_stamp": drive["time_stamp"], **drive["position"]},
+        "encoders": {**stamp, "ticks_per_revolution": dim.ENCODER_TICKS_PER_REVOLUTION},
+        "compass": dict(stamp),
+        "gps": dict(stamp),
     }
+    for spec in signals.SIGNALS.values():
+        if spec.http:
+            value = robot.signal(spec.name)
+            for place in spec.http:
+                signals.put_value(state, place, value)
+    wheels = state["drive"]["wheels"].values()
+    for field in {f for wheel in wheels for f in wheel}:
+        for wheel in wheels:
+            wheel.setdefault(field, None)
+    return jsonable(state)
 
 
 def snapshot(sim) -> dict:

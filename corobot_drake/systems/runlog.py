@@ -35,11 +35,6 @@ LOG_PERIOD = 0.01
 RUN_LOG_CHUNK = 1000
 """Samples (10 s at 100 Hz) moved out of the sink at a time when the run log is bounded
 (`Simulation.run_log_window`)."""
-SAMPLE_COLUMNS = ("time", "left_power", "right_power", "left_ticks", "right_ticks", "x", "y",
-                  "yaw")
-"""What a real Corobot's logger records."""
-TELEMETRY = tuple((signal.port, signal.log) for signal in signals.TELEMETRY)
-"""(robot port, its columns) of the contact telemetry, in the log's order (`signals.TELEMETRY`)."""
 HELD_PERIOD = 0.1
 """s: the loads and the slip are sampled every 0.1 s (10 Hz) and held between (ZeroOrderHolds):
 evaluated every 10 ms step, the loads (the plant's contact results) and the slip (the bodies'
@@ -47,34 +42,54 @@ velocities) cost well over the ~3% of a step the run log may add (the
 measurement is in the commit that added this). A row's loads and slip are those of the latest
 0.1 s sample; its tip margin is the step's (a few sums from the chassis pose, made when the log
 is read; the run's least margin, `Robot.min_tip_margin_deg`, is read from it)."""
-HELD = tuple(signal.port for signal in signals.TELEMETRY if signal.costly)
-COLUMNS = SAMPLE_COLUMNS + tuple(c for _, columns in TELEMETRY for c in columns)
+MADE_WHEN_READ = ("commanded_power", "encoders", "pose", "tip_margin")
+"""The signals whose columns `rows_of` makes from the drive status, the encoders' counts and
+the chassis state when the log is read (`_made_when_read`); every other signal with run-log
+columns is sampled from its port."""
+for _spec in signals.SIGNALS.values():
+    if _spec.log and _spec.name not in MADE_WHEN_READ and not _spec.system:
+        raise ValueError(f"signal {_spec.name!r} has run-log columns but no system to sample")
+SAMPLED = tuple((s.port, s.log_columns) for s in signals.SIGNALS.values()
+                if s.log and s.name not in MADE_WHEN_READ)
+"""(robot port, its columns) of the signals sampled from their ports, in the table's order."""
+HELD = tuple(s.port for s in signals.SIGNALS.values()
+             if s.log and s.name not in MADE_WHEN_READ and s.costly)
+"""The sampled ports held (`HELD_PERIOD`): costly to evaluate every sample."""
+COLUMNS = ("time", *(c for s in signals.SIGNALS.values() for c in s.log_columns))
+"""The run log's columns: time, then each signal's (`signals.Signal.log`), in the table's
+order."""
+FORMATS = (".6f", *(s.log_format for s in signals.SIGNALS.values() for _ in s.log))
+"""The CSV format of each column."""
 
 RAW_COLUMNS = (*DriveStatus.get_fields(), "left_ticks", "right_ticks", *CHASSIS_STATE,
-               *(c for name, columns in TELEMETRY if name in HELD for c in columns))
+               *(c for _, columns in SAMPLED for c in columns))
 """What the sink records every `LOG_PERIOD` s (after its time): the drive's status, the front
-encoders' counts, the chassis' state (`odometry.CHASSIS_STATE`) and the held telemetry, all
-straight from C++ systems' ports (no Python call per sample). `rows_of` makes the `COLUMNS`
-from them when the log is read: the heading, the tip margin and whole ticks are functions of
-one sample each, so they cost nothing while the simulation runs."""
+encoders' counts, the chassis' state (`odometry.CHASSIS_STATE`) and the sampled ports (the
+held ones through their holds), all straight from C++ systems' ports (no Python call per
+sample). `rows_of` makes the `COLUMNS` from them when the log is read: the heading, the tip
+margin and whole ticks are functions of one sample each, so they cost nothing while the
+simulation runs."""
 
 
 def add_run_log(builder, name: str, chassis_state_port, drive_status_port, encoder_ticks_port,
-                held_ports: dict):
+                sampled_ports: dict):
     """Adds `<name>.run_log_row` (a Multiplexer of `RAW_COLUMNS`: `drive_status_port`,
-    `encoder_ticks_port`, `chassis_state_port` and the `held_ports`, {`HELD` port name: output
-    port}, each through a hold `<name>.run_log_<port>`) and its sink `<name>.run_log`; returns
-    the sink."""
+    `encoder_ticks_port`, `chassis_state_port` and the `sampled_ports`, {`SAMPLED` port name:
+    output port}, the `HELD` ones each through a hold `<name>.run_log_<port>`) and its sink
+    `<name>.run_log`; returns the sink."""
     sizes = [len(DriveStatus.get_fields()), 2, len(CHASSIS_STATE),
-             *(len(columns) for port_name, columns in TELEMETRY if port_name in HELD)]
+             *(len(columns) for _, columns in SAMPLED)]
     row = builder.AddNamedSystem(f"{name}.run_log_row", Multiplexer(sizes))
     for k, port in enumerate((drive_status_port, encoder_ticks_port, chassis_state_port)):
         builder.Connect(port, row.get_input_port(k))
-    for k, port_name in enumerate(HELD, start=3):
-        hold = builder.AddNamedSystem(f"{name}.run_log_{port_name}",
-                                      ZeroOrderHold(HELD_PERIOD, len(dict(TELEMETRY)[port_name])))
-        builder.Connect(held_ports[port_name], hold.get_input_port())
-        builder.Connect(hold.get_output_port(), row.get_input_port(k))
+    for k, (port_name, columns) in enumerate(SAMPLED, start=3):
+        source = sampled_ports[port_name]
+        if port_name in HELD:
+            hold = builder.AddNamedSystem(f"{name}.run_log_{port_name}",
+                                          ZeroOrderHold(HELD_PERIOD, len(columns)))
+            builder.Connect(source, hold.get_input_port())
+            source = hold.get_output_port()
+        builder.Connect(source, row.get_input_port(k))
     sink = LogVectorOutput(row.get_output_port(), builder, LOG_PERIOD)
     sink.set_name(f"{name}.run_log")
     return sink
@@ -84,14 +99,27 @@ def rows_of(times: np.ndarray, raw: np.ndarray, tip_margin) -> np.ndarray:
     """Run-log rows (`COLUMNS`) from the sink's sample `times` [n] and `raw` samples [n,
     `RAW_COLUMNS`]; `tip_margin`: the robot's `stability.TipMargin` (its `margin_of_up`)."""
     column = {c: raw[:, i] for i, c in enumerate(RAW_COLUMNS)}
-    R = rotation_rows(raw[:, [RAW_COLUMNS.index(c) for c in CHASSIS_STATE[:4]]])
-    yaw = np.arctan2(R[:, 1, 0], R[:, 0, 0])  # as `odometry.heading_of`
-    margin = tip_margin.margin_of_up(R[:, 2, 0], R[:, 2, 1], R[:, 2, 2])
-    held = [column[c] for port_name, columns in TELEMETRY if port_name in HELD
-            for c in columns]
-    return np.column_stack([times, column["power_left"], column["power_right"],
-                            np.rint(column["left_ticks"]), np.rint(column["right_ticks"]),
-                            column["x"], column["y"], yaw, *held, margin])
+    made = _made_when_read(column, tip_margin)
+    out = [times]
+    for spec in signals.SIGNALS.values():
+        values = made.get(spec.name)
+        out += [values[key] if values is not None else column[c] for c, key in spec.log]
+    return np.column_stack(out)
+
+
+def _made_when_read(column: dict, tip_margin) -> dict:
+    """{signal name: {key: column}} of the `MADE_WHEN_READ` signals, from the raw columns."""
+    R = rotation_rows(np.column_stack([column[c] for c in CHASSIS_STATE[:4]]))
+    left, right = column["power_left"], column["power_right"]
+    return {
+        "commanded_power": {"front_left": left, "rear_left": left, "front_right": right,
+                            "rear_right": right},
+        "encoders": {"front_left": np.rint(column["left_ticks"]),
+                     "front_right": np.rint(column["right_ticks"])},
+        "pose": {"x": column["x"], "y": column["y"],
+                 "yaw": np.arctan2(R[:, 1, 0], R[:, 0, 0])},  # as `odometry.heading_of`
+        "tip_margin": {"": tip_margin.margin_of_up(R[:, 2, 0], R[:, 2, 1], R[:, 2, 2])},
+    }
 
 
 def log_rows(sink, root_context, tip_margin) -> np.ndarray:
@@ -103,9 +131,11 @@ def log_rows(sink, root_context, tip_margin) -> np.ndarray:
 
 
 def write_csv(rows: np.ndarray, path: str | Path) -> None:
-    """Writes run-log rows (from `log_rows`) as CSV with a header line."""
-    with open(path, "w") as f:
-        f.write(",".join(COLUMNS) + "\n")
-        for t, pl, pr, tl, tr, x, y, yaw, *telemetry in rows:
-            f.write(f"{t:.6f},{pl:.6g},{pr:.6g},{int(tl)},{int(tr)},{x:.6f},{y:.6f},{yaw:.6f}")
-            f.write("".join(f",{v:.6g}" for v in telemetry) + "\n")
+    """Writes run-log rows (from `log_rows`) as CSV with a header line (each column in its
+    `FORMATS`)."""
+    formats = [(lambda v: str(int(v))) if f == "d" else (lambda v, f=f: format(v, f))
+               for f in FORMATS]
+    with open(path, "w") as out:
+        out.write(",".join(COLUMNS) + "\n")
+        for row in rows:
+            out.write(",".join(f(v) for f, v in zip(formats, row, strict=True)) + "\n")

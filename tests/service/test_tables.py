@@ -4,7 +4,12 @@ the same simulated time."""
 
 import concurrent.futures
 import copy
+import functools
+import json
 import math
+import subprocess
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -19,7 +24,7 @@ from corobot_drake.resources import DEFAULT_SCENARIO
 from corobot_drake.serving import snapshots
 from corobot_drake.serving.webapp import create_app
 from corobot_drake.simulation import Simulation, quiet_drake_warnings
-from corobot_drake.systems.runlog import COLUMNS, HELD_PERIOD
+from corobot_drake.systems.runlog import COLUMNS, HELD_PERIOD, MADE_WHEN_READ
 
 quiet_drake_warnings()
 
@@ -208,25 +213,68 @@ CURVE = ("robots: {corobot: {commands: [!SetPower {left: 1, right: 0.5}, !Wait {
          " !AllStop {}]}}")
 LOOKS = (0.3, 0.6)
 """s: when the front ends are compared (mid-curve, and braking), on the held samples' times."""
+CONVERTED = 1e-12
+"""rad, m: a value a front end carries converted (degrees, a quaternion, an angle the run log
+makes from the logged quaternion) reads back within this of the live one (float rounding)."""
+FLOAT32 = 2.0 ** -24
+"""The relative rounding of a value a message holds as a 32-bit float (`|f32`)."""
+
+
+class Ros2Memory:
+    """A ROS 2 bus sink (`ros2.bus`) that keeps every message, decoded by rclpy's type
+    support as a subscriber's would be: {topic: {t_ns: message}}."""
+
+    def __init__(self):
+        from rclpy.serialization import deserialize_message
+
+        from corobot_drake.ros2.graph import ros_type
+
+        self._decode, self._type = deserialize_message, ros_type
+        self.types, self.messages = {}, {}
+
+    def declare(self, topic, msgtype, qos):
+        self.types[topic] = msgtype
+        self.messages[topic] = {}
+
+    def write(self, topic, data, t_ns):
+        self.messages[topic][t_ns] = self._decode(bytes(data), self._type(self.types[topic]))
+
+
+def _ros2_extras():
+    """The ROS 2 topics on a `Ros2Memory` (None without the [ros2] extra and its built
+    interfaces)."""
+    try:
+        import corobot_interfaces.msg  # noqa: F401
+        import rclpy  # noqa: F401
+
+        from corobot_drake.ros2.bus import Bus
+        from corobot_drake.ros2.publishers import add_ros2_topics
+    except ImportError:
+        return None, []
+    memory = Ros2Memory()
+    return memory, [functools.partial(add_ros2_topics, Bus([memory]))]
 
 
 @pytest.fixture(scope="module")
 def looked(tmp_path_factory):
-    """A curve logged to MCAP; at each of `LOOKS`: the live signals, the summary and the HTTP
-    snapshot. Returns (simulation, {time: (live, summary, snapshot)}, MCAP topics)."""
+    """One short run (a curve) read by every front end: at each of `LOOKS`, every signal live,
+    the summary and the HTTP snapshot; the run log, the MCAP topics and the ROS 2 messages
+    after. Returns (simulation, {time: (live, summary, snapshot)}, MCAP topics, ROS 2
+    messages or None)."""
     path = tmp_path_factory.mktemp("tables") / "run.mcap"
     looks = {}
+    memory, extras = _ros2_extras()
     with McapLog(path) as log:
         scenario = load_scenario(DEFAULT_SCENARIO, overrides=[CURVE])
         scenario.robots[ROBOT].cameras["front"].rgb = False
-        sim = Simulation(scenario, foxglove=log.context)
+        sim = Simulation(scenario, foxglove=log.context, extras=extras)
         for t in LOOKS:
             sim.advance_to(t)
             robot = sim.robot(ROBOT)
-            live = {s.name: robot.signal(s.name) for s in signals.SIGNALS.values() if s.port}
+            live = {s.name: robot.signal(s.name) for s in signals.SIGNALS.values()}
             looks[t] = (live, robot.summary(), snapshots.robot_snapshot(robot, sim.time))
         sim.advance_to(LOOKS[-1] + 2 * HELD_PERIOD)
-    return sim, looks, read_mcap(path)
+    return sim, looks, read_mcap(path), memory and memory.messages
 
 
 def _at(messages: list, t: float):
@@ -239,73 +287,122 @@ def _row(rows: np.ndarray, t: float) -> dict:
     return dict(zip(COLUMNS, row, strict=True))
 
 
-def test_telemetry_reads_the_same_in_every_front_end(looked):
-    """Each telemetry signal, read live at a look, is the summary's value at its key and the
-    HTTP state's (per wheel or drive state, at its field). The recorded front ends agree with
-    each other: a held (costly) signal's MCAP sample stamped t is the run log's row half a
-    held period later (both hold the sample taken at t, from the plant's latest step); a
-    signal read every step is the live value in both."""
-    sim, looks, topics = looked
-    rows = sim.robot(ROBOT).run_log()
+def _same(read, expected, place: str, what: str) -> None:
+    """`read` is `expected` exactly, or within `CONVERTED` where the front end converts it."""
+    if place.endswith("|f32"):
+        expected = pytest.approx(expected, rel=FLOAT32, abs=0)
+    elif "|" in place:
+        expected = pytest.approx(expected, abs=CONVERTED)
+    assert read == expected, (what, place)
+
+
+def _keys(value):
+    return tuple(value) if isinstance(value, dict) else None
+
+
+def _stamp(spec: signals.Signal, topic: str, key: str, t: float, snapshot: dict) -> float:
+    """The time stamp of the message of `topic` that carries `spec`'s value read at `t`: a
+    topic per key (an IR sensor's) carries each reading at its own time (the scan's), a
+    costly signal's the sample held at t, any other the look's at t."""
+    if "*" in topic:
+        return snapshot["ir"][f"{key}_ir"]["time_stamp"]
+    return t
+
+
+def _recorded(spec, value, keys, t, snapshot, topics, ros2) -> list:
+    """[(front end, place, value read)] of `spec` in the run log, MCAP and ROS 2 at `t`."""
+    out = []
+    row = _row(topics["__rows__"], t + (HELD_PERIOD / 2 if spec.costly else 0.0))
+    if spec.log:
+        read = {key: row[column] for column, key in spec.log}
+        place = "|log" if spec.name in MADE_WHEN_READ else "log"
+        out.append(("run log", place, read if keys else read[""],
+                    {k: value[k] for k in read} if keys else value))
+    per_topic = [("mcap", spec.mcap_places, topics), ("ros2", spec.ros2_places, ros2)]
+    for front_end, places, source in per_topic:
+        if source is None:
+            continue
+        for topic, place in places.items():
+            for key in (keys if "*" in topic else (None,)):
+                name = "/" + signals.topic_name(topic, key or "")
+                stamp = _stamp(spec, topic, key, t, snapshot)
+                message = (_at(source[name], stamp) if front_end == "mcap"
+                           else source[name][round(stamp * 1e9)])
+                expected = value[key] if key else value
+                read = signals.read_value(message, place, None if key else _keys(expected))
+                if isinstance(expected, dict):  # a place may carry some of the keys
+                    expected = {k: expected[k] for k in read}
+                out.append((f"{front_end} {name}", place, read, expected))
+    return out
+
+
+def test_every_signal_reads_the_same_in_every_front_end(looked):
+    """Each signal read live (`Robot.signal`) at a look is, at each of its places in the
+    table, the summary's and the HTTP state's value; the recorded front ends (the run log's
+    row logged then, the MCAP and ROS 2 messages of that instant) carry it too. A costly
+    signal is recorded from the sample held at the look (`HELD_PERIOD`: the row half a held
+    period later, the messages stamped with the look), which a command at the look moves
+    from the live value: its recorded places agree with each other."""
+    sim, looks, topics, ros2 = looked
+    topics = {**topics, "__rows__": sim.robot(ROBOT).run_log()}
+    carried = {"summary": set(), "http": set(), "log": set(), "mcap": set(), "ros2": set()}
     for t, (live, summary, snapshot) in looks.items():
-        drive = snapshot["drive"]
-        for spec in signals.TELEMETRY:
-            value = live[spec.name]
-            assert signals.get(summary, spec.summary) == spec.summary_value(value), spec.name
-            message = _at(topics[f"/{spec.topic}"], t)
-            row = _row(rows, t + (HELD_PERIOD / 2 if spec.costly else 0.0))
-            if spec.per_wheel:
-                assert {w: drive["wheels"][w][spec.field] for w in dim.WHEEL_NAMES} == value
-                recorded = {w: message["wheels"][w][spec.field] for w in dim.WHEEL_NAMES}
-                assert dict(zip(dim.WHEEL_NAMES, (row[c] for c in spec.log),
-                                strict=True)) == recorded, spec.name
-            else:
-                assert drive[spec.field] == message[spec.field] == row[spec.log[0]] == value
-            if not spec.costly:
-                assert message[spec.field] == value, spec.name
+        for spec in signals.SIGNALS.values():
+            value, keys = live[spec.name], _keys(live[spec.name])
+            if spec.summary:
+                _same(signals.read_value(summary, spec.summary, keys), value, spec.summary,
+                      spec.name)
+                carried["summary"].add(spec.name)
+            for place in spec.http:
+                _same(signals.read_value(snapshot, place, keys), value, place, spec.name)
+                carried["http"].add(spec.name)
+            recorded = _recorded(spec, value, keys, t, snapshot, topics, ros2)
+            held = recorded[0][2] if spec.costly else None
+            for where, place, read, expected in recorded:
+                _same(read, held if spec.costly else expected, place, (spec.name, where))
+                carried[where.split()[0].replace("run", "log")].add(spec.name)
         # They moved: a curve's slip is not that of a robot at rest.
         assert live["wheel_slip_ratio"]["front_left"] > 0
+    assert carried["summary"] == {s.name for s in signals.SIGNALS.values() if s.summary}
+    assert carried["http"] == {s.name for s in signals.SIGNALS.values() if s.http}
+    assert carried["log"] == {s.name for s in signals.SIGNALS.values() if s.log}
+    assert carried["mcap"] == {s.name for s in signals.SIGNALS.values() if s.mcap_places}
+    if ros2 is not None:
+        assert carried["ros2"] == {s.name for s in signals.SIGNALS.values() if s.ros2_places}
 
 
-def test_state_signals_read_the_same_in_every_front_end(looked):
-    """The state signals' hand-written front ends agree with the live reading at a look: the
-    summary, the HTTP state, the run log's row (logged at that instant) and MCAP's topics."""
-    sim, looks, topics = looked
-    rows = sim.robot(ROBOT).run_log()
-    checked = set()
-    for t, (live, summary, snapshot) in looks.items():
-        drive, row = snapshot["drive"], _row(rows, t)
-        pose = summary["pose"]
-        assert drive["pose"] == pose and drive["velocity"] == summary["velocity"]
-        assert (row["x"], row["y"]) == (pose["x"], pose["y"])
-        assert row["yaw"] == pytest.approx(pose["yaw"], abs=1e-12)  # (-pi, pi]: the same
-        odom = _at(topics["/odom"], t)
-        assert (odom.pose.position.x, odom.pose.position.y) == (pose["x"], pose["y"])
-        checked |= {"pose", "velocity"}
-        heading = live["heading"]
-        assert summary["heading"] == drive["heading"] == heading
-        # the run log makes its yaw from the logged quaternion when read: the same angle, its
-        # own rounding
-        assert row["yaw"] == pytest.approx(heading, abs=1e-12)
-        position = live["position"]
-        assert summary["position"] == list(drive["position"].values()) == position == [
-            pose["x"], pose["y"], pose["z"]]
-        checked |= {"heading", "position"}
-        axles = live["axle_speeds"]
-        assert summary["wheels"] == axles == {
-            w: drive["wheels"][w]["axle_speed"] for w in dim.WHEEL_NAMES}
-        state = _at(topics["/drive_state"], t)
-        assert {w: state["wheels"][w]["axle_speed"] for w in dim.WHEEL_NAMES} == axles
-        assert state["heading"] == heading and state["position"] == position
-        ticks = summary["encoders"]
-        assert (row["left_ticks"], row["right_ticks"]) == (ticks["front_left"],
-                                                           ticks["front_right"])
-        assert ticks == {w: drive["wheels"][w]["encoder_ticks"] for w in ticks}
-        assert (row["left_power"], row["right_power"]) == (
-            drive["wheels"]["front_left"]["commanded_power"],
-            drive["wheels"]["front_right"]["commanded_power"])
-        checked |= {"axle_speeds", "encoders", "commanded_power"}
-        assert list(summary["odometry"].values()) == live["odometry"]
-        assert summary["ir"] == {n[:-3]: s["raw"] for n, s in snapshot["ir"].items()}
-        checked |= {"odometry", "ir_distances"}
-    assert checked == {s.name for s in signals.STATE}  # a new state signal needs its check
+def test_every_signal_is_carried_by_every_front_end_or_says_why_not():
+    """The table's coverage: every signal is in the summary and the HTTP state; all but the
+    chassis velocity (in its heading's frame: /odom's twist is in base_link) in ROS 2, all but
+    it and the dead reckoning (ROS 2's /wheel_odom) in MCAP; each has its doc and a port or
+    a reader; a costly signal is logged (its recorded places are checked against the run
+    log's)."""
+    for spec in signals.SIGNALS.values():
+        assert spec.summary and spec.http, spec.name
+        assert spec.doc and (spec.port or spec.reader), spec.name
+        assert not spec.costly or spec.log, spec.name
+    assert {s.name for s in signals.SIGNALS.values() if not s.ros2_places} == {"velocity"}
+    assert {s.name for s in signals.SIGNALS.values() if not s.mcap_places} == {
+        "velocity", "odometry"}
+
+
+def test_a_signal_added_to_the_table_appears_in_every_front_end():
+    """One entry in the table and its system's output port (`signal_added.py`, in a process
+    of its own: the table is read when the front ends are imported) and the new signal is in
+    the summary, the HTTP state (its served JSON too, through the derived response model) and
+    its subscriptions' thresholds, the run log (its CSV too), its own MCAP topic and its own
+    ROS 2 message (made from the table: no rebuilt interfaces needed for the bus and bags),
+    each with the live value."""
+    pytest.importorskip("rosbags", reason="the [ros2] extra (tools/setup installs it)")
+    script = Path(__file__).with_name("signal_added.py")
+    done = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
+                          timeout=300, check=False)
+    assert done.returncode == 0, done.stderr
+    out = json.loads(done.stdout)
+    live = out.pop("live")
+    assert live == pytest.approx(12.6 - 0.5 * 0.3, abs=1e-12)  # the system's value at LOOK
+    assert out.pop("change_threshold") == 0.01
+    assert out.pop("csv_header")[-1] == "battery"
+    assert out.pop("ros2_type") == "corobot_interfaces/msg/Battery"
+    assert out == dict.fromkeys(("summary", "snapshot", "http", "run_log", "mcap", "ros2"),
+                                live)

@@ -154,7 +154,7 @@ def test_set_pose_near_the_box_is_clear_but_a_wheel_inside_is_blocked(sim):
     assert robot.pose().x == pytest.approx(-0.55, abs=0.005)
     result = robot.set_pose(-0.60, 0.0, 0.0).result()
     assert (result.status, result.reason) == ("failed", "blocked")
-    assert robot.obstacle_at(_ground(-0.60)) == "giant_box"
+    assert robot.obstacle_at(_ground(-0.60)).obstacle.name == "world body 'giant_box'"
     assert robot.obstacle_at(_ground(2.0)) is None
 
 
@@ -173,13 +173,17 @@ def test_set_pose_and_the_loader_allow_the_same_overlap_with_the_box(below):
     face = box.pose.GetDeterministicValue().translation()[0] + box.shape.size[0] / 2
     depth = OVERLAP_TOLERANCE + (-1e-4 if below else 1e-4)
     x = float(face + dim.HALF_WHEELBASE + dim.WHEEL_RADIUS - depth)
-    assert fresh.robot().obstacle_at(_ground(x)) == (None if below else "giant_box")
+    problem = fresh.robot().obstacle_at(_ground(x))
     override = f"robots: {{corobot: {{pose: {{translation: [{x!r}, 0.0, 0.0]}}}}}}"
     if below:
+        assert problem is None
         make_sim(override)
-    else:
-        with pytest.raises(sc.ScenarioError, match="inside world body 'giant_box'"):
+    else:  # one check (`placement.overlap_problems`), one wording
+        assert problem.message == ("robot 'corobot' starts 5 mm inside world body "
+                                   "'giant_box' (at most 5 mm allowed); move it clear")
+        with pytest.raises(sc.ScenarioError) as refused:
             make_sim(override)
+        assert str(refused.value).endswith(f"robots.corobot.pose: {problem.message}")
 
 
 def test_scripted_set_pose_into_the_box_is_blocked_and_the_script_goes_on():

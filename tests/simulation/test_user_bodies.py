@@ -171,6 +171,24 @@ def test_a_model_and_a_robot_may_not_start_inside_each_other(tmp_path):
                  "robots: {corobot: {pose: {translation: [0.95, 0, 0]}}}")
 
 
+def test_a_set_pose_into_a_model_is_blocked_in_the_loaders_words(tmp_path):
+    """The directives' models are obstacles to a SetPose as to a start pose: the same check
+    (`placement.overlap_problems`) says the same thing about the same pose."""
+    from corobot_drake.config.poses import ground_pose
+
+    path = crate(tmp_path)
+    sim = make_sim(crate_directive(path, x=1.0))
+    X_WB = ground_pose(0.95, 0.0, 0.0).GetDeterministicValue()
+    problem = sim.robot().obstacle_at(X_WB)
+    assert problem.obstacle.name == "model body 'crate::crate'"
+    with pytest.raises(ScenarioError) as refused:
+        make_sim(crate_directive(path, x=1.0),
+                 "robots: {corobot: {pose: {translation: [0.95, 0, 0]}}}")
+    assert str(refused.value).endswith(f"robots.corobot.pose: {problem.message}")
+    result = sim.robot().set_pose(0.95, 0.0, 0.0).wait(5)
+    assert (result.status, result.reason) == ("failed", "blocked")
+
+
 def special_files(tmp_path):
     fifo = tmp_path / "fifo.obj"
     os.mkfifo(fifo)

@@ -16,10 +16,9 @@ from corobot_drake.systems.monitor import TiltMonitor
 from corobot_drake.systems.odometry import heading_of, rotation_rows
 from corobot_drake.systems.runlog import (
     COLUMNS,
-    HELD,
     LOG_PERIOD,
     RAW_COLUMNS,
-    TELEMETRY,
+    SAMPLED,
     add_run_log,
     log_rows,
     rows_of,
@@ -76,7 +75,7 @@ class FlatMargin:
 
 def test_rows_of_makes_the_columns_from_the_raw_samples():
     """Whole ticks, the heading of the (unnormalized) quaternion as `heading_of` of the pose,
-    x and y, the held telemetry in `TELEMETRY`'s order, the tip margin of the pose."""
+    x and y, the held telemetry in `SAMPLED`'s order, the tip margin of the pose."""
     X = RigidTransform(RollPitchYaw(0.02, -0.01, 2.9), [1.25, -0.75, 0.06])
     raw = np.concatenate([drive_status(), [301.9999999999, -12.0000000001], chassis_state(X),
                           np.arange(12.0)])
@@ -115,7 +114,7 @@ def test_run_log_samples_every_log_period_and_writes_csv(tmp_path):
     # The held telemetry ports: 4 loads, 4 slip ratios, 4 slip angles.
     telemetry = {name: builder.AddSystem(ConstantVectorSource(
         np.arange(len(columns)) + 10.0 * k)).get_output_port()
-        for k, (name, columns) in enumerate(TELEMETRY, start=1) if name in HELD}
+        for k, (name, columns) in enumerate(SAMPLED, start=1)}
     sink = add_run_log(builder, "robot", pose.get_output_port(), status.get_output_port(),
                        ticks.get_output_port(), telemetry)
     diagram = builder.Build()
@@ -126,7 +125,7 @@ def test_run_log_samples_every_log_period_and_writes_csv(tmp_path):
     np.testing.assert_allclose(rows[:, 0], np.arange(11) * LOG_PERIOD, atol=1e-12)
     np.testing.assert_allclose(rows[-1, 1:8], [1.0, 1.0, 600, 600, 0.5, 0.25, -1.0], atol=1e-12)
     np.testing.assert_allclose(rows[-1, 8:], [10, 11, 12, 13, 20, 21, 22, 23, 30, 31, 32, 33,
-                                              40], atol=1e-12)  # in TELEMETRY's order
+                                              40], atol=1e-12)  # in SAMPLED's order
     path = tmp_path / "log.csv"
     write_csv(rows, path)
     lines = path.read_text().splitlines()
