@@ -46,6 +46,7 @@ from pydrake.multibody.tree import BodyIndex
 from pydrake.systems.framework import LeafSystem
 from pydrake.systems.sensors import ImageRgba8U
 
+from corobot_drake import topics as ros_names
 from corobot_drake.config.poses import mount_frame
 from corobot_drake.model import dimensions as dim
 from corobot_drake.model.ir_models import SharpGP2D12
@@ -101,7 +102,7 @@ class TransformPublisher(LeafSystem):
                     t, self._frames[parent], name, X_W[parent].InvertAndCompose(X_W[index])))
         transforms += [tp.frame_transform(t, p, c, X) for p, c, X in self._mounts]
         self._channel.log(FrameTransforms(transforms=transforms),
-                          log_time=tp.nanoseconds(t))
+                          log_time=ros_names.nanoseconds(t))
 
 
 class ScenePublisher(LeafSystem):
@@ -117,7 +118,7 @@ class ScenePublisher(LeafSystem):
     def _publish(self, context):
         t = context.get_time()
         self._channel.log(SceneUpdate(entities=[e(t) for e in self._entities]),
-                          log_time=tp.nanoseconds(t))
+                          log_time=ros_names.nanoseconds(t))
 
 
 class RobotStatePublisher(RobotStateLooks):
@@ -138,7 +139,7 @@ class RobotStatePublisher(RobotStateLooks):
     odometry (pose in the world, velocity in base_link), the drive state, and a
     foxglove.Log line for each command that started or ended since the previous look."""
 
-    def __init__(self, context, names: tp.RobotNames, chassis_index: int,
+    def __init__(self, context, names: ros_names.RobotNames, chassis_index: int,
                  period: float = STATE_PERIOD):
         super().__init__(chassis_index)
         self._names, self._period = names, period
@@ -153,7 +154,7 @@ class RobotStatePublisher(RobotStateLooks):
 
     def _publish(self, context):
         t = context.get_time()
-        ns = tp.nanoseconds(t)
+        ns = ros_names.nanoseconds(t)
         angles, rates = self.wheel_state(context)
         self._joint_channel.log(JointStates(timestamp=tp.stamp(t), joints=[
             JointState(name=name, position=float(q), velocity=float(v))
@@ -164,7 +165,7 @@ class RobotStatePublisher(RobotStateLooks):
         for when, message, level in self.command_events(context):
             self._command_channel.log(Log(timestamp=tp.stamp(when), level=level,
                                           message=message, name=self._names.robot),
-                                      log_time=tp.nanoseconds(when))
+                                      log_time=ros_names.nanoseconds(when))
 
     def odometry(self, context) -> Odometry:
         """The chassis pose in the world and its velocity in base_link (ROS's nav_msgs/Odometry:
@@ -209,10 +210,10 @@ class TelemetryPublisher(LeafSystem):
     `costly_period` s the costly ones' held values, stamped with their sample's time (a period
     before; at 0 nothing is sampled yet)."""
 
-    def __init__(self, context, names: tp.RobotNames, period: float = STATE_PERIOD,
+    def __init__(self, context, names: ros_names.RobotNames, period: float = STATE_PERIOD,
                  costly_period: float = TELEMETRY_PERIOD):
         super().__init__()
-        for topic in tp.TELEMETRY_TOPICS:
+        for topic in ros_names.TELEMETRY_TOPICS:
             ports = [self.DeclareVectorInputPort(spec.port, spec.size) for spec in topic.signals]
             channel = tp.json_channel(names.topic(topic.name), topic.schema(), context)
             # The looks on the holds' own schedule (period, offset 0): a look and a sample at
@@ -223,7 +224,7 @@ class TelemetryPublisher(LeafSystem):
                                                              else 0.0))
 
     @staticmethod
-    def _publisher(topic: tp.TelemetryTopic, ports: list, channel, age: float):
+    def _publisher(topic: ros_names.TelemetryTopic, ports: list, channel, age: float):
         """The publish event of `topic`, whose inputs are `age` s old (a hold's period, or
         0)."""
         def publish(context):
@@ -231,7 +232,7 @@ class TelemetryPublisher(LeafSystem):
             if t < -TOLERANCE:
                 return  # nothing sampled yet
             channel.log(topic.message(t, [port.Eval(context) for port in ports]),
-                        log_time=tp.nanoseconds(t))
+                        log_time=ros_names.nanoseconds(t))
         return publish
 
 
@@ -248,7 +249,7 @@ class IrPublisher(LeafSystem):
     Input `scan_state` (the IrSensor's, `ir_sensor.scan_state_layout`). It looks once per
     scan period, at the scans' times, and publishes the scan taken since the previous look."""
 
-    def __init__(self, context, names: tp.RobotNames, sensor: str, sensor_system):
+    def __init__(self, context, names: ros_names.RobotNames, sensor: str, sensor_system):
         super().__init__()
         config = sensor_system.config
         self._names, self._sensor = names, sensor
@@ -272,7 +273,7 @@ class IrPublisher(LeafSystem):
         when = float(s[SCAN_TIME])
         if not in_window(when, context.get_time(), self._period):
             return  # also NaN: no scan yet
-        ns = tp.nanoseconds(when)
+        ns = ros_names.nanoseconds(when)
         self._range_channel.log(tp.range_message(
             when, self._names.ir_frame(self._sensor), self._fov, self._min, self._max,
             s[DISTANCE], s[TRUE_DISTANCE]), log_time=ns)
@@ -299,7 +300,7 @@ class CameraPublisher(LeafSystem):
     the first), the camera's outputs. It looks every `look` s and publishes a frame that came
     out (capture + `delay`) since the previous look, as `camera.CameraFrameSaver` does."""
 
-    def __init__(self, context, names: tp.RobotNames, camera: str, config, look: float,
+    def __init__(self, context, names: ros_names.RobotNames, camera: str, config, look: float,
                  delay: float):
         super().__init__()
         self._names, self._look, self._delay = names, float(look), float(delay)
@@ -323,7 +324,7 @@ class CameraPublisher(LeafSystem):
         captured = float(self._image_time.Eval(context)[0])
         if not in_window(captured + self._delay, context.get_time(), self._look):
             return  # also NaN: no frame yet
-        ns = tp.nanoseconds(captured)
+        ns = ros_names.nanoseconds(captured)
         self._image_channel.log(CompressedImage(
             timestamp=tp.stamp(captured), frame_id=self._frame, format="jpeg",
             data=jpeg(self._image.Eval(context))), log_time=ns)
@@ -354,7 +355,7 @@ def _body_frames(plant, robots: dict, namespaced: bool) -> dict:
         body = plant.get_body(BodyIndex(i))
         parts = robot_of.get(int(body.model_instance()))
         if parts is not None:
-            names = tp.RobotNames(parts.name, namespaced)
+            names = ros_names.RobotNames(parts.name, namespaced)
             parent = None if body.index() == parts.chassis.index() else int(parts.chassis.index())
             frames[i] = (names.body_frame(body.name()), parent)
         else:
@@ -422,7 +423,7 @@ def add_foxglove_topics(builder, plant, scene_graph, robots: dict, scenario, con
     frames = _body_frames(plant, robots, namespaced)
     mounts = []
     for name, parts in robots.items():
-        names = tp.RobotNames(name, namespaced)
+        names = ros_names.RobotNames(name, namespaced)
         state = builder.AddNamedSystem(f"{name}.foxglove_state", RobotStatePublisher(
             context, names, parts.chassis.index()))
         RobotStateLooks.connect(builder, plant, name, state)
@@ -444,12 +445,12 @@ def add_foxglove_topics(builder, plant, scene_graph, robots: dict, scenario, con
         context, _scene_entities(plant, scene_graph, frames)))
 
 
-def _add_telemetry(builder, context, names: tp.RobotNames) -> None:
+def _add_telemetry(builder, context, names: ros_names.RobotNames) -> None:
     """Adds `<robot>.foxglove_telemetry`, fed by the robot's signals' ports, the costly
     topics' through holds `<robot>.foxglove_<port>` (`looks.connect_signal_topics`)."""
     publisher = builder.AddNamedSystem(f"{names.robot}.foxglove_telemetry",
                                        TelemetryPublisher(context, names))
-    connect_signal_topics(builder, names.robot, publisher, tp.TELEMETRY_TOPICS, "foxglove_")
+    connect_signal_topics(builder, names.robot, publisher, ros_names.TELEMETRY_TOPICS, "foxglove_")
 
 
 def _mount(plant, frames: dict, child: str, mount) -> tuple:

@@ -19,10 +19,10 @@ import enum
 import sys
 from pathlib import Path
 
+from corobot_drake import topics as tp
 from corobot_drake.config import scenario as sc
 from corobot_drake.config.sensors import camera_names
 from corobot_drake.model.dimensions import WHEEL_NAMES
-from corobot_drake.recording import topics as tp
 
 INTERFACES_DIR = Path(__file__).resolve().parent / "ros_packages"
 PACKAGE = "corobot_interfaces"

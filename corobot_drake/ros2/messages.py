@@ -10,8 +10,8 @@ import math
 import numpy as np
 from pydrake.math import RigidTransform, RollPitchYaw, RotationMatrix
 
+from corobot_drake import topics as tp
 from corobot_drake.model.dimensions import WHEEL_NAMES
-from corobot_drake.recording import topics as tp
 from corobot_drake.ros2.bus import typestore
 from corobot_drake.signals import put_value
 

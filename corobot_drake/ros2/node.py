@@ -30,11 +30,11 @@ from rclpy.qos import (
 )
 
 from corobot_drake.config import scenario as sc
-from corobot_drake.recording.topics import RobotNames
 from corobot_drake.ros2 import interfaces as ifc
 from corobot_drake.ros2.graph import configure_discovery, ros_type
 from corobot_drake.serving import calls
 from corobot_drake.serving.runner import SimulationStoppedError
+from corobot_drake.topics import RobotNames
 
 ANSWER_TIMEOUT = 10.0
 """s (wall clock) a service or a goal waits for the simulation thread to take its command."""

@@ -19,10 +19,10 @@ from pydrake.math import RigidTransform
 from pydrake.systems.framework import LeafSystem
 from pydrake.systems.sensors import ImageRgba8U
 
+from corobot_drake import topics as tp
 from corobot_drake.config.poses import mount_frame
 from corobot_drake.model import dimensions as dim
 from corobot_drake.model.ir_models import SharpGP2D12
-from corobot_drake.recording import topics as tp
 from corobot_drake.recording.looks import (
     STATE_PERIOD,
     TELEMETRY_PERIOD,

@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 
 from corobot_drake.model import dimensions as dim
-from corobot_drake.recording.topics import CHASSIS_FRAME
+from corobot_drake.topics import CHASSIS_FRAME
 
 CHASSIS_COLOR = "0.15 0.15 0.18 1"
 PLATFORM_COLOR = "0.55 0.1 0.1 1"

@@ -2,6 +2,8 @@
 on the ground floor, and the package imports nothing of the lab."""
 
 import ast
+import subprocess
+import sys
 
 import pytest
 
@@ -9,7 +11,8 @@ from conftest import REPO
 
 MAX_FUNCTION_LINES = 80
 CODE = ("corobot_drake", "lab", "tools", "tests", "examples")
-GROUND_FLOOR = ("config", "model", "limits", "resources", "extras", "commands", "signals")
+GROUND_FLOOR = ("config", "model", "limits", "resources", "extras", "commands", "signals",
+                "topics")
 """The package's modules and folders that import none of the floors above them."""
 UPPER_FLOORS = ("systems", "sensors", "station", "markers", "simulation", "serving", "recording",
                 "study", "gym", "tuning", "ros2", "cli")
@@ -68,3 +71,28 @@ def test_the_station_knows_no_front_end_and_finds_sensors_through_the_registry()
     sensors = {m for m in imported if m.startswith("corobot_drake.sensors.")
                and m.split(".")[2] not in ("registry", "site")}
     assert front_ends | sensors == set()
+
+
+BLOCK_AND_IMPORT = """
+import sys
+blocked = {blocked!r}
+class Block:
+    def find_spec(self, name, path=None, target=None):
+        if name.split(".")[0] in blocked:
+            raise ImportError(f"{{name}} is another extra's")
+sys.meta_path.insert(0, Block())
+import {module}
+"""
+
+
+@pytest.mark.parametrize(("module", "others"), [
+    ("corobot_drake.ros2.run", ("foxglove", "mcap", "ray", "gymnasium")),
+    ("corobot_drake.ros2.bag", ("foxglove", "mcap", "ray", "gymnasium", "fastapi", "uvicorn")),
+    ("corobot_drake.simulation", ("foxglove", "mcap", "ray", "gymnasium", "fastapi", "uvicorn",
+                                  "rclpy", "rosbags")),
+])
+def test_a_front_end_imports_without_the_other_extras(module, others):
+    # `--ros2` needs the [ros2] extra only (with --serve, [serve] too), not [record]'s Foxglove.
+    code = BLOCK_AND_IMPORT.format(blocked=set(others), module=module)
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr[-2000:]

@@ -25,11 +25,12 @@ from corobot_drake.recording.publishers import (
     TelemetryPublisher,
     in_window,
 )
-from corobot_drake.recording.topics import RobotNames, command_event
+from corobot_drake.recording.topics import command_event
 from corobot_drake.resources import DEFAULT_SCENARIO
 from corobot_drake.simulation import Simulation
 from corobot_drake.systems.drive import CommandRecord
 from corobot_drake.systems.runlog import COLUMNS
+from corobot_drake.topics import RobotNames
 from lab.bench import NO_CAMERA
 
 CURVE = "robots: {corobot: {commands: [!SetPower {left: 1, right: 0.5}]}}"

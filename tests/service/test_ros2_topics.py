@@ -27,11 +27,11 @@ from rclpy.serialization import deserialize_message
 
 from conftest import Stepper
 from corobot_drake import cli
+from corobot_drake import topics as tp
 from corobot_drake.config import scenario as sc
 from corobot_drake.config.sensors import IrSensorConfig
 from corobot_drake.model import dimensions as dim
 from corobot_drake.model.sdf import corobot_sdf
-from corobot_drake.recording import topics as tp
 from corobot_drake.resources import make_parser
 from corobot_drake.ros2 import interfaces as ifc
 from corobot_drake.ros2.bus import Bus
