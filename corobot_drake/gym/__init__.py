@@ -38,10 +38,11 @@ if ENV_ID not in gymnasium.registry:
 
 
 def load_policy(path=None):
-    """The shipped policy (or the one saved at `path`): a callable observation -> action."""
-    from corobot_drake.gym.policy import LinearPolicy
+    """The shipped policy (or the one saved at `path`): a callable observation -> action,
+    with a `reset()` to call at every env reset (it remembers the episode's IR hits)."""
+    from corobot_drake.gym.policy import load
 
-    return LinearPolicy.load(path)
+    return load(path)
 
 
 __all__ = ["ENV_ID", "MAX_EPISODE_STEPS", "load_policy"]
