@@ -853,9 +853,9 @@ TOOLS = [
     ToolCase("train: --address that is no address", "train_policy",
              ("--address", "not an address"), "not a Ray cluster's address"),
     ToolCase("train: --evaluate without a policy", "train_policy",
-             ("--evaluate", "--out", "{tmp}/none.json"), "no such file"),
+             ("--evaluate", "--policy", "{tmp}/none.json"), "no such file"),
     ToolCase("train: --evaluate a file that is no policy", "train_policy",
-             ("--evaluate", "--out", "{tmp}/policy.json"), "not a saved policy",
+             ("--evaluate", "--policy", "{tmp}/policy.json"), "not a saved policy",
              (("policy.json", b'{"features": ["x"], "weights": {}}'),)),
 ]
 

@@ -99,8 +99,10 @@ NUM_RAYS = sum(len(d) for _, d in _RAYS)
 """IR rays at the observation's start (front then rear)."""
 _ANGLES = np.linspace(-math.pi, math.pi, HEADINGS, endpoint=False)
 _UNIT = np.column_stack([np.cos(_ANGLES), np.sin(_ANGLES)])
-_NEIGHBOURS = [(di, dj, math.hypot(di, dj)) for di in (-1, 0, 1) for dj in (-1, 0, 1)
-               if di or dj]
+_NEIGHBOURS = [(di, dj, math.hypot(di, dj)) for di in range(-2, 3) for dj in range(-2, 3)
+               if math.gcd(di, dj) == 1]
+"""The wavefront's steps: the 16 nearest directions (a path's length is within 1 % of its
+Euclidean length whatever its direction)."""
 
 
 def _wrap(angle):
@@ -134,9 +136,20 @@ class CostMap:
         return np.clip(ij, 0, self.n - 1), inside
 
     def at(self, points: np.ndarray) -> np.ndarray:
-        """The cost at each point (inf off the grid)."""
-        ij, inside = self.cells(points)
-        return np.where(inside, self.cost[ij[..., 0], ij[..., 1]], math.inf)
+        """The cost at each point, interpolated between the 4 nearest cells (inf next to a
+        blocked cell, and off the grid)."""
+        x = (points + self.half) / CELL
+        low = np.floor(x).astype(int)
+        f = x - low
+        inside = ((low >= 0) & (low < self.n - 1)).all(axis=-1)
+        i, j = np.clip(low[..., 0], 0, self.n - 2), np.clip(low[..., 1], 0, self.n - 2)
+        fi, fj = f[..., 0], f[..., 1]
+        corners = np.stack([self.cost[i, j], self.cost[i + 1, j], self.cost[i, j + 1],
+                            self.cost[i + 1, j + 1]])
+        weights = np.stack([(1 - fi) * (1 - fj), fi * (1 - fj), (1 - fi) * fj, fi * fj])
+        blocked = np.isinf(corners).any(axis=0) | ~inside
+        value = (np.where(np.isinf(corners), 0.0, corners) * weights).sum(axis=0)
+        return np.where(blocked, math.inf, value)
 
     def update(self, hits: np.ndarray, p: DetourParameters) -> None:
         """Recomputes the cost from the stored hits (goal frame, m)."""
@@ -159,21 +172,20 @@ class CostMap:
 
 
 def _wavefront(weight: np.ndarray, centre: int) -> np.ndarray:
-    """Cost from every cell to the centre one, stepping to the 8 neighbours at
-    CELL x length x the two cells' mean `weight` (Bellman-Ford sweeps until nothing
-    changes)."""
+    """Cost from every cell to the centre one, stepping in `_NEIGHBOURS` at CELL x length x
+    the two cells' mean `weight` (Bellman-Ford sweeps until nothing changes; a knight's step
+    over a blocked cell's corner is allowed, a cell's width being under the clearance)."""
     n = len(weight)
     cost = np.full((n, n), math.inf)
     cost[centre, centre] = 0.0
-    padded_weight = np.pad(weight, 1, constant_values=math.inf)
-    steps = [(window, CELL * length * (weight + window) / 2)
-             for window, (length,) in _windows(padded_weight, 1, n, _NEIGHBOURS)]
-    offsets = [(di, dj) for di, dj, _ in _NEIGHBOURS]
+    padded_weight = np.pad(weight, 2, constant_values=math.inf)
+    steps = [CELL * length * (weight + window) / 2
+             for window, (length,) in _windows(padded_weight, 2, n, _NEIGHBOURS)]
     for _ in range(4 * n):
-        padded = np.pad(cost, 1, constant_values=math.inf)
+        padded = np.pad(cost, 2, constant_values=math.inf)
         new = cost
-        for (di, dj), (_, step) in zip(offsets, steps, strict=True):
-            new = np.minimum(new, padded[1 + di:1 + di + n, 1 + dj:1 + dj + n] + step)
+        for (window, _), step in zip(_windows(padded, 2, n, _NEIGHBOURS), steps, strict=True):
+            new = np.minimum(new, window + step)
         new[centre, centre] = 0.0
         if np.array_equal(new, cost):
             break
