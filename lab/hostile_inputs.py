@@ -847,7 +847,7 @@ TOOLS = [
     ToolCase("train: --generations 0", "train_policy", ("--generations", "0"), "[1, 1000]"),
     ToolCase("train: --sigma nan", "train_policy", ("--sigma", "nan"), "(0, 100]; got nan"),
     ToolCase("train: --elite above --population", "train_policy", ("--elite", "11"),
-             "at most --population (10)"),
+             "at most --population (8)"),
     ToolCase("train: --address where no Ray cluster answers", "train_policy",
              ("--address", "127.0.0.1:1"), "--address 127.0.0.1:1: no Ray cluster answers"),
     ToolCase("train: --address that is no address", "train_policy",

@@ -90,6 +90,14 @@ def _parser() -> ToolParser:
     return p
 
 
+def outputs(args) -> tuple[Path, Path]:
+    """Where training writes the policy and its learning curve: under --out, or with --ship
+    into the package and the docs."""
+    if args.ship:
+        return SHIPPED, SHIPPED_CURVE
+    return args.out / POLICY_FILE, args.out / CURVE_FILE
+
+
 @one_line_errors
 def main(argv=None) -> int:
     p = _parser()
@@ -106,8 +114,7 @@ def main(argv=None) -> int:
             saved = load(args.policy)
         except ValueError as e:
             p.error(f"argument --policy: not a saved policy: {e}")
-    policy_file, curve_file = ((SHIPPED, SHIPPED_CURVE) if args.ship
-                               else (args.out / POLICY_FILE, args.out / CURVE_FILE))
+    policy_file, curve_file = outputs(args)
     if not args.evaluate:  # before training: an unwritable place fails now, not after it
         policy_file.parent.mkdir(parents=True, exist_ok=True)
         curve_file.parent.mkdir(parents=True, exist_ok=True)
