@@ -101,7 +101,7 @@ _ANGLES = np.linspace(-math.pi, math.pi, HEADINGS, endpoint=False)
 _UNIT = np.column_stack([np.cos(_ANGLES), np.sin(_ANGLES)])
 _NEIGHBOURS = [(di, dj, math.hypot(di, dj)) for di in range(-2, 3) for dj in range(-2, 3)
                if math.gcd(di, dj) == 1]
-"""The wavefront's steps: the 16 nearest directions (a path's length is within 1 % of its
+"""The wavefront's steps: the 16 nearest directions (a path's length is within 3 % of its
 Euclidean length whatever its direction)."""
 
 
