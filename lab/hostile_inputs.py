@@ -847,15 +847,15 @@ TOOLS = [
     ToolCase("train: --generations 0", "train_policy", ("--generations", "0"), "[1, 1000]"),
     ToolCase("train: --sigma nan", "train_policy", ("--sigma", "nan"), "(0, 100]; got nan"),
     ToolCase("train: --elite above --population", "train_policy", ("--elite", "11"),
-             "at most --population (10)"),
+             "at most --population (8)"),
     ToolCase("train: --address where no Ray cluster answers", "train_policy",
              ("--address", "127.0.0.1:1"), "--address 127.0.0.1:1: no Ray cluster answers"),
     ToolCase("train: --address that is no address", "train_policy",
              ("--address", "not an address"), "not a Ray cluster's address"),
     ToolCase("train: --evaluate without a policy", "train_policy",
-             ("--evaluate", "--out", "{tmp}/none.json"), "no such file"),
+             ("--evaluate", "--policy", "{tmp}/none.json"), "no such file"),
     ToolCase("train: --evaluate a file that is no policy", "train_policy",
-             ("--evaluate", "--out", "{tmp}/policy.json"), "not a saved policy",
+             ("--evaluate", "--policy", "{tmp}/policy.json"), "not a saved policy",
              (("policy.json", b'{"features": ["x"], "weights": {}}'),)),
 ]
 

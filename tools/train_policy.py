@@ -1,11 +1,15 @@
 #!/usr/bin/env python3
-"""Trains the GoToGoal policy: the cross-entropy method over a linear policy, on Ray.
+"""Trains the GoToGoal policy: the cross-entropy method over its parameters, on Ray.
 
-Saves the policy and plots the learning curve (`corobot_drake.gym.train`); `--evaluate` plays
-the saved policy, its hand-written start and random actions on the held-out seeds.
+Saves the policy (`policy.json`) and plots the learning curve (`gym_learning_curve.png`) in
+`--out` (default: the current directory); `--ship` puts them where the package and the docs
+take them from instead (`corobot_drake/gym/policy.json`, `docs/images/`). `--evaluate` plays
+a saved policy (`--policy`, default the shipped one), the hand-written goal seeker and random
+actions on the held-out seeds.
 
-    python tools/train_policy.py [--generations 10] [--population 10] [--episodes 8] ...
-    python tools/train_policy.py --evaluate     # the held-out seeds' table
+    python tools/train_policy.py [--generations 4] [--population 8] [--episodes 16] ...
+    python tools/train_policy.py --ship          # train and ship
+    python tools/train_policy.py --evaluate      # the held-out seeds' table
 """
 
 import dataclasses as dc
@@ -17,9 +21,9 @@ from corobot_drake.arguments import (
     ToolParser,
     bounded,
     one_line_errors,
-    output_file,
+    output_directory,
 )
-from corobot_drake.gym.policy import SHIPPED, LinearPolicy
+from corobot_drake.gym.policy import SHIPPED, LinearPolicy, load
 from corobot_drake.gym.rollouts import episode_pool
 from corobot_drake.gym.train import HELD_OUT, CemSettings, evaluate, plot_curve, train
 from corobot_drake.limits import OneOf, bound_of
@@ -27,6 +31,9 @@ from corobot_drake.simulation import quiet_drake_warnings
 from corobot_drake.study.engine import AddressError
 
 REPO = Path(__file__).resolve().parent.parent
+POLICY_FILE = "policy.json"
+CURVE_FILE = "gym_learning_curve.png"
+SHIPPED_CURVE = REPO / "docs" / "images" / CURVE_FILE
 
 
 RANDOM_SEEDS = HELD_OUT[:10]
@@ -39,8 +46,8 @@ def _print_evaluation(policy: dict, start: dict, random: dict) -> None:
     print("| policy | success rate | mean return | mean steps | collision steps | "
           "stall steps |")
     print("|---|---|---|---|---|---|")
-    for name, s in (("trained (linear, CEM)", policy),
-                    ("hand-written start (LinearPolicy.goal_seeker)", start),
+    for name, s in ((f"trained ({policy['kind']}, CEM)", policy),
+                    ("hand-written goal seeker (LinearPolicy.goal_seeker)", start),
                     (f"random actions (seeds {RANDOM_SEEDS[0]}-{RANDOM_SEEDS[-1]} only)",
                      random)):
         print(f"| {name} | {s['success_rate']:.0%} | {s['mean_return']:.1f} | "
@@ -69,14 +76,26 @@ def _parser() -> ToolParser:
                    help="Ray workers (None: this machine's cores)")
     p.add_argument("--address", default=None,
                    help="a Ray cluster's address (None: a local instance)")
-    p.add_argument("--out", type=output_file, default=SHIPPED, help="where the policy is saved")
-    p.add_argument("--plot", type=output_file,
-                   default=REPO / "docs/images/gym_learning_curve.png",
-                   help="the learning curve's picture")
+    p.add_argument("--out", type=output_directory, default=Path("."),
+                   help=f"the directory {POLICY_FILE} and {CURVE_FILE} are written to "
+                        f"(default: the current one)")
+    p.add_argument("--ship", action="store_true",
+                   help=f"write the policy into the package ({SHIPPED}) and the curve into the "
+                        f"docs ({SHIPPED_CURVE}) instead of --out")
     p.add_argument("--evaluate", action="store_true",
-                   help="only evaluate the policy at --out and random actions on the held-out "
-                        "seeds")
+                   help="only evaluate --policy, the hand-written goal seeker and random "
+                        "actions on the held-out seeds")
+    p.add_argument("--policy", type=Path, default=SHIPPED,
+                   help="the saved policy --evaluate plays (default: the shipped one)")
     return p
+
+
+def outputs(args) -> tuple[Path, Path]:
+    """Where training writes the policy and its learning curve: under --out, or with --ship
+    into the package and the docs."""
+    if args.ship:
+        return SHIPPED, SHIPPED_CURVE
+    return args.out / POLICY_FILE, args.out / CURVE_FILE
 
 
 @one_line_errors
@@ -86,20 +105,25 @@ def main(argv=None) -> int:
     if args.elite > args.population:
         p.error(f"argument --elite: must be at most --population ({args.population}); "
                 f"got {args.elite}")
-    if args.evaluate and not args.out.is_file():
-        p.error(f"argument --out: {args.out}: no such file (--evaluate reads a saved policy)")
+    if args.evaluate and not args.policy.is_file():
+        p.error(f"argument --policy: {args.policy}: no such file (--evaluate reads a saved "
+                f"policy)")
     saved = None
     if args.evaluate:  # read before any worker starts: a bad file is its one line
         try:
-            saved = LinearPolicy.load(args.out)
-        except (ValueError, KeyError, TypeError) as e:  # JSONDecodeError is a ValueError
-            p.error(f"argument --out: {args.out}: not a saved policy ({e})")
+            saved = load(args.policy)
+        except ValueError as e:
+            p.error(f"argument --policy: not a saved policy: {e}")
+    policy_file, curve_file = outputs(args)
+    if not args.evaluate:  # before training: an unwritable place fails now, not after it
+        policy_file.parent.mkdir(parents=True, exist_ok=True)
+        curve_file.parent.mkdir(parents=True, exist_ok=True)
     quiet_drake_warnings()
     settings = CemSettings(**{f.name: getattr(args, f.name) for f in dc.fields(CemSettings)})
     try:
         with episode_pool(args.workers, args.address) as pool:
             if args.evaluate:
-                held_out = evaluate(pool, saved)
+                held_out = {**evaluate(pool, saved), "kind": type(saved).__name__}
                 start = evaluate(pool, LinearPolicy.goal_seeker())
                 random = evaluate(pool, None, RANDOM_SEEDS)
                 _print_evaluation(held_out, start, random)
@@ -108,8 +132,8 @@ def main(argv=None) -> int:
     except AddressError as e:  # no Ray cluster there: the flag's one line
         print(f"error: --{e}", file=sys.stderr)
         return 2
-    policy.save(args.out, trained_by="tools/train_policy.py", settings=dc.asdict(settings))
-    plot_curve(curve, args.plot)
+    policy.save(policy_file, trained_by="tools/train_policy.py", settings=dc.asdict(settings))
+    plot_curve(curve, curve_file)
     print("| generation | population mean return | elite mean return | best | "
           "success (population) | success (elite) | s |")
     print("|---|---|---|---|---|---|---|")
@@ -120,8 +144,8 @@ def main(argv=None) -> int:
     episodes = settings.generations * settings.population * settings.episodes
     print(f"\nTrained on {episodes} episodes ({settings.generations} generations x "
           f"{settings.population} candidates x {settings.episodes} seeds) in "
-          f"{sum(c.seconds for c in curve):.0f} s; saved {args.out.name}, plotted "
-          f"{args.plot.name}; `--evaluate` plays it on the held-out seeds.")
+          f"{sum(c.seconds for c in curve):.0f} s; saved {policy_file.name}, plotted "
+          f"{curve_file.name}; `--evaluate` plays it on the held-out seeds.")
     return 0
 
 

@@ -7,11 +7,13 @@
 
 - `env.py`: `GoToGoalEnv` and its `GoToGoalConfig` (spaces, reward, held boxes);
 - `layout.py`: an episode's start, goal and boxes, drawn from the seed;
-- `policy.py`: `LinearPolicy` (features of an observation, a linear map, tanh), saved as JSON;
-  `policy.json` is the shipped one (`load_policy`);
+- `detour.py`: `DetourPolicy`, the shipped kind: it remembers the IR hits of the episode and
+  heads along the cheapest way around them (`policy.json` is the shipped one, `load_policy`);
+- `policy.py`: `LinearPolicy` (features of an observation, a linear map, tanh; its
+  `goal_seeker` is the hand-written baseline) and `load`, which reads either kind's JSON;
 - `rollouts.py`: episodes of a policy, in one process or on Ray (the study engine's
   `ray_session`), and their summary;
-- `train.py`: the cross-entropy method over a LinearPolicy, episodes evaluated on Ray
+- `train.py`: the cross-entropy method over a policy's parameters, episodes evaluated on Ray
   (`tools/train_policy.py`); environment steps per second: `lab/bench_gym.py`.
 
 docs/gym.md has the spaces, the reward and the measured figures.
@@ -38,10 +40,11 @@ if ENV_ID not in gymnasium.registry:
 
 
 def load_policy(path=None):
-    """The shipped policy (or the one saved at `path`): a callable observation -> action."""
-    from corobot_drake.gym.policy import LinearPolicy
+    """The shipped policy (or the one saved at `path`): a callable observation -> action,
+    with a `reset()` to call at every env reset (it remembers the episode's IR hits)."""
+    from corobot_drake.gym.policy import load
 
-    return LinearPolicy.load(path)
+    return load(path)
 
 
 __all__ = ["ENV_ID", "MAX_EPISODE_STEPS", "load_policy"]

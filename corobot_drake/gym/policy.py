@@ -17,7 +17,7 @@ import numpy as np
 from corobot_drake.model import dimensions as dim
 
 SHIPPED = Path(__file__).resolve().parent / "policy.json"
-"""The policy `load_policy()` returns (written by tools/train_policy.py)."""
+"""The policy `load_policy()` returns (written by `tools/train_policy.py --ship`)."""
 NUM_RAYS = 12
 """IR rays in the observation (front then rear, 6 each): the observation's first entries."""
 FRONT_RAYS = 6
@@ -63,6 +63,9 @@ class LinearPolicy:
     def __call__(self, observation) -> np.ndarray:
         return np.tanh(self.weights @ features(observation)).astype(np.float32)
 
+    def reset(self) -> None:
+        """Nothing to forget (a policy of the current observation)."""
+
     def save(self, path: str | Path, **about) -> None:
         """JSON: the feature names, the weights (one row per side) and `about` (how it was
         trained, what it scored)."""
@@ -73,9 +76,37 @@ class LinearPolicy:
 
     @classmethod
     def load(cls, path: str | Path | None = None) -> LinearPolicy:
-        data = json.loads(Path(path or SHIPPED).read_text())
+        return cls.from_saved(json.loads(Path(path or SHIPPED).read_text()), path or SHIPPED)
+
+    @classmethod
+    def from_saved(cls, data: dict, path) -> LinearPolicy:
+        """The policy of a saved file's JSON `data` (ValueError naming a bad field)."""
         if data.get("features") != list(FEATURE_NAMES):
-            raise ValueError(f"{path or SHIPPED}: features: expected {list(FEATURE_NAMES)}, "
-                             f"got {data.get('features')}")
-        return cls(np.array([data["weights"]["left"], data["weights"]["right"]], dtype=float))
+            raise ValueError(f"{path}: features: expected {list(FEATURE_NAMES)}, "
+                             f"got {data.get('features')!r:.200}")
+        try:
+            weights = np.array([data["weights"]["left"], data["weights"]["right"]], dtype=float)
+        except (KeyError, TypeError, ValueError):
+            weights = None
+        if weights is None or weights.shape != (2, NUM_FEATURES) or not np.isfinite(weights).all():
+            raise ValueError(f"{path}: weights: expected left and right, {NUM_FEATURES} finite "
+                             f"numbers each")
+        return cls(weights)
+
+
+def load(path: str | Path | None = None):
+    """The policy saved at `path` (default: the shipped one), of its `kind`: a `DetourPolicy`
+    or a `LinearPolicy` (ValueError naming what is wrong with the file)."""
+    from corobot_drake.gym.detour import DetourPolicy
+
+    path = Path(path or SHIPPED)
+    try:
+        data = json.loads(path.read_text())
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as e:
+        raise ValueError(f"{path}: not a saved policy ({e})") from None
+    kinds = {"DetourPolicy": DetourPolicy, "LinearPolicy": LinearPolicy}
+    kind = data.get("kind") if isinstance(data, dict) else None
+    if kind not in kinds:
+        raise ValueError(f"{path}: kind: expected one of {', '.join(kinds)}, got {kind!r:.40}")
+    return kinds[kind].from_saved(data, path)
 

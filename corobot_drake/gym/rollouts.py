@@ -3,8 +3,9 @@
 `run_episode` plays one seed to its end. `EpisodePool` keeps one env per Ray worker (an actor:
 the diagram is built once per worker, each episode resets it) inside the study engine's
 `ray_session` (a local Ray instance, or a cluster by address); `rollouts` is the one-call form.
-A policy is any picklable callable observation -> action; `None` means uniformly random
-actions, drawn from the episode's seed.
+A policy is any picklable callable observation -> action (with a `reset()`, called before each
+episode, if it remembers); `None` means uniformly random actions, drawn from the episode's
+seed.
 """
 
 from __future__ import annotations
@@ -36,10 +37,13 @@ class Episode:
 
 
 def run_episode(env: GoToGoalEnv, policy: Callable | None, seed: int) -> Episode:
-    """Plays the episode of `seed` with `policy` (None: random actions) to its end."""
+    """Plays the episode of `seed` with `policy` (None: random actions) to its end; a policy
+    with memory (a `reset` method) forgets the previous episode first."""
     obs, info = env.reset(seed=seed)
     if policy is None:
         env.action_space.seed(seed)
+    elif callable(getattr(policy, "reset", None)):
+        policy.reset()
     total, steps, collisions, stalls = 0.0, 0, 0, 0
     while True:
         action = env.action_space.sample() if policy is None else policy(obs)

@@ -1,6 +1,8 @@
-"""Training a `LinearPolicy` with the cross-entropy method, episodes evaluated on Ray.
+"""Training a policy's parameter vector with the cross-entropy method, episodes on Ray.
 
-Each generation draws `population` weight vectors from a diagonal Gaussian, plays each on the
+The vector is a `DetourPolicy`'s (`detour.py`: each entry scales one parameter by its exp) or
+a `LinearPolicy`'s weights (`CemSettings.start`). Each generation draws `population` vectors
+from a diagonal Gaussian, plays each on the
 generation's `episodes` training seeds (the same seeds for every candidate: common random
 numbers, so candidates are compared on the same layouts), keeps the `elite` with the highest
 mean return and refits the Gaussian to them (plus a little extra spread that decays, so it
@@ -16,6 +18,7 @@ import time
 import numpy as np
 from tqdm import tqdm
 
+from corobot_drake.gym.detour import PARAMETER_NAMES, DetourPolicy
 from corobot_drake.gym.policy import NUM_FEATURES, LinearPolicy
 from corobot_drake.gym.rollouts import EpisodePool, summary
 from corobot_drake.limits import OneOf, Range, bound_of, bounded
@@ -24,6 +27,13 @@ TRAIN_SEEDS = 10_000
 """The first training seed (generation g uses TRAIN_SEEDS + g * episodes + 0..episodes-1)."""
 HELD_OUT = tuple(range(100))
 """Seeds the policy is judged on, never trained on."""
+STARTS = {
+    "detour": (DetourPolicy.from_vector, lambda: np.zeros(len(PARAMETER_NAMES))),
+    "goal_seeker": (LinearPolicy.from_vector,
+                    lambda: LinearPolicy.goal_seeker().weights.ravel()),
+    "zero": (LinearPolicy.from_vector, lambda: np.zeros(2 * NUM_FEATURES)),
+}
+"""Each start: (vector -> policy, the initial mean vector)."""
 
 
 @dc.dataclass(frozen=True)
@@ -31,17 +41,18 @@ class CemSettings:
     """The training's settings, each with its bound (`tools/train_policy.py` checks its flags
     against them)."""
 
-    generations: int = bounded(10, Range(1, 1000))
-    population: int = bounded(10, Range(1, 10_000, why="candidates per generation"))
-    episodes: int = bounded(8, Range(1, 1000))
+    generations: int = bounded(4, Range(1, 1000))
+    population: int = bounded(8, Range(1, 10_000, why="candidates per generation"))
+    episodes: int = bounded(16, Range(1, 1000))
     """Training seeds per generation (every candidate plays all of them)."""
     elite: int = bounded(3, Range(1, 10_000, why="at most the population"))
-    start: str = bounded("goal_seeker", OneOf(("goal_seeker", "zero")))
-    """The initial mean: `goal_seeker` (`LinearPolicy.goal_seeker`, hand-written) or `zero`
-    (a robot that stays; it needs many more generations)."""
-    sigma: float = bounded(0.6, Range(0.0, 100.0, low_open=True))
-    """Initial standard deviation of every weight."""
-    extra_sigma: float = bounded(0.2, Range(0.0, 100.0))
+    start: str = bounded("detour", OneOf(tuple(STARTS)))
+    """The policy and its initial mean: `detour` (a `DetourPolicy` with its hand-set
+    parameters), `goal_seeker` (`LinearPolicy.goal_seeker`, hand-written) or `zero` (a
+    `LinearPolicy` that stays; it needs many more generations)."""
+    sigma: float = bounded(0.2, Range(0.0, 100.0, low_open=True))
+    """Initial standard deviation of every entry (a linear policy's weights took 0.6)."""
+    extra_sigma: float = bounded(0.05, Range(0.0, 100.0))
     """Spread added to the refitted one, decaying linearly to 0 at the last generation."""
     seed: int = bounded(0, Range(0, 2**32 - 1, why="numpy's seed"))
     """Seeds the sampling of candidates."""
@@ -74,12 +85,12 @@ class Generation:
 
 
 def train(settings: CemSettings, pool: EpisodePool,
-          progress: bool = True) -> tuple[LinearPolicy, list[Generation]]:
+          progress: bool = True) -> tuple[DetourPolicy | LinearPolicy, list[Generation]]:
     """The final mean policy and the learning curve."""
     rng = np.random.default_rng(settings.seed)
-    dim = 2 * NUM_FEATURES
-    mean = (LinearPolicy.goal_seeker().weights.ravel() if settings.start == "goal_seeker"
-            else np.zeros(dim))
+    make, initial = STARTS[settings.start]
+    mean = initial()
+    dim = len(mean)
     std = np.full(dim, settings.sigma)
     curve = []
     bar = tqdm(range(settings.generations), unit="generation", disable=not progress)
@@ -87,7 +98,7 @@ def train(settings: CemSettings, pool: EpisodePool,
         start = time.perf_counter()
         seeds = TRAIN_SEEDS + g * settings.episodes + np.arange(settings.episodes)
         thetas = mean + std * rng.standard_normal((settings.population, dim))
-        jobs = [(LinearPolicy.from_vector(t), int(s)) for t in thetas for s in seeds]
+        jobs = [(make(t), int(s)) for t in thetas for s in seeds]
         episodes = pool.run(jobs, chunk=settings.episodes)
         returns = np.array([e.episode_return for e in episodes]).reshape(settings.population, -1)
         successes = np.array([e.success for e in episodes]).reshape(settings.population, -1)
@@ -101,7 +112,7 @@ def train(settings: CemSettings, pool: EpisodePool,
                                 float(successes[elite].mean()), time.perf_counter() - start))
         bar.set_postfix(elite_return=f"{curve[-1].elite_return:.1f}",
                         success=f"{curve[-1].success_rate:.2f}")
-    return LinearPolicy.from_vector(mean), curve
+    return make(mean), curve
 
 
 def evaluate(pool: EpisodePool, policy, seeds=HELD_OUT) -> dict:
@@ -134,7 +145,7 @@ def plot_curve(curve: list[Generation], path, held_out: dict | None = None) -> N
     bottom.set_xlabel("CEM generation")
     bottom.legend()
     bottom.grid(alpha=0.3)
-    fig.suptitle("GoToGoal: cross-entropy method over a linear policy")
+    fig.suptitle("GoToGoal: cross-entropy method over a policy's parameters")
     fig.tight_layout()
     fig.savefig(path, dpi=90)
     plt.close(fig)
