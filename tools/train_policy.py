@@ -23,6 +23,7 @@ from corobot_drake.arguments import (
     one_line_errors,
     output_directory,
 )
+from corobot_drake.cli import ctrl_c_stops, stopped_status
 from corobot_drake.gym.policy import SHIPPED, LinearPolicy, load
 from corobot_drake.gym.rollouts import episode_pool
 from corobot_drake.gym.train import HELD_OUT, CemSettings, evaluate, plot_curve, train
@@ -132,6 +133,10 @@ def main(argv=None) -> int:
     except AddressError as e:  # no Ray cluster there: the flag's one line
         print(f"error: --{e}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:  # Ctrl-C or SIGTERM (ctrl_c_stops): Ray is shut down on the way
+        print("stopped: nothing written (a policy is saved when its training ends)",
+              file=sys.stderr)
+        return stopped_status()
     policy.save(policy_file, trained_by="tools/train_policy.py", settings=dc.asdict(settings))
     plot_curve(curve, curve_file)
     print("| generation | population mean return | elite mean return | best | "
@@ -150,4 +155,5 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
+    ctrl_c_stops()
     sys.exit(main())
