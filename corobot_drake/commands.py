@@ -209,7 +209,7 @@ COMPLETING_POWER_OVER_HTTP = 0.2
          optional=("power",), http_defaults={"power": COMPLETING_POWER_OVER_HTTP})
 class DriveDistance:
     """Drive straight until |distance| m from the start pose (negative: backwards), at
-    `power` in (0, 1]; ends succeeded on arrival (SPEC "Commands that complete")."""
+    `power` in (0, 1]; ends succeeded on arrival."""
 
     distance: float = bounded(0.0, lim.DISTANCE)
     power: float = bounded(0.5, lim.DRIVE_POWER)

@@ -6,7 +6,7 @@ benchmark doesn't depend on the station code: the ground HalfSpace (anchored), t
 (a free 100 kg body, so it is posed through ``QueryObject.GetPoseInWorld`` at every scan) and the
 robot's chassis and platform boxes and four wheel cylinders, which are excluded as the robot's
 own. The robot sits at the origin facing +x, so the rear sensor sees the box face at 0.62865 m
-and the front sensor sees nothing (SPEC, Sensors).
+and the front sensor sees nothing.
 
 A scan casts the 12 rays as the IR sensors do: per sensor, its ``RayFan`` posed by the chassis
 pose and one ``RayCaster.cast_fan``. :func:`scan_cost_seconds` is the median cost of one scan of

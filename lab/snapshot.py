@@ -3,7 +3,7 @@
 
 :func:`take` renders the scene now from a named view: `chase` (behind and above the robot),
 `overview` (the robot and the world's bodies from the side), `robot-camera` (the robot's own
-camera: SPEC mount, 320x240, 30 deg vertical fov), or from a free eye and target. The scene is
+camera: its mount, 320x240, 30 deg vertical fov), or from a free eye and target. The scene is
 lit by the scenario's sun (a directional light in the world frame) with the sky colour behind
 it (`corobot_drake.sensors.render`).
 """

@@ -1,6 +1,6 @@
 """Cost of the robot's camera per frame (run: python tools/bench_camera.py).
 
-Figures for the SPEC camera (320 x 240, 30 deg vertical fov, sun + fill light, no shadows)
+Figures for the Corobot's camera (320 x 240, 30 deg vertical fov, sun + fill light, no shadows)
 with each renderer (GL through an X display or a private Xvfb, the default here; VTK, through
 GLX when a display is available), in the default scene with the robot driving a circle: the
 render itself (`camera_frame_ms`), and what the camera adds to a simulation at 30 Hz

@@ -1,7 +1,7 @@
 """Camera frame cost, visual meshes vs collision boxes (run: python tools/camera_cost.py).
 
 The robot drives a circle beside the giant box; between frames the simulation advances one
-camera period (1/30 s) and only the render call is timed: one 320x240 colour frame (the SPEC
+camera period (1/30 s) and only the render call is timed: one 320x240 colour frame (the Corobot's
 camera) rendered by VTK with the camera's lighting (sun + fill, no shadows). Views: the
 robot's own camera (`robot-camera`) and a 320x240 chase camera that looks at the robot
 (`chase`). The two visuals are rendered alternately, frame by frame, so load from other

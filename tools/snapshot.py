@@ -10,7 +10,7 @@ The scene is lit by the scenario's sun (a directional light in the world frame) 
 colour behind it. `--time` simulates that many seconds first (the scenario's commands, or
 `--drive` power), so the wheels, the robot and anything it pushed are where the drive put them.
 Views: `chase` (behind and above the robot), `overview` (the robot and the world's bodies from
-the side), `robot-camera` (the robot's own camera: SPEC mount, 320x240, 30 deg vertical fov).
+the side), `robot-camera` (the robot's own camera: its mount, 320x240, 30 deg vertical fov).
 The rendering is `lab.snapshot`.
 """
 

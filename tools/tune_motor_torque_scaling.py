@@ -1,4 +1,4 @@
-"""Tunes MotorTorqueScaling so that full power gives the target top speed (SPEC "Drive").
+"""Tunes MotorTorqueScaling so that full power gives the target top speed.
 
 Drives the robot at full power headless, measures its steady top speed (the mean forward speed
 over the last `--measure` s, after `--settle` s: not the average including the ramp), prints

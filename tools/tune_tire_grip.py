@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Picks the motor's effort limit by the worst case of the box flip (SPEC "Tuning ... by hand").
+"""Picks the motor's effort limit by the worst case of the box flip.
 
 Runs `scenarios/studies/tire_grip.yaml` (per effort limit: into the giant box at half and full
 power, backwards and forwards, square and at 30 deg, plant steps 1-10 ms) and

@@ -6,9 +6,9 @@ Each is YAML text for `load_scenario(..., overrides=[...])`.
 from corobot_drake.config import scenario as sc
 
 IR_RATE_HZ = 20.0
-"""Hz: the IR scan rate `sensor_overrides` sets (SPEC: 20 Hz)."""
+"""Hz: the IR scan rate `sensor_overrides` sets (the Corobot's: 20 Hz)."""
 CAMERA_FPS = 30.0
-"""Hz: the camera frame rate `sensor_overrides` sets (SPEC: 30 Hz)."""
+"""Hz: the camera frame rate `sensor_overrides` sets (the Corobot's: 30 Hz)."""
 
 
 def sensor_overrides(robot: str = "corobot", ir: bool = False, camera: bool = False

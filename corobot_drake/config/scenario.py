@@ -176,7 +176,7 @@ class World:
 
 @dc.dataclass
 class Drive:
-    """Drive parameters of one robot (SPEC "Drive")."""
+    """Drive parameters of one robot."""
 
     motor_torque_scaling: float = bounded(dim.MOTOR_TORQUE_SCALING, lim.AXLE_SPEED)
     """Axle speed (rad/s) at power 1."""
@@ -262,11 +262,11 @@ class Robot:
     five (the odometry has drifted from the true pose, and carries on from its last update)."""
     cameras: dict[str, CameraConfig] = dc.field(default_factory=default_cameras)
     """Cameras by name, Drake's CameraConfig each (`config/sensors.py`); default `front`,
-    the SPEC camera; a new name starts as the SPEC camera too. `X_PB.base_frame` names a
+    the Corobot's camera; a new name starts as it too. `X_PB.base_frame` names a
     link of this robot (`chassis`); `{rgb: false}` removes one."""
     ir_sensors: dict[str, IrSensorConfig] = dc.field(default_factory=default_ir_sensors)
     """IR distance sensors by name (`config/sensors.py`); defaults `front` and `rear` at the
-    SPEC positions; `{enabled: false}` removes one."""
+    the Corobot's positions; `{enabled: false}` removes one."""
 
 
 CENIC = "cenic"

@@ -5,7 +5,7 @@ holds them.
 `robots.<name>.cameras.<camera>` (Drake's `CameraConfig`, as Drake's hardware_sim holds its
 `cameras:`). The map key names the sensor (its systems, ports, topics and URLs); a
 `CameraConfig.name` is not read. A key the defaults lack starts as the Corobot's own sensor of
-that kind (`NEW_SENSOR`: a second camera is a SPEC camera until its fields say otherwise).
+that kind (`NEW_SENSOR`: a second camera is the Corobot's camera until its fields say otherwise).
 `sensors/registry.py` adds each kind to the diagram (`add_ir_sensor`, `add_camera`).
 
 Every sensor is mounted the same way, by Drake's `pydrake.common.schema.Transform` `X_PB`: the
@@ -31,7 +31,7 @@ from corobot_drake.model.ir_models import MODELS as IR_MODELS
 
 @dc.dataclass
 class IrSensorConfig:
-    """One IR distance sensor on a robot (SPEC, Sensors)."""
+    """One IR distance sensor on a robot."""
 
     X_PB: Transform = dc.field(
         default_factory=lambda: mount(dim.FRONT_IR.position, (0.0, 0.0, 0.0)))
@@ -61,7 +61,7 @@ class IrSensorConfig:
 
 
 def default_ir_sensors() -> dict[str, IrSensorConfig]:
-    """The Corobot's two sensors at the SPEC positions: `front` looking forward, `rear` back."""
+    """The Corobot's two sensors in their places: `front` looking forward, `rear` back."""
     return {name: IrSensorConfig(X_PB=mount(m.position, (0.0, 0.0, math.degrees(m.yaw))))
             for name, m in (("front", dim.FRONT_IR), ("rear", dim.REAR_IR))}
 
@@ -69,7 +69,7 @@ def default_ir_sensors() -> dict[str, IrSensorConfig]:
 # --- the cameras (the scenario's `robots.<name>.cameras.<camera>`, Drake's CameraConfig) -----
 
 FRONT_CAMERA = "front"
-"""The Corobot's own camera (SPEC), the one every robot has by default. Its front ends keep
+"""The Corobot's own camera, the one every robot has by default. Its front ends keep
 the unqualified names (`/camera/...` topics, `/robots/<robot>/camera` routes, frames saved in
 `<dir>/<robot>/`); any other camera's carry its name (`camera_names`)."""
 
@@ -95,7 +95,7 @@ and the output at 0.33000000000000007 never came (its frame was lost)."""
 
 
 def default_camera_config(name: str = FRONT_CAMERA) -> CameraConfig:
-    """The Corobot's camera (SPEC): 320 x 240, 30 deg vertical fov, 30 Hz, on the chassis at
+    """The Corobot's camera: 320 x 240, 30 deg vertical fov, 30 Hz, on the chassis at
     `dimensions.CAMERA`, looking forward; every robot camera renders with one engine
     (`RENDERER_NAME`). `name`: its map key (kept in `CameraConfig.name` for a reader of the
     YAML; the key names the camera)."""

@@ -884,7 +884,7 @@ def _field_node(node, name: str):
 
 def _with_new_sensors(robots_node, defaults: sc.Scenario) -> sc.Scenario:
     """`defaults`, or a copy of it holding each sensor this layer names that it lacks as its
-    kind's `NEW_SENSOR` (a new camera is the SPEC camera before the layer's fields apply;
+    kind's `NEW_SENSOR` (a new camera is the Corobot's camera before the layer's fields apply;
     Drake's typed load would start it from its type's defaults)."""
     new = [(robot.value, kind, key.value)
            for robot, fields in getattr(robots_node, "value", ())

@@ -4,7 +4,7 @@ Two models, by the names a scenario uses (:data:`MODELS`):
 
 ``ideal``
     The reading is the distance to the nearest hit, capped at ``maximum_range`` (which is also
-    the reading when nothing is hit). This is the original simulation's sensor (SPEC, Sensors).
+    the reading when nothing is hit). This is the original simulation's sensor.
 
 ``sharp_gp2d12``
     The output voltage of a Sharp GP2D12-class triangulating IR ranger, quantised by a 10-bit,

@@ -1,6 +1,6 @@
 """The IR distance sensors: one LeafSystem per sensor, casting a cross of rays at a fixed rate.
 
-Each sensor (SPEC, Sensors) is fixed to a link of its robot, the chassis by default (its
+Each sensor is fixed to a link of its robot, the chassis by default (its
 ``X_PB``, :class:`corobot_drake.config.sensors.IrSensorConfig`), and reads SceneGraph's
 ``query_object`` port, its only input: the link's pose comes from
 ``QueryObject.GetPoseInWorld(link frame)`` and the rays are cast exactly against every

@@ -65,7 +65,7 @@ from corobot_drake.model import dimensions as dim
 _log = logging.getLogger(__name__)
 
 DEFAULT_DISPERSION_CONE_ANGLE = dim.IR_DISPERSION_CONE_ANGLE_DEG
-"""Degrees: the IR sensor's dispersion cone (SPEC, Sensors)."""
+"""Degrees: the IR sensor's dispersion cone."""
 
 
 # --------------------------------------------------------------------------------------------
@@ -620,7 +620,7 @@ def cross_of_rays_in_sensor_frame(
     Rows 0..samples-1: the horizontal fan (in the S x-y plane, yaw from -angle/2 to +angle/2);
     rows samples..2*samples-1: the vertical fan (in the S x-z plane, pitch up from -angle/2 to
     +angle/2). With an odd ``samples`` both fans contain the centre ray (+x): it is cast twice,
-    keeping the SPEC's 2 x samples rays per sensor.
+    keeping the 2 x samples rays per sensor.
     """
     if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or samples < 2:
         raise ValueError(

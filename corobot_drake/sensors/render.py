@@ -131,7 +131,7 @@ def chase_view(X_WB: RigidTransform, back: float = 0.95, up: float = 0.5,
 
 
 def robot_camera_view(X_WB: RigidTransform) -> RigidTransform:
-    """The robot's own camera (SPEC mount `dimensions.CAMERA`), in the world."""
+    """The robot's own camera (its mount `dimensions.CAMERA`), in the world."""
     mount = dim.CAMERA
     X_BC = RigidTransform(RollPitchYaw(0, 0, mount.yaw).ToRotationMatrix() @ R_BC,
                           mount.position)

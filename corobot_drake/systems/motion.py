@@ -4,7 +4,7 @@
 ordinary commands (SetPower, SetSpeed, SetVelocity, AllStop, Enable) through; it turns a
 DriveDistance or RotateDegrees into a stream of SetPower requests computed every control
 period from the measured chassis position (GPS) and heading (compass), and reports how each
-one ends on its `command_status` output. Two landing profiles (SPEC "Commands that complete"):
+one ends on its `command_status` output. Two landing profiles:
 
 - `seed`, the book's: full power until the goal; from the progress over the last 0.1 s (the
   book's 6 samples of 1/60 s, kept one per control period), estimate the time left and halve

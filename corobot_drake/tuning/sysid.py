@@ -1,6 +1,6 @@
 """System identification of the drive from a run log (CSV), by least squares.
 
-The drive model (SPEC "Drive"): each side's axle speed command moves toward
+The drive model: each side's axle speed command moves toward
 power x MotorTorqueScaling at no more than the slew limit (rad/s^2), and the wheels follow it.
 `fit_drive` finds MotorTorqueScaling S, the slew limit L and a small time offset tau (the
 controller's frame and the servo's lag) that make the modelled front-wheel speeds match the ones
