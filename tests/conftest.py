@@ -6,8 +6,20 @@ on two cores), `simulation` (the robot measured through whole simulations), `ser
 front ends as a user meets them: HTTP, browser, recording, CLI, studies, ROS 2) and
 `packaging` (the wheel, the tools, the hostile corpus, the docs' blocks). `pytest` runs all;
 `pytest tests/unit` (or `-m unit`) the fast tier.
+
+`pytest` runs on every core (pytest-xdist, `-n auto --dist loadgroup` in pyproject.toml): the
+tests of a module that share one of its module-scoped fixtures (a served simulation, a browser,
+a Ray head) go to one worker, in file order, so the fixture is built once; every other test
+goes wherever a core is free. A module may name its group itself (`pytestmark =
+pytest.mark.xdist_group(NAME)`) to keep its tests off the other workers' (the ROS 2 tests: one
+DDS graph at a time). `-n 0` runs them all in this process.
+
+A test module must stop every process it starts: each worker checks, as each module ends, that
+no child process it did not have before is still running.
 """
 
+import os
+import time
 from pathlib import Path
 
 import pytest
@@ -22,6 +34,9 @@ quiet_drake_warnings()
 
 TIERS = ("unit", "simulation", "service", "packaging")
 
+CHILD_EXIT_SECONDS = 15.0
+"""s a module's stopped child processes get to exit before the module fails for them."""
+
 
 def pytest_collection_modifyitems(items):
     for item in items:
@@ -30,6 +45,70 @@ def pytest_collection_modifyitems(items):
             raise pytest.UsageError(f"{item.path}: a test file belongs in one of the tiers' "
                                     f"folders: {', '.join(f'tests/{t}/' for t in TIERS)}")
         item.add_marker(tier)
+        if not item.get_closest_marker("xdist_group") and _shares_a_fixture(item):
+            item.add_marker(pytest.mark.xdist_group(f"{tier}/{item.path.name}"))
+
+
+def _shares_a_fixture(item) -> bool:
+    """Whether the test uses a fixture of the tests' own that outlives it (module scope or
+    wider): one that the module's other tests share, built once per worker that runs them."""
+    info = getattr(item, "_fixtureinfo", None)
+    if info is None:
+        return False
+    return any(defs[-1].scope != "function" and defs[-1].baseid.startswith("tests")
+               and not defs[-1].func.__name__.startswith("_")
+               for defs in info.name2fixturedefs.values())
+
+
+def _children() -> dict[int, str]:
+    """The running processes descended from this one (pid: command line), zombies left out."""
+    parents: dict[int, list[int]] = {}
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            state, ppid = stat.read_text().rsplit(")", 1)[1].split()[:2]
+        except (OSError, ValueError):
+            continue
+        if state != "Z":
+            parents.setdefault(int(ppid), []).append(int(stat.parent.name))
+    found, todo = {}, [os.getpid()]
+    while todo:
+        for child in parents.get(todo.pop(), []):
+            try:
+                command = Path(f"/proc/{child}/cmdline").read_bytes()
+            except OSError:
+                continue
+            found[child] = command.replace(b"\0", b" ").decode(errors="replace")[:200]
+            todo.append(child)
+    return found
+
+
+def _xvfb_pid() -> int | None:
+    """The private X server of this process (it lives as long as the process, by design)."""
+    from corobot_drake.sensors import xdisplay
+
+    return None if xdisplay._xvfb is None else xdisplay._xvfb.pid
+
+
+@pytest.fixture(scope="module", autouse=True)
+def _no_child_process_left_running(request):
+    """Fails the module's last test (at its teardown) if the module left a child process of
+    this pytest process running: a test stops what it starts, by its handle."""
+    if not Path("/proc/self/stat").exists():
+        yield
+        return
+    before = set(_children())
+    yield
+    deadline = time.monotonic() + CHILD_EXIT_SECONDS
+    while True:  # a process stopped at the module's end may take a moment to exit
+        left = {pid: command for pid, command in _children().items()
+                if pid not in before and pid != _xvfb_pid()}
+        if not left or time.monotonic() > deadline:
+            break
+        time.sleep(0.1)
+    if left:
+        pytest.fail(f"{request.node.nodeid} left child processes running: "
+                    + "; ".join(f"{pid} {command}" for pid, command in left.items()),
+                    pytrace=False)
 
 
 def make_sim(*overrides: str, scenario: Path = DEFAULT_SCENARIO,

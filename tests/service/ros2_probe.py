@@ -26,6 +26,10 @@ WAIT = 60.0
 """s (wall clock) a wait may take before the test fails: discovery takes up to ~5 s, a
 simulated second ~1-2 s of a loaded 2-core machine's time."""
 SHM = Path("/dev/shm")
+ONE_GRAPH_AT_A_TIME = pytest.mark.xdist_group("ros2")
+"""The DDS tests' modules run on one pytest worker, one after another: their networks are
+private, but /dev/shm, where Fast DDS keeps its segments and `own_shared_memory` cleans up,
+is the machine's."""
 
 
 @contextlib.contextmanager

@@ -32,7 +32,9 @@ from corobot_drake.model import dimensions as dim
 from corobot_drake.ros2 import inspection
 from corobot_drake.serving.client import CorobotClient
 from corobot_drake.serving.runner import SimRunner
-from ros2_probe import ros2_simulation
+from ros2_probe import ONE_GRAPH_AT_A_TIME, ros2_simulation
+
+pytestmark = ONE_GRAPH_AT_A_TIME
 
 _runner_defaults = inspect.signature(SimRunner).parameters
 SNAPSHOT_LAG = (_runner_defaults["snapshot_period"].default

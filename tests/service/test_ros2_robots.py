@@ -16,7 +16,9 @@ from std_srvs.srv import Trigger
 from tf2_msgs.msg import TFMessage
 
 from conftest import REPO
-from ros2_probe import ros2_simulation
+from ros2_probe import ONE_GRAPH_AT_A_TIME, ros2_simulation
+
+pytestmark = ONE_GRAPH_AT_A_TIME
 
 ROBOTS = ("corobot", "corobot_2")
 QUIET = ("robots: {corobot: {commands: [], cameras: {front: {rgb: false}}}, "
