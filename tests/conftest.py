@@ -8,14 +8,16 @@ front ends as a user meets them: HTTP, browser, recording, CLI, studies, ROS 2) 
 `pytest tests/unit` (or `-m unit`) the fast tier.
 
 `pytest` runs on every core (pytest-xdist, `-n auto --dist loadgroup` in pyproject.toml): the
-tests of a module that share one of its module-scoped fixtures (a served simulation, a browser,
-a Ray head) go to one worker, in file order, so the fixture is built once; every other test
-goes wherever a core is free. A module may name its group itself (`pytestmark =
+tests of a module that share one of its module-scoped fixtures (a served simulation, a browser)
+go to one worker, in file order, so the fixture is built once; the modules that share a
+session-scoped one (`ray_head`) go to one worker together; every other test goes wherever a
+core is free. A module may name its group itself (`pytestmark =
 pytest.mark.xdist_group(NAME)`) to keep its tests off the other workers' (the ROS 2 tests: one
 DDS graph at a time). `-n 0` runs them all in this process.
 
 A test module must stop every process it starts: each worker checks, as each module ends, that
-no child process it did not have before is still running.
+no child process it did not have before is still running (the session's fixtures' processes
+apart), and at the session's end that none is left at all.
 """
 
 import os
@@ -39,29 +41,46 @@ CHILD_EXIT_SECONDS = 15.0
 
 
 def pytest_collection_modifyitems(items):
+    groups = {}  # module -> its worker group (None: its tests go anywhere)
     for item in items:
         tier = item.path.parent.name
         if tier not in TIERS:
             raise pytest.UsageError(f"{item.path}: a test file belongs in one of the tiers' "
                                     f"folders: {', '.join(f'tests/{t}/' for t in TIERS)}")
         item.add_marker(tier)
-        if not item.get_closest_marker("xdist_group") and _shares_a_fixture(item):
-            item.add_marker(pytest.mark.xdist_group(f"{tier}/{item.path.name}"))
+        shared = _shared_fixtures(item)
+        if shared and groups.get(item.path) is None:
+            groups[item.path] = f"{tier}/{item.path.name}"
+        if any(d.scope == "session" for d in shared):  # shared with other modules' tests
+            groups[item.path] = next(d.argname for d in shared if d.scope == "session")
+    for item in items:
+        if (not item.get_closest_marker("xdist_group") and _shared_fixtures(item)
+                and groups.get(item.path)):
+            item.add_marker(pytest.mark.xdist_group(groups[item.path]))
 
 
-def _shares_a_fixture(item) -> bool:
-    """Whether the test uses a fixture of the tests' own that outlives it (module scope or
-    wider): one that the module's other tests share, built once per worker that runs them."""
+def _shared_fixtures(item) -> list:
+    """The fixtures of the tests' own that the test uses and that outlive it (module scope
+    or wider): the module's other tests share them (session scope: other modules' too)."""
     info = getattr(item, "_fixtureinfo", None)
     if info is None:
-        return False
-    return any(defs[-1].scope != "function" and defs[-1].baseid.startswith("tests")
-               and not defs[-1].func.__name__.startswith("_")
-               for defs in info.name2fixturedefs.values())
+        return []
+    return [defs[-1] for defs in info.name2fixturedefs.values()
+            if defs[-1].scope != "function" and defs[-1].baseid.startswith("tests")
+            and not defs[-1].argname.startswith("_")]
 
 
-def _children() -> dict[int, str]:
-    """The running processes descended from this one (pid: command line), zombies left out."""
+# --- no process left running ------------------------------------------------------------
+
+
+SESSION_PROCESSES: set[int] = set()
+"""Processes that session-scoped fixtures started (with their descendants: e.g. Ray's
+workers): they stop at the session's end, not at a module's."""
+
+
+def _children(skip: set[int] = frozenset()) -> dict[int, str]:
+    """The running processes descended from this one (pid: command line), zombies left out,
+    and the trees of `skip` left out."""
     parents: dict[int, list[int]] = {}
     for stat in Path("/proc").glob("[0-9]*/stat"):
         try:
@@ -73,6 +92,8 @@ def _children() -> dict[int, str]:
     found, todo = {}, [os.getpid()]
     while todo:
         for child in parents.get(todo.pop(), []):
+            if child in skip:
+                continue
             try:
                 command = Path(f"/proc/{child}/cmdline").read_bytes()
             except OSError:
@@ -89,26 +110,66 @@ def _xvfb_pid() -> int | None:
     return None if xdisplay._xvfb is None else xdisplay._xvfb.pid
 
 
+def _left_running(before: set[int], skip: set[int]) -> dict[int, str]:
+    """The child processes not in `before` (nor in the trees of `skip`, nor the X server)
+    still running once they have had `CHILD_EXIT_SECONDS` to exit."""
+    deadline = time.monotonic() + CHILD_EXIT_SECONDS
+    while True:  # a process stopped at the end may take a moment to exit
+        left = {pid: command for pid, command in _children(skip).items()
+                if pid not in before and pid != _xvfb_pid()}
+        if not left or time.monotonic() > deadline:
+            return left
+        time.sleep(0.1)
+
+
+def _fail_for(what: str, left: dict[int, str]) -> None:
+    if left:
+        pytest.fail(f"{what} left child processes running: "
+                    + "; ".join(f"{pid} {command}" for pid, command in left.items()),
+                    pytrace=False)
+
+
+@pytest.fixture(scope="session", autouse=True)
+def _no_child_process_left_at_the_end():
+    """Fails the session's last test (at its teardown) if a child process of this pytest
+    process is still running when every fixture has stopped what it started."""
+    before = set(_children())
+    yield
+    _fail_for("the session", _left_running(before, set()))
+
+
 @pytest.fixture(scope="module", autouse=True)
 def _no_child_process_left_running(request):
     """Fails the module's last test (at its teardown) if the module left a child process of
     this pytest process running: a test stops what it starts, by its handle."""
-    if not Path("/proc/self/stat").exists():
-        yield
-        return
     before = set(_children())
     yield
-    deadline = time.monotonic() + CHILD_EXIT_SECONDS
-    while True:  # a process stopped at the module's end may take a moment to exit
-        left = {pid: command for pid, command in _children().items()
-                if pid not in before and pid != _xvfb_pid()}
-        if not left or time.monotonic() > deadline:
-            break
-        time.sleep(0.1)
-    if left:
-        pytest.fail(f"{request.node.nodeid} left child processes running: "
-                    + "; ".join(f"{pid} {command}" for pid, command in left.items()),
-                    pytrace=False)
+    _fail_for(request.node.nodeid, _left_running(before, SESSION_PROCESSES))
+
+
+# --- shared by modules ------------------------------------------------------------------
+
+
+@pytest.fixture(scope="session")
+def ray_head():
+    """A Ray head (2 CPUs, no dashboard, its own processes) for the session's tests on Ray
+    (tests/service/test_study.py, tests/simulation/test_gym.py: one worker runs both). Its
+    users join it by address, or connect this process, and leave it as they found it: not
+    connected. Shut down through its handle at the session's end."""
+    ray = pytest.importorskip("ray")
+    from ray.cluster_utils import Cluster
+
+    assert not ray.is_initialized()
+    before = set(_children())
+    cluster = Cluster(initialize_head=True, head_node_args={
+        "num_cpus": 2, "include_dashboard": False})
+    started = set(_children()) - before
+    SESSION_PROCESSES.update(started)
+    yield cluster
+    if ray.is_initialized():
+        ray.shutdown()
+    cluster.shutdown()
+    SESSION_PROCESSES.difference_update(started)
 
 
 def make_sim(*overrides: str, scenario: Path = DEFAULT_SCENARIO,

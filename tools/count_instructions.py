@@ -10,7 +10,8 @@ where time on this shared machine is not, split into the plant's step and the re
 `--override` adds a station row with that scenario override (e.g. a Drake setting to try).
 `--cache-sim` adds callgrind's count of first-level instruction-cache misses (its cache model:
 what code the rows keep evicting), at about twice the run time. Rows run two at a time, ~20 s
-each.
+each. `--repeatability --seconds 0.02` checks the measure itself: two counts of the same run
+agree within 1%.
 """
 
 import subprocess
@@ -63,6 +64,29 @@ def _print_table(jobs: list, counts: list[instructions.Count], seconds: float) -
               f"{value - step:.1f} |" + (f" {misses:.2f} |" if cache else ""))
 
 
+REPEATABLE = 0.01
+"""The most two counts of the same station run may differ, relative: they differ only by
+what lands in the window besides the steps (Python's garbage collector, the toggling itself),
+0.05-0.15% over 20 ms; 1% still tells a count from a time, which moves 10-30% between
+identical runs on a shared machine."""
+
+
+def _repeatability(seconds: float) -> int:
+    """Counts the station twice: prints both counts, their relative difference and the
+    plant's step's share; 1 if they differ by more than REPEATABLE."""
+    jobs = [(instructions.STATION, None)] * 2
+    counts = _counted(jobs, seconds, False)
+    if isinstance(counts, str):
+        print(f"error: {counts}", file=sys.stderr)
+        return 2
+    first, second = counts
+    spread = abs(second.instructions - first.instructions) / first.instructions
+    print(f"the station over {seconds:g} simulated s, counted twice: {first.instructions:,} "
+          f"and {second.instructions:,} instructions ({spread:.3%} apart); the plant's step "
+          f"{first.plant_step / first.instructions:.0%} of them")
+    return 0 if spread <= REPEATABLE else 1
+
+
 @one_line_errors
 def main(argv=None) -> int:
     p = ToolParser(description=__doc__.splitlines()[0])
@@ -72,12 +96,17 @@ def main(argv=None) -> int:
                    help="scenario YAML: adds a station row with it (repeatable; default: none)")
     p.add_argument("--cache-sim", action="store_true",
                    help="also count first-level instruction-cache misses (~2x slower)")
+    p.add_argument("--repeatability", action="store_true",
+                   help="instead of the table: count the station twice and print how far "
+                   "the counts differ (exit 1 beyond REPEATABLE)")
     args = p.parse_args(argv)
     try:
         instructions.require_valgrind()
     except instructions.ValgrindMissingError as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
+    if args.repeatability:
+        return _repeatability(args.seconds)
     for override in args.override:  # a bad one is its one line now, not a failed row later
         bench_layers._scenario(override)
     jobs = [(row, None) for row in instructions.rows()]

@@ -6,7 +6,6 @@ before anything is built. Each load runs in a thread of its own and fails the te
 import os
 import subprocess
 import sys
-import tempfile
 from pathlib import Path
 
 import pytest
@@ -72,14 +71,17 @@ def test_a_hostile_value_in_any_numeric_field_is_refused_clearly_or_accepted(dat
     assert hi.related(outcome.match(), path), (override, outcome.error)
 
 
-_EDITED = Path(tempfile.mkdtemp(prefix="corobot-hostile-"))
+@pytest.fixture(scope="module")
+def edited(tmp_path_factory) -> Path:
+    """Where the edited scenario files go (hypothesis runs the examples in one test call)."""
+    return tmp_path_factory.mktemp("hostile")
 
 
 @EXAMPLES
-@given(st.data())
-def test_an_edited_scenario_file_loads_or_fails_with_its_line(data):
+@given(data=st.data())
+def test_an_edited_scenario_file_loads_or_fails_with_its_line(edited, data):
     name, text = hi.mutated_file(HypothesisDraw(data))
-    path = _EDITED / name
+    path = edited / name
     path.write_bytes(text.encode("utf-8", "surrogatepass"))
     outcome = hi.load(path)
     if outcome.error is None and outcome.other is None and not outcome.hung:

@@ -140,8 +140,10 @@ def test_webcam_page_refreshes_at_the_chosen_interval(page, server):
     wait_for(lambda: page.evaluate("() => window.webcam.frames") >= 8, 20, "8 frames")
     starts = page.evaluate("() => window.webcam.starts")
     gaps = [b - a for a, b in itertools.pairwise(starts)]
-    mean = sum(gaps) / len(gaps)
-    assert 270 <= mean <= 400, gaps
+    # One frame at a time, the next started the interval after the last one's start (or
+    # later, when a frame takes longer): never sooner. (How close to the interval a loaded
+    # machine keeps it is a benchmark's figure, not asserted here.) 1 ms: the timer's grain.
+    assert len(starts) >= 8 and min(gaps) >= 300 - 1, gaps
     assert page.evaluate("() => document.getElementById('frame').naturalWidth") == 320
 
     page.locator("#stop").click()

@@ -1,5 +1,5 @@
-"""The study engine: the study file, its expansion into runs, and studies run on Ray (a local
-instance shared by the module's tests, and a separately started head joined by address)."""
+"""The study engine: the study file, its expansion into runs, and studies run on Ray (a
+separately started head, conftest's `ray_head`, joined by address or connected to)."""
 
 import csv
 import math
@@ -351,22 +351,6 @@ def test_a_bad_program_path_is_one_line(tmp_path, text, expected):
 
 # --- studies on Ray ------------------------------------------------------------------------
 
-@pytest.fixture(scope="module")
-def ray_head():
-    """A separately started Ray head (2 CPUs, no dashboard, its own processes), shut down
-    through its handle at the module's end; the module's studies run on it."""
-    ray = pytest.importorskip("ray")
-    from ray.cluster_utils import Cluster
-
-    assert not ray.is_initialized()
-    cluster = Cluster(initialize_head=True, head_node_args={
-        "num_cpus": 2, "include_dashboard": False})
-    yield cluster
-    if ray.is_initialized():
-        ray.shutdown()
-    cluster.shutdown()
-
-
 def test_a_study_joins_a_separately_started_ray_head(tmp_path, ray_head):
     import ray
 
@@ -381,12 +365,14 @@ def test_a_study_joins_a_separately_started_ray_head(tmp_path, ray_head):
 
 @pytest.fixture(scope="module")
 def connected(ray_head):
-    """This process connected to the module's head: a study then uses the caller's session
-    (as in a notebook) instead of starting its own."""
+    """This process connected to the session's Ray head (conftest's `ray_head`) for the
+    module: a study then uses the caller's session (as in a notebook) instead of starting its
+    own."""
     import ray
 
     ray.init(address=ray_head.address, log_to_driver=False, configure_logging=False)
     yield
+    ray.shutdown()  # disconnects; the head is the session's
 
 
 @pytest.fixture(scope="module")

@@ -205,23 +205,31 @@ def _ground(x: float):
 # --- memory stays flat in long runs ----------------------------------------------------------
 
 
-def test_a_bounded_run_log_keeps_its_window_and_agrees_with_the_whole_one():
+def test_a_bounded_run_log_keeps_its_window_and_agrees_with_the_whole_one(monkeypatch):
     """With `run_log_window` the run log keeps the newest window (plus what the sink holds,
     under one chunk of `RUN_LOG_CHUNK` samples), and those rows are the same as a whole
-    run's. One advance of 31 s or many small ones (as when serving) bound it alike."""
-    from corobot_drake.systems.runlog import LOG_PERIOD, RUN_LOG_CHUNK
+    run's. One long advance (spanning more than a chunk and the window) or many small ones
+    (as when serving) bound it alike. Run at a tenth of the shipped chunk (1 s of samples)
+    and window: the bounding only counts samples and compares times, so every path it takes
+    with the shipped 10 s chunk it takes here in a tenth of the simulated time."""
+    from corobot_drake import simulation
+    from corobot_drake.systems.runlog import LOG_PERIOD
 
+    chunk = 100
+    monkeypatch.setattr(simulation, "RUN_LOG_CHUNK", chunk)
     script = "robots: {corobot: {commands: [!SetPower {left: 0.3, right: -0.3}]}}"
     whole, bounded = make_sim(script), make_sim(script)
-    bounded.run_log_window = 5.0
-    whole.advance(31.0)
-    bounded.advance(20.0)
-    while bounded.time < 31.0 - 1e-9:
-        bounded.advance_to(min(31.0, bounded.time + 0.05))
+    bounded.run_log_window = 0.5
+    end = 3.1
+    whole.advance(end)
+    bounded.advance(2.0)  # one advance: 2 chunks' samples, one chunk spanning the window
+    while bounded.time < end - 1e-9:
+        bounded.advance_to(min(end, bounded.time + 0.05))
     full, kept = whole.robot().run_log(), bounded.robot().run_log()
-    assert len(full) == pytest.approx(31.0 / LOG_PERIOD, abs=2)
-    window = 5.0 / LOG_PERIOD
-    assert window <= len(kept) <= window + RUN_LOG_CHUNK + 1
+    assert len(full) == pytest.approx(end / LOG_PERIOD, abs=2)
+    window = 0.5 / LOG_PERIOD
+    assert window <= len(kept) <= window + chunk + 1
+    assert len(kept) < len(full) - chunk  # something was dropped
     assert (kept == full[-len(kept):]).all()  # bit for bit the whole log's end
     assert (bounded._run_log_chunks["corobot"][0][:, 0] > 0).all()
     bounded.reset()

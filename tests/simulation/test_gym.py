@@ -165,9 +165,15 @@ def test_async_vector_env_steps_the_same_episodes_as_one_env(env):
         assert rewards[i] == pytest.approx(reward, abs=1e-6)
 
 
-def test_rollouts_on_ray_equal_episodes_in_this_process(env):
+def test_rollouts_on_ray_equal_episodes_in_this_process(env, ray_head):
+    """On the session's Ray head (conftest's `ray_head`), joined by address for the rollouts
+    and left after them."""
+    import ray
+
     policy = load_policy()
-    on_ray = rollouts(policy, [HELD_OUT[1]], workers=1, progress=False)
+    on_ray = rollouts(policy, [HELD_OUT[1]], workers=1, address=ray_head.address,
+                      progress=False)
+    assert not ray.is_initialized()
     here = [run_episode(env, policy, HELD_OUT[1])]
     assert on_ray == here
 

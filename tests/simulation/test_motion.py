@@ -382,11 +382,15 @@ def test_a_command_saved_before_its_first_update_resumes_as_issued():
 
 
 def test_drive_test_same_seed_same_numbers(tmp_path):
+    """Two runs of the tool print the same numbers to the last digit. At full power (15 s
+    simulated for the loop instead of 38 s at the default 0.2): the determinism asserted does
+    not depend on the power."""
     outputs = []
     for name in ("a.png", "b.png"):
         run = subprocess.run(
             [sys.executable, str(REPO / "tools" / "drive_test.py"), "--loops", "1", "--seed",
-             "7", "--plot", str(tmp_path / name)], capture_output=True, text=True, check=True)
+             "7", "--power", "1", "--plot", str(tmp_path / name)], capture_output=True,
+            text=True, check=True)
         outputs.append([line for line in run.stdout.splitlines()
                         if not line.startswith("path plot")])
         assert (tmp_path / name).stat().st_size > 10_000
@@ -396,12 +400,18 @@ def test_drive_test_same_seed_same_numbers(tmp_path):
 
 def test_compass_agrees_with_the_chassis_yaw_after_a_long_drive():
     """The plant's state quaternion drifts from unit norm; the compass must not care
-    (test_systems_odometry: a non-unit state quaternion)."""
+    (test_systems_odometry: a non-unit state quaternion). One turn and a drive take the norm
+    0.5% off (measured: 0.0053; five turns and drives, 25 s, 1.9%): a compass that read the
+    quaternion as a unit one (atan2 of its entries) would be off by ~2e-3 rad here, a
+    thousand times the tolerance."""
     sim = make_sim()
     robot = sim.robot()
-    for degrees in (170, -100, 120, -150, 90):
-        robot.rotate_degrees(degrees, 0.5)
-        robot.drive_distance(0.3, 0.5)
+    robot.rotate_degrees(170, 0.5)
+    robot.drive_distance(0.3, 0.5)
+    plant = sim.station.plant
+    quaternion = plant.GetPositions(plant.GetMyContextFromRoot(sim.context),
+                                    plant.GetModelInstanceByName("corobot"))[:4]
+    assert abs(np.linalg.norm(quaternion) - 1.0) > 1e-3  # the drift the compass must ignore
     assert robot.heading() == pytest.approx(robot.pose().yaw, abs=1e-6)
 
 
