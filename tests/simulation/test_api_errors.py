@@ -224,7 +224,7 @@ def test_a_bounded_run_log_keeps_its_window_and_agrees_with_the_whole_one(monkey
     whole.advance(end)
     bounded.advance(2.0)  # one advance: 2 chunks' samples, one chunk spanning the window
     while bounded.time < end - 1e-9:
-        bounded.advance_to(min(end, bounded.time + 0.05))
+        bounded.advance_to(min(end, round(bounded.time + 0.05, 6)))
     full, kept = whole.robot().run_log(), bounded.robot().run_log()
     assert len(full) == pytest.approx(end / LOG_PERIOD, abs=2)
     window = 0.5 / LOG_PERIOD
