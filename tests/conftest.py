@@ -103,20 +103,26 @@ def _children(skip: set[int] = frozenset()) -> dict[int, str]:
     return found
 
 
-def _xvfb_pid() -> int | None:
-    """The private X server of this process (it lives as long as the process, by design)."""
+def _process_helpers() -> set[int]:
+    """The helpers that live as long as this process, by design: the private X server
+    (`xdisplay`) and multiprocessing's resource tracker (started by a spawned child's first
+    semaphore, e.g. Gymnasium's AsyncVectorEnv's)."""
+    from multiprocessing import resource_tracker
+
     from corobot_drake.sensors import xdisplay
 
-    return None if xdisplay._xvfb is None else xdisplay._xvfb.pid
+    helpers = {getattr(resource_tracker._resource_tracker, "_pid", None)}
+    helpers.add(None if xdisplay._xvfb is None else xdisplay._xvfb.pid)
+    return helpers - {None}
 
 
 def _left_running(before: set[int], skip: set[int]) -> dict[int, str]:
-    """The child processes not in `before` (nor in the trees of `skip`, nor the X server)
-    still running once they have had `CHILD_EXIT_SECONDS` to exit."""
+    """The child processes not in `before` (nor in the trees of `skip`, nor the process's
+    helpers) still running once they have had `CHILD_EXIT_SECONDS` to exit."""
     deadline = time.monotonic() + CHILD_EXIT_SECONDS
     while True:  # a process stopped at the end may take a moment to exit
         left = {pid: command for pid, command in _children(skip).items()
-                if pid not in before and pid != _xvfb_pid()}
+                if pid not in before and pid not in _process_helpers()}
         if not left or time.monotonic() > deadline:
             return left
         time.sleep(0.1)

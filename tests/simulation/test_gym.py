@@ -149,7 +149,11 @@ def test_camera_adds_the_image_to_a_dict_observation():
 
 
 def test_async_vector_env_steps_the_same_episodes_as_one_env(env):
-    envs = gymnasium.vector.AsyncVectorEnv([lambda: gymnasium.make(ENV_ID)] * 2)
+    # Spawned, not forked: a fork of this process (threads of Ray, Meshcat, the servers'
+    # readers) copies locks other threads hold, and a child waiting on one never answers.
+    # "module:id": the spawned child imports the module that registers the id.
+    envs = gymnasium.vector.AsyncVectorEnv(
+        [lambda: gymnasium.make(f"corobot_drake.gym:{ENV_ID}")] * 2, context="spawn")
     try:
         obs, _ = envs.reset(seed=[11, 12])
         actions = np.array([[0.5, 0.8], [-0.3, 0.6]], np.float32)
