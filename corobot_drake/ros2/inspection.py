@@ -200,6 +200,8 @@ def _hz(session: _Session, args, out) -> int:
         stamp = getattr(getattr(msg, "header", None), "stamp", None) or getattr(
             msg, "clock", None)
         with lock:
+            if args.count and len(arrivals) >= args.count:
+                return  # counted: one arriving before the report must not change it
             arrivals.append((time.monotonic(), None if stamp is None
                              else stamp.sec + 1e-9 * stamp.nanosec))
             if args.count and len(arrivals) >= args.count:
