@@ -7,13 +7,13 @@ front ends as a user meets them: HTTP, browser, recording, CLI, studies, ROS 2) 
 `packaging` (the wheel, the tools, the hostile corpus, the docs' blocks). `pytest` runs all;
 `pytest tests/unit` (or `-m unit`) the fast tier.
 
-`pytest` runs on every core (pytest-xdist, `-n auto --dist loadgroup` in pyproject.toml): the
+With `-n auto --dist loadgroup` (pytest-xdist; pyproject.toml says why not by default) the
 tests of a module that share one of its module-scoped fixtures (a served simulation, a browser)
 go to one worker, in file order, so the fixture is built once; the modules that share a
 session-scoped one (`ray_head`) go to one worker together; every other test goes wherever a
 core is free. A module may name its group itself (`pytestmark =
 pytest.mark.xdist_group(NAME)`) to keep its tests off the other workers' (the ROS 2 tests: one
-DDS graph at a time). `-n 0` runs them all in this process.
+DDS graph at a time).
 
 A test module must stop every process it starts: each worker checks, as each module ends, that
 no child process it did not have before is still running (the session's fixtures' processes
