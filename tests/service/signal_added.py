@@ -22,6 +22,7 @@ signals.SIGNALS[BATTERY.name] = BATTERY
 
 from fastapi.testclient import TestClient  # noqa: E402
 from pydrake.systems.framework import LeafSystem  # noqa: E402
+from step_runner import StepRunner  # noqa: E402
 
 from corobot_drake.config.scenario import load_scenario  # noqa: E402
 from corobot_drake.recording.mcap_log import McapLog  # noqa: E402
@@ -85,7 +86,7 @@ def main() -> None:
                "snapshot": snapshots.robot_snapshot(robot, sim.time)["drive"][
                    "battery_voltage"],
                "change_threshold": CHANGE_THRESHOLDS["battery_voltage"]}
-        http = TestClient(create_app(_Runner(sim)), base_url="http://127.0.0.1")
+        http = TestClient(create_app(StepRunner(sim)), base_url="http://127.0.0.1")
         out["http"] = http.get("/robots/corobot/drive").json()["battery_voltage"]
         sim.advance_to(LOOK + 0.1)
     rows = robot.run_log()
@@ -102,22 +103,6 @@ def main() -> None:
     out["ros2"] = message.battery_voltage
     out["ros2_type"] = memory.types["/battery"]
     json.dump(out, sys.stdout)
-
-
-class _Runner:
-    """The routes' `serving.runner.Runner` over the simulation, as test_tables' StepRunner."""
-
-    def __init__(self, sim):
-        self.sim = sim
-        self.robots = {n: snapshots.RobotInfo.of(r) for n, r in sim.robots.items()}
-        self.alive, self.meshcat_url = True, None
-
-    @property
-    def snapshot(self) -> dict:
-        return snapshots.snapshot(self.sim)
-
-    def stats(self) -> dict:
-        return {"time": self.sim.time}
 
 
 if __name__ == "__main__":

@@ -2,7 +2,6 @@
 from Python, a scenario's script and HTTP; every signal reads the same in every front end at
 the same simulated time."""
 
-import concurrent.futures
 import copy
 import functools
 import json
@@ -14,6 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from fastapi.testclient import TestClient
+from step_runner import StepRunner
 from test_recording import read_mcap
 
 from corobot_drake import commands, signals
@@ -45,35 +45,6 @@ ISSUE_AT = 0.2
 """s: the sample command is issued then, the prelude (driving) at 0."""
 END = 2.5
 """s: the state compared (every completing sample has ended by then)."""
-
-
-class StepRunner:
-    """The `serving.runner.Runner` the routes use, over a simulation the test advances itself:
-    a submitted call runs at once, at the simulation's current time (as `SimRunner` runs it
-    between steps), so an HTTP command is issued at a time the test knows."""
-
-    def __init__(self, sim: Simulation):
-        self.sim = sim
-        self.robots = {n: snapshots.RobotInfo.of(r) for n, r in sim.robots.items()}
-        self.alive, self.meshcat_url = True, None
-
-    @property
-    def snapshot(self) -> dict:
-        return snapshots.snapshot(self.sim)
-
-    def submit(self, fn):
-        future = concurrent.futures.Future()
-        try:
-            future.set_result(fn(self.sim))
-        except Exception as e:  # the routes answer it (422, ...)
-            future.set_exception(e)
-        return future
-
-    def watch(self, fn):
-        return self.submit(fn)
-
-    def stats(self) -> dict:
-        return {"time": self.sim.time}
 
 
 @pytest.fixture(scope="module")
