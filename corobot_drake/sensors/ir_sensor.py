@@ -47,6 +47,7 @@ adds them, from the station's Meshcat hook (``corobot_drake/markers.py``).
 """
 
 
+import copy
 import math
 import zlib
 
@@ -261,7 +262,9 @@ class IrSensor(LeafSystem):
         version = inspector.geometry_version()
         if self._caster is None or not version.IsSameAs(self._caster_version, Role.kProximity):
             self._caster = RayCaster(inspector, exclude=self._exclude)
-            self._caster_version = version
+            # A copy: the version itself is a view that keeps the inspector's Python wrapper
+            # (and the Context it came from) referenced after that Context is gone.
+            self._caster_version = copy.copy(version)
         return self._caster
 
     def _cast(self, query_object):

@@ -3,11 +3,12 @@
 initialization. Then the registry: every kind of `Robot` has its add function."""
 
 import dataclasses as dc
+import gc
 import typing
 
 import numpy as np
 import pytest
-from pydrake.geometry import Box, ProximityProperties
+from pydrake.geometry import Box, ProximityProperties, QueryObject, SceneGraphInspector
 from pydrake.math import RigidTransform
 from pydrake.multibody.plant import AddMultibodyPlantSceneGraph
 from pydrake.multibody.tree import SpatialInertia
@@ -69,6 +70,24 @@ def test_add_ir_sensor_alone_reads_the_wall(wall):
     expected = WALL_X - origin_x if wall else config.maximum_range
     assert distance == pytest.approx(expected, abs=EXACT)
     assert diagram.GetOutputPort("bot.front.scan_time").Eval(context)[0] == 0.0
+
+
+def test_an_ir_sensor_keeps_no_view_of_a_context_that_is_gone():
+    """The sensor outlives the Contexts it scans (a diagram is simulated again and again):
+    once its Simulator is gone, no Python view of that Context's geometry (a QueryObject,
+    its inspector) may stay alive through the sensor. Such a view points at freed memory,
+    and its wrapper, still registered at that address, is what the bindings hand back for
+    whatever is allocated there next (an output's value, seen as a QueryObject's)."""
+    site = small_site(wall=True)
+    sensor = add_ir_sensor(site, "front", IrSensorConfig())
+    diagram, context = initialized(site)
+    assert sensor.GetOutputPort("distance").Eval(sensor.GetMyContextFromRoot(context))[0] < 1
+    del context
+    gc.collect()
+    views = [type(o).__name__ for o in gc.get_objects()
+             if isinstance(o, (QueryObject, SceneGraphInspector))]
+    assert views == []
+    assert diagram.GetSubsystemByName("bot.ir.front") is sensor  # the sensor itself lives on
 
 
 def test_add_ir_sensor_turned_off_adds_nothing():
