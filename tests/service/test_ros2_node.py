@@ -289,8 +289,11 @@ def test_the_inspection_tool_lists_echoes_and_counts(ros):
     assert echoed["header"]["frame_id"] == "ir_rear" and echoed["radiation_type"] == 1
     out = io.StringIO()
     assert inspection.main(["hz", "/clock", "-n", "30", "--timeout", "60"], out=out) == 0
-    assert out.getvalue().splitlines()[-1].endswith(
-        "100.0 per simulated s over 30 messages")  # every 10 ms of its stamps
+    # Every 10 ms of its stamps: the closest two (a best-effort stream may drop some under
+    # load, which lowers the mean rate, never raises it).
+    report = out.getvalue().splitlines()[-1]
+    assert report.endswith("over 30 messages, stamps 10.0 ms apart at the closest")
+    assert float(report.split(", ")[1].split()[0]) <= 100.0 + 1e-9
     assert inspection.main(["--wait", "1", "echo", "/no_such_topic"]) == 1
 
 
