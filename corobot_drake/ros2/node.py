@@ -13,6 +13,7 @@ from __future__ import annotations
 import concurrent.futures
 import contextlib
 import dataclasses as dc
+import logging
 import math
 import threading
 from functools import partial
@@ -42,6 +43,8 @@ FEEDBACK_PERIOD = 0.1
 """s (wall clock) between an action's feedback messages."""
 SERVICE_SETTLE_TIMEOUT = 30.0
 """s (wall clock) /set_pose waits for the robot to settle at its new pose."""
+
+_log = logging.getLogger(__name__)
 
 
 QOS = {
@@ -249,8 +252,7 @@ class Ros2Node:
         return self
 
     def _spin(self) -> None:
-        with contextlib.suppress(ExternalShutdownException):
-            self._executor.spin()
+        spin_until_closed(self._executor, self._closing)
 
     def close(self) -> None:
         """Stops spinning and shuts the node down, in the order rclpy needs (the executor,
@@ -267,6 +269,23 @@ class Ros2Node:
         self.node.destroy_node()
         if self.context.ok():
             rclpy.shutdown(context=self.context)
+
+
+def spin_until_closed(executor, closing: threading.Event) -> None:
+    """Spins `executor` until it is shut down or `closing` is set. A callback's exception
+    (rclpy re-raises it from `spin`) is logged and the node goes on serving: one lost answer,
+    e.g. a response Fast DDS drops because the server has not yet discovered the client's
+    reader, must not end every service, action and subscription of the node."""
+    while not closing.is_set():
+        try:
+            executor.spin()
+            return
+        except ExternalShutdownException:
+            return
+        except Exception:
+            if closing.is_set():
+                return
+            _log.exception("a ROS 2 callback failed; the node goes on serving")
 
 
 def remaining(robot: str, command: type, sim) -> float | None:

@@ -25,6 +25,8 @@ import pytest
 WAIT = 60.0
 """s (wall clock) a wait may take before the test fails: discovery takes up to ~5 s, a
 simulated second ~1-2 s of a loaded 2-core machine's time."""
+RETRY = 10.0
+"""s (wall clock) a service call waits for its answer before asking again (`Probe.call`)."""
 SHM = Path("/dev/shm")
 ONE_GRAPH_AT_A_TIME = pytest.mark.xdist_group("ros2")
 """The DDS tests' modules run on one pytest worker, one after another: their networks are
@@ -98,6 +100,7 @@ class Probe:
         self.node = rclpy.create_node(name, context=self.context)
         self.messages: dict[str, list] = collections.defaultdict(list)
         self._changed = threading.Condition()
+        self._clients: dict = {}
         self._executor = MultiThreadedExecutor(context=self.context)
         self._executor.add_node(self.node)
         self._thread = threading.Thread(target=self._executor.spin, daemon=True)
@@ -142,14 +145,45 @@ class Probe:
             raise AssertionError(f"no answer in {timeout} s")
         return future.result()
 
+    def client(self, service: str, srvtype):
+        """The probe's client of `service`, made (and its server discovered) on first use and
+        kept: each new client is a new round of discovery, whose race can lose an answer."""
+        if (service, srvtype) not in self._clients:
+            client = self.node.create_client(srvtype, service)
+            if not client.wait_for_service(timeout_sec=WAIT):
+                raise AssertionError(f"service {service} not discovered in {WAIT} s")
+            self._clients[service, srvtype] = client
+        return self._clients[service, srvtype]
+
+    def action_client(self, kind, name: str):
+        """The probe's client of action `name`, made (and its server discovered) on first use
+        and kept. Make it before the test needs it: a goal sent before the server has
+        discovered the client's readers is accepted, but its answer is lost."""
+        from rclpy.action import ActionClient
+
+        if (name, kind) not in self._clients:
+            client = ActionClient(self.node, kind, name)
+            if not client.wait_for_server(timeout_sec=WAIT):
+                raise AssertionError(f"action {name} not discovered in {WAIT} s")
+            self._clients[name, kind] = client
+        return self._clients[name, kind]
+
     def call(self, service: str, srvtype, request, timeout: float = WAIT):
-        client = self.node.create_client(srvtype, service)
-        try:
-            if not client.wait_for_service(timeout_sec=timeout):
-                raise AssertionError(f"service {service} not discovered in {timeout} s")
-            return self.wait_future(client.call_async(request), timeout)
-        finally:
-            self.node.destroy_client(client)
+        """The answer of `service` to `request`. Asked again every `RETRY` s without one:
+        wait_for_service sees the server's reader, not whether the server has discovered the
+        client's (Fast DDS then drops the response after 100 ms), and the probe's calls are
+        all idempotent (a pose, a stop, parameters)."""
+        client = self.client(service, srvtype)
+        deadline = time.monotonic() + timeout
+        while True:
+            future = client.call_async(request)
+            left = deadline - time.monotonic()
+            try:
+                return self.wait_future(future, min(RETRY, left))
+            except AssertionError:
+                client.remove_pending_request(future)
+                if time.monotonic() >= deadline:
+                    raise AssertionError(f"no answer from {service} in {timeout} s") from None
 
     def close(self) -> None:
         import rclpy

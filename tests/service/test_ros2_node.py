@@ -20,7 +20,6 @@ from corobot_interfaces.msg import DriveState, TipMargin, WheelLoads, WheelSlip
 from corobot_interfaces.srv import SetPose
 from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
-from rclpy.action import ActionClient
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import CameraInfo, Image, JointState, Range
@@ -64,6 +63,8 @@ def ros():
         for topic, (msgtype, qos) in TOPICS.items():
             probe.subscribe(topic, msgtype, qos)
         probe.wait_for("/clock")  # discovered
+        for kind, name in ((DriveDistance, "/drive_distance"), (RotateDegrees, "/rotate_degrees")):
+            probe.action_client(kind, name)  # discovered both ways before the first goal
         client = CorobotClient(server.url)
         yield probe, client, client.robot()
         client.close()
@@ -197,8 +198,7 @@ def test_cmd_vel_drives_and_the_deadman_stops(ros):
 
 
 def action(probe, kind, name, **goal):
-    client = ActionClient(probe.node, kind, name)
-    assert client.wait_for_server(timeout_sec=60)
+    client = probe.action_client(kind, name)
     feedback = []
     handle = probe.wait_future(client.send_goal_async(
         kind.Goal(**goal), feedback_callback=lambda f: feedback.append(f.feedback)))
@@ -315,3 +315,36 @@ def test_the_deadman_is_a_parameter(ros):
     refused = set_to(-1.0)
     assert not refused.successful and "cmd_vel_timeout" in refused.reason
     assert set_to(0.5).successful
+
+
+def test_the_node_goes_on_serving_after_a_callback_fails(caplog):
+    """rclpy re-raises a callback's exception from `spin` (e.g. the RCLError of a response
+    Fast DDS could not send): the node's thread logs it and spins on, until it is closed."""
+    import threading
+
+    from rclpy.executors import ExternalShutdownException
+
+    from corobot_drake.ros2.node import spin_until_closed
+
+    class Executor:
+        def __init__(self, outcomes):
+            self.outcomes, self.spins = list(outcomes), 0
+
+        def spin(self):
+            self.spins += 1
+            outcome = self.outcomes.pop(0)
+            if outcome is not None:
+                raise outcome
+
+    failing = Executor([RuntimeError("failed to send response"), RuntimeError("again"), None])
+    spin_until_closed(failing, threading.Event())
+    assert failing.spins == 3  # spun again after each failure, returned when spin returned
+    assert caplog.text.count("a ROS 2 callback failed; the node goes on serving") == 2
+    shut_down = Executor([ExternalShutdownException()])
+    spin_until_closed(shut_down, threading.Event())
+    assert shut_down.spins == 1
+    closed = threading.Event()
+    closed.set()
+    never = Executor([])
+    spin_until_closed(never, closed)
+    assert never.spins == 0
