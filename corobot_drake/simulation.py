@@ -117,8 +117,6 @@ class Robot:
         self._sim = sim
         self._parts = parts
         self.name = parts.name
-        self._ports: dict = {}
-        """The station's output ports of the signals read so far, by port name."""
 
     # --- commands -------------------------------------------------------------------------
     @_one_thread
@@ -328,11 +326,8 @@ class Robot:
         if spec.reader:
             value = getattr(self, spec.reader)()
             return dc.asdict(value) if dc.is_dataclass(value) else value
-        port = self._ports.get(spec.port)
-        if port is None:  # looked up once: a name lookup costs more than a cached Eval
-            port = self._ports[spec.port] = self._sim.station.diagram.GetOutputPort(
-                f"{self.name}.{spec.port}")
-        return spec.value_of(port.Eval(self._sim.context))
+        return spec.value_of(self._sim.output_port(f"{self.name}.{spec.port}").Eval(
+            self._sim.context))
 
     def commanded_power(self) -> dict[str, float]:
         """The drive's commanded power per wheel (its side's), in [-1, 1], by wheel name."""
@@ -520,6 +515,14 @@ class Robot:
         }
 
 
+def _teleport_monitor(sources, root_context) -> EventStatus:
+    """Stops the Simulator after the step in which a command source issued a SetPose."""
+    for source in sources:
+        if source.has_teleport(source.GetMyContextFromRoot(root_context)):
+            return EventStatus.ReachedTermination(source, "teleport")
+    return EventStatus.Succeeded()
+
+
 class Simulation:
     """A scenario built into a Drake diagram with its Simulator and Context."""
 
@@ -564,10 +567,11 @@ class Simulation:
         self.station: Station = build_station(scenario, meshcat, save_camera, extras=extras,
                                               mouse_drag=self._record_live is not False)
         self._owners = None
+        self._output_ports: dict = {}
+        """The station's output ports read so far (`output_port`), by name."""
         self.simulator = Simulator(self.station.diagram)
         ApplySimulatorConfig(scenario.simulator_config, self.simulator)
         self.context = self.simulator.get_mutable_context()
-        self.robots = {name: Robot(self, parts) for name, parts in self.station.robots.items()}
         # The built diagram's key, now: the scenario may be changed in place before a reset.
         self._diagram_key = diagram_key(scenario)
         self.run_log_window: float | None = run_log_window
@@ -587,7 +591,10 @@ class Simulation:
         if any(isinstance(c, sc.SetPose) for r in self.scenario.robots.values()
                for c in r.commands):
             # A scripted SetPose: stop after the step that issued it, to teleport (advance_to).
-            self.simulator.set_monitor(self._teleport_monitor)
+            # The monitor holds the command sources, not this Simulation: the Simulator keeps
+            # it from C++, where a reference back to the Simulation is a cycle never freed.
+            self.simulator.set_monitor(functools.partial(
+                _teleport_monitor, [p.command_source for p in self.station.robots.values()]))
         else:
             self.simulator.clear_monitor()
         if self._record_live is not None:  # before Initialize: its publish is the first frame
@@ -650,6 +657,23 @@ class Simulation:
     def time(self) -> float:
         return self.context.get_time()
 
+    def output_port(self, name: str):
+        """The station's exported output port `name`, looked up once (a name lookup costs
+        more than a cached Eval)."""
+        port = self._output_ports.get(name)
+        if port is None:
+            port = self._output_ports[name] = self.station.diagram.GetOutputPort(name)
+        return port
+
+    @property
+    def robots(self) -> dict[str, Robot]:
+        """Each robot by name, in the scenario's order. A `Robot` is a view that keeps its
+        Simulation alive; the Simulation keeps none of them, so it is freed the moment its
+        last reference goes, in that thread, not by the cycle collector in whichever thread
+        runs it next (its renderers' GL contexts must not be torn down beside another
+        thread's)."""
+        return {name: Robot(self, parts) for name, parts in self.station.robots.items()}
+
     def robot(self, name: str | None = None) -> Robot:
         """The named robot; without a name, the only one."""
         if name is None:
@@ -693,13 +717,6 @@ class Simulation:
 
     def _dead_reckoning(self, name: str):
         return self.station.diagram.GetSubsystemByName(f"{name}.dead_reckoning")
-
-    def _teleport_monitor(self, root_context) -> EventStatus:
-        for parts in self.station.robots.values():
-            source = parts.command_source
-            if source.has_teleport(source.GetMyContextFromRoot(root_context)):
-                return EventStatus.ReachedTermination(source, "teleport")
-        return EventStatus.Succeeded()
 
     @_one_thread
     def advance_to(self, t: float) -> None:

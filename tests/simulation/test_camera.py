@@ -24,9 +24,8 @@ from corobot_drake.model import dimensions as dim
 from corobot_drake.simulation import Simulation
 
 pytestmark = pytest.mark.xdist_group("simulation/test_camera.py")
-"""The camera tests in file order on one worker: run spread over two workers after other
-modules' tests, one of them crashed its worker (a native crash in the GL renderer, not
-reproduced alone nor in file order)."""
+"""The camera tests in file order on one worker (each builds its own GL renderer: on one
+worker they stay clear of another module's in the same process)."""
 
 
 BOX_RGB = np.array([0.8, 0.45, 0.15])
@@ -449,3 +448,28 @@ def test_a_picture_mid_run_leaves_the_simulation_as_it_was():
                      sim.robot().camera_image()))
     assert runs[0][:2] == runs[1][:2]
     np.testing.assert_array_equal(runs[0][2], runs[1][2])
+
+
+@pytest.mark.parametrize("script", ["", "commands: [!SetPose {x: 0.1, y: 0, yaw_deg: 0}], "])
+def test_a_simulation_is_freed_when_its_last_reference_goes(script):
+    """No reference cycle keeps a Simulation (a Robot is a view of it; the SetPose monitor
+    holds the command sources): it is freed by its reference count, in the thread that drops
+    it. Left to the cycle collector, which runs in whichever thread allocates next (a
+    server's, Ray's), its GL renderer was torn down beside another thread's GL calls: a
+    segfault in Mesa's GLX."""
+    import gc
+    import weakref
+
+    gc.disable()
+    try:
+        sim = make_sim(f"robots: {{corobot: {{{script}cameras: {{front: {{width: 32, "
+                       "height: 24}}}}", camera=True)
+        robot = sim.robot()
+        robot.drive_distance_async(0.1, 0.5)
+        sim.advance_to(0.1)
+        assert robot.signal("axle_speeds")
+        freed = weakref.ref(sim)
+        del sim, robot
+        assert freed() is None
+    finally:
+        gc.enable()
