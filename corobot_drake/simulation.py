@@ -111,7 +111,8 @@ def _check_timeout(timeout: float | None) -> float | None:
 
 
 class Robot:
-    """One robot of a running simulation: its commands and measurements."""
+    """One robot of a running simulation: its commands and measurements. A view: it keeps
+    its Simulation alive and holds nothing of its own (`Simulation.robots` makes them)."""
 
     def __init__(self, sim: "Simulation", parts: RobotParts):
         self._sim = sim

@@ -190,6 +190,17 @@ def _echo(session: _Session, args, out) -> int:
     if not _subscribe(session, args, on_message):
         return 1
     _until(done, args.timeout)
+    return _enough(args, seen[0], 1)
+
+
+def _enough(args, received: int, needed: int) -> int:
+    """0, or 1 with an error line when fewer than `needed` messages arrived (by the timeout
+    or Ctrl-C): a silent exit 0 would read as a topic that works."""
+    if received < needed:
+        when = "before Ctrl-C" if args.timeout is None else f"in {args.timeout:g} s"
+        print(f"error: {received} message(s) on {args.topic} {when} ({needed} needed)",
+              file=sys.stderr)
+        return 1
     return 0
 
 
@@ -230,7 +241,9 @@ def _hz(session: _Session, args, out) -> int:
         return 1
     _until(done, args.timeout, report)
     report()
-    return 0
+    with lock:
+        received = len(arrivals)
+    return _enough(args, received, 2)  # a rate needs two
 
 
 def main(argv: list[str] | None = None, out=None) -> int:

@@ -5,8 +5,9 @@ the module (real time, headless, with `--serve` beside it), in a private network
 (`ros2_probe`)."""
 
 import inspect
-import io
 import math
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -28,7 +29,6 @@ from std_srvs.srv import SetBool, Trigger
 from tf2_msgs.msg import TFMessage
 
 from corobot_drake.model import dimensions as dim
-from corobot_drake.ros2 import inspection
 from corobot_drake.serving.client import CorobotClient
 from corobot_drake.serving.runner import SimRunner
 from ros2_probe import ONE_GRAPH_AT_A_TIME, ros2_simulation
@@ -276,25 +276,36 @@ def test_services_act(ros):
     assert yaw_of(rest.pose.pose.orientation) == pytest.approx(-1.0, abs=0.01)
 
 
+def inspect_topics(*args: str) -> subprocess.CompletedProcess:
+    """`python -m corobot_drake.ros2 ARGS`, as a user runs it: a process (and so a DDS
+    participant) of its own, in this test's network and domain."""
+    return subprocess.run([sys.executable, "-m", "corobot_drake.ros2", *args],
+                          capture_output=True, text=True, timeout=180)
+
+
 def test_the_inspection_tool_lists_echoes_and_counts(ros):
-    out = io.StringIO()
-    assert inspection.main(["list"], out=out) == 0
-    listed = out.getvalue()
-    assert "  /odom [nav_msgs/msg/Odometry]" in listed
-    assert "  /set_pose [corobot_interfaces/srv/SetPose]" in listed
-    assert "  /drive_distance\n" in listed and "  /rotate_degrees\n" in listed
-    out = io.StringIO()
-    assert inspection.main(["echo", "/ir/rear", "-n", "1", "--timeout", "60"], out=out) == 0
-    echoed = yaml.safe_load(out.getvalue().split("---")[0])  # a best-effort stream, read
+    listed = inspect_topics("list")
+    assert listed.returncode == 0, listed.stderr
+    assert "  /odom [nav_msgs/msg/Odometry]" in listed.stdout
+    assert "  /set_pose [corobot_interfaces/srv/SetPose]" in listed.stdout
+    assert "  /drive_distance\n" in listed.stdout and "  /rotate_degrees\n" in listed.stdout
+    echo = inspect_topics("echo", "/ir/rear", "-n", "1", "--timeout", "60")
+    assert echo.returncode == 0, echo.stderr
+    echoed = yaml.safe_load(echo.stdout.split("---")[0])  # a best-effort stream, read
     assert echoed["header"]["frame_id"] == "ir_rear" and echoed["radiation_type"] == 1
-    out = io.StringIO()
-    assert inspection.main(["hz", "/clock", "-n", "30", "--timeout", "60"], out=out) == 0
+    hz = inspect_topics("hz", "/clock", "-n", "30", "--timeout", "60")
+    assert hz.returncode == 0, hz.stderr
     # Every 10 ms of its stamps: the closest two (a best-effort stream may drop some under
     # load, which lowers the mean rate, never raises it).
-    report = out.getvalue().splitlines()[-1]
+    report = hz.stdout.splitlines()[-1]
     assert report.endswith("over 30 messages, stamps 10.0 ms apart at the closest")
     assert float(report.split(", ")[1].split()[0]) <= 100.0 + 1e-9
-    assert inspection.main(["--wait", "1", "echo", "/no_such_topic"]) == 1
+    missing = inspect_topics("--wait", "1", "echo", "/no_such_topic")
+    assert missing.returncode == 1
+    assert missing.stderr.startswith("error: no topic /no_such_topic found in 1 s")
+    once = inspect_topics("hz", "/robot_description", "--timeout", "3")  # latched: one
+    assert (once.returncode, once.stderr.splitlines()[-1]) == (
+        1, "error: 1 message(s) on /robot_description in 3 s (2 needed)")
 
 
 def test_the_deadman_is_a_parameter(ros):
