@@ -44,6 +44,11 @@ FEEDBACK_PERIOD = 0.1
 SERVICE_SETTLE_TIMEOUT = 30.0
 """s (wall clock) /set_pose waits for the robot to settle at its new pose."""
 
+BLOCKING_CALLBACKS_PER_ROBOT = len(ifc.ACTIONS) + 1
+"""Callbacks that wait on the simulation, per robot: each action's running goal, /set_pose."""
+OTHER_CALLBACK_THREADS = 4
+"""Executor threads for the quick callbacks (/cmd_vel, the services, the parameters)."""
+
 _log = logging.getLogger(__name__)
 
 
@@ -98,6 +103,7 @@ class Ros2Node:
         self._thread: threading.Thread | None = None
         self._closing = threading.Event()
         self._servers: list = []
+        self._robots = 0
 
     @property
     def log(self):
@@ -120,6 +126,7 @@ class Ros2Node:
         """Takes commands for `robots` (names, the scenario's order) through `runner`."""
         self.runner = runner
         namespaced = len(robots) > 1
+        self._robots = len(robots)
         for robot in robots:
             names = RobotNames(robot, namespaced)
             self.node.create_subscription(
@@ -245,7 +252,13 @@ class Ros2Node:
     # --- life cycle ---
     def start(self) -> Ros2Node:
         """Spins the node in a thread of its own."""
-        self._executor = MultiThreadedExecutor(context=self.context)
+        # A goal's execute callback holds a thread until its command ends, and /set_pose one
+        # until the robot settles (both wait, the GIL released). rclpy's default, a thread
+        # per core, left a 2-core machine with two goals running nothing to serve /cmd_vel,
+        # the parameters or any other service: a thread per blocking callback a robot can
+        # have at once, and some for the rest.
+        threads = BLOCKING_CALLBACKS_PER_ROBOT * self._robots + OTHER_CALLBACK_THREADS
+        self._executor = MultiThreadedExecutor(num_threads=threads, context=self.context)
         self._executor.add_node(self.node)
         self._thread = threading.Thread(target=self._spin, name="corobot-ros2", daemon=True)
         self._thread.start()

@@ -81,3 +81,24 @@ def test_a_robots_commands_are_its_own(probe):
     response = probe.call("/corobot_2/all_stop", Trigger, Trigger.Request())
     assert response.success
     probe.node.destroy_publisher(publisher)
+
+
+def test_services_are_answered_while_every_robot_runs_a_goal(probe):
+    """Each running goal holds one of the node's executor threads until its command ends:
+    with both robots on a long drive, the node still answers a service at once (it has
+    threads for every goal a robot can run and for the quick callbacks besides; with one
+    thread per core, a 2-core machine's two were both taken until the drives ended)."""
+    from corobot_interfaces.action import DriveDistance
+    from rcl_interfaces.srv import GetParameters
+
+    goals = [probe.wait_future(probe.action_client(DriveDistance, f"/{robot}/drive_distance")
+                               .send_goal_async(DriveDistance.Goal(distance=2.0, power=0.3)))
+             for robot in ROBOTS]  # ~10 s of driving each
+    assert all(goal.accepted for goal in goals)
+    answer = probe.call("/corobot_drake/get_parameters", GetParameters,
+                        GetParameters.Request(names=["cmd_vel_timeout"]), timeout=5)
+    assert answer.values[0].double_value > 0
+    for goal in goals:
+        probe.wait_future(goal.cancel_goal_async())
+    results = [probe.wait_future(goal.get_result_async()) for goal in goals]
+    assert not any(r.result.success for r in results)  # cancelled mid-drive: still running
