@@ -168,18 +168,20 @@ class Probe:
             self._clients[name, kind] = client
         return self._clients[name, kind]
 
-    def call(self, service: str, srvtype, request, timeout: float = WAIT):
-        """The answer of `service` to `request`. Asked again every `RETRY` s without one:
+    def call(self, service: str, srvtype, request, timeout: float = WAIT,
+             retry: float | None = RETRY):
+        """The answer of `service` to `request`, asked again every `retry` s without one:
         wait_for_service sees the server's reader, not whether the server has discovered the
-        client's (Fast DDS then drops the response after 100 ms), and the probe's calls are
-        all idempotent (a pose, a stop, parameters)."""
+        client's (Fast DDS then drops the response after 100 ms). For a quick, idempotent
+        service only (a stop, parameters); `retry=None` for one that takes its time (a pose
+        answers once the robot has settled: asked again, it would start over)."""
         client = self.client(service, srvtype)
         deadline = time.monotonic() + timeout
         while True:
             future = client.call_async(request)
             left = deadline - time.monotonic()
             try:
-                return self.wait_future(future, min(RETRY, left))
+                return self.wait_future(future, left if retry is None else min(retry, left))
             except AssertionError:
                 client.remove_pending_request(future)
                 if time.monotonic() >= deadline:

@@ -65,6 +65,7 @@ def ros():
         probe.wait_for("/clock")  # discovered
         for kind, name in ((DriveDistance, "/drive_distance"), (RotateDegrees, "/rotate_degrees")):
             probe.action_client(kind, name)  # discovered both ways before the first goal
+        probe.client("/set_pose", SetPose)  # and before the first pose
         client = CorobotClient(server.url)
         yield probe, client, client.robot()
         client.close()
@@ -80,7 +81,7 @@ def yaw_of(q) -> float:
 
 
 def set_pose(probe, x, y, yaw):
-    return probe.call("/set_pose", SetPose, SetPose.Request(x=x, y=y, yaw=yaw))
+    return probe.call("/set_pose", SetPose, SetPose.Request(x=x, y=y, yaw=yaw), retry=None)
 
 
 def at_rest(probe, after: float) -> Odometry:
