@@ -7,7 +7,7 @@ front ends as a user meets them: HTTP, browser, recording, CLI, studies, ROS 2) 
 `packaging` (the wheel, the tools, the hostile corpus, the docs' blocks). `pytest` runs all;
 `pytest tests/unit` (or `-m unit`) the fast tier.
 
-On every core (pytest-xdist's `-n auto --dist loadgroup`, pyproject.toml's default) the
+With `-n auto --dist loadgroup` (pytest-xdist; pyproject.toml says why not by default) the
 tests of a module that share one of its module-scoped fixtures (a served simulation, a browser)
 go to one worker, in file order, so the fixture is built once; the modules that share a
 session-scoped one (`ray_head`) go to one worker together; every other test goes wherever a

@@ -9,6 +9,7 @@ import pytest
 pytest.importorskip("rclpy", reason="the [ros2] extra (tools/setup installs it)")
 pytest.importorskip("corobot_interfaces.msg", reason="python -m corobot_drake.ros2.build")
 
+from corobot_interfaces.action import DriveDistance
 from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
@@ -38,6 +39,7 @@ def probe():
         probe.subscribe("/tf_static", TFMessage, LATCHED)
         for robot in ROBOTS:
             probe.wait_for(f"/{robot}/odom")
+            probe.action_client(DriveDistance, f"/{robot}/drive_distance")  # discovered
         yield probe
 
 
@@ -88,7 +90,6 @@ def test_services_are_answered_while_every_robot_runs_a_goal(probe):
     with both robots on a long drive, the node still answers a service at once (it has
     threads for every goal a robot can run and for the quick callbacks besides; with one
     thread per core, a 2-core machine's two were both taken until the drives ended)."""
-    from corobot_interfaces.action import DriveDistance
     from rcl_interfaces.srv import GetParameters
 
     goals = [probe.wait_future(probe.action_client(DriveDistance, f"/{robot}/drive_distance")
