@@ -203,6 +203,7 @@ def _check_model_file(file: Path, path: str) -> None:
                             max_bytes=MAX_MODEL_BYTES)
     except sc.ScenarioError as e:
         raise DirectiveError(path, f"{file}: {e.message}") from None
+    base = _mjcf_mesh_dir(text, file.parent) if file.suffix.lower() == ".xml" else file.parent
     for match in _MESH_TAG.finditer(text):
         attributes, body = match.group(1), match.group(3) or ""
         found = (re.search(_ATTRIBUTE.format("filename"), attributes)
@@ -212,8 +213,19 @@ def _check_model_file(file: Path, path: str) -> None:
             continue
         scale = (re.search(_ATTRIBUTE.format("scale"), attributes)
                  or re.search(_ELEMENT.format("scale"), body))
-        _check_model_mesh(resolve(found.group(1), file.parent), scale and scale.group(1),
+        _check_model_mesh(resolve(found.group(1), base), scale and scale.group(1),
                           f"{file}: mesh {found.group(1)!r}", path)
+
+
+def _mjcf_mesh_dir(text: str, model_dir: Path) -> Path:
+    """Where an MJCF model's relative mesh files are, as Drake's parser finds them: the
+    `<compiler>`'s `meshdir` (else its `assetdir`), against the model's folder unless
+    absolute; the model's folder without either."""
+    compiler = re.search(r"<compiler\b([^>]*)>", text)
+    attributes = compiler.group(1) if compiler else ""
+    found = (re.search(_ATTRIBUTE.format("meshdir"), attributes)
+             or re.search(_ATTRIBUTE.format("assetdir"), attributes))
+    return model_dir / found.group(1) if found else model_dir
 
 
 def _check_model_mesh(mesh: Path, scale: str | None, what: str, path: str) -> None:

@@ -315,3 +315,41 @@ def test_a_mesh_scale_outside_its_range_is_refused(tmp_path, scale, message):
     with pytest.raises(ScenarioError, match=rf"world\.bodies\.m\.shape\.{message}"):
         make_sim(f"world: {{bodies: {{m: {{shape: !Mesh {{filename: '{tmp_path}/cube.obj', "
                  f"scale: {scale}}}}}}}}}")
+
+
+MJCF_CRATE = """<mujoco model="crate">
+  <compiler {compiler}/>
+  <asset><mesh name="cube" file="cube.obj"/></asset>
+  <worldbody>
+    <body name="crate" pos="0.6 0.6 0.1">
+      <freejoint/>
+      <inertial pos="0 0 0" mass="2" diaginertia="0.0133 0.0133 0.0133"/>
+      <geom type="mesh" mesh="cube"/>
+    </body>
+  </worldbody>
+</mujoco>
+"""
+
+
+@pytest.mark.parametrize("compiler, folder", [('meshdir="meshes"', "meshes"),
+                                              ('assetdir="assets"', "assets"),
+                                              ('meshdir="meshes" assetdir="assets"', "meshes")])
+def test_an_mjcf_model_finds_its_meshes_where_its_compiler_says(tmp_path, compiler, folder):
+    """MJCF's `<compiler meshdir>` (else `assetdir`) names the meshes' folder: the checks
+    look there, as Drake's parser does, and find a bad mesh there too."""
+    (tmp_path / folder).mkdir()
+    (tmp_path / folder / "cube.obj").write_text(CUBE_OBJ)
+    model = tmp_path / "crate.xml"
+    model.write_text(MJCF_CRATE.format(compiler=compiler))
+    directive = f"directives: [{{add_model: {{name: crate, file: 'file://{model}'}}}}]"
+    scenario = load_scenario(None, overrides=[directive])
+    sim = Simulation(scenario)
+    sim.advance(0.3)
+    crate = sim.station.plant.GetBodyByName("crate")
+    z = sim.station.plant.EvalBodyPoseInWorld(
+        sim.station.plant.GetMyContextFromRoot(sim.context), crate).translation()[2]
+    assert z == pytest.approx(0.1, abs=SINK_TOLERANCE)  # on the ground: the cube was found
+    (tmp_path / folder / "cube.obj").write_text(bad_meshes(tmp_path)["nan.obj"][0])
+    with pytest.raises(ScenarioError, match=r"directives\[0\]\.add_model\.file: .*: mesh "
+                       r"'cube\.obj': .*not a finite number"):
+        load_scenario(None, overrides=[directive])
