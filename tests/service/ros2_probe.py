@@ -192,6 +192,13 @@ class Probe:
 
         self._executor.shutdown(timeout_sec=5.0)
         self._thread.join(5.0)
+        from rclpy.action import ActionClient
+
+        for client in self._clients.values():  # before the node, whose destruction leaves
+            if isinstance(client, ActionClient):  # an action client's futures failing
+                client.destroy()
+            else:
+                self.node.destroy_client(client)
         self.node.destroy_node()
         if self.context.ok():
             rclpy.shutdown(context=self.context)
