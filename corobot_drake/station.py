@@ -37,9 +37,10 @@ from pydrake.systems.primitives import MatrixGain
 
 from corobot_drake import signals
 from corobot_drake.config import scenario as sc
+from corobot_drake.config.mesh_files import mesh_source
 from corobot_drake.model import dimensions as dim
 from corobot_drake.model.sdf import corobot_sdf
-from corobot_drake.resources import make_parser, resolve_file
+from corobot_drake.resources import make_parser
 from corobot_drake.sensors.registry import add_sensors
 from corobot_drake.sensors.site import SensorSite
 from corobot_drake.systems.contact import add_wheel_contacts
@@ -68,14 +69,14 @@ def _geometry(shape):
     if isinstance(shape, sc.Ellipsoid):
         return Ellipsoid(shape.a, shape.b, shape.c)
     if isinstance(shape, sc.Mesh):
-        return Mesh(resolve_file(shape.filename), shape.scale)
+        return Mesh(mesh_source(shape.filename), shape.scale)
     raise TypeError(f"unsupported shape {shape!r}")
 
 
 def _collision_geometry(shape):
     """What a world body touches with: its shape, or a mesh's convex hull (`Mesh.collision`)."""
     if isinstance(shape, sc.Mesh) and shape.collision == "convex_hull":
-        return Convex(resolve_file(shape.filename), shape.scale)
+        return Convex(mesh_source(shape.filename), shape.scale)
     return _geometry(shape)
 
 

@@ -18,12 +18,8 @@ from pathlib import Path
 
 import numpy as np
 
-from corobot_drake.config.scenario import ScenarioError, read_bytes
+from corobot_drake.config.scenario import MESH_EXTENSIONS, ScenarioError, read_bytes
 from corobot_drake.limits import SHAPE_SIZE
-
-MESH_EXTENSIONS = (".obj", ".gltf", ".glb")
-"""The mesh files this module reads (any case): a model's visual mesh may be GLB; a world
-body's not (`scenario.MESH_EXTENSIONS`)."""
 
 MAX_MESH_BYTES = 16 << 20
 """A mesh file's largest size, its glTF buffers included (16 MiB: an OBJ of ~150k triangles)."""
@@ -66,6 +62,31 @@ def check_mesh_file(path: str | Path, extensions=MESH_EXTENSIONS) -> MeshInfo:
     except (ValueError, RecursionError) as e:
         raise MeshFileError(f"not a glTF file (not JSON: {str(e).splitlines()[0]})") from None
     return _gltf(document, Path(path).parent, None, len(data))
+
+
+def mesh_source(uri: str):
+    """What Drake's `Mesh` and `Convex` read for a scenario's mesh file `uri` (checked before):
+    its path, or for a GLB the same glTF in memory, its binary chunk a data URI (Drake builds no
+    convex hull from a GLB file, and does from a glTF), its other files read beside it."""
+    from pydrake.common import MemoryFile
+    from pydrake.geometry import InMemoryMesh
+
+    from corobot_drake.resources import resolve_file
+
+    path = Path(resolve_file(uri))
+    if path.suffix.lower() != ".glb":
+        return str(path)
+    document, binary = _glb(_read(path, MAX_MESH_BYTES))
+    beside = {}
+    for buffer in document.get("buffers", []):
+        if "uri" not in buffer:
+            buffer["uri"] = ("data:application/octet-stream;base64,"
+                             + base64.b64encode(binary or b"").decode())
+    for item in [*document.get("buffers", []), *document.get("images", [])]:
+        if "uri" in item and not item["uri"].startswith("data:"):
+            beside[item["uri"]] = path.parent / item["uri"]
+    return InMemoryMesh(mesh_file=MemoryFile(json.dumps(document).encode(), ".gltf", str(path)),
+                        supporting_files=beside)
 
 
 def _read(path, max_bytes: int) -> bytes:
@@ -168,6 +189,9 @@ def _gltf(document, directory: Path, binary: bytes | None, size: int) -> MeshInf
             for primitive in mesh["primitives"]:
                 if primitive.get("mode", 4) != 4:  # points, lines, strips: no faces drawn so
                     continue
+                if "NORMAL" not in primitive["attributes"]:
+                    raise MeshFileError("a primitive has no vertex normals (NORMAL): the "
+                                        "cameras' renderer needs them")
                 positions = _accessor(document, buffers, primitive["attributes"]["POSITION"])
                 index = primitive.get("indices")
                 count = (document["accessors"][index]["count"] if index is not None

@@ -85,9 +85,9 @@ def body_shape(shape):
     if kind is sc.Ellipsoid:
         return Ellipsoid(shape.a, shape.b, shape.c)
     if kind is sc.Mesh:  # its convex hull (the file was checked before: `mesh_files`)
-        from corobot_drake.resources import resolve_file
+        from corobot_drake.config.mesh_files import mesh_source
 
-        return Convex(resolve_file(shape.filename), shape.scale)
+        return Convex(mesh_source(shape.filename), shape.scale)
     return None  # a shape this check does not know: not checked
 
 

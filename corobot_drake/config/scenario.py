@@ -84,7 +84,7 @@ class Ellipsoid:
 
 @dc.dataclass
 class Mesh:
-    """A mesh file: drawn as it is (OBJ or glTF), touching others through `collision`."""
+    """A mesh file: drawn as it is (OBJ, glTF or GLB), touching others through `collision`."""
 
     filename: str = ""
     """A path relative to the scenario file (an --override's: to the working directory), an
@@ -100,10 +100,9 @@ class Mesh:
 
 
 MESH_COLLISIONS = ("convex_hull", "mesh")
-MESH_EXTENSIONS = (".obj", ".gltf")
-"""The mesh files a world body may use (any case): what Meshcat, the cameras' renderers and
-Drake's convex hull all read (not GLB: Drake 1.58 builds no convex hull from it);
-`config/mesh_files.py` checks them."""
+MESH_EXTENSIONS = (".obj", ".gltf", ".glb")
+"""The mesh files a world body or a directives' model may use (any case); `config/mesh_files.py`
+checks them. `collision: mesh` reads OBJ only (Drake's rigid hydroelastic mesh)."""
 
 # typing.Union, not `|`: the YAML tags (!Box ...) are read from a Union's members.
 Shape = Union[Box, Sphere, Cylinder, Capsule, Ellipsoid, Mesh]  # noqa: UP007

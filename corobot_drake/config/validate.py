@@ -563,6 +563,10 @@ class LayerChecks:
         if mesh.collision not in sc.MESH_COLLISIONS:
             self.fail(f"{path}.collision", f"{mesh.collision!r} is not one of "
                       + ", ".join(sc.MESH_COLLISIONS))
+        if mesh.collision == "mesh" and not filename.lower().endswith(".obj"):
+            self.fail(f"{path}.collision", "a surface mesh touches as Drake's rigid "
+                      "hydroelastic mesh, which is read from an OBJ file: use an .obj, or "
+                      "convex_hull")
         if mesh.collision == "mesh" and not body.fixed:
             self.fail(f"{path}.collision", "a surface mesh touches rigidly, and a free rigid "
                       f"body {RIGID_ON_GROUND}: make the body fixed, or use convex_hull "

@@ -224,20 +224,26 @@ def test_a_directives_file_that_includes_itself_is_refused(tmp_path):
             f"directives: [{{add_directives: {{file: 'file://{tmp_path}/a.yaml'}}}}]"])
 
 
-def gltf(vertices, indices, glb=False) -> bytes:
-    """A glTF 2.0 mesh of `vertices` (n x 3) and triangle `indices`: JSON with its buffer in
-    a data URI, or GLB."""
-    blob = np.asarray(vertices, "<f4").tobytes() + np.asarray(indices, "<u2").tobytes()
+def gltf(vertices, indices, glb=False, normals=True) -> bytes:
+    """A glTF 2.0 mesh of `vertices` (n x 3), each with a normal pointing away from the origin
+    (unless not `normals`), and triangle `indices`: JSON with its buffer in a data URI, or GLB."""
+    vertices = np.asarray(vertices, "<f4")
     n, m = len(vertices), len(indices)
+    directions = vertices / np.maximum(np.linalg.norm(vertices, axis=1, keepdims=True), 1e-9)
+    blob = (vertices.tobytes() + directions.astype("<f4").tobytes()
+            + np.asarray(indices, "<u2").tobytes())
+    attributes = {"POSITION": 0, "NORMAL": 2} if normals else {"POSITION": 0}
     document = {
         "asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],
         "nodes": [{"mesh": 0}], "meshes": [{"primitives": [
-            {"attributes": {"POSITION": 0}, "indices": 1}]}],
+            {"attributes": attributes, "indices": 1}]}],
         "buffers": [{"byteLength": len(blob)}],
         "bufferViews": [{"buffer": 0, "byteLength": 12 * n},
-                        {"buffer": 0, "byteOffset": 12 * n, "byteLength": 2 * m}],
+                        {"buffer": 0, "byteOffset": 24 * n, "byteLength": 2 * m},
+                        {"buffer": 0, "byteOffset": 12 * n, "byteLength": 12 * n}],
         "accessors": [{"bufferView": 0, "componentType": 5126, "count": n, "type": "VEC3"},
-                      {"bufferView": 1, "componentType": 5123, "count": m, "type": "SCALAR"}]}
+                      {"bufferView": 1, "componentType": 5123, "count": m, "type": "SCALAR"},
+                      {"bufferView": 2, "componentType": 5126, "count": n, "type": "VEC3"}]}
     if not glb:
         document["buffers"][0]["uri"] = ("data:application/octet-stream;base64,"
                                          + base64.b64encode(blob).decode())
@@ -271,6 +277,8 @@ def bad_meshes(tmp_path) -> dict:
         "empty.glb": (gltf(CORNERS, [], glb=True), "has no faces"),
         "bad.glb": (b"glTF" + b"\0" * 30, "not a glTF 2.0 binary file"),
         "nan.glb": (gltf(nan, TRIANGLES, glb=True), "not a finite number"),
+        "nonormals.gltf": (gltf(CORNERS, TRIANGLES, normals=False),
+                           r"no vertex normals \(NORMAL\)"),
     }
 
 
@@ -278,10 +286,8 @@ def test_bad_meshes_are_refused_with_one_line(tmp_path):
     for name, (content, message) in bad_meshes(tmp_path).items():
         path = tmp_path / name
         (path.write_bytes if isinstance(content, bytes) else path.write_text)(content)
-        world = ("a mesh file is one of .obj, .gltf" if name.endswith(".glb")  # Drake's hull
-                 else message)
         with pytest.raises(ScenarioError, match=rf"world\.bodies\.m\.shape\.filename: {path}: "
-                           rf".*{world}"):
+                           rf".*{message}"):
             make_sim(f"world: {{bodies: {{m: {{shape: !Mesh {{filename: '{path}'}}}}}}}}")
         with pytest.raises(ScenarioError, match=rf"directives\[0\]\.add_model\.file: .*: mesh "
                            rf"'{path}': .*{message}"):
@@ -289,12 +295,27 @@ def test_bad_meshes_are_refused_with_one_line(tmp_path):
                 tmp_path, geometry=f'<mesh filename="{path}"/>'))])
 
 
-def test_a_good_gltf_mesh_loads_and_rests(tmp_path):
-    (tmp_path / "cube.gltf").write_bytes(gltf(CORNERS, TRIANGLES))
-    sim = make_sim(f"world: {{bodies: {{m: {{shape: !Mesh {{filename: '{tmp_path}/cube.gltf'}}, "
-                   "pose: {translation: [0.8, 0.8, 0.1]}}}}")
+@pytest.mark.parametrize("name", ["cube.gltf", "CUBE.GLB"])
+def test_a_good_gltf_or_glb_mesh_loads_rests_and_is_seen(tmp_path, name):
+    """A free glTF or GLB cube (convex hull, compliant) rests, and the camera renders it (Drake
+    hulls no GLB file: the station hands it over as glTF in memory)."""
+    (tmp_path / name).write_bytes(gltf(CORNERS, TRIANGLES, glb=name.lower().endswith(".glb")))
+    sim = make_sim(f"world: {{bodies: {{m: {{shape: !Mesh {{filename: '{tmp_path}/{name}'}}, "
+                   "pose: {translation: [0.5, 0, 0.1]}}}}", camera=True)
+    empty = make_sim(camera=True)
     sim.advance(0.5)
+    empty.advance(0.5)
     assert sim.summary()["bodies"]["m"]["pose"]["z"] == pytest.approx(0.1, abs=1e-3)
+    seen = np.any(sim.robot().camera_image() != empty.robot().camera_image(), axis=-1)
+    assert seen.mean() > 0.05  # the cube fills part of the view ahead
+
+
+def test_a_surface_mesh_that_is_not_obj_is_refused(tmp_path):
+    (tmp_path / "cube.gltf").write_bytes(gltf(CORNERS, TRIANGLES))
+    with pytest.raises(ScenarioError, match=r"world\.bodies\.m\.shape\.collision: a surface "
+                       r"mesh .* read from an OBJ file"):
+        make_sim(f"world: {{bodies: {{m: {{shape: !Mesh {{filename: '{tmp_path}/cube.gltf', "
+                 "collision: mesh}, fixed: true, hydroelastic_modulus: 0}}}")
 
 
 def test_a_large_sparse_mesh_is_refused_by_its_size_unread(tmp_path):
