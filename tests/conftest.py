@@ -7,20 +7,23 @@ front ends as a user meets them: HTTP, browser, recording, CLI, studies, ROS 2) 
 `packaging` (the wheel, the tools, the hostile corpus, the docs' blocks). `pytest` runs all;
 `pytest tests/unit` (or `-m unit`) the fast tier.
 
-With `-n auto --dist loadgroup` (pytest-xdist; pyproject.toml says why not by default) the
-tests of a module that share one of its module-scoped fixtures (a served simulation, a browser)
-go to one worker, in file order, so the fixture is built once; the modules that share a
-session-scoped one (`ray_head`) go to one worker together; every other test goes wherever a
-core is free. A module may name its group itself (`pytestmark =
-pytest.mark.xdist_group(NAME)`) to keep its tests off the other workers' (the ROS 2 tests: one
-DDS graph at a time).
+`pytest` runs on every core (pytest-xdist's `--dist loadgroup`, pyproject.toml): the tests of a
+module that share one of its module-scoped fixtures (a served simulation, a browser) go to one
+worker, in file order, so the fixture is built once; the modules that share a session-scoped
+one (`ray_head`) go to one worker together; every other test goes wherever a core is free. A
+module may name its group itself (`pytestmark = pytest.mark.xdist_group(NAME)`). The tests
+marked `realtime` (they wait on something running in real time: the ROS 2 nodes, one DDS graph
+at a time; the Meshcat page) go to one worker and run while no other worker runs a test.
 
 A test module must stop every process it starts: each worker checks, as each module ends, that
 no child process it did not have before is still running (the session's fixtures' processes
 apart), and at the session's end that none is left at all.
 """
 
+import fcntl
 import os
+import shutil
+import tempfile
 import time
 from pathlib import Path
 
@@ -40,6 +43,7 @@ CHILD_EXIT_SECONDS = 15.0
 """s a module's stopped child processes get to exit before the module fails for them."""
 
 
+@pytest.hookimpl(tryfirst=True)  # before pytest-xdist's, which reads the groups
 def pytest_collection_modifyitems(items):
     groups = {}  # module -> its worker group (None: its tests go anywhere)
     for item in items:
@@ -48,6 +52,8 @@ def pytest_collection_modifyitems(items):
             raise pytest.UsageError(f"{item.path}: a test file belongs in one of the tiers' "
                                     f"folders: {', '.join(f'tests/{t}/' for t in TIERS)}")
         item.add_marker(tier)
+        if item.get_closest_marker("realtime"):  # one worker, so one module's fixtures at a time
+            item.add_marker(pytest.mark.xdist_group("realtime"))
         shared = _shared_fixtures(item)
         if shared and groups.get(item.path) is None:
             groups[item.path] = f"{tier}/{item.path.name}"
@@ -59,6 +65,19 @@ def pytest_collection_modifyitems(items):
             item.add_marker(pytest.mark.xdist_group(groups[item.path]))
 
 
+def pytest_collection_finish(session):
+    """A worker whose grouped tests lost their group (`--dist loadgroup` has pytest-xdist add
+    `@group` to their ids) stops the run: it would share fixtures and DDS across workers."""
+    if not (session.config.getoption("loadgroup", False) and session.items):
+        return
+    lost = [item.nodeid for item in session.items
+            if item.get_closest_marker("xdist_group") and "@" not in item.nodeid]
+    if lost:
+        raise pytest.UsageError(f"pytest-xdist did not group {len(lost)} tests (e.g. {lost[0]}):"
+                                " pytest 9.2 with pytest-xdist 3.8 (pytest-dev/pytest-xdist#1386)"
+                                "; tools/setup installs a pair that works")
+
+
 def _shared_fixtures(item) -> list:
     """The fixtures of the tests' own that the test uses and that outlive it (module scope
     or wider): the module's other tests share them (session scope: other modules' too)."""
@@ -68,6 +87,88 @@ def _shared_fixtures(item) -> list:
     return [defs[-1] for defs in info.name2fixturedefs.values()
             if defs[-1].scope != "function" and defs[-1].baseid.startswith("tests")
             and not defs[-1].argname.startswith("_")]
+
+
+# --- real-time tests alone on the machine -----------------------------------------------
+
+
+_LOCKS = "COROBOT_TEST_LOCKS"
+"""Environment: the folder of the workers' lock files, made by the controller."""
+
+
+def pytest_configure(config):
+    if os.environ.get("PYTEST_XDIST_WORKER") is None and config.getoption("numprocesses",
+                                                                           None):
+        _check_grouping(config)
+        os.environ[_LOCKS] = tempfile.mkdtemp(prefix="corobot-tests-")  # the workers inherit it
+
+
+def _check_grouping(config) -> None:
+    """pytest 9.2's structured node ids make pytest-xdist up to 3.8 group nothing under
+    `--dist loadgroup` (pytest-dev/pytest-xdist#1386): modules would share fixtures and DDS
+    across workers. (`pytest_collection_finish` checks what the workers got.)"""
+    import xdist
+    from packaging.version import Version
+
+    if (config.getoption("dist", None) == "loadgroup"
+            and Version(pytest.__version__) >= Version("9.2")
+            and Version(xdist.__version__) <= Version("3.8")):
+        raise pytest.UsageError(f"pytest {pytest.__version__} with pytest-xdist "
+                                f"{xdist.__version__} does not group tests "
+                                "(pytest-dev/pytest-xdist#1386): run tools/setup, or -n 0")
+
+
+def pytest_unconfigure(config):
+    if os.environ.get("PYTEST_XDIST_WORKER") is None and os.environ.get(_LOCKS):
+        shutil.rmtree(os.environ.pop(_LOCKS), ignore_errors=True)
+
+
+@pytest.hookimpl(wrapper=True)
+def pytest_runtest_protocol(item, nextitem):
+    """Under pytest-xdist, a `realtime` test (one that waits on a server, a node or a browser
+    running in real time) runs while no other worker runs a test: the other waits, from the
+    first of a run of real-time tests to the last. Every other test shares the machine."""
+    realtime = item.get_closest_marker("realtime") is not None
+    if realtime and not _Machine.exclusive:
+        _Machine.take(exclusive=True)
+    elif not realtime:
+        _Machine.take(exclusive=False)
+    try:
+        return (yield)
+    finally:
+        if not (realtime and nextitem is not None and nextitem.get_closest_marker("realtime")):
+            _Machine.give_back()
+
+
+class _Machine:
+    """A readers-writer lock between the xdist workers (flock on two files): `exclusive` for
+    real-time tests, shared for the rest. The turnstile keeps a waiting exclusive taker from
+    being passed by shared ones. A no-op in one process."""
+
+    exclusive = False
+    _files: tuple | None = None
+
+    @classmethod
+    def take(cls, exclusive: bool) -> None:
+        if cls._files is None:
+            folder = os.environ.get(_LOCKS)
+            if os.environ.get("PYTEST_XDIST_WORKER") is None or folder is None:
+                return
+            cls._files = tuple(open(Path(folder) / name, "a")  # noqa: SIM115 (kept open)
+                               for name in ("turnstile", "machine"))
+        turnstile, machine = cls._files
+        fcntl.flock(turnstile, fcntl.LOCK_EX)
+        try:
+            fcntl.flock(machine, fcntl.LOCK_EX if exclusive else fcntl.LOCK_SH)
+        finally:
+            fcntl.flock(turnstile, fcntl.LOCK_UN)
+        cls.exclusive = exclusive
+
+    @classmethod
+    def give_back(cls) -> None:
+        if cls._files is not None:
+            fcntl.flock(cls._files[1], fcntl.LOCK_UN)
+        cls.exclusive = False
 
 
 # --- no process left running ------------------------------------------------------------

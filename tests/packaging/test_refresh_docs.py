@@ -14,6 +14,8 @@ from lab.docs_blocks import (
     replace_block,
     wrap_markdown,
 )
+from lab.refresh.runner import CHECK_SECONDS, DETERMINISTIC
+from lab.refresh.specs import blocks
 
 TOOL = REPO / "tools" / "refresh_docs.py"
 
@@ -107,8 +109,18 @@ def test_every_block_in_the_docs_has_a_command_and_every_command_its_block():
     assert "landing-errors" in run.stdout and "python tools/landing_errors.py" in run.stdout
 
 
-def test_the_cheap_deterministic_blocks_are_what_their_commands_print():
+CHEAP_BLOCKS = [s.name for s in blocks()
+                if s.kind == DETERMINISTIC and s.seconds <= CHECK_SECONDS]
+"""What `tools/refresh_docs.py --check` re-renders, one test each (so the workers share them)."""
+
+
+def test_the_cheap_blocks_are_checked():
+    assert "step-counts" in CHEAP_BLOCKS and len(CHEAP_BLOCKS) >= 5
+
+
+@pytest.mark.parametrize("name", CHEAP_BLOCKS)
+def test_a_cheap_deterministic_block_is_what_its_command_prints(name):
     """Simulation results are deterministic: the figures in the docs are what the tools print
     today (timings are not checked). On failure: python tools/refresh_docs.py --only NAME."""
-    run = _tool("--check")
+    run = _tool("--check", "--only", name)
     assert run.returncode == 0, run.stdout + run.stderr[-3000:]

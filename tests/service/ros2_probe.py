@@ -28,10 +28,10 @@ simulated second ~1-2 s of a loaded 2-core machine's time."""
 RETRY = 10.0
 """s (wall clock) a service call waits for its answer before asking again (`Probe.call`)."""
 SHM = Path("/dev/shm")
-ONE_GRAPH_AT_A_TIME = pytest.mark.xdist_group("ros2")
-"""The DDS tests' modules run on one pytest worker, one after another: their networks are
-private, but /dev/shm, where Fast DDS keeps its segments and `own_shared_memory` cleans up,
-is the machine's."""
+ONE_GRAPH_AT_A_TIME = pytest.mark.realtime
+"""The DDS tests run in real time, alone on the machine, one module after another on one
+pytest worker (tests/conftest.py): their networks are private, but /dev/shm, where Fast DDS
+keeps its segments and `own_shared_memory` cleans up, is the machine's."""
 
 
 @contextlib.contextmanager

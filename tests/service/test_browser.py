@@ -171,6 +171,7 @@ def meshcat_server(tmp_path_factory):
         yield s
 
 
+@pytest.mark.realtime  # the move a key press starts, awaited in real time (software WebGL)
 def test_meshcat_view_and_a_key_press_that_stops_by_itself(page, meshcat_server):
     """Meshcat's page: the initial view frames the robot and the giant box (sent again to a
     page that connects late), an arrow key drives and the move ends by itself (Meshcat sends
