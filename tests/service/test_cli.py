@@ -279,11 +279,14 @@ def test_an_mcap_file_on_a_full_disk_is_named(tmp_path):
         run = subprocess.run(
             [sys.executable, "-m", "corobot_drake", "--headless", "--duration", "1",
              "--override", NO_CAMERA, "--mcap", str(disk / "r.mcap"),
-             "--summary", str(disk / "s.json")], capture_output=True, text=True, timeout=300)
+             "--summary", str(disk / "s.json")], capture_output=True, text=True, timeout=300,
+            env=dict(os.environ, TMPDIR=str(tmp_path)))  # where the fallback goes
     finally:
         subprocess.run(["umount", str(disk)], check=True)
     assert run.returncode == 1
     assert "Traceback" not in run.stderr
     assert f"error: --mcap: {disk}/r.mcap: cannot write (" in run.stderr
     assert f"error: --summary: {disk}/s.json: cannot write (No space left on device); " \
-           "written to " in run.stderr
+           f"written to {tmp_path}/corobot-summary-" in run.stderr
+    (fallback,) = tmp_path.glob("corobot-summary-*.json")
+    assert json.loads(fallback.read_text())["time"] == pytest.approx(1.0)
