@@ -929,7 +929,16 @@ def diagram_key(scenario: sc.Scenario) -> str:
 
 
 def quiet_drake_warnings() -> None:
-    """Drake warns that half-spaces take no part in deformable contact (we have none)."""
-    logging.getLogger("drake").setLevel(logging.ERROR)
+    """Drake's warnings off (half-spaces take no part in deformable contact: we have none),
+    but for those that say something a scenario gave is ignored (a model's GLB visual, which
+    the cameras' renderer does not draw)."""
+    drake = logging.getLogger("drake")
+    drake.setLevel(logging.WARNING)
+    if _only_what_is_ignored not in drake.filters:
+        drake.addFilter(_only_what_is_ignored)
+
+
+def _only_what_is_ignored(record: logging.LogRecord) -> bool:
+    return record.levelno >= logging.ERROR or "ignored" in record.getMessage()
 
 

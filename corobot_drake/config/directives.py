@@ -33,6 +33,10 @@ MAX_INCLUDE_DEPTH = 8
 _MESH_TAG = re.compile(r"<mesh\b([^>]*?)(/>|>(.*?)</mesh>)", re.S)
 _ATTRIBUTE = r"""\b{}\s*=\s*["']([^"']*)["']"""
 _ELEMENT = r"<{0}>\s*([^<]*?)\s*</{0}>"
+_COLLISION = re.compile(r"<collision\b.*?</collision>", re.S)
+"""A URDF or SDFormat collision element: its mesh is hulled for contact."""
+HULLED_EXTENSIONS = (".obj", ".gltf", ".vtk")
+"""The mesh files Drake builds a collision shape from (its convex hull): not GLB."""
 
 
 class DirectiveError(ValueError):
@@ -204,6 +208,7 @@ def _check_model_file(file: Path, path: str) -> None:
     except sc.ScenarioError as e:
         raise DirectiveError(path, f"{file}: {e.message}") from None
     base = _mjcf_mesh_dir(text, file.parent) if file.suffix.lower() == ".xml" else file.parent
+    collisions = [m.span() for m in _COLLISION.finditer(text)]
     for match in _MESH_TAG.finditer(text):
         attributes, body = match.group(1), match.group(3) or ""
         found = (re.search(_ATTRIBUTE.format("filename"), attributes)
@@ -213,8 +218,12 @@ def _check_model_file(file: Path, path: str) -> None:
             continue
         scale = (re.search(_ATTRIBUTE.format("scale"), attributes)
                  or re.search(_ELEMENT.format("scale"), body))
-        _check_model_mesh(resolve(found.group(1), base), scale and scale.group(1),
-                          f"{file}: mesh {found.group(1)!r}", path)
+        mesh, what = resolve(found.group(1), base), f"{file}: mesh {found.group(1)!r}"
+        if (any(a <= match.start() < b for a, b in collisions)
+                and mesh.suffix.lower() not in HULLED_EXTENSIONS):
+            raise DirectiveError(path, f"{what}: a collision mesh is one of "
+                                 f"{', '.join(HULLED_EXTENSIONS)} (Drake hulls no other)")
+        _check_model_mesh(mesh, scale and scale.group(1), what, path)
 
 
 def _mjcf_mesh_dir(text: str, model_dir: Path) -> Path:

@@ -310,6 +310,24 @@ def test_a_good_gltf_or_glb_mesh_loads_rests_and_is_seen(tmp_path, name):
     assert seen.mean() > 0.05  # the cube fills part of the view ahead
 
 
+def test_a_models_glb_collision_is_refused_and_its_glb_visual_said_to_go_unseen(tmp_path,
+                                                                               caplog):
+    """Drake hulls no GLB file, so a model's GLB collision mesh is refused; its cameras'
+    renderer draws no GLB visual (Meshcat does), and Drake's warning saying so gets through."""
+    (tmp_path / "c.glb").write_bytes(gltf(CORNERS, TRIANGLES, glb=True))
+    mesh = f'<mesh filename="{tmp_path}/c.glb"/>'
+    with pytest.raises(ScenarioError, match=rf"directives\[0\]\.add_model\.file: .*crate\.urdf: "
+                       rf"mesh '{tmp_path}/c\.glb': a collision mesh is one of \.obj, \.gltf"):
+        load_scenario(None, overrides=[crate_directive(crate(tmp_path, geometry=mesh))])
+    with_visual = crate(tmp_path, name="visual.urdf")
+    with_visual.write_text(with_visual.read_text().replace(
+        "<collision>", f"<visual><geometry>{mesh}</geometry></visual><collision>"))
+    sim = make_sim(crate_directive(with_visual), camera=True)
+    assert sim.station.models["crate"] is not None
+    assert any("RenderEngineGl" in r.getMessage() and "ignored" in r.getMessage()
+               for r in caplog.records if r.name == "drake")
+
+
 def test_a_surface_mesh_that_is_not_obj_is_refused(tmp_path):
     (tmp_path / "cube.gltf").write_bytes(gltf(CORNERS, TRIANGLES))
     with pytest.raises(ScenarioError, match=r"world\.bodies\.m\.shape\.collision: a surface "
