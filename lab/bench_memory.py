@@ -41,18 +41,27 @@ def serve_child(rate: float = SERVE_RATE) -> int:
 
 
 def rss_bytes(pid: int) -> int:
-    """Resident memory of process `pid` and all its descendants, bytes (0 once gone)."""
-    total = 0
-    try:
-        for line in Path(f"/proc/{pid}/status").read_text().splitlines():
-            if line.startswith("VmRSS:"):
-                total += int(line.split()[1]) * 1024
-        children = set()
-        for task in Path(f"/proc/{pid}/task").iterdir():
-            children.update(int(c) for c in (task / "children").read_text().split())
-    except (FileNotFoundError, ProcessLookupError):
-        return total
-    return total + sum(rss_bytes(c) for c in children)
+    """Resident memory of process `pid` and all its descendants, bytes (0 once gone). The
+    descendants come from every process's parent in /proc/*/stat: a thread's `children` list
+    would vanish with the thread, which the server starts and ends all the time."""
+    parents: dict[int, list[int]] = {}
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            parent = int(stat.read_text().rsplit(")", 1)[1].split()[1])
+        except (OSError, ValueError, IndexError):
+            continue  # gone meanwhile
+        parents.setdefault(parent, []).append(int(stat.parent.name))
+    total, todo = 0, [pid]
+    while todo:
+        process = todo.pop()
+        todo.extend(parents.get(process, []))
+        try:
+            status = Path(f"/proc/{process}/status").read_text()
+        except OSError:
+            continue
+        total += next((int(line.split()[1]) * 1024 for line in status.splitlines()
+                       if line.startswith("VmRSS:")), 0)
+    return total
 
 
 @dc.dataclass
