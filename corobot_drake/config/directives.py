@@ -111,8 +111,9 @@ class _DrakeWarnings(logging.Handler):
 
     def __enter__(self):
         log = logging.getLogger("drake")
-        self._saved = log.level, log.propagate
+        self._saved = log.level, log.propagate, log.filters
         log.setLevel(logging.WARNING)  # whatever quieted it: these are read here
+        log.filters = []
         log.propagate = False  # and reported once, as the check's line (the station's parse
         log.addHandler(self)   # warns again)
         return self
@@ -120,7 +121,7 @@ class _DrakeWarnings(logging.Handler):
     def __exit__(self, *exc) -> None:
         log = logging.getLogger("drake")
         log.removeHandler(self)
-        log.level, log.propagate = self._saved
+        log.level, log.propagate, log.filters = self._saved
 
 
 REQUIRED = {
@@ -219,11 +220,11 @@ def _check_model_file(file: Path, path: str) -> None:
         scale = (re.search(_ATTRIBUTE.format("scale"), attributes)
                  or re.search(_ELEMENT.format("scale"), body))
         mesh, what = resolve(found.group(1), base), f"{file}: mesh {found.group(1)!r}"
+        _check_model_mesh(mesh, scale and scale.group(1), what, path)
         if (any(a <= match.start() < b for a, b in collisions)
                 and mesh.suffix.lower() not in HULLED_EXTENSIONS):
             raise DirectiveError(path, f"{what}: a collision mesh is one of "
                                  f"{', '.join(HULLED_EXTENSIONS)} (Drake hulls no other)")
-        _check_model_mesh(mesh, scale and scale.group(1), what, path)
 
 
 def _mjcf_mesh_dir(text: str, model_dir: Path) -> Path:
