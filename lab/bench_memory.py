@@ -21,6 +21,8 @@ import threading
 import time
 from pathlib import Path
 
+from lab.processes import descendants
+
 SERVE_RATE = 40.0
 """Simulated s per wall s asked of the served simulation: more than this machine manages,
 so it runs flat out (below `SimRunner`'s max_lag / tick = 60, where it would not step)."""
@@ -42,19 +44,10 @@ def serve_child(rate: float = SERVE_RATE) -> int:
 
 def rss_bytes(pid: int) -> int:
     """Resident memory of process `pid` and all its descendants, bytes (0 once gone). The
-    descendants come from every process's parent in /proc/*/stat: a thread's `children` list
+    descendants come from every process's parent (`lab.processes`): a thread's `children` list
     would vanish with the thread, which the server starts and ends all the time."""
-    parents: dict[int, list[int]] = {}
-    for stat in Path("/proc").glob("[0-9]*/stat"):
-        try:
-            parent = int(stat.read_text().rsplit(")", 1)[1].split()[1])
-        except (OSError, ValueError, IndexError):
-            continue  # gone meanwhile
-        parents.setdefault(parent, []).append(int(stat.parent.name))
-    total, todo = 0, [pid]
-    while todo:
-        process = todo.pop()
-        todo.extend(parents.get(process, []))
+    total = 0
+    for process in [pid, *descendants(pid)]:
         try:
             status = Path(f"/proc/{process}/status").read_text()
         except OSError:

@@ -32,6 +32,7 @@ import pytest
 from corobot_drake.config.scenario import load_scenario
 from corobot_drake.resources import DEFAULT_SCENARIO
 from corobot_drake.simulation import Simulation, quiet_drake_warnings
+from lab.processes import children_by_parent, descendants
 
 REPO = Path(__file__).resolve().parent.parent
 
@@ -182,25 +183,13 @@ workers): they stop at the session's end, not at a module's."""
 def _children(skip: set[int] = frozenset()) -> dict[int, str]:
     """The running processes descended from this one (pid: command line), zombies left out,
     and the trees of `skip` left out."""
-    parents: dict[int, list[int]] = {}
-    for stat in Path("/proc").glob("[0-9]*/stat"):
+    found = {}
+    for child in descendants(os.getpid(), children_by_parent(zombies=False), skip):
         try:
-            state, ppid = stat.read_text().rsplit(")", 1)[1].split()[:2]
-        except (OSError, ValueError):
+            command = Path(f"/proc/{child}/cmdline").read_bytes()
+        except OSError:
             continue
-        if state != "Z":
-            parents.setdefault(int(ppid), []).append(int(stat.parent.name))
-    found, todo = {}, [os.getpid()]
-    while todo:
-        for child in parents.get(todo.pop(), []):
-            if child in skip:
-                continue
-            try:
-                command = Path(f"/proc/{child}/cmdline").read_bytes()
-            except OSError:
-                continue
-            found[child] = command.replace(b"\0", b" ").decode(errors="replace")[:200]
-            todo.append(child)
+        found[child] = command.replace(b"\0", b" ").decode(errors="replace")[:200]
     return found
 
 

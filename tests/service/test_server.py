@@ -19,6 +19,7 @@ import httpx
 import pytest
 
 from corobot_drake.serving.serve import ServerProcess
+from lab.processes import alive, children_by_parent
 
 ROBOT = "/robots/corobot"
 
@@ -707,32 +708,11 @@ def test_transport_carries_calls_watches_and_snapshots():
 
 # --- one process dies, the other stops --------------------------------------------------------
 
-def _children(pid: int) -> list[int]:
-    """`pid`'s child processes now (from /proc)."""
-    from pathlib import Path
-
-    found = []
-    for stat in Path("/proc").glob("[0-9]*/stat"):
-        with contextlib.suppress(OSError):
-            if int(stat.read_text().rsplit(")", 1)[1].split()[1]) == pid:
-                found.append(int(stat.parent.name))
-    return found
-
-
-def _alive(pid: int) -> bool:
-    from pathlib import Path
-
-    try:
-        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
-    except OSError:
-        return False
-
-
 def _http_process(server: ServerProcess) -> int:
     """The PID of the served simulation's HTTP process (its `multiprocessing` child)."""
     from pathlib import Path
 
-    (pid,) = [p for p in _children(server.process.pid)
+    (pid,) = [p for p in children_by_parent().get(server.process.pid, [])
               if b"spawn_main" in Path(f"/proc/{p}/cmdline").read_bytes()]
     return pid
 
@@ -763,7 +743,7 @@ def test_the_http_process_stops_when_its_served_simulation_dies(tmp_path):
         server.process.send_signal(signal.SIGKILL)
         server.process.wait(30)
     deadline = time.monotonic() + 30
-    while _alive(http_pid):
+    while alive(http_pid):
         assert time.monotonic() < deadline, "the HTTP process outlived its simulation"
         time.sleep(0.05)
     address = urlsplit(server.url)

@@ -12,6 +12,7 @@ from corobot_drake.config.scenario import ScenarioError
 from corobot_drake.resources import DEFAULT_SCENARIO
 from corobot_drake.study import engine
 from corobot_drake.study.spec import Normal, Uniform, draw, expand, load_study
+from lab.processes import alive, descendants
 
 TINY = """\
 scenario: {scenario}
@@ -559,31 +560,6 @@ def test_the_drive_test_study_and_the_drive_test_tool_agree(tmp_path, connected)
     assert 0.0 < alone["drift"][0] < 0.01  # a closed-loop loop comes back within 10 mm
 
 
-def _descendants(pid: int) -> set[int]:
-    """The PIDs of `pid`'s process tree now (from /proc)."""
-    children: dict[int, list[int]] = {}
-    for stat in Path("/proc").glob("[0-9]*/stat"):
-        try:
-            fields = stat.read_text().rsplit(")", 1)[1].split()
-        except OSError:
-            continue
-        children.setdefault(int(fields[1]), []).append(int(stat.parent.name))
-    found, todo = set(), [pid]
-    while todo:
-        for child in children.get(todo.pop(), []):
-            found.add(child)
-            todo.append(child)
-    return found
-
-
-def _alive(pid: int) -> bool:
-    try:
-        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
-    except OSError:
-        return False
-    return state != "Z"
-
-
 def test_ctrl_c_keeps_the_finished_rows_and_stops_ray(tmp_path, connected, capsys):
     """Ctrl-C (SIGINT) mid-study: exit 130, the finished rows kept, every process the study
     started gone (its own local Ray instance); --resume then runs only the rest."""
@@ -609,7 +585,7 @@ def test_ctrl_c_keeps_the_finished_rows_and_stops_ray(tmp_path, connected, capsy
         while not ((out / "runs.csv").exists() and rows(out / "runs.csv")):
             assert time.monotonic() < deadline and study.poll() is None, "no rows written"
             time.sleep(0.05)
-        started = _descendants(study.pid)
+        started = set(descendants(study.pid))
         study.send_signal(signal.SIGINT)
         _, err = study.communicate(timeout=60)
     finally:
@@ -620,9 +596,9 @@ def test_ctrl_c_keeps_the_finished_rows_and_stops_ray(tmp_path, connected, capsy
     kept = rows(out / "runs.csv")
     assert 1 <= len(kept) < 6 and all(r["status"] == "ok" for r in kept)
     deadline = time.monotonic() + 15  # Ray's processes go with it, each as it is told
-    while [pid for pid in started if _alive(pid)] and time.monotonic() < deadline:
+    while [pid for pid in started if alive(pid)] and time.monotonic() < deadline:
         time.sleep(0.1)
-    assert not [pid for pid in started if _alive(pid)]
+    assert not [pid for pid in started if alive(pid)]
     # Resumed from the command line (in this process, on the module's Ray head).
     assert main([str(study_file), "--out", str(out), "--resume", "--quiet"]) == 0
     assert "6 runs (0 errors)" in capsys.readouterr().out
