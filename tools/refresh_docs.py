@@ -30,7 +30,7 @@ import sys
 
 from lab.refresh.measures import MEASUREMENTS
 from lab.refresh.rewrite import check_markers, list_blocks, refresh
-from lab.refresh.runner import CHECK_SECONDS, DETERMINISTIC
+from lab.refresh.runner import DETERMINISTIC
 from lab.refresh.specs import blocks
 
 
@@ -65,8 +65,7 @@ def main(argv=None) -> int:
         list_blocks(specs)
         return 0
     if args.check:
-        chosen = [s for s in specs if s.kind == DETERMINISTIC
-                  and (args.only or s.seconds <= CHECK_SECONDS)]
+        chosen = [s for s in specs if s.kind == DETERMINISTIC and (args.only or s.cheap)]
         skipped = [s.name for s in specs if s not in chosen]
         if args.only and skipped:
             print(f"note: not checked (their figures vary run to run): {', '.join(skipped)}",

@@ -8,7 +8,7 @@ import sys
 import time
 
 from lab.docs_blocks import BlockError, find_blocks, replace_block, wrap_markdown
-from lab.refresh.runner import CHECK_SECONDS, DETERMINISTIC, DOCS, REPO, Runner, Spec
+from lab.refresh.runner import DOCS, REPO, Runner, Spec
 
 
 def check_markers(specs: list[Spec]) -> list[str]:
@@ -31,7 +31,7 @@ def check_markers(specs: list[Spec]) -> list[str]:
 def list_blocks(specs: list[Spec]) -> None:
     for s in specs:
         line = find_blocks((REPO / s.file).read_text(), s.file)[s.name].line
-        cheap = " (--check)" if s.kind == DETERMINISTIC and s.seconds <= CHECK_SECONDS else ""
+        cheap = " (--check)" if s.cheap else ""
         print(f"{s.name:32s} {s.file}:{line}  {s.kind}{cheap}, ~{s.seconds:.0f} s\n"
               f"{'':32s} {s.shown}")
 

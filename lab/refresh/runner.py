@@ -128,6 +128,11 @@ class Spec:
     """Rough cost on the project's 2-core machine, all commands and repeats."""
 
     @property
+    def cheap(self) -> bool:
+        """`--check` without `--only` re-renders it: deterministic, and within CHECK_SECONDS."""
+        return self.kind == DETERMINISTIC and self.seconds <= CHECK_SECONDS
+
+    @property
     def shown(self) -> str:
         return "; ".join(c.text + (f" (x{c.repeats})" if c.repeats > 1 else "")
                          for c in self.commands)

@@ -14,7 +14,6 @@ from lab.docs_blocks import (
     replace_block,
     wrap_markdown,
 )
-from lab.refresh.runner import CHECK_SECONDS, DETERMINISTIC
 from lab.refresh.specs import blocks
 
 TOOL = REPO / "tools" / "refresh_docs.py"
@@ -109,8 +108,7 @@ def test_every_block_in_the_docs_has_a_command_and_every_command_its_block():
     assert "landing-errors" in run.stdout and "python tools/landing_errors.py" in run.stdout
 
 
-CHEAP_BLOCKS = [s.name for s in blocks()
-                if s.kind == DETERMINISTIC and s.seconds <= CHECK_SECONDS]
+CHEAP_BLOCKS = [s.name for s in blocks() if s.cheap]
 """What `tools/refresh_docs.py --check` re-renders, one test each (so the workers share them)."""
 
 
