@@ -1,6 +1,11 @@
-"""The machine's process tree, read from /proc: for the benchmarks that measure a server's
-processes and the tests that check what a process left running."""
+"""The machine's process tree and listening sockets, read from /proc: for the benchmarks that
+measure a server's processes and the tests that check what a process left running or open.
 
+A socket is followed by its inode, not its port: another process may bind a freed port number
+at once (the suite runs on every core)."""
+
+import contextlib
+import os
 from pathlib import Path
 
 
@@ -38,3 +43,26 @@ def alive(pid: int) -> bool:
         return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
     except (OSError, IndexError):
         return False
+
+
+def listening_sockets(port: int | None = None) -> set[int]:
+    """The inodes of the machine's listening TCP sockets (/proc/net/tcp and tcp6, state 0A),
+    only those on `port` if given."""
+    found = set()
+    for table in ("/proc/net/tcp", "/proc/net/tcp6"):
+        for row in Path(table).read_text().splitlines()[1:]:
+            local, state, inode = (row.split()[i] for i in (1, 3, 9))
+            if state == "0A" and (port is None or int(local.rsplit(":", 1)[1], 16) == port):
+                found.add(int(inode))
+    return found
+
+
+def sockets_held(pid: int) -> set[int]:
+    """The inodes of the sockets among `pid`'s open files."""
+    held = set()
+    for fd in Path(f"/proc/{pid}/fd").iterdir():
+        with contextlib.suppress(OSError):
+            target = os.readlink(fd)
+            if target.startswith("socket:["):
+                held.add(int(target[len("socket:["):-1]))
+    return held

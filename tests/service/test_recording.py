@@ -2,7 +2,9 @@
 
 import base64
 import json
+import os
 import re
+import time
 
 import foxglove
 import msgpack  # Meshcat's wire format (installed with Ray)
@@ -32,6 +34,7 @@ from corobot_drake.systems.drive import CommandRecord
 from corobot_drake.systems.runlog import COLUMNS
 from corobot_drake.topics import RobotNames
 from lab.bench import NO_CAMERA
+from lab.processes import listening_sockets, sockets_held
 
 CURVE = "robots: {corobot: {commands: [!SetPower {left: 1, right: 0.5}]}}"
 SCRIPT = ("robots: {corobot: {commands: [!SetPower {left: 1, right: 0.5}, !Wait {seconds: 0.5},"
@@ -412,18 +415,11 @@ def test_foxglove_live_serves_the_topics_and_stops(offered):
                 data = ws.recv(timeout=10)
             assert data[0] == 1 and int.from_bytes(data[1:5], "little") == 1  # message, sub 1
     finally:
-        port = live.port
+        (listener,) = sockets_held(os.getpid()) & listening_sockets(live.port)
         live.stop()
     live.stop()  # idempotent
-    import socket
-    import time
-
     deadline = time.monotonic() + 5.0  # the server's socket closes on its own thread
-    while True:  # until nothing listens any more
-        try:
-            socket.create_connection(("127.0.0.1", port), timeout=1).close()
-        except OSError:
-            break
+    while listener in listening_sockets():
         assert time.monotonic() < deadline, "still listening 5 s after stop()"
         time.sleep(0.05)
 
