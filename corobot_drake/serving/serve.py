@@ -111,6 +111,8 @@ def serve(make_sim, host: str = "127.0.0.1", port: int = 50000, meshcat: bool = 
         with contextlib.suppress(KeyboardInterrupt):  # a second Ctrl-C: terminate it now
             http.join(HTTP_STOP_TIMEOUT)
         if http.is_alive():
+            print(f"warning: the HTTP server process ({http.pid}) did not stop within "
+                  f"{HTTP_STOP_TIMEOUT:g} s: terminated", file=sys.stderr)
             http.terminate()
             http.join(5)
     print(f"simulated {runner.sim.time:.2f} s at {stats['realtime_factor'] or 0:.2f}x real "

@@ -17,7 +17,9 @@ from __future__ import annotations
 import concurrent.futures
 import contextlib
 import itertools
+import os
 import pickle
+import socket
 import threading
 import time
 from collections import deque
@@ -107,6 +109,10 @@ class SimSide:
                 self._cond.wait(0.05)
         self.closed.set()
         with contextlib.suppress(OSError):
+            # A plain close leaves the socket open while the receiver thread is blocked
+            # reading it, and the HTTP process would see no end until it was terminated.
+            with socket.socket(fileno=os.dup(self.conn.fileno())) as end:
+                end.shutdown(socket.SHUT_RDWR)
             self.conn.close()
 
     def _receive_loop(self) -> None:

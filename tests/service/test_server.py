@@ -731,6 +731,23 @@ def test_a_served_simulation_stops_when_its_http_process_dies(tmp_path):
         "was killed by SIGKILL: the simulation stopped with it") for line in lines), lines
 
 
+def test_ctrl_c_stops_both_processes_in_turn(tmp_path):
+    """Ctrl-C (SIGINT to the simulation process): the simulation stops, closes the pipe, and
+    the HTTP process sees it closed and ends by itself (it is not terminated), exit status 0."""
+    import signal
+
+    log = tmp_path / "stderr.log"
+    with ServerProcess(["--headless"], stderr_path=str(log)) as server:
+        assert httpx.get(f"{server.url}/simulation").status_code == 200
+        http_pid = _http_process(server)
+        server.process.send_signal(signal.SIGINT)
+        assert server.process.wait(30) == 0
+    assert not alive(http_pid)
+    lines = log.read_text().splitlines()
+    assert not [line for line in lines if "HTTP server process" in line], lines
+    assert lines[-1].startswith("simulated "), lines
+
+
 def test_the_http_process_stops_when_its_served_simulation_dies(tmp_path):
     """The simulation process killed (SIGKILL, by the PID this test started): its HTTP process
     ends too (the kernel's parent-death signal), and its listening socket is closed. The
