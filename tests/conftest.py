@@ -124,21 +124,38 @@ def pytest_unconfigure(config):
         shutil.rmtree(os.environ.pop(_LOCKS), ignore_errors=True)
 
 
+def _realtime(item) -> bool:
+    return item is not None and item.get_closest_marker("realtime") is not None
+
+
 @pytest.hookimpl(wrapper=True)
 def pytest_runtest_protocol(item, nextitem):
     """Under pytest-xdist, a `realtime` test (one that waits on a server, a node or a browser
     running in real time) runs while no other worker runs a test: the other waits, from the
-    first of a run of real-time tests to the last. Every other test shares the machine."""
-    realtime = item.get_closest_marker("realtime") is not None
-    if realtime and not _Machine.exclusive:
-        _Machine.take(exclusive=True)
-    elif not realtime:
-        _Machine.take(exclusive=False)
+    call of the first of a run of real-time tests to the teardown of the last (their module
+    fixtures start and stop beside the other worker's tests). Every other test shares the
+    machine."""
+    if _realtime(item):
+        return (yield)
+    _Machine.take(exclusive=False)
     try:
         return (yield)
     finally:
-        if not (realtime and nextitem is not None and nextitem.get_closest_marker("realtime")):
-            _Machine.give_back()
+        _Machine.give_back()
+
+
+@pytest.hookimpl(wrapper=True)
+def pytest_runtest_call(item):
+    if _realtime(item) and not _Machine.exclusive:
+        _Machine.take(exclusive=True)
+    return (yield)
+
+
+@pytest.hookimpl(wrapper=True)
+def pytest_runtest_teardown(item, nextitem):
+    if _realtime(item) and not _realtime(nextitem):
+        _Machine.give_back()
+    return (yield)
 
 
 class _Machine:

@@ -229,8 +229,6 @@ def test_meshcat_view_and_a_key_press_that_stops_by_itself(page, meshcat_server)
     # It drove forward: HOLD_FIRST (0.7 s of wall clock) at power 0.5 is ~0.2 m at real time;
     # how far a loaded host's simulation gets in that wall time is not this test's to assert.
     assert drive()["position"]["x"] - x0 > 0.01
-    OUT.mkdir(exist_ok=True)
-    page.screenshot(path=str(OUT / "meshcat.png"))
 
 
 def offline(page, server_url: str) -> list[tuple[str, str]]:

@@ -6,8 +6,10 @@ the module (real time, headless, with `--serve` beside it), in a private network
 
 import inspect
 import math
+import re
 import subprocess
 import sys
+import time
 
 import numpy as np
 import pytest
@@ -269,42 +271,61 @@ def test_services_act(ros):
     blocked = set_pose(probe, -1.8, 0.0, 0.0)  # inside the giant box
     assert not blocked.success and blocked.reason == "blocked"
     response = probe.call("/all_stop", Trigger, Trigger.Request())
-    assert response.success
-    assert robot.command_log()[-1]["command"] == "AllStop"
+    assert response.success, response.message
+    # The answer means accepted: the command source logs the AllStop at its next update.
+    seq = int(re.fullmatch(r"stopping \(seq (\d+), t = [\d.]+ s\)", response.message)[1])
+    deadline = time.monotonic() + 30
+    while not [r for r in robot.command_log() if r["seq"] == seq]:
+        assert time.monotonic() < deadline, "the AllStop was never logged"
+        time.sleep(0.05)
+    assert [r["command"] for r in robot.command_log() if r["seq"] == seq] == ["AllStop"]
     assert set_pose(probe, 0.2, 0.5, -1.0).success
     rest = at_rest(probe, client.time)
     assert rest.pose.pose.position.y == pytest.approx(0.5, abs=0.01)
     assert yaw_of(rest.pose.pose.orientation) == pytest.approx(-1.0, abs=0.01)
 
 
-def inspect_topics(*args: str) -> subprocess.CompletedProcess:
-    """`python -m corobot_drake.ros2 ARGS`, as a user runs it: a process (and so a DDS
-    participant) of its own, in this test's network and domain."""
-    return subprocess.run([sys.executable, "-m", "corobot_drake.ros2", *args],
-                          capture_output=True, text=True, timeout=180)
+def inspect_topics(*commands: list[str]) -> list[subprocess.CompletedProcess]:
+    """`python -m corobot_drake.ros2 ARGS` for each of `commands`, as a user runs it, all at
+    once: each a process (and so a DDS participant) of its own, in this test's network and
+    domain."""
+    processes = [subprocess.Popen([sys.executable, "-m", "corobot_drake.ros2", *args],
+                                  stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                 for args in commands]
+    done = []
+    try:
+        for process in processes:
+            out, err = process.communicate(timeout=180)
+            done.append(subprocess.CompletedProcess(process.args, process.returncode, out, err))
+    finally:
+        for process in processes:
+            if process.poll() is None:
+                process.kill()
+                process.wait()
+    return done
 
 
 def test_the_inspection_tool_lists_echoes_and_counts(ros):
-    listed = inspect_topics("list")
+    listed, echo, hz, missing, once = inspect_topics(
+        ["list"], ["echo", "/ir/rear", "-n", "1", "--timeout", "60"],
+        ["hz", "/clock", "-n", "30", "--timeout", "60"],
+        ["--wait", "1", "echo", "/no_such_topic"],
+        ["hz", "/robot_description", "--timeout", "3"])  # latched: one message
     assert listed.returncode == 0, listed.stderr
     assert "  /odom [nav_msgs/msg/Odometry]" in listed.stdout
     assert "  /set_pose [corobot_interfaces/srv/SetPose]" in listed.stdout
     assert "  /drive_distance\n" in listed.stdout and "  /rotate_degrees\n" in listed.stdout
-    echo = inspect_topics("echo", "/ir/rear", "-n", "1", "--timeout", "60")
     assert echo.returncode == 0, echo.stderr
     echoed = yaml.safe_load(echo.stdout.split("---")[0])  # a best-effort stream, read
     assert echoed["header"]["frame_id"] == "ir_rear" and echoed["radiation_type"] == 1
-    hz = inspect_topics("hz", "/clock", "-n", "30", "--timeout", "60")
     assert hz.returncode == 0, hz.stderr
     # Every 10 ms of its stamps: the closest two (a best-effort stream may drop some under
     # load, which lowers the mean rate, never raises it).
     report = hz.stdout.splitlines()[-1]
     assert report.endswith("over 30 messages, stamps 10.0 ms apart at the closest")
     assert float(report.split(", ")[1].split()[0]) <= 100.0 + 1e-9
-    missing = inspect_topics("--wait", "1", "echo", "/no_such_topic")
     assert missing.returncode == 1
     assert missing.stderr.startswith("error: no topic /no_such_topic found in 1 s")
-    once = inspect_topics("hz", "/robot_description", "--timeout", "3")  # latched: one
     assert (once.returncode, once.stderr.splitlines()[-1]) == (
         1, "error: 1 message(s) on /robot_description in 3 s (2 needed)")
 
