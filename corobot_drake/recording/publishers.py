@@ -13,6 +13,8 @@ inputs and the wiring of the signals' own topics are shared with ROS 2's publish
 (`recording.looks`).
 """
 
+import itertools
+
 import numpy as np
 from foxglove.channels import (
     CameraCalibrationChannel,
@@ -38,9 +40,10 @@ from foxglove.messages import (
     SceneEntity,
     SceneUpdate,
     SpherePrimitive,
+    TriangleListPrimitive,
 )
 from pydrake.common.value import AbstractValue, Value
-from pydrake.geometry import Box, Cylinder, Rgba, Sphere
+from pydrake.geometry import Box, Convex, Cylinder, Mesh, Rgba, Sphere
 from pydrake.math import RigidTransform
 from pydrake.multibody.tree import BodyIndex
 from pydrake.systems.framework import LeafSystem
@@ -379,34 +382,63 @@ def _primitive(shape, X_BG: RigidTransform, rgba):
     return None
 
 
+def _hull(shape, X_BG: RigidTransform, rgba):
+    """("triangles", foxglove triangle list) of a Mesh's or Convex's convex hull (Drake's, of
+    the scaled mesh: a few hundred triangles however large the mesh, since /scene is sent
+    again every second); None for other shapes and for a mesh Drake cannot hull."""
+    if not isinstance(shape, Mesh | Convex):
+        return None
+    try:
+        hull = shape.GetConvexHull()
+    except RuntimeError:  # a model's GLB (Drake hulls OBJ, glTF and VTK), a flat mesh
+        return None
+    points = []
+    for face in range(hull.num_faces()):
+        polygon = hull.element(face)
+        corners = [tp.point3(hull.vertex(polygon.vertex(k)))
+                   for k in range(polygon.num_vertices())]
+        for b, c in itertools.pairwise(corners[1:]):  # a fan: the polygon is convex
+            points += [corners[0], b, c]
+    return "triangles", TriangleListPrimitive(pose=tp.pose_of(X_BG), points=points,
+                                              color=tp.color(rgba))
+
+
 COLLISION_COLOR = (0.6, 0.6, 0.65, 1.0)
 """A body drawn from its collision shapes (its visuals are meshes) is this grey."""
 
 
 def _scene_entities(plant, scene_graph, frames: dict) -> list:
-    """One entity maker per body with primitive shapes: its visual boxes, cylinders and spheres
-    in their colours, else (mesh visuals, as the robot's) its collision shapes in grey."""
+    """One entity maker per body with a shape: its visual boxes, cylinders and spheres in
+    their colours; else (mesh visuals, as the robot's) its collision shapes in grey; else
+    (meshes only, as a `!Mesh` world body's) its visual meshes' convex hulls."""
     inspector = scene_graph.model_inspector()
     makers = []
     for i, (frame, _) in [(0, ("world", None)), *frames.items()]:
         body = plant.get_body(BodyIndex(i))
-        shapes: dict[str, list] = {}
-        for ids, colored in ((plant.GetVisualGeometriesForBody(body), True),
-                             (plant.GetCollisionGeometriesForBody(body), False)):
-            for gid in ids:
-                rgba = COLLISION_COLOR
-                if colored:
-                    props = inspector.GetIllustrationProperties(gid)
-                    rgba = props.GetPropertyOrDefault("phong", "diffuse",
-                                                      Rgba(*COLLISION_COLOR)).rgba
-                made = _primitive(inspector.GetShape(gid), inspector.GetPoseInFrame(gid), rgba)
-                if made is not None:
-                    shapes.setdefault(made[0], []).append(made[1])
+        passes = ((plant.GetVisualGeometriesForBody(body), True, _primitive),
+                  (plant.GetCollisionGeometriesForBody(body), False, _primitive),
+                  (plant.GetVisualGeometriesForBody(body), True, _hull))
+        for ids, colored, draw in passes:
+            shapes = _drawn(inspector, ids, colored, draw)
             if shapes:
+                makers.append(_entity_maker(frame, shapes))
                 break
-        if shapes:
-            makers.append(_entity_maker(frame, shapes))
     return makers
+
+
+def _drawn(inspector, ids, colored: bool, draw) -> dict[str, list]:
+    """{SceneEntity field: primitives} of the geometries `ids` that `draw` can draw, in their
+    illustration colour if `colored`, else grey."""
+    shapes: dict[str, list] = {}
+    for gid in ids:
+        rgba = COLLISION_COLOR
+        if colored:
+            props = inspector.GetIllustrationProperties(gid)
+            rgba = props.GetPropertyOrDefault("phong", "diffuse", Rgba(*COLLISION_COLOR)).rgba
+        made = draw(inspector.GetShape(gid), inspector.GetPoseInFrame(gid), rgba)
+        if made is not None:
+            shapes.setdefault(made[0], []).append(made[1])
+    return shapes
 
 
 def _entity_maker(frame: str, shapes: dict):

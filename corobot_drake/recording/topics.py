@@ -69,6 +69,10 @@ def vector3(v) -> Vector3:
     return Vector3(x=float(v[0]), y=float(v[1]), z=float(v[2]))
 
 
+def point3(v) -> Point3:
+    return Point3(x=float(v[0]), y=float(v[1]), z=float(v[2]))
+
+
 def quaternion(X: RigidTransform) -> Quaternion:
     q = X.rotation().ToQuaternion()
     return Quaternion(x=float(q.x()), y=float(q.y()), z=float(q.z()), w=float(q.w()))
@@ -94,10 +98,10 @@ def ray_lines(origin, ends: np.ndarray, hits: np.ndarray) -> LinePrimitive:
     """The rays of one IR scan as a line list in the world frame: origin (3) to each end
     (N x 3, m), coloured by whether it hit (N, 0 or 1)."""
     points, colors = [], []
-    o = Point3(x=float(origin[0]), y=float(origin[1]), z=float(origin[2]))
+    o = point3(origin)
     for end, hit in zip(ends, hits, strict=True):
         c = color(RAY_HIT_COLOR if hit > 0.5 else RAY_MISS_COLOR)
-        points += [o, Point3(x=float(end[0]), y=float(end[1]), z=float(end[2]))]
+        points += [o, point3(end)]
         colors += [c, c]
     return LinePrimitive(type=LinePrimitiveLineType.LineList, thickness=2.0,
                          scale_invariant=True, points=points, colors=colors)

@@ -35,6 +35,7 @@ from corobot_drake.systems.runlog import COLUMNS
 from corobot_drake.topics import RobotNames
 from lab.bench import NO_CAMERA
 from lab.processes import listening_sockets, sockets_held
+from mesh_samples import CORNERS, CUBE_OBJ, TRIANGLES, gltf
 
 CURVE = "robots: {corobot: {commands: [!SetPower {left: 1, right: 0.5}]}}"
 SCRIPT = ("robots: {corobot: {commands: [!SetPower {left: 1, right: 0.5}, !Wait {seconds: 0.5},"
@@ -173,6 +174,32 @@ def test_mcap_has_every_topic_at_its_rate(mcap_run):
     # Camera at 30 Hz, captures at 0.0005 + k / 30 s out 30 ms later: k = 0..29 before 1 s.
     assert counts["/camera/image/compressed"] == counts["/camera/camera_info"] == 30
     assert counts["/scene"] == 2  # at 0 and 1 s
+
+
+def test_a_mesh_body_is_drawn_in_the_scene_as_its_hull(tmp_path):
+    """A body with meshes only (`!Mesh` world bodies, OBJ and GLB) is drawn in /scene as its
+    mesh's convex hull, in its colour, scaled: the hull's corners are the cube's (to float
+    precision: a GLB's vertices are 32-bit); the robot keeps its collision shapes."""
+    (tmp_path / "cube.obj").write_text(CUBE_OBJ)
+    (tmp_path / "cube.glb").write_bytes(gltf(CORNERS, TRIANGLES, glb=True))
+    bodies = ", ".join(
+        f"{name}: {{shape: !Mesh {{filename: '{tmp_path}/{name}', scale: {scale}}}, "
+        f"mass: 2.0, color: [0.1, 0.2, 0.3, 1.0], pose: {{translation: [{x}, 1.0, 0.3]}}}}"
+        for name, scale, x in (("cube.obj", 2.0, 0.5), ("cube.glb", 1.5, -0.5)))
+    path = tmp_path / "run.mcap"
+    with McapLog(path) as log:
+        Simulation(load_scenario(DEFAULT_SCENARIO, overrides=[f"world: {{bodies: {{{bodies}}}}}"]),
+                   foxglove=log.context).advance(0.05)
+    entities = {e.id: e for e in read_mcap(path)["/scene"][0][2].entities}
+    for name, scale in (("cube.obj", 2.0), ("cube.glb", 1.5)):
+        (hull,) = entities[name].triangles
+        assert not (entities[name].cubes or entities[name].cylinders or entities[name].spheres)
+        points = np.array([[p.x, p.y, p.z] for p in hull.points])
+        assert len(points) % 3 == 0 and len(points) >= 36  # 6 faces, 2 triangles or more each
+        assert np.abs(points).max(axis=1) == pytest.approx(0.1 * scale, rel=1e-6), name
+        assert [hull.color.r, hull.color.g, hull.color.b] == pytest.approx([0.1, 0.2, 0.3])
+    assert len(entities["front_left_wheel"].cylinders) == 1
+    assert not entities["base_link"].triangles
 
 
 def test_mcap_messages_hold_the_run(mcap_run):

@@ -2,8 +2,6 @@
 stay on it when the robot pushes them, at the coarsest and the default plant step; what the
 contact model cannot hold, and every bad model or mesh file, stops the load with one line."""
 
-import base64
-import json
 import math
 import os
 
@@ -15,6 +13,7 @@ from corobot_drake.config.mesh_files import MAX_MESH_BYTES, MAX_MESH_TRIANGLES
 from corobot_drake.config.scenario import ScenarioError, load_scenario
 from corobot_drake.limits import MAX_TIME_STEP
 from corobot_drake.simulation import Simulation
+from mesh_samples import CORNERS, CUBE_OBJ, TRIANGLES, gltf
 
 STEPS = [MAX_TIME_STEP, 0.01]
 """The coarsest allowed plant step and the default: a rigid box sank through the ground at
@@ -23,14 +22,6 @@ SINK_TOLERANCE = 0.003
 """m: how far a 2 kg, 0.2 m compliant box may sink or rock into the ground while pushed (the
 1e7 Pa patch under its weight is ~0.05 mm; pushed at 20 ms its lowest centre was 0.6 mm
 down). A box that sinks as the rigid ones did loses 8 cm to 50 cm."""
-
-CUBE_OBJ = "\n".join(
-    [f"v {x} {y} {z}" for x in (-0.1, 0.1) for y in (-0.1, 0.1) for z in (-0.1, 0.1)]
-    + ["vn 0 0 1"]
-    + [f"f {a}//1 {b}//1 {c}//1" for a, b, c in (
-        (1, 2, 4), (1, 4, 3), (5, 7, 8), (5, 8, 6), (1, 5, 6), (1, 6, 2),
-        (3, 4, 8), (3, 8, 7), (1, 3, 7), (1, 7, 5), (2, 6, 8), (2, 8, 4))]) + "\n"
-"""A 0.2 m cube centred on its origin."""
 
 CRATE_URDF = """<?xml version="1.0"?>
 <robot name="crate">
@@ -224,40 +215,6 @@ def test_a_directives_file_that_includes_itself_is_refused(tmp_path):
             f"directives: [{{add_directives: {{file: 'file://{tmp_path}/a.yaml'}}}}]"])
 
 
-def gltf(vertices, indices, glb=False, normals=True) -> bytes:
-    """A glTF 2.0 mesh of `vertices` (n x 3), each with a normal pointing away from the origin
-    (unless not `normals`), and triangle `indices`: JSON with its buffer in a data URI, or GLB."""
-    vertices = np.asarray(vertices, "<f4")
-    n, m = len(vertices), len(indices)
-    directions = vertices / np.maximum(np.linalg.norm(vertices, axis=1, keepdims=True), 1e-9)
-    blob = (vertices.tobytes() + directions.astype("<f4").tobytes()
-            + np.asarray(indices, "<u2").tobytes())
-    attributes = {"POSITION": 0, "NORMAL": 2} if normals else {"POSITION": 0}
-    document = {
-        "asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],
-        "nodes": [{"mesh": 0}], "meshes": [{"primitives": [
-            {"attributes": attributes, "indices": 1}]}],
-        "buffers": [{"byteLength": len(blob)}],
-        "bufferViews": [{"buffer": 0, "byteLength": 12 * n},
-                        {"buffer": 0, "byteOffset": 24 * n, "byteLength": 2 * m},
-                        {"buffer": 0, "byteOffset": 12 * n, "byteLength": 12 * n}],
-        "accessors": [{"bufferView": 0, "componentType": 5126, "count": n, "type": "VEC3"},
-                      {"bufferView": 1, "componentType": 5123, "count": m, "type": "SCALAR"},
-                      {"bufferView": 2, "componentType": 5126, "count": n, "type": "VEC3"}]}
-    if not glb:
-        document["buffers"][0]["uri"] = ("data:application/octet-stream;base64,"
-                                         + base64.b64encode(blob).decode())
-        return json.dumps(document).encode()
-    text = json.dumps(document).encode().ljust(-(-len(json.dumps(document)) // 4) * 4)
-    blob = blob.ljust(-(-len(blob) // 4) * 4, b"\0")
-    chunks = (len(text).to_bytes(4, "little") + b"JSON" + text
-              + len(blob).to_bytes(4, "little") + b"BIN\0" + blob)
-    return b"glTF" + (2).to_bytes(4, "little") + (12 + len(chunks)).to_bytes(4, "little") + chunks
-
-
-CORNERS = [[x, y, z] for x in (-0.1, 0.1) for y in (-0.1, 0.1) for z in (-0.1, 0.1)]
-TRIANGLES = [0, 1, 3, 0, 3, 2, 4, 6, 7, 4, 7, 5, 0, 4, 5, 0, 5, 1,
-             2, 3, 7, 2, 7, 6, 0, 2, 6, 0, 6, 4, 1, 5, 7, 1, 7, 3]
 
 
 def bad_meshes(tmp_path) -> dict:
