@@ -34,9 +34,10 @@ mostly idle, but at the default 5 ms each of their wake-ups could hold the simul
 HTTP_NICENESS = 10
 """The HTTP process's nice increment: under CPU contention the simulation comes first."""
 
-HTTP_STOP_TIMEOUT = 3.0
+HTTP_STOP_TIMEOUT = 10.0
 """s the HTTP process has, once the simulation stops, to answer the requests in flight (503)
-and exit (uvicorn's graceful shutdown takes up to 1 s) before it is terminated."""
+and exit before it is terminated (a second Ctrl-C terminates it at once). It takes under a
+second on an idle machine; niced (HTTP_NICENESS) on a busy one, a few."""
 
 SERVE_RUN_LOG_WINDOW = LIVE_RUN_LOG_WINDOW
 """s of run log a served simulation keeps in memory: serving runs for days, and nothing it
