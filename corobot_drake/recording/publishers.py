@@ -367,9 +367,11 @@ def _body_frames(plant, robots: dict, namespaced: bool) -> dict:
     return frames
 
 
-def _primitive(shape, X_BG: RigidTransform, rgba):
-    """(kind, foxglove primitive) of a Box, Cylinder or Sphere; None for other shapes."""
-    pose, c = tp.pose_of(X_BG), tp.color(rgba)
+def _primitive(inspector, gid, rgba):
+    """(kind, foxglove primitive) of geometry `gid` if a Box, Cylinder or Sphere; None for
+    other shapes."""
+    shape = inspector.GetShape(gid)
+    pose, c = tp.pose_of(inspector.GetPoseInFrame(gid)), tp.color(rgba)
     if isinstance(shape, Box):
         return "cubes", CubePrimitive(pose=pose, size=tp.vector3(shape.size()), color=c)
     if isinstance(shape, Cylinder):
@@ -382,15 +384,18 @@ def _primitive(shape, X_BG: RigidTransform, rgba):
     return None
 
 
-def _hull(shape, X_BG: RigidTransform, rgba):
-    """("triangles", foxglove triangle list) of a Mesh's or Convex's convex hull (Drake's, of
-    the scaled mesh: a few hundred triangles however large the mesh, since /scene is sent
-    again every second); None for other shapes and for a mesh Drake cannot hull."""
-    if not isinstance(shape, Mesh | Convex):
+def _hull(inspector, gid, rgba):
+    """("triangles", foxglove triangle list) of geometry `gid`'s convex hull if a Mesh or
+    Convex (SceneGraph's, of the scaled mesh: a few hundred triangles however large the mesh,
+    since /scene is sent again every second); None for other shapes and for a mesh Drake
+    cannot hull."""
+    if not isinstance(inspector.GetShape(gid), Mesh | Convex):
         return None
     try:
-        hull = shape.GetConvexHull()
-    except RuntimeError:  # a model's GLB (Drake hulls OBJ, glTF and VTK), a flat mesh
+        hull = inspector.GetConvexHull(gid)
+    except RuntimeError:  # a model's GLB: Drake hulls OBJ, glTF and VTK
+        return None
+    if hull is None:
         return None
     points = []
     for face in range(hull.num_faces()):
@@ -399,8 +404,8 @@ def _hull(shape, X_BG: RigidTransform, rgba):
                    for k in range(polygon.num_vertices())]
         for b, c in itertools.pairwise(corners[1:]):  # a fan: the polygon is convex
             points += [corners[0], b, c]
-    return "triangles", TriangleListPrimitive(pose=tp.pose_of(X_BG), points=points,
-                                              color=tp.color(rgba))
+    return "triangles", TriangleListPrimitive(pose=tp.pose_of(inspector.GetPoseInFrame(gid)),
+                                              points=points, color=tp.color(rgba))
 
 
 COLLISION_COLOR = (0.6, 0.6, 0.65, 1.0)
@@ -415,9 +420,10 @@ def _scene_entities(plant, scene_graph, frames: dict) -> list:
     makers = []
     for i, (frame, _) in [(0, ("world", None)), *frames.items()]:
         body = plant.get_body(BodyIndex(i))
-        passes = ((plant.GetVisualGeometriesForBody(body), True, _primitive),
+        visual = plant.GetVisualGeometriesForBody(body)
+        passes = ((visual, True, _primitive),
                   (plant.GetCollisionGeometriesForBody(body), False, _primitive),
-                  (plant.GetVisualGeometriesForBody(body), True, _hull))
+                  (visual, True, _hull))
         for ids, colored, draw in passes:
             shapes = _drawn(inspector, ids, colored, draw)
             if shapes:
@@ -435,7 +441,7 @@ def _drawn(inspector, ids, colored: bool, draw) -> dict[str, list]:
         if colored:
             props = inspector.GetIllustrationProperties(gid)
             rgba = props.GetPropertyOrDefault("phong", "diffuse", Rgba(*COLLISION_COLOR)).rgba
-        made = draw(inspector.GetShape(gid), inspector.GetPoseInFrame(gid), rgba)
+        made = draw(inspector, gid, rgba)
         if made is not None:
             shapes.setdefault(made[0], []).append(made[1])
     return shapes
