@@ -38,11 +38,16 @@ def descendants(pid: int, parents: dict[int, list[int]] | None = None,
 
 
 def alive(pid: int) -> bool:
-    """`pid` runs (it exists and is no zombie)."""
-    try:
-        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
-    except (OSError, IndexError):
-        return False
+    """`pid` runs: one of its threads exists and is no zombie. Every thread is read, not only
+    the process's own stat: a leader thread that has ended reads "Z" while the other threads
+    still run and hold the process's files."""
+    for stat in Path(f"/proc/{pid}/task").glob("*/stat"):
+        try:
+            if stat.read_text().rsplit(")", 1)[1].split()[0] not in ("Z", "X"):
+                return True
+        except (OSError, IndexError):
+            continue
+    return False
 
 
 def listening_sockets(port: int | None = None) -> set[int]:
