@@ -171,30 +171,53 @@ def meshcat_server(tmp_path_factory):
         yield s
 
 
-@pytest.mark.realtime  # the move a key press starts, awaited in real time (software WebGL)
-def test_meshcat_view_and_a_key_press_that_stops_by_itself(page, meshcat_server):
-    """Meshcat's page: the initial view frames the robot and the giant box (sent again to a
-    page that connects late), an arrow key drives and the move ends by itself (Meshcat sends
-    no key release: the teleop holds a move only while the key repeats). Holding the key (its
-    auto-repeat, timed in wall-clock tenths of a second) and the follow camera are tested in
-    tests/simulation/test_teleop.py with a clock of its own: on a loaded machine this page (software
-    WebGL) falls ever further behind the visualizer's stream of poses, so what it shows of a
-    moving robot cannot be waited for."""
+def _view_target(page):
+    """Where Meshcat's camera looks, in Drake's z-up world (from three.js's y-up scene)."""
+    import numpy as np
+
+    x, y, z = page.evaluate("() => viewer.controls.target.toArray()")
+    return np.array([x, -z, y])
+
+
+@pytest.fixture
+def meshcat_page(page, meshcat_server):
+    """Meshcat's page of `meshcat_server`, loaded and framing the default scene at rest, with
+    its console messages: loading it (software WebGL) is the test's setup, which runs beside
+    the other worker's tests; only the key press is awaited alone on the machine."""
     import numpy as np
 
     from conftest import make_sim
-    from corobot_drake.config.scenario import BOOK_SUN_DIRECTION
     from corobot_drake.serving.view import framing, scene_points
-    from corobot_drake.station import MESHCAT_DIRECTIONAL_INTENSITY
 
-    url = meshcat_server.url
-    meshcat_url = page.request.get(f"{url}/simulation").json()["meshcat_url"]
+    meshcat_url = page.request.get(f"{meshcat_server.url}/simulation").json()["meshcat_url"]
     page.set_viewport_size({"width": 480, "height": 360})  # software WebGL: fewer pixels
     _, target = framing(scene_points(make_sim()))  # the default scene's, at rest
     console = []
     page.on("console", lambda m: console.append(m.text))
     page.goto(meshcat_url)
+    # Generous waits: a page on a loaded machine (software WebGL) lags Meshcat's messages.
     page.wait_for_selector("text=Forward (Up)", state="attached", timeout=90000)
+    wait_for(lambda: np.allclose(_view_target(page), target, atol=1e-3), 90, "the initial view")
+    return page, console
+
+
+@pytest.mark.realtime  # the move a key press starts, awaited in real time (software WebGL)
+def test_meshcat_view_and_a_key_press_that_stops_by_itself(meshcat_page, meshcat_server):
+    """Meshcat's page: the initial view frames the robot and the giant box (sent again to a
+    page that connects late: the fixture waits for it), the sun is the scenario's, an arrow
+    key drives and the move ends by itself (Meshcat sends no key release: the teleop holds a
+    move only while the key repeats). Holding the key (its auto-repeat, timed in wall-clock
+    tenths of a second) and the follow camera are tested in tests/simulation/test_teleop.py
+    with a clock of its own: on a loaded machine this page (software WebGL) falls ever further
+    behind the visualizer's stream of poses, so what it shows of a moving robot cannot be
+    waited for."""
+    import numpy as np
+
+    from corobot_drake.config.scenario import BOOK_SUN_DIRECTION
+    from corobot_drake.station import MESHCAT_DIRECTIONAL_INTENSITY
+
+    page, console = meshcat_page
+    url = meshcat_server.url
     # The sun: Meshcat's directional light at the scenario's direction and intensity, and no
     # property sent to a path that is no light (the browser warns "has no property").
     sun = ["Lights", "FillLight", "<object>"]
@@ -205,13 +228,6 @@ def test_meshcat_view_and_a_key_press_that_stops_by_itself(page, meshcat_server)
     assert np.array([x, y, z]) / np.linalg.norm([x, y, z]) == pytest.approx(
         -np.array(BOOK_SUN_DIRECTION) / np.linalg.norm(BOOK_SUN_DIRECTION), abs=1e-6)
     assert not [m for m in console if "has no property" in m], console
-
-    def view_target():  # Drake's z-up world from Meshcat's y-up three.js scene
-        x, y, z = page.evaluate("() => viewer.controls.target.toArray()")
-        return np.array([x, -z, y])
-
-    # Generous waits: a page on a loaded machine (software WebGL) lags Meshcat's messages.
-    wait_for(lambda: np.allclose(view_target(), target, atol=1e-3), 90, "the initial view")
     x0 = page.request.get(f"{url}/robots/corobot/drive").json()["position"]["x"]
     page.keyboard.press("ArrowUp")
 
