@@ -1,7 +1,8 @@
 """What the publishers of the run's topics share, the recording's (`recording.publishers`,
 Foxglove) and ROS 2's (`ros2.publishers`): when they look at the simulation, the robot state
-they read (`RobotStateLooks`: its input ports and the chassis read) and how the topics of
-signals with a message of their own are fed (`connect_signal_topics`).
+they read (`RobotStateLooks`: its input ports and the chassis read), the camera frames they
+find (`CameraLooks`) and how the topics of signals with a message of their own are fed
+(`connect_signal_topics`).
 
 A publisher looks on periodic publish events from its input ports alone: what to publish at
 time t is decided from the Context, so it keeps no memory and a reset or replayed Context
@@ -17,6 +18,7 @@ from pydrake.math import RigidTransform
 from pydrake.multibody.math import SpatialVelocity
 from pydrake.systems.framework import LeafSystem
 from pydrake.systems.primitives import ZeroOrderHold
+from pydrake.systems.sensors import ImageRgba8U
 
 from corobot_drake.model import dimensions as dim
 from corobot_drake.systems.runlog import HELD_PERIOD
@@ -98,6 +100,40 @@ class RobotStateLooks(LeafSystem):
                 ("drive_state", builder.GetSubsystemByName(f"{robot}.drive_state")
                  .GetOutputPort("drive_state"))):
             builder.Connect(source, publisher.GetInputPort(port))
+
+
+class CameraLooks(LeafSystem):
+    """The base of a camera's frame publishers: their input ports, and the frame each look
+    finds.
+
+    .. pydrake_system::
+
+        name: CameraLooks
+        input_ports:
+        - rgb_image
+        - image_time
+
+    Inputs `rgb_image` (abstract ImageRgba8U, `width` x `height`) and `image_time` (1, s: its
+    capture; NaN before the first), the camera's outputs. It looks every `look` s and hands
+    a frame that came out (capture + `delay`) since the previous look to the subclass's
+    `publish_frame(context, captured, image)`, as `camera.CameraFrameSaver` saves one."""
+
+    def __init__(self, width: int, height: int, look: float, delay: float):
+        super().__init__()
+        self._look, self._delay = float(look), float(delay)
+        self._image = self.DeclareAbstractInputPort(
+            "rgb_image", AbstractValue.Make(ImageRgba8U(width, height)))
+        self._image_time = self.DeclareVectorInputPort("image_time", 1)
+        self.DeclarePeriodicPublishEvent(self._look, 0.0, self._find_frame)
+
+    def _find_frame(self, context):
+        captured = float(self._image_time.Eval(context)[0])
+        if in_window(captured + self._delay, context.get_time(), self._look):  # False: NaN
+            self.publish_frame(context, captured, self._image.Eval(context))
+
+    def publish_frame(self, context, captured: float, image: ImageRgba8U) -> None:
+        """Publishes the frame captured at `captured` (s)."""
+        raise NotImplementedError
 
 
 def connect_signal_topics(builder, robot: str, publisher, topics, prefix: str) -> None:

@@ -58,6 +58,7 @@ from corobot_drake.recording.looks import (
     STATE_PERIOD,
     TELEMETRY_PERIOD,
     TOLERANCE,
+    CameraLooks,
     RobotStateLooks,
     connect_signal_topics,
     in_window,
@@ -287,7 +288,7 @@ class IrPublisher(LeafSystem):
         self._rays_channel.log(SceneUpdate(entities=[entity]), log_time=ns)
 
 
-class CameraPublisher(LeafSystem):
+class CameraPublisher(CameraLooks):
     """One camera's frames: /camera/image/compressed (foxglove.CompressedImage, JPEG) and
     /camera/camera_info (foxglove.CameraCalibration), stamped with the capture time (another
     camera than `front`: /camera/<camera>/..., `topics.RobotNames.camera_topic`).
@@ -299,17 +300,11 @@ class CameraPublisher(LeafSystem):
         - rgb_image
         - image_time
 
-    Inputs `rgb_image` (abstract ImageRgba8U) and `image_time` (1, s: its capture; NaN before
-    the first), the camera's outputs. It looks every `look` s and publishes a frame that came
-    out (capture + `delay`) since the previous look, as `camera.CameraFrameSaver` does."""
+    The ports, and when a frame is published: `looks.CameraLooks`."""
 
     def __init__(self, context, names: ros_names.RobotNames, camera: str, config, look: float,
                  delay: float):
-        super().__init__()
-        self._names, self._look, self._delay = names, float(look), float(delay)
-        self._image = self.DeclareAbstractInputPort(
-            "rgb_image", AbstractValue.Make(ImageRgba8U(config.width, config.height)))
-        self._image_time = self.DeclareVectorInputPort("image_time", 1)
+        super().__init__(config.width, config.height, look, delay)
         self._image_channel = CompressedImageChannel(
             names.camera_topic(camera, "image/compressed"), context=context)
         self._info_channel = CameraCalibrationChannel(names.camera_topic(camera, "camera_info"),
@@ -321,16 +316,12 @@ class CameraPublisher(LeafSystem):
             frame_id=self._frame, width=config.width, height=config.height,
             distortion_model="plumb_bob", D=[0.0] * 5, K=[fx, 0, cx, 0, fy, cy, 0, 0, 1],
             R=[1.0, 0, 0, 0, 1, 0, 0, 0, 1], P=[fx, 0, cx, 0, 0, fy, cy, 0, 0, 0, 1, 0])
-        self.DeclarePeriodicPublishEvent(self._look, 0.0, self._publish)
 
-    def _publish(self, context):
-        captured = float(self._image_time.Eval(context)[0])
-        if not in_window(captured + self._delay, context.get_time(), self._look):
-            return  # also NaN: no frame yet
+    def publish_frame(self, context, captured: float, image: ImageRgba8U) -> None:
         ns = ros_names.nanoseconds(captured)
         self._image_channel.log(CompressedImage(
             timestamp=tp.stamp(captured), frame_id=self._frame, format="jpeg",
-            data=jpeg(self._image.Eval(context))), log_time=ns)
+            data=jpeg(image)), log_time=ns)
         self._info_channel.log(CameraCalibration(timestamp=tp.stamp(captured),
                                                  **self._calibration), log_time=ns)
 

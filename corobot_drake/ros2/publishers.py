@@ -27,6 +27,7 @@ from corobot_drake.recording.looks import (
     STATE_PERIOD,
     TELEMETRY_PERIOD,
     TOLERANCE,
+    CameraLooks,
     RobotStateLooks,
     connect_signal_topics,
     in_window,
@@ -259,7 +260,7 @@ class IrPublisher(LeafSystem):
             when, self._frame, self._fov, self._min, self._max, s[DISTANCE]))
 
 
-class CameraPublisher(LeafSystem):
+class CameraPublisher(CameraLooks):
     """One camera's frames: /camera/image_raw (sensor_msgs/Image, rgb8) and
     /camera/camera_info, stamped with the capture time (another camera than `front`:
     /camera/<camera>/..., `interfaces.camera_topic`).
@@ -271,30 +272,19 @@ class CameraPublisher(LeafSystem):
         - rgb_image
         - image_time
 
-    Inputs `rgb_image` (abstract ImageRgba8U) and `image_time` (1, s: its capture; NaN before
-    the first), the camera's outputs. It looks every `look` s and publishes a frame that came
-    out (capture + `delay`) since the previous look, as `camera.CameraFrameSaver` does."""
+    The ports, and when a frame is published: `recording.looks.CameraLooks`."""
 
     def __init__(self, bus, names: tp.RobotNames, camera: str, config, look: float,
                  delay: float):
-        super().__init__()
+        super().__init__(config.width, config.height, look, delay)
         self._m, self._config = Messages(bus.store), config
-        self._look, self._delay = float(look), float(delay)
         self._frame = names.camera_frame(camera)
-        self._image = self.DeclareAbstractInputPort(
-            "rgb_image", AbstractValue.Make(ImageRgba8U(config.width, config.height)))
-        self._image_time = self.DeclareVectorInputPort("image_time", 1)
         self._image_channel = _channel(bus, names, ifc.camera_topic(camera, "image_raw"))
         self._info_channel = _channel(bus, names, ifc.camera_topic(camera, "camera_info"))
-        self.DeclarePeriodicPublishEvent(self._look, 0.0, self._publish)
 
-    def _publish(self, context):
-        captured = float(self._image_time.Eval(context)[0])
-        if not in_window(captured + self._delay, context.get_time(), self._look):
-            return  # also NaN: no frame yet
+    def publish_frame(self, context, captured: float, image: ImageRgba8U) -> None:
         ns = tp.nanoseconds(captured)
-        rgba = self._image.Eval(context).data
-        self._image_channel.publish(ns, self._m.image(captured, self._frame, rgba))
+        self._image_channel.publish(ns, self._m.image(captured, self._frame, image.data))
         self._info_channel.publish(ns, self._m.camera_info(captured, self._frame,
                                                            self._config))
 

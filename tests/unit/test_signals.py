@@ -1,5 +1,5 @@
-"""The signals table's places (`signals.put_value`, `read_value`) and the state publishers'
-shared base (`recording.looks.RobotStateLooks`) alone."""
+"""The signals table's places (`signals.put_value`, `read_value`) and the publishers' shared
+bases (`recording.looks.RobotStateLooks`, `CameraLooks`) alone."""
 
 import math
 
@@ -7,9 +7,10 @@ import numpy as np
 import pytest
 from pydrake.math import RigidTransform, RollPitchYaw
 from pydrake.multibody.math import SpatialVelocity
+from pydrake.systems.sensors import ImageRgba8U
 
 from corobot_drake import signals
-from corobot_drake.recording.looks import RobotStateLooks
+from corobot_drake.recording.looks import CameraLooks, RobotStateLooks
 from corobot_drake.systems.odometry import DriveState, WheelState
 
 
@@ -74,3 +75,37 @@ def test_robot_state_looks_read_the_chassis_in_base_link():
     angles, rates = looks.wheel_state(context)
     assert angles.tolist() == [0, 1, 2, 3] and rates.tolist() == [4, 5, 6, 7]
     assert looks.drive_state(context) == state
+
+
+class _Frames(CameraLooks):
+    """Keeps what it is handed: (context time, capture time, the image's first pixel)."""
+
+    def __init__(self):
+        super().__init__(4, 3, look=0.01, delay=0.03)
+        self.handed = []
+
+    def publish_frame(self, context, captured, image):
+        self.handed.append((context.get_time(), captured, int(image.data[0, 0, 0])))
+
+
+@pytest.mark.parametrize("captured, look", [
+    (math.nan, None),  # no frame: nothing handed on
+    (0.015, 0.05),     # out at 0.045: the look at 0.05 sees [0.04, 0.05)
+    (0.010, 0.05),     # out at 0.04: not the look at 0.04 (it runs before the updates at 0.04)
+    (0.0, 0.04),
+])
+def test_camera_looks_hand_on_a_frame_once_at_the_look_after_it_comes_out(captured, look):
+    """A frame comes out `delay` (30 ms) after its capture; of the looks every 10 ms over
+    0.1 s, only the first after that instant hands it on, with its capture time and image."""
+    from pydrake.systems.analysis import Simulator
+
+    frames = _Frames()
+    simulator = Simulator(frames)
+    context = simulator.get_mutable_context()
+    image = ImageRgba8U(4, 3)
+    image.mutable_data[:] = 7
+    frames.GetInputPort("rgb_image").FixValue(context, image)
+    frames.GetInputPort("image_time").FixValue(context, [captured])
+    simulator.AdvanceTo(0.1)
+    expected = [] if look is None else [(look, captured, 7)]
+    assert [(pytest.approx(t, abs=1e-12), c, v) for t, c, v in frames.handed] == expected
