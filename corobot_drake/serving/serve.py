@@ -211,8 +211,10 @@ def http_main(conn, access, port: int, log_level: str, niceness: int,
     if sock is None:
         return
     server_box: list = []
+    gone = threading.Event()
 
     def closed() -> None:  # the simulation process went away: stop serving
+        gone.set()
         if server_box:
             server_box[0].should_exit = True
 
@@ -224,6 +226,8 @@ def http_main(conn, access, port: int, log_level: str, niceness: int,
                          timeout_graceful_shutdown=1)
     server = uvicorn.Server(config)
     server_box.append(server)
+    if gone.is_set():  # it stopped while the app was built (this niced process is slow to start)
+        return
     with contextlib.suppress(KeyboardInterrupt):
         server.run(sockets=[sock])
 

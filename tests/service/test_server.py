@@ -731,6 +731,34 @@ def test_a_served_simulation_stops_when_its_http_process_dies(tmp_path):
         "was killed by SIGKILL: the simulation stopped with it") for line in lines), lines
 
 
+def test_the_http_side_stops_when_the_simulation_stops_while_it_starts():
+    """The simulation's end of the pipe closes right after its hello, while the HTTP side
+    is still building its app (a Ctrl-C at once; on a busy machine the niced HTTP process
+    takes seconds to start): the HTTP side returns instead of serving on until it is
+    terminated."""
+    import multiprocessing
+    import threading
+
+    from conftest import make_sim
+    from corobot_drake.serving.runner import SimRunner
+    from corobot_drake.serving.security import Access
+    from corobot_drake.serving.serve import http_main
+
+    sim_end, http_end = multiprocessing.Pipe()
+    http = threading.Thread(target=http_main, args=(
+        http_end, Access.for_host("127.0.0.1", None), 0, "warning", 0), daemon=True)
+    http.start()
+    assert sim_end.recv()[0] == "listening"
+    runner = SimRunner(make_sim()).start()
+    hello = ("hello", {"robots": runner.robots, "snapshot": runner.snapshot,
+                       "stats": runner.stats(), "meshcat_url": runner.meshcat_url})
+    runner.stop()
+    sim_end.send(hello)  # and at once the end: the HTTP side sees it while it builds its app
+    sim_end.close()
+    http.join(30)  # a server that missed the close would serve on: the join times out
+    assert not http.is_alive(), "the HTTP side serves on after the simulation stopped"
+
+
 def test_ctrl_c_stops_both_processes_in_turn(tmp_path):
     """Ctrl-C (SIGINT to the simulation process): the simulation stops, closes the pipe, and
     the HTTP process sees it closed and ends by itself (it is not terminated), exit status 0."""
