@@ -36,8 +36,12 @@ HTTP_NICENESS = 10
 
 HTTP_STOP_TIMEOUT = 10.0
 """s the HTTP process has, once the simulation stops, to answer the requests in flight (503)
-and exit before it is terminated (a second Ctrl-C terminates it at once). It takes under a
-second on an idle machine; niced (HTTP_NICENESS) on a busy one, a few."""
+and exit before it is terminated (called from Python, a second Ctrl-C terminates it at once;
+`python -m corobot_drake` takes only the first signal). It takes under a second on an idle
+machine; niced (HTTP_NICENESS) on a busy one, a few."""
+BUILD_STOP_TIMEOUT = 60.0
+"""s a simulation being built when Ctrl-C comes has to finish building (it cannot be cut
+short) before the process ends: a few seconds for the default scene."""
 
 SERVE_RUN_LOG_WINDOW = LIVE_RUN_LOG_WINDOW
 """s of run log a served simulation keeps in memory: serving runs for days, and nothing it
@@ -80,7 +84,17 @@ def serve(make_sim, host: str = "127.0.0.1", port: int = 50000, meshcat: bool = 
     http = ctx.Process(target=http_main, name="corobot-http", daemon=True, args=(
         child_conn, access, port, log_level, HTTP_NICENESS, parent))
     http.start()
-    kind, value = conn.recv()
+    child_conn.close()  # this process's copy: the pipe ends when the HTTP process does
+    try:
+        kind, value = conn.recv()
+    except EOFError:
+        http.join(5)
+        print(f"error: the HTTP server process ({http.pid}) {_ended(http.exitcode)} before "
+              "it listened", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        _end(http)
+        raise
     if kind == "error":
         http.join(5)
         print(f"error: {value}", file=sys.stderr)
@@ -92,9 +106,13 @@ def serve(make_sim, host: str = "127.0.0.1", port: int = 50000, meshcat: bool = 
     try:
         runner.start()
     except (ValueError, RendererUnavailableError) as e:  # e.g. a non-finite number
-        http.terminate()
+        _end(http)
         print(f"error: {label + ': ' if label else ''}{e}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:  # while the simulation is built: its thread ends it first
+        runner.stop(BUILD_STOP_TIMEOUT)
+        _end(http)
+        raise
     bridge = SimSide(runner, conn)
     shown = f"http://[{host}]:{value}" if ":" in host else f"http://{host}:{value}"
     stats, lost = runner.stats(), False
@@ -122,6 +140,12 @@ def serve(make_sim, host: str = "127.0.0.1", port: int = 50000, meshcat: bool = 
         print(f"error: the HTTP server process ({http.pid}) {_ended(http.exitcode)}: the "
               f"simulation stopped with it", file=sys.stderr)
     return 0 if runner.error is None and not lost else 1
+
+
+def _end(http) -> None:
+    """Ends the HTTP process (SIGTERM) before it serves: it has nothing to finish."""
+    http.terminate()
+    http.join(5)
 
 
 def _ended(exitcode: int | None) -> str:
@@ -195,6 +219,12 @@ def http_main(conn, access, port: int, log_level: str, niceness: int,
     """The HTTP process: listen on `access.host`, report the port, wait for the simulation,
     serve behind `access` (`security.Access`); end when the simulation process `parent`
     ends, however it ends."""
+    import signal
+
+    # A Ctrl-C at a terminal reaches this process too: the simulation process stops it
+    # (closing the pipe, or SIGTERM before it serves), so it need not print a traceback.
+    if threading.current_thread() is threading.main_thread():  # (a test runs it in a thread)
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
     if not _die_with_parent(parent):
         return
     import uvicorn

@@ -731,6 +731,39 @@ def test_a_served_simulation_stops_when_its_http_process_dies(tmp_path):
         "was killed by SIGKILL: the simulation stopped with it") for line in lines), lines
 
 
+def test_an_http_process_that_dies_before_it_listens_is_one_line():
+    """The HTTP process killed (SIGKILL, by its PID) as soon as it exists, before it has
+    imported its server and reported its port: the simulation process does not wait for the
+    report forever; exit status 2 and one line saying what happened."""
+    import signal
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    run = subprocess.Popen([sys.executable, "-m", "corobot_drake", "--headless", "--serve",
+                            "--port", "0"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                           text=True)
+    try:
+        deadline = time.monotonic() + 60
+        while True:  # the spawned child: a second or more of imports before it listens
+            http = [p for p in children_by_parent().get(run.pid, [])
+                    if b"spawn_main" in Path(f"/proc/{p}/cmdline").read_bytes()]
+            if http:
+                break
+            assert time.monotonic() < deadline and run.poll() is None, "no HTTP process"
+            time.sleep(0.01)
+        os.kill(http[0], signal.SIGKILL)
+        out, err = run.communicate(timeout=60)
+    finally:
+        if run.poll() is None:
+            run.kill()
+            run.wait()
+    assert run.returncode == 2, err
+    assert err.strip().splitlines()[-1] == (f"error: the HTTP server process ({http[0]}) was "
+                                            "killed by SIGKILL before it listened")
+    assert not out
+
+
 def test_the_http_side_stops_when_the_simulation_stops_while_it_starts():
     """The simulation's end of the pipe closes right after its hello, while the HTTP side
     is still building its app (a Ctrl-C at once; on a busy machine the niced HTTP process
@@ -748,7 +781,7 @@ def test_the_http_side_stops_when_the_simulation_stops_while_it_starts():
     http = threading.Thread(target=http_main, args=(
         http_end, Access.for_host("127.0.0.1", None), 0, "warning", 0), daemon=True)
     http.start()
-    assert sim_end.recv()[0] == "listening"
+    assert sim_end.poll(60) and sim_end.recv()[0] == "listening"
     runner = SimRunner(make_sim()).start()
     hello = ("hello", {"robots": runner.robots, "snapshot": runner.snapshot,
                        "stats": runner.stats(), "meshcat_url": runner.meshcat_url})
