@@ -391,13 +391,19 @@ STOPPED_BY: int | None = None
 """The signal that stopped this process's run (`ctrl_c_stops`), else None."""
 
 
+_WRITING_OUTPUTS = False
+"""True while a run's outputs are written (`_finish`): a signal then is recorded, not raised."""
+
+
 def _stop(signum, frame) -> None:
-    """The first SIGINT or SIGTERM raises KeyboardInterrupt where the program is; later ones
-    are ignored, so that the outputs of the run so far are written whole."""
+    """The first SIGINT or SIGTERM raises KeyboardInterrupt where the program is (unless the
+    outputs are being written: it is recorded, and they are finished); later ones are
+    ignored, so that the outputs of the run so far are written whole."""
     global STOPPED_BY
     if STOPPED_BY is None:
         STOPPED_BY = signum
-        raise KeyboardInterrupt
+        if not _WRITING_OUTPUTS:
+            raise KeyboardInterrupt
 
 
 def ctrl_c_stops() -> None:
@@ -431,6 +437,15 @@ def main(argv: list[str] | None = None) -> int:
     warnings.formatwarning = _one_line_warning  # for a user, not a developer: no source lines
     args = _parser().parse_args(argv)
     try:
+        return _main(args)
+    except KeyboardInterrupt:  # before the run started (loading, building): nothing to write
+        print("stopped before the run started", file=sys.stderr)
+        return stopped_status()
+
+
+def _main(args) -> int:
+    """`main` once the arguments are parsed."""
+    try:
         check_arguments(args)
         args.token = shared_token(args)
         scenario = load_scenario(scenario_path(args.scenario), overrides=args.override)
@@ -452,12 +467,8 @@ def main(argv: list[str] | None = None) -> int:
         print(f"error: --{'foxglove' if isinstance(e, RuntimeError) else 'mcap'}: "
               f"{str(e).splitlines()[0]}", file=sys.stderr)
         return 2
-    try:
-        with sinks, _ros2_front(args, scenario) as ros2:
-            status = _run(args, scenario, duration, sinks.context, ros2)
-    except KeyboardInterrupt:  # before the run started (building it): nothing to write
-        print("stopped before the run started", file=sys.stderr)
-        return stopped_status()
+    with sinks, _ros2_front(args, scenario) as ros2:
+        status = _run(args, scenario, duration, sinks.context, ros2)
     return status if sinks.finished else max(status, 1)
 
 
@@ -522,10 +533,22 @@ def _run(args, scenario, duration: float, foxglove, ros2=None) -> int:
 
 
 def _finish(sim: Simulation, args) -> int:
-    """The run's closing line and its outputs (`_write_results`)."""
-    summary = sim.summary()
-    print(f"simulated {summary['time']:.2f} s at {summary['realtime_factor']:.1f}x real time")
-    status = _write_results(sim, args, summary)
+    """The run's closing line and its outputs (`_write_results`), written whole even if a
+    stop signal comes meanwhile (it sets the exit status)."""
+    import signal
+
+    global _WRITING_OUTPUTS
+    _WRITING_OUTPUTS, stopped_before = True, STOPPED_BY
+    try:
+        summary = sim.summary()
+        print(f"simulated {summary['time']:.2f} s at {summary['realtime_factor']:.1f}x real "
+              "time")
+        status = _write_results(sim, args, summary)
+    finally:
+        _WRITING_OUTPUTS = False
+    if STOPPED_BY is not None and stopped_before is None:
+        print(f"stopped by {signal.Signals(STOPPED_BY).name} while the outputs were written: "
+              "they were finished first", file=sys.stderr)
     return stopped_status() if STOPPED_BY is not None and status == 0 else status
 
 

@@ -161,6 +161,59 @@ def test_the_interactive_run_keeps_a_window_of_run_log(tmp_path, monkeypatch, ca
     assert cli.run_log_window(cli._parser().parse_args(["--headless"])) is None
 
 
+@pytest.fixture
+def stop_signals(monkeypatch):
+    """The entry point's SIGINT and SIGTERM handlers (`cli.ctrl_c_stops`) in this process for
+    one test; the handlers and the recorded signal put back after it."""
+    import signal
+
+    from corobot_drake import cli
+
+    before = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
+    monkeypatch.setattr(cli, "STOPPED_BY", None)
+    cli.ctrl_c_stops()
+    yield cli
+    for signum, handler in before.items():
+        signal.signal(signum, handler)
+
+
+def test_a_signal_while_the_outputs_are_written_lets_them_finish(tmp_path, capsys,
+                                                                   monkeypatch, stop_signals):
+    """SIGTERM in the middle of writing a finished run's outputs (here between the run log
+    and the summary): every output is still written whole, one line says so, exit 143."""
+    import signal
+
+    cli = stop_signals
+    write_logs = cli._write_logs
+
+    def write_logs_then_sigterm(sim, path):
+        write_logs(sim, path)
+        signal.raise_signal(signal.SIGTERM)  # handled here, between two bytecodes
+
+    monkeypatch.setattr(cli, "_write_logs", write_logs_then_sigterm)
+    log, summary = tmp_path / "r.csv", tmp_path / "s.json"
+    assert main(["--headless", "--duration", "0.5", "--override", NO_CAMERA,
+                 "--log", str(log), "--summary", str(summary)]) == 128 + signal.SIGTERM
+    assert json.loads(summary.read_text())["time"] == pytest.approx(0.5)
+    assert len(log.read_text().splitlines()) == 1 + 51  # header, then 0 to 0.5 s at 100 Hz
+    assert ("stopped by SIGTERM while the outputs were written: they were finished first"
+            in capsys.readouterr().err)
+
+
+def test_ctrl_c_while_the_scenario_loads_is_one_line(capsys, monkeypatch, stop_signals):
+    """Ctrl-C before the run exists (here while the scenario is read): one line, exit 130."""
+    import signal
+
+    cli = stop_signals
+
+    def interrupted(*args, **kwargs):
+        signal.raise_signal(signal.SIGINT)
+
+    monkeypatch.setattr(cli, "load_scenario", interrupted)
+    assert main(["--headless"]) == 130
+    assert capsys.readouterr().err.strip() == "stopped before the run started"
+
+
 def test_ctrl_c_stops_a_run_started_with_sigint_ignored():
     """A background job of a non-interactive shell (a CI script) starts with SIGINT ignored,
     and Python keeps it so: the entry point restores Ctrl-C, so SIGINT still ends a run
