@@ -68,9 +68,11 @@ def main(argv: list[str] | None = None) -> int:
         print(f"error: --out: {e.filename or out}: cannot write ({e.strerror})", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
+        from corobot_drake.cli import stopped_status
+
         print(f"stopped: the finished runs are in {out / 'runs.csv'} (--resume runs the rest)",
               file=sys.stderr)
-        return 130
+        return stopped_status()  # 130 for Ctrl-C, 143 for SIGTERM
     rows = read_rows(runs_csv)
     errors = [r for r in rows if r["status"] != "ok"]
     print(f"{len(rows)} runs ({len(errors)} errors): {runs_csv}, {out / 'summary.md'}")

@@ -15,9 +15,11 @@ import operator
 import os
 import re
 import shutil
+import signal
 import socket
 import stat
 import sys
+import threading
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -136,15 +138,21 @@ def ray_session(address: str | None, workers: int | None) -> Iterator[int]:
     if ray.is_initialized():  # the caller's own Ray session (a notebook, a test): use it
         yield workers or int(ray.cluster_resources().get("CPU", 1))
         return
-    if address:
-        _join(address)
-    else:
-        # "local": a new instance even when RAY_ADDRESS or a running cluster would be joined.
-        ray.init(address="local", num_cpus=workers or os.cpu_count(), include_dashboard=False,
-                 log_to_driver=False, configure_logging=False)
+    # ray.init sets a SIGTERM handler of its own (sys.exit: no line, no --resume hint); a
+    # program's own (`cli.ctrl_c_stops`: stop cleanly, shut Ray down) is put back after it.
+    on_sigterm = signal.getsignal(signal.SIGTERM)
     try:
+        if address:
+            _join(address)
+        else:
+            # "local": a new instance even when RAY_ADDRESS or a running cluster would be
+            # joined.
+            ray.init(address="local", num_cpus=workers or os.cpu_count(),
+                     include_dashboard=False, log_to_driver=False, configure_logging=False)
+        if callable(on_sigterm) and threading.current_thread() is threading.main_thread():
+            signal.signal(signal.SIGTERM, on_sigterm)
         yield workers or int(ray.cluster_resources().get("CPU", 1))
-    finally:
+    finally:  # also after a stop while Ray started
         ray.shutdown()
 
 
