@@ -97,11 +97,15 @@ def start_xvfb() -> str | None:
         return None
     finally:
         os.close(write_end)
-    number = _read_display_number(read_end)
-    connection = xlib.XOpenDisplay(f":{number}".encode()) if number is not None else None
+    connection = None
+    try:  # until a connection is open, nothing else ends the server (`-terminate`)
+        number = _read_display_number(read_end)
+        connection = xlib.XOpenDisplay(f":{number}".encode()) if number is not None else None
+    finally:  # also on a Ctrl-C meanwhile
+        if not connection:
+            process.kill()
+            process.wait()
     if not connection:
-        process.kill()
-        process.wait()
         return None
     process.display_number = number
     _xvfb, _keepalive = process, connection

@@ -473,3 +473,45 @@ def test_a_simulation_is_freed_when_its_last_reference_goes(script):
         assert freed() is None
     finally:
         gc.enable()
+
+
+XVFB_STOPPED_WHILE_STARTING = """
+import os, shutil, signal, subprocess, sys
+from corobot_drake.cli import ctrl_c_stops
+from corobot_drake.sensors import xdisplay
+if shutil.which("Xvfb") is None or xdisplay._xlib() is None:
+    print("no Xvfb"); sys.exit()
+started = []
+class Recorded(subprocess.Popen):
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        started.append(self)
+xdisplay.subprocess.Popen = Recorded
+ctrl_c_stops()
+read = xdisplay._read_display_number
+def read_then_sigterm(fd):
+    number = read(fd)
+    os.kill(os.getpid(), signal.SIGTERM)  # taken at the next bytecode, before XOpenDisplay
+    return number
+xdisplay._read_display_number = read_then_sigterm
+try:
+    xdisplay.start_xvfb()
+except KeyboardInterrupt:
+    pass
+(server,) = started
+print("left running" if server.poll() is None else "stopped")
+if server.poll() is None:
+    server.kill()
+    server.wait()
+"""
+
+
+def test_a_stop_while_the_private_xvfb_starts_stops_the_server():
+    """SIGTERM (the entry point's KeyboardInterrupt) after Xvfb reported its display but
+    before this process connected to it: the server is stopped with it (`-terminate` would
+    never end a server no client has connected to)."""
+    run = subprocess.run([sys.executable, "-c", XVFB_STOPPED_WHILE_STARTING],
+                         capture_output=True, text=True, timeout=60)
+    if run.stdout.strip() == "no Xvfb":
+        pytest.skip("no Xvfb or Xlib (tools/setup installs both)")
+    assert run.stdout.strip() == "stopped", run.stdout + run.stderr
