@@ -67,7 +67,6 @@ def serve(make_sim, host: str = "127.0.0.1", port: int = 50000, meshcat: bool = 
     through it: the ROS 2 node, `ros2.run.Ros2Front.attach`)."""
     import multiprocessing
 
-    from corobot_drake.sensors.camera import RendererUnavailableError
     from corobot_drake.serving.security import Access
     from corobot_drake.serving.transport import SimSide
 
@@ -85,34 +84,15 @@ def serve(make_sim, host: str = "127.0.0.1", port: int = 50000, meshcat: bool = 
         child_conn, access, port, log_level, HTTP_NICENESS, parent))
     http.start()
     child_conn.close()  # this process's copy: the pipe ends when the HTTP process does
-    try:
-        kind, value = conn.recv()
-    except EOFError:
-        http.join(5)
-        print(f"error: the HTTP server process ({http.pid}) {_ended(http.exitcode)} before "
-              "it listened", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        _end(http)
-        raise
-    if kind == "error":
-        http.join(5)
-        print(f"error: {value}", file=sys.stderr)
+    value = _listening_port(http, conn)
+    if value is None:
         return 2
     sys.setswitchinterval(SWITCH_INTERVAL)
     runner = sim_runner(make_sim, meshcat, rate)
     if attach is not None:
         attach(runner)
-    try:
-        runner.start()
-    except (ValueError, RendererUnavailableError) as e:  # e.g. a non-finite number
-        _end(http)
-        print(f"error: {label + ': ' if label else ''}{e}", file=sys.stderr)
+    if not _started(runner, http, label):
         return 2
-    except KeyboardInterrupt:  # while the simulation is built: its thread ends it first
-        runner.stop(BUILD_STOP_TIMEOUT)
-        _end(http)
-        raise
     bridge = SimSide(runner, conn)
     shown = f"http://[{host}]:{value}" if ":" in host else f"http://{host}:{value}"
     stats, lost = runner.stats(), False
@@ -140,6 +120,44 @@ def serve(make_sim, host: str = "127.0.0.1", port: int = 50000, meshcat: bool = 
         print(f"error: the HTTP server process ({http.pid}) {_ended(http.exitcode)}: the "
               f"simulation stopped with it", file=sys.stderr)
     return 0 if runner.error is None and not lost else 1
+
+
+def _listening_port(http, conn) -> int | None:
+    """The port the HTTP process listens on, once it reports it; None, its error printed,
+    when it cannot listen or ends first."""
+    try:
+        kind, value = conn.recv()
+    except EOFError:
+        http.join(5)
+        print(f"error: the HTTP server process ({http.pid}) {_ended(http.exitcode)} before "
+              "it listened", file=sys.stderr)
+        return None
+    except KeyboardInterrupt:
+        _end(http)
+        raise
+    if kind == "error":
+        http.join(5)
+        print(f"error: {value}", file=sys.stderr)
+        return None
+    return value
+
+
+def _started(runner, http, label: str) -> bool:
+    """Starts the simulation thread (`runner`, which builds the simulation); False, the
+    error printed and the HTTP process ended, when the simulation cannot be built."""
+    from corobot_drake.sensors.camera import RendererUnavailableError
+
+    try:
+        runner.start()
+    except (ValueError, RendererUnavailableError) as e:  # e.g. a non-finite number
+        _end(http)
+        print(f"error: {label + ': ' if label else ''}{e}", file=sys.stderr)
+        return False
+    except KeyboardInterrupt:  # while the simulation is built: its thread ends it first
+        runner.stop(BUILD_STOP_TIMEOUT)
+        _end(http)
+        raise
+    return True
 
 
 def _end(http) -> None:
