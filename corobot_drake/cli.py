@@ -354,6 +354,13 @@ class _FoxgloveSinks(contextlib.ExitStack):
         self.context, self.finished = None, True
         if args.mcap is None and args.foxglove is None:
             return
+        try:
+            self._open(args)
+        except BaseException:  # the MCAP file cannot be made, a Ctrl-C: the server stops
+            self.close()
+            raise
+
+    def _open(self, args) -> None:
         import foxglove
 
         from corobot_drake.recording.foxglove_live import FoxgloveLive

@@ -343,3 +343,27 @@ def test_an_mcap_file_on_a_full_disk_is_named(tmp_path):
            f"written to {tmp_path}/corobot-summary-" in run.stderr
     (fallback,) = tmp_path.glob("corobot-summary-*.json")
     assert json.loads(fallback.read_text())["time"] == pytest.approx(1.0)
+
+
+def test_a_foxglove_server_started_before_a_failing_mcap_file_is_stopped(tmp_path, capsys,
+                                                                          monkeypatch):
+    """--foxglove and --mcap, the MCAP file failing as it is made (after the live server
+    started: a taken port must leave no file behind): one line, exit 2, and the server this
+    process started no longer listens."""
+    import os
+    import time
+
+    from corobot_drake.recording import mcap_log
+    from lab.processes import listening_sockets, sockets_held
+
+    def cannot_make(path, context):
+        raise OSError(28, "No space left on device", str(path))
+
+    monkeypatch.setattr(mcap_log, "McapLog", cannot_make)
+    before = sockets_held(os.getpid()) & listening_sockets()
+    assert main(["--headless", "--foxglove", "0", "--mcap", str(tmp_path / "r.mcap")]) == 2
+    assert capsys.readouterr().err.strip().splitlines()[-1].startswith("error: --mcap: ")
+    deadline = time.monotonic() + 5.0  # the server's socket closes on its own thread
+    while sockets_held(os.getpid()) & listening_sockets() - before:
+        assert time.monotonic() < deadline, "the Foxglove server still listens"
+        time.sleep(0.05)
