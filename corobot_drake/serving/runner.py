@@ -117,6 +117,9 @@ class SimRunner:
         self._inbox: queue.SimpleQueue = queue.SimpleQueue()
         self._watches: list[tuple[Callable, concurrent.futures.Future]] = []
         self._stop = threading.Event()
+        self._ending = threading.RLock()  # (a future's callback may submit again)
+        """Held to queue a request, and by the simulation thread's last drain: a request is
+        either queued before that drain (and failed by it) or refused after it."""
         self._ready = threading.Event()
         self._thread: threading.Thread | None = None
         self._window: list[tuple[float, float]] = []
@@ -155,10 +158,11 @@ class SimRunner:
 
     def _put(self, fn: Callable, watch: bool) -> concurrent.futures.Future:
         future: concurrent.futures.Future = concurrent.futures.Future()
-        if self._stop.is_set() or (self._thread is not None and not self.alive):
-            future.set_exception(SimulationStoppedError("the simulation is not running"))
-        else:
-            self._inbox.put((fn, future, watch))
+        with self._ending:
+            if self._stop.is_set() or (self._thread is not None and not self.alive):
+                future.set_exception(SimulationStoppedError("the simulation is not running"))
+            else:
+                self._inbox.put((fn, future, watch))
         return future
 
     # --- measurements ---
@@ -203,8 +207,9 @@ class SimRunner:
             self.error = e
         finally:
             self._ready.set()
-            self._stop.set()
-            self._fail_pending(SimulationStoppedError("the simulation stopped"))
+            with self._ending:
+                self._stop.set()
+                self._fail_pending(SimulationStoppedError("the simulation stopped"))
 
     def _loop(self) -> None:
         sim, clock = self.sim, time.perf_counter
