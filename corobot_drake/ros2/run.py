@@ -90,16 +90,12 @@ def run_live(front: Ros2Front, make_sim, meshcat: bool, duration: float,
     `finish(sim)`, called in the simulation thread (Meshcat, which a replay is written from,
     answers only the thread that made it). What building it raised is raised."""
     from corobot_drake.serving.runner import SimulationStoppedError
-    from corobot_drake.serving.serve import BUILD_STOP_TIMEOUT, sim_runner
+    from corobot_drake.serving.serve import sim_runner
 
     runner = sim_runner(make_sim, meshcat, run_log_window=run_log_window)
     front.attach(runner)
     sys.setswitchinterval(SWITCH_INTERVAL)
-    try:
-        runner.start()
-    except KeyboardInterrupt:  # while the simulation is built: its thread ends it first
-        runner.stop(BUILD_STOP_TIMEOUT)
-        raise
+    runner.start()
     if runner.meshcat_url:
         print(f"Meshcat: {runner.meshcat_url}", flush=True)
     end = runner.sim.time + duration

@@ -31,6 +31,10 @@ log = logging.getLogger(__name__)
 
 T = TypeVar("T")
 
+BUILD_STOP_TIMEOUT = 60.0
+"""s a simulation being built when Ctrl-C comes has to finish building before the runner
+stops: a few seconds for the default scene."""
+
 
 class SimulationStoppedError(RuntimeError):
     """A request the simulation will never answer: it has stopped (or was never reached).
@@ -127,10 +131,17 @@ class SimRunner:
     # --- life cycle ---
     def start(self, timeout: float = 300.0) -> SimRunner:
         """Starts the simulation thread; returns once the simulation is built and its first
-        snapshot published (re-raising what building it raised)."""
+        snapshot published (re-raising what building it raised). A KeyboardInterrupt while
+        it is built stops the runner once the build has ended (at most `BUILD_STOP_TIMEOUT`
+        s: it cannot be cut short; the process must not end under it), then goes on."""
         self._thread = threading.Thread(target=self._main, name="corobot-sim", daemon=True)
         self._thread.start()
-        if not self._ready.wait(timeout):
+        try:
+            ready = self._ready.wait(timeout)
+        except KeyboardInterrupt:
+            self.stop(BUILD_STOP_TIMEOUT)
+            raise
+        if not ready:
             raise TimeoutError("the simulation was not built in time")
         if self.sim is None:
             raise self.error

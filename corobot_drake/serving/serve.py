@@ -39,9 +39,6 @@ HTTP_STOP_TIMEOUT = 10.0
 and exit before it is terminated (called from Python, a second Ctrl-C terminates it at once;
 `python -m corobot_drake` takes only the first signal). It takes under a second on an idle
 machine; niced (HTTP_NICENESS) on a busy one, a few."""
-BUILD_STOP_TIMEOUT = 60.0
-"""s a simulation being built when Ctrl-C comes has to finish building (it cannot be cut
-short) before the process ends: a few seconds for the default scene."""
 
 SERVE_RUN_LOG_WINDOW = LIVE_RUN_LOG_WINDOW
 """s of run log a served simulation keeps in memory: serving runs for days, and nothing it
@@ -153,8 +150,7 @@ def _started(runner, http, label: str) -> bool:
         _end(http)
         print(f"error: {label + ': ' if label else ''}{e}", file=sys.stderr)
         return False
-    except KeyboardInterrupt:  # while the simulation is built: its thread ends it first
-        runner.stop(BUILD_STOP_TIMEOUT)
+    except KeyboardInterrupt:  # while the simulation is built (the runner has stopped)
         _end(http)
         raise
     return True
