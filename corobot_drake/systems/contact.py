@@ -20,8 +20,18 @@ velocities.
 Hydroelastic contacts (the tyres' compliant patches) and point contacts (the fallback, e.g. a
 rigid body against a tyre) both count for the loads. The slip is kinematic: it needs the body
 velocities only, not the contact results.
+
+A discrete plant's contact results are the forces its solver applied over the last step. A
+continuous plant's (CENIC's) are its compliant law evaluated at the current state, not what the
+integrator applied (CENIC's solve is not exposed), and while driving they read low (a third low
+at full speed). There the loads are the robot's momentum balance over the last physics step:
+the vertical contact force on the whole robot is m (g + a_z) of its centre of mass, from the
+chassis' velocity change since the last step before now (`add_chassis_velocities`), shared
+among the wheels (and whatever else of the robot touches something) as the law shares it at
+the state.
 """
 
+import dataclasses as dc
 import math
 
 import numpy as np
@@ -30,6 +40,7 @@ from pydrake.math import RigidTransform
 from pydrake.multibody.math import SpatialVelocity
 from pydrake.multibody.plant import ContactResults
 from pydrake.systems.framework import LeafSystem, ValueProducer
+from pydrake.systems.primitives import MatrixGain, ZeroOrderHold
 
 from corobot_drake.model import dimensions as dim
 
@@ -38,6 +49,71 @@ SLIP_SPEED_FLOOR = 0.01
 completing command drives, `motion` creep speed; 1.6% of top speed) neither speed says much
 about grip; with the floor a robot at rest, creeping by ~1e-5 m/s, reads ~0 (not NaN, nor its
 noise blown up to +-100%)."""
+
+
+@dc.dataclass(frozen=True)
+class RobotMomentum:
+    """What a robot's momentum balance on a continuous plant needs (`of_robot`)."""
+
+    mass: float
+    """kg: all the robot's bodies."""
+    com_in_chassis: tuple[float, float, float]
+    """m: the robot's centre of mass in its chassis frame C (the wheels turn about axes
+    through their own centres of mass, so it is fixed in C)."""
+    gravity: float
+    """m/s^2: the plant's gravity, downwards."""
+    chassis: int
+    """BodyIndex of the chassis."""
+    bodies: frozenset[int]
+    """BodyIndex of each of the robot's bodies."""
+    geometries: frozenset
+    """GeometryId of each collision geometry of the robot's bodies."""
+    step: float
+    """s: the physics step (`add_chassis_velocities` holds the chassis' velocity at each)."""
+
+    @classmethod
+    def of_robot(cls, plant, model_instance, chassis, step: float) -> "RobotMomentum":
+        """The robot `model_instance` (chassis body `chassis`) of the finalized `plant`."""
+        context = plant.CreateDefaultContext()
+        plant.SetFreeBodyPose(context, chassis, RigidTransform())
+        bodies = [plant.get_body(i) for i in plant.GetBodyIndices(model_instance)]
+        return cls(mass=float(plant.CalcTotalMass(context, [model_instance])),
+                   com_in_chassis=tuple(float(x) for x in plant.CalcCenterOfMassPositionInWorld(
+                       context, [model_instance])),
+                   gravity=float(-plant.gravity_field().gravity_vector()[2]),
+                   chassis=int(chassis.index()),
+                   bodies=frozenset(int(b.index()) for b in bodies),
+                   geometries=frozenset(g for b in bodies
+                                        for g in plant.GetCollisionGeometriesForBody(b)),
+                   step=step)
+
+    def last_step(self, t: float) -> float:
+        """s: the last physics step's time before `t` (the grid k `step` from 0, where Drake
+        puts a periodic event's times; `t` on it within a millionth of a step is on it)."""
+        return (math.ceil(t / self.step - 1e-6) - 1) * self.step
+
+    def vertical_force(self, R_WC: np.ndarray, velocity, held, seconds: float) -> float:
+        """N: the vertical (world +z) force on the robot besides gravity, m (g + a_z) of its
+        centre of mass over the last `seconds`, from the chassis' rotation R_WC and its
+        `velocity` now and `held` then ([angular; of its origin], world)."""
+        velocity, held = np.asarray(velocity), np.asarray(held)
+        alpha, a = (velocity - held).reshape(2, 3) / seconds
+        w, r = velocity[:3], R_WC @ np.array(self.com_in_chassis)
+        a_com = a + np.cross(alpha, r) + np.cross(w, np.cross(w, r))
+        return self.mass * (float(a_com[2]) + self.gravity)
+
+
+def momentum_shares(law: list[float], law_total: float, total: float) -> list[float]:
+    """The wheels' loads, N: `total` (the robot's vertical contact force from its momentum)
+    shared as the contact law shares `law_total` among the wheels (`law`); the law's own
+    loads where it carries nothing (no contact: nothing to share)."""
+    if law_total <= LAW_FLOOR:
+        return law
+    return [x * (total / law_total) for x in law]
+
+
+LAW_FLOOR = 1e-9
+"""N: a contact law's vertical force on the robot at or below which nothing touches."""
 
 
 class WheelContacts(LeafSystem):
@@ -51,6 +127,8 @@ class WheelContacts(LeafSystem):
         - chassis_pose
         - body_spatial_velocities
         - wheel_state
+        - chassis_velocity (continuous plant)
+        - held_chassis_velocity (continuous plant)
         output_ports:
         - wheel_loads
         - wheel_slip_ratio
@@ -58,20 +136,26 @@ class WheelContacts(LeafSystem):
 
     Inputs: `contact_results` (abstract ContactResults of the plant), `chassis_pose` (abstract
     RigidTransform X_WC, from `odometry.ChassisPoses`), `body_spatial_velocities` (the
-    plant's, indexed by BodyIndex), `wheel_state` [q, v] of the four axles (rad, rad/s).
+    plant's, indexed by BodyIndex), `wheel_state` [q, v] of the four axles (rad, rad/s); with
+    `momentum` (a continuous plant), `chassis_velocity` (6: the chassis' angular velocity,
+    rad/s, and its origin's, m/s, world) now and `held_chassis_velocity` at the last physics
+    step before now.
     Outputs (4 each, `dimensions.WHEEL_NAMES` order: front left, front right, rear left, rear
     right): `wheel_loads` (N), `wheel_slip_ratio` (longitudinal, dimensionless, + traction),
-    `wheel_slip_angle` (deg, + moving to the left of the heading). No state: the outputs are
-    functions of the plant's latest step. Only `wheel_loads` reads the contact results; the
-    slip's two ports share one computation (a cache entry).
+    `wheel_slip_angle` (deg, + moving to the left of the heading). Only `wheel_loads` reads
+    the contact results; the slip's two ports share one computation (a cache entry). No state
+    on a discrete plant: the outputs are functions of the plant's latest step. With
+    `momentum`, one number set when the Simulator initializes: the time after which the held
+    velocity is a step's (until then, the contact law's loads).
     """
 
-    def __init__(self, plant, wheels):
+    def __init__(self, plant, wheels, momentum: RobotMomentum | None = None):
         super().__init__()
         self._wheels = [int(w.index()) for w in wheels]
         self._wheel_of_body = {i: k for k, i in enumerate(self._wheels)}
         self._wheel_of_geometry = {g: k for k, w in enumerate(wheels)
                                    for g in plant.GetCollisionGeometriesForBody(w)}
+        self._momentum = momentum
         self._contacts = self.DeclareAbstractInputPort("contact_results",
                                                        AbstractValue.Make(ContactResults()))
         self._pose = self.DeclareAbstractInputPort("chassis_pose",
@@ -79,8 +163,14 @@ class WheelContacts(LeafSystem):
         self._velocities = self.DeclareAbstractInputPort(
             "body_spatial_velocities", AbstractValue.Make([SpatialVelocity()]))
         self._wheel_state = self.DeclareVectorInputPort("wheel_state", 8)
-        self.DeclareVectorOutputPort("wheel_loads", 4, self._calc_loads,
-                                     {self.input_port_ticket(self._contacts.get_index())})
+        loads_depend_on = {self.input_port_ticket(self._contacts.get_index())}
+        if momentum is not None:
+            self._velocity = self.DeclareVectorInputPort("chassis_velocity", 6)
+            self._held = self.DeclareVectorInputPort("held_chassis_velocity", 6)
+            self._momentum_from = self.DeclareDiscreteState(1)
+            self.DeclareInitializationDiscreteUpdateEvent(self._start_momentum)
+            loads_depend_on = {self.all_input_ports_ticket(), self.xd_ticket()}
+        self.DeclareVectorOutputPort("wheel_loads", 4, self._calc_loads, loads_depend_on)
         self._slip = self.DeclareCacheEntry(
             "slip", ValueProducer(allocate=lambda: Value([0.0] * 8),
                                   calc=lambda c, v: v.set_value(self._calc_slip(c))),
@@ -91,11 +181,33 @@ class WheelContacts(LeafSystem):
         self.DeclareVectorOutputPort("wheel_slip_angle", 4, lambda c, o: o.SetFromVector(
             self._slip.Eval(c)[4:]), {self._slip.ticket()})
 
+    def _start_momentum(self, context, discrete_state):
+        # The hold samples at the grid's times: the first at or after the start.
+        first = self._momentum.last_step(context.get_time()) + self._momentum.step
+        discrete_state.set_value(self._momentum_from, [first])
+
     def loads(self, context) -> list[float]:
         """Each wheel's load: the vertical (world +z) component of the total contact force on
-        it, N. Plain floats: a vector sum per contact in numpy costs more than the sum."""
+        it, N (module docstring)."""
+        law, law_total = self._law_loads(context)
+        momentum = self._momentum
+        t = context.get_time()
+        if momentum is None or t <= context.get_discrete_state(
+                self._momentum_from).GetAtIndex(0) + 1e-6 * momentum.step:
+            return law
+        total = momentum.vertical_force(self._pose.Eval(context).rotation().matrix(),
+                                        self._velocity.Eval(context), self._held.Eval(context),
+                                        t - momentum.last_step(t))
+        return momentum_shares(law, law_total, total)
+
+    def _law_loads(self, context) -> tuple[list[float], float]:
+        """(each wheel's vertical contact force, the robot's (every body's; only with
+        `momentum`)), N, from the contact results. Plain floats: a vector sum per contact in
+        numpy costs more than the sum."""
         results = self._contacts.Eval(context)
-        loads = [0.0] * 4
+        robot_geometries = self._momentum.geometries if self._momentum else frozenset()
+        robot_bodies = self._momentum.bodies if self._momentum else frozenset()
+        loads, total = [0.0] * 4, 0.0
         for i in range(results.num_hydroelastic_contacts()):
             info = results.hydroelastic_contact_info(i)
             surface = info.contact_surface()
@@ -104,6 +216,8 @@ class WheelContacts(LeafSystem):
                 k = self._wheel_of_geometry.get(geometry)
                 if k is not None:
                     loads[k] += sign * force_z
+                if geometry in robot_geometries:
+                    total += sign * force_z
         for i in range(results.num_point_pair_contacts()):
             info = results.point_pair_contact_info(i)
             force_z = float(info.contact_force()[2])  # on body B
@@ -111,7 +225,9 @@ class WheelContacts(LeafSystem):
                 k = self._wheel_of_body.get(int(body))
                 if k is not None:
                     loads[k] += sign * force_z
-        return loads
+                if int(body) in robot_bodies:
+                    total += sign * force_z
+        return loads, total
 
     def _calc_loads(self, context, output):
         output.SetFromVector(np.array(self.loads(context)))
@@ -144,14 +260,39 @@ def slip_angle_deg(ground: float, lateral: float) -> float:
     return math.degrees(math.atan2(lateral, max(abs(ground), SLIP_SPEED_FLOOR)))
 
 
-def add_wheel_contacts(builder, name: str, plant, wheels, chassis_pose_port, wheel_state_port):
+def add_chassis_velocities(builder, name: str, plant, chassis, step: float):
+    """Adds `<name>.chassis_velocity` (the chassis' velocities, angular and of its origin,
+    world, picked out of the plant's state) and `<name>.held_chassis_velocity` (them held at
+    each physics step `step`, on the plant's step grid): Drake's MatrixGain and ZeroOrderHold,
+    C++. Returns their output ports."""
+    pick = np.zeros((6, plant.num_multibody_states()))
+    start = plant.num_positions() + chassis.floating_velocities_start_in_v()
+    pick[:, start:start + 6] = np.eye(6)
+    velocity = builder.AddNamedSystem(f"{name}.chassis_velocity", MatrixGain(pick))
+    builder.Connect(plant.get_state_output_port(), velocity.get_input_port())
+    held = builder.AddNamedSystem(f"{name}.held_chassis_velocity", ZeroOrderHold(step, 6))
+    builder.Connect(velocity.get_output_port(), held.get_input_port())
+    return velocity.get_output_port(), held.get_output_port()
+
+
+def add_wheel_contacts(builder, name: str, plant, wheels, chassis_pose_port, wheel_state_port,
+                       chassis, step: float):
     """Adds `<name>.wheel_contacts` fed by the plant, `chassis_pose_port` and
-    `wheel_state_port`; returns it."""
-    system = builder.AddNamedSystem(f"{name}.wheel_contacts", WheelContacts(plant, wheels))
+    `wheel_state_port`; on a continuous plant, its loads from the robot's momentum balance
+    (its `chassis` body's model instance, physics step `step`: `add_chassis_velocities`).
+    Returns it."""
+    momentum = (RobotMomentum.of_robot(plant, chassis.model_instance(), chassis, step)
+                if plant.time_step() == 0 else None)
+    system = builder.AddNamedSystem(f"{name}.wheel_contacts",
+                                    WheelContacts(plant, wheels, momentum))
     for port_name, port in (("contact_results", plant.get_contact_results_output_port()),
                             ("chassis_pose", chassis_pose_port),
                             ("body_spatial_velocities",
                              plant.get_body_spatial_velocities_output_port()),
                             ("wheel_state", wheel_state_port)):
         builder.Connect(port, system.GetInputPort(port_name))
+    if momentum is not None:
+        velocity, held = add_chassis_velocities(builder, name, plant, chassis, step)
+        builder.Connect(velocity, system.GetInputPort("chassis_velocity"))
+        builder.Connect(held, system.GetInputPort("held_chassis_velocity"))
     return system
