@@ -187,9 +187,19 @@ def _run_interactive(sim: Simulation, meshcat, duration: float) -> None:
               "F follows; Ctrl-C quits)", flush=True)
         while sim.time < end:
             teleop.poll()
-            sim.advance_to(min(end, sim.time + 1.0 / 30.0))
+            sim.advance_to(_next_view_stop(sim, end))
     except KeyboardInterrupt:
         print("\nstopped", file=sys.stderr)
+
+
+def _next_view_stop(sim: Simulation, end: float) -> float:
+    """s: where the interactive view stops next: a frame (1/30 s) on, or `end`; on a
+    continuous plant, on its last physics step before that (at least the next one), so that
+    the view changes nothing of the motion (`Simulation.stop_time`)."""
+    t = sim.time + 1.0 / 30.0
+    if sim.continuous:
+        t = max(sim.stop_time(t), sim.time + sim.physics_step)
+    return min(end, t)
 
 
 # --- checks of the command line, before anything is built ------------------------------------

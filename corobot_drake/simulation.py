@@ -46,6 +46,10 @@ from corobot_drake.systems.drive import CommandRecord, DriveStatus
 from corobot_drake.systems.odometry import DriveState
 from corobot_drake.systems.runlog import COLUMNS, RUN_LOG_CHUNK, log_rows, write_csv
 
+STEP_ROUNDING = 1e-6
+"""Steps: a time this close to a physics step (in steps, 10 ns at 10 ms) is on it
+(`Simulation.on_step`)."""
+
 MIN_RUN_CHUNK = 1e-4
 """s: the shortest chunk `Simulation.run` advances by (a smaller one is refused: at 1e-300 s
 the time never moved and `run` never ended)."""
@@ -575,6 +579,8 @@ class Simulation:
         self.context = self.simulator.get_mutable_context()
         # The built diagram's key, now: the scenario may be changed in place before a reset.
         self._diagram_key = diagram_key(scenario)
+        self._physics_step = sc.physics_step(scenario.plant_config, scenario.simulator_config)
+        self._continuous = scenario.plant_config.time_step == 0
         self.run_log_window: float | None = run_log_window
         """s of run log kept in memory (the newest, plus up to `runlog.RUN_LOG_CHUNK`
         samples); None keeps the whole run. A long-running simulation (`--serve`) sets it so
@@ -719,11 +725,44 @@ class Simulation:
     def _dead_reckoning(self, name: str):
         return self.station.diagram.GetSubsystemByName(f"{name}.dead_reckoning")
 
+    @property
+    def physics_step(self) -> float:
+        """s: the physics' step (`scenario.physics_step`): a discrete plant's time step or
+        CENIC's fixed step."""
+        return self._physics_step
+
+    @property
+    def continuous(self) -> bool:
+        """Whether the plant is continuous (stepped by CENIC): its motion then depends on
+        where the Simulator stops, and every stop between its steps is a step of its own."""
+        return self._continuous
+
+    def stop_time(self, t: float) -> float:
+        """The time to stop at for a loop that may stop anywhere up to `t` (the server's
+        wall clock, the Meshcat view): `t` on a discrete plant; on a continuous one its last
+        physics step at or before `t` (on Drake's grid: `on_step`), so that such a loop
+        changes nothing of the motion."""
+        if not self._continuous:
+            return t
+        return self.on_step(math.floor(t / self._physics_step + STEP_ROUNDING)
+                            * self._physics_step)
+
+    def on_step(self, t: float) -> float:
+        """`t`, or on a continuous plant, when it is within `STEP_ROUNDING` of a physics
+        step k h, that step's time as Drake computes its events' (k * h), so that stopping
+        there adds no step (0.1 x 3 is not 0.01 x 30 in floating point)."""
+        if not self._continuous:
+            return t
+        k = round(t / self._physics_step)
+        return k * self._physics_step if abs(t / self._physics_step - k) < STEP_ROUNDING else t
+
     @_one_thread
     def advance_to(self, t: float) -> None:
         """Advances to simulated time `t` (s; finite, not before now: ValueError otherwise),
-        applying scripted SetPose teleports."""
+        applying scripted SetPose teleports. On a continuous plant a `t` within rounding of
+        a physics step stops on that step (`on_step`)."""
         limits.number("t", t, self.time)
+        t = max(self.on_step(t), self.time)
         start = time.perf_counter()
         while True:
             self.simulator.AdvanceTo(t)

@@ -314,7 +314,8 @@ def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None,
     builder.ExportOutput(scene_graph.get_query_output_port(), "query_object")
     lcm = None
     if meshcat is not None:
-        lcm = _add_meshcat(builder, plant, scene_graph, meshcat, scenario.world, mouse_drag)
+        lcm = _add_meshcat(builder, plant, scene_graph, meshcat, scenario.world, mouse_drag,
+                           step if plant.time_step() == 0 else 0.0)
     diagram = builder.Build()
     diagram.set_name("corobot_station")
     return Station(diagram, plant, scene_graph, robots, bodies, models, meshcat, renderers,
@@ -426,14 +427,19 @@ def visualization_config():
                                mouse_interaction_stiffness=MESHCAT_DRAG_STIFFNESS)
 
 
-def _add_meshcat(builder, plant, scene_graph, meshcat, world: sc.World, mouse_drag: bool):
-    """Adds Drake's Meshcat visualizers and the scene's looks; returns the LCM bus they use."""
+def _add_meshcat(builder, plant, scene_graph, meshcat, world: sc.World, mouse_drag: bool,
+                 continuous_step: float = 0.0):
+    """Adds Drake's Meshcat visualizers and the scene's looks; returns the LCM bus they use.
+    On a continuous plant (its step `continuous_step` > 0) they publish on its steps
+    (`publish_period_on_steps`)."""
     from pydrake.lcm import DrakeLcm
     from pydrake.visualization import ApplyVisualizationConfig
 
     config = visualization_config()
     if not mouse_drag:
         config.mouse_interaction_stiffness = None
+    if continuous_step > 0:
+        config.publish_period = publish_period_on_steps(config.publish_period, continuous_step)
     # Meshcat only: Drake's default LCM bus would also publish every frame as UDP multicast
     # for Meldis; an in-process bus keeps the run off the network.
     lcm = DrakeLcm("memq://")
@@ -445,6 +451,13 @@ def _add_meshcat(builder, plant, scene_graph, meshcat, world: sc.World, mouse_dr
     meshcat.SetProperty("/Grid", "visible", False)
     _set_meshcat_sun(meshcat, world.sun)
     return lcm
+
+
+def publish_period_on_steps(period: float, step: float) -> float:
+    """s: the shortest 2^j `step` (j >= 0) at least `period`. Its event times k 2^j step are
+    the same doubles as the plant's k' step (doubling is exact), so on a continuous plant they
+    add no step between its steps; 5 step, say, would not (0.05 x 3 is not 0.01 x 15)."""
+    return step * 2.0 ** max(0, math.ceil(math.log2(period / step) - 1e-9))
 
 
 MESHCAT_SUN = "/Lights/FillLight/<object>"

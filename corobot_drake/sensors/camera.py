@@ -16,6 +16,9 @@ and with `output_delay: 0`, or with VTK (which cannot render on that thread):
 - `<robot>.camera.<camera>.hold`: `CameraHold`, which takes one frame at initialization and
   one per tick, on the plant's steps, and holds it.
 
+On a continuous plant (CENIC) the camera is always the second kind, with the output delay held
+on the steps too: a capture between the steps would split a CENIC step and change the motion.
+
 Either way the latest frame is exported as `<robot>.camera.<camera>.rgb_image` (ImageRgba8U;
 empty before the first) with `<robot>.camera.<camera>.image_time` (s, its capture; NaN before
 the first). With a save directory, `<robot>.camera.<camera>.saver` (`CameraFrameSaver`) writes
@@ -168,7 +171,8 @@ def _last_tick(t: float, fps: float, offset: float) -> tuple[int, float]:
 
 class CameraHold(LeafSystem):
     """Renders one colour frame at initialization and one per frame tick (every 1/fps s from
-    `capture_offset`) and holds it.
+    `capture_offset`) and holds it; with `delay`, holds each back `delay` s first (and takes
+    none at initialization, as Drake's `RgbdSensorAsync`: one frame in flight at a time).
 
     .. pydrake_system::
 
@@ -183,25 +187,40 @@ class CameraHold(LeafSystem):
     (abstract ImageRgba8U, width x height) and `image_time` (1-vector, s: when the frame was
     taken), both held in state.
 
-    With a discrete plant (`step` > 0, its time step) frames are taken on the plant's steps:
-    at the first step at or after each tick. The scene only changes at steps, so the image is
+    With a plant step (`step` > 0) frames are taken on the plant's steps: at the first step at
+    or after each tick. On a discrete plant the scene only changes at steps, so the image is
     the one an exact-time render at the tick would give, while the Simulator stops nowhere
-    but the plant's steps. At most one frame per step. With `step` = 0, frames are taken at
-    the ticks themselves."""
+    but the plant's steps; on a continuous one (CENIC), a capture between the steps would
+    split a step and change the motion. At most one frame per step. With `step` = 0, frames
+    are taken at the ticks themselves.
+
+    With `delay` > 0 (and `step` > 0) a frame comes out at the first step at or after its
+    capture + `delay` (`RgbdSensorAsync`'s output delay, on the step grid; before the first,
+    an empty image and NaN), and waits until then in state of its own."""
 
     def __init__(self, width: int, height: int, fps: float, capture_offset: float = 0.0,
-                 step: float = 0.0):
+                 step: float = 0.0, delay: float = 0.0):
         super().__init__()
+        if delay > 0 and not step > 0:
+            raise ValueError("CameraHold: a delay needs the plant's step")
         self._fps, self._offset, self._step = float(fps), float(capture_offset), float(step)
+        self._delay = float(delay)
         model = AbstractValue.Make(ImageRgba8U(width, height))
         self._input = self.DeclareAbstractInputPort("color_image", model)
-        self._image = self.DeclareAbstractState(model)
-        self._time = self.DeclareDiscreteState(1)
+        if delay > 0:
+            self._image = self.DeclareAbstractState(AbstractValue.Make(ImageRgba8U()))
+            self._time = self.DeclareDiscreteState([np.nan])
+            self._taken_image = self.DeclareAbstractState(model)
+            self._taken_time = self.DeclareDiscreteState([np.nan])
+        else:
+            self._image = self._taken_image = self.DeclareAbstractState(model)
+            self._time = self._taken_time = self.DeclareDiscreteState(1)
         self.DeclareStateOutputPort("rgb_image", self._image)
         self.DeclareStateOutputPort("image_time", self._time)
-        self.DeclareInitializationUnrestrictedUpdateEvent(self._capture)
+        if not delay:  # a delayed camera, like Drake's, shows nothing before its first tick
+            self.DeclareInitializationUnrestrictedUpdateEvent(self._capture)
         if step > 0:
-            self.DeclarePeriodicUnrestrictedUpdateEvent(step, 0.0, self._capture_if_due)
+            self.DeclarePeriodicUnrestrictedUpdateEvent(step, 0.0, self._on_step)
         else:
             self.DeclarePeriodicUnrestrictedUpdateEvent(1.0 / fps, capture_offset,
                                                          self._capture)
@@ -211,16 +230,30 @@ class CameraHold(LeafSystem):
         k, t_k = _last_tick(t, self._fps, self._offset)
         return k >= 0 and t_k > t - self._step + TICK_TOLERANCE
 
-    def _capture_if_due(self, context, state):
-        if not self.frame_due(context.get_time()):
-            return EventStatus.DidNothing()
+    def _on_step(self, context, state):
+        t = context.get_time()
+        released = self._delay > 0 and self._release_if_out(context, state, t)
+        if not self.frame_due(t):
+            return EventStatus.Succeeded() if released else EventStatus.DidNothing()
         self._capture(context, state)
         return EventStatus.Succeeded()
 
-    def _capture(self, context, state):
+    def _release_if_out(self, context, state, t: float) -> bool:
+        """Puts out the frame held back once its capture + delay has come (not NaN)."""
+        taken = context.get_discrete_state(self._taken_time).GetAtIndex(0)
+        shown = context.get_discrete_state(self._time).GetAtIndex(0)
+        if not taken + self._delay <= t + TICK_TOLERANCE or taken == shown:
+            return False
         state.get_mutable_abstract_state(int(self._image)).set_value(
+            context.get_abstract_state(int(self._taken_image)).get_value())
+        state.get_mutable_discrete_state(int(self._time)).SetAtIndex(0, taken)
+        return True
+
+    def _capture(self, context, state):
+        state.get_mutable_abstract_state(int(self._taken_image)).set_value(
             self._input.Eval(context))
-        state.get_mutable_discrete_state(int(self._time)).SetAtIndex(0, context.get_time())
+        state.get_mutable_discrete_state(int(self._taken_time)).SetAtIndex(
+            0, context.get_time())
 
 
 class CameraFrameSaver(LeafSystem):
@@ -350,13 +383,17 @@ def add_camera(site: SensorSite, name: str, config: CameraConfig,
     body, X_AB = mount_frame(plant, site.model_instance, config.X_PB)
     frame_id = plant.GetBodyFrameIdOrThrow(body.index())
     look = frame_look_period(config, step)
-    if config.output_delay > 0 and site.renderers.get(config.renderer_name) == "RenderEngineGl":
+    continuous = plant.time_step() == 0
+    if (config.output_delay > 0 and not continuous
+            and site.renderers.get(config.renderer_name) == "RenderEngineGl"):
         camera = _add_async(builder, scene_graph, prefix, config, frame_id, X_AB, step)
         image, delay = camera.GetOutputPort("color_image"), config.output_delay
     else:
+        # On a continuous plant every capture is on a step, with the delay held there.
+        delay = config.output_delay if continuous and look == step else 0.0
         camera = _add_held(builder, scene_graph, prefix, config, frame_id, X_AB,
-                           look if look == step else 0.0)
-        image, delay = camera.GetOutputPort("rgb_image"), 0.0
+                           look if look == step else 0.0, delay)
+        image = camera.GetOutputPort("rgb_image")
     image_time = camera.GetOutputPort("image_time")
     builder.ExportOutput(image, f"{prefix}.rgb_image")
     builder.ExportOutput(image_time, f"{prefix}.image_time")
@@ -386,16 +423,16 @@ def _add_async(builder, scene_graph, prefix: str, config: CameraConfig, frame_id
 
 
 def _add_held(builder, scene_graph, prefix: str, config: CameraConfig, frame_id, X_AB,
-              step: float):
+              step: float, delay: float):
     """The camera as an `RgbdSensor` rendering into a `CameraHold` (frames on the plant's
-    `step`s, 0: at the ticks), with no delay; returns the hold."""
-    if config.output_delay > 0 and config.renderer_class != "":  # else said at fallback
+    `step`s, 0: at the ticks), out `delay` s after their capture; returns the hold."""
+    if config.output_delay > 0 and not delay and config.renderer_class != "":  # else said
         _warn_once("camera: output_delay is not simulated with RenderEngineVtk (it cannot "
                    "render on RgbdSensorAsync's thread); frames come without delay")
     color, depth = config.MakeCameras()
     sensor = builder.AddNamedSystem(prefix, RgbdSensor(frame_id, X_AB, color, depth))
     builder.Connect(scene_graph.get_query_output_port(), sensor.query_object_input_port())
     hold = builder.AddNamedSystem(f"{prefix}.hold", CameraHold(
-        config.width, config.height, config.fps, config.capture_offset, step))
+        config.width, config.height, config.fps, config.capture_offset, step, delay))
     builder.Connect(sensor.color_image_output_port(), hold.get_input_port())
     return hold

@@ -55,7 +55,7 @@ import numpy as np
 from pydrake.common.value import Value
 from pydrake.geometry import Meshcat, Rgba, Role, Sphere
 from pydrake.math import RigidTransform
-from pydrake.systems.framework import BasicVector, LeafSystem
+from pydrake.systems.framework import BasicVector, EventStatus, LeafSystem
 
 from corobot_drake.config.poses import mount_frame
 from corobot_drake.config.sensors import IrSensorConfig
@@ -114,6 +114,10 @@ def scan_state_layout(num_rays: int) -> tuple[int, slice, slice, slice]:
             slice(hits, hits + num_rays))
 
 
+SCAN_ROUNDING = 1e-6
+"""Periods: a scan time this close to a plant step (continuous plants) is on it."""
+
+
 class IrSensor(LeafSystem):
     """One IR distance sensor (see the module docstring for its state and ports).
 
@@ -146,6 +150,11 @@ class IrSensor(LeafSystem):
     discrete state, `scan_state_layout`). The sensor frame S is fixed in the body frame B by
     X_BS; +x of S is the look direction.
 
+    Scans every 1/`scan_rate_hz` s from then on. With `step` (a continuous plant's physics
+    step, s) each scan is taken on the plant's steps instead, at the first at or after its
+    time: an event between CENIC's steps splits one, and even a scan time a rounding error off
+    a step's (0.05 x 3 is not 0.01 x 15) is a step of its own.
+
     config: as validated by the scenario loader (`config/validate.py`), trusted here;
     frame_id: the SceneGraph FrameId of the body the sensor is fixed to; X_BS: the sensor
     frame in that body's frame (default: `config.X_PB`, its base frame being the body's);
@@ -153,7 +162,7 @@ class IrSensor(LeafSystem):
     """
 
     def __init__(self, config: IrSensorConfig, frame_id, exclude, key: int = 0,
-                 name: str = "ir", X_BS: RigidTransform | None = None):
+                 name: str = "ir", X_BS: RigidTransform | None = None, step: float = 0.0):
         super().__init__()
         self.config = config
         self.sensor_name = name
@@ -183,7 +192,12 @@ class IrSensor(LeafSystem):
             np.concatenate([initial, np.zeros(self.state_size - _READING_SIZE)]))
 
         self.DeclareInitializationDiscreteUpdateEvent(self._initial_scan)
-        self.DeclarePeriodicDiscreteUpdateEvent(self.period, self.period, self._periodic_scan)
+        self._step = float(step)
+        if step > 0:
+            self.DeclarePeriodicDiscreteUpdateEvent(step, 0.0, self._scan_if_due)
+        else:
+            self.DeclarePeriodicDiscreteUpdateEvent(self.period, self.period,
+                                                    self._periodic_scan)
 
         state = {self.discrete_state_ticket(self._state)}
 
@@ -286,6 +300,18 @@ class IrSensor(LeafSystem):
         # call runs with cold caches after the physics step).
         x = discrete_state.get_mutable_value()
         self._do_scan(context, x, int(x[SCAN_INDEX]) + 1, float(x[DISTANCE]))
+
+    def scan_due(self, t: float) -> bool:
+        """Whether the plant step at `t` (`step` > 0) takes a scan: a scan time k period
+        (k >= 1) in (t - step, t], within rounding."""
+        k = math.floor(t / self.period + SCAN_ROUNDING)
+        return k >= 1 and k * self.period > t - self._step + SCAN_ROUNDING * self.period
+
+    def _scan_if_due(self, context, discrete_state):
+        if not self.scan_due(context.get_time()):
+            return EventStatus.DidNothing()
+        self._periodic_scan(context, discrete_state)
+        return EventStatus.Succeeded()
 
     def _do_scan(self, context, x, index: int, previous: float) -> None:
         """Scans and writes the whole state vector `x` (the handler's output, mutable)."""
@@ -428,7 +454,8 @@ def add_ir_sensor(site: SensorSite, name: str, config: IrSensorConfig) -> IrSens
     sensor = builder.AddNamedSystem(f"{robot}.ir.{name}", IrSensor(
         config, plant.GetBodyFrameIdOrThrow(body.index()),
         model_instance_geometry_ids(plant, site.model_instance),
-        noise_key(site.random_seed, robot, name, config.noise_seed), name, X_BS))
+        noise_key(site.random_seed, robot, name, config.noise_seed), name, X_BS,
+        site.physics_step if plant.time_step() == 0 else 0.0))
     builder.Connect(site.scene_graph.get_query_output_port(), sensor.get_input_port(0))
     for i in range(sensor.num_output_ports()):
         port = sensor.get_output_port(i)

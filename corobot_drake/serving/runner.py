@@ -237,8 +237,9 @@ class SimRunner:
                 self.slips += 1
                 wall0, t0 = now, sim.time
                 target = sim.time
-            if target > sim.time + 1e-9:
-                sim.advance_to(min(target, sim.time + self.max_step))
+            stop = sim.stop_time(min(target, sim.time + self.max_step))
+            if stop > sim.time + 1e-9:
+                sim.advance_to(stop)
                 self.steps += 1
                 self._check_watches()
             if sim.time >= next_snapshot - 1e-9:

@@ -146,8 +146,10 @@ def measure_continuous_sensors(seconds: float = 9.0) -> dict:
         sim = Simulation(load_scenario(DEFAULT_SCENARIO, overrides=[
             DRIVING, *sensor_overrides(ir=True, camera=camera), *overrides]))
         robot, out = sim.robot(), []
-        for k in range(1, round(seconds * 20) + 1):  # at the scans' own times, k / 20 s
-            sim.advance_to(k * 0.05)
+        for k in range(1, round(seconds * 20) + 1):
+            # A step after each scan (k / 20 s): both integrators have taken it whichever
+            # way its time and the step's round.
+            sim.advance_to(k * 0.05 + 0.01)
             out.append((robot.ir_distances(), robot.position()))
         return out, sim.simulator.get_num_steps_taken() / seconds
 

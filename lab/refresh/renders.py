@@ -189,8 +189,10 @@ def render_continuous_sensors(outs) -> str:
         f"robot's position at the scans differs by up to {1000 * m['max_position_m']:.1f} mm "
         f"(the two integrators' trajectories). Under CENIC the simulator takes "
         f"{m['steps_per_second']:.0f} steps per simulated second without the camera and "
-        f"{m['camera_steps_per_second']:.0f} with it at 30 Hz; with the camera the robot ends "
-        f"{1000 * m['camera_position_m']:.1f} mm from where it ends without.")
+        f"{m['camera_steps_per_second']:.0f} with it at 30 Hz (its frames are taken on the "
+        f"steps); with the camera the robot ends "
+        + ("where it ends without, to the bit." if m["camera_position_m"] == 0 else
+           f"{m['camera_position_m']:.1e} m from where it ends without."))
 
 
 def _default_column(outs) -> tuple[list[str], list[list[float]], list[Output]]:

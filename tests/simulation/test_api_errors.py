@@ -237,6 +237,41 @@ def test_a_bounded_run_log_keeps_its_window_and_agrees_with_the_whole_one(monkey
     assert bounded.robot().run_log()[:, 0].tolist() == [0.0]  # the sample at the start
 
 
+CENIC = sc.CENIC_PLANT % 0.01
+
+
+def test_under_cenic_stops_within_rounding_of_a_step_are_on_it():
+    """A continuous plant's motion depends on where the Simulator stops: a stop a rounding
+    error away from a step (2.3 is not 230 x 0.01 in floating point: 2.3000000000000003)
+    would be a step of 1e-16 s of its own. `advance_to` puts such a stop on the step, so a
+    run advanced in 50 ms chunks of rounded decimals is the run advanced at once, to the
+    bit; on a discrete plant stops change nothing and times are kept as given."""
+    script = "robots: {corobot: {commands: [!SetPower {left: 0.8, right: 0.4}]}}"
+    whole, chunked = make_sim(script, CENIC), make_sim(script, CENIC)
+    whole.advance(3.0)
+    while chunked.time < 3.0 - 1e-9:
+        chunked.advance_to(round(chunked.time + 0.05, 6))
+    assert chunked.time == 3.0 == 300 * 0.01
+    assert (whole.simulator.get_num_steps_taken()
+            == chunked.simulator.get_num_steps_taken())
+    assert whole.robot().pose() == chunked.robot().pose()
+    assert (whole.robot().run_log() == chunked.robot().run_log()).all()
+    assert chunked.on_step(2.3) == 2.3000000000000003 and chunked.on_step(2.305) == 2.305
+    sap = make_sim(script)
+    assert sap.on_step(2.3) == 2.3 and sap.stop_time(2.3456) == 2.3456
+
+
+def test_under_cenic_a_loop_that_may_stop_anywhere_stops_on_steps(sim):
+    """The server's and the Meshcat view's targets (wall-clock times) go to the last step at
+    or before them on a continuous plant; a discrete plant stops where asked."""
+    cenic = make_sim(CENIC)
+    assert cenic.continuous and not sim.continuous
+    assert cenic.stop_time(0.0333) == 0.03
+    assert cenic.stop_time(0.04 - 1e-12) == 4 * 0.01  # rounding below a step is on it
+    assert cenic.stop_time(2.3) == 230 * 0.01
+    assert sim.stop_time(0.0333) == 0.0333
+
+
 def test_the_command_log_keeps_the_newest_records(sim, monkeypatch):
     """Past `COMMAND_LOG_CAPACITY` records the oldest go; the newest and running ones stay, and
     a handle to a dropped command says so (KeyError) instead of failing later."""

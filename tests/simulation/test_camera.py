@@ -19,7 +19,12 @@ from PIL import Image
 
 from conftest import DEFAULT_SCENARIO, TWO_CAMERAS, make_sim
 from corobot_drake.cli import main
-from corobot_drake.config.scenario import ScenarioError, load_scenario, physics_step
+from corobot_drake.config.scenario import (
+    CENIC_PLANT,
+    ScenarioError,
+    load_scenario,
+    physics_step,
+)
 from corobot_drake.model import dimensions as dim
 from corobot_drake.simulation import Simulation
 
@@ -302,6 +307,60 @@ def test_the_synchronous_camera_adds_no_simulator_stops():
     sim = make_sim(CIRCLE, NO_DELAY, camera=True)
     sim.advance(1.005)
     assert sim.robot().camera_image_time() == pytest.approx(1.0)  # tick 30 on step 100
+
+
+CENIC = CENIC_PLANT % 0.01
+"""A continuous plant stepped by CENIC every 10 ms."""
+
+
+def test_under_cenic_the_camera_changes_nothing_of_the_motion():
+    """A capture between the steps would split a CENIC step and move the robot (with the
+    asynchronous camera the chassis bounced: its vertical speed swung 5-8 mm/s from step to
+    step against 1.3): on a continuous plant the camera takes its frames on the steps, so the
+    run is the same to the bit with it and without it, stop for stop."""
+    runs = []
+    for camera in (False, True):
+        sim = make_sim(CIRCLE, CENIC, camera=camera)
+        sim.advance(1.0)
+        pose = sim.robot().pose()
+        runs.append((sim.simulator.get_num_steps_taken(), pose.x, pose.y, pose.yaw))
+    assert runs[0] == runs[1]
+
+
+def test_under_cenic_frames_come_on_the_steps_after_the_output_delay():
+    """Tick k (0.5 ms past k / 10 s) is taken at the next step, 0.01 + k / 10 s, and comes
+    out 0.03 s later, on a step too; before the first there is none (as with Drake's
+    asynchronous camera: nothing is taken at initialization). Every tick's frame comes out."""
+    sim = make_sim("robots: {corobot: {cameras: {front: {fps: 10}}}}", CENIC, camera=True)
+    robot = sim.robot()
+    assert sim.station.robots["corobot"].cameras["front"].delay == 0.03
+    sim.advance_to(0.04)
+    assert robot.camera_image() is None and math.isnan(robot.camera_image_time())
+    sim.advance_to(0.045)
+    assert robot.camera_image_time() == pytest.approx(0.01)
+    assert robot.camera_image()[:, :, :3].max() > 0
+    seen = set()
+    while sim.time < 3.0:
+        sim.advance(0.01)
+        seen.add(round((robot.camera_image_time() - 0.01) * 10))
+    assert seen == set(range(0, 30))  # 0.01 s (tick 0) to 2.91 s (tick 29)
+
+
+def test_under_cenic_a_delayed_frame_is_the_synchronous_frame_of_its_step():
+    """With the delay or without, a frame is taken at the same step, of the same scene (the
+    runs are the same: no capture splits a step), bit for bit."""
+    sync = make_sim(SPIN_BY_THE_EDGE, CENIC,
+                    "robots: {corobot: {cameras: {front: {output_delay: 0}}}}", camera=True)
+    sync.advance_to(0.545)
+    assert sync.robot().camera_image_time() == pytest.approx(0.54)  # tick 16's step
+    delayed = make_sim(SPIN_BY_THE_EDGE, CENIC, camera=True)
+    delayed.advance_to(0.565)
+    assert delayed.robot().camera_image_time() == pytest.approx(0.51)  # tick 15's, out at 0.54
+    previous = delayed.robot().camera_image()
+    delayed.advance_to(0.575)  # out at 0.57
+    assert delayed.robot().camera_image_time() == pytest.approx(0.54)
+    np.testing.assert_array_equal(delayed.robot().camera_image(), sync.robot().camera_image())
+    assert np.abs(previous.astype(int) - sync.robot().camera_image().astype(int)).max() > 0
 
 
 def test_gl_and_vtk_render_the_same_picture():

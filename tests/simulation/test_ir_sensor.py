@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from conftest import DEFAULT_SCENARIO, make_sim
-from corobot_drake.config.scenario import ScenarioError, load_scenario, physics_step
+from corobot_drake.config.scenario import CENIC_PLANT, ScenarioError, load_scenario, physics_step
 from corobot_drake.model import dimensions as dim
 from corobot_drake.model.ir_models import SharpGP2D12
 from corobot_drake.sensors.ir_sensor import SCAN_INDEX, counter_normal
@@ -307,3 +307,30 @@ def test_meshcat_draws_every_scan_right_after_it():
         state = rear.GetOutputPort("scan_state").Eval(rear.GetMyContextFromRoot(sim.context))
         assert viz._last_index == state[SCAN_INDEX], sim.time
     assert viz.draws == int(state[SCAN_INDEX]) + 1
+
+
+def test_under_cenic_the_ir_sensors_scan_on_the_steps_and_change_nothing_of_the_motion():
+    """On a continuous plant a scan time a rounding error off a step's (3 x 0.05 s is
+    0.15000000000000002, the step 0.15) would be a CENIC step of its own: the scans are taken
+    on the plant's steps, so the run is the same with the sensors and without them, to the
+    bit; each scan is at its step's time, every 50 ms. At 19.9 Hz (scan times between the
+    steps) each is taken at the first step at or after its time."""
+    cenic = CENIC_PLANT % 0.01
+    drive = "robots: {corobot: {commands: [!SetPower {left: 0.8, right: 0.4}]}}"
+    off = ("robots: {corobot: {ir_sensors: {front: {enabled: false}, "
+           "rear: {enabled: false}}}}")
+    runs = []
+    for overrides in ((drive, cenic), (drive, cenic, off)):
+        sim = make_sim(*overrides)
+        sim.advance(1.0)
+        runs.append((sim.simulator.get_num_steps_taken(), sim.robot().pose()))
+    assert runs[0] == runs[1]
+    sim = make_sim(drive, cenic)
+    times = []
+    for k in range(1, 21):
+        sim.advance_to(k * 0.05 + 0.01)  # a step after each scan
+        times.append(sim.robot().ir("front").time)
+    assert times == [5 * k * 0.01 for k in range(1, 21)]  # the steps' own doubles
+    slow = make_sim(cenic, "robots: {corobot: {ir_sensors: {front: {scan_rate_hz: 19.9}}}}")
+    slow.advance_to(0.115)
+    assert slow.robot().ir("front").time == pytest.approx(0.11)  # 2 / 19.9 = 0.1005 s

@@ -101,6 +101,29 @@ def test_meshcat_publishes_collision_shapes_hidden_by_default():
             assert meshcat.HasPath(f"/drake/{layer}/{path}"), (layer, path)
 
 
+def test_under_cenic_meshcat_publishes_on_the_plant_s_steps():
+    """Drake's 1/64 s between the 10 ms steps would split CENIC's steps whenever Meshcat
+    watches: on a continuous plant the visualizers publish every 2^j steps instead, the same
+    event times as the plant's, so a run watched in Meshcat is the same run, step for step."""
+    from pydrake.geometry import StartMeshcat
+
+    from corobot_drake.config.scenario import CENIC_PLANT
+    from corobot_drake.simulation import Simulation
+    from corobot_drake.station import publish_period_on_steps
+
+    assert publish_period_on_steps(1 / 64, 0.01) == 0.02
+    assert publish_period_on_steps(1 / 64, 0.001) == 0.016
+    assert publish_period_on_steps(0.01, 0.01) == 0.01
+    assert all(k * 0.02 == (2 * k) * 0.01 for k in range(100_000))  # doubling is exact
+    script = "robots: {corobot: {commands: [!SetPower {left: 0.8, right: 0.4}]}}"
+    runs = []
+    for meshcat in (None, StartMeshcat()):
+        sim = Simulation(make_sim(script, CENIC_PLANT % 0.01).scenario, meshcat=meshcat)
+        sim.advance(1.0)
+        runs.append((sim.simulator.get_num_steps_taken(), sim.robot().pose()))
+    assert runs[0] == runs[1]
+
+
 def test_meshcat_sun_shines_from_the_books_direction():
     """The book's sun, (0.5, -0.75, 0.5) in MRDS's y-up frame, is (-0.5, -0.5, -0.75) here;
     Meshcat's directional light sits up-sun of the origin with the scenario's intensity (a
