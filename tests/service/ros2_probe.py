@@ -101,6 +101,7 @@ class Probe:
         self.messages: dict[str, list] = collections.defaultdict(list)
         self._changed = threading.Condition()
         self._clients: dict = {}
+        self._publishers: dict = {}
         self._executor = MultiThreadedExecutor(context=self.context)
         self._executor.add_node(self.node)
         self._thread = threading.Thread(target=self._executor.spin, daemon=True)
@@ -154,6 +155,15 @@ class Probe:
                 raise AssertionError(f"service {service} not discovered in {WAIT} s")
             self._clients[service, srvtype] = client
         return self._clients[service, srvtype]
+
+    def publisher(self, topic: str, msgtype, qos=10):
+        """The probe's publisher on `topic`, made on first use and kept until `close`: an
+        entity destroyed while the executor's thread waits on it kills that thread
+        (rclpy's InvalidHandle, "destruction was requested"), and the probe hears nothing
+        more."""
+        if (topic, msgtype) not in self._publishers:
+            self._publishers[topic, msgtype] = self.node.create_publisher(msgtype, topic, qos)
+        return self._publishers[topic, msgtype]
 
     def action_client(self, kind, name: str):
         """The probe's client of action `name`, made (and its server discovered) on first use

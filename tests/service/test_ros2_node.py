@@ -181,7 +181,7 @@ def test_clock_is_the_simulation_time(ros):
 def test_cmd_vel_drives_and_the_deadman_stops(ros):
     probe, client, robot = ros
     assert set_pose(probe, 0.0, 0.0, 0.0).success
-    publisher = probe.node.create_publisher(Twist, "/cmd_vel", 10)
+    publisher = probe.publisher("/cmd_vel", Twist)
     twist = Twist()
     twist.linear.x = 0.2
     start = probe.count("/odom")
@@ -197,7 +197,6 @@ def test_cmd_vel_drives_and_the_deadman_stops(ros):
     assert stamp(stopped) > last_twist + 0.5 - 0.05  # not before the deadman's 0.5 s
     assert robot.command_log()[-1]["command"] == "AllStop"
     assert stopped.pose.pose.position.x > 0.05  # it drove meanwhile
-    probe.node.destroy_publisher(publisher)
 
 
 def action(probe, kind, name, **goal):

@@ -67,7 +67,7 @@ def test_each_robot_has_its_namespace_and_frames(probe):
 
 
 def test_a_robots_commands_are_its_own(probe):
-    publisher = probe.node.create_publisher(Twist, "/corobot_2/cmd_vel", 10)
+    publisher = probe.publisher("/corobot_2/cmd_vel", Twist)
     twist = Twist()
     twist.linear.x = 0.2
     start = {robot: probe.count(f"/{robot}/odom") for robot in ROBOTS}
@@ -82,7 +82,6 @@ def test_a_robots_commands_are_its_own(probe):
                          for m in still)
     response = probe.call("/corobot_2/all_stop", Trigger, Trigger.Request())
     assert response.success
-    probe.node.destroy_publisher(publisher)
 
 
 def test_services_are_answered_while_every_robot_runs_a_goal(probe):
