@@ -169,6 +169,23 @@ def _last_tick(t: float, fps: float, offset: float) -> tuple[int, float]:
     return k, offset + k / fps
 
 
+class _HeldFrame:
+    """A frame in the Context's abstract state, shared and not copied when Drake clones that
+    state: a hold's update runs every plant step, Drake copies the state for each, and a
+    320 x 240 frame is 300 kB. Never changed once made."""
+
+    __slots__ = ("image",)
+
+    def __init__(self, image: ImageRgba8U):
+        self.image = image
+
+    def __deepcopy__(self, memo):
+        return self
+
+    def __copy__(self):
+        return self
+
+
 class CameraHold(LeafSystem):
     """Renders one colour frame at initialization and one per frame tick (every 1/fps s from
     `capture_offset`) and holds it; with `delay`, holds each back `delay` s first (and takes
@@ -185,7 +202,7 @@ class CameraHold(LeafSystem):
 
     Input `color_image` (abstract ImageRgba8U, an RgbdSensor's). Outputs `rgb_image`
     (abstract ImageRgba8U, width x height) and `image_time` (1-vector, s: when the frame was
-    taken), both held in state.
+    taken), both held in state (the frame as a `_HeldFrame`, copied out when read).
 
     With a plant step (`step` > 0) frames are taken on the plant's steps: at the first step at
     or after each tick. On a discrete plant the scene only changes at steps, so the image is
@@ -204,18 +221,24 @@ class CameraHold(LeafSystem):
         if delay > 0 and not step > 0:
             raise ValueError("CameraHold: a delay needs the plant's step")
         self._fps, self._offset, self._step = float(fps), float(capture_offset), float(step)
-        self._delay = float(delay)
-        model = AbstractValue.Make(ImageRgba8U(width, height))
-        self._input = self.DeclareAbstractInputPort("color_image", model)
+        self._delay, self._size = float(delay), (width, height)
+        self._input = self.DeclareAbstractInputPort(
+            "color_image", AbstractValue.Make(ImageRgba8U(width, height)))
         if delay > 0:
-            self._image = self.DeclareAbstractState(AbstractValue.Make(ImageRgba8U()))
+            self._image = self.DeclareAbstractState(AbstractValue.Make(_HeldFrame(ImageRgba8U())))
             self._time = self.DeclareDiscreteState([np.nan])
-            self._taken_image = self.DeclareAbstractState(model)
+            self._taken_image = self.DeclareAbstractState(
+                AbstractValue.Make(_HeldFrame(ImageRgba8U(width, height))))
             self._taken_time = self.DeclareDiscreteState([np.nan])
         else:
-            self._image = self._taken_image = self.DeclareAbstractState(model)
+            self._image = self._taken_image = self.DeclareAbstractState(
+                AbstractValue.Make(_HeldFrame(ImageRgba8U(width, height))))
             self._time = self._taken_time = self.DeclareDiscreteState(1)
-        self.DeclareStateOutputPort("rgb_image", self._image)
+        self.DeclareAbstractOutputPort(
+            "rgb_image", lambda: AbstractValue.Make(ImageRgba8U(width, height)),
+            lambda c, value: value.set_value(c.get_abstract_state(int(self._image))
+                                             .get_value().image),
+            {self.abstract_state_ticket(self._image)})
         self.DeclareStateOutputPort("image_time", self._time)
         if not delay:  # a delayed camera, like Drake's, shows nothing before its first tick
             self.DeclareInitializationUnrestrictedUpdateEvent(self._capture)
@@ -250,8 +273,9 @@ class CameraHold(LeafSystem):
         return True
 
     def _capture(self, context, state):
-        state.get_mutable_abstract_state(int(self._taken_image)).set_value(
-            self._input.Eval(context))
+        image = ImageRgba8U(*self._size)
+        image.mutable_data[:] = self._input.Eval(context).data
+        state.get_mutable_abstract_state(int(self._taken_image)).set_value(_HeldFrame(image))
         state.get_mutable_discrete_state(int(self._taken_time)).SetAtIndex(
             0, context.get_time())
 

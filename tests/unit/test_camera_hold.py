@@ -1,0 +1,50 @@
+"""`sensors.camera.CameraHold` alone: its input image fixed, its events stepped."""
+
+import math
+
+import numpy as np
+from pydrake.systems.sensors import ImageRgba8U
+
+from conftest import Stepper
+from corobot_drake.sensors.camera import CameraHold
+
+STEP = 0.01
+
+
+def image(level: int) -> ImageRgba8U:
+    frame = ImageRgba8U(4, 3)
+    frame.mutable_data[:] = level
+    return frame
+
+
+def test_a_delayed_hold_puts_each_frame_out_a_delay_after_its_step():
+    """10 Hz ticks 0.5 ms past k / 10 s on 10 ms steps, 30 ms delay: tick 0 is taken at the
+    0.01 s step and comes out at the 0.04 s one; nothing before it (none at initialization);
+    the frame out is the one taken, not the input now."""
+    s = Stepper(CameraHold(4, 3, fps=10, capture_offset=0.0005, step=STEP, delay=0.03), STEP)
+    s.fix("color_image", image(1))
+    s.tick()  # 0 s
+    assert s.output("rgb_image").width() == 0 and math.isnan(s.output("image_time")[0])
+    s.tick()  # 0.01 s: tick 0 taken
+    s.fix("color_image", image(2))
+    s.tick(3)  # 0.02, 0.03, 0.04 s: out at 0.04
+    assert s.output("image_time")[0] == 0.01
+    assert (s.output("rgb_image").data == 1).all()
+    s.tick(7)  # 0.11 s: tick 1 taken (input 2); 0.14 s: out
+    assert s.output("image_time")[0] == 0.01
+    s.tick(3)
+    assert s.output("image_time")[0] == 0.11 and (s.output("rgb_image").data == 2).all()
+
+
+def test_a_hold_without_delay_takes_a_frame_at_initialization_and_on_each_tick_s_step():
+    s = Stepper(CameraHold(4, 3, fps=10, capture_offset=0.0005, step=STEP), STEP)
+    s.fix("color_image", image(5))
+    s.tick()
+    assert s.output("image_time")[0] == 0.0 and (s.output("rgb_image").data == 5).all()
+    s.fix("color_image", image(6))
+    s.tick()  # 0.01 s: tick 0's step
+    assert s.output("image_time")[0] == 0.01 and (s.output("rgb_image").data == 6).all()
+    s.fix("color_image", image(7))
+    s.tick(9)  # to 0.10 s: no tick's step yet (tick 1 is at 0.1005 s)
+    assert s.output("image_time")[0] == 0.01
+    assert np.array_equal(s.output("rgb_image").data, np.full((3, 4, 4), 6, np.uint8))
