@@ -257,7 +257,7 @@ class IrPublisher(LeafSystem):
         super().__init__()
         config = sensor_system.config
         self._names, self._sensor = names, sensor
-        self._period = sensor_system.period
+        self._period = sensor_system.events[0]  # the looks' period
         self._fov = config.dispersion_cone_angle
         self._min = SharpGP2D12.min_distance if config.model == "sharp_gp2d12" else 0.0
         self._max = config.maximum_range
@@ -267,10 +267,10 @@ class IrPublisher(LeafSystem):
                                               context)
         self._rays_channel = SceneUpdateChannel(names.topic(f"ir/{sensor}/rays"),
                                                 context=context)
-        # The scans' own schedule (period, offset period): a look and a scan at one time are
-        # at the same float time, the look first (a look scheduled apart could fall an ulp
+        # The scans' own schedule (`IrSensor.events`): a look and a scan at one time are at
+        # the same float time, the look first (a look scheduled apart could fall an ulp
         # after a scan and miss the scan before it).
-        self.DeclarePeriodicPublishEvent(self._period, self._period, self._publish)
+        self.DeclarePeriodicPublishEvent(*sensor_system.events, self._publish)
 
     def _publish(self, context):
         s = self._scan.Eval(context)

@@ -241,7 +241,7 @@ class IrPublisher(LeafSystem):
         config = sensor_system.config
         self._m = Messages(bus.store)
         self._frame = names.ir_frame(sensor)
-        self._period = sensor_system.period
+        self._period = sensor_system.events[0]  # the looks' period
         self._fov = math.radians(config.dispersion_cone_angle)
         self._min = SharpGP2D12.min_distance if config.model == "sharp_gp2d12" else 0.0
         self._max = config.maximum_range
@@ -249,7 +249,7 @@ class IrPublisher(LeafSystem):
         self._scan = self.DeclareVectorInputPort("scan_state", size)
         self._channel = _channel(bus, names, ifc.ir_topic(sensor))
         # On the scans' own schedule, as the recording's IrPublisher (see there).
-        self.DeclarePeriodicPublishEvent(self._period, self._period, self._publish)
+        self.DeclarePeriodicPublishEvent(*sensor_system.events, self._publish)
 
     def _publish(self, context):
         s = self._scan.Eval(context)

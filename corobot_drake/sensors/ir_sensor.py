@@ -193,6 +193,10 @@ class IrSensor(LeafSystem):
 
         self.DeclareInitializationDiscreteUpdateEvent(self._initial_scan)
         self._step = float(step)
+        self.events = (step, 0.0) if step > 0 else (self.period, self.period)
+        """(period, offset), s: the schedule of the scan events. A reader that looks on the
+        same schedule sees each scan once, at the look after it (a look runs before the
+        updates at its time), with no stop of its own."""
         if step > 0:
             self.DeclarePeriodicDiscreteUpdateEvent(step, 0.0, self._scan_if_due)
         else:

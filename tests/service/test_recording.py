@@ -2,6 +2,7 @@
 
 import base64
 import json
+import math
 import os
 import re
 import time
@@ -153,6 +154,32 @@ def mcap_run(tmp_path_factory):
                          foxglove=log.context)
         sim.advance(1.0)
     return sim, read_mcap(path)
+
+
+def test_under_cenic_mcap_has_every_scan_and_frame_once(tmp_path):
+    """On a continuous plant the IR sensors scan and the camera takes its frames on the plant's
+    steps (`IrSensor.events`): the publishers look on the same schedule, so each scan of
+    1 s is published once, stamped with its step (k x 0.05 s, as 5k x 0.01), and each frame
+    once, 30 ms after its step; and recording changes nothing of the motion."""
+    from corobot_drake.config.scenario import CENIC_PLANT
+    from corobot_drake.simulation import Simulation
+
+    overrides = [SCRIPT, CENIC_PLANT % 0.01]
+    with McapLog(tmp_path / "run.mcap") as log:
+        sim = Simulation(load_scenario(DEFAULT_SCENARIO, overrides=overrides),
+                         foxglove=log.context)
+        sim.advance(1.0)
+    topics = read_mcap(tmp_path / "run.mcap")
+    for topic in ("/ir/front", "/ir/rear"):
+        assert [t for t, _, _ in topics[topic]] == pytest.approx(
+            [k * 0.05 for k in range(20)], abs=1e-9), topic  # stamped in whole nanoseconds
+    frames = [t for t, _, _ in topics["/camera/image/compressed"]]
+    # Tick k at 0.5 ms past k / 30 s is taken at the next 10 ms step, out 30 ms later.
+    steps = [math.ceil((0.0005 + k / 30) / 0.01) * 0.01 for k in range(30)]
+    assert frames == pytest.approx([t for t in steps if t + 0.03 < 1.0], abs=1e-9)
+    quiet = Simulation(load_scenario(DEFAULT_SCENARIO, overrides=overrides))
+    quiet.advance(1.0)
+    assert quiet.robot().pose() == sim.robot().pose()
 
 
 def test_mcap_has_every_topic_at_its_rate(mcap_run):
@@ -560,7 +587,8 @@ def test_ir_publisher_alone_publishes_each_scan_once():
     context = foxglove.Context()
     buffer = io.BytesIO()
     writer = foxglove.open_mcap(buffer, context=context)
-    sensor = types.SimpleNamespace(config=IrSensorConfig(), period=0.05, num_rays=6)
+    sensor = types.SimpleNamespace(config=IrSensorConfig(), period=0.05, num_rays=6,
+                                   events=(0.05, 0.05))
     publisher = IrPublisher(context, RobotNames("r"), "front", sensor)
     simulator = Simulator(publisher)
     system_context = simulator.get_mutable_context()

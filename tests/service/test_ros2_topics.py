@@ -189,7 +189,7 @@ def test_robot_state_publisher_odom_and_wheel_odom():
 def test_ir_publisher_sends_each_scan_once():
     memory = Memory()
     config = IrSensorConfig()
-    sensor = types.SimpleNamespace(config=config, period=0.05, num_rays=3)
+    sensor = types.SimpleNamespace(config=config, period=0.05, num_rays=3, events=(0.05, 0.05))
     system = IrPublisher(Bus([memory]), tp.RobotNames("corobot"), "front", sensor)
     size = scan_state_layout(3)[0]
     stepper = Stepper(system, 0.05)
