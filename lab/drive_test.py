@@ -6,6 +6,7 @@ drive the same distance back, rotate 180 deg - angle (all at `power`, default 0.
 is the distance from the start position after each loop. Same seed, same numbers.
 """
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -30,13 +31,16 @@ def fast_overrides(profile: str) -> list[str]:
             "cameras: {front: {rgb: false}}}}"]
 
 
-def run(seed: int, loops: int, profile: str, power: float = 0.2, verbose: bool = True) -> dict:
-    """Runs the test (the legs as the robot's script, as a study's `drive_test` runs it);
-    returns {drift: [m after each loop], heading_error: [deg], path: [[x, y]], failures:
-    [...], legs: [(angle_deg, distance_m)]}."""
+def run(seed: int, loops: int, profile: str, power: float = 0.2, verbose: bool = True,
+        overrides: list[str] = ()) -> dict:
+    """Runs the test (the legs as the robot's script, as a study's `drive_test` runs it) on
+    the default scene with `overrides` (scenario YAML) merged on top; returns {drift: [m after
+    each loop], heading_error: [deg], path: [[x, y]], failures: [...], legs: [(angle_deg,
+    distance_m)]}."""
     quiet_drake_warnings()
     test = DriveTest(loops, power, ROBOT)
-    scenario = sc.load_scenario(DEFAULT_SCENARIO, overrides=fast_overrides(profile))
+    scenario = sc.load_scenario(DEFAULT_SCENARIO,
+                                overrides=[*fast_overrides(profile), *overrides])
     scenario.robots[ROBOT].commands = test.commands(seed)
     sim = Simulation(scenario)
     robot = sim.robot()
@@ -117,24 +121,28 @@ def plot_drift(table: list[dict], profile: str, filename: str | Path) -> None:
     plt.close(fig)
 
 
-def study_text(seeds: list[int], loops: int, profile: str, power: float) -> str:
-    """The drive test over `seeds` as a study file (see scenarios/studies/drive_test.yaml)."""
+def study_text(seeds: list[int], loops: int, profile: str, power: float,
+               overrides: list[str] = ()) -> str:
+    """The drive test over `seeds` as a study file (see scenarios/studies/drive_test.yaml),
+    with `overrides` (scenario YAML) merged into every run."""
     return "\n".join([
         f"scenario: {DEFAULT_SCENARIO}",
         "duration: 900.0", "until: commands", "settle: 0.0",
         f"seeds: {list(seeds)}",
         f"grid: {{robots.{ROBOT}.motion.profile: [{profile}]}}",
         f"drive_test: {{loops: {loops}, power: {power}, robot: {ROBOT}}}",
-        "metrics: [drive_test_drift, drive_test_heading_error, command_status]", ""])
+        "metrics: [drive_test_drift, drive_test_heading_error, command_status]",
+        f"overrides: {json.dumps(list(overrides))}", ""])  # a JSON list is YAML
 
 
 def run_study_of_seeds(seeds: list[int], loops: int, profile: str, power: float, out: Path,
-                       workers: int | None = None) -> list[dict]:
-    """The drive test for each seed as a study on Ray (files in `out`); per seed:
-    {seed, drift_mm: [after each loop], failures: [index: status]}."""
+                       workers: int | None = None, overrides: list[str] = ()) -> list[dict]:
+    """The drive test for each seed as a study on Ray (files in `out`), `overrides` merged
+    into every run; per seed: {seed, drift_mm: [after each loop], failures: [index:
+    status]}."""
     out.mkdir(parents=True, exist_ok=True)
     study_file = out / "drive_test.yaml"
-    study_file.write_text(study_text(seeds, loops, profile, power))
+    study_file.write_text(study_text(seeds, loops, profile, power, overrides))
     rows = engine.read_rows(engine.run_study(study_file, out, workers=workers))
     table = []
     for row in rows:

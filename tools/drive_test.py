@@ -8,6 +8,7 @@ is the distance from the start position after each loop. Same seed, same numbers
 
     python tools/drive_test.py --loops 3 --seed 1 [--profile seed] [--plot path.png]
     python tools/drive_test.py --loops 3 --seeds 20 --workers 2 [--profile seed]  # on Ray
+    python tools/drive_test.py ... --override "{plant_config: ...}"   # another physics
 """
 
 import sys
@@ -32,7 +33,8 @@ SEEDS = Range(1, 10_000, why="runs of the study")
 
 
 def _one_seed(args) -> None:
-    result = drive_test.run(args.seed, args.loops, args.profile, args.power)
+    result = drive_test.run(args.seed, args.loops, args.profile, args.power,
+                            overrides=args.override)
     for failure in result["failures"]:
         print(f"failed: {failure}")
     drift = result["drift"][-1]
@@ -51,7 +53,7 @@ def _many_seeds(args) -> None:
     seeds = list(range(args.seed, args.seed + args.seeds))
     out = Path(args.out or f"studies/drive_test_{args.profile}")
     table = drive_test.run_study_of_seeds(seeds, args.loops, args.profile, args.power, out,
-                                          args.workers)
+                                          args.workers, args.override)
     for r in table:
         print(f"seed {r['seed']:3d}: drift after each loop (mm) "
               + " ".join(f"{v:7.2f}" for v in r["drift_mm"])
@@ -86,6 +88,9 @@ def main(argv=None) -> int:
                    help="Ray workers for --seeds (None: the machine's cores)")
     p.add_argument("--out", type=output_directory, help="study output directory for --seeds "
                    "(None: studies/drive_test_<profile>)")
+    p.add_argument("--override", action="append", default=[], metavar="YAML",
+                   help="scenario YAML merged on the default scene (repeatable), e.g. CENIC: "
+                   f"\"{sc.CENIC_PLANT % 0.01}\"")
     args = p.parse_args(argv)
     if args.seeds == 1:
         args.plot = args.plot or "drive_test.png"

@@ -560,6 +560,21 @@ def test_the_drive_test_study_and_the_drive_test_tool_agree(tmp_path, connected)
     assert 0.0 < alone["drift"][0] < 0.01  # a closed-loop loop comes back within 10 mm
 
 
+def test_the_drive_test_tool_s_overrides_reach_every_run_of_its_study(tmp_path):
+    """`tools/drive_test.py --override` (CENIC, say) goes into the study it writes for
+    --seeds, as the study's `overrides`."""
+    from corobot_drake.config.scenario import CENIC_PLANT
+    from corobot_drake.study.spec import load_study
+    from lab import drive_test
+
+    cenic = CENIC_PLANT % 0.01
+    study_file = tmp_path / "drive_test.yaml"
+    study_file.write_text(drive_test.study_text([1, 2], 1, "closed_loop", 1.0, [cenic]))
+    assert load_study(study_file).overrides == [cenic]
+    study_file.write_text(drive_test.study_text([1], 1, "seed", 1.0))
+    assert load_study(study_file).overrides == []
+
+
 def test_ctrl_c_keeps_the_finished_rows_and_stops_ray(tmp_path, connected, capsys):
     """Ctrl-C (SIGINT) mid-study: exit 130, the finished rows kept, every process the study
     started gone (its own local Ray instance); --resume then runs only the rest."""
