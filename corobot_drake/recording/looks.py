@@ -1,8 +1,8 @@
 """What the publishers of the run's topics share, the recording's (`recording.publishers`,
 Foxglove) and ROS 2's (`ros2.publishers`): when they look at the simulation, the robot state
-they read (`RobotStateLooks`: its input ports and the chassis read), the camera frames they
-find (`CameraLooks`) and how the topics of signals with a message of their own are fed
-(`connect_signal_topics`).
+they read (`RobotStateLooks`: its input ports and the chassis read), the camera frames and IR
+scans they find (`CameraLooks`, `IrScanLooks`) and how the topics of signals with a message of
+their own are fed (`connect_signal_topics`).
 
 A publisher looks on periodic publish events from its input ports alone: what to publish at
 time t is decided from the Context, so it keeps no memory and a reset or replayed Context
@@ -21,6 +21,8 @@ from pydrake.systems.primitives import ZeroOrderHold
 from pydrake.systems.sensors import ImageRgba8U
 
 from corobot_drake.model import dimensions as dim
+from corobot_drake.model.ir_models import SharpGP2D12
+from corobot_drake.sensors.ir_sensor import SCAN_TIME, scan_state_layout
 from corobot_drake.systems.runlog import HELD_PERIOD
 
 STATE_PERIOD = 0.02
@@ -133,6 +135,45 @@ class CameraLooks(LeafSystem):
 
     def publish_frame(self, context, captured: float, image: ImageRgba8U) -> None:
         """Publishes the frame captured at `captured` (s)."""
+        raise NotImplementedError
+
+
+class IrScanLooks(LeafSystem):
+    """The base of an IR sensor's scan publishers: its input port, the sensor's limits, and
+    the scan each look finds.
+
+    .. pydrake_system::
+
+        name: IrScanLooks
+        input_ports:
+        - scan_state
+
+    Input `scan_state` (the `IrSensor`'s, `ir_sensor.scan_state_layout`). It looks on the
+    sensor's own event schedule (`IrSensor.events`: a look and a scan at one time are at the
+    same float time, the look first; a look scheduled apart could fall an ulp after a scan
+    and miss the scan before it) and hands the scan taken since the previous look to the
+    subclass's `publish_scan(context, when, scan)`. `fov_deg`, `min_range` and `max_range`
+    (m) are the sensor's cone and the distances it can read."""
+
+    def __init__(self, sensor_system):
+        super().__init__()
+        config = sensor_system.config
+        self._period = sensor_system.events[0]
+        self.fov_deg = config.dispersion_cone_angle
+        self.min_range = SharpGP2D12.min_distance if config.model == "sharp_gp2d12" else 0.0
+        self.max_range = config.maximum_range
+        self._scan = self.DeclareVectorInputPort(
+            "scan_state", scan_state_layout(sensor_system.num_rays)[0])
+        self.DeclarePeriodicPublishEvent(*sensor_system.events, self._find_scan)
+
+    def _find_scan(self, context):
+        scan = self._scan.Eval(context)
+        when = float(scan[SCAN_TIME])
+        if in_window(when, context.get_time(), self._period):  # False: NaN, no scan yet
+            self.publish_scan(context, when, scan)
+
+    def publish_scan(self, context, when: float, scan) -> None:
+        """Publishes `scan` (the sensor's scan state) taken at `when` (s)."""
         raise NotImplementedError
 
 

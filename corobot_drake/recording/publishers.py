@@ -52,18 +52,18 @@ from pydrake.systems.sensors import ImageRgba8U
 from corobot_drake import topics as ros_names
 from corobot_drake.config.poses import mount_frame
 from corobot_drake.model import dimensions as dim
-from corobot_drake.model.ir_models import SharpGP2D12
 from corobot_drake.recording import topics as tp
 from corobot_drake.recording.looks import (
     STATE_PERIOD,
     TELEMETRY_PERIOD,
     TOLERANCE,
     CameraLooks,
+    IrScanLooks,
     RobotStateLooks,
     connect_signal_topics,
     in_window,
 )
-from corobot_drake.sensors.ir_sensor import DISTANCE, SCAN_TIME, TRUE_DISTANCE, scan_state_layout
+from corobot_drake.sensors.ir_sensor import DISTANCE, TRUE_DISTANCE, scan_state_layout
 
 SCENE_PERIOD = 1.0
 """s: /scene (the shapes) again every second, for viewers that connect late."""
@@ -240,51 +240,36 @@ class TelemetryPublisher(LeafSystem):
         return publish
 
 
-class IrPublisher(LeafSystem):
+class IrPublisher(IrScanLooks):
     """One IR sensor's scans: /ir/<sensor> (corobot.Range, JSON) and /ir/<sensor>/rays
-    (foxglove.SceneUpdate: the rays in the world).
+    (foxglove.SceneUpdate: the rays in the world), one per scan, stamped with the scan's time
+    (`IrScanLooks`).
 
     .. pydrake_system::
 
         name: IrPublisher
         input_ports:
         - scan_state
-
-    Input `scan_state` (the IrSensor's, `ir_sensor.scan_state_layout`). It looks once per
-    scan period, at the scans' times, and publishes the scan taken since the previous look."""
+    """
 
     def __init__(self, context, names: ros_names.RobotNames, sensor: str, sensor_system):
-        super().__init__()
-        config = sensor_system.config
+        super().__init__(sensor_system)
         self._names, self._sensor = names, sensor
-        self._period = sensor_system.events[0]  # the looks' period
-        self._fov = config.dispersion_cone_angle
-        self._min = SharpGP2D12.min_distance if config.model == "sharp_gp2d12" else 0.0
-        self._max = config.maximum_range
-        size, self._origin, self._ends, self._hits = scan_state_layout(sensor_system.num_rays)
-        self._scan = self.DeclareVectorInputPort("scan_state", size)
+        _, self._origin, self._ends, self._hits = scan_state_layout(sensor_system.num_rays)
         self._range_channel = tp.json_channel(names.topic(f"ir/{sensor}"), tp.RANGE_SCHEMA,
                                               context)
         self._rays_channel = SceneUpdateChannel(names.topic(f"ir/{sensor}/rays"),
                                                 context=context)
-        # The scans' own schedule (`IrSensor.events`): a look and a scan at one time are at
-        # the same float time, the look first (a look scheduled apart could fall an ulp
-        # after a scan and miss the scan before it).
-        self.DeclarePeriodicPublishEvent(*sensor_system.events, self._publish)
 
-    def _publish(self, context):
-        s = self._scan.Eval(context)
-        when = float(s[SCAN_TIME])
-        if not in_window(when, context.get_time(), self._period):
-            return  # also NaN: no scan yet
+    def publish_scan(self, context, when: float, scan) -> None:
         ns = ros_names.nanoseconds(when)
         self._range_channel.log(tp.range_message(
-            when, self._names.ir_frame(self._sensor), self._fov, self._min, self._max,
-            s[DISTANCE], s[TRUE_DISTANCE]), log_time=ns)
-        ends = np.asarray(s[self._ends]).reshape(-1, 3)
+            when, self._names.ir_frame(self._sensor), self.fov_deg, self.min_range,
+            self.max_range, scan[DISTANCE], scan[TRUE_DISTANCE]), log_time=ns)
+        ends = np.asarray(scan[self._ends]).reshape(-1, 3)
         entity = SceneEntity(timestamp=tp.stamp(when), frame_id="world",
                              id=self._names.ir_frame(self._sensor),
-                             lines=[tp.ray_lines(s[self._origin], ends, s[self._hits])])
+                             lines=[tp.ray_lines(scan[self._origin], ends, scan[self._hits])])
         self._rays_channel.log(SceneUpdate(entities=[entity]), log_time=ns)
 
 

@@ -22,19 +22,18 @@ from pydrake.systems.sensors import ImageRgba8U
 from corobot_drake import topics as tp
 from corobot_drake.config.poses import mount_frame
 from corobot_drake.model import dimensions as dim
-from corobot_drake.model.ir_models import SharpGP2D12
 from corobot_drake.recording.looks import (
     STATE_PERIOD,
     TELEMETRY_PERIOD,
     TOLERANCE,
     CameraLooks,
+    IrScanLooks,
     RobotStateLooks,
     connect_signal_topics,
-    in_window,
 )
 from corobot_drake.ros2 import interfaces as ifc
 from corobot_drake.ros2.messages import R_LINK_OPTICAL, Messages
-from corobot_drake.sensors.ir_sensor import DISTANCE, SCAN_TIME, scan_state_layout
+from corobot_drake.sensors.ir_sensor import DISTANCE
 
 CLOCK_PERIOD = 0.01
 """s: /clock at 100 Hz (the plant's default step: a look adds no Simulator stop)."""
@@ -223,41 +222,27 @@ class TelemetryPublisher(LeafSystem):
                                              publish)
 
 
-class IrPublisher(LeafSystem):
+class IrPublisher(IrScanLooks):
     """One IR sensor's scans: /ir/<sensor> (sensor_msgs/Range, INFRARED), one per scan,
-    stamped with the scan's time.
+    stamped with the scan's time (`IrScanLooks`).
 
     .. pydrake_system::
 
         name: IrPublisher
         input_ports:
         - scan_state
-
-    Input `scan_state` (the IrSensor's, `ir_sensor.scan_state_layout`). It looks once per
-    scan period, at the scans' times, and publishes the scan taken since the previous look."""
+    """
 
     def __init__(self, bus, names: tp.RobotNames, sensor: str, sensor_system):
-        super().__init__()
-        config = sensor_system.config
+        super().__init__(sensor_system)
         self._m = Messages(bus.store)
         self._frame = names.ir_frame(sensor)
-        self._period = sensor_system.events[0]  # the looks' period
-        self._fov = math.radians(config.dispersion_cone_angle)
-        self._min = SharpGP2D12.min_distance if config.model == "sharp_gp2d12" else 0.0
-        self._max = config.maximum_range
-        size = scan_state_layout(sensor_system.num_rays)[0]
-        self._scan = self.DeclareVectorInputPort("scan_state", size)
         self._channel = _channel(bus, names, ifc.ir_topic(sensor))
-        # On the scans' own schedule, as the recording's IrPublisher (see there).
-        self.DeclarePeriodicPublishEvent(*sensor_system.events, self._publish)
 
-    def _publish(self, context):
-        s = self._scan.Eval(context)
-        when = float(s[SCAN_TIME])
-        if not in_window(when, context.get_time(), self._period):
-            return  # also NaN: no scan yet
+    def publish_scan(self, context, when: float, scan) -> None:
         self._channel.publish(tp.nanoseconds(when), self._m.range(
-            when, self._frame, self._fov, self._min, self._max, s[DISTANCE]))
+            when, self._frame, math.radians(self.fov_deg), self.min_range, self.max_range,
+            scan[DISTANCE]))
 
 
 class CameraPublisher(CameraLooks):

@@ -1,7 +1,8 @@
 """The signals table's places (`signals.put_value`, `read_value`) and the publishers' shared
-bases (`recording.looks.RobotStateLooks`, `CameraLooks`) alone."""
+bases (`recording.looks.RobotStateLooks`, `CameraLooks`, `IrScanLooks`) alone."""
 
 import math
+import types
 
 import numpy as np
 import pytest
@@ -10,7 +11,9 @@ from pydrake.multibody.math import SpatialVelocity
 from pydrake.systems.sensors import ImageRgba8U
 
 from corobot_drake import signals
-from corobot_drake.recording.looks import CameraLooks, RobotStateLooks
+from corobot_drake.config.sensors import IrSensorConfig
+from corobot_drake.recording.looks import CameraLooks, IrScanLooks, RobotStateLooks
+from corobot_drake.sensors.ir_sensor import SCAN_TIME
 from corobot_drake.systems.odometry import DriveState, WheelState
 
 
@@ -109,3 +112,38 @@ def test_camera_looks_hand_on_a_frame_once_at_the_look_after_it_comes_out(captur
     simulator.AdvanceTo(0.1)
     expected = [] if look is None else [(look, captured, 7)]
     assert [(pytest.approx(t, abs=1e-12), c, v) for t, c, v in frames.handed] == expected
+
+
+class _Scans(IrScanLooks):
+    """Keeps what it is handed: (context time, scan time)."""
+
+    def __init__(self, events):
+        super().__init__(types.SimpleNamespace(config=IrSensorConfig(), num_rays=6,
+                                               events=events))
+        self.handed = []
+
+    def publish_scan(self, context, when, scan):
+        self.handed.append((context.get_time(), when))
+
+
+@pytest.mark.parametrize("events, scanned, look", [
+    ((0.05, 0.05), math.nan, None),  # no scan yet: nothing handed on
+    ((0.05, 0.05), 0.05, 0.1),       # a look and a scan at 0.05: the look ran first
+    ((0.01, 0.0), 0.05, 0.06),       # on a continuous plant's steps: the next step's look
+])
+def test_ir_scan_looks_hand_on_a_scan_once_at_the_look_after_it(events, scanned, look):
+    """The looks run on the sensor's event schedule; over 0.2 s only the first look after
+    the scan hands it on, with its time; the base knows the sensor's limits."""
+    from pydrake.systems.analysis import Simulator
+
+    scans = _Scans(events)
+    assert (scans.fov_deg, scans.max_range) == (IrSensorConfig().dispersion_cone_angle,
+                                                IrSensorConfig().maximum_range)
+    simulator = Simulator(scans)
+    context = simulator.get_mutable_context()
+    state = np.zeros(scans.get_input_port().size())
+    state[SCAN_TIME] = scanned
+    scans.get_input_port().FixValue(context, state)
+    simulator.AdvanceTo(0.2)
+    expected = [] if look is None else [(look, scanned)]
+    assert [(pytest.approx(t, abs=1e-12), w) for t, w in scans.handed] == expected
