@@ -315,7 +315,7 @@ def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None,
     lcm = None
     if meshcat is not None:
         lcm = _add_meshcat(builder, plant, scene_graph, meshcat, scenario.world, mouse_drag,
-                           step if plant.time_step() == 0 else 0.0)
+                           sc.continuous_step(scenario.plant_config, scenario.simulator_config))
     diagram = builder.Build()
     diagram.set_name("corobot_station")
     return Station(diagram, plant, scene_graph, robots, bodies, models, meshcat, renderers,
@@ -360,7 +360,7 @@ def _add_drive(builder, plant, scenario: sc.Scenario, name: str, added, chassis_
     _connect_servos(builder, plant, instance, name, controller.GetOutputPort("desired_state"),
                     servo_velocity_sign(scenario.simulator_config))
     _add_telemetry(builder, plant, name, added, chassis_pose, selector.get_output_port(),
-                   sc.physics_step(scenario.plant_config, scenario.simulator_config))
+                   sc.continuous_step(scenario.plant_config, scenario.simulator_config))
     tilt = builder.AddNamedSystem(f"{name}.tilt_monitor", TiltMonitor(TILT_SAMPLE_PERIOD))
     builder.Connect(chassis_state, tilt.GetInputPort("chassis_state"))
     for port in ("drive_status", "axle_speed_command", "axle_speed"):
@@ -370,14 +370,14 @@ def _add_drive(builder, plant, scenario: sc.Scenario, name: str, added, chassis_
                       chassis_pose=chassis_pose)
 
 
-def _add_telemetry(builder, plant, name: str, added, chassis_pose, wheel_state, step: float
-                   ) -> None:
-    """The wheels' contact telemetry (`<name>.wheel_contacts`; on a continuous plant, its
-    loads from the robot's momentum over each physics `step`) and the tip margin
-    (`<name>.tip_margin`)."""
+def _add_telemetry(builder, plant, name: str, added, chassis_pose, wheel_state,
+                   continuous_step: float) -> None:
+    """The wheels' contact telemetry (`<name>.wheel_contacts`; on a continuous plant, step
+    `continuous_step` > 0, its loads from the robot's momentum over each step) and the tip
+    margin (`<name>.tip_margin`)."""
     instance, chassis, joints = added
     add_wheel_contacts(builder, name, plant, [j.child_body() for j in joints], chassis_pose,
-                       wheel_state, chassis, step)
+                       wheel_state, chassis, continuous_step)
     add_tip_margin(builder, name, plant, instance, chassis,
                    {w: j.child_body() for w, j in zip(dim.WHEEL_NAMES, joints, strict=True)},
                    chassis_pose)

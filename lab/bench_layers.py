@@ -102,11 +102,11 @@ def build_layers(scenario: sc.Scenario, layers: int, seconds: float = 10.0) -> _
     instance, chassis, joints = _add_robot(plant, name, robot)
     plant.Finalize()
     fixed = {}
-    step = sc.physics_step(scenario.plant_config, scenario.simulator_config)
     if layers == 1:
         times, values = station_desired_state(scenario, seconds)
         # A zero-order hold whose breaks sit half a step before each step: the plant's step
         # at t_k reads sample k whatever the rounding of t_k.
+        step = sc.physics_step(scenario.plant_config, scenario.simulator_config)
         replay = builder.AddSystem(TrajectorySource(PiecewisePolynomial.ZeroOrderHold(
             np.append(times - step / 2, times[-1] + step / 2),
             np.column_stack([values, values[:, -1]]))))
@@ -125,7 +125,8 @@ def build_layers(scenario: sc.Scenario, layers: int, seconds: float = 10.0) -> _
             desired_state = fix.get_output_port()
         builder.Connect(desired_state, plant.get_desired_state_input_port(instance))
         _add_robot_layers(builder, plant, name, robot, chassis, joints, selector, controller,
-                          layers, fixed, step)
+                          layers, fixed,
+                          sc.continuous_step(scenario.plant_config, scenario.simulator_config))
     diagram = builder.Build()
     simulator = Simulator(diagram)
     ApplySimulatorConfig(scenario.simulator_config, simulator)
@@ -173,9 +174,9 @@ def _record_desired_state(scenario: sc.Scenario, seconds: float):
 
 
 def _add_robot_layers(builder, plant, name, robot, chassis, joints, selector, controller,
-                      layers, fixed, step: float) -> None:
-    """Layers 3 and up of `LAYERS`, wired as `station.build_station` wires them (`step`: the
-    physics step)."""
+                      layers, fixed, continuous_step: float) -> None:
+    """Layers 3 and up of `LAYERS`, wired as `station.build_station` wires them
+    (`continuous_step`: `scenario.continuous_step`)."""
     if layers < 3:
         fixed["request"] = controller.GetInputPort("request")
         return
@@ -204,7 +205,8 @@ def _add_robot_layers(builder, plant, name, robot, chassis, joints, selector, co
         builder.Connect(state, tilt.GetInputPort("chassis_state"))
     if layers >= 7:
         contacts = add_wheel_contacts(builder, name, plant, [j.child_body() for j in joints],
-                                      pose, selector.get_output_port(), chassis, step)
+                                      pose, selector.get_output_port(), chassis,
+                                      continuous_step)
         add_tip_margin(
             builder, name, plant, chassis.model_instance(), chassis,
             {w: j.child_body() for w, j in zip(dim.WHEEL_NAMES, joints, strict=True)}, pose)

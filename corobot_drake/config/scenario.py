@@ -290,6 +290,13 @@ def physics_step(plant_config: MultibodyPlantConfig, simulator_config: Simulator
     return plant_config.time_step or simulator_config.max_step_size
 
 
+def continuous_step(plant_config: MultibodyPlantConfig, simulator_config: SimulatorConfig
+                    ) -> float:
+    """s: a continuous plant's (CENIC's) step, to which its sensors, looks and stops keep (an
+    event between its steps would split one and change the motion); 0 on a discrete plant."""
+    return physics_step(plant_config, simulator_config) if plant_config.time_step == 0 else 0.0
+
+
 SAP_PLANT = ("{plant_config: {time_step: %g}, "
              "simulator_config: {integration_scheme: runge_kutta3}}")
 """A scenario override (`SAP_PLANT % step`): a discrete plant stepped by SAP (the scenario's

@@ -64,7 +64,9 @@ from pydrake.systems.sensors import CameraConfig, ImageRgba8U, RgbdSensor, RgbdS
 from corobot_drake.config.poses import mount_frame
 from corobot_drake.config.sensors import FRONT_CAMERA
 from corobot_drake.sensors.site import SensorSite
+from corobot_drake.sensors.ticks import TICK_TOLERANCE, last_tick, tick_in_step
 from corobot_drake.sensors.xdisplay import x_display
+from corobot_drake.systems.shared_state import SharedState
 
 FILL_INTENSITY = 0.5
 """The fill light (from the camera, the sky's scattered light); the sun is the scenario's."""
@@ -73,8 +75,6 @@ NEAR_STEP = 1e-6
 """s: a camera event this close to a plant step risks the skip described at
 `config.sensors.CAPTURE_OFFSET`."""
 
-TICK_TOLERANCE = 1e-9
-"""s: a frame tick this close to a plant step counts as on it (float sums of periods)."""
 
 
 class RendererUnavailableError(RuntimeError):
@@ -162,28 +162,14 @@ def _warn_once(message: str) -> None:
         warnings.warn(message, stacklevel=3)
 
 
-def _last_tick(t: float, fps: float, offset: float) -> tuple[int, float]:
-    """(k, t_k): the last frame tick t_k = offset + k / fps at or before `t` (k = -1 before
-    the first)."""
-    k = int(np.floor((t - offset) * fps + TICK_TOLERANCE * fps))
-    return k, offset + k / fps
-
-
-class _HeldFrame:
-    """A frame in the Context's abstract state, shared and not copied when Drake clones that
-    state: a hold's update runs every plant step, Drake copies the state for each, and a
-    320 x 240 frame is 300 kB. Never changed once made."""
+class _HeldFrame(SharedState):
+    """A frame in the Context's abstract state: a hold's update runs every plant step, Drake
+    copies the state for each, and a 320 x 240 frame is 300 kB."""
 
     __slots__ = ("image",)
 
     def __init__(self, image: ImageRgba8U):
         self.image = image
-
-    def __deepcopy__(self, memo):
-        return self
-
-    def __copy__(self):
-        return self
 
 
 class CameraHold(LeafSystem):
@@ -250,8 +236,7 @@ class CameraHold(LeafSystem):
 
     def frame_due(self, t: float) -> bool:
         """Whether the plant step at `t` takes a frame: a tick in (t - step, t]."""
-        k, t_k = _last_tick(t, self._fps, self._offset)
-        return k >= 0 and t_k > t - self._step + TICK_TOLERANCE
+        return tick_in_step(t, self._fps, self._offset, self._step)
 
     def _on_step(self, context, state):
         t = context.get_time()
@@ -325,8 +310,8 @@ class CameraFrameSaver(LeafSystem):
         out = captured + self._delay
         if not (t - self._period - TICK_TOLERANCE < out < t - TICK_TOLERANCE):
             return False  # also NaN: no frame yet
-        k, _ = _last_tick(captured, self._rate, self._offset)
-        previous, _ = _last_tick(captured - 1.0 / self._fps, self._rate, self._offset)
+        k, _ = last_tick(captured, self._rate, self._offset)
+        previous, _ = last_tick(captured - 1.0 / self._fps, self._rate, self._offset)
         return k >= 0 and k > previous
 
     def _save(self, context):
@@ -407,7 +392,7 @@ def add_camera(site: SensorSite, name: str, config: CameraConfig,
     body, X_AB = mount_frame(plant, site.model_instance, config.X_PB)
     frame_id = plant.GetBodyFrameIdOrThrow(body.index())
     look = frame_look_period(config, step)
-    continuous = plant.time_step() == 0
+    continuous = site.continuous_step > 0
     if (config.output_delay > 0 and not continuous
             and site.renderers.get(config.renderer_name) == "RenderEngineGl"):
         camera = _add_async(builder, scene_graph, prefix, config, frame_id, X_AB, step)

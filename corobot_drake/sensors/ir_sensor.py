@@ -68,6 +68,7 @@ from corobot_drake.sensors.raycast import (
     model_instance_geometry_ids,
 )
 from corobot_drake.sensors.site import SensorSite
+from corobot_drake.sensors.ticks import tick_in_step
 
 # --- counter-based noise -------------------------------------------------------------------
 
@@ -112,10 +113,6 @@ def scan_state_layout(num_rays: int) -> tuple[int, slice, slice, slice]:
     hits = ends + 3 * num_rays
     return (hits + num_rays, slice(_READING_SIZE, ends), slice(ends, hits),
             slice(hits, hits + num_rays))
-
-
-SCAN_ROUNDING = 1e-6
-"""Periods: a scan time this close to a plant step (continuous plants) is on it."""
 
 
 class IrSensor(LeafSystem):
@@ -307,9 +304,8 @@ class IrSensor(LeafSystem):
 
     def scan_due(self, t: float) -> bool:
         """Whether the plant step at `t` (`step` > 0) takes a scan: a scan time k period
-        (k >= 1) in (t - step, t], within rounding."""
-        k = math.floor(t / self.period + SCAN_ROUNDING)
-        return k >= 1 and k * self.period > t - self._step + SCAN_ROUNDING * self.period
+        (k >= 1) in (t - step, t]."""
+        return tick_in_step(t, 1.0 / self.period, self.period, self._step)
 
     def _scan_if_due(self, context, discrete_state):
         if not self.scan_due(context.get_time()):
@@ -459,7 +455,7 @@ def add_ir_sensor(site: SensorSite, name: str, config: IrSensorConfig) -> IrSens
         config, plant.GetBodyFrameIdOrThrow(body.index()),
         model_instance_geometry_ids(plant, site.model_instance),
         noise_key(site.random_seed, robot, name, config.noise_seed), name, X_BS,
-        site.physics_step if plant.time_step() == 0 else 0.0))
+        site.continuous_step))
     builder.Connect(site.scene_graph.get_query_output_port(), sensor.get_input_port(0))
     for i in range(sensor.num_output_ports()):
         port = sensor.get_output_port(i)

@@ -32,3 +32,9 @@ class SensorSite:
     @property
     def physics_step(self) -> float:
         return self.plant.time_step() if self.step is None else self.step
+
+    @property
+    def continuous_step(self) -> float:
+        """s: a continuous plant's step, on which its sensors sample; 0 on a discrete one
+        (`scenario.continuous_step`)."""
+        return self.physics_step if self.plant.time_step() == 0 else 0.0

@@ -276,13 +276,13 @@ def add_chassis_velocities(builder, name: str, plant, chassis, step: float):
 
 
 def add_wheel_contacts(builder, name: str, plant, wheels, chassis_pose_port, wheel_state_port,
-                       chassis, step: float):
+                       chassis, continuous_step: float = 0.0):
     """Adds `<name>.wheel_contacts` fed by the plant, `chassis_pose_port` and
-    `wheel_state_port`; on a continuous plant, its loads from the robot's momentum balance
-    (its `chassis` body's model instance, physics step `step`: `add_chassis_velocities`).
-    Returns it."""
-    momentum = (RobotMomentum.of_robot(plant, chassis.model_instance(), chassis, step)
-                if plant.time_step() == 0 else None)
+    `wheel_state_port`; on a continuous plant (its step `continuous_step` > 0,
+    `scenario.continuous_step`), its loads from the robot's momentum balance (its `chassis`
+    body's model instance: `add_chassis_velocities`). Returns it."""
+    momentum = (RobotMomentum.of_robot(plant, chassis.model_instance(), chassis,
+                                       continuous_step) if continuous_step > 0 else None)
     system = builder.AddNamedSystem(f"{name}.wheel_contacts",
                                     WheelContacts(plant, wheels, momentum))
     for port_name, port in (("contact_results", plant.get_contact_results_output_port()),
@@ -292,7 +292,8 @@ def add_wheel_contacts(builder, name: str, plant, wheels, chassis_pose_port, whe
                             ("wheel_state", wheel_state_port)):
         builder.Connect(port, system.GetInputPort(port_name))
     if momentum is not None:
-        velocity, held = add_chassis_velocities(builder, name, plant, chassis, step)
+        velocity, held = add_chassis_velocities(builder, name, plant, chassis,
+                                                continuous_step)
         builder.Connect(velocity, system.GetInputPort("chassis_velocity"))
         builder.Connect(held, system.GetInputPort("held_chassis_velocity"))
     return system

@@ -25,21 +25,11 @@ from corobot_drake.config.scenario import (
     Wait,
 )
 from corobot_drake.model import dimensions as dim
-
-
-class _Immutable:
-    """Frozen values are shared, not copied, when Drake clones the Context's abstract state
-    (it does so every step; a deep copy of a growing log would make long runs slow)."""
-
-    def __deepcopy__(self, memo):
-        return self
-
-    def __copy__(self):
-        return self
+from corobot_drake.systems.shared_state import SharedState
 
 
 @dc.dataclass(frozen=True)
-class DriveRequest(_Immutable):
+class DriveRequest(SharedState):
     """A command (a scenario command dataclass) stamped with its sequence number and time.
 
     The command is never mutated after it is issued."""
@@ -58,7 +48,7 @@ class DriveRequest(_Immutable):
 
 
 @dc.dataclass(frozen=True)
-class CommandStatus(_Immutable):
+class CommandStatus(SharedState):
     """How a completing command (DriveDistance, RotateDegrees, SetPose) ended, reported by
     `motion.MotionCommands`: its request's seq, status and reason, end time (s)."""
 
@@ -72,7 +62,7 @@ class CommandStatus(_Immutable):
 
 
 @dc.dataclass(frozen=True)
-class CommandRecord(_Immutable):
+class CommandRecord(SharedState):
     """One command's life, for the run summary. Times in s; end_time None while running."""
 
     seq: int
@@ -97,7 +87,7 @@ def _bounded(log: list) -> tuple:
 
 
 @dc.dataclass(frozen=True)
-class CommandSourceState(_Immutable):
+class CommandSourceState(SharedState):
     """The command source's whole memory (held as abstract state in the Context)."""
 
     request: DriveRequest = DriveRequest()

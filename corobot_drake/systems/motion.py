@@ -43,7 +43,8 @@ from corobot_drake.config.scenario import (
     SetPower,
 )
 from corobot_drake.model import dimensions as dim
-from corobot_drake.systems.drive import CommandStatus, DriveRequest, _Immutable
+from corobot_drake.systems.drive import CommandStatus, DriveRequest
+from corobot_drake.systems.shared_state import SharedState
 
 # The seed profile (the book's constants, per second: it counted 1/60 s frames); its window,
 # `SEED_WINDOW`, is the scenario's (a saved command's progress fills it).
@@ -104,7 +105,7 @@ def wrap(angle: float) -> float:
 
 
 @dc.dataclass(frozen=True)
-class ActiveCommand(_Immutable):
+class ActiveCommand(SharedState):
     """A running command. Units: m, rad, s."""
 
     seq: int
@@ -133,7 +134,7 @@ class ActiveCommand(_Immutable):
 
 
 @dc.dataclass(frozen=True)
-class MotionState(_Immutable):
+class MotionState(SharedState):
     """MotionCommands' whole memory (abstract state in the Context)."""
 
     handled_seq: int = 0
