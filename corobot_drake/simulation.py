@@ -580,7 +580,10 @@ class Simulation:
         # The built diagram's key, now: the scenario may be changed in place before a reset.
         self._diagram_key = diagram_key(scenario)
         self._physics_step = sc.physics_step(scenario.plant_config, scenario.simulator_config)
-        self._continuous = scenario.plant_config.time_step == 0
+        self.continuous_step = sc.continuous_step(scenario.plant_config,
+                                                  scenario.simulator_config)
+        """s: the continuous plant's step, to which stops and looks keep; 0 on a discrete one."""
+        self._continuous = self.continuous_step > 0
         self.run_log_window: float | None = run_log_window
         """s of run log kept in memory (the newest, plus up to `runlog.RUN_LOG_CHUNK`
         samples); None keeps the whole run. A long-running simulation (`--serve`) sets it so

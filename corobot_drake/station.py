@@ -438,8 +438,7 @@ def _add_meshcat(builder, plant, scene_graph, meshcat, world: sc.World, mouse_dr
     config = visualization_config()
     if not mouse_drag:
         config.mouse_interaction_stiffness = None
-    if continuous_step > 0:
-        config.publish_period = publish_period_on_steps(config.publish_period, continuous_step)
+    config.publish_period = meshcat_publish_period(continuous_step)
     # Meshcat only: Drake's default LCM bus would also publish every frame as UDP multicast
     # for Meldis; an in-process bus keeps the run off the network.
     lcm = DrakeLcm("memq://")
@@ -451,6 +450,13 @@ def _add_meshcat(builder, plant, scene_graph, meshcat, world: sc.World, mouse_dr
     meshcat.SetProperty("/Grid", "visible", False)
     _set_meshcat_sun(meshcat, world.sun)
     return lcm
+
+
+def meshcat_publish_period(continuous_step: float) -> float:
+    """s: how often the Meshcat visualizers publish: Drake's default (1/64 s), or on a
+    continuous plant (its step `continuous_step` > 0) the 2^j steps at least that."""
+    period = visualization_config().publish_period
+    return publish_period_on_steps(period, continuous_step) if continuous_step > 0 else period
 
 
 def publish_period_on_steps(period: float, step: float) -> float:

@@ -1,7 +1,7 @@
 """Real-time factors of the default scene driving a figure of eight (`tools/bench.py`).
 
 Stacks (physics only; + 2 IR at 20 Hz; + camera at 30 Hz; both) times plant settings
-(hydroelastic at 10, 5, 2 and 1 ms; point contact at 10 ms; CENIC at 10 ms):
+(CENIC at 10, 5 and 2 ms; SAP at 10 and 2 ms; SAP with point contact at 10 ms):
 :func:`realtime_factor` of
 `sensor_overrides(**STACKS[stack])` with `PLANTS[plant]`. Fleets of robots, each driving
 the figure of eight: :func:`robot_seconds_per_second`.
@@ -77,19 +77,16 @@ STACKS = {
 }
 """Stack name -> `sensor_overrides` flags."""
 PLANTS = {
-    "hydroelastic 10 ms (default)": "plant_config: {time_step: 0.01, contact_model: "
-                                        "hydroelastic_with_fallback}",
-    "hydroelastic 5 ms": "plant_config: {time_step: 0.005, contact_model: "
-                                   "hydroelastic_with_fallback}",
-    "hydroelastic 2 ms": "plant_config: {time_step: 0.002, contact_model: "
-                         "hydroelastic_with_fallback}",
-    "hydroelastic 1 ms": "plant_config: {time_step: 0.001, contact_model: "
-                         "hydroelastic_with_fallback}",
-    "point 10 ms": "plant_config: {time_step: 0.01, contact_model: point}",
-    "CENIC 10 ms (hydroelastic)": sc.CENIC_PLANT % 0.01,
+    "CENIC 10 ms (default)": sc.CENIC_PLANT % 0.01,
+    "CENIC 5 ms": sc.CENIC_PLANT % 0.005,
+    "CENIC 2 ms": sc.CENIC_PLANT % 0.002,
+    "SAP 10 ms": sc.SAP_PLANT % 0.01,
+    "SAP 2 ms": sc.SAP_PLANT % 0.002,
+    "SAP point 10 ms": ("{plant_config: {time_step: 0.01, contact_model: point}, "
+                        "simulator_config: {integration_scheme: runge_kutta3}}"),
 }
-"""Plant setting name -> scenario override (SAP's discrete plant unless named CENIC)."""
-DEFAULT_PLANT = "hydroelastic 10 ms (default)"
+"""Plant setting name -> scenario override (hydroelastic unless named point)."""
+DEFAULT_PLANT = "CENIC 10 ms (default)"
 IN_PLACE = ((f"+ 2 IR at {IR_RATE_HZ:g} Hz", IR_RATE_HZ, "scan (2 sensors)"),
             (f"+ camera at {CAMERA_FPS:g} Hz", CAMERA_FPS, "frame"))
 """(stack, events per simulated second, what one event is) of each sensor's in-place cost."""

@@ -33,7 +33,12 @@ from pydrake.common.yaml import yaml_dump_typed
 from pydrake.multibody.plant import AddMultibodyPlant
 from pydrake.systems.analysis import ApplySimulatorConfig, Simulator
 from pydrake.systems.framework import DiagramBuilder
-from pydrake.systems.primitives import MatrixGain, TrajectorySource
+from pydrake.systems.primitives import (
+    ConstantVectorSource,
+    MatrixGain,
+    TrajectorySource,
+    ZeroOrderHold,
+)
 from pydrake.trajectories import PiecewisePolynomial
 
 from corobot_drake.config import scenario as sc
@@ -46,7 +51,7 @@ from corobot_drake.systems.drive import CommandSource, DriveController, DriveReq
 from corobot_drake.systems.monitor import TiltMonitor
 from corobot_drake.systems.motion import MotionCommands
 from corobot_drake.systems.odometry import add_chassis_poses, add_chassis_states, add_odometry
-from corobot_drake.systems.runlog import SAMPLED, add_run_log
+from corobot_drake.systems.runlog import HELD_PERIOD, SAMPLED, add_run_log
 from corobot_drake.systems.servo import add_servo_sign, servo_velocity_sign
 from corobot_drake.systems.stability import add_tip_margin
 from lab import bench
@@ -104,13 +109,24 @@ def build_layers(scenario: sc.Scenario, layers: int, seconds: float = 10.0) -> _
     fixed = {}
     if layers == 1:
         times, values = station_desired_state(scenario, seconds)
+        step = sc.physics_step(scenario.plant_config, scenario.simulator_config)
+        if sc.continuous_step(scenario.plant_config, scenario.simulator_config):
+            # CENIC's step from t_k runs after the drive's update at t_k: it reads what the
+            # station's plant reads at t_k+1, before that step's updates.
+            values = np.column_stack([values[:, 1:], values[:, -1]])
         # A zero-order hold whose breaks sit half a step before each step: the plant's step
         # at t_k reads sample k whatever the rounding of t_k.
-        step = sc.physics_step(scenario.plant_config, scenario.simulator_config)
         replay = builder.AddSystem(TrajectorySource(PiecewisePolynomial.ZeroOrderHold(
             np.append(times - step / 2, times[-1] + step / 2),
             np.column_stack([values, values[:, -1]]))))
         builder.Connect(replay.get_output_port(), plant.get_desired_state_input_port(instance))
+        if sc.continuous_step(scenario.plant_config, scenario.simulator_config):
+            # CENIC steps to the next event: the station's drive ends each step at k x step
+            # (Drake's periodic times) and its 10 Hz holds at k x 0.1 (some a rounding error
+            # off a step); C++ holds on the same grids give the plant alone those stops.
+            zero = builder.AddSystem(ConstantVectorSource([0.0])).get_output_port()
+            for period in (step, HELD_PERIOD):
+                builder.Connect(zero, builder.AddSystem(ZeroOrderHold(period, 1)).get_input_port())
     else:
         controller = builder.AddSystem(DriveController(robot.drive))
         selector = builder.AddSystem(MatrixGain(plant.MakeStateSelectorMatrix(

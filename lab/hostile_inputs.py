@@ -204,12 +204,12 @@ OVERRIDES = [
     # the plant and the simulator
     _override("step 1e-7", "plant_config: {time_step: 1e-7}", STEP, "[0.0001, 0.02] s"),
     _override("step 1 s", "plant_config: {time_step: 1.0}", STEP, "[0.0001, 0.02] s"),
-    _override("step 0 without CENIC", "plant_config: {time_step: 0}",
+    _override("a continuous plant without CENIC",
+              "simulator_config: {integration_scheme: runge_kutta3}",
               "simulator_config.integration_scheme", "needs cenic"),
-    _override("CENIC on a discrete plant", "simulator_config: {integration_scheme: cenic}", STEP,
+    _override("CENIC on a discrete plant", "plant_config: {time_step: 0.01}", STEP,
               "cenic needs a continuous plant"),
-    _override("CENIC step 1 s", "{plant_config: {time_step: 0}, simulator_config: "
-              "{integration_scheme: cenic, max_step_size: 1.0}}",
+    _override("CENIC step 1 s", "simulator_config: {max_step_size: 1.0}",
               "simulator_config.max_step_size", "[0.0001, 0.02] s"),
     _override("step negative", "plant_config: {time_step: -0.01}", STEP, "got -0.01"),
     _override("step inf", "plant_config: {time_step: .inf}", STEP, "got inf"),

@@ -29,7 +29,7 @@ from pathlib import Path
 
 import pytest
 
-from corobot_drake.config.scenario import load_scenario
+from corobot_drake.config.scenario import CENIC_PLANT, SAP_PLANT, load_scenario
 from corobot_drake.resources import DEFAULT_SCENARIO
 from corobot_drake.simulation import Simulation, quiet_drake_warnings
 from lab.processes import children_by_parent, descendants
@@ -283,6 +283,12 @@ def ray_head():
         ray.shutdown()
     cluster.shutdown()
     SESSION_PROCESSES.difference_update(started)
+
+
+SAP = SAP_PLANT % 0.01
+"""Override: SAP's discrete plant at 10 ms, for tests of what it does that CENIC does not."""
+CENIC = CENIC_PLANT % 0.01
+"""Override: the default's CENIC at 10 ms, for tests that compare the two."""
 
 
 def make_sim(*overrides: str, scenario: Path = DEFAULT_SCENARIO,

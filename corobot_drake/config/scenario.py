@@ -273,14 +273,21 @@ CENIC = "cenic"
 
 
 def _default_plant_config() -> MultibodyPlantConfig:
-    """A discrete plant stepped by SAP (`lagged`: the SAP family honours the wheels' servo
-    gains) every 10 ms. CENIC instead: `CENIC_PLANT` (docs/performance.md says what it
-    changes, and why it is not the default)."""
+    """A continuous plant, stepped by CENIC (`_default_simulator_config`); `lagged` is the
+    SAP approximation a discrete plant gets (`SAP_PLANT`: the SAP family honours the wheels'
+    servo gains)."""
     return MultibodyPlantConfig(
-        time_step=0.010,
+        time_step=0.0,
         discrete_contact_approximation="lagged",
         contact_model="hydroelastic_with_fallback",
     )
+
+
+def _default_simulator_config() -> SimulatorConfig:
+    """Drake's CENIC integrator at fixed 10 ms steps (docs/performance.md, "The integrator",
+    says what it changes from SAP's discrete plant, `SAP_PLANT`)."""
+    return SimulatorConfig(integration_scheme=CENIC, max_step_size=0.010,
+                           use_error_control=False)
 
 
 def physics_step(plant_config: MultibodyPlantConfig, simulator_config: SimulatorConfig
@@ -300,11 +307,11 @@ def continuous_step(plant_config: MultibodyPlantConfig, simulator_config: Simula
 SAP_PLANT = ("{plant_config: {time_step: %g}, "
              "simulator_config: {integration_scheme: runge_kutta3}}")
 """A scenario override (`SAP_PLANT % step`): a discrete plant stepped by SAP (the scenario's
-`discrete_contact_approximation`, `lagged` by default) every `step` s (the default's kind)."""
+`discrete_contact_approximation`, `lagged` by default) every `step` s."""
 CENIC_PLANT = ("{plant_config: {time_step: 0}, simulator_config: {integration_scheme: cenic, "
                "max_step_size: %g, use_error_control: false}}")
 """A scenario override (`CENIC_PLANT % step`): a continuous plant stepped by Drake's CENIC
-integrator at fixed `step` s (fewer instructions than SAP; what it changes:
+integrator at fixed `step` s (the default's kind; what it changes from SAP:
 docs/performance.md, "The integrator")."""
 
 
@@ -316,7 +323,7 @@ class Scenario:
     simulation_duration: float = bounded(math.inf, lim.SIMULATION_DURATION)
     """s; the CLI's --duration overrides it (.inf: until stopped)."""
     plant_config: MultibodyPlantConfig = dc.field(default_factory=_default_plant_config)
-    simulator_config: SimulatorConfig = dc.field(default_factory=SimulatorConfig)
+    simulator_config: SimulatorConfig = dc.field(default_factory=_default_simulator_config)
     world: World = dc.field(default_factory=World)
     directives: list[ModelDirective] = dc.field(default_factory=list)
     """Models from SDFormat, URDF or MJCF files, as Drake's `ModelDirectives` (`add_model`,

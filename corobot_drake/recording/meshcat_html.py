@@ -20,7 +20,10 @@ from pydrake.geometry import Meshcat, MeshcatParams
 from corobot_drake.station import visualization_config
 
 RECORDING_FPS = 1.0 / visualization_config().publish_period
-"""Animation frames per second: one per visualizer publish (64 Hz)."""
+"""Animation frames per second: Drake's visualizer publish rate (64 Hz). On a continuous
+plant they publish every 0.02 s (`station.meshcat_publish_period`): each publish still has a
+frame of its own (a frame is floor(t x 64)), and a frame keeps its publish's time to 1/64 s
+(50 Hz frames would put two publishes in one frame: floor(0.06 x 50) is 2)."""
 
 
 def offline_meshcat() -> Meshcat:

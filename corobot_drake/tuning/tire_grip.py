@@ -32,7 +32,7 @@ from corobot_drake.study import engine, finished
 ROBOT = "corobot"
 GRAVITY = 9.81
 LIMIT = f"robots.{ROBOT}.contact.effort_limit"
-STEP = "plant_config.time_step"
+STEP = "simulator_config.max_step_size"
 NEEDS = {"box": (f"{ROBOT}.max_tilt_deg",),
          "drive": (f"{ROBOT}.steady_speed", f"{ROBOT}.steady_yaw_rate")}
 """The metric columns `limits` reads (numbers in every ok run)."""

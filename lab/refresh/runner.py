@@ -21,9 +21,9 @@ ORDER = {DETERMINISTIC: 0, PICTURE: 1, TIMING: 2}
 CHECK_SECONDS = 30.0
 """`--check` without `--only` re-renders the deterministic blocks estimated to cost this or less."""
 NO_CAMERA = "robots: {corobot: {cameras: {front: {rgb: false}}}}"
-CENIC_OVERRIDE = ("{plant_config: {time_step: 0}, simulator_config: {integration_scheme: "
-                  "cenic, max_step_size: 0.01, use_error_control: false}}")
-"""`scenario.CENIC_PLANT` at 10 ms, as the command line writes it."""
+SAP_OVERRIDE = ("{plant_config: {time_step: 0.01}, simulator_config: {integration_scheme: "
+                "runge_kutta3}}")
+"""`scenario.SAP_PLANT` at 10 ms, as the command line writes it."""
 OLD_CHECKOUT = "/tmp/corobot-268a52c"
 """The checkout `bench_compare` measures against: `git worktree add /tmp/corobot-268a52c
 268a52c` (the commit before CENIC and the lean per-step path)."""

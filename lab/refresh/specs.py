@@ -8,11 +8,11 @@ from types import SimpleNamespace
 from lab.refresh import renders as r
 from lab.refresh.measures import measure_command
 from lab.refresh.runner import (
-    CENIC_OVERRIDE,
     DETERMINISTIC,
     OLD_CHECKOUT,
     ORDER,
     PICTURE,
+    SAP_OVERRIDE,
     TIMING,
     Command,
     Spec,
@@ -38,7 +38,7 @@ def _shared_commands() -> SimpleNamespace:
     bench_ir = Command("python tools/bench_ir.py")
     bench_raycast = Command("python tools/bench_raycast.py")
     bench_camera = Command("python tools/bench_camera.py")
-    default_column = Command('python tools/bench.py --plants "hydroelastic 10 ms" --seconds 5 '
+    default_column = Command('python tools/bench.py --plants "CENIC 10 ms" --seconds 5 '
                              '--repeats 5 --no-micro', repeats=3)
     pictures = [
         ("readme-picture-drive-test", "Drive test path", "drive_test.png",
@@ -178,11 +178,11 @@ def _performance_specs(c: SimpleNamespace) -> list[Spec]:
                       '--override "robots: {corobot: {drive: {control_period: 0.02}}}"'),),
              r.render_command_table, TIMING, 450),
         Spec("bench-compare", "docs/performance.md",
-             (Command(f"python tools/bench_compare.py --old {OLD_CHECKOUT} --rounds 3 "
-                      f"--new-override {shlex.quote(CENIC_OVERRIDE)}"),),
+             (Command(f"python tools/bench_compare.py --old {OLD_CHECKOUT} --rounds 3"),),
              r.render_bench_robots, TIMING, 600),
         Spec("bench-compare-sap", "docs/performance.md",
-             (Command("python tools/bench_compare.py --old /tmp/corobot-old --rounds 3"),),
+             (Command("python tools/bench_compare.py --old /tmp/corobot-old --rounds 3 "
+                      f"--new-override {shlex.quote(SAP_OVERRIDE)}"),),
              r.render_bench_robots, TIMING, 600),
         Spec("continuous-sensors", "docs/performance.md", (measure_command("continuous-sensors"),),
              r.render_continuous_sensors, DETERMINISTIC, 60),

@@ -1,9 +1,13 @@
 """The physics-only decomposition (`tools/bench.py --layers`) measures what the station runs."""
 
 import numpy as np
+import pytest
 
+from conftest import SAP
 from corobot_drake.simulation import Simulation
 from lab import bench_layers as bl
+
+INTEGRATORS = pytest.mark.parametrize("overrides", [(), (SAP,)], ids=["cenic", "sap"])
 
 
 def _plant_state(simulator) -> np.ndarray:
@@ -11,10 +15,11 @@ def _plant_state(simulator) -> np.ndarray:
     return plant.GetPositionsAndVelocities(plant.GetMyContextFromRoot(simulator.get_context()))
 
 
-def test_all_layers_step_the_station_bit_for_bit():
+@INTEGRATORS
+def test_all_layers_step_the_station_bit_for_bit(overrides):
     # The layers are wired as the station: with all of them the trajectory is the station's
     # exactly, so the last layer's cost is the station's cost and nothing is missing.
-    scenario = bl._scenario()
+    scenario = bl._scenario(*overrides)
     built = bl.build_layers(scenario, len(bl.LAYERS))
     built.simulator.AdvanceTo(1.0)
     sim = Simulation(scenario)
@@ -24,11 +29,12 @@ def test_all_layers_step_the_station_bit_for_bit():
     assert np.array_equal(_plant_state(built.simulator), expected)
 
 
-def test_the_plant_alone_steps_the_station_bit_for_bit():
+@INTEGRATORS
+def test_the_plant_alone_steps_the_station_bit_for_bit(overrides):
     # The floor is measured on the station's own driving (the desired state its drive gave
     # the plant at each step, replayed): the same physics, so what the station adds over it
     # is the robot's systems alone, not a different trajectory's contact problem.
-    scenario = bl._scenario()
+    scenario = bl._scenario(*overrides)
     built = bl.build_layers(scenario, 1, 1.0)
     built.simulator.AdvanceTo(1.0)
     sim = Simulation(scenario)

@@ -14,7 +14,7 @@ import pytest
 from google.protobuf import descriptor_pb2, descriptor_pool, message_factory
 from mcap.reader import make_reader
 
-from conftest import TWO_CAMERAS, make_sim
+from conftest import SAP, TWO_CAMERAS, make_sim
 from corobot_drake.cli import main
 from corobot_drake.config.scenario import load_scenario
 from corobot_drake.model import dimensions as dim
@@ -57,8 +57,10 @@ def _track(animation: dict, path: str, name: str) -> list:
     return next(t["keys"] for t in clip["tracks"] if t["name"] == name)
 
 
-def test_recording_is_a_self_contained_replay_of_the_run(tmp_path):
-    sim = Simulation(load_scenario(DEFAULT_SCENARIO, overrides=[CURVE]), record=True)
+@pytest.mark.parametrize("plant, period", [((), 0.02), ((SAP,), 1 / 64)], ids=["cenic", "sap"])
+def test_recording_is_a_self_contained_replay_of_the_run(tmp_path, plant, period):
+    """A frame per visualizer publish: Drake's 64 Hz, or on CENIC's steps every 0.02 s."""
+    sim = Simulation(load_scenario(DEFAULT_SCENARIO, overrides=[CURVE, *plant]), record=True)
     sim.advance(1.0)
     path = tmp_path / "run.html"
     size = sim.save_recording(path)
@@ -68,8 +70,7 @@ def test_recording_is_a_self_contained_replay_of_the_run(tmp_path):
     assert not re.search(r'<(script|link|img)[^>]+(src|href)="https?:', html)
     (animation,) = [m for m in _meshcat_messages(html) if m["type"] == "set_animation"]
     keys = _track(animation, "/drake/illustration/corobot/chassis", ".position")
-    # One frame per visualizer publish, at 0, 1/64, ..., 1 s.
-    assert len(keys) == round(1.0 * RECORDING_FPS) + 1
+    assert len(keys) == round(1.0 / period) + 1
     assert keys[-1]["time"] == round(1.0 * RECORDING_FPS)
     pose = sim.robot().pose()
     # The last frame is the robot where the run ended (published at t = 1 s exactly).
@@ -93,7 +94,8 @@ def test_recording_restarts_with_reset_and_carries_on_after_a_save(tmp_path):
                         if m["type"] == "set_animation"]
         counts.append(len(_track(animation, "/drake/illustration/corobot/chassis",
                                  ".position")))
-    assert counts == [33, 65, 17]  # 0.5, 1.0 and (after the reset) 0.25 s at 64 Hz, from 0
+    # 0.5, 1.0 and (after the reset) 0.24 s at 50 Hz (on CENIC's steps), from 0.
+    assert counts == [26, 51, 13]
 
 
 def test_save_recording_needs_record():
@@ -198,8 +200,9 @@ def test_mcap_has_every_topic_at_its_rate(mcap_run):
     # IR: the scans at 0, 0.05, ..., 0.95 s (the one at 1 s is taken when the run goes on).
     for topic in ("/ir/front", "/ir/front/rays", "/ir/rear", "/ir/rear/rays"):
         assert counts[topic] == 20, topic
-    # Camera at 30 Hz, captures at 0.0005 + k / 30 s out 30 ms later: k = 0..29 before 1 s.
-    assert counts["/camera/image/compressed"] == counts["/camera/camera_info"] == 30
+    # Camera at 30 Hz, taken on the first step at or after 0.0005 + k / 30 s and out 30 ms
+    # later: k = 0..28 before 1 s (k = 29's, taken at 0.97 s, is out at 1 s, the end).
+    assert counts["/camera/image/compressed"] == counts["/camera/camera_info"] == 29
     assert counts["/scene"] == 2  # at 0 and 1 s
 
 

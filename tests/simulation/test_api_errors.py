@@ -9,7 +9,7 @@ import threading
 import numpy as np
 import pytest
 
-from conftest import make_sim
+from conftest import CENIC, SAP, make_sim
 from corobot_drake.config import scenario as sc
 
 
@@ -237,7 +237,6 @@ def test_a_bounded_run_log_keeps_its_window_and_agrees_with_the_whole_one(monkey
     assert bounded.robot().run_log()[:, 0].tolist() == [0.0]  # the sample at the start
 
 
-CENIC = sc.CENIC_PLANT % 0.01
 
 
 def test_under_cenic_stops_within_rounding_of_a_step_are_on_it():
@@ -257,14 +256,14 @@ def test_under_cenic_stops_within_rounding_of_a_step_are_on_it():
     assert whole.robot().pose() == chunked.robot().pose()
     assert (whole.robot().run_log() == chunked.robot().run_log()).all()
     assert chunked.on_step(2.3) == 2.3000000000000003 and chunked.on_step(2.305) == 2.305
-    sap = make_sim(script)
+    sap = make_sim(script, SAP)
     assert sap.on_step(2.3) == 2.3 and sap.stop_time(2.3456) == 2.3456
 
 
-def test_under_cenic_a_loop_that_may_stop_anywhere_stops_on_steps(sim):
+def test_under_cenic_a_loop_that_may_stop_anywhere_stops_on_steps():
     """The server's and the Meshcat view's targets (wall-clock times) go to the last step at
     or before them on a continuous plant; a discrete plant stops where asked."""
-    cenic = make_sim(CENIC)
+    cenic, sim = make_sim(CENIC), make_sim(SAP)
     assert cenic.continuous and not sim.continuous
     assert cenic.stop_time(0.0333) == 0.03
     assert cenic.stop_time(0.04 - 1e-12) == 4 * 0.01  # rounding below a step is on it

@@ -17,10 +17,9 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from conftest import DEFAULT_SCENARIO, TWO_CAMERAS, make_sim
+from conftest import CENIC, DEFAULT_SCENARIO, SAP, TWO_CAMERAS, make_sim
 from corobot_drake.cli import main
 from corobot_drake.config.scenario import (
-    CENIC_PLANT,
     ScenarioError,
     load_scenario,
     physics_step,
@@ -156,11 +155,11 @@ def test_frames_are_lit_not_black():
     assert np.all(face.mean(axis=0) > 0.3 * BOX_RGB * 255)
 
 
-def test_frames_come_at_the_camera_rate_after_the_output_delay():
-    """The default camera is asynchronous: a frame captured at a tick (0.5 ms past each
-    1/fps, off the plant's steps) appears output_delay (0.03 s) later; before the first there
-    is none."""
-    sim = make_sim("robots: {corobot: {cameras: {front: {fps: 10}}}}", camera=True)
+def test_under_sap_frames_come_at_the_camera_rate_after_the_output_delay():
+    """On SAP's discrete plant the default camera is asynchronous: a frame captured at a tick
+    (0.5 ms past each 1/fps, off the plant's steps) appears output_delay (0.03 s) later;
+    before the first there is none."""
+    sim = make_sim("robots: {corobot: {cameras: {front: {fps: 10}}}}", SAP, camera=True)
     robot = sim.robot()
     assert robot.has_camera
     config = sim.scenario.robots["corobot"].cameras["front"]
@@ -213,15 +212,15 @@ SPIN_BY_THE_EDGE = ("robots: {corobot: {pose: {translation: [0.4, -1.0, 0], "
                     "commands: [!SetPower {left: -0.5, right: 0.5}]}}")
 
 
-def test_delayed_frames_show_the_scene_at_their_capture():
-    """The asynchronous frame captured at the 16th tick (0.5 ms past 16/30 s, between plant
+def test_under_sap_delayed_frames_show_the_scene_at_their_capture():
+    """SAP's asynchronous frame captured at the 16th tick (0.5 ms past 16/30 s, between plant
     steps) is, bit for bit, the synchronous camera's frame for that tick, and it appears
     0.03 s later. The robot spins in front of the box's edge, so consecutive frames differ."""
     sync = make_sim(SPIN_BY_THE_EDGE, "robots: {corobot: {cameras: {front: {output_delay: 0}}}}",
-                    camera=True)
+                    SAP, camera=True)
     sync.advance_to(0.545)
     assert sync.robot().camera_image_time() == pytest.approx(0.54)  # tick 16, on the next step
-    delayed = make_sim(SPIN_BY_THE_EDGE, camera=True)
+    delayed = make_sim(SPIN_BY_THE_EDGE, SAP, camera=True)
     tick = 0.0005 + 16.0 / 30.0
     delayed.advance_to(tick + 0.03 - 0.001)
     assert delayed.robot().camera_image_time() == pytest.approx(0.0005 + 15.0 / 30.0)
@@ -273,12 +272,12 @@ def test_cli_saves_numbered_frames(tmp_path, capsys):
 CIRCLE = "robots: {corobot: {commands: [!SetPower {left: 0.4, right: 0.8}]}}"
 
 
-def test_frames_taken_on_plant_steps_are_the_exact_time_images():
-    """The 30 Hz tick at 16/30 s falls between the 10 ms plant steps; the frame is taken at
-    the step at 0.54 s and is, bit for bit, what the sensor renders at exactly 16/30 s (the
-    scene only changes at steps). The robot spins in front of the box's edge, so
-    consecutive frames differ."""
-    sim = make_sim(SPIN_BY_THE_EDGE, NO_DELAY, camera=True)
+def test_under_sap_frames_taken_on_plant_steps_are_the_exact_time_images():
+    """The 30 Hz tick at 16/30 s falls between SAP's 10 ms plant steps; the frame is taken at
+    the step at 0.54 s and is, bit for bit, what the sensor renders at exactly 16/30 s (a
+    discrete plant's scene only changes at steps). The robot spins in front of the box's
+    edge, so consecutive frames differ."""
+    sim = make_sim(SPIN_BY_THE_EDGE, NO_DELAY, SAP, camera=True)
     assert physics_step(sim.scenario.plant_config, sim.scenario.simulator_config) == 0.01
     sensor = sim.station.diagram.GetSubsystemByName("corobot.camera.front")
     tick = 16.0 / 30.0
@@ -307,10 +306,6 @@ def test_the_synchronous_camera_adds_no_simulator_stops():
     sim = make_sim(CIRCLE, NO_DELAY, camera=True)
     sim.advance(1.005)
     assert sim.robot().camera_image_time() == pytest.approx(1.0)  # tick 30 on step 100
-
-
-CENIC = CENIC_PLANT % 0.01
-"""A continuous plant stepped by CENIC every 10 ms."""
 
 
 def test_under_cenic_the_camera_changes_nothing_of_the_motion():
@@ -434,9 +429,11 @@ def test_the_webcam_service_has_no_frame_before_the_first_output():
     sim = make_sim(camera=True)
     t, frame_time, image = calls.grab_frame("corobot", sim)
     assert image is None and math.isnan(frame_time) and t == 0.0
-    sim.advance_to(0.035)
+    sim.advance_to(0.035)  # the first frame, taken on the step at 10 ms, is out at 40 ms
+    assert calls.grab_frame("corobot", sim)[2] is None
+    sim.advance_to(0.045)
     t, frame_time, image = calls.grab_frame("corobot", sim)
-    assert t == pytest.approx(0.035) and frame_time == pytest.approx(0.0005)
+    assert t == pytest.approx(0.045) and frame_time == pytest.approx(0.01)
     assert image.shape == (dim.CAMERA_HEIGHT, dim.CAMERA_WIDTH, 3) and image.mean() > 50
 
 
@@ -484,7 +481,9 @@ def test_a_stale_display_is_replaced_by_a_private_xvfb(tmp_path):
                          capture_output=True, text=True, timeout=120, env=env)
     assert run.returncode == 0, run.stderr
     assert "DISPLAY=:987 cannot be opened" in run.stderr and "Traceback" not in run.stderr
-    assert len(list((tmp_path / "corobot").glob("*.png"))) == 3  # captures at 0.5, 33.8, 67.2 ms
+    # Taken on the steps at 10, 40 and 70 ms (the ticks 0.5, 33.8, 67.2 ms), each out 30 ms
+    # later and saved at the saver's next look: the third, out at 100 ms, the run's end, is not.
+    assert len(list((tmp_path / "corobot").glob("*.png"))) == 2
 
 
 def test_a_picture_mid_run_leaves_the_simulation_as_it_was():

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from pydrake.common.yaml import yaml_dump_typed
 
-from conftest import REPO, make_sim
+from conftest import REPO, SAP, make_sim
 from corobot_drake.cli import main
 from corobot_drake.config import scenario as sc
 from corobot_drake.config.scenario import load_scenario
@@ -334,28 +334,41 @@ def _wheel_angles(sim: Simulation) -> np.ndarray:
     return np.array([j.get_angle(plant_context) for j in sim.robot()._parts.wheel_joints])
 
 
-def test_a_saved_scene_keeps_the_odometry_and_the_hold_angles():
-    """The dead-reckoned odometry drifts from the true pose (4-12 mm on this curve); a saved scene
-    carries it on as it was (it once restarted at the true pose), and the drive's hold angles
-    (where a resting wheel is pulled back to: a few urad from where the ground pushed it).
-    Saved while driving between two updates, when the AllStop is due (1.0 s) and issued but
-    not yet taken (1.005 s), and at rest: each resumed run ends as the uninterrupted one.
-    Measured: the odometry to the bit, the wheel angles within 3e-9 rad (the hold's last
-    correction is not saved); without the hold angles they differed by 2e-6 rad."""
+@pytest.mark.parametrize("plant", [(), (SAP,)], ids=["cenic", "sap"])
+def test_a_saved_scene_keeps_the_odometry_and_the_hold_angles(plant):
+    """The dead-reckoned odometry drifts from the true pose (1-12 mm on this curve); a saved
+    scene carries it on as it was (it once restarted at the true pose), and the drive's hold
+    angles (where a resting wheel is pulled back to: a few urad from where the ground pushed
+    it). Saved while driving between two updates, when the AllStop is due (1.0 s) and issued
+    but not yet taken (1.005 s), and at rest: each resumed run ends as the uninterrupted one.
+
+    SAP, measured: the odometry to the bit, the wheel angles within 3e-9 rad (the hold's last
+    correction is not saved); without the hold angles they differed by 2e-6 rad. CENIC: a
+    scene saved while driving differs by about 1e-17 (the pose through YAML), and CENIC's
+    driving on slipping tyres grows that to 0.01-0.02 mm of odometry and 0.05-0.09 mm of
+    pose by the end (the same difference in the Simulator's own state does as much; a
+    re-initialized Simulator alone does nothing), inside the resume's 1 mm (docs/commands.md)
+    and far below the odometry's drift that a restart at the true pose would lose."""
     extra = STOP_SCRIPT.replace("left: 0.6", "left: 0.8")
-    sim, saves = fast_sim(extra=extra), {}
+    sim, saves = make_sim(_robot_yaml("closed_loop", extra), *plant), {}
     for t in (0.505, 1.0, 1.005, 3.0):
         sim.advance_to(t)
         saves[t] = _through_yaml(sim.saved_scenario())
     sim.advance_to(5.0)
-    again = _resumer("closed_loop")
+    again = make_sim(_robot_yaml("closed_loop"), *plant)
     for save, scenario in saves.items():
         robot = scenario.robots["corobot"]
         x, y, _ = robot.pose.translation
-        assert math.hypot(robot.odometry[0] - x, robot.odometry[1] - y) > 4e-3  # 4-12 mm
+        drift = math.hypot(robot.odometry[0] - x, robot.odometry[1] - y)
+        assert drift > 1e-3  # 2.7-12 mm (CENIC), 4-12 mm (SAP)
         again.reset(scenario)
         again.advance_to(5.0)
-        assert again.robot().odometry() == sim.robot().odometry(), save
+        odometry, expected = again.robot().odometry(), sim.robot().odometry()
+        if sim.continuous:
+            assert math.hypot(odometry.x - expected.x, odometry.y - expected.y) < 0.1 * drift
+            assert math.dist(again.robot().position(), sim.robot().position()) < 1e-3, save
+            continue
+        assert odometry == expected, save
         assert again.robot().pose().x == pytest.approx(sim.robot().pose().x, abs=1e-9), save
         np.testing.assert_allclose(_wheel_angles(again), _wheel_angles(sim), rtol=0,
                                    atol=1e-7, err_msg=str(save))
@@ -399,12 +412,13 @@ def test_drive_test_same_seed_same_numbers(tmp_path):
 
 
 def test_compass_agrees_with_the_chassis_yaw_after_a_long_drive():
-    """The plant's state quaternion drifts from unit norm; the compass must not care
+    """SAP's discrete plant lets its state quaternion drift from unit norm (CENIC's keeps it
+    normalized); the compass must not care
     (test_systems_odometry: a non-unit state quaternion). One turn and a drive take the norm
     0.5% off (measured: 0.0053; five turns and drives, 25 s, 1.9%): a compass that read the
     quaternion as a unit one (atan2 of its entries) would be off by ~2e-3 rad here, a
     thousand times the tolerance."""
-    sim = make_sim()
+    sim = make_sim(SAP)
     robot = sim.robot()
     robot.rotate_degrees(170, 0.5)
     robot.drive_distance(0.3, 0.5)
