@@ -120,13 +120,17 @@ def measure_event_times(repeats: int = 5, seconds: float = 10.0) -> dict:
 
 
 def measure_step_counts(seconds: float = 3.0) -> dict:
-    """Simulator steps per simulated second of the default scene driving (`_event_cases`):
-    the same on every machine."""
+    """Simulator steps per simulated second of the default scene driving (`_event_cases`),
+    under the default (CENIC) and SAP at 10 ms: the same on every machine."""
+    from corobot_drake.config.scenario import SAP_PLANT
+
     counts = {}
     for name, overrides in _event_cases().items():
-        sim = _driving(overrides)
-        sim.advance(seconds)
-        counts[name] = sim.simulator.get_num_steps_taken() / seconds
+        counts[name] = {}
+        for plant, extra in (("cenic", []), ("sap", [SAP_PLANT % 0.01])):
+            sim = _driving([*overrides, *extra])
+            sim.advance(seconds)
+            counts[name][plant] = sim.simulator.get_num_steps_taken() / seconds
     return counts
 
 
@@ -136,7 +140,7 @@ def measure_continuous_sensors(seconds: float = 9.0) -> dict:
     position at that scan, the largest differences (m) and how many readings differ by more
     than 1 mm; then, under CENIC, the camera on against off: simulator steps per simulated
     second and the chassis' distance apart (m) at the end."""
-    from corobot_drake.config.scenario import CENIC_PLANT, load_scenario
+    from corobot_drake.config.scenario import CENIC_PLANT, SAP_PLANT, load_scenario
     from corobot_drake.simulation import Simulation, quiet_drake_warnings
     from lab.bench import DRIVING, sensor_overrides
 
@@ -154,7 +158,7 @@ def measure_continuous_sensors(seconds: float = 9.0) -> dict:
         return out, sim.simulator.get_num_steps_taken() / seconds
 
     cenic, steps = scans(CENIC_PLANT % 0.01)
-    sap, _ = scans()
+    sap, _ = scans(SAP_PLANT % 0.01)
     reading = [abs(a[0][n] - b[0][n]) for a, b in zip(cenic, sap, strict=True) for n in a[0]]
     moved = [math.dist(a[1], b[1]) for a, b in zip(cenic, sap, strict=True)]
     with_camera, camera_steps = scans(CENIC_PLANT % 0.01, camera=True)
