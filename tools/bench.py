@@ -1,9 +1,9 @@
 """Real-time factors of the default scene, headless (run: python tools/bench.py).
 
 One run prints a markdown table: rows are the stacks (physics only; + 2 IR at 20 Hz; + camera at
-30 Hz; full stack = both), columns the plant settings (hydroelastic at 10 ms, the default and the
-tire-grip sweep's pick, and at 5, 2 and 1 ms; point contact at 10 ms; CENIC at 10 ms). Each
-cell simulates
+30 Hz; full stack = both), columns the plant settings (`lab.bench.PLANTS`: CENIC at 10 ms, the
+default, and at 5 and 2 ms; SAP's discrete plant at 10 and 2 ms; SAP with point contact at
+10 ms). Each cell simulates
 `--seconds` of the robot driving a figure of eight, `--repeats` times, and reports the median
 wall-clock real-time factor (the CPU-time one in parentheses: the machine may be shared). Then
 the IR cost per scan and the camera cost per frame, both measured in place (the extra wall time

@@ -4,8 +4,9 @@ Figures for the Corobot's camera (320 x 240, 30 deg vertical fov, sun + fill lig
 with each renderer (GL through an X display or a private Xvfb, the default here; VTK, through
 GLX when a display is available), in the default scene with the robot driving a circle: the
 render itself (`camera_frame_ms`), and what the camera adds to a simulation at 30 Hz
-(`camera_overhead_ms`), rendering in the simulation's thread or on a worker thread; both in
-`lab.bench_camera`. Prints a markdown table, medians of `--repeats` runs.
+(`camera_overhead_ms`) under CENIC (the default: on its steps) and under SAP, rendering in
+the simulation's thread or on a worker thread; both in `lab.bench_camera`. Prints a markdown
+table, medians of `--repeats` runs.
 """
 
 import statistics
@@ -18,6 +19,7 @@ from corobot_drake.arguments import (
     bounded,
     one_line_errors,
 )
+from corobot_drake.config.scenario import SAP_PLANT
 from corobot_drake.limits import Range
 from lab.bench_camera import RENDERERS, camera_frame_ms, camera_overhead_ms
 
@@ -48,13 +50,17 @@ def main(argv=None) -> int:
              dict(clock="wall", **frames), RENDERERS),
             ("render, CPU time (all threads)", camera_frame_ms, dict(clock="cpu", **frames),
              RENDERERS)]
-    for delay, label in ((0.0, "in the simulation's thread (output_delay 0)"),
-                         (None, "on a worker thread (the default, output_delay 0.03)")):
+    sap = (SAP_PLANT % 0.01,)
+    for plant, delay, label, renderers in (
+            ((), None, "CENIC (the default): on its steps, in the simulation's thread "
+             "(output_delay 0.03)", RENDERERS),
+            (sap, 0.0, "SAP: in the simulation's thread (output_delay 0)", RENDERERS),
+            (sap, None, "SAP: on a worker thread (output_delay 0.03)", ("RenderEngineGl",))):
         for clock in ("wall", "cpu"):
             rows.append((f"added to a simulation at 30 Hz, {label}, "
                          f"{'wall clock' if clock == 'wall' else 'CPU time'}",
-                         camera_overhead_ms, dict(clock=clock, delay=delay, **seconds),
-                         RENDERERS if delay == 0.0 else ("RenderEngineGl",)))
+                         camera_overhead_ms,
+                         dict(clock=clock, delay=delay, overrides=plant, **seconds), renderers))
     for label, fn, kwargs, renderers in rows:
         cells = [f"{median(fn, renderer=r, **kwargs):.2f}" if r in renderers else "-"
                  for r in args.renderers]

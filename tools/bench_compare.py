@@ -111,9 +111,8 @@ def main(argv=None) -> int:
     parser.add_argument("--cases", help="only cases containing this text (None: all)")
     parser.add_argument("--new-override", action="append", default=[],
                         help="scenario YAML merged on this checkout's runs (repeatable), e.g. "
-                             "CENIC: \"{plant_config: {time_step: 0}, simulator_config: "
-                             "{integration_scheme: cenic, max_step_size: 0.01, "
-                             "use_error_control: false}}\"")
+                             "SAP: \"{plant_config: {time_step: 0.01}, simulator_config: "
+                             "{integration_scheme: runge_kutta3}}\"")
     args = parser.parse_args(argv)
     if not (args.old / "corobot_drake").is_dir():
         parser.error(f"argument --old: {args.old} holds no corobot_drake/ package")

@@ -89,8 +89,8 @@ def main(argv=None) -> int:
     p.add_argument("--out", type=output_directory, help="study output directory for --seeds "
                    "(None: studies/drive_test_<profile>)")
     p.add_argument("--override", action="append", default=[], metavar="YAML",
-                   help="scenario YAML merged on the default scene (repeatable), e.g. CENIC: "
-                   f"\"{sc.CENIC_PLANT % 0.01}\"")
+                   help="scenario YAML merged on the default scene (repeatable), e.g. SAP: "
+                   f"\"{sc.SAP_PLANT % 0.01}\"")
     args = p.parse_args(argv)
     if args.seeds == 1:
         args.plot = args.plot or "drive_test.png"

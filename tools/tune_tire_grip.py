@@ -2,7 +2,7 @@
 """Picks the motor's effort limit by the worst case of the box flip.
 
 Runs `scenarios/studies/tire_grip.yaml` (per effort limit: into the giant box at half and full
-power, backwards and forwards, square and at 30 deg, plant steps 1-10 ms) and
+power, backwards and forwards, square and at 30 deg, CENIC steps 1-10 ms) and
 `tire_grip_drive.yaml` (straight speed and spin rate at full power) on the study engine, or
 reads them with `--from DIR`; prints a table per limit and the pick: no flip in the worst case
 (largest tilt below 20 deg), not slower on open ground, then the most margin

@@ -3,7 +3,7 @@
 Two studies, physics only (no camera, no IR):
 
 - `scenarios/studies/tire_grip.yaml`: per effort limit, the robot driven into the giant box at
-  half and full power, backwards and forwards, square and at 30 deg, at plant steps 1, 2, 5 and
+  half and full power, backwards and forwards, square and at 30 deg, at CENIC steps 1, 2, 5 and
   10 ms (the `box_approach` program): the largest tilt of each run. A limit's worst case is its
   largest tilt over all of them.
 - `scenarios/studies/tire_grip_drive.yaml`: per effort limit, the steady speed driving straight
@@ -176,7 +176,7 @@ def markdown(table: list[Limit], picked: Limit | None) -> str:
 
 
 def plot(rows: dict, path: Path) -> None:
-    """Largest tilt against the plant step, a panel per effort limit, a line per approach."""
+    """Largest tilt against the step, a panel per effort limit, a line per approach."""
     import matplotlib
 
     matplotlib.use("Agg")

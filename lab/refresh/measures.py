@@ -168,7 +168,37 @@ def measure_continuous_sensors(seconds: float = 9.0) -> dict:
             "camera_position_m": math.dist(with_camera[-1][1], cenic[-1][1])}
 
 
+BOX_PUSH_STEPS = (0.01, 0.005, 0.002, 0.001)
+"""s: the steps `measure_box_push` runs each integrator at."""
+
+
+def measure_box_push(seconds: float = 3.0) -> dict:
+    """How far the robot at power 0.5 pushes a free 2 kg, 0.2 m box on the ground in
+    `seconds` (m; the box starts 0.5 m ahead, the scene of tests/simulation/test_user_bodies.py),
+    per integrator and step (`BOX_PUSH_STEPS`): {"cenic": {step: m}, "sap": {step: m}}."""
+    from corobot_drake.config.scenario import CENIC_PLANT, SAP_PLANT, load_scenario
+    from corobot_drake.simulation import Simulation, quiet_drake_warnings
+
+    quiet_drake_warnings()
+    scene = ["robots: {corobot: {commands: [!SetPower {left: 0.5, right: 0.5}], "
+             "cameras: {front: {rgb: false}}}}",
+             "world: {bodies: {crate: {shape: !Box {size: [0.2, 0.2, 0.2]}, mass: 2.0, "
+             "pose: {translation: [0.5, 0.0, 0.1]}}}}"]
+    out = {}
+    for name, plant in (("cenic", CENIC_PLANT), ("sap", SAP_PLANT)):
+        out[name] = {}
+        for step in BOX_PUSH_STEPS:
+            sim = Simulation(load_scenario(DEFAULT_SCENARIO, overrides=[*scene, plant % step]))
+            sim.advance(seconds)
+            body = sim.station.bodies["crate"]
+            X = sim.station.plant.EvalBodyPoseInWorld(
+                sim.station.plant.GetMyContextFromRoot(sim.context), body)
+            out[name][f"{step:g}"] = float(X.translation()[0]) - 0.5
+    return out
+
+
 MEASUREMENTS = {
+    "box-push": measure_box_push,
     "continuous-sensors": measure_continuous_sensors,
     "ir-at-start": measure_ir_at_start,
     "saved-mid-drive": measure_saved_mid_drive,

@@ -184,6 +184,8 @@ def _performance_specs(c: SimpleNamespace) -> list[Spec]:
              (Command("python tools/bench_compare.py --old /tmp/corobot-old --rounds 3 "
                       f"--new-override {shlex.quote(SAP_OVERRIDE)}"),),
              r.render_bench_robots, TIMING, 600),
+        Spec("box-push", "docs/performance.md", (measure_command("box-push"),),
+             r.render_box_push, DETERMINISTIC, 60),
         Spec("continuous-sensors", "docs/performance.md", (measure_command("continuous-sensors"),),
              r.render_continuous_sensors, DETERMINISTIC, 60),
         Spec("bench-full", "docs/performance.md",
