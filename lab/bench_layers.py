@@ -32,7 +32,7 @@ import numpy as np
 from pydrake.common.yaml import yaml_dump_typed
 from pydrake.multibody.plant import AddMultibodyPlant
 from pydrake.systems.analysis import ApplySimulatorConfig, Simulator
-from pydrake.systems.framework import DiagramBuilder
+from pydrake.systems.framework import DiagramBuilder, LeafSystem
 from pydrake.systems.primitives import (
     ConstantVectorSource,
     MatrixGain,
@@ -61,6 +61,11 @@ LAYERS = ("plant alone (the station's desired state replayed)",
           "+ chassis poses, encoders, compass, GPS, drive state",
           "+ command source and motion (the script)", "+ dead reckoning", "+ tilt monitor",
           "+ wheel contacts and tip margin", "+ run log (with the contact telemetry)")
+IDLE_UPDATES = 5
+"""The station's Python updates per step and robot (drive controller, command source, motion,
+dead reckoning, tilt monitor)."""
+IDLE = f"plant alone + {IDLE_UPDATES} Python updates per step that do nothing"
+"""A row of the floor the station's design sets: Drake's dispatch of that many Python updates."""
 STATION = "the station (Simulation, physics only)"
 VARIANTS = {
     "the station, `use_sampled_output_ports: false` (same trajectory)":
@@ -97,9 +102,20 @@ class _Layered:
     """set_command(root context, seq, SetPower): what the fixed inputs get at a segment."""
 
 
-def build_layers(scenario: sc.Scenario, layers: int, seconds: float = 10.0) -> _Layered:
+class _Idle(LeafSystem):
+    """A Python update every `period` s that does nothing (one number of discrete state)."""
+
+    def __init__(self, period: float):
+        super().__init__()
+        self.DeclareDiscreteState(1)
+        self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, lambda context, state: None)
+
+
+def build_layers(scenario: sc.Scenario, layers: int, seconds: float = 10.0,
+                 idle_updates: int = 0) -> _Layered:
     """The default scene's plant with the first `layers` of `LAYERS` (1: the plant alone, fed
-    the station's desired state over its first `seconds`: `station_desired_state`)."""
+    the station's desired state over its first `seconds`: `station_desired_state`), and
+    `idle_updates` Python updates per physics step that do nothing (`_Idle`)."""
     builder = DiagramBuilder()
     plant, _ = AddMultibodyPlant(scenario.plant_config, builder)
     _add_world(plant, scenario.world)
@@ -143,6 +159,8 @@ def build_layers(scenario: sc.Scenario, layers: int, seconds: float = 10.0) -> _
         _add_robot_layers(builder, plant, name, robot, chassis, joints, selector, controller,
                           layers, fixed,
                           sc.continuous_step(scenario.plant_config, scenario.simulator_config))
+    for _ in range(idle_updates):
+        builder.AddSystem(_Idle(sc.physics_step(scenario.plant_config, scenario.simulator_config)))
     diagram = builder.Build()
     simulator = Simulator(diagram)
     ApplySimulatorConfig(scenario.simulator_config, simulator)
@@ -232,9 +250,10 @@ def _add_robot_layers(builder, plant, name, robot, chassis, joints, selector, co
                     {port: contacts.GetOutputPort(port) for port, _ in SAMPLED})
 
 
-def _cpu_seconds(layers: int | None, scenario: sc.Scenario, seconds: float) -> float:
+def _cpu_seconds(layers: int | None, scenario: sc.Scenario, seconds: float,
+                 idle_updates: int = 0) -> float:
     """CPU s to simulate `seconds` of the figure of eight with the first `layers` of `LAYERS`
-    (None: the station itself), building excluded."""
+    (None: the station itself) and `idle_updates` (`build_layers`), building excluded."""
     if layers is None:
         from corobot_drake.simulation import Simulation
 
@@ -242,7 +261,7 @@ def _cpu_seconds(layers: int | None, scenario: sc.Scenario, seconds: float) -> f
         start = time.process_time()
         sim.advance(seconds)
         return time.process_time() - start
-    built = build_layers(scenario, layers, seconds)
+    built = build_layers(scenario, layers, seconds, idle_updates)
     context = built.simulator.get_mutable_context()
     segments = [*_segments(scenario.robots[bench.ROBOT]), (seconds, None)]
     start = time.process_time()
@@ -260,13 +279,14 @@ def layer_costs(seconds: float, repeats: int, progress=None) -> dict[str, tuple[
     second}; the rows run in turn, `repeats` rounds. The least is the run least disturbed by
     other work on a shared machine (contention only adds CPU time: cache and memory bandwidth).
     `progress()` is called after each run."""
-    rows = [(name, i + 1, _scenario()) for i, name in enumerate(LAYERS)]
-    rows += [(STATION, None, _scenario())]
-    rows += [(name, None, _scenario(override)) for name, override in VARIANTS.items()]
-    runs = {name: [] for name, _, _ in rows}
+    rows = [(name, i + 1, _scenario(), 0) for i, name in enumerate(LAYERS)]
+    rows += [(STATION, None, _scenario(), 0)]
+    rows += [(name, None, _scenario(override), 0) for name, override in VARIANTS.items()]
+    rows += [(IDLE, 1, _scenario(), IDLE_UPDATES)]
+    runs = {name: [] for name, _, _, _ in rows}
     for _ in range(repeats):
-        for name, layers, scenario in rows:
-            runs[name].append(_cpu_seconds(layers, scenario, seconds) / seconds * 1000)
+        for name, layers, scenario, idle in rows:
+            runs[name].append(_cpu_seconds(layers, scenario, seconds, idle) / seconds * 1000)
             if progress:
                 progress()
     return {name: (statistics.median(values), min(values)) for name, values in runs.items()}

@@ -43,3 +43,16 @@ def test_the_plant_alone_steps_the_station_bit_for_bit(overrides):
     expected = plant.GetPositionsAndVelocities(plant.GetMyContextFromRoot(sim.context))
     assert np.array_equal(_plant_state(built.simulator), expected)
     assert expected[4] > 0.3  # it drove: 0.49 m/s mean rim speed for most of a second
+
+
+def test_idle_python_updates_leave_the_plant_alone_s_steps():
+    # The floor row adds Python updates that do nothing: the same steps and trajectory, so
+    # what it adds over the plant alone is Drake's dispatch of those updates alone.
+    scenario = bl._scenario()
+    runs = []
+    for idle in (0, bl.IDLE_UPDATES):
+        built = bl.build_layers(scenario, 1, 1.0, idle_updates=idle)
+        built.simulator.AdvanceTo(1.0)
+        runs.append((built.simulator.get_num_steps_taken(), _plant_state(built.simulator)))
+    assert runs[0][0] == runs[1][0] == 102
+    assert np.array_equal(runs[0][1], runs[1][1])
