@@ -40,12 +40,13 @@ def rows() -> list[str]:
     return [*bench_layers.LAYERS, STATION]
 
 
-PLANT_STEPS = ("MultibodyPlant<double>::CalcStepUnrestricted",
+PLANT_STEPS = ("CenicIntegrator<double>::DoStep",
+               "MultibodyPlant<double>::CalcStepUnrestricted",
                "MultibodyPlant<double>::CalcStepDiscrete")
-"""The plant's step (its contact problem, the solve, the new state): with sampled output ports
-(Drake's default) an unrestricted update, without them a discrete one. Callgrind's inclusive
-count of it is the plant's share of a row; the rest is the framework's and the project's
-systems'."""
+"""The plant's step (its contact problem, the solve, the new state): CENIC's step on a
+continuous plant; on SAP's discrete plant, with sampled output ports (Drake's default) an
+unrestricted update, without them a discrete one. Callgrind's inclusive count of it is the
+plant's share of a row; the rest is the framework's and the project's systems'."""
 
 
 def require_valgrind() -> None:

@@ -171,8 +171,10 @@ def _performance_specs(c: SimpleNamespace) -> list[Spec]:
              r.render_bench_robots, TIMING, 900),
         Spec("count-instructions", "docs/performance.md",
              (Command('python tools/count_instructions.py --cache-sim '
-                      '--override "plant_config: {discrete_contact_approximation: similar}" '
-                      '--override "plant_config: {use_sampled_output_ports: false}" '
+                      f'--override "{SAP_OVERRIDE}" '
+                      '--override "{plant_config: {time_step: 0.01, '
+                      'discrete_contact_approximation: similar}, simulator_config: '
+                      '{integration_scheme: runge_kutta3}}" '
                       '--override "robots: {corobot: {contact: {resolution_hint: 0.007}}}" '
                       '--override "world: {bodies: {giant_box: {fixed: true}}}" '
                       '--override "robots: {corobot: {drive: {control_period: 0.02}}}"'),),
