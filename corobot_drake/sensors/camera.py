@@ -2,22 +2,22 @@
 engine (or VTK headless).
 
 Each camera of a robot (a `pydrake.systems.sensors.CameraConfig`, the scenario field
-`robots.<robot>.cameras.<camera>`) becomes, in the diagram, with the default `output_delay`
-(0.03 s) and the GL engine:
+`robots.<robot>.cameras.<camera>`) becomes, in the diagram, on a continuous plant (CENIC, the
+default), or on SAP's discrete plant with `output_delay: 0` or VTK (which cannot render on a
+worker thread):
+
+- `<robot>.camera.<camera>`: an `RgbdSensor` (colour only; it renders when asked) and
+- `<robot>.camera.<camera>.hold`: `CameraHold`, which takes one frame per tick on the plant's
+  steps and holds it; under CENIC it keeps the output delay (default 0.03 s) on the steps too
+  (a capture between the steps would split a CENIC step and change the motion), without a
+  delay it also takes one at initialization;
+
+and on SAP's discrete plant with the default `output_delay` (0.03 s) and the GL engine:
 
 - `<robot>.camera.<camera>`: Drake's `RgbdSensorAsync` (colour only). At each tick
   (`capture_offset` + k / `fps`) it captures the poses and renders on a worker thread, with
   its own clone of the engine, while the simulation goes on; the frame comes out
-  `output_delay` later,
-
-and with `output_delay: 0`, or with VTK (which cannot render on that thread):
-
-- `<robot>.camera.<camera>`: an `RgbdSensor` (colour only; it renders when asked) and
-- `<robot>.camera.<camera>.hold`: `CameraHold`, which takes one frame at initialization and
-  one per tick, on the plant's steps, and holds it.
-
-On a continuous plant (CENIC) the camera is always the second kind, with the output delay held
-on the steps too: a capture between the steps would split a CENIC step and change the motion.
+  `output_delay` later.
 
 Either way the latest frame is exported as `<robot>.camera.<camera>.rgb_image` (ImageRgba8U;
 empty before the first) with `<robot>.camera.<camera>.image_time` (s, its capture; NaN before
@@ -375,11 +375,14 @@ def add_camera(site: SensorSite, name: str, config: CameraConfig,
     sky), and returns it; None when `config.rgb` is false. Cameras with the same
     `renderer_name` share the engine the first of them makes (`site.renderers`).
 
-    With `output_delay` > 0 and the GL engine, the camera is Drake's `RgbdSensorAsync`: each
-    frame renders on a worker thread (its own clone of the engine, which GL allows) while the
-    simulation goes on, and appears `output_delay` s after its capture. Otherwise (VTK cannot
-    render on that thread) it is an `RgbdSensor` and a `CameraHold` taking frames on the
-    plant's steps, with no delay. `save_rate`: Hz of saved frames (default: every frame)."""
+    On a continuous plant (CENIC, the default) it is an `RgbdSensor` and a `CameraHold`
+    taking each frame on the first step at or after its tick, in the simulation's thread, and
+    putting it out `output_delay` later on the steps (a render between the steps would split
+    one). On SAP's discrete plant, with `output_delay` > 0 and the GL engine, it is Drake's
+    `RgbdSensorAsync`: each frame renders on a worker thread (its own clone of the engine,
+    which GL allows) while the simulation goes on, and appears `output_delay` s after its
+    capture; otherwise (VTK cannot render on that thread) the `CameraHold` with no delay.
+    `save_rate`: Hz of saved frames (default: every frame)."""
     if not config.rgb:
         return None
     builder, plant, scene_graph = site.builder, site.plant, site.scene_graph

@@ -197,8 +197,45 @@ def measure_box_push(seconds: float = 3.0) -> dict:
     return out
 
 
+SPIN_STEPS = (0.001, 0.002, 0.005, 0.01)
+"""s: the steps `measure_spin_steps` runs each integrator at."""
+
+
+def measure_spin_steps(seconds: float = 3.0) -> dict:
+    """The default robot at full power on open ground (IR and camera off), per integrator and
+    step (`SPIN_STEPS`): the steady yaw rate spinning in place against the isotropic-Coulomb
+    prediction (`tuning.tire_grip.predicted_spin_rate`) and the steady straight speed (m/s),
+    the study metrics over the last second of `seconds`: {"cenic": {step: {"spin": ratio,
+    "speed": m/s}}, "sap": ...}."""
+    from corobot_drake.config.scenario import CENIC_PLANT, SAP_PLANT, load_scenario
+    from corobot_drake.model import dimensions as dim
+    from corobot_drake.simulation import Simulation, quiet_drake_warnings
+    from corobot_drake.study.metrics import METRICS, RobotRun
+    from corobot_drake.tuning.tire_grip import predicted_spin_rate
+    from lab.bench import physics_only_overrides
+
+    quiet_drake_warnings()
+    prediction = predicted_spin_rate(dim.MOTOR_TORQUE_SCALING * dim.WHEEL_RADIUS)
+
+    def steady(plant: str, left: float, metric: str) -> float:
+        sim = Simulation(load_scenario(DEFAULT_SCENARIO, overrides=[
+            *physics_only_overrides(), plant,
+            f"robots: {{corobot: {{commands: [!SetPower {{left: {left}, right: 1.0}}]}}}}"]))
+        robot = sim.robot()
+        start = robot.pose()
+        sim.advance(seconds)
+        return float(METRICS[metric](RobotRun(sim, robot, start, robot.heading())))
+
+    return {name: {f"{step:g}": {"spin": abs(steady(plant % step, -1.0, "steady_yaw_rate"))
+                                 / prediction,
+                                 "speed": steady(plant % step, 1.0, "steady_speed")}
+                   for step in SPIN_STEPS}
+            for name, plant in (("cenic", CENIC_PLANT), ("sap", SAP_PLANT))}
+
+
 MEASUREMENTS = {
     "box-push": measure_box_push,
+    "spin-steps": measure_spin_steps,
     "continuous-sensors": measure_continuous_sensors,
     "ir-at-start": measure_ir_at_start,
     "saved-mid-drive": measure_saved_mid_drive,

@@ -207,6 +207,21 @@ def render_box_push(outs) -> str:
             "3 s, by step:\n\n" + "\n".join(lines))
 
 
+def render_spin_steps(outs) -> str:
+    o = outs[0][0]
+    m = json_output(outs)
+    steps = list(m["cenic"])
+    head = "| integrator, figure | " + " | ".join(f"{1000 * float(h):g} ms" for h in steps) + " |"
+    lines = [head, "|---|" + "---|" * len(steps)]
+    for key, label in (("cenic", "CENIC"), ("sap", "SAP")):
+        lines.append(f"| {label}, spin / prediction | "
+                     + " | ".join(f"{m[key][h]['spin']:.3f}" for h in steps) + " |")
+        lines.append(f"| {label}, straight speed (m/s) | "
+                     + " | ".join(f"{m[key][h]['speed']:.4f}" for h in steps) + " |")
+    return (f"`{o.command}` (full power on open ground, the study metrics over the last of "
+            "3 s):\n\n" + "\n".join(lines))
+
+
 def _default_column(outs) -> tuple[list[str], list[list[float]], list[Output]]:
     """(stacks, wall RTF per stack per run, outputs) of the default-column runs."""
     runs = outs[0]

@@ -188,6 +188,8 @@ def _performance_specs(c: SimpleNamespace) -> list[Spec]:
              r.render_bench_robots, TIMING, 600),
         Spec("box-push", "docs/performance.md", (measure_command("box-push"),),
              r.render_box_push, DETERMINISTIC, 60),
+        Spec("spin-steps", "docs/tuning.md", (measure_command("spin-steps"),),
+             r.render_spin_steps, DETERMINISTIC, 60),
         Spec("continuous-sensors", "docs/performance.md", (measure_command("continuous-sensors"),),
              r.render_continuous_sensors, DETERMINISTIC, 60),
         Spec("bench-full", "docs/performance.md",
