@@ -115,8 +115,7 @@ def _front_end_specs(c: SimpleNamespace) -> list[Spec]:
              (Command("python examples/drive_legs.py --loops 1 --seed 1"),), r.render_drive_legs,
              TIMING, 45),
         Spec("server-flood", "docs/services.md",
-             (Command("python -m pytest -n 0 -s -q tests/service/test_server.py -k flood",
-                      ok=(0, 1)),),
+             (Command("python tools/bench_server_flood.py"),),
              r.render_server_flood, TIMING, 30),
         Spec("server-memory", "docs/services.md",
              (Command("python tools/bench_memory.py --sim-minutes 60 --warmup-minutes 1 "

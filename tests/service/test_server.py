@@ -5,20 +5,18 @@ One server serves the whole module (building the simulation takes seconds); test
 the robot's state put it back (set_pose / all_stop / enable) so they don't depend on order.
 """
 
-import concurrent.futures
-import contextlib
 import io
 import itertools
 import json
 import math
 import os
-import threading
 import time
 
 import httpx
 import pytest
 
 from corobot_drake.serving.serve import ServerProcess
+from lab import server_load
 from lab.processes import alive, children_by_parent, listening_sockets, sockets_held
 
 ROBOT = "/robots/corobot"
@@ -450,73 +448,18 @@ def test_malformed_flood_and_pollers_are_answered_and_the_simulation_runs_on(htt
     `server-flood` block.)"""
     reset(http, caps)
     http.post(f"{ROBOT}/drive/set_power", json={"left": 0.3, "right": -0.3})  # spin in place
-    stop = threading.Event()
-    polls = {"ok": 0, "bad": 0}
-    lock = threading.Lock()
     paths = [f"{ROBOT}/drive", f"{ROBOT}/drive/two_wheel", f"{ROBOT}/encoders", "/services"]
     if caps["ir"]:
         paths += [f"{ROBOT}/front_ir", f"{ROBOT}/rear_ir"]
-
-    def background() -> None:
-        """The load's clients stand for browsers on other machines: on this one they must
-        not take the simulation's CPU (Linux threads have their own nice value)."""
-        with contextlib.suppress(OSError, AttributeError):
-            os.setpriority(os.PRIO_PROCESS, threading.get_native_id(), 10)
-
-    def poller(i: int) -> None:
-        background()
-        with httpx.Client(base_url=server.url, timeout=30) as client:
-            n = 0
-            while not stop.is_set():
-                r = client.get(paths[(i + n) % len(paths)])
-                n += 1
-                with lock:
-                    polls["ok" if r.status_code == 200 else "bad"] += 1
-                time.sleep(0.1)
-
-    malformed = [
-        ("POST", f"{ROBOT}/drive/set_power", "{"),
-        ("POST", f"{ROBOT}/drive/set_power", '{"left": NaN, "right": 0}'),
-        ("POST", f"{ROBOT}/drive/set_power", '{"left": 7, "right": 0}'),
-        ("POST", f"{ROBOT}/drive/set_speed", '{"left": "x"}'),
-        ("POST", "/robots/ghost/drive/set_power", '{"left": 0, "right": 0}'),
-        ("GET", f"{ROBOT}/warp_drive", None),
-        ("POST", f"{ROBOT}/drive/enable", "\x00\xff garbage"),
-        ("DELETE", f"{ROBOT}/drive", None),
-    ]
-
-    def flood(k: int) -> list[int]:
-        background()
-        codes = []
-        with httpx.Client(base_url=server.url, timeout=30) as client:
-            for j in range(500):
-                method, path, body = malformed[(k * 500 + j) % len(malformed)]
-                codes.append(client.request(method, path, content=body, headers={
-                    "Content-Type": "application/json"}).status_code)
-                time.sleep(0.005)
-        return codes
-
     t0 = sim_time(http)
-    pollers = [threading.Thread(target=poller, args=(i,)) for i in range(20)]
-    for p in pollers:
-        p.start()
-    with concurrent.futures.ThreadPoolExecutor(2) as pool:
-        codes = [c for chunk in pool.map(flood, range(2)) for c in chunk]
+    answers = server_load.run(server.url, ROBOT, paths)
     deadline = time.monotonic() + 60
-    while True:  # until every poller has had its ten answers and the simulation moved on
-        with lock:
-            answered = polls["ok"] + polls["bad"]
-        if answered > 20 * 10 and sim_time(http) > t0:
-            break
-        assert time.monotonic() < deadline, f"{answered} polls answered in 60 s"
+    while sim_time(http) <= t0:  # it advances under the load
+        assert time.monotonic() < deadline, "the simulation stopped advancing"
         time.sleep(0.1)
-    stop.set()
-    for p in pollers:
-        p.join()
-    t1 = sim_time(http)
-    assert t1 > t0  # it advanced under the load
+    codes = answers.flood_codes
     assert len(codes) == 1000 and all(400 <= c < 500 for c in codes), set(codes)
-    assert polls["bad"] == 0 and polls["ok"] > 20 * 10
+    assert answers.polls_bad == 0 and answers.polls_ok > 20 * 10
     stats = http.get("/simulation").json()
     assert stats["running"] and stats["error"] is None
     http.post(f"{ROBOT}/drive/all_stop", json={})
