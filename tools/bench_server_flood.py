@@ -1,5 +1,4 @@
-"""Benchmark: the real-time factor a server keeps under a load (run: python
-tools/bench_server_flood.py).
+"""Benchmark: a server's real-time factor under a flood (run: python tools/bench_server_flood.py).
 
 The default scenario served headless in real time, the robot spinning in place; its real-time
 factor with no load, then while 20 clients poll its state every 0.1 s and 2 clients send 1000
