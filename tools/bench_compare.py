@@ -26,6 +26,7 @@ IMPORT_BENCH = ("try:\n    from lab import bench\n"
                 "except ImportError:  # a checkout from before the lab left the package\n"
                 "    from corobot_drake.analysis import bench\n")
 """The benchmarks' module in either checkout."""
+DRIVE_TEST = "20-seed drive tests per hour (3 loops, 2 Ray workers: tools/drive_test.py)"
 CASES = {
     "physics only": IMPORT_BENCH +
                     "r = bench.realtime_factor([*bench.physics_only_overrides(), *{overrides}], "
@@ -50,9 +51,21 @@ CASES = {
         "    if terminated or truncated:\n        env.reset()\n"
         "print(json.dumps({{'wall': {steps} / (time.perf_counter() - wall), "
         "'cpu': {steps} / (time.process_time() - cpu)}}))",
+    DRIVE_TEST:
+        "import subprocess, sys, tempfile, time\n"
+        "with tempfile.TemporaryDirectory() as out:\n"
+        "    wall = time.perf_counter()\n"
+        "    subprocess.run([sys.executable, 'tools/drive_test.py', '--loops', '3', '--seeds',\n"
+        "                    '20', '--workers', '2', '--out', out, '--plot', out + '/d.png',\n"
+        "                    *[a for o in {overrides} for a in ('--override', o)]],\n"
+        "                   check=True, capture_output=True)\n"
+        "print(json.dumps({{'wall': 3600 / (time.perf_counter() - wall), 'cpu': None}}))",
 }
 """Case -> the Python its process runs (printing one JSON line {wall, cpu}: rates, higher is
-faster); `{overrides}`: the checkout's scenario overrides (a list's repr)."""
+faster; cpu None where the work is in other processes); `{overrides}`: the checkout's
+scenario overrides (a list's repr)."""
+DEFAULT_CASES = tuple(c for c in CASES if c != DRIVE_TEST)
+"""The cases run unless `--cases` names others (the drive test takes minutes a run)."""
 
 
 def run_case(checkout: Path, case: str, seconds: float, steps: int,
@@ -70,7 +83,7 @@ def run_case(checkout: Path, case: str, seconds: float, steps: int,
     return json.loads(done.stdout.strip().splitlines()[-1])
 
 
-def compare(old: Path, rounds: int, seconds: float, steps: int, cases=tuple(CASES),
+def compare(old: Path, rounds: int, seconds: float, steps: int, cases=DEFAULT_CASES,
             new_overrides: list[str] = (), progress=None) -> dict:
     """{case: {"old": [runs], "new": [runs]}} of `cases`, `rounds` interleaved rounds; this
     checkout's runs with `new_overrides`."""
@@ -85,15 +98,28 @@ def compare(old: Path, rounds: int, seconds: float, steps: int, cases=tuple(CASE
     return runs
 
 
+def _median(values: list) -> float | None:
+    return None if None in values else statistics.median(values)
+
+
+def _ratio(new: float | None, old: float | None) -> float | None:
+    return None if new is None or old is None else new / old
+
+
+def _cpu(value: float | None, unit: str = "") -> str:
+    """" (CPU)" of a table cell; nothing where the case has no CPU figure."""
+    return "" if value is None else f" ({value:.2f}{unit})"
+
+
 def table(runs: dict) -> str:
     lines = ["| case | old, wall (CPU), median | new, wall (CPU), median | new / old, wall "
              "(CPU) |", "|---|---|---|---|"]
     for case, by in runs.items():
-        median = {label: [statistics.median(r[key] for r in by[label]) for key in ("wall", "cpu")]
+        median = {label: [_median([r[key] for r in by[label]]) for key in ("wall", "cpu")]
                   for label in ("old", "new")}
         o, n = median["old"], median["new"]
-        lines.append(f"| {case} | {o[0]:.2f} ({o[1]:.2f}) | {n[0]:.2f} ({n[1]:.2f}) | "
-                     f"{n[0] / o[0]:.2f}x ({n[1] / o[1]:.2f}x) |")
+        lines.append(f"| {case} | {o[0]:.2f}{_cpu(o[1])} | {n[0]:.2f}{_cpu(n[1])} | "
+                     f"{n[0] / o[0]:.2f}x{_cpu(_ratio(n[1], o[1]), 'x')} |")
     return "\n".join(lines)
 
 
@@ -116,7 +142,8 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     if not (args.old / "corobot_drake").is_dir():
         parser.error(f"argument --old: {args.old} holds no corobot_drake/ package")
-    cases = [c for c in CASES if not args.cases or args.cases in c]
+    cases = [c for c in (CASES if args.cases else DEFAULT_CASES)
+             if not args.cases or args.cases in c]
     if not cases:
         parser.error(f"argument --cases: {args.cases!r} is in none of: {', '.join(CASES)}")
     runs = compare(args.old.resolve(), args.rounds, args.seconds, args.steps, cases,

@@ -182,6 +182,10 @@ def _performance_specs(c: SimpleNamespace) -> list[Spec]:
         Spec("bench-compare", "docs/performance.md",
              (Command(f"python tools/bench_compare.py --old {OLD_CHECKOUT} --rounds 9"),),
              r.render_bench_robots, TIMING, 600),
+        Spec("bench-compare-drive-test", "docs/performance.md",
+             (Command(f"python tools/bench_compare.py --old {OLD_CHECKOUT} --rounds 2 "
+                      "--cases 'drive test'"),),
+             r.render_bench_robots, TIMING, 700),
         Spec("bench-compare-sap", "docs/performance.md",
              (Command("python tools/bench_compare.py --old /tmp/corobot-old --rounds 3 "
                       f"--new-override {shlex.quote(SAP_OVERRIDE)}"),),
