@@ -346,9 +346,9 @@ def test_a_saved_scene_keeps_the_odometry_and_the_hold_angles(plant):
     correction is not saved); without the hold angles they differed by 2e-6 rad. CENIC: a
     scene saved while driving differs by about 1e-17 (the pose through YAML), and CENIC's
     driving on slipping tyres grows that to 0.01-0.02 mm of odometry and 0.05-0.09 mm of
-    pose by the end (the same difference in the Simulator's own state does as much; a
-    re-initialized Simulator alone does nothing), inside the resume's 1 mm (docs/commands.md)
-    and far below the odometry's drift that a restart at the true pose would lose."""
+    pose by the end (re-initializing the Simulator at the unchanged state changes nothing),
+    inside the resume's 1 mm (docs/commands.md) and far below the odometry's drift that a
+    restart at the true pose would lose."""
     extra = STOP_SCRIPT.replace("left: 0.6", "left: 0.8")
     sim, saves = make_sim(_robot_yaml("closed_loop", extra), *plant), {}
     for t in (0.505, 1.0, 1.005, 3.0):
