@@ -583,7 +583,6 @@ class Simulation:
         self.continuous_step = sc.continuous_step(scenario.plant_config,
                                                   scenario.simulator_config)
         """s: the continuous plant's step, to which stops and looks keep; 0 on a discrete one."""
-        self._continuous = self.continuous_step > 0
         self.run_log_window: float | None = run_log_window
         """s of run log kept in memory (the newest, plus up to `runlog.RUN_LOG_CHUNK`
         samples); None keeps the whole run. A long-running simulation (`--serve`) sets it so
@@ -738,14 +737,14 @@ class Simulation:
     def continuous(self) -> bool:
         """Whether the plant is continuous (stepped by CENIC): its motion then depends on
         where the Simulator stops, and every stop between its steps is a step of its own."""
-        return self._continuous
+        return self.continuous_step > 0
 
     def stop_time(self, t: float) -> float:
         """The time to stop at for a loop that may stop anywhere up to `t` (the server's
         wall clock, the Meshcat view): `t` on a discrete plant; on a continuous one its last
         physics step at or before `t` (on Drake's grid: `on_step`), so that such a loop
         changes nothing of the motion."""
-        if not self._continuous:
+        if not self.continuous_step:
             return t
         return self.on_step(math.floor(t / self._physics_step + STEP_ROUNDING)
                             * self._physics_step)
@@ -754,7 +753,7 @@ class Simulation:
         """`t`, or on a continuous plant, when it is within `STEP_ROUNDING` of a physics
         step k h, that step's time as Drake computes its events' (k * h), so that stopping
         there adds no step (0.1 x 3 is not 0.01 x 30 in floating point)."""
-        if not self._continuous:
+        if not self.continuous_step:
             return t
         k = round(t / self._physics_step)
         return k * self._physics_step if abs(t / self._physics_step - k) < STEP_ROUNDING else t

@@ -21,6 +21,7 @@ import math
 
 import numpy as np
 
+from corobot_drake.config.scenario import SAP_PLANT
 from corobot_drake.model import dimensions as dim
 from corobot_drake.model.sdf import WheelContact
 from corobot_drake.resources import DEFAULT_SCENARIO
@@ -159,35 +160,34 @@ def worst_prediction(angles: np.ndarray, rates: np.ndarray, seconds: float,
     return float(candidates[best]), float(rotations[best])
 
 
-SAP = ("{{plant_config: {{time_step: 0.01}}, simulator_config: {{integration_scheme: "
-       "runge_kutta3}}}}")
-"""`scenario.SAP_PLANT` at 10 ms as a template (its braces doubled)."""
+SAP = SAP_PLANT % 0.01
+"""SAP's discrete plant at 10 ms (`scenario.SAP_PLANT`)."""
 ISOLATION = (
     ("shipped (CENIC, 10 ms, hydroelastic, servo damping 10 N m s/rad)", ()),
-    ("servo damping 1 N m s/rad", ("robots: {{{robot}: {{contact: {{servo_damping: 1}}}}}}",)),
+    ("servo damping 1 N m s/rad", ("robots: {{robot}: {contact: {servo_damping: 1}}}",)),
     ("servo damping 100 N m s/rad",
-     ("robots: {{{robot}: {{contact: {{servo_damping: 100}}}}}}",)),
+     ("robots: {{robot}: {contact: {servo_damping: 100}}}",)),
     ("servo damping 1000 N m s/rad",
-     ("robots: {{{robot}: {{contact: {{servo_damping: 1000}}}}}}",)),
-    ("CENIC step 1 ms", ("simulator_config: {{max_step_size: 0.001}}",)),
-    ("CENIC step 5 ms", ("simulator_config: {{max_step_size: 0.005}}",)),
+     ("robots: {{robot}: {contact: {servo_damping: 1000}}}",)),
+    ("CENIC step 1 ms", ("simulator_config: {max_step_size: 0.001}",)),
+    ("CENIC step 5 ms", ("simulator_config: {max_step_size: 0.005}",)),
     ("SAP (lagged, 10 ms)", (SAP,)),
     ("SAP, approximation similar",
-     (SAP, "plant_config: {{discrete_contact_approximation: similar}}")),
-    ("SAP, approximation sap", (SAP, "plant_config: {{discrete_contact_approximation: sap}}")),
+     (SAP, "plant_config: {discrete_contact_approximation: similar}")),
+    ("SAP, approximation sap", (SAP, "plant_config: {discrete_contact_approximation: sap}")),
     ("SAP, stiction tolerance 1e-6 m/s (Drake's default 1e-4)",
-     (SAP, "plant_config: {{stiction_tolerance: 1.0e-6}}")),
-    ("SAP, stiction tolerance 1e-2 m/s", (SAP, "plant_config: {{stiction_tolerance: 1.0e-2}}")),
-    ("Hunt-Crossley dissipation 0.5 s/m", ("robots: {{{robot}: {{contact: "
-     "{{hunt_crossley_dissipation: 0.5}}}}}}",)),
-    ("Hunt-Crossley dissipation 50 s/m", ("robots: {{{robot}: {{contact: "
-     "{{hunt_crossley_dissipation: 50}}}}}}",)),
-    ("tyre mesh 2.5 mm (152 facets)", ("robots: {{{robot}: {{contact: "
-     "{{resolution_hint: 0.0025}}}}}}",)),
-    ("point contact (an exact cylinder, no mesh)", ("plant_config: {{contact_model: point}}",)),
+     (SAP, "plant_config: {stiction_tolerance: 1.0e-6}")),
+    ("SAP, stiction tolerance 1e-2 m/s", (SAP, "plant_config: {stiction_tolerance: 1.0e-2}")),
+    ("Hunt-Crossley dissipation 0.5 s/m", ("robots: {{robot}: {contact: "
+     "{hunt_crossley_dissipation: 0.5}}}",)),
+    ("Hunt-Crossley dissipation 50 s/m", ("robots: {{robot}: {contact: "
+     "{hunt_crossley_dissipation: 50}}}",)),
+    ("tyre mesh 2.5 mm (152 facets)", ("robots: {{robot}: {contact: "
+     "{resolution_hint: 0.0025}}}",)),
+    ("point contact (an exact cylinder, no mesh)", ("plant_config: {contact_model: point}",)),
 )
-"""(change, override templates with `{robot}`): one change each from the shipped scenario
-(SAP's own settings under SAP)."""
+"""(change, override texts, `{robot}` standing for the robot's name): one change each from
+the shipped scenario (SAP's own settings under SAP)."""
 ISOLATION_SECONDS = 5.0
 
 
@@ -199,7 +199,7 @@ def isolate(progress=None, scenario=DEFAULT_SCENARIO) -> list[tuple[str, float, 
     name = next(iter(load_scenario(scenario).robots))
     rows = []
     for label, templates in ISOLATION:
-        overrides = [t.format(robot=name) for t in templates]
+        overrides = [t.replace("{robot}", name) for t in templates]
         contact = next(iter(load_scenario(scenario, overrides=overrides).robots.values())).contact
         start = 0.25 * facet_angle(contact)
         run = rest_run(start, ISOLATION_SECONDS, hold=False, scenario=scenario,

@@ -14,6 +14,8 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
+from corobot_drake.config.scenario import SAP_PLANT
+
 REPO = Path(__file__).resolve().parents[2]
 DOCS = ("README.md", *sorted(f"docs/{p.name}" for p in (REPO / "docs").glob("*.md")))
 DETERMINISTIC, PICTURE, TIMING = "deterministic", "picture", "timing"
@@ -21,8 +23,7 @@ ORDER = {DETERMINISTIC: 0, PICTURE: 1, TIMING: 2}
 CHECK_SECONDS = 30.0
 """`--check` without `--only` re-renders the deterministic blocks estimated to cost this or less."""
 NO_CAMERA = "robots: {corobot: {cameras: {front: {rgb: false}}}}"
-SAP_OVERRIDE = ("{plant_config: {time_step: 0.01}, simulator_config: {integration_scheme: "
-                "runge_kutta3}}")
+SAP_OVERRIDE = SAP_PLANT % 0.01
 """`scenario.SAP_PLANT` at 10 ms, as the command line writes it."""
 OLD_CHECKOUT = "/tmp/corobot-268a52c"
 """The checkout `bench_compare` measures against: `git worktree add /tmp/corobot-268a52c

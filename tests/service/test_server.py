@@ -448,9 +448,7 @@ def test_malformed_flood_and_pollers_are_answered_and_the_simulation_runs_on(htt
     `server-flood` block.)"""
     reset(http, caps)
     http.post(f"{ROBOT}/drive/set_power", json={"left": 0.3, "right": -0.3})  # spin in place
-    paths = [f"{ROBOT}/drive", f"{ROBOT}/drive/two_wheel", f"{ROBOT}/encoders", "/services"]
-    if caps["ir"]:
-        paths += [f"{ROBOT}/front_ir", f"{ROBOT}/rear_ir"]
+    paths = [p for p in server_load.POLL_PATHS if caps["ir"] or not p.endswith("_ir")]
     t0 = sim_time(http)
     answers = server_load.run(server.url, ROBOT, paths)
     deadline = time.monotonic() + 60
