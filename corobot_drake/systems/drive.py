@@ -11,7 +11,7 @@ import math
 import numpy as np
 from pydrake.common.containers import namedview
 from pydrake.common.value import Value
-from pydrake.systems.framework import LeafSystem
+from pydrake.systems.framework import EventStatus, LeafSystem
 
 from corobot_drake.config.scenario import (
     COMPLETING_COMMANDS,
@@ -195,16 +195,16 @@ class CommandSource(LeafSystem):
             if last.command in _COMPLETING_NAMES:
                 reason = ("disabled" if isinstance(command, Enable) and not command.enabled
                           else "superseded")
-                log[last_index] = dc.replace(last, end_time=time, status="failed",
+                log[last_index] = last.replace(end_time=time, status="failed",
                                              reason=reason)
             else:
-                log[last_index] = dc.replace(last, end_time=time, status="succeeded")
+                log[last_index] = last.replace(end_time=time, status="succeeded")
         seq = state.request.seq + 1
         log.append(CommandRecord(seq=seq, command=command_name(command), start_time=time))
         enabled = command.enabled if isinstance(command, Enable) else state.request.enabled
         request = DriveRequest(seq, command, time, enabled)
         teleport = request if isinstance(command, SetPose) else state.teleport
-        return dc.replace(state, request=request, log=_bounded(log), teleport=teleport)
+        return state.replace(request=request, log=_bounded(log), teleport=teleport)
 
     @staticmethod
     def _with_status(state: CommandSourceState, status: CommandStatus) -> CommandSourceState:
@@ -217,9 +217,9 @@ class CommandSource(LeafSystem):
                 if record.end_time is not None:
                     return state
                 log = list(state.log)
-                log[i] = dc.replace(record, end_time=status.time, status=status.status,
+                log[i] = record.replace(end_time=status.time, status=status.status,
                                     reason=status.reason)
-                return dc.replace(state, log=tuple(log))
+                return state.replace(log=tuple(log))
         return state
 
     @staticmethod
@@ -237,14 +237,14 @@ class CommandSource(LeafSystem):
             if r.seq == 0:  # a Wait: the script is held until script_blocked_until
                 if now < state.script_blocked_until - 1e-12:
                     continue
-                ended = dc.replace(r, end_time=state.script_blocked_until, status="succeeded")
+                ended = r.replace(end_time=state.script_blocked_until, status="succeeded")
             elif r.command in _MOTION_LEVEL_NAMES and not state.request.enabled:
-                ended = dc.replace(r, end_time=now, status="failed", reason="disabled")
+                ended = r.replace(end_time=now, status="failed", reason="disabled")
             else:
-                ended = dc.replace(r, end_time=now, status="succeeded")
+                ended = r.replace(end_time=now, status="succeeded")
             log = log or list(state.log)
             log[i] = ended
-        return state if log is None else dc.replace(state, log=tuple(log))
+        return state if log is None else state.replace(log=tuple(log))
 
     def _status(self, context) -> CommandStatus:
         if not self._status_port.HasValue(context):
@@ -279,7 +279,7 @@ class CommandSource(LeafSystem):
         state = self.get_state(context)
         if state.teleport is None:
             return None
-        self._set_state(context, dc.replace(state, teleport=None))
+        self._set_state(context, state.replace(teleport=None))
         return state.teleport
 
     def has_teleport(self, context) -> bool:
@@ -298,8 +298,12 @@ class CommandSource(LeafSystem):
         now = context.get_time()
         current = self._with_ended(self._with_status(original, self._status(context)), now)
         current = self._next_script_command(current, self.script(context), now)
-        if current is not original:
-            self._set_state(state, current)
+        if current is original:
+            # Drake then skips copying the state back (and what reads the request stays
+            # valid), when no other system's update at this step changed anything either.
+            return EventStatus.DidNothing()
+        self._set_state(state, current)
+        return EventStatus.Succeeded()
 
     def _initialize(self, context, state):
         """The script's commands up to its first Wait (even of 0 s: what follows it is
@@ -326,15 +330,15 @@ class CommandSource(LeafSystem):
                 or self._script_waiting(current)):
             return current
         command = script[current.next_script_index]
-        current = dc.replace(current, next_script_index=current.next_script_index + 1)
+        current = current.replace(next_script_index=current.next_script_index + 1)
         if isinstance(command, Wait):
             log = current.log
             if command.seconds > 0:  # a 0 s Wait only defers the rest to an update: no record
                 log = _bounded([*log, CommandRecord(seq=0, command="Wait", start_time=now)])
-            return dc.replace(current, script_blocked_until=now + command.seconds, log=log)
+            return current.replace(script_blocked_until=now + command.seconds, log=log)
         current = self._with_command(current, command, now)
         completing = isinstance(command, COMPLETING_COMMANDS)
-        return dc.replace(current, script_waits_for=current.request.seq if completing else 0)
+        return current.replace(script_waits_for=current.request.seq if completing else 0)
 
 
 _COMPLETING_NAMES = tuple(c.__name__ for c in COMPLETING_COMMANDS)
@@ -384,6 +388,11 @@ resting wheel at up to 3e-5 rad/s; a braking wheel turns far faster)."""
 HOLD_SLACK = 1e-4
 """rad: a held wheel pushed further than this from its hold angle is held where it is now
 instead (6 um at the rim: the most a hold ever pulls a wheel back)."""
+
+
+def _clip(value: float, limit: float) -> float:
+    """`value` within [-limit, limit], as a float."""
+    return float(min(max(value, -limit), limit))
 
 
 def _slew(axle: float, target: float, step: float) -> float:
@@ -457,18 +466,20 @@ class DriveController(LeafSystem):
     def target_for(self, command, enabled: bool) -> tuple[float, float, float, float] | None:
         """(power_l, power_r, axle_l, axle_r) a motion command asks for; None if not motion."""
         d = self._drive
+        # min/max, not np.clip: the same numbers at a sixtieth of the cost, and a closed-loop
+        # command sends a new request every control period.
         if isinstance(command, SetPower):
-            pl, pr = (float(np.clip(p, -1.0, 1.0)) for p in (command.left, command.right))
+            pl, pr = (_clip(p, 1.0) for p in (command.left, command.right))
             return pl, pr, pl * d.motor_torque_scaling, pr * d.motor_torque_scaling
         if isinstance(command, SetSpeed | SetVelocity):
             if isinstance(command, SetSpeed):
-                al, ar = (float(np.clip(v / dim.WHEEL_RADIUS, -d.max_axle_speed,
-                                        d.max_axle_speed)) for v in (command.left, command.right))
+                al, ar = (_clip(v / dim.WHEEL_RADIUS, d.max_axle_speed)
+                          for v in (command.left, command.right))
             else:
                 al, ar = self._velocity_axle_speeds(command)
             # The power a SetSpeed amounts to; past full power (axle speed above the
             # scaling) it reports 1: power is a fraction of the motor's range.
-            pl, pr = (float(np.clip(a / d.motor_torque_scaling, -1.0, 1.0)) for a in (al, ar))
+            pl, pr = (_clip(a / d.motor_torque_scaling, 1.0) for a in (al, ar))
             return pl, pr, al, ar
         if isinstance(command, AllStop):
             return 0.0, 0.0, 0.0, 0.0
@@ -539,17 +550,17 @@ class DriveController(LeafSystem):
             desired = context.get_discrete_state(self._desired)
             if all(desired[4 + k] == side for k, side in enumerate(sides)):
                 return None
-        return np.array(correction)
+        return correction
 
     def _set_axle(self, state, left: float, right: float, correction=None) -> None:
         """Writes the slewed axle speeds (rad/s) and the desired state made from them (plus
         the hold's v_d `correction`, rad/s per wheel) into `state` (a Context or
         DiscreteValues)."""
         state.set_value(self._axle, np.array([left, right]))
-        v_d = np.array([left, right, left, right])
+        v_d = [left, right, left, right]
         if correction is not None:
-            v_d = v_d + correction
-        state.set_value(self._desired, np.concatenate([np.zeros(4), v_d]))
+            v_d = [v + c for v, c in zip(v_d, correction, strict=True)]
+        state.set_value(self._desired, np.array([0.0, 0.0, 0.0, 0.0, *v_d]))
 
     def speeds(self, root_context) -> tuple[list[float], list[float]]:
         """(targets, commanded): the axle speeds [left, right] (rad/s) the drive slews towards

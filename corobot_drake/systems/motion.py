@@ -30,7 +30,7 @@ import dataclasses as dc
 import math
 
 from pydrake.common.value import Value
-from pydrake.systems.framework import LeafSystem
+from pydrake.systems.framework import EventStatus, LeafSystem
 
 from corobot_drake.config.scenario import SEED_WINDOW as SEED_WINDOW
 from corobot_drake.config.scenario import (
@@ -148,7 +148,7 @@ class MotionState(SharedState):
 def _count_still(a, at_goal: bool, frames: int):
     """The active command with its count of updates at rest on the goal (reset when it
     moves); True once it has held there for `frames` updates."""
-    a = dc.replace(a, still_frames=a.still_frames + 1 if at_goal else 0)
+    a = a.replace(still_frames=a.still_frames + 1 if at_goal else 0)
     return a, a.still_frames >= frames
 
 
@@ -235,12 +235,12 @@ class MotionCommands(LeafSystem):
         s = original
         request = self._request_port.Eval(context)
         if request.seq == s.handled_seq and s.active is None:
-            return  # nothing new, nothing running: the pose is not needed
+            return EventStatus.DidNothing()  # nothing new, nothing running
         now = context.get_time()
         x, y = (float(v) for v in self._position_port.Eval(context)[:2])
         heading = float(self._heading_port.Eval(context)[0])
         if request.seq != s.handled_seq:
-            s = dc.replace(s, handled_seq=request.seq, active=None)
+            s = s.replace(handled_seq=request.seq, active=None)
             command = request.command
             if isinstance(command, DriveDistance | RotateDegrees):
                 if not request.enabled:
@@ -249,7 +249,7 @@ class MotionCommands(LeafSystem):
                     s = self._start(s, request, command, (x, y, heading), now)
             elif isinstance(command, SetPose):
                 target = (command.x, command.y, math.radians(command.yaw_deg))
-                s = dc.replace(s, active=ActiveCommand(
+                s = s.replace(active=ActiveCommand(
                     request.seq, "pose", 0.0, 1.0, 0.0, target, now, heading))
                 s = self._emit(s, AllStop(), request, now)
             else:
@@ -258,8 +258,10 @@ class MotionCommands(LeafSystem):
             step = {"drive": self._step_drive, "rotate": self._step_rotate,
                     "pose": self._step_pose}[s.active.kind]
             s = step(s, request, x, y, heading, now)
-        if s is not original:
-            state.get_mutable_abstract_state(self._state_index).set_value(s)
+        if s is original:
+            return EventStatus.DidNothing()  # as `CommandSource._update`
+        state.get_mutable_abstract_state(self._state_index).set_value(s)
+        return EventStatus.Succeeded()
 
     @staticmethod
     def _emit(s: MotionState, command, request: DriveRequest, now: float,
@@ -270,12 +272,12 @@ class MotionCommands(LeafSystem):
         if (out.seq and out.command == command and out.enabled == request.enabled
                 and out.immediate == immediate):
             return s
-        return dc.replace(s, output=DriveRequest(out.seq + 1, command, now, request.enabled,
+        return s.replace(output=DriveRequest(out.seq + 1, command, now, request.enabled,
                                                  immediate))
 
     def _finish(self, s, request, seq, status, reason, now, immediate=False) -> MotionState:
         """Ends the active command with `status`; the wheels stop (at once if `immediate`)."""
-        s = dc.replace(s, active=None, status=CommandStatus(seq, status, reason, now))
+        s = s.replace(active=None, status=CommandStatus(seq, status, reason, now))
         return self._emit(s, AllStop(), request, now, immediate)
 
     def _start(self, s, request, command, pose, now) -> MotionState:
@@ -305,7 +307,7 @@ class MotionCommands(LeafSystem):
         active = ActiveCommand(request.seq, kind, target, sign, min(abs(power), 1.0), start,
                                now, heading, progress=progress, samples=samples,
                                stall_progress=progress, stall_time=now)
-        return dc.replace(s, active=active)
+        return s.replace(active=active)
 
     def _drive_progress(self, start, sign: float, x: float, y: float) -> float:
         """m towards a drive's goal from `start` (x0, y0, yaw0): the book's straight-line
@@ -320,7 +322,7 @@ class MotionCommands(LeafSystem):
     def _check_stall(self, s, a: ActiveCommand, request, now, threshold: float, moving: bool):
         """(state, active): failed `stalled` when progress < threshold for the stall time."""
         if abs(a.progress - a.stall_progress) >= threshold or not moving:
-            return s, dc.replace(a, stall_progress=a.progress, stall_time=now)
+            return s, a.replace(stall_progress=a.progress, stall_time=now)
         if now - a.stall_time >= self._motion.stall_time - 1e-9:
             return self._finish(s, request, a.seq, "failed", "stalled", now), None
         return s, a
@@ -335,7 +337,7 @@ class MotionCommands(LeafSystem):
         previous = a.progress
         seed = self._motion.profile == "seed"
         progress = self._drive_progress(a.start, a.sign, x, y)
-        a = dc.replace(a, progress=progress, heading=heading)
+        a = a.replace(progress=progress, heading=heading)
         remaining = a.target - progress
         cruise = a.power * self._drive.motor_torque_scaling  # axle rad/s
         if seed:
@@ -346,7 +348,7 @@ class MotionCommands(LeafSystem):
             if a is None:
                 return s
             axle = a.sign * a.scale * cruise
-            return self._set_power(dc.replace(s, active=a), request, axle, axle, now)
+            return self._set_power(s.replace(active=a), request, axle, axle, now)
         speed = (progress - previous) / self._period  # m/s towards the goal
         v = self._servo(remaining, speed, DRIVE_TOLERANCE, DRIVE_STILL_SPEED,
                         BRAKE_FRACTION * self._drive.slew_rate * dim.WHEEL_RADIUS, DRIVE_GAIN,
@@ -364,7 +366,7 @@ class MotionCommands(LeafSystem):
         if v != 0.0:
             correction = max(-HEADING_CORRECTION_LIMIT, min(
                 HEADING_CORRECTION_LIMIT, HEADING_GAIN * wrap(yaw0 - heading)))
-        return self._set_power(dc.replace(s, active=a), request, axle - correction,
+        return self._set_power(s.replace(active=a), request, axle - correction,
                                axle + correction, now)
 
     def _step_rotate(self, s, request, x, y, heading, now) -> MotionState:
@@ -372,7 +374,7 @@ class MotionCommands(LeafSystem):
         delta = wrap(heading - a.heading)
         previous = a.progress
         progress = previous + delta
-        a = dc.replace(a, progress=progress, heading=heading)
+        a = a.replace(progress=progress, heading=heading)
         remaining = a.target - progress
         cruise = a.power * self._drive.motor_torque_scaling  # axle rad/s
         if self._motion.profile == "seed":
@@ -386,7 +388,7 @@ class MotionCommands(LeafSystem):
             if a is None:
                 return s
             axle = a.sign * a.scale * cruise
-            return self._set_power(dc.replace(s, active=a), request, -axle, axle, now)
+            return self._set_power(s.replace(active=a), request, -axle, axle, now)
         rate = delta / self._period
         to_axle = 1.0 / (SPIN_YAW_PER_RIM_SPEED * dim.WHEEL_RADIUS)  # axle rad/s per yaw rad/s
         w = self._servo(remaining, rate, TURN_TOLERANCE, TURN_STILL_RATE,
@@ -401,7 +403,7 @@ class MotionCommands(LeafSystem):
         if a is None:
             return s
         axle = w * to_axle
-        return self._set_power(dc.replace(s, active=a), request, -axle, axle, now)
+        return self._set_power(s.replace(active=a), request, -axle, axle, now)
 
     def _seed_slowdown(self, a: ActiveCommand, remaining: float,
                        progress: float) -> ActiveCommand:
@@ -418,7 +420,7 @@ class MotionCommands(LeafSystem):
             if left < SEED_DECELERATE_TIME:
                 scale *= 0.5
                 samples = ()
-        return dc.replace(a, samples=(*samples, progress), scale=scale)
+        return a.replace(samples=(*samples, progress), scale=scale)
 
     def _servo(self, remaining, rate, tolerance, still, brake, gain, creep, cruise):
         """The closed-loop profile's speed towards the goal (signed; None: in tolerance and
@@ -438,10 +440,10 @@ class MotionCommands(LeafSystem):
                   and abs(wrap(heading - tyaw)) < POSE_LANDED_YAW)
         if landed:
             if a.still_frames == 0:
-                a = dc.replace(a, stall_time=now)  # landing time
+                a = a.replace(stall_time=now)  # landing time
             if now - a.stall_time >= POSE_SETTLE_TIME - 1e-9:
                 return self._finish(s, request, a.seq, "succeeded", "", now)
-            return dc.replace(s, active=dc.replace(a, still_frames=a.still_frames + 1))
+            return s.replace(active=a.replace(still_frames=a.still_frames + 1))
         if now - a.start_time >= POSE_TIMEOUT - 1e-9:
             return self._finish(s, request, a.seq, "failed", "not_applied", now)
         return s
