@@ -374,12 +374,8 @@ _TARGETS = slice(3, 5)
 """Where the targets sit in a `DriveStatus` vector."""
 _TARGET_LEFT, _TARGET_RIGHT = range(_TARGETS.start, _TARGETS.stop)
 assert DriveStatus.get_fields()[_TARGETS] == ("target_left", "target_right")
-
-
-def _stop(status) -> None:
-    """Powers and targets of a `DriveStatus` to zero."""
-    for field in ("power_left", "power_right", "target_left", "target_right"):
-        setattr(status, field, 0.0)
+assert DriveStatus.get_fields()[1:] == ("power_left", "power_right", *DriveStatus.get_fields()[
+    _TARGETS])  # the order of `DriveController.target_for`'s tuple
 
 
 HOLD_SPEED = 1e-3
@@ -500,24 +496,11 @@ class DriveController(LeafSystem):
         # two to eight numbers pydrake's numpy views, input-port copies and list conversions
         # cost more than the update's arithmetic, and this runs every control period.
         request = self._request_port.Eval(context)
-        jump = False
         if request.seq != context.get_discrete_state(self._seq)[0]:
-            discrete_state.set_value(self._seq, np.array([float(request.seq)]))
-            status = DriveStatus(context.get_discrete_state(self._status).CopyToVector())
-            status.enabled = 1.0 if request.enabled else 0.0
-            target = self.target_for(request.command, True) if request.enabled else None
-            if target is not None:
-                (status.power_left, status.power_right, status.target_left,
-                 status.target_right) = target
-                jump = request.immediate
-            if not request.enabled:
-                _stop(status)
-                jump = True  # disabled: wheels held at zero at once
-            discrete_state.set_value(self._status, status[:])
-            target_left, target_right = (float(v) for v in status[_TARGETS])
+            target_left, target_right, jump = self._take(context, discrete_state, request)
         else:
             status = context.get_discrete_state(self._status)
-            target_left, target_right = status[_TARGET_LEFT], status[_TARGET_RIGHT]
+            target_left, target_right, jump = status[_TARGET_LEFT], status[_TARGET_RIGHT], False
         axle = context.get_discrete_state(self._axle)
         left, right = axle[0], axle[1]
         if jump:
@@ -528,6 +511,24 @@ class DriveController(LeafSystem):
         correction = self._hold(context, discrete_state, new_left, new_right)
         if (new_left, new_right) != (left, right) or correction is not None:
             self._set_axle(discrete_state, new_left, new_right, correction)
+
+    def _take(self, context, discrete_state, request) -> tuple[float, float, bool]:
+        """Acts on a new request: writes its seq and the `DriveStatus` it makes; returns the
+        axle speed targets (rad/s) and whether the axles jump to them (a request marked
+        `immediate`, or a disabled drive, held at zero at once). The status as a plain list:
+        a closed-loop command sends a request every period."""
+        discrete_state.set_value(self._seq, np.array([float(request.seq)]))
+        if not request.enabled:
+            discrete_state.set_value(self._status, np.zeros(len(DriveStatus.get_fields())))
+            return 0.0, 0.0, True
+        target = self.target_for(request.command, True)
+        if target is None:  # not motion (an Enable): the powers and targets stay
+            status = context.get_discrete_state(self._status).get_value().tolist()
+            target, jump = status[1:], False
+        else:
+            jump = request.immediate
+        discrete_state.set_value(self._status, np.array([1.0, *target]))
+        return float(target[2]), float(target[3]), jump
 
     def _hold(self, context, discrete_state, left: float, right: float):
         """Updates the hold angles; returns the wheels' v_d corrections (rad/s, actuator

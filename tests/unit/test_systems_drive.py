@@ -446,3 +446,17 @@ def test_a_wait_runs_until_it_has_elapsed():
     s.tick(5)  # t = 7/60 s > 0.1 s
     assert log(s)[0].status == "succeeded"
     assert log(s)[0].end_time == pytest.approx(0.1, abs=1e-12)
+
+
+def test_an_update_that_changes_nothing_is_not_applied():
+    """Idle updates report DidNothing, so Drake copies nothing back: the Simulator counts
+    only the updates that changed the state."""
+    s = source([SetPower(0.1, 0.1), Wait(0.05), AllStop()], CommandStatus())
+    s.tick(20)
+    # The first update ends the SetPower (issued at initialization) and starts the Wait;
+    # the update at or after 0.05 s ends it and issues the AllStop; the next ends that.
+    assert s.simulator.get_num_unrestricted_updates() == 3
+    assert [r.command for r in log(s) if r.status == "succeeded"] == [
+        "SetPower", "Wait", "AllStop"]
+    s.tick(20)
+    assert s.simulator.get_num_unrestricted_updates() == 3

@@ -327,3 +327,14 @@ def test_a_command_resumed_at_any_update_replays_the_same_requests(profile, comm
             at(resumed, x, heading)
     assert status(s).status == "succeeded"
     assert halvings >= (1 if profile == "seed" else 0)  # the refills are covered
+
+
+def test_an_update_that_changes_nothing_is_not_applied():
+    """With nothing new and nothing running the update reports DidNothing (Drake copies
+    nothing back); a running command changes the state at every update."""
+    s = motion()
+    s.tick(10)
+    assert s.simulator.get_num_unrestricted_updates() == 0
+    s.fix("request", DriveRequest(1, DriveDistance(1.0, 0.5), 0.0))
+    s.tick(10)
+    assert s.simulator.get_num_unrestricted_updates() == 10
