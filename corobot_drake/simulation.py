@@ -129,19 +129,22 @@ class Robot:
         """Issues a scenario command dataclass now; returns its sequence number. ValueError
         (naming the allowed range) for a command the API does not take or an argument out of
         its range (`commands.check`)."""
-        command = commands.check(command)
+        return self._issue_checked(commands.check(command))
+
+    def _issue_checked(self, command) -> int:
         source = self._parts.command_source
         seq = source.Issue(source.GetMyMutableContextFromRoot(self._sim.context), command)
         self._apply_teleport()  # a SetPose takes the robot there now
         return seq
 
+    @_one_thread
     def command(self, method: str, *args, **kwargs):
         """Issues the command `method` names (`commands.COMMANDS`: `set_power`, ...) with its
         arguments, as the methods below do: returns its sequence number, or a `CommandHandle`
         for a command that completes (without waiting). ValueError for an unknown command or
         an argument out of its range, TypeError for arguments it does not take."""
         spec = commands.by_method(method)
-        seq = self.issue(commands.make(method, *args, **kwargs))
+        seq = self._issue_checked(commands.make(method, *args, **kwargs))  # make checks it
         return CommandHandle(self, seq) if spec.completing else seq
 
     def set_power(self, left: float, right: float) -> int:

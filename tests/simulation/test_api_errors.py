@@ -117,7 +117,7 @@ def test_a_second_thread_advancing_or_commanding_is_refused_while_one_advances(s
     thread.start()
     sim.run(0.04, progress=progress, chunk=0.02)
     thread.join(30)
-    assert [e.split(":")[0] for e in errors] == ["advance_to", "issue", "reset", "set_pose"]
+    assert [e.split(":")[0] for e in errors] == ["advance_to", "command", "reset", "set_pose"]
     assert all("another thread is advancing or commanding this Simulation" in e
                for e in errors)
     assert sim.time == pytest.approx(t0 + 0.04) and sim.robot().command_log() == log0
