@@ -17,6 +17,7 @@ import logging
 import math
 import threading
 import time
+import weakref
 from pathlib import Path
 
 import numpy as np
@@ -574,6 +575,8 @@ class Simulation:
         # Ctrl-drag only where someone watches: an offline recording stays free of it.
         self.station: Station = build_station(scenario, meshcat, save_camera, extras=extras,
                                               mouse_drag=self._record_live is not False)
+        # The cameras' render threads end with this simulation, in the thread that frees it.
+        weakref.finalize(self, self.station.close)
         self._owners = None
         self._output_ports: dict = {}
         """The station's output ports read so far (`output_port`), by name."""

@@ -8,7 +8,9 @@ knows no front end: the Meshcat markers, the Foxglove and MCAP topics and the RO
 attach through its `extras` hooks, which their callers pass.
 """
 
+import copy
 import dataclasses as dc
+import functools
 import math
 from collections.abc import Callable, Iterable
 
@@ -30,7 +32,12 @@ from pydrake.geometry import (
 )
 from pydrake.math import RigidTransform
 from pydrake.multibody.parsing import ModelDirectives, ProcessModelDirectives
-from pydrake.multibody.plant import AddMultibodyPlant, CoulombFriction, MultibodyPlant
+from pydrake.multibody.plant import (
+    AddMultibodyPlant,
+    CoulombFriction,
+    MultibodyPlant,
+    MultibodyPlantConfig,
+)
 from pydrake.multibody.tree import CalcSpatialInertia, SpatialInertia, UnitInertia
 from pydrake.systems.framework import Diagram, DiagramBuilder
 from pydrake.systems.primitives import MatrixGain
@@ -249,6 +256,14 @@ class Station:
     visualization_lcm: object = None
     """With Meshcat: the in-process LCM bus Drake's visualizers publish on (held here: the
     diagram's publishers only point at it)."""
+    render_workers: list = dc.field(default_factory=list)
+    """The cameras' render workers (`sensors.render_worker`): a thread each, which `close`
+    ends (a `Simulation` does when it is freed)."""
+
+    def close(self) -> None:
+        """Ends the cameras' render threads (their frames then render no more). Idempotent."""
+        for worker in self.render_workers:
+            worker.close()
 
 
 def _add_robot(plant: MultibodyPlant, name: str, robot: sc.Robot):
@@ -278,6 +293,25 @@ sensors built, `RobotParts.sensors`); e.g. `markers.add_meshcat_markers`,
 its sink with `functools.partial`."""
 
 
+def add_scene(builder, scenario: sc.Scenario, plant_config=None):
+    """The station's first phase: the scenario's plant (`plant_config`, default the
+    scenario's) and scene graph with the world, the directives' models and the robots,
+    finalized. Returns (plant, scene_graph, {world body name: body}, {model name: instance},
+    {robot name: (instance, chassis, wheel joints)})."""
+    plant, scene_graph = AddMultibodyPlant(plant_config or scenario.plant_config, builder)
+    bodies = _add_world(plant, scenario.world)
+    models = _add_directives(plant, scene_graph, scenario.directives)
+    added = {name: _add_robot(plant, name, robot) for name, robot in scenario.robots.items()}
+    plant.Finalize()
+    return plant, scene_graph, bodies, models, added
+
+
+RENDER_COPY = MultibodyPlantConfig(time_step=1e9)
+"""The plant of a camera's render copy (`sensors.render_worker`): only its state is set, and
+its own update (a SAP step, every 1e9 s of the copy's clock, which advances 1 s a frame)
+never comes to change it."""
+
+
 def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None,
                   extras: Iterable[StationHook] = (), mouse_drag: bool = True) -> Station:
     """Builds the whole diagram for `scenario`, in phases: the plant (world, directives,
@@ -287,11 +321,7 @@ def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None,
     `MESHCAT_DRAG_STIFFNESS`); with `save_camera` (a directory), each robot's camera frames are
     saved there as PNG (`camera.save_directory`)."""
     builder = DiagramBuilder()
-    plant, scene_graph = AddMultibodyPlant(scenario.plant_config, builder)
-    bodies = _add_world(plant, scenario.world)
-    models = _add_directives(plant, scene_graph, scenario.directives)
-    added = {name: _add_robot(plant, name, robot) for name, robot in scenario.robots.items()}
-    plant.Finalize()
+    plant, scene_graph, bodies, models, added = add_scene(builder, scenario)
 
     chassis = {name: parts[1] for name, parts in added.items()}
     # One chassis pose per robot (from the plant's body_poses, converted once per step) for
@@ -299,13 +329,18 @@ def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None,
     # samples every step (the tilt monitor, the run log).
     chassis_ports = (add_chassis_poses(builder, plant, chassis),
                      add_chassis_states(builder, plant, chassis))
-    robots, renderers = {}, {}
+    robots, renderers, render_workers = {}, {}, []
     step = sc.physics_step(scenario.plant_config, scenario.simulator_config)
+    # What the cameras' render copies are built from, on their own threads: a copy (a
+    # scenario may be changed in place once its station is built).
+    frozen = copy.deepcopy(scenario)
     for name, robot in scenario.robots.items():
         robots[name] = _add_drive(builder, plant, scenario, name, added[name], chassis_ports)
         robots[name].sensors = add_sensors(SensorSite(
             builder, plant, scene_graph, name, robots[name].model_instance, scenario.world,
-            scenario.random_seed, step, save_camera, renderers), robot)
+            scenario.random_seed, step, save_camera, renderers,
+            functools.partial(_add_render_copy, scenario=frozen, robot=name),
+            render_workers), robot)
     for extra in extras:
         extra(builder, plant, scene_graph, robots, scenario)
     for name in robots:
@@ -318,8 +353,17 @@ def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None,
                            sc.continuous_step(scenario.plant_config, scenario.simulator_config))
     diagram = builder.Build()
     diagram.set_name("corobot_station")
+    for worker in render_workers:  # built on their threads meanwhile
+        worker.wait_ready()
     return Station(diagram, plant, scene_graph, robots, bodies, models, meshcat, renderers,
-                   lcm)
+                   lcm, render_workers)
+
+
+def _add_render_copy(builder, scenario: sc.Scenario, robot: str):
+    """A copy of the scene for a camera's render worker: (plant, scene_graph, the robot's
+    model instance)."""
+    plant, scene_graph, _, _, added = add_scene(builder, scenario, RENDER_COPY)
+    return plant, scene_graph, added[robot][0]
 
 
 def _add_drive(builder, plant, scenario: sc.Scenario, name: str, added, chassis_ports

@@ -45,6 +45,7 @@ from __future__ import annotations
 
 import copy
 import dataclasses as dc
+import functools
 import warnings
 from pathlib import Path
 
@@ -63,6 +64,7 @@ from pydrake.systems.sensors import CameraConfig, ImageRgba8U, RgbdSensor, RgbdS
 
 from corobot_drake.config.poses import mount_frame
 from corobot_drake.config.sensors import FRONT_CAMERA
+from corobot_drake.sensors.render_worker import RenderWorker, build_render_scene
 from corobot_drake.sensors.site import SensorSite
 from corobot_drake.sensors.ticks import TICK_TOLERANCE, last_tick, tick_in_step
 from corobot_drake.sensors.xdisplay import x_display
@@ -182,11 +184,14 @@ class CameraHold(LeafSystem):
         name: CameraHold
         input_ports:
         - color_image
+        - plant_state (with a worker)
         output_ports:
         - rgb_image
         - image_time
 
-    Input `color_image` (abstract ImageRgba8U, an RgbdSensor's). Outputs `rgb_image`
+    Input `color_image` (abstract ImageRgba8U, an RgbdSensor's; with a `worker`, never read:
+    the worker renders the frame from input `plant_state`, the plant's [q; v] at the capture,
+    held in state of its own until the frame is out). Outputs `rgb_image`
     (abstract ImageRgba8U, width x height) and `image_time` (1-vector, s: when the frame was
     taken), both held in state (the frame as a `_HeldFrame`, copied out when read).
 
@@ -202,14 +207,21 @@ class CameraHold(LeafSystem):
     an empty image and NaN), and waits until then in state of its own."""
 
     def __init__(self, width: int, height: int, fps: float, capture_offset: float = 0.0,
-                 step: float = 0.0, delay: float = 0.0):
+                 step: float = 0.0, delay: float = 0.0, worker: RenderWorker | None = None,
+                 num_states: int = 0):
         super().__init__()
         if delay > 0 and not step > 0:
             raise ValueError("CameraHold: a delay needs the plant's step")
+        if worker is not None and not delay > 0:
+            raise ValueError("CameraHold: a render worker needs a delay to render in")
         self._fps, self._offset, self._step = float(fps), float(capture_offset), float(step)
         self._delay, self._size = float(delay), (width, height)
+        self._worker = worker
         self._input = self.DeclareAbstractInputPort(
             "color_image", AbstractValue.Make(ImageRgba8U(width, height)))
+        if worker is not None:
+            self._plant_state = self.DeclareVectorInputPort("plant_state", num_states)
+            self._taken_state = self.DeclareDiscreteState(num_states)
         if delay > 0:
             self._image = self.DeclareAbstractState(AbstractValue.Make(_HeldFrame(ImageRgba8U())))
             self._time = self.DeclareDiscreteState([np.nan])
@@ -252,12 +264,23 @@ class CameraHold(LeafSystem):
         shown = context.get_discrete_state(self._time).GetAtIndex(0)
         if not taken + self._delay <= t + TICK_TOLERANCE or taken == shown:
             return False
-        state.get_mutable_abstract_state(int(self._image)).set_value(
-            context.get_abstract_state(int(self._taken_image)).get_value())
+        if self._worker is None:
+            frame = context.get_abstract_state(int(self._taken_image)).get_value()
+        else:
+            x = context.get_discrete_state(int(self._taken_state)).get_value()
+            frame = _HeldFrame(self._worker.take((taken, x.tobytes()), x))
+        state.get_mutable_abstract_state(int(self._image)).set_value(frame)
         state.get_mutable_discrete_state(int(self._time)).SetAtIndex(0, taken)
         return True
 
     def _capture(self, context, state):
+        if self._worker is not None:  # the plant's state now; the worker renders it
+            x = self._plant_state.Eval(context)
+            state.get_mutable_discrete_state(int(self._taken_state)).SetFromVector(x)
+            state.get_mutable_discrete_state(int(self._taken_time)).SetAtIndex(
+                0, context.get_time())
+            self._worker.submit((context.get_time(), x.tobytes()), x)
+            return
         image = ImageRgba8U(*self._size)
         image.mutable_data[:] = self._input.Eval(context).data
         state.get_mutable_abstract_state(int(self._taken_image)).set_value(_HeldFrame(image))
@@ -401,10 +424,18 @@ def add_camera(site: SensorSite, name: str, config: CameraConfig,
         camera = _add_async(builder, scene_graph, prefix, config, frame_id, X_AB, step)
         image, delay = camera.GetOutputPort("color_image"), config.output_delay
     else:
-        # On a continuous plant every capture is on a step, with the delay held there.
+        # On a continuous plant every capture is on a step, with the delay held there; with
+        # GL, rendered meanwhile by a worker (VTK cannot render on another thread).
         delay = config.output_delay if continuous and look == step else 0.0
+        worker = None
+        if (delay > 0 and site.add_scene_copy is not None
+                and site.renderers.get(config.renderer_name) == "RenderEngineGl"):
+            worker = render_worker(site, config)
+            site.render_workers.append(worker)
         camera = _add_held(builder, scene_graph, prefix, config, frame_id, X_AB,
-                           look if look == step else 0.0, delay)
+                           look if look == step else 0.0, delay, worker)
+        if worker is not None:
+            builder.Connect(plant.get_state_output_port(), camera.GetInputPort("plant_state"))
         image = camera.GetOutputPort("rgb_image")
     image_time = camera.GetOutputPort("image_time")
     builder.ExportOutput(image, f"{prefix}.rgb_image")
@@ -434,17 +465,44 @@ def _add_async(builder, scene_graph, prefix: str, config: CameraConfig, frame_id
     return camera
 
 
+def render_worker(site: SensorSite, config: CameraConfig) -> RenderWorker:
+    """A `RenderWorker` for the camera `config` of the site's robot: a copy of the scene
+    (`site.add_scene_copy`) with an engine made and lit as the site's, and the camera's
+    `RgbdSensor` on the same frame, built on the worker's thread."""
+    world = site.world
+
+    def add_scene_and_sensor(builder):
+        plant, scene_graph, instance = site.add_scene_copy(builder)
+        engine, _ = make_render_engine(config.renderer_class, world.sun.direction,
+                                       world.sun.intensity, world.sky_color)
+        scene_graph.AddRenderer(config.renderer_name, engine)
+        body, X_AB = mount_frame(plant, instance, config.X_PB)
+        color, depth = config.MakeCameras()
+        sensor = builder.AddSystem(RgbdSensor(plant.GetBodyFrameIdOrThrow(body.index()), X_AB,
+                                              color, depth))
+        builder.Connect(scene_graph.get_query_output_port(), sensor.query_object_input_port())
+        return plant, sensor.color_image_output_port()
+
+    return RenderWorker(functools.partial(build_render_scene, add_scene_and_sensor,
+                                          config.width, config.height),
+                        site.plant.num_multibody_states())
+
+
 def _add_held(builder, scene_graph, prefix: str, config: CameraConfig, frame_id, X_AB,
-              step: float, delay: float):
+              step: float, delay: float, worker: RenderWorker | None = None):
     """The camera as an `RgbdSensor` rendering into a `CameraHold` (frames on the plant's
-    `step`s, 0: at the ticks), out `delay` s after their capture; returns the hold."""
+    `step`s, 0: at the ticks), out `delay` s after their capture, rendered by `worker` if
+    given (the hold's `plant_state` input is then the caller's to connect); returns the
+    hold."""
     if config.output_delay > 0 and not delay and config.renderer_class != "":  # else said
         _warn_once("camera: output_delay is not simulated with RenderEngineVtk (it cannot "
                    "render on RgbdSensorAsync's thread); frames come without delay")
     color, depth = config.MakeCameras()
     sensor = builder.AddNamedSystem(prefix, RgbdSensor(frame_id, X_AB, color, depth))
     builder.Connect(scene_graph.get_query_output_port(), sensor.query_object_input_port())
+    num_states = worker.num_states if worker is not None else 0
     hold = builder.AddNamedSystem(f"{prefix}.hold", CameraHold(
-        config.width, config.height, config.fps, config.capture_offset, step, delay))
-    builder.Connect(sensor.color_image_output_port(), hold.get_input_port())
+        config.width, config.height, config.fps, config.capture_offset, step, delay, worker,
+        num_states))
+    builder.Connect(sensor.color_image_output_port(), hold.GetInputPort("color_image"))
     return hold

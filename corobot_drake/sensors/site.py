@@ -1,6 +1,7 @@
 """Where a robot's sensors are added: what every `add_<kind>` (`registry.py`) is given."""
 
 import dataclasses as dc
+from collections.abc import Callable
 from pathlib import Path
 
 from corobot_drake.config import scenario as sc
@@ -28,6 +29,12 @@ class SensorSite:
     renderers: dict = dc.field(default_factory=dict)
     """The render engines made so far: renderer name -> "RenderEngineGl" or
     "RenderEngineVtk" (cameras with one renderer name share its engine)."""
+    add_scene_copy: Callable | None = None
+    """`add_scene_copy(builder)` adds a copy of the diagram's scene to another builder
+    (returns its plant, scene graph and this robot's model instance): what a camera's render
+    worker renders from (`sensors.render_worker`); None: cameras render in place."""
+    render_workers: list = dc.field(default_factory=list)
+    """The cameras' render workers made so far (the station closes them)."""
 
     @property
     def physics_step(self) -> float:

@@ -341,6 +341,58 @@ def test_under_cenic_frames_come_on_the_steps_after_the_output_delay():
     assert seen == set(range(0, 30))  # 0.01 s (tick 0) to 2.91 s (tick 29)
 
 
+def test_under_cenic_delayed_frames_render_on_a_thread_that_ends_with_the_simulation():
+    """Each frame renders on the camera's worker thread, from the plant's state at its step
+    (one render per frame taken), and that thread ends when the simulation is freed."""
+    import threading
+    import weakref
+
+    def workers():
+        return [t for t in threading.enumerate() if t.name.startswith("corobot-camera")]
+
+    before = workers()
+    sim = make_sim("robots: {corobot: {cameras: {front: {fps: 10}}}}", CENIC, camera=True)
+    hold = sim.station.diagram.GetSubsystemByName("corobot.camera.front.hold")
+    worker = hold._worker
+    if worker is None:
+        pytest.skip("no GL renderer here: VTK cameras render in place")
+    sim.advance_to(1.045)  # ticks 0-10 taken (0.01 ... 1.01 s), 0-10 out (... 1.04 s)
+    assert sim.robot().camera_image_time() == pytest.approx(1.01)
+    assert worker.renders == 11
+    assert len(workers()) == len(before) + 1
+    freed = weakref.ref(sim)
+    del sim, hold
+    assert freed() is None
+    assert workers() == before
+
+
+def test_a_frame_without_its_render_started_renders_when_taken():
+    """A frame whose render the worker did not start (a Context restored mid-flight) is
+    rendered when it is due: the same image."""
+    sim = make_sim(SPIN_BY_THE_EDGE, CENIC, camera=True)
+    worker = sim.station.diagram.GetSubsystemByName("corobot.camera.front.hold")._worker
+    if worker is None:
+        pytest.skip("no GL renderer here: VTK cameras render in place")
+    plant = sim.station.plant
+    x = plant.GetPositionsAndVelocities(plant.GetMyContextFromRoot(sim.context))
+    worker.submit(("started", 0.0), x)
+    started = np.array(worker.take(("started", 0.0), x).data)
+    not_started = np.array(worker.take(("never submitted", 0.0), x).data)
+    np.testing.assert_array_equal(started, not_started)
+    sensor = sim.station.diagram.GetSubsystemByName("corobot.camera.front")
+    in_place = np.array(sensor.color_image_output_port().Eval(
+        sensor.GetMyContextFromRoot(sim.context)).data)
+    np.testing.assert_array_equal(started, in_place)
+
+
+def test_a_vtk_camera_renders_in_place_under_cenic():
+    sim = make_sim(CENIC, "robots: {corobot: {cameras: {front: {renderer_class: "
+                   "RenderEngineVtk, width: 32, height: 24}}}}", camera=True)
+    assert sim.station.diagram.GetSubsystemByName("corobot.camera.front.hold")._worker is None
+    sim.advance_to(0.045)
+    assert sim.robot().camera_image_time() == pytest.approx(0.01)
+
+
 def test_under_cenic_a_delayed_frame_is_the_synchronous_frame_of_its_step():
     """With the delay or without, a frame is taken at the same step, of the same scene (the
     runs are the same: no capture splits a step), bit for bit."""

@@ -48,3 +48,36 @@ def test_a_hold_without_delay_takes_a_frame_at_initialization_and_on_each_tick_s
     s.tick(9)  # to 0.10 s: no tick's step yet (tick 1 is at 0.1005 s)
     assert s.output("image_time")[0] == 0.01
     assert np.array_equal(s.output("rgb_image").data, np.full((3, 4, 4), 6, np.uint8))
+
+
+class FakeWorker:
+    """A `RenderWorker` that "renders" a plant state as an image filled with its first
+    number, and records what it was asked."""
+
+    num_states = 2
+
+    def __init__(self):
+        self.submitted, self.taken = [], []
+
+    def submit(self, key, state):
+        self.submitted.append((key, list(state)))
+
+    def take(self, key, state):
+        self.taken.append((key, list(state)))
+        return image(int(state[0]))
+
+
+def test_with_a_worker_the_frame_is_rendered_from_the_plant_state_at_its_capture():
+    """The capture keeps the plant's state and hands it to the worker; the frame out a delay
+    later is the worker's render of that state (not of the state then), and the hold's own
+    colour input is never read (left unconnected here)."""
+    worker = FakeWorker()
+    s = Stepper(CameraHold(4, 3, fps=10, capture_offset=0.0005, step=STEP, delay=0.03,
+                           worker=worker, num_states=2), STEP)
+    s.fix("plant_state", [3.0, 0.5])
+    s.tick(2)  # 0.01 s: tick 0 taken
+    s.fix("plant_state", [9.0, 0.5])
+    assert [state for _, state in worker.submitted] == [[3.0, 0.5]]
+    s.tick(3)  # 0.04 s: out
+    assert s.output("image_time")[0] == 0.01 and (s.output("rgb_image").data == 3).all()
+    assert worker.taken == worker.submitted  # the same key and state
