@@ -9,8 +9,9 @@ GLX when a display is available), in the default scene with the robot driving a 
   only that call is timed; median over `frames`.
 - `camera_overhead_ms()`: what the camera adds to a simulation: the time of `seconds`
   simulated with the camera at 30 Hz minus the same run without it, per frame. `delay` is the
-  camera's output_delay: the default 0.03 renders on a worker thread (GL only), so the wall
-  clock pays less than the CPU; 0 renders in the simulation's thread.
+  camera's output_delay: the default 0.03 renders on a worker thread (GL only: Drake's
+  `RgbdSensorAsync` under SAP, `sensors.render_worker` under CENIC), so the wall clock pays
+  less than the CPU; 0 renders in the simulation's thread.
 """
 
 from __future__ import annotations

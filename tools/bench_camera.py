@@ -4,8 +4,8 @@ Figures for the Corobot's camera (320 x 240, 30 deg vertical fov, sun + fill lig
 with each renderer (GL through an X display or a private Xvfb, the default here; VTK, through
 GLX when a display is available), in the default scene with the robot driving a circle: the
 render itself (`camera_frame_ms`), and what the camera adds to a simulation at 30 Hz
-(`camera_overhead_ms`) under CENIC (the default: on its steps) and under SAP, rendering in
-the simulation's thread or on a worker thread; both in `lab.bench_camera`. Prints a markdown
+(`camera_overhead_ms`) under CENIC (the default: taken on its steps) and under SAP, rendering
+in the simulation's thread or on a worker thread; both in `lab.bench_camera`. Prints a markdown
 table, medians of `--repeats` runs.
 """
 
@@ -52,8 +52,10 @@ def main(argv=None) -> int:
              RENDERERS)]
     sap = (SAP_PLANT % 0.01,)
     for plant, delay, label, renderers in (
-            ((), None, "CENIC (the default): on its steps, in the simulation's thread "
-             "(output_delay 0.03)", RENDERERS),
+            ((), None, "CENIC (the default, output_delay 0.03): taken on its steps, GL "
+             "rendered on a worker thread (VTK in the simulation's thread)", RENDERERS),
+            ((), 0.0, "CENIC with output_delay 0: taken and rendered on its steps, in the "
+             "simulation's thread", RENDERERS),
             (sap, 0.0, "SAP: in the simulation's thread (output_delay 0)", RENDERERS),
             (sap, None, "SAP: on a worker thread (output_delay 0.03)", ("RenderEngineGl",))):
         for clock in ("wall", "cpu"):

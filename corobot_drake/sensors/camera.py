@@ -9,8 +9,10 @@ worker thread):
 - `<robot>.camera.<camera>`: an `RgbdSensor` (colour only; it renders when asked) and
 - `<robot>.camera.<camera>.hold`: `CameraHold`, which takes one frame per tick on the plant's
   steps and holds it; under CENIC it keeps the output delay (default 0.03 s) on the steps too
-  (a capture between the steps would split a CENIC step and change the motion), without a
-  delay it also takes one at initialization;
+  (a capture between the steps would split a CENIC step and change the motion), and with the
+  GL engine a `render_worker.RenderWorker` renders each delayed frame meanwhile on a thread of
+  its own, from the plant's state at the capture (the sensor then is never asked); without a
+  delay it renders in place and also takes one at initialization;
 
 and on SAP's discrete plant with the default `output_delay` (0.03 s) and the GL engine:
 
@@ -399,13 +401,14 @@ def add_camera(site: SensorSite, name: str, config: CameraConfig,
     `renderer_name` share the engine the first of them makes (`site.renderers`).
 
     On a continuous plant (CENIC, the default) it is an `RgbdSensor` and a `CameraHold`
-    taking each frame on the first step at or after its tick, in the simulation's thread, and
-    putting it out `output_delay` later on the steps (a render between the steps would split
-    one). On SAP's discrete plant, with `output_delay` > 0 and the GL engine, it is Drake's
-    `RgbdSensorAsync`: each frame renders on a worker thread (its own clone of the engine,
-    which GL allows) while the simulation goes on, and appears `output_delay` s after its
-    capture; otherwise (VTK cannot render on that thread) the `CameraHold` with no delay.
-    `save_rate`: Hz of saved frames (default: every frame)."""
+    taking each frame on the first step at or after its tick and putting it out `output_delay`
+    later on the steps (a capture between the steps would split one); with GL and a delay, a
+    `RenderWorker` renders it meanwhile on its own thread (`render_worker`), else the sensor
+    in the simulation's thread. On SAP's discrete plant, with `output_delay` > 0 and the GL
+    engine, it is Drake's `RgbdSensorAsync`: each frame renders on a worker thread (its own
+    clone of the engine, which GL allows) while the simulation goes on, and appears
+    `output_delay` s after its capture; otherwise (VTK cannot render on that thread) the
+    `CameraHold` with no delay. `save_rate`: Hz of saved frames (default: every frame)."""
     if not config.rgb:
         return None
     builder, plant, scene_graph = site.builder, site.plant, site.scene_graph
