@@ -262,7 +262,8 @@ def render_unit_costs(outs) -> str:
     render = row("render (the sensor", "wall clock")
     on_steps = row("added to a simulation at 30 Hz, CENIC (the default", "wall clock")
     on_steps_cpu = row("added to a simulation at 30 Hz, CENIC (the default", "CPU time")
-    in_place = row("added to a simulation at 30 Hz, CENIC with output_delay 0", "wall clock")
+    rendered_in_place = row("added to a simulation at 30 Hz, CENIC with output_delay 0",
+                            "wall clock")
     sync = row("added to a simulation at 30 Hz, SAP: in the simulation's thread", "wall clock")
     async_wall = row("added to a simulation at 30 Hz, SAP: on a worker thread", "wall clock")
     async_cpu = row("added to a simulation at 30 Hz, SAP: on a worker thread", "CPU time")
@@ -283,7 +284,8 @@ def render_unit_costs(outs) -> str:
         f"| camera frame at 30 Hz, CENIC (default), GL, added CPU time | {on_steps_cpu[0]} ms "
         f"| `tools/bench_camera.py` |",
         f"| camera frame at 30 Hz, CENIC, synchronous (`output_delay: 0`: rendered in the "
-        f"simulation's thread), GL / VTK, added wall time | {in_place[0]} / {in_place[1]} ms "
+        f"simulation's thread), GL / VTK, added wall time | {rendered_in_place[0]} / "
+        f"{rendered_in_place[1]} ms "
         f"| `tools/bench_camera.py` |",
         f"| camera frame at 30 Hz, SAP, asynchronous GL, added wall time | {async_wall[0]} ms | "
         f"`tools/bench_camera.py` |",
