@@ -353,8 +353,6 @@ def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None,
                            sc.continuous_step(scenario.plant_config, scenario.simulator_config))
     diagram = builder.Build()
     diagram.set_name("corobot_station")
-    for worker in render_workers:  # built on their threads meanwhile
-        worker.wait_ready()
     return Station(diagram, plant, scene_graph, robots, bodies, models, meshcat, renderers,
                    lcm, render_workers)
 

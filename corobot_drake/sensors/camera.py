@@ -434,7 +434,8 @@ def add_camera(site: SensorSite, name: str, config: CameraConfig,
         if (delay > 0 and site.add_scene_copy is not None
                 and site.renderers.get(config.renderer_name) == "RenderEngineGl"):
             worker = render_worker(site, config)
-            site.render_workers.append(worker)
+            if worker is not None:
+                site.render_workers.append(worker)
         camera = _add_held(builder, scene_graph, prefix, config, frame_id, X_AB,
                            look if look == step else 0.0, delay, worker)
         if worker is not None:
@@ -468,10 +469,11 @@ def _add_async(builder, scene_graph, prefix: str, config: CameraConfig, frame_id
     return camera
 
 
-def render_worker(site: SensorSite, config: CameraConfig) -> RenderWorker:
+def render_worker(site: SensorSite, config: CameraConfig) -> RenderWorker | None:
     """A `RenderWorker` for the camera `config` of the site's robot: a copy of the scene
     (`site.add_scene_copy`) with an engine made and lit as the site's, and the camera's
-    `RgbdSensor` on the same frame, built on the worker's thread."""
+    `RgbdSensor` on the same frame, built on the worker's thread. None, with a warning, when
+    that fails (the camera then renders in place)."""
     world = site.world
 
     def add_scene_and_sensor(builder):
@@ -486,9 +488,17 @@ def render_worker(site: SensorSite, config: CameraConfig) -> RenderWorker:
         builder.Connect(scene_graph.get_query_output_port(), sensor.query_object_input_port())
         return plant, sensor.color_image_output_port()
 
-    return RenderWorker(functools.partial(build_render_scene, add_scene_and_sensor,
-                                          config.width, config.height),
-                        site.plant.num_multibody_states())
+    worker = RenderWorker(functools.partial(build_render_scene, add_scene_and_sensor,
+                                            config.width, config.height),
+                          site.plant.num_multibody_states())
+    try:
+        worker.wait_ready()
+    except Exception as e:  # e.g. GL refused on another thread: the old way still works
+        worker.close()
+        _warn_once(f"camera: frames render in the simulation's thread (the render worker "
+                   f"could not start: {str(e).splitlines()[0] if str(e) else type(e).__name__})")
+        return None
+    return worker
 
 
 def _add_held(builder, scene_graph, prefix: str, config: CameraConfig, frame_id, X_AB,

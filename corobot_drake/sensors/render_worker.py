@@ -76,9 +76,9 @@ def build_render_scene(add_scene_and_sensor: Callable, width: int, height: int) 
 
 class RenderWorker:
     """Renders frames on one thread of its own (`concurrent.futures`), the copy of the scene
-    made there by `make_scene()` (a `RenderScene`) as soon as the worker starts (the station
-    goes on being built meanwhile, then `wait_ready`). `submit` a frame's key and state at its
-    capture, `take` its image when it is due."""
+    made there by `make_scene()` (a `RenderScene`) as soon as the worker starts (`wait_ready`
+    waits for it). `submit` a frame's key and state at its capture, `take` its image when it
+    is due."""
 
     def __init__(self, make_scene: Callable[[], RenderScene], num_states: int):
         self.num_states = num_states

@@ -385,6 +385,29 @@ def test_a_frame_without_its_render_started_renders_when_taken():
     np.testing.assert_array_equal(started, in_place)
 
 
+def test_a_render_worker_that_cannot_start_leaves_the_camera_rendering_in_place(monkeypatch):
+    import threading
+
+    import corobot_drake.sensors.camera as camera
+
+    def refuse(*args):
+        raise RuntimeError("no GL on this thread (a test's)")
+
+    def workers():
+        return [t for t in threading.enumerate() if t.name.startswith("corobot-camera")]
+
+    before = workers()
+    monkeypatch.setattr(camera, "build_render_scene", refuse)
+    with pytest.warns(UserWarning, match=r"render in the simulation's thread .*no GL on this "
+                                         r"thread \(a test's\)"):
+        sim = make_sim(CENIC, "robots: {corobot: {cameras: {front: {width: 32, height: 24}}}}",
+                       camera=True)
+    assert sim.station.diagram.GetSubsystemByName("corobot.camera.front.hold")._worker is None
+    assert workers() == before  # the worker that failed is gone
+    sim.advance_to(0.045)
+    assert sim.robot().camera_image_time() == pytest.approx(0.01)
+
+
 def test_a_vtk_camera_renders_in_place_under_cenic():
     sim = make_sim(CENIC, "robots: {corobot: {cameras: {front: {renderer_class: "
                    "RenderEngineVtk, width: 32, height: 24}}}}", camera=True)
