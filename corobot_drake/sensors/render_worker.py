@@ -127,6 +127,4 @@ class RenderWorker:
         self._executor.shutdown(wait=True)
 
     def _drop(self) -> None:
-        scene, self._scene = self._scene, None
-        if scene is not None:
-            scene.exception() or scene.result()  # its own error, if any, is not raised here
+        self._scene = None  # the copy's last reference: it is freed here, on this thread
