@@ -261,7 +261,9 @@ class Station:
     ends (a `Simulation` does when it is freed)."""
 
     def close(self) -> None:
-        """Ends the cameras' render threads (their frames then render no more). Idempotent."""
+        """Ends the cameras' render threads: after it the diagram's delayed GL cameras can take
+        no frame (simulating on raises), so close a station when done with it (a Simulation
+        closes its own when it is freed). Idempotent."""
         for worker in self.render_workers:
             worker.close()
 
@@ -320,6 +322,18 @@ def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None,
     `meshcat`, adds Drake's visualizers (and, with `mouse_drag`, Ctrl-drag of bodies:
     `MESHCAT_DRAG_STIFFNESS`); with `save_camera` (a directory), each robot's camera frames are
     saved there as PNG (`camera.save_directory`)."""
+    render_workers = []
+    try:
+        return _build_station(scenario, meshcat, save_camera, extras, mouse_drag,
+                              render_workers)
+    except BaseException:
+        for worker in render_workers:  # no station will close them
+            worker.close()
+        raise
+
+
+def _build_station(scenario: sc.Scenario, meshcat, save_camera, extras, mouse_drag: bool,
+                   render_workers: list) -> Station:
     builder = DiagramBuilder()
     plant, scene_graph, bodies, models, added = add_scene(builder, scenario)
 
@@ -329,7 +343,7 @@ def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None,
     # samples every step (the tilt monitor, the run log).
     chassis_ports = (add_chassis_poses(builder, plant, chassis),
                      add_chassis_states(builder, plant, chassis))
-    robots, renderers, render_workers = {}, {}, []
+    robots, renderers, renderer_classes = {}, {}, {}
     step = sc.physics_step(scenario.plant_config, scenario.simulator_config)
     # What the cameras' render copies are built from, on their own threads: a copy (a
     # scenario may be changed in place once its station is built).
@@ -338,7 +352,7 @@ def build_station(scenario: sc.Scenario, meshcat=None, save_camera=None,
         robots[name] = _add_drive(builder, plant, scenario, name, added[name], chassis_ports)
         robots[name].sensors = add_sensors(SensorSite(
             builder, plant, scene_graph, name, robots[name].model_instance, scenario.world,
-            scenario.random_seed, step, save_camera, renderers,
+            scenario.random_seed, step, save_camera, renderers, renderer_classes,
             functools.partial(_add_render_copy, scenario=frozen, robot=name),
             render_workers), robot)
     for extra in extras:

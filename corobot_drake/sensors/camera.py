@@ -37,7 +37,7 @@ rendering here (VTK runs an anti-aliasing pass over every pixel); else VTK headl
 EGL, with a warning. Both are lit alike: the scenario's sun as a directional light in the world
 frame, a dim fill light from the camera (the sky's scattered light, so faces turned from the
 sun are shaded, not black) and the sky colour as background. Cameras of all robots share one
-engine.
+engine (a render worker's copy of the scene makes one of its own, the same).
 
 A camera turned off: `cameras: {front: {rgb: false}}` (Drake's own convention: no image, no
 sensor).
@@ -417,6 +417,7 @@ def add_camera(site: SensorSite, name: str, config: CameraConfig,
         world = site.world
         engine, site.renderers[config.renderer_name] = make_render_engine(
             config.renderer_class, world.sun.direction, world.sun.intensity, world.sky_color)
+        site.renderer_classes[config.renderer_name] = config.renderer_class
         scene_graph.AddRenderer(config.renderer_name, engine)
     body, X_AB = mount_frame(plant, site.model_instance, config.X_PB)
     frame_id = plant.GetBodyFrameIdOrThrow(body.index())
@@ -475,10 +476,16 @@ def render_worker(site: SensorSite, config: CameraConfig) -> RenderWorker | None
     `RgbdSensor` on the same frame, built on the worker's thread. None, with a warning, when
     that fails (the camera then renders in place)."""
     world = site.world
+    # The GL engine this camera's renderer name shares in the scene, made again from what the
+    # scene's was made from; GL by name, so a thread without GL fails (and the camera renders
+    # in place) instead of falling back to VTK.
+    made_from = site.renderer_classes[config.renderer_name]
+    renderer_class = (made_from if isinstance(made_from, RenderEngineGlParams)
+                      else "RenderEngineGl")
 
     def add_scene_and_sensor(builder):
         plant, scene_graph, instance = site.add_scene_copy(builder)
-        engine, _ = make_render_engine(config.renderer_class, world.sun.direction,
+        engine, _ = make_render_engine(renderer_class, world.sun.direction,
                                        world.sun.intensity, world.sky_color)
         scene_graph.AddRenderer(config.renderer_name, engine)
         body, X_AB = mount_frame(plant, instance, config.X_PB)

@@ -12,7 +12,8 @@ plant's state at its capture (what the copy is set to), so it is the frame the
 simulation's own sensor renders at that state, bit for bit.
 
 The worker keeps no state a Context needs: a frame whose render was not started here (a
-Context restored from a saved scene, a reset) renders when it is asked for.
+Context restored in memory mid-flight, e.g. by `SetTimeStateAndParametersFrom`) renders when
+it is asked for.
 """
 
 from __future__ import annotations
@@ -69,9 +70,14 @@ def build_render_scene(add_scene_and_sensor: Callable, width: int, height: int) 
                                                                                   height))))
     builder.Connect(image, hold.get_input_port())
     simulator = Simulator(builder.Build())
-    simulator.get_mutable_context().SetTime(PERIOD / 2)
+    context = simulator.get_mutable_context()
+    context.SetTime(PERIOD / 2)
     simulator.Initialize()
-    return RenderScene(simulator, plant, hold)
+    scene = RenderScene(simulator, plant, hold)
+    # A first frame now: a GL that fails only when it draws fails here, where the camera can
+    # still render in place instead, and the shaders are compiled before the first capture.
+    scene.render(plant.GetPositionsAndVelocities(plant.GetMyContextFromRoot(context)))
+    return scene
 
 
 class RenderWorker:

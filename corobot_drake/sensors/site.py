@@ -29,6 +29,9 @@ class SensorSite:
     renderers: dict = dc.field(default_factory=dict)
     """The render engines made so far: renderer name -> "RenderEngineGl" or
     "RenderEngineVtk" (cameras with one renderer name share its engine)."""
+    renderer_classes: dict = dc.field(default_factory=dict)
+    """Renderer name -> the `CameraConfig.renderer_class` its engine was made from (the
+    first camera's of that name): what a render worker's copy makes its engine from."""
     add_scene_copy: Callable | None = None
     """`add_scene_copy(builder)` adds a copy of the diagram's scene to another builder
     (returns its plant, scene graph and this robot's model instance): what a camera's render

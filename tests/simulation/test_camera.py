@@ -24,6 +24,7 @@ from corobot_drake.config.scenario import (
     load_scenario,
     physics_step,
 )
+from corobot_drake.config.sensors import RENDERER_NAME
 from corobot_drake.model import dimensions as dim
 from corobot_drake.simulation import Simulation
 
@@ -341,6 +342,14 @@ def test_under_cenic_frames_come_on_the_steps_after_the_output_delay():
     assert seen == set(range(0, 30))  # 0.01 s (tick 0) to 2.91 s (tick 29)
 
 
+def gl_worker(sim, hold):
+    """The hold's render worker; skips where the scene's cameras render with VTK (no GL)."""
+    if sim.station.renderers[RENDERER_NAME] != "RenderEngineGl":
+        pytest.skip("no GL renderer here: VTK cameras render in place")
+    assert hold._worker is not None, "a GL camera under CENIC renders on a worker"
+    return hold._worker
+
+
 def test_under_cenic_delayed_frames_render_on_a_thread_that_ends_with_the_simulation():
     """Each frame renders on the camera's worker thread, from the plant's state at its step
     (one render per frame taken), and that thread ends when the simulation is freed."""
@@ -350,29 +359,27 @@ def test_under_cenic_delayed_frames_render_on_a_thread_that_ends_with_the_simula
     def workers():
         return [t for t in threading.enumerate() if t.name.startswith("corobot-camera")]
 
-    before = workers()
+    before = set(workers())
     sim = make_sim("robots: {corobot: {cameras: {front: {fps: 10}}}}", CENIC, camera=True)
     hold = sim.station.diagram.GetSubsystemByName("corobot.camera.front.hold")
-    worker = hold._worker
-    if worker is None:
-        pytest.skip("no GL renderer here: VTK cameras render in place")
+    worker = gl_worker(sim, hold)
+    assert worker.renders == 0
     sim.advance_to(1.045)  # ticks 0-10 taken (0.01 ... 1.01 s), 0-10 out (... 1.04 s)
     assert sim.robot().camera_image_time() == pytest.approx(1.01)
     assert worker.renders == 11
-    assert len(workers()) == len(before) + 1
+    mine = set(workers()) - before
+    assert len(mine) == 1
     freed = weakref.ref(sim)
     del sim, hold
     assert freed() is None
-    assert workers() == before
+    assert not mine & set(workers())
 
 
 def test_a_frame_without_its_render_started_renders_when_taken():
     """A frame whose render the worker did not start (a Context restored mid-flight) is
     rendered when it is due: the same image."""
     sim = make_sim(SPIN_BY_THE_EDGE, CENIC, camera=True)
-    worker = sim.station.diagram.GetSubsystemByName("corobot.camera.front.hold")._worker
-    if worker is None:
-        pytest.skip("no GL renderer here: VTK cameras render in place")
+    worker = gl_worker(sim, sim.station.diagram.GetSubsystemByName("corobot.camera.front.hold"))
     plant = sim.station.plant
     x = plant.GetPositionsAndVelocities(plant.GetMyContextFromRoot(sim.context))
     worker.submit(("started", 0.0), x)
@@ -396,14 +403,14 @@ def test_a_render_worker_that_cannot_start_leaves_the_camera_rendering_in_place(
     def workers():
         return [t for t in threading.enumerate() if t.name.startswith("corobot-camera")]
 
-    before = workers()
+    before = set(workers())
     monkeypatch.setattr(camera, "build_render_scene", refuse)
     with pytest.warns(UserWarning, match=r"render in the simulation's thread .*no GL on this "
                                          r"thread \(a test's\)"):
         sim = make_sim(CENIC, "robots: {corobot: {cameras: {front: {width: 32, height: 24}}}}",
                        camera=True)
     assert sim.station.diagram.GetSubsystemByName("corobot.camera.front.hold")._worker is None
-    assert workers() == before  # the worker that failed is gone
+    assert set(workers()) <= before  # the worker that failed is gone
     sim.advance_to(0.045)
     assert sim.robot().camera_image_time() == pytest.approx(0.01)
 
@@ -411,6 +418,51 @@ def test_a_render_worker_that_cannot_start_leaves_the_camera_rendering_in_place(
 def test_a_vtk_camera_renders_in_place_under_cenic():
     sim = make_sim(CENIC, "robots: {corobot: {cameras: {front: {renderer_class: "
                    "RenderEngineVtk, width: 32, height: 24}}}}", camera=True)
+    assert sim.station.diagram.GetSubsystemByName("corobot.camera.front.hold")._worker is None
+    sim.advance_to(0.045)
+    assert sim.robot().camera_image_time() == pytest.approx(0.01)
+
+
+def test_a_worker_renders_with_the_engine_its_renderer_name_shares_in_the_scene():
+    """Cameras of one renderer name share the engine the first of them made; a second
+    camera asking for VTK under that name renders with the scene's GL engine, and so does its
+    render worker's copy: its frame is the in-place render, bit for bit."""
+    sim = make_sim(SPIN_BY_THE_EDGE, CENIC, "robots: {corobot: {cameras: {second: "
+                   "{renderer_class: RenderEngineVtk, width: 64, height: 48}}}}", camera=True)
+    hold = sim.station.diagram.GetSubsystemByName("corobot.camera.second.hold")
+    worker = gl_worker(sim, hold)
+    plant = sim.station.plant
+    sim.advance_to(0.2)
+    x = plant.GetPositionsAndVelocities(plant.GetMyContextFromRoot(sim.context))
+    sensor = sim.station.diagram.GetSubsystemByName("corobot.camera.second")
+    in_place = np.array(sensor.color_image_output_port().Eval(
+        sensor.GetMyContextFromRoot(sim.context)).data)
+    assert in_place[:, :, :3].std() > 10  # the box's edge and the ground: no blank view
+    np.testing.assert_array_equal(np.array(worker.take("now", x).data), in_place)
+
+
+def test_a_worker_thread_without_gl_leaves_the_camera_rendering_in_place(monkeypatch):
+    """The default renderer falls back to VTK where GL is missing; on a worker's thread the
+    copy asks for GL by name, so a thread without GL makes the camera render in place (with
+    the scene's GL engine) instead of rendering with another engine."""
+    import threading
+
+    import corobot_drake.sensors.camera as camera
+
+    made = camera.make_render_engine
+
+    def no_gl_on_workers(renderer_class, *args):
+        if threading.current_thread().name.startswith("corobot-camera"):
+            assert renderer_class == "RenderEngineGl"
+            raise camera.RendererUnavailableError("camera renderer RenderEngineGl: no GL here")
+        return made(renderer_class, *args)
+
+    monkeypatch.setattr(camera, "make_render_engine", no_gl_on_workers)
+    with pytest.warns(UserWarning, match="render in the simulation's thread .*no GL here"):
+        sim = make_sim(CENIC, "robots: {corobot: {cameras: {front: {width: 32, height: 24}}}}",
+                       camera=True)
+    if sim.station.renderers[RENDERER_NAME] != "RenderEngineGl":
+        pytest.skip("no GL renderer here: VTK cameras render in place")
     assert sim.station.diagram.GetSubsystemByName("corobot.camera.front.hold")._worker is None
     sim.advance_to(0.045)
     assert sim.robot().camera_image_time() == pytest.approx(0.01)
