@@ -8,7 +8,6 @@ knows no front end: the Meshcat markers, the Foxglove and MCAP topics and the RO
 attach through its `extras` hooks, which their callers pass.
 """
 
-import copy
 import dataclasses as dc
 import functools
 import math
@@ -345,15 +344,12 @@ def _build_station(scenario: sc.Scenario, meshcat, save_camera, extras, mouse_dr
                      add_chassis_states(builder, plant, chassis))
     robots, renderers, renderer_classes = {}, {}, {}
     step = sc.physics_step(scenario.plant_config, scenario.simulator_config)
-    # What the cameras' render copies are built from, on their own threads: a copy (a
-    # scenario may be changed in place once its station is built).
-    frozen = copy.deepcopy(scenario)
     for name, robot in scenario.robots.items():
         robots[name] = _add_drive(builder, plant, scenario, name, added[name], chassis_ports)
         robots[name].sensors = add_sensors(SensorSite(
             builder, plant, scene_graph, name, robots[name].model_instance, scenario.world,
             scenario.random_seed, step, save_camera, renderers, renderer_classes,
-            functools.partial(_add_render_copy, scenario=frozen, robot=name),
+            functools.partial(_add_render_copy, scenario=scenario, robot=name),
             render_workers), robot)
     for extra in extras:
         extra(builder, plant, scene_graph, robots, scenario)

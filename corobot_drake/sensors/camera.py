@@ -209,8 +209,7 @@ class CameraHold(LeafSystem):
     an empty image and NaN), and waits until then in state of its own."""
 
     def __init__(self, width: int, height: int, fps: float, capture_offset: float = 0.0,
-                 step: float = 0.0, delay: float = 0.0, worker: RenderWorker | None = None,
-                 num_states: int = 0):
+                 step: float = 0.0, delay: float = 0.0, worker: RenderWorker | None = None):
         super().__init__()
         if delay > 0 and not step > 0:
             raise ValueError("CameraHold: a delay needs the plant's step")
@@ -222,13 +221,14 @@ class CameraHold(LeafSystem):
         self._input = self.DeclareAbstractInputPort(
             "color_image", AbstractValue.Make(ImageRgba8U(width, height)))
         if worker is not None:
-            self._plant_state = self.DeclareVectorInputPort("plant_state", num_states)
-            self._taken_state = self.DeclareDiscreteState(num_states)
+            self._plant_state = self.DeclareVectorInputPort("plant_state", worker.num_states)
+            self._taken_state = self.DeclareDiscreteState(worker.num_states)
         if delay > 0:
             self._image = self.DeclareAbstractState(AbstractValue.Make(_HeldFrame(ImageRgba8U())))
             self._time = self.DeclareDiscreteState([np.nan])
-            self._taken_image = self.DeclareAbstractState(
-                AbstractValue.Make(_HeldFrame(ImageRgba8U(width, height))))
+            if worker is None:  # else the frame taken is its state, rendered when it is out
+                self._taken_image = self.DeclareAbstractState(
+                    AbstractValue.Make(_HeldFrame(ImageRgba8U(width, height))))
             self._taken_time = self.DeclareDiscreteState([np.nan])
         else:
             self._image = self._taken_image = self.DeclareAbstractState(
@@ -520,9 +520,7 @@ def _add_held(builder, scene_graph, prefix: str, config: CameraConfig, frame_id,
     color, depth = config.MakeCameras()
     sensor = builder.AddNamedSystem(prefix, RgbdSensor(frame_id, X_AB, color, depth))
     builder.Connect(scene_graph.get_query_output_port(), sensor.query_object_input_port())
-    num_states = worker.num_states if worker is not None else 0
     hold = builder.AddNamedSystem(f"{prefix}.hold", CameraHold(
-        config.width, config.height, config.fps, config.capture_offset, step, delay, worker,
-        num_states))
+        config.width, config.height, config.fps, config.capture_offset, step, delay, worker))
     builder.Connect(sensor.color_image_output_port(), hold.GetInputPort("color_image"))
     return hold

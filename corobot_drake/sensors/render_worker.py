@@ -21,7 +21,6 @@ from __future__ import annotations
 import collections
 import concurrent.futures
 import dataclasses as dc
-import threading
 from collections.abc import Callable
 
 import numpy as np
@@ -93,7 +92,8 @@ class RenderWorker:
             max_workers=1, thread_name_prefix="corobot-camera")
         self._scene = self._executor.submit(make_scene)
         self._pending: collections.OrderedDict = collections.OrderedDict()
-        self._lock = threading.Lock()
+        """Renders started, by frame key; touched only by the simulation's thread (`submit`
+        and `take`), so no lock."""
         self.renders = 0
         """Frames rendered so far (on the worker's thread)."""
 
@@ -108,17 +108,14 @@ class RenderWorker:
     def submit(self, key, state) -> None:
         """Starts rendering the frame `key` (hashable: its capture) at the plant's
         `state`."""
-        future = self._executor.submit(self._render, np.array(state, dtype=float))
-        with self._lock:
-            self._pending[key] = future
-            while len(self._pending) > IN_FLIGHT:
-                self._pending.popitem(last=False)
+        self._pending[key] = self._executor.submit(self._render, np.array(state, dtype=float))
+        while len(self._pending) > IN_FLIGHT:
+            self._pending.popitem(last=False)
 
     def take(self, key, state) -> ImageRgba8U:
         """The frame `key`: the render `submit` started (waiting for it), or, when none was
         started here, one made now from `state`."""
-        with self._lock:
-            future = self._pending.pop(key, None)
+        future = self._pending.pop(key, None)
         if future is None:
             future = self._executor.submit(self._render, np.array(state, dtype=float))
         return future.result()

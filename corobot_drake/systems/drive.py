@@ -196,7 +196,7 @@ class CommandSource(LeafSystem):
                 reason = ("disabled" if isinstance(command, Enable) and not command.enabled
                           else "superseded")
                 log[last_index] = last.replace(end_time=time, status="failed",
-                                             reason=reason)
+                                               reason=reason)
             else:
                 log[last_index] = last.replace(end_time=time, status="succeeded")
         seq = state.request.seq + 1
@@ -218,7 +218,7 @@ class CommandSource(LeafSystem):
                     return state
                 log = list(state.log)
                 log[i] = record.replace(end_time=status.time, status=status.status,
-                                    reason=status.reason)
+                                        reason=status.reason)
                 return state.replace(log=tuple(log))
         return state
 

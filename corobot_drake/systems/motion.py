@@ -273,7 +273,7 @@ class MotionCommands(LeafSystem):
                 and out.immediate == immediate):
             return s
         return s.replace(output=DriveRequest(out.seq + 1, command, now, request.enabled,
-                                                 immediate))
+                                             immediate))
 
     def _finish(self, s, request, seq, status, reason, now, immediate=False) -> MotionState:
         """Ends the active command with `status`; the wheels stop (at once if `immediate`)."""

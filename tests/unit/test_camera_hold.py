@@ -73,7 +73,7 @@ def test_with_a_worker_the_frame_is_rendered_from_the_plant_state_at_its_capture
     colour input is never read (left unconnected here)."""
     worker = FakeWorker()
     s = Stepper(CameraHold(4, 3, fps=10, capture_offset=0.0005, step=STEP, delay=0.03,
-                           worker=worker, num_states=2), STEP)
+                           worker=worker), STEP)
     s.fix("plant_state", [3.0, 0.5])
     s.tick(2)  # 0.01 s: tick 0 taken
     s.fix("plant_state", [9.0, 0.5])
