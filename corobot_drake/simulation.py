@@ -45,7 +45,13 @@ from corobot_drake.sensors.ir_sensor import noise_key
 from corobot_drake.station import RobotParts, Station, build_station
 from corobot_drake.systems.drive import CommandRecord, DriveStatus
 from corobot_drake.systems.odometry import DriveState
-from corobot_drake.systems.runlog import COLUMNS, RUN_LOG_CHUNK, log_rows, write_csv
+from corobot_drake.systems.runlog import (
+    COLUMNS,
+    RUN_LOG_CHUNK,
+    log_rows,
+    max_tilt_deg,
+    write_csv,
+)
 
 STEP_ROUNDING = 1e-6
 """Steps: a time this close to a physics step (in steps, 10 ns at 10 ms) is on it
@@ -382,10 +388,11 @@ class Robot:
         return bool(DriveStatus(status).enabled)
 
     def max_tilt_deg(self) -> float:
-        """Largest tilt from upright so far (degrees, sampled at 100 Hz)."""
-        monitor = self._parts.tilt_monitor
-        return float(monitor.get_output_port().Eval(monitor.GetMyContextFromRoot(
-            self._sim.context))[0])
+        """Largest tilt from upright so far, deg: over the run log's samples of the chassis
+        (every 10 ms, the whole run: `runlog.max_tilt_deg`); 0 before the first."""
+        sim = self._sim
+        log = sim._run_log_sink(self.name).FindLog(sim.context)
+        return max(sim._max_tilt_moved_out[self.name], max_tilt_deg(log.data().T))
 
     def ir(self, name: str) -> IrReading:
         """The latest scan of the named IR sensor (`front`, `rear`, ...): raw distance (m),
@@ -596,6 +603,9 @@ class Simulation:
         self._run_log_chunks = {name: collections.deque() for name in self.robots}
         """Each robot's run-log samples moved out of its Drake log sink when bounded
         (`_collect_run_logs`): arrays of `runlog.COLUMNS` rows, oldest first."""
+        self._max_tilt_moved_out = dict.fromkeys(self.robots, 0.0)
+        """Each robot's largest tilt (deg) over the samples moved out of its sink (kept
+        whatever the window)."""
         self._start()
 
     def _start(self) -> None:
@@ -641,6 +651,7 @@ class Simulation:
             self._run_log_sink(name).GetMutableLog(
                 self._run_log_sink(name).GetMyMutableContextFromRoot(self.context)).Clear()
             self._run_log_chunks[name].clear()
+            self._max_tilt_moved_out[name] = 0.0
         self.context.SetTime(self.scenario.simulator_config.start_time)
         self._start()
 
@@ -794,6 +805,8 @@ class Simulation:
             if log.num_samples() < RUN_LOG_CHUNK:
                 continue
             chunks.append(log_rows(sink, self.context, self.robots[name]._tip_margin()))
+            self._max_tilt_moved_out[name] = max(self._max_tilt_moved_out[name],
+                                                 max_tilt_deg(log.data().T))
             log.Clear()
             cutoff = self.time - self.run_log_window
             while chunks and chunks[0][-1, 0] < cutoff:

@@ -52,15 +52,11 @@ from corobot_drake.sensors.site import SensorSite
 from corobot_drake.systems.contact import add_wheel_contacts
 from corobot_drake.systems.dead_reckoning import DeadReckoning
 from corobot_drake.systems.drive import CommandSource, DriveController
-from corobot_drake.systems.monitor import TiltMonitor
 from corobot_drake.systems.motion import MotionCommands
 from corobot_drake.systems.odometry import add_chassis_poses, add_chassis_states, add_odometry
 from corobot_drake.systems.runlog import SAMPLED, add_run_log
 from corobot_drake.systems.servo import add_servo_sign, servo_velocity_sign
 from corobot_drake.systems.stability import add_tip_margin
-
-TILT_SAMPLE_PERIOD = 0.01
-"""s. Tilt changes over tenths of a second even in a flip; 100 Hz catches its peak."""
 
 
 def _geometry(shape):
@@ -217,7 +213,6 @@ class RobotParts:
     wheel_joints: list
     command_source: CommandSource
     drive_controller: DriveController
-    tilt_monitor: TiltMonitor
     motion: MotionCommands | None = None
     """DriveDistance / RotateDegrees / SetPose state machine (`motion.py`)."""
     chassis_pose: object = None
@@ -339,13 +334,14 @@ def _build_station(scenario: sc.Scenario, meshcat, save_camera, extras, mouse_dr
     chassis = {name: parts[1] for name, parts in added.items()}
     # One chassis pose per robot (from the plant's body_poses, converted once per step) for
     # its compass, GPS and odometry; and its chassis' state (C++, no pose conversion) for what
-    # samples every step (the tilt monitor, the run log).
-    chassis_ports = (add_chassis_poses(builder, plant, chassis),
-                     add_chassis_states(builder, plant, chassis))
+    # samples every step: the run log (`<name>.chassis_state`), and from it the largest tilt.
+    chassis_poses = add_chassis_poses(builder, plant, chassis)
+    add_chassis_states(builder, plant, chassis)
     robots, renderers, renderer_classes = {}, {}, {}
     step = sc.physics_step(scenario.plant_config, scenario.simulator_config)
     for name, robot in scenario.robots.items():
-        robots[name] = _add_drive(builder, plant, scenario, name, added[name], chassis_ports)
+        robots[name] = _add_drive(builder, plant, scenario, name, added[name],
+                                  chassis_poses[name])
         robots[name].sensors = add_sensors(SensorSite(
             builder, plant, scene_graph, name, robots[name].model_instance, scenario.world,
             scenario.random_seed, step, save_camera, renderers, renderer_classes,
@@ -374,13 +370,12 @@ def _add_render_copy(builder, scenario: sc.Scenario, robot: str):
     return plant, scene_graph, added[robot][0]
 
 
-def _add_drive(builder, plant, scenario: sc.Scenario, name: str, added, chassis_ports
+def _add_drive(builder, plant, scenario: sc.Scenario, name: str, added, chassis_pose
                ) -> RobotParts:
     """One robot's command source, motion commands, drive controller and wheel servos, its
-    odometry and its monitors (contact telemetry, tip margin, tilt, run log)."""
+    odometry and its monitors (contact telemetry, tip margin)."""
     robot = scenario.robots[name]
     instance, chassis, joints = added
-    chassis_pose, chassis_state = (ports[name] for ports in chassis_ports)
     source = builder.AddNamedSystem(
         f"{name}.commands", CommandSource(robot.commands, robot.drive.control_period))
     controller = builder.AddNamedSystem(f"{name}.drive_controller", DriveController(robot.drive))
@@ -413,12 +408,10 @@ def _add_drive(builder, plant, scenario: sc.Scenario, name: str, added, chassis_
                     servo_velocity_sign(scenario.simulator_config))
     _add_telemetry(builder, plant, name, added, chassis_pose, selector.get_output_port(),
                    sc.continuous_step(scenario.plant_config, scenario.simulator_config))
-    tilt = builder.AddNamedSystem(f"{name}.tilt_monitor", TiltMonitor(TILT_SAMPLE_PERIOD))
-    builder.Connect(chassis_state, tilt.GetInputPort("chassis_state"))
     for port in ("drive_status", "axle_speed_command", "axle_speed"):
         builder.ExportOutput(controller.GetOutputPort(port), f"{name}.{port}")
     builder.ExportOutput(plant.get_state_output_port(instance), f"{name}.state")
-    return RobotParts(name, instance, chassis, joints, source, controller, tilt, motion=motion,
+    return RobotParts(name, instance, chassis, joints, source, controller, motion=motion,
                       chassis_pose=chassis_pose)
 
 

@@ -12,10 +12,10 @@ station's wiring, each diagram driving the benchmark's figure of eight (`bench.D
 - + the chassis poses, encoders, compass, GPS and drive state (no events of their own: they
   cost only when something reads them);
 - + the command source and motion (the script replaces the fixed request);
-- + dead reckoning, + the tilt monitor (each an event every 10 ms);
+- + dead reckoning (an event every 10 ms);
 - + the wheel contacts and the tip margin (read by nothing per step yet);
 - + the run log (an event every 10 ms; its contact telemetry: the tip margin every row, the
-  loads and slip every 0.1 s);
+  loads and slip every 0.1 s; the run's largest tilt is read from its samples);
 - the station itself (`Simulation`, physics only), which the last layer should match;
 - the station with one Drake-side setting changed (`VARIANTS`).
 
@@ -44,11 +44,10 @@ from pydrake.trajectories import PiecewisePolynomial
 from corobot_drake.config import scenario as sc
 from corobot_drake.model import dimensions as dim
 from corobot_drake.resources import DEFAULT_SCENARIO
-from corobot_drake.station import TILT_SAMPLE_PERIOD, _add_robot, _add_world
+from corobot_drake.station import _add_robot, _add_world
 from corobot_drake.systems.contact import add_wheel_contacts
 from corobot_drake.systems.dead_reckoning import DeadReckoning
 from corobot_drake.systems.drive import CommandSource, DriveController, DriveRequest
-from corobot_drake.systems.monitor import TiltMonitor
 from corobot_drake.systems.motion import MotionCommands
 from corobot_drake.systems.odometry import add_chassis_poses, add_chassis_states, add_odometry
 from corobot_drake.systems.runlog import HELD_PERIOD, SAMPLED, add_run_log
@@ -59,11 +58,11 @@ from lab import bench
 LAYERS = ("plant alone (the station's desired state replayed)",
           "+ drive controller (request fixed)",
           "+ chassis poses, encoders, compass, GPS, drive state",
-          "+ command source and motion (the script)", "+ dead reckoning", "+ tilt monitor",
+          "+ command source and motion (the script)", "+ dead reckoning",
           "+ wheel contacts and tip margin", "+ run log (with the contact telemetry)")
-IDLE_UPDATES = 5
+IDLE_UPDATES = 4
 """The station's Python updates per step and robot (drive controller, command source, motion,
-dead reckoning, tilt monitor)."""
+dead reckoning)."""
 IDLE = f"plant alone + {IDLE_UPDATES} Python updates per step that do nothing"
 """A row of the floor the station's design sets: Drake's dispatch of that many Python updates."""
 STATION = "the station (Simulation, physics only)"
@@ -234,16 +233,13 @@ def _add_robot_layers(builder, plant, name, robot, chassis, joints, selector, co
         builder.Connect(odometry.encoder_ticks, dead_reckoning.GetInputPort("encoder_ticks"))
         builder.Connect(pose, dead_reckoning.GetInputPort("chassis_pose"))
     if layers >= 6:
-        tilt = builder.AddSystem(TiltMonitor(TILT_SAMPLE_PERIOD))
-        builder.Connect(state, tilt.GetInputPort("chassis_state"))
-    if layers >= 7:
         contacts = add_wheel_contacts(builder, name, plant, [j.child_body() for j in joints],
                                       pose, selector.get_output_port(), chassis,
                                       continuous_step)
         add_tip_margin(
             builder, name, plant, chassis.model_instance(), chassis,
             {w: j.child_body() for w, j in zip(dim.WHEEL_NAMES, joints, strict=True)}, pose)
-    if layers >= 8:
+    if layers >= 7:
         add_run_log(builder, name, state, controller.GetOutputPort("drive_status"),
                     odometry.encoder_ticks,
                     {port: contacts.GetOutputPort(port) for port, _ in SAMPLED})

@@ -9,7 +9,7 @@
   and slip angle;
 - `stability.py`: `TipMargin`, the tip-over margin and its least over the run;
 - `slip_markers.py`: `SlipMarkers`, each wheel's slip as a coloured ball in Meshcat;
-- `monitor.py`: `TiltMonitor`; `runlog.py`: the run log (a log sink of C++ signals, its
-  columns made when read);
+- `runlog.py`: the run log (a log sink of C++ signals, its columns and the run's largest tilt
+  made when read);
 - `servo.py`: the probe of CENIC's PD sign defect and its compensation (`add_servo_sign`).
 """

@@ -19,8 +19,12 @@ simulation's contact telemetry, which no real logger has:
   dimensionless (+ traction), deg (+ to the left): `contact.WheelContacts`, sampled every
   `HELD_PERIOD` (0.1 s) and held. tip_margin: deg, `stability.TipMargin` of the row's
   chassis pose (computed when the log is read, as the yaw is).
+
+The run's largest tilt from upright (`max_tilt_deg`) is read from the same samples' chassis
+state, so nothing samples the chassis a second time while the simulation runs.
 """
 
+import math
 from pathlib import Path
 
 import numpy as np
@@ -31,7 +35,8 @@ from corobot_drake.systems.drive import DriveStatus
 from corobot_drake.systems.odometry import CHASSIS_STATE, rotation_rows
 
 LOG_PERIOD = 0.01
-"""s: the run log's sample period (100 Hz)."""
+"""s: the run log's sample period (100 Hz: tilt changes over tenths of a second even in a flip,
+so the largest tilt's samples catch its peak)."""
 RUN_LOG_CHUNK = 1000
 """Samples (10 s at 100 Hz) moved out of the sink at a time when the run log is bounded
 (`Simulation.run_log_window`)."""
@@ -120,6 +125,18 @@ def _made_when_read(column: dict, tip_margin) -> dict:
                  "yaw": np.arctan2(R[:, 1, 0], R[:, 0, 0])},  # as `odometry.heading_of`
         "tip_margin": {"": tip_margin.margin_of_up(R[:, 2, 0], R[:, 2, 1], R[:, 2, 2])},
     }
+
+
+def max_tilt_deg(raw: np.ndarray) -> float:
+    """deg: the largest tilt from upright of the chassis over raw samples [n, `RAW_COLUMNS`]
+    (0 without any): the angle between the chassis' +z and the world's, from each sample's
+    quaternion normalized (a continuous plant's drifts off unit norm). R[2, 2] is
+    1 - 2 (x^2 + y^2) of the unit quaternion; the largest tilt is the smallest R[2, 2]."""
+    if not len(raw):
+        return 0.0
+    qw, qx, qy, qz = (raw[:, RAW_COLUMNS.index(c)] for c in CHASSIS_STATE[:4])
+    cos_tilt = 1.0 - 2.0 * (qx * qx + qy * qy) / (qw * qw + qx * qx + qy * qy + qz * qz)
+    return math.degrees(math.acos(min(1.0, max(-1.0, float(cos_tilt.min())))))
 
 
 def log_rows(sink, root_context, tip_margin) -> np.ndarray:

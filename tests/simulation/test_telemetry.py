@@ -288,10 +288,9 @@ def test_backing_into_the_giant_box_shrinks_the_tip_margin_as_the_chassis_pitche
     # Rest to impact the margin falls by a clear amount (measured 0.9 and 8.6 deg) ...
     assert least < at_rest - least_drop
     # ... and by what the pitch explains: the chassis pitches without rolling, its largest
-    # tilt (the tilt monitor's 100 Hz samples) and least margin (the run log's rows, at the
-    # same instants) are the same sample, and the rigid geometry (the pitch about one axle,
-    # wheels there on the ground) gives the margin within 0.05 deg (the tyres' compression:
-    # ~1 mm of the 60 mm lever).
+    # tilt and least margin (both of the run log's rows, every 10 ms) are the same sample,
+    # and the rigid geometry (the pitch about one axle, wheels there on the ground) gives
+    # the margin within 0.05 deg (the tyres' compression: ~1 mm of the 60 mm lever).
     assert least == pytest.approx(pitched_margin_deg(tilt), abs=0.05)
 
 

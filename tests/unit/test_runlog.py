@@ -1,5 +1,5 @@
-"""TiltMonitor on its own (fixed inputs, updates stepped by a Simulator on the lone system),
-the run log's conversion of its raw samples, and the run-log sink in a small diagram."""
+"""The run log's conversion of its raw samples (the columns, the largest tilt) and the run-log
+sink in a small diagram."""
 
 import math
 
@@ -10,10 +10,8 @@ from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import ConstantVectorSource
 
-from conftest import Stepper
 from corobot_drake.systems.drive import DriveStatus
-from corobot_drake.systems.monitor import TiltMonitor
-from corobot_drake.systems.odometry import heading_of, rotation_rows
+from corobot_drake.systems.odometry import CHASSIS_STATE, heading_of, rotation_rows
 from corobot_drake.systems.runlog import (
     COLUMNS,
     LOG_PERIOD,
@@ -21,6 +19,7 @@ from corobot_drake.systems.runlog import (
     SAMPLED,
     add_run_log,
     log_rows,
+    max_tilt_deg,
     rows_of,
     write_csv,
 )
@@ -41,22 +40,35 @@ def chassis_state(X: RigidTransform) -> np.ndarray:
     return np.concatenate([1.5 * np.array([q.w(), q.x(), q.y(), q.z()]), X.translation()])
 
 
-def test_tilt_monitor_holds_the_largest_sampled_tilt():
-    period = 0.01
-    s = Stepper(TiltMonitor(period), period)
-    assert s.output("max_tilt_deg")[0] == 0.0  # nothing sampled yet
-    s.fix("chassis_state", chassis_state(tilted(30.0, yaw_deg=120.0)))  # yaw is no tilt
-    s.tick()
-    assert s.output("max_tilt_deg")[0] == pytest.approx(30.0, abs=DEG)
-    s.fix("chassis_state", chassis_state(tilted(10.0)))
-    s.tick(5)
-    assert s.output("max_tilt_deg")[0] == pytest.approx(30.0, abs=DEG)
-    s.fix("chassis_state", chassis_state(tilted(0.0, pitch_deg=-45.0)))
-    s.tick()
-    assert s.output("max_tilt_deg")[0] == pytest.approx(45.0, abs=DEG)
-    s.fix("chassis_state", chassis_state(tilted(180.0)))  # upside down
-    s.tick()
-    assert s.output("max_tilt_deg")[0] == pytest.approx(180.0, abs=1e-6)  # acos near -1
+def raw_samples(poses) -> np.ndarray:
+    """Run-log raw samples [n, `RAW_COLUMNS`] whose chassis states are `poses`' (the rest 0)."""
+    raw = np.zeros((len(poses), len(RAW_COLUMNS)))
+    start = RAW_COLUMNS.index(CHASSIS_STATE[0])
+    for row, X in zip(raw, poses, strict=True):
+        row[start:start + len(CHASSIS_STATE)] = chassis_state(X)
+    return raw
+
+
+def test_max_tilt_is_the_largest_tilt_of_the_samples():
+    """Yaw is no tilt; the quaternions (scaled by 1.5) are normalized; roll or pitch, either
+    sign; upside down reads 180 (acos near -1); no sample reads 0."""
+    assert max_tilt_deg(np.zeros((0, len(RAW_COLUMNS)))) == 0.0
+    assert max_tilt_deg(raw_samples([tilted(0.0, yaw_deg=120.0)])) == pytest.approx(0.0, abs=1e-6)
+    samples = [tilted(30.0, yaw_deg=120.0), tilted(10.0)]
+    assert max_tilt_deg(raw_samples(samples)) == pytest.approx(30.0, abs=DEG)
+    samples.append(tilted(0.0, pitch_deg=-45.0))
+    assert max_tilt_deg(raw_samples(samples)) == pytest.approx(45.0, abs=DEG)
+    samples.append(tilted(180.0))
+    assert max_tilt_deg(raw_samples(samples)) == pytest.approx(180.0, abs=1e-6)
+
+
+def test_max_tilt_is_the_largest_of_each_samples_tilt():
+    """The smallest R[2, 2] taken once is the largest of the per-sample tilts, bit for bit:
+    acos is monotonic."""
+    rng = np.random.default_rng(7)
+    poses = [tilted(*angles) for angles in rng.uniform(-60.0, 60.0, (50, 3))]
+    each = [max_tilt_deg(raw_samples([X])) for X in poses]
+    assert max_tilt_deg(raw_samples(poses)) == max(each)
 
 
 def drive_status(enabled=1.0, left=0.25, right=-0.5) -> np.ndarray:
