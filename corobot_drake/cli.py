@@ -494,7 +494,7 @@ def _run(args, scenario, duration: float, foxglove, ros2=None) -> int:
     requested outputs; `foxglove`: the Context the run's topics go to (or None); `ros2`: the
     run's ROS 2 node and bag (`ros2.run.Ros2Front`, or None)."""
     from corobot_drake.sensors.camera import RendererUnavailableError
-    from corobot_drake.simulation import Simulation
+    from corobot_drake.simulation import PhysicsError, Simulation
 
     extras = ros2.extras if ros2 is not None else ()
     if args.serve:  # Meshcat is made in the simulation thread (it must be used from there)
@@ -531,22 +531,32 @@ def _run(args, scenario, duration: float, foxglove, ros2=None) -> int:
     except (ValueError, RendererUnavailableError) as e:  # the loader missed it: still one line
         print(f"error: {args.scenario}: (top level): {e}", file=sys.stderr)
         return 2
-    if args.headless:
-        if math.isinf(duration):
-            duration = HEADLESS_DEFAULT_DURATION
-        progress = _HeadlessProgress(duration)
-        if args.foxglove is not None:  # live: watched as it happens
-            sim.simulator.set_target_realtime_rate(1.0)
-        try:
-            sim.run(duration, progress=progress)
-        except KeyboardInterrupt:  # SIGINT or SIGTERM (`ctrl_c_stops`): keep the run so far
-            progress.finish()
-            _stopped_line(sim, duration)
-        else:
-            progress.finish()
-    else:
-        _run_interactive(sim, meshcat, duration)
+    try:
+        _run_here(sim, meshcat, args.headless, duration, args.foxglove is not None)
+    except PhysicsError as e:  # the run so far is kept: its outputs are written
+        print(f"error: {args.scenario}: {e}", file=sys.stderr, flush=True)
+        return max(_finish(sim, args), 1)
     return _finish(sim, args)
+
+
+def _run_here(sim: Simulation, meshcat, headless: bool, duration: float, live: bool) -> None:
+    """Runs `sim` for `duration` s, headless (`live`: at real time, watched in Foxglove) or
+    in Meshcat."""
+    if not headless:
+        _run_interactive(sim, meshcat, duration)
+        return
+    if math.isinf(duration):
+        duration = HEADLESS_DEFAULT_DURATION
+    progress = _HeadlessProgress(duration)
+    if live:
+        sim.simulator.set_target_realtime_rate(1.0)
+    try:
+        sim.run(duration, progress=progress)
+    except KeyboardInterrupt:  # SIGINT or SIGTERM (`ctrl_c_stops`): keep the run so far
+        progress.finish()
+        _stopped_line(sim, duration)
+    else:
+        progress.finish()
 
 
 def _finish(sim: Simulation, args) -> int:
@@ -558,8 +568,9 @@ def _finish(sim: Simulation, args) -> int:
     _WRITING_OUTPUTS, stopped_before = True, STOPPED_BY
     try:
         summary = sim.summary()
-        print(f"simulated {summary['time']:.2f} s at {summary['realtime_factor']:.1f}x real "
-              "time")
+        rate = summary["realtime_factor"]  # NaN when no step was taken
+        print(f"simulated {summary['time']:.2f} s"
+              + (f" at {rate:.1f}x real time" if math.isfinite(rate) else ""))
         status = _write_results(sim, args, summary)
     finally:
         _WRITING_OUTPUTS = False

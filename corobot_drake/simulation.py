@@ -24,6 +24,7 @@ import numpy as np
 from pydrake.common.yaml import yaml_dump_typed
 from pydrake.geometry import HalfSpace, Role
 from pydrake.math import RigidTransform, RollPitchYaw
+from pydrake.multibody.cenic import CenicIntegrator
 from pydrake.multibody.math import SpatialVelocity
 from pydrake.systems.analysis import ApplySimulatorConfig, Simulator
 from pydrake.systems.framework import EventStatus
@@ -588,7 +589,7 @@ class Simulation:
         self._output_ports: dict = {}
         """The station's output ports read so far (`output_port`), by name."""
         self.simulator = Simulator(self.station.diagram)
-        ApplySimulatorConfig(scenario.simulator_config, self.simulator)
+        apply_simulator_config(scenario, self.simulator)
         self.context = self.simulator.get_mutable_context()
         # The built diagram's key, now: the scenario may be changed in place before a reset.
         self._diagram_key = diagram_key(scenario)
@@ -783,14 +784,31 @@ class Simulation:
         limits.number("t", t, self.time)
         t = max(self.on_step(t), self.time)
         start = time.perf_counter()
-        while True:
-            self.simulator.AdvanceTo(t)
-            applied = [robot._apply_teleport() for robot in self.robots.values()]
-            if not any(applied) or self.time >= t:
-                break
+        try:
+            while True:
+                self._advance_simulator(t)
+                applied = [robot._apply_teleport() for robot in self.robots.values()]
+                if not any(applied) or self.time >= t:
+                    break
+        finally:
+            self._wall_seconds += time.perf_counter() - start
         if self.run_log_window is not None:
             self._collect_run_logs()
-        self._wall_seconds += time.perf_counter() - start
+
+    def _advance_simulator(self, t: float) -> None:
+        """The Simulator's `AdvanceTo(t)`; CENIC's solver giving up on a step is a
+        PhysicsError saying what to change."""
+        try:
+            self.simulator.AdvanceTo(t)
+        except RuntimeError as e:
+            if CENIC_FAILED not in str(e):
+                raise
+            solver = self.scenario.cenic_solver
+            raise PhysicsError(
+                f"cenic_solver: CENIC's step from t = {self.time:.6g} s did not converge within "
+                f"max_iterations {solver.max_iterations} (line searches of at most "
+                f"max_linesearch_iterations {solver.max_linesearch_iterations}): raise them, "
+                "or loosen min_tolerance") from e
 
     def _run_log_sink(self, name: str):
         return self.station.diagram.GetSubsystemByName(f"{name}.run_log")
@@ -968,6 +986,23 @@ class Simulation:
 
 _PER_RUN_ROBOT_FIELDS = ("pose", "velocity", "wheel_angles", "wheel_speeds",
                          "axle_speed_command", "wheel_hold_angles", "odometry", "commands")
+
+
+class PhysicsError(RuntimeError):
+    """The physics could not take a step; `str()` is one line saying what to change."""
+
+
+CENIC_FAILED = "CenicIntegrator: optimization failed"
+"""What Drake's CENIC raises when its solver gives up on a step (`cenic_solver`'s limits)."""
+
+
+def apply_simulator_config(scenario: sc.Scenario, simulator: Simulator) -> None:
+    """Drake's `ApplySimulatorConfig` of the scenario's `simulator_config`, then, when that
+    makes a CENIC integrator, the parameters of its solver (`cenic_solver`)."""
+    ApplySimulatorConfig(scenario.simulator_config, simulator)
+    integrator = simulator.get_mutable_integrator()
+    if isinstance(integrator, CenicIntegrator):
+        integrator.SetSolverParameters(scenario.cenic_solver)
 
 
 def diagram_key(scenario: sc.Scenario) -> str:

@@ -31,7 +31,7 @@ import time
 import numpy as np
 from pydrake.common.yaml import yaml_dump_typed
 from pydrake.multibody.plant import AddMultibodyPlant
-from pydrake.systems.analysis import ApplySimulatorConfig, Simulator
+from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder, LeafSystem
 from pydrake.systems.primitives import (
     ConstantVectorSource,
@@ -44,6 +44,7 @@ from pydrake.trajectories import PiecewisePolynomial
 from corobot_drake.config import scenario as sc
 from corobot_drake.model import dimensions as dim
 from corobot_drake.resources import DEFAULT_SCENARIO
+from corobot_drake.simulation import apply_simulator_config
 from corobot_drake.station import _add_robot, _add_world
 from corobot_drake.systems.contact import add_wheel_contacts
 from corobot_drake.systems.dead_reckoning import DeadReckoning
@@ -161,7 +162,7 @@ def build_layers(scenario: sc.Scenario, layers: int, seconds: float = 10.0,
         builder.AddSystem(_Idle(sc.physics_step(scenario.plant_config, scenario.simulator_config)))
     diagram = builder.Build()
     simulator = Simulator(diagram)
-    ApplySimulatorConfig(scenario.simulator_config, simulator)
+    apply_simulator_config(scenario, simulator)
     context = simulator.get_mutable_context()
 
     def set_command(root, seq, command):

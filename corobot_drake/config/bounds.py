@@ -4,6 +4,7 @@ Every other range, and the `bounded` fields that declare theirs, is in `corobot_
 (Drake-free, so the HTTP process reads it too); this is the part that needs Drake's types.
 """
 
+from pydrake.multibody.contact_solvers import IcfSolverParameters
 from pydrake.multibody.plant import MultibodyPlantConfig
 from pydrake.systems.analysis import GetIntegrationSchemes, SimulatorConfig
 from pydrake.systems.sensors import CameraConfig
@@ -36,6 +37,14 @@ DRAKE_BOUNDS: dict[type, dict[str, object]] = {
         "start_time": Range(0.0, DURATION.high, unit="s",
                             why="the clock of a plant step; negative froze the physics"),
         "target_realtime_rate": Range(0.0, 1000.0, why="0: as fast as possible"),
+    },
+    IcfSolverParameters: {
+        "max_iterations": Range(1, 10_000, why="Newton iterations a step may take"),
+        "min_tolerance": Range(0.0, 0.1, low_open=True),
+        "hessian_reuse_target_iterations": Range(1, 10_000),
+        "max_linesearch_iterations": Range(1, 10_000),
+        "linesearch_tolerance": Range(0.0, 0.1, low_open=True),
+        "alpha_max": Range(0.0, 10.0, low_open=True),
     },
     CameraConfig: {
         "width": Range(1, CAMERA_MAX_PIXELS, unit="pixels"),

@@ -18,6 +18,7 @@ from typing import Union
 
 from pydrake.common.schema import Transform
 from pydrake.common.yaml import yaml_dump_typed
+from pydrake.multibody.contact_solvers import IcfSolverParameters
 from pydrake.multibody.parsing import ModelDirective
 from pydrake.multibody.plant import MultibodyPlantConfig
 from pydrake.systems.analysis import SimulatorConfig
@@ -290,6 +291,17 @@ def _default_simulator_config() -> SimulatorConfig:
                            use_error_control=False)
 
 
+LINESEARCH_TOLERANCE = 1e-3
+"""CENIC's exact line search stops within this (Drake's default 1e-8): each Newton iteration
+still converges to `min_tolerance`, so a step's result moves by nanometres (docs/performance.md,
+"CENIC's solver"), and a slipping robot's step takes a third fewer line-search iterations."""
+
+
+def _default_cenic_solver() -> IcfSolverParameters:
+    """Drake's solver parameters but `LINESEARCH_TOLERANCE`."""
+    return IcfSolverParameters(linesearch_tolerance=LINESEARCH_TOLERANCE)
+
+
 def physics_step(plant_config: MultibodyPlantConfig, simulator_config: SimulatorConfig
                  ) -> float:
     """s: the physics' step: a discrete plant's `time_step`, or a continuous plant's (CENIC's)
@@ -324,6 +336,11 @@ class Scenario:
     """s; the CLI's --duration overrides it (.inf: until stopped)."""
     plant_config: MultibodyPlantConfig = dc.field(default_factory=_default_plant_config)
     simulator_config: SimulatorConfig = dc.field(default_factory=_default_simulator_config)
+    cenic_solver: IcfSolverParameters = dc.field(default_factory=_default_cenic_solver)
+    """The solver of CENIC's steps (Drake's `IcfSolverParameters`; with `integration_scheme:
+    cenic` only): Drake's, its line search stopped sooner (`_default_cenic_solver`). With
+    `use_error_control: false` each step converges to `min_tolerance` (docs/performance.md,
+    "CENIC's solver": what each parameter costs and moves)."""
     world: World = dc.field(default_factory=World)
     directives: list[ModelDirective] = dc.field(default_factory=list)
     """Models from SDFormat, URDF or MJCF files, as Drake's `ModelDirectives` (`add_model`,

@@ -32,7 +32,7 @@ import numpy as np
 import yaml
 from pydrake.common import pretty_class_name
 from pydrake.common.schema import Transform
-from pydrake.common.yaml import yaml_load_typed
+from pydrake.common.yaml import yaml_dump_typed, yaml_load_typed
 from pydrake.geometry import RenderEngineGlParams, RenderEngineVtkParams, Rgba
 
 from corobot_drake.config import placement
@@ -547,6 +547,10 @@ class LayerChecks:
             problem = TIME_STEP.problem(s.simulator_config.max_step_size)
             if problem:
                 self.fail("simulator_config.max_step_size", f"{problem} (cenic's step)")
+        elif _dumped(s.cenic_solver) != _dumped(sc.Scenario().cenic_solver):
+            self.fail("cenic_solver", "sets the solver of cenic's steps; the plant steps with "
+                      f"{s.simulator_config.integration_scheme} (set it only with "
+                      "integration_scheme: cenic)")
 
     def _mesh(self, path: str, mesh: sc.Mesh, body: sc.WorldBody) -> None:
         try:
@@ -781,6 +785,11 @@ def _type_text(tp) -> str:
         return " or ".join(_type_text(t) for t in typing.get_args(tp))
     origin = typing.get_origin(tp)
     return "None" if tp is type(None) else _type_name(origin or tp)
+
+
+def _dumped(struct) -> str:
+    """A Drake config struct as YAML (they have no value equality)."""
+    return yaml_dump_typed(struct)
 
 
 def _join(path: str, name: str) -> str:

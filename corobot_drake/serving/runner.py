@@ -214,7 +214,12 @@ class SimRunner:
             self._ready.set()
             self._loop()
         except BaseException as e:  # the runner must report, not vanish silently
-            log.exception("simulation thread stopped")
+            from corobot_drake.simulation import PhysicsError
+
+            if isinstance(e, PhysicsError):  # a limit of the scenario's: one line says it
+                log.error("simulation thread stopped: %s", e)
+            else:
+                log.exception("simulation thread stopped")
             self.error = e
         finally:
             self._ready.set()
