@@ -190,6 +190,9 @@ def _performance_specs(c: SimpleNamespace) -> list[Spec]:
              (Command("python tools/bench_compare.py --old /tmp/corobot-old --rounds 3 "
                       f"--new-override {shlex.quote(SAP_OVERRIDE)}"),),
              r.render_bench_robots, TIMING, 600),
+        Spec("cenic-solver", "docs/performance.md",
+             (Command("python tools/cenic_solver.py --repeats 5"),), r.render_bench_study,
+             TIMING, 200),
         Spec("box-push", "docs/performance.md", (measure_command("box-push"),),
              r.render_box_push, DETERMINISTIC, 60),
         Spec("spin-steps", "docs/tuning.md", (measure_command("spin-steps"),),
