@@ -211,6 +211,12 @@ OVERRIDES = [
               "cenic needs a continuous plant"),
     _override("CENIC step 1 s", "simulator_config: {max_step_size: 1.0}",
               "simulator_config.max_step_size", "[0.0001, 0.02] s"),
+    _override("CENIC solver tolerance 0", "cenic_solver: {min_tolerance: 0.0}",
+              "cenic_solver.min_tolerance", "(0, 0.1]"),
+    _override("CENIC solver under SAP",
+              "{plant_config: {time_step: 0.01}, simulator_config: {integration_scheme: "
+              "runge_kutta3}, cenic_solver: {max_iterations: 50}}", "cenic_solver",
+              "only with integration_scheme: cenic"),
     _override("step negative", "plant_config: {time_step: -0.01}", STEP, "got -0.01"),
     _override("step inf", "plant_config: {time_step: .inf}", STEP, "got inf"),
     _override("step 1e300", "plant_config: {time_step: 1e300}", STEP, "got 1e+300"),
