@@ -806,9 +806,10 @@ class Simulation:
             solver = self.scenario.cenic_solver
             raise PhysicsError(
                 f"cenic_solver: CENIC's step from t = {self.time:.6g} s did not converge within "
-                f"max_iterations {solver.max_iterations} (line searches of at most "
-                f"max_linesearch_iterations {solver.max_linesearch_iterations}): raise them, "
-                "or loosen min_tolerance") from e
+                f"max_iterations {solver.max_iterations} (line searches to linesearch_tolerance "
+                f"{solver.linesearch_tolerance:g} in at most max_linesearch_iterations "
+                f"{solver.max_linesearch_iterations}): raise the iterations, tighten the line "
+                "search or loosen min_tolerance") from e
 
     def _run_log_sink(self, name: str):
         return self.station.diagram.GetSubsystemByName(f"{name}.run_log")

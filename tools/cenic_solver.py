@@ -29,7 +29,8 @@ def main(argv=None) -> int:
     rates = {s: [] for s in settings}
     for _ in tqdm(range(args.repeats), desc="gym rounds", unit="round", file=sys.stderr):
         for s in settings:
-            rates[s].append(cenic_solver.gym_rate(s))
+            if "failed" not in drives[s]:
+                rates[s].append(cenic_solver.gym_rate(s))
     print(f"machine: {machine()}; {cenic_solver.SECONDS:g} s of driving, "
           f"{cenic_solver.GYM_STEPS} gym steps x {args.repeats} rounds\n")
     print(cenic_solver.table(drives, rates))

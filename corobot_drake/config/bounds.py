@@ -43,7 +43,8 @@ DRAKE_BOUNDS: dict[type, dict[str, object]] = {
         "min_tolerance": Range(0.0, 0.1, low_open=True),
         "hessian_reuse_target_iterations": Range(1, 10_000),
         "max_linesearch_iterations": Range(1, 10_000),
-        "linesearch_tolerance": Range(0.0, 0.1, low_open=True),
+        "linesearch_tolerance": Range(0.0, 0.02, low_open=True,
+                                      why="5e-2 stops CENIC converging at the first steps"),
         "alpha_max": Range(0.0, 10.0, low_open=True),
     },
     CameraConfig: {

@@ -191,7 +191,7 @@ def _performance_specs(c: SimpleNamespace) -> list[Spec]:
                       f"--new-override {shlex.quote(SAP_OVERRIDE)}"),),
              r.render_bench_robots, TIMING, 600),
         Spec("cenic-solver", "docs/performance.md",
-             (Command("python tools/cenic_solver.py --repeats 5"),), r.render_bench_study,
+             (Command("python tools/cenic_solver.py --repeats 9"),), r.render_bench_study,
              TIMING, 200),
         Spec("box-push", "docs/performance.md", (measure_command("box-push"),),
              r.render_box_push, DETERMINISTIC, 60),
