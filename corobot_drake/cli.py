@@ -163,8 +163,10 @@ class _HeadlessProgress:
               "real time)", end="", file=sys.stderr, flush=True)
 
     def finish(self) -> None:
+        """Ends the progress line (once)."""
         if self._printed:
             print(file=sys.stderr)
+            self._printed = False
 
 
 def run_log_window(args) -> float | None:
@@ -519,6 +521,9 @@ def _run(args, scenario, duration: float, foxglove, ros2=None) -> int:
         except (ValueError, RendererUnavailableError) as e:
             print(f"error: {args.scenario}: (top level): {e}", file=sys.stderr)
             return 2
+        except PhysicsError as e:  # its outputs are written (`run_live`)
+            print(f"error: {args.scenario}: {e}", file=sys.stderr, flush=True)
+            return 1
     meshcat = None
     if not args.headless:
         from pydrake.geometry import StartMeshcat
@@ -555,7 +560,7 @@ def _run_here(sim: Simulation, meshcat, headless: bool, duration: float, live: b
     except KeyboardInterrupt:  # SIGINT or SIGTERM (`ctrl_c_stops`): keep the run so far
         progress.finish()
         _stopped_line(sim, duration)
-    else:
+    finally:  # (also before a PhysicsError's line: the progress line ends first)
         progress.finish()
 
 

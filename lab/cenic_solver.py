@@ -48,7 +48,7 @@ SETTINGS = (
     Setting("linesearch_tolerance 1e-4", linesearch_tolerance=1e-4),
     Setting(f"**linesearch_tolerance {LINESEARCH_TOLERANCE:g}** (the default)",
             linesearch_tolerance=LINESEARCH_TOLERANCE),
-    Setting("linesearch_tolerance 1e-2", linesearch_tolerance=1e-2),
+    Setting("linesearch_tolerance 1e-2 (past the loader's bound)", linesearch_tolerance=1e-2),
     Setting("linesearch_tolerance 5e-2 (past the loader's bound)", linesearch_tolerance=5e-2),
     Setting(f"min_tolerance 1e-6, linesearch_tolerance {LINESEARCH_TOLERANCE:g}",
             min_tolerance=1e-6, linesearch_tolerance=LINESEARCH_TOLERANCE),

@@ -212,7 +212,9 @@ OVERRIDES = [
     _override("CENIC step 1 s", "simulator_config: {max_step_size: 1.0}",
               "simulator_config.max_step_size", "[0.0001, 0.02] s"),
     _override("CENIC solver tolerance 0", "cenic_solver: {min_tolerance: 0.0}",
-              "cenic_solver.min_tolerance", "(0, 0.1]"),
+              "cenic_solver.min_tolerance", "(0, 1e-05]"),
+    _override("CENIC solver iterations past Drake's int", "cenic_solver: {max_iterations: "
+              "2147483648}", "cenic_solver.max_iterations", "(Drake's int)"),
     _override("CENIC solver under SAP",
               "{plant_config: {time_step: 0.01}, simulator_config: {integration_scheme: "
               "runge_kutta3}, cenic_solver: {max_iterations: 50}}", "cenic_solver",

@@ -294,9 +294,8 @@ def _default_simulator_config() -> SimulatorConfig:
 LINESEARCH_TOLERANCE = 1e-3
 """CENIC's exact line search stops within this (Drake's default 1e-8): each step still
 converges to `min_tolerance`, so the robot moves by a fraction of a nanometre
-(docs/performance.md, "CENIC's solver"), and a slipping robot's step takes a third fewer
-line-search iterations. At 5e-2 the solver no longer converges; 1e-3 keeps a factor 50 from
-there."""
+(docs/performance.md, "CENIC's solver"), and a slipping robot's step takes 30% fewer
+line-search iterations. From about 2e-2 the solver gives up on some steps (the gym's)."""
 
 
 def _default_cenic_solver() -> IcfSolverParameters:
@@ -342,7 +341,7 @@ class Scenario:
     """The solver of CENIC's steps (Drake's `IcfSolverParameters`; with `integration_scheme:
     cenic` only): Drake's, its line search stopped sooner (`_default_cenic_solver`). With
     `use_error_control: false` each step converges to `min_tolerance` (docs/performance.md,
-    "CENIC's solver": what each parameter costs and moves)."""
+    "CENIC's solver": what the tolerances cost and move, and why the bounds)."""
     world: World = dc.field(default_factory=World)
     directives: list[ModelDirective] = dc.field(default_factory=list)
     """Models from SDFormat, URDF or MJCF files, as Drake's `ModelDirectives` (`add_model`,

@@ -285,6 +285,8 @@ class _SchemaWalk:
                       f"got {node.value!r}")
         if tp is float and math.isnan(value):
             self.fail(node, path, "NaN is not allowed")
+        if tp is int and DRAKE_INT.problem(value):  # the typed load would fail without a field
+            self.fail(node, path, DRAKE_INT.problem(value))
 
     def _list(self, node, item_type, path, size: int | None = None):
         if not isinstance(node, yaml.SequenceNode):

@@ -88,9 +88,11 @@ def run_live(front: Ros2Front, make_sim, meshcat: bool, duration: float,
     """Runs the simulation (`make_sim(meshcat or None)`, built in its thread) in real time with
     the node attached, until `duration` simulated s have passed or Ctrl-C; then returns
     `finish(sim)`, called in the simulation thread (Meshcat, which a replay is written from,
-    answers only the thread that made it). What building it raised is raised."""
+    answers only the thread that made it). What building it raised is raised; a PhysicsError
+once `finish` has written the run so far."""
     from corobot_drake.serving.runner import SimulationStoppedError
     from corobot_drake.serving.serve import sim_runner
+    from corobot_drake.simulation import PhysicsError
 
     runner = sim_runner(make_sim, meshcat, run_log_window=run_log_window)
     front.attach(runner)
@@ -110,6 +112,8 @@ def run_live(front: Ros2Front, make_sim, meshcat: bool, duration: float,
         pass  # the simulation thread ended: its error is raised below
     finally:
         runner.stop()
+    if isinstance(runner.error, PhysicsError):  # a step the physics gave up on: the run so
+        finish(runner.sim)  # far is written, from here (the simulation's thread has ended)
     raise runner.error or RuntimeError("the simulation stopped")
 
 
