@@ -386,6 +386,19 @@ HOLD_SLACK = 1e-4
 instead (6 um at the rim: the most a hold ever pulls a wheel back)."""
 
 
+class Tracking:
+    """What the drive's hold knows (`DriveController`'s mode state, a float)."""
+
+    TRACKING = 0.0
+    """The hold angles are up to date: held wheels' hold angles, the others' angles at the
+    last update."""
+    UNTRACKED = 1.0
+    """Both sides were commanded to turn at the last update: no wheel held, hold angles not
+    updated."""
+    IDLE = 2.0
+    """UNTRACKED, and the axles at their targets: nothing changes until a new request."""
+
+
 def _clip(value: float, limit: float) -> float:
     """`value` within [-limit, limit], as a float."""
     return float(min(max(value, -limit), limit))
@@ -420,8 +433,8 @@ class DriveController(LeafSystem):
     Output `drive_status` (5, `DriveStatus`: read it by name).
     Output `axle_speed` [front_left, front_right, rear_left, rear_right] measured, rad/s.
     Discrete state, updated every `drive.control_period` s: the seq of the last request acted
-    on, the `DriveStatus`, the slewed axle speeds (and the desired state made from them) and
-    the wheels' hold angles.
+    on and the hold's `Tracking`, the `DriveStatus`, the slewed axle speeds (and the desired
+    state made from them) and the wheels' hold angles.
     A new request sets the enable level and (when enabled) the motion target; disabled,
     everything is held at zero; the axle speeds then move towards the targets by at most
     `drive.slew_rate * drive.control_period`, or jump to them for a request marked
@@ -433,6 +446,11 @@ class DriveController(LeafSystem):
     HOLD_SPEED / 2, so it never looks like motion). The servo alone only damps: without the
     hold a robot at rest rolls, at up to ~2 um/s, into the nearest stable facet of its tyres'
     hydroelastic mesh, up to ~2 mm (docs/tuning.md, "At rest").
+
+    While both sides are commanded to turn no wheel can be held, so the hold angles are not
+    tracked (`Tracking.UNTRACKED`: a wheel on a side that stops is then held where it is at
+    that update), and once the axles are at their targets an update reads only the request's
+    seq until a new one comes (`Tracking.IDLE`): a steady drive costs no per-step work.
     """
 
     def __init__(self, drive: Drive):
@@ -446,7 +464,7 @@ class DriveController(LeafSystem):
         # ports (no Python call when the plant reads its desired state every step).
         enabled = DriveStatus.Zero()
         enabled.enabled = 1.0
-        self._seq = self.DeclareDiscreteState(1)
+        self._mode = self.DeclareDiscreteState(2)  # [seq, Tracking]
         self._status = self.DeclareDiscreteState(enabled[:])
         self._axle = self.DeclareDiscreteState(2)
         self._desired = self.DeclareDiscreteState(8)
@@ -496,7 +514,10 @@ class DriveController(LeafSystem):
         # two to eight numbers pydrake's numpy views, input-port copies and list conversions
         # cost more than the update's arithmetic, and this runs every control period.
         request = self._request_port.Eval(context)
-        if request.seq != context.get_discrete_state(self._seq)[0]:
+        seq, tracking = context.get_discrete_state(self._mode).get_value().tolist()
+        if request.seq == seq and tracking == Tracking.IDLE:
+            return
+        if request.seq != seq:
             target_left, target_right, jump = self._take(context, discrete_state, request)
         else:
             status = context.get_discrete_state(self._status)
@@ -508,7 +529,17 @@ class DriveController(LeafSystem):
         else:
             new_left = _slew(left, target_left, self._step)
             new_right = _slew(right, target_right, self._step)
-        correction = self._hold(context, discrete_state, new_left, new_right)
+        if (new_left != 0.0 and new_right != 0.0) or self._drive.hold_gain == 0.0:
+            # No wheel can be held: the desired state is the axles' alone.
+            correction = None
+            new_tracking = (Tracking.IDLE if (new_left, new_right) == (target_left, target_right)
+                            else Tracking.UNTRACKED)
+        else:
+            correction = self._hold(context, discrete_state, new_left, new_right,
+                                    tracking != Tracking.TRACKING)
+            new_tracking = Tracking.TRACKING
+        if request.seq != seq or new_tracking != tracking:
+            discrete_state.set_value(self._mode, np.array([float(request.seq), new_tracking]))
         if (new_left, new_right) != (left, right) or correction is not None:
             self._set_axle(discrete_state, new_left, new_right, correction)
 
@@ -517,7 +548,6 @@ class DriveController(LeafSystem):
         axle speed targets (rad/s) and whether the axles jump to them (a request marked
         `immediate`, or a disabled drive, held at zero at once). The status as a plain list:
         a closed-loop command sends a request every period."""
-        discrete_state.set_value(self._seq, np.array([float(request.seq)]))
         if not request.enabled:
             discrete_state.set_value(self._status, np.zeros(len(DriveStatus.get_fields())))
             return 0.0, 0.0, True
@@ -530,20 +560,21 @@ class DriveController(LeafSystem):
         discrete_state.set_value(self._status, np.array([1.0, *target]))
         return float(target[2]), float(target[3]), jump
 
-    def _hold(self, context, discrete_state, left: float, right: float):
-        """Updates the hold angles; returns the wheels' v_d corrections (rad/s, actuator
-        order), or None when there are none now and were none before (nothing to write)."""
+    def _hold(self, context, discrete_state, left: float, right: float, untracked: bool):
+        """Updates the hold angles (`untracked`: they were not tracked at the last update, so
+        no wheel is held and none is held where it was then); returns the wheels' v_d
+        corrections (rad/s, actuator order), or None when there are none now and were none
+        before (nothing to write)."""
         gain = self._drive.hold_gain
-        if gain == 0.0:
-            return None
         # Plain floats: on four numbers numpy's per-call overhead costs more than the sums.
         wheel_state = self._wheel_state_port.EvalBasicVector(context).get_value().tolist()
         q, v = wheel_state[:4], wheel_state[4:]
-        held = context.get_discrete_state(self._hold_angle).get_value().tolist()
+        held = (q if untracked
+                else context.get_discrete_state(self._hold_angle).get_value().tolist())
         sides = [left, right, left, right]
         hold = [h if side == 0.0 and abs(w) < HOLD_SPEED and abs(a - h) <= HOLD_SLACK else a
                 for side, w, a, h in zip(sides, v, q, held, strict=True)]
-        if hold != held:
+        if untracked or hold != held:
             discrete_state.set_value(self._hold_angle, np.array(hold))
         limit = 0.5 * HOLD_SPEED
         correction = [min(max(gain * (h - a), -limit), limit) for h, a in zip(hold, q, strict=True)]
@@ -572,14 +603,22 @@ class DriveController(LeafSystem):
 
     def hold_angles(self, root_context) -> list[float]:
         """rad, per wheel (`dimensions.WHEEL_NAMES` order): where the hold keeps each wheel
-        while it rests (a wheel not held: its angle at the last update)."""
+        while it rests (a wheel not held: its angle at the last update; while both sides
+        turn, when they are not tracked, its angle now)."""
         context = self.GetMyContextFromRoot(root_context)
+        if context.get_discrete_state(self._mode).GetAtIndex(1) != Tracking.TRACKING:
+            return self._wheel_state_port.Eval(context)[:4].tolist()
         return [float(a) for a in context.get_discrete_state(self._hold_angle).get_value()]
 
     def SetHoldAngles(self, context, angles) -> None:
         """Sets the hold angles (rad, per wheel): an initial condition (a saved scene; the
         wheels' own angles when none is given). `context` is this system's."""
         context.SetDiscreteState(self._hold_angle, np.asarray(angles, dtype=float))
+        self._set_tracking(context, Tracking.TRACKING)
+
+    def _set_tracking(self, context, tracking: float) -> None:
+        seq = context.get_discrete_state(self._mode).GetAtIndex(0)
+        context.SetDiscreteState(self._mode, np.array([seq, tracking]))
 
     def Halt(self, context) -> None:
         """Stops the wheels at once (powers, targets and slewed axle speeds to 0): what a
@@ -595,3 +634,5 @@ class DriveController(LeafSystem):
         status.power_left, status.power_right = left / scaling, right / scaling
         context.SetDiscreteState(self._status, status[:])
         self._set_axle(context.get_mutable_discrete_state(), left, right)
+        if context.get_discrete_state(self._mode).GetAtIndex(1) == Tracking.IDLE:
+            self._set_tracking(context, Tracking.UNTRACKED)  # the next update writes

@@ -460,3 +460,46 @@ def test_an_update_that_changes_nothing_is_not_applied():
         "SetPower", "Wait", "AllStop"]
     s.tick(20)
     assert s.simulator.get_num_unrestricted_updates() == 3
+
+
+def test_a_steady_drive_writes_no_state():
+    """Both sides turning at their targets: the updates change nothing, however the wheels
+    turn (no hold is tracked), and `hold_angles` reads the wheels' angles now."""
+    s = controller()
+    s.fix("request", DriveRequest(1, SetPower(0.1, -0.2)))
+    s.tick(round(0.2 * K / STEP) + 1)  # slewed to the targets (0.2 K rad/s at STEP a tick)
+    np.testing.assert_allclose(s.output("axle_speed_command"), [0.1 * K, -0.2 * K],
+                               atol=EXACT)
+    state = s.context.get_discrete_state()
+    before = [state.get_vector(i).CopyToVector() for i in range(state.num_groups())]
+    turned = wheels([1.0, -2.0, 1.5, -2.5], [0.1 * K / 2, -0.2 * K, 0.1 * K, -0.2 * K])
+    s.fix("wheel_state", turned)
+    s.tick(3)
+    for i, values in enumerate(before):
+        np.testing.assert_array_equal(state.get_vector(i).CopyToVector(), values)
+    assert s.system.hold_angles(s.context) == [1.0, -2.0, 1.5, -2.5]
+    s.fix("request", DriveRequest(2, SetPower(0.1, -0.2)))  # the same again: still steady
+    s.tick()
+    np.testing.assert_array_equal(s.output("desired_state")[4:],
+                                  [0.1 * K, -0.2 * K, 0.1 * K, -0.2 * K])
+
+
+def test_a_wheel_stopped_from_a_steady_drive_is_held_where_it_stops():
+    """Hold angles are not tracked while both sides turn: a wheel at rest when its side
+    stops (at once: disabled) is held at its angle at that update (not at its angle at the
+    update before, within `HOLD_SLACK` of it), and pulled back to it."""
+    s = controller()
+    s.fix("request", DriveRequest(1, SetPower(0.05, 0.05)))
+    stopped = [0.7, 0.8, 0.9, 1.0]
+    s.fix("wheel_state", wheels([a - 5e-5 for a in stopped], [1e-4] * 4))  # slow (a wall)
+    s.tick(round(0.05 * K / STEP) + 3)  # steady
+    s.fix("wheel_state", wheels(stopped))  # at rest
+    s.fix("request", DriveRequest(2, Enable(False), enabled=False))
+    s.tick()
+    np.testing.assert_array_equal(s.output("desired_state"), np.zeros(8))
+    assert s.system.hold_angles(s.context) == stopped
+    s.fix("wheel_state", wheels([0.7 + 2e-5, 0.8, 0.9, 1.0 - 1e-5]))
+    s.tick()
+    gain = DRIVE.hold_gain
+    np.testing.assert_allclose(s.output("desired_state")[4:],
+                               [-gain * 2e-5, 0.0, 0.0, gain * 1e-5], rtol=1e-9, atol=1e-15)
