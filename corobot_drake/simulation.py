@@ -49,8 +49,10 @@ from corobot_drake.systems.odometry import DriveState
 from corobot_drake.systems.runlog import (
     COLUMNS,
     RUN_LOG_CHUNK,
+    ContactSamples,
     log_rows,
     max_tilt_deg,
+    tip_margins,
     write_csv,
 )
 
@@ -375,8 +377,13 @@ class Robot:
     def min_tip_margin_deg(self) -> float:
         """The least `tip_margin_deg` so far, deg: over the run log's rows (every 10 ms; with
         `Simulation.run_log_window`, its window) and now."""
-        column = self.run_log()[:, COLUMNS.index("tip_margin")]
-        return float(min(column.min(initial=math.inf), self.tip_margin_deg()))
+        sim = self._sim
+        # From the samples' chassis alone: the contact telemetry need not be made.
+        raw = sim._run_log_sink(self.name).FindLog(sim.context).data().T
+        margins = [chunk[:, COLUMNS.index("tip_margin")]
+                   for chunk in sim._run_log_chunks[self.name]]
+        margins.append(tip_margins(raw, self._tip_margin()))
+        return float(min(min(m.min(initial=math.inf) for m in margins), self.tip_margin_deg()))
 
     def enable_requested(self) -> bool:
         """The enable level last commanded (is_enabled() follows it at the next control tick)."""
@@ -425,7 +432,8 @@ class Robot:
         right_power, left_ticks, right_ticks, x, y, yaw), sampled every `runlog.LOG_PERIOD` s;
         with `Simulation.run_log_window`, only its last part."""
         sim = self._sim
-        rows = log_rows(sim._run_log_sink(self.name), sim.context, self._tip_margin())
+        rows = log_rows(sim._run_log_sink(self.name), sim.context, self._tip_margin(),
+                        sim._contact_samples.get(self.name))
         chunks = sim._run_log_chunks[self.name]
         return np.concatenate([*chunks, rows]) if chunks else rows
 
@@ -608,6 +616,11 @@ class Simulation:
         self._max_tilt_moved_out = dict.fromkeys(self.robots, 0.0)
         """Each robot's largest tilt (deg) over the samples moved out of its sink (kept
         whatever the window)."""
+        self._contact_samples = {} if not self.continuous_step else {
+            name: ContactSamples(self.station.diagram, self.station.plant, name)
+            for name in self.robots}
+        """On a continuous plant, what makes each robot's run-log contact telemetry when it
+        is read."""
         self._start()
 
     def _start(self) -> None:
@@ -654,6 +667,10 @@ class Simulation:
                 self._run_log_sink(name).GetMyMutableContextFromRoot(self.context)).Clear()
             self._run_log_chunks[name].clear()
             self._max_tilt_moved_out[name] = 0.0
+        for samples in self._contact_samples.values():
+            samples.sink.GetMutableLog(samples.sink.GetMyMutableContextFromRoot(
+                self.context)).Clear()
+            samples.clear()
         self.context.SetTime(self.scenario.simulator_config.start_time)
         self._start()
 
@@ -825,7 +842,13 @@ class Simulation:
             log = sink.GetMutableLog(sink.GetMyMutableContextFromRoot(self.context))
             if log.num_samples() < RUN_LOG_CHUNK:
                 continue
-            chunks.append(log_rows(sink, self.context, self.robots[name]._tip_margin()))
+            samples = self._contact_samples.get(name)
+            chunks.append(log_rows(sink, self.context, self.robots[name]._tip_margin(),
+                                   samples))
+            if samples is not None:
+                samples.moved_out(self.context)
+                samples.sink.GetMutableLog(samples.sink.GetMyMutableContextFromRoot(
+                    self.context)).Clear()
             self._max_tilt_moved_out[name] = max(self._max_tilt_moved_out[name],
                                                  max_tilt_deg(log.data().T))
             log.Clear()

@@ -39,7 +39,7 @@ from pydrake.multibody.plant import (
 )
 from pydrake.multibody.tree import CalcSpatialInertia, SpatialInertia, UnitInertia
 from pydrake.systems.framework import Diagram, DiagramBuilder
-from pydrake.systems.primitives import MatrixGain
+from pydrake.systems.primitives import MatrixGain, Multiplexer
 
 from corobot_drake import signals
 from corobot_drake.config import scenario as sc
@@ -349,8 +349,9 @@ def _build_station(scenario: sc.Scenario, meshcat, save_camera, extras, mouse_dr
             render_workers), robot)
     for extra in extras:
         extra(builder, plant, scene_graph, robots, scenario)
+    continuous = sc.continuous_step(scenario.plant_config, scenario.simulator_config) > 0
     for name in robots:
-        _add_signal_outputs(builder, name)
+        _add_signal_outputs(builder, plant, name, continuous)
     builder.ExportOutput(plant.get_body_poses_output_port(), "body_poses")
     builder.ExportOutput(scene_graph.get_query_output_port(), "query_object")
     lcm = None
@@ -433,10 +434,11 @@ def signal_output(builder, robot: str, spec: signals.Signal):
     return builder.GetSubsystemByName(f"{robot}.{spec.system}").GetOutputPort(spec.port)
 
 
-def _add_signal_outputs(builder, name: str) -> None:
+def _add_signal_outputs(builder, plant, name: str, continuous: bool) -> None:
     """Exports each signal's port from its system as `<name>.<port>` (`signals.SIGNALS`
     with a `system`; once every system is in, the front ends' extras too), and adds the run
-    log (`runlog.add_run_log`), which samples those of `runlog.SAMPLED`."""
+    log (`runlog.add_run_log`), which samples those of `runlog.SAMPLED` (on a `continuous`
+    plant, the held ones are made when it is read: `runlog.ContactSamples`)."""
     by_port = {}
     for spec in signals.SIGNALS.values():
         if spec.system:
@@ -447,7 +449,19 @@ def _add_signal_outputs(builder, name: str) -> None:
                 builder.GetSubsystemByName(f"{name}.drive_controller").GetOutputPort(
                     "drive_status"),
                 builder.GetSubsystemByName(f"{name}.encoder_ticks").get_output_port(),
-                {port: by_port[port] for port, _ in SAMPLED})
+                {port: by_port[port] for port, _ in SAMPLED},
+                _contact_state(builder, plant, name) if continuous else None)
+
+
+def _contact_state(builder, plant, name: str):
+    """`<name>.contact_state`: [the plant's state; the robot's held chassis velocity], what
+    its contact telemetry is a function of on a continuous plant (`runlog.ContactSamples`)."""
+    held = builder.GetSubsystemByName(f"{name}.held_chassis_velocity").get_output_port()
+    state = builder.AddNamedSystem(f"{name}.contact_state", Multiplexer(
+        [plant.num_multibody_states(), held.size()]))
+    builder.Connect(plant.get_state_output_port(), state.get_input_port(0))
+    builder.Connect(held, state.get_input_port(1))
+    return state.get_output_port()
 
 
 MESHCAT_DRAG_STIFFNESS = 100.0

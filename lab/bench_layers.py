@@ -15,7 +15,8 @@ station's wiring, each diagram driving the benchmark's figure of eight (`bench.D
 - + dead reckoning (an event every 10 ms);
 - + the wheel contacts and the tip margin (read by nothing per step yet);
 - + the run log (an event every 10 ms; its contact telemetry: the tip margin every row, the
-  loads and slip every 0.1 s; the run's largest tilt is read from its samples);
+  loads and slip every 0.1 s, made when the log is read on a continuous plant; the run's
+  largest tilt is read from its samples);
 - the station itself (`Simulation`, physics only), which the last layer should match;
 - the station with one Drake-side setting changed (`VARIANTS`).
 
@@ -45,7 +46,7 @@ from corobot_drake.config import scenario as sc
 from corobot_drake.model import dimensions as dim
 from corobot_drake.resources import DEFAULT_SCENARIO
 from corobot_drake.simulation import apply_simulator_config
-from corobot_drake.station import _add_robot, _add_world
+from corobot_drake.station import _add_robot, _add_world, _contact_state
 from corobot_drake.systems.contact import add_wheel_contacts
 from corobot_drake.systems.dead_reckoning import DeadReckoning
 from corobot_drake.systems.drive import CommandSource, DriveController, DriveRequest
@@ -243,7 +244,8 @@ def _add_robot_layers(builder, plant, name, robot, chassis, joints, selector, co
     if layers >= 7:
         add_run_log(builder, name, state, controller.GetOutputPort("drive_status"),
                     odometry.encoder_ticks,
-                    {port: contacts.GetOutputPort(port) for port, _ in SAMPLED})
+                    {port: contacts.GetOutputPort(port) for port, _ in SAMPLED},
+                    _contact_state(builder, plant, name) if continuous_step else None)
 
 
 def _cpu_seconds(layers: int | None, scenario: sc.Scenario, seconds: float,

@@ -17,8 +17,11 @@ simulation's contact telemetry, which no real logger has:
 - x, y: chassis position in the world, m. yaw: chassis heading about world z, rad, in (-pi, pi].
 - load_*, slip_ratio_*, slip_angle_*: per wheel (fl front left, fr, rl, rr), N,
   dimensionless (+ traction), deg (+ to the left): `contact.WheelContacts`, sampled every
-  `HELD_PERIOD` (0.1 s) and held. tip_margin: deg, `stability.TipMargin` of the row's
-  chassis pose (computed when the log is read, as the yaw is).
+  `HELD_PERIOD` (0.1 s) and held (a row shows the latest sample before it). On a continuous
+  plant they are made when the log is read (`ContactSamples`), from the plant's state sampled
+  at those times: nothing evaluates them while the simulation runs. tip_margin: deg,
+  `stability.TipMargin` of the row's chassis pose (computed when the log is read, as the yaw
+  is).
 
 The run's largest tilt from upright (`max_tilt_deg`) is read from the same samples' chassis
 state, so nothing samples the chassis a second time while the simulation runs.
@@ -60,6 +63,8 @@ SAMPLED = tuple((s.port, s.log_columns) for s in signals.SIGNALS.values()
 HELD = tuple(s.port for s in signals.SIGNALS.values()
              if s.log and s.name not in MADE_WHEN_READ and s.costly)
 """The sampled ports held (`HELD_PERIOD`): costly to evaluate every sample."""
+HELD_COLUMNS = tuple(c for port, columns in SAMPLED if port in HELD for c in columns)
+"""The run-log columns of the `HELD` ports."""
 COLUMNS = ("time", *(c for s in signals.SIGNALS.values() for c in s.log_columns))
 """The run log's columns: time, then each signal's (`signals.Signal.log`), in the table's
 order."""
@@ -73,21 +78,33 @@ encoders' counts, the chassis' state (`odometry.CHASSIS_STATE`) and the sampled 
 held ones through their holds), all straight from C++ systems' ports (no Python call per
 sample). `rows_of` makes the `COLUMNS` from them when the log is read: the heading, the tip
 margin and whole ticks are functions of one sample each, so they cost nothing while the
-simulation runs."""
+simulation runs. With `ContactSamples` (a continuous plant) the sink records the columns up to
+the `HELD_COLUMNS` (`raw_columns`)."""
+
+
+def raw_columns(held_when_read: bool) -> tuple[str, ...]:
+    """The sink's columns: `RAW_COLUMNS`, less the `HELD_COLUMNS` when they are made when the
+    log is read (`ContactSamples`)."""
+    return tuple(c for c in RAW_COLUMNS if not (held_when_read and c in HELD_COLUMNS))
 
 
 def add_run_log(builder, name: str, chassis_state_port, drive_status_port, encoder_ticks_port,
-                sampled_ports: dict):
-    """Adds `<name>.run_log_row` (a Multiplexer of `RAW_COLUMNS`: `drive_status_port`,
+                sampled_ports: dict, contact_state_port=None):
+    """Adds `<name>.run_log_row` (a Multiplexer of `raw_columns`: `drive_status_port`,
     `encoder_ticks_port`, `chassis_state_port` and the `sampled_ports`, {`SAMPLED` port name:
     output port}, the `HELD` ones each through a hold `<name>.run_log_<port>`) and its sink
-    `<name>.run_log`; returns the sink."""
+    `<name>.run_log`; returns the sink. With `contact_state_port` (a continuous plant's
+    [plant state; the robot's held chassis velocity], `ContactSamples`), the `HELD` ports are
+    not sampled: a sink `<name>.run_log_contact_states` keeps that port every `HELD_PERIOD`
+    s instead, and their columns are made from it when the log is read."""
+    sampled = [(port, columns) for port, columns in SAMPLED
+               if contact_state_port is None or port not in HELD]
     sizes = [len(DriveStatus.get_fields()), 2, len(CHASSIS_STATE),
-             *(len(columns) for _, columns in SAMPLED)]
+             *(len(columns) for _, columns in sampled)]
     row = builder.AddNamedSystem(f"{name}.run_log_row", Multiplexer(sizes))
     for k, port in enumerate((drive_status_port, encoder_ticks_port, chassis_state_port)):
         builder.Connect(port, row.get_input_port(k))
-    for k, (port_name, columns) in enumerate(SAMPLED, start=3):
+    for k, (port_name, columns) in enumerate(sampled, start=3):
         source = sampled_ports[port_name]
         if port_name in HELD:
             hold = builder.AddNamedSystem(f"{name}.run_log_{port_name}",
@@ -95,21 +112,93 @@ def add_run_log(builder, name: str, chassis_state_port, drive_status_port, encod
             builder.Connect(source, hold.get_input_port())
             source = hold.get_output_port()
         builder.Connect(source, row.get_input_port(k))
+    if contact_state_port is not None:
+        # Its publish events fall where the holds' updates would (k x HELD_PERIOD), so the
+        # simulator stops at the same times either way.
+        contacts = LogVectorOutput(contact_state_port, builder, HELD_PERIOD)
+        contacts.set_name(f"{name}.run_log_contact_states")
     sink = LogVectorOutput(row.get_output_port(), builder, LOG_PERIOD)
     sink.set_name(f"{name}.run_log")
     return sink
 
 
-def rows_of(times: np.ndarray, raw: np.ndarray, tip_margin) -> np.ndarray:
+class ContactSamples:
+    """Makes a robot's `HELD_COLUMNS` when its run log is read, on a continuous plant: each
+    sample of `<name>.run_log_contact_states` (the plant's state and the robot's held chassis
+    velocity at a `HELD_PERIOD` time) is set into a copy of the Context at its time and the
+    robot's `WheelContacts` ports are evaluated there: what holds sampling them live would
+    have held, to the bit, and nothing evaluated while the simulation runs. Each sample is
+    made once (kept until `moved_out` or `clear`)."""
+
+    def __init__(self, diagram, plant, name: str):
+        self.sink = diagram.GetSubsystemByName(f"{name}.run_log_contact_states")
+        self._plant = plant
+        self._hold = diagram.GetSubsystemByName(f"{name}.held_chassis_velocity")
+        contacts = diagram.GetSubsystemByName(f"{name}.wheel_contacts")
+        self._ports = [contacts.GetOutputPort(port) for port in HELD]
+        self._made: list[np.ndarray] = []
+        """The columns of the sink's first samples, made so far."""
+        self._before = np.zeros(len(HELD_COLUMNS))
+        """The columns of rows before the sink's first sample: the holds' initial values, or
+        the last sample moved out."""
+
+    def columns(self, root_context, times: np.ndarray) -> np.ndarray:
+        """[len(times), `HELD_COLUMNS`]: at each row time (s), the latest sample before it."""
+        log = self.sink.FindLog(root_context)
+        sample_times, data = log.sample_times(), log.data()
+        if len(self._made) < len(sample_times):
+            self._make(root_context, sample_times, data)
+        table = np.vstack([self._before, *self._made[:len(sample_times)]])
+        return table[np.searchsorted(sample_times, times, side="left")]
+
+    def _make(self, root_context, sample_times, data) -> None:
+        scratch = root_context.Clone()
+        plant_context = self._plant.GetMyMutableContextFromRoot(scratch)
+        hold_context = self._hold.GetMyMutableContextFromRoot(scratch)
+        states = self._plant.num_multibody_states()
+        for j in range(len(self._made), len(sample_times)):
+            scratch.SetTime(sample_times[j])
+            self._plant.SetPositionsAndVelocities(plant_context, data[:states, j])
+            hold_context.SetDiscreteState(data[states:, j])
+            self._made.append(np.concatenate([port.Eval(self._port_context(port, scratch))
+                                              for port in self._ports]))
+
+    @staticmethod
+    def _port_context(port, root_context):
+        return port.get_system().GetMyContextFromRoot(root_context)
+
+    def moved_out(self, root_context) -> None:
+        """The sink's samples are about to be cleared: later rows start from its last one."""
+        log = self.sink.FindLog(root_context)
+        if log.num_samples():
+            self.columns(root_context, log.sample_times()[-1:])
+            self._before = self._made[log.num_samples() - 1]
+        self._made = []
+
+    def clear(self) -> None:
+        """The sink was cleared for a run from the start."""
+        self._made, self._before = [], np.zeros(len(HELD_COLUMNS))
+
+
+def rows_of(times: np.ndarray, raw: np.ndarray, tip_margin, held=None) -> np.ndarray:
     """Run-log rows (`COLUMNS`) from the sink's sample `times` [n] and `raw` samples [n,
-    `RAW_COLUMNS`]; `tip_margin`: the robot's `stability.TipMargin` (its `margin_of_up`)."""
-    column = {c: raw[:, i] for i, c in enumerate(RAW_COLUMNS)}
+    `raw_columns`]; `tip_margin`: the robot's `stability.TipMargin` (its `margin_of_up`);
+    `held`: [n, `HELD_COLUMNS`] when the sink has none (`ContactSamples.columns`)."""
+    column = {c: raw[:, i] for i, c in enumerate(raw_columns(held is not None))}
+    if held is not None:
+        column.update((c, held[:, i]) for i, c in enumerate(HELD_COLUMNS))
     made = _made_when_read(column, tip_margin)
     out = [times]
     for spec in signals.SIGNALS.values():
         values = made.get(spec.name)
         out += [values[key] if values is not None else column[c] for c, key in spec.log]
     return np.column_stack(out)
+
+
+def tip_margins(raw: np.ndarray, tip_margin) -> np.ndarray:
+    """deg: the tip margin (`stability.TipMargin`) of each raw sample's chassis."""
+    R = rotation_rows(raw[:, [RAW_COLUMNS.index(c) for c in CHASSIS_STATE[:4]]])
+    return tip_margin.margin_of_up(R[:, 2, 0], R[:, 2, 1], R[:, 2, 2])
 
 
 def _made_when_read(column: dict, tip_margin) -> dict:
@@ -139,12 +228,15 @@ def max_tilt_deg(raw: np.ndarray) -> float:
     return math.degrees(math.acos(min(1.0, max(-1.0, float(cos_tilt.min())))))
 
 
-def log_rows(sink, root_context, tip_margin) -> np.ndarray:
-    """The log so far as an array with the `COLUMNS` (one row per sample; `rows_of`)."""
+def log_rows(sink, root_context, tip_margin, contact_samples=None) -> np.ndarray:
+    """The log so far as an array with the `COLUMNS` (one row per sample; `rows_of`), its
+    `HELD_COLUMNS` from `contact_samples` (a `ContactSamples`) when it has them."""
     log = sink.FindLog(root_context)
     if not log.num_samples():
         return np.zeros((0, len(COLUMNS)))
-    return rows_of(log.sample_times(), log.data().T, tip_margin)
+    times = log.sample_times()
+    held = None if contact_samples is None else contact_samples.columns(root_context, times)
+    return rows_of(times, log.data().T, tip_margin, held)
 
 
 def write_csv(rows: np.ndarray, path: str | Path) -> None:

@@ -436,3 +436,40 @@ def test_a_simulation_with_meshcat_draws_the_slip_markers():
     headless = Simulation(load_scenario(DEFAULT_SCENARIO, overrides=physics_only_overrides()))
     with pytest.raises(RuntimeError):  # not in headless runs' diagram at all
         headless.station.diagram.GetSubsystemByName("corobot.slip_markers")
+
+
+@pytest.mark.parametrize("plant_config", ["cenic", "sap"])
+def test_the_run_log_holds_the_contact_telemetry_sampled_every_tenth_of_a_second(
+        plant_config, monkeypatch):
+    """Under CENIC a row's loads and slip are the wheel contacts' outputs at the latest 0.1 s
+    sample before it, made from the plant's state sampled then when the log is read: nothing
+    evaluates them while the simulation runs. SAP samples them live, every 0.1 s."""
+    from corobot_drake.systems.runlog import COLUMNS, HELD_COLUMNS
+
+    overrides = ["robots: {corobot: {commands: [!SetPower {left: 1.0, right: -0.4}]}}",
+                 *physics_only_overrides()]
+    if plant_config == "sap":
+        overrides.append("{plant_config: {time_step: 0.01}, "
+                         "simulator_config: {integration_scheme: runge_kutta3}}")
+    evaluations = []
+    calc = contact.WheelContacts._calc_loads
+    monkeypatch.setattr(contact.WheelContacts, "_calc_loads",  # before the ports bind it
+                        lambda self, c, o: (evaluations.append(c.get_time()), calc(self, c, o)))
+    sim = Simulation(load_scenario(DEFAULT_SCENARIO, overrides=overrides))
+    robot = sim.robots["corobot"]
+    sim.advance_to(1.0)  # a sample (10 x 0.1) and a step (100 x 0.01): the same double
+    live = np.array([value for name in ("wheel_loads", "wheel_slip_ratio", "wheel_slip_angle")
+                     for value in robot.signal(name).values()])
+    sim.advance_to(1.05)
+    # The signal's own read above, and under SAP each sample (11 of them, from t = 0).
+    assert len(evaluations) == (1 if plant_config == "cenic" else 12)
+    if plant_config == "sap":
+        return
+    rows = robot.run_log()
+    held = rows[:, [COLUMNS.index(c) for c in HELD_COLUMNS]]
+    times = rows[:, 0]
+    after = (times > 1.0 + 1e-9) & (times < 1.05 + 1e-9)
+    assert after.sum() == 5
+    np.testing.assert_array_equal(held[after], np.tile(live, (5, 1)))
+    assert not np.array_equal(held[np.isclose(times, 1.0)][0], live)  # the sample before
+    np.testing.assert_array_equal(held[0], np.zeros(len(HELD_COLUMNS)))  # no sample before

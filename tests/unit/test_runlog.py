@@ -144,3 +144,30 @@ def test_run_log_samples_every_log_period_and_writes_csv(tmp_path):
     assert lines[0] == ",".join(COLUMNS)
     assert lines[-1] == ("0.100000,1,1,600,600,0.500000,0.250000,-1.000000,"
                          "10,11,12,13,20,21,22,23,30,31,32,33,40")
+
+
+def test_with_a_contact_state_the_held_ports_are_not_sampled_but_their_state_is():
+    """A continuous plant's run log: the row leaves the held telemetry out (made when read:
+    `runlog.ContactSamples`), and a second sink keeps the contact state every 0.1 s."""
+    from corobot_drake.systems.runlog import HELD, HELD_COLUMNS, HELD_PERIOD, raw_columns
+
+    builder = DiagramBuilder()
+    pose = builder.AddSystem(ConstantVectorSource(chassis_state(RigidTransform())))
+    status = builder.AddSystem(ConstantVectorSource(drive_status(left=1.0, right=1.0)))
+    ticks = builder.AddSystem(ConstantVectorSource([3.0, 4.0]))
+    telemetry = {name: builder.AddSystem(ConstantVectorSource(np.zeros(len(columns))))
+                 .get_output_port() for name, columns in SAMPLED}
+    state = builder.AddSystem(ConstantVectorSource([7.0, 8.0, 9.0]))
+    sink = add_run_log(builder, "robot", pose.get_output_port(), status.get_output_port(),
+                       ticks.get_output_port(), telemetry, state.get_output_port())
+    diagram = builder.Build()
+    assert not any(diagram.HasSubsystemNamed(f"robot.run_log_{port}") for port in HELD)
+    simulator = Simulator(diagram)
+    simulator.AdvanceTo(0.25)
+    log = sink.FindLog(simulator.get_context())
+    assert log.data().shape == (len(raw_columns(True)), 26)
+    assert set(raw_columns(True)) == set(RAW_COLUMNS) - set(HELD_COLUMNS)
+    contacts = diagram.GetSubsystemByName("robot.run_log_contact_states")
+    samples = contacts.FindLog(simulator.get_context())
+    np.testing.assert_allclose(samples.sample_times(), np.arange(3) * HELD_PERIOD, atol=1e-12)
+    np.testing.assert_array_equal(samples.data()[:, -1], [7.0, 8.0, 9.0])
