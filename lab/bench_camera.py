@@ -11,7 +11,8 @@ GLX when a display is available), in the default scene with the robot driving a 
   simulated with the camera at 30 Hz minus the same run without it, per frame. `delay` is the
   camera's output_delay: the default 0.03 renders on a worker thread (GL only: Drake's
   `RgbdSensorAsync` under SAP, `sensors.render_worker` under CENIC), so the wall clock pays
-  less than the CPU; 0 renders in the simulation's thread.
+  less than the CPU; 0 renders in the simulation's thread. Under CENIC a worker's frame is
+  waited for only when read: `read` reads each one as it comes out (`advance_reading`).
 """
 
 from __future__ import annotations
@@ -65,20 +66,42 @@ def camera_frame_ms(frames: int = 90, warmup: int = 5, overrides=(), clock: str 
     return 1000.0 * statistics.median(times)
 
 
-def _elapsed(sim: Simulation, seconds: float, clock: str) -> float:
+READ_STEP = 0.01
+"""s: how often a reader looks for a new frame (`advance_reading`): every step of the
+default plant, so it adds no Simulator stop and sees each frame as it comes out."""
+
+
+def advance_reading(sim: Simulation, seconds: float) -> None:
+    """Advances `seconds`, reading each camera frame once as it comes out (a consumer's
+    30 Hz: a recorder, a ROS 2 image publisher), looking every `READ_STEP`."""
+    robot, last = sim.robot(), None
+    for _ in range(round(seconds / READ_STEP)):
+        sim.advance(READ_STEP)
+        taken = robot.camera_image_time()
+        if taken != last:
+            robot.camera_image()
+            last = taken
+
+
+def _elapsed(sim: Simulation, seconds: float, clock: str, read: bool = False) -> float:
     sim.advance(0.1)  # first steps (and the t = 0 frame) out of the timing
     now = _CLOCKS[clock]
     start = now()
-    sim.advance(seconds)
+    if read:
+        advance_reading(sim, seconds)
+    else:
+        sim.advance(seconds)
     return now() - start
 
 
 def camera_overhead_ms(seconds: float = 3.0, overrides=(), clock: str = "wall",
-                       renderer: str = "", delay: float | None = None) -> float:
+                       renderer: str = "", delay: float | None = None,
+                       read: bool = False) -> float:
     """ms (`clock` "wall" or "cpu") the camera adds to the simulation per frame, at 30 Hz,
-    with output_delay `delay` (None: the scenario's)."""
+    with output_delay `delay` (None: the scenario's); `read`: every frame read as it comes
+    out (`advance_reading`; the run without the camera advances by the same steps)."""
     quiet_drake_warnings()
     with_camera = _elapsed(_sim(True, overrides=overrides, renderer=renderer, delay=delay),
-                           seconds, clock)
-    without = _elapsed(_sim(False, overrides=overrides), seconds, clock)
+                           seconds, clock, read)
+    without = _elapsed(_sim(False, overrides=overrides), seconds, clock, read)
     return 1000.0 * (with_camera - without) / (seconds * FPS)

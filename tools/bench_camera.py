@@ -51,18 +51,23 @@ def main(argv=None) -> int:
             ("render, CPU time (all threads)", camera_frame_ms, dict(clock="cpu", **frames),
              RENDERERS)]
     sap = (SAP_PLANT % 0.01,)
-    for plant, delay, label, renderers in (
-            ((), None, "CENIC (the default, output_delay 0.03): taken on its steps, GL "
-             "rendered on a worker thread (VTK in the simulation's thread)", RENDERERS),
-            ((), 0.0, "CENIC with output_delay 0: taken and rendered on its steps, in the "
-             "simulation's thread", RENDERERS),
-            (sap, 0.0, "SAP: in the simulation's thread (output_delay 0)", RENDERERS),
-            (sap, None, "SAP: on a worker thread (output_delay 0.03)", ("RenderEngineGl",))):
+    for plant, delay, read, label, renderers in (
+            ((), None, False, "CENIC (the default, output_delay 0.03): taken on its steps, GL "
+             "rendered on a worker thread (VTK in the simulation's thread), no frame read",
+             RENDERERS),
+            ((), None, True, "CENIC (the default), every frame read as it comes out",
+             RENDERERS),
+            ((), 0.0, False, "CENIC with output_delay 0: taken and rendered on its steps, in "
+             "the simulation's thread", RENDERERS),
+            (sap, 0.0, False, "SAP: in the simulation's thread (output_delay 0)", RENDERERS),
+            (sap, None, False, "SAP: on a worker thread (output_delay 0.03)",
+             ("RenderEngineGl",))):
         for clock in ("wall", "cpu"):
             rows.append((f"added to a simulation at 30 Hz, {label}, "
                          f"{'wall clock' if clock == 'wall' else 'CPU time'}",
                          camera_overhead_ms,
-                         dict(clock=clock, delay=delay, overrides=plant, **seconds), renderers))
+                         dict(clock=clock, delay=delay, overrides=plant, read=read,
+                              **seconds), renderers))
     for label, fn, kwargs, renderers in rows:
         cells = [f"{median(fn, renderer=r, **kwargs):.2f}" if r in renderers else "-"
                  for r in args.renderers]

@@ -27,6 +27,8 @@ IMPORT_BENCH = ("try:\n    from lab import bench\n"
                 "    from corobot_drake.analysis import bench\n")
 """The benchmarks' module in either checkout."""
 DRIVE_TEST = "20-seed drive tests per hour (3 loops, 2 Ray workers: tools/drive_test.py)"
+READING = ("full stack, each camera frame read as it comes out (a consumer: looked for every "
+           "10 ms, as lab.bench_camera.advance_reading)")
 CASES = {
     "physics only": IMPORT_BENCH +
                     "r = bench.realtime_factor([*bench.physics_only_overrides(), *{overrides}], "
@@ -37,6 +39,24 @@ CASES = {
         "r = bench.realtime_factor([*bench.sensor_overrides(ir=True, camera=True), "
         "*{overrides}], {seconds})\n"
         "print(json.dumps({{'wall': r[0], 'cpu': r[1]}}))",
+    READING:
+        IMPORT_BENCH +
+        "import time\n"
+        "from corobot_drake.config.scenario import load_scenario\n"
+        "from corobot_drake.resources import DEFAULT_SCENARIO\n"
+        "from corobot_drake.simulation import Simulation\n"
+        "sim = Simulation(load_scenario(DEFAULT_SCENARIO, overrides=[bench.DRIVING, "
+        "*bench.sensor_overrides(ir=True, camera=True), *{overrides}]))\n"
+        "robot, last = sim.robot(), None\n"
+        "wall, cpu = time.perf_counter(), time.process_time()\n"
+        "for _ in range(round({seconds} / 0.01)):\n"
+        "    sim.advance(0.01)\n"
+        "    taken = robot.camera_image_time()\n"
+        "    if taken != last:\n"
+        "        robot.camera_image()\n"
+        "        last = taken\n"
+        "print(json.dumps({{'wall': {seconds} / (time.perf_counter() - wall), "
+        "'cpu': {seconds} / (time.process_time() - cpu)}}))",
     "gym env steps per s (one env, in process)":
         "import functools\nimport time\nimport corobot_drake.gym.env as gym_env\n"
         "from corobot_drake.config.scenario import load_scenario\n"

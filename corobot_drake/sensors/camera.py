@@ -193,9 +193,12 @@ class CameraHold(LeafSystem):
 
     Input `color_image` (abstract ImageRgba8U, an RgbdSensor's; with a `worker`, never read:
     the worker renders the frame from input `plant_state`, the plant's [q; v] at the capture,
-    held in state of its own until the frame is out). Outputs `rgb_image`
-    (abstract ImageRgba8U, width x height) and `image_time` (1-vector, s: when the frame was
-    taken), both held in state (the frame as a `_HeldFrame`, copied out when read).
+    held in state of its own). Outputs `rgb_image` (abstract ImageRgba8U, width x height) and
+    `image_time` (1-vector, s: when the frame was taken), both held in state (the frame as a
+    `_HeldFrame`, copied out when read). With a `worker` the frame out is held as the plant
+    state it shows, and `rgb_image` takes the worker's render of it when it is read (the
+    render starts at the capture): a simulation whose frames nobody reads never waits for
+    them.
 
     With a plant step (`step` > 0) frames are taken on the plant's steps: at the first step at
     or after each tick. On a discrete plant the scene only changes at steps, so the image is
@@ -223,22 +226,32 @@ class CameraHold(LeafSystem):
         if worker is not None:
             self._plant_state = self.DeclareVectorInputPort("plant_state", worker.num_states)
             self._taken_state = self.DeclareDiscreteState(worker.num_states)
-        if delay > 0:
-            self._image = self.DeclareAbstractState(AbstractValue.Make(_HeldFrame(ImageRgba8U())))
+        if worker is not None:  # the frame out is the plant state it shows (`_shown_frame`)
+            self._shown_state = self.DeclareDiscreteState(worker.num_states)
             self._time = self.DeclareDiscreteState([np.nan])
-            if worker is None:  # else the frame taken is its state, rendered when it is out
+            self._taken_time = self.DeclareDiscreteState([np.nan])
+            self.DeclareAbstractOutputPort(
+                "rgb_image", lambda: AbstractValue.Make(ImageRgba8U(width, height)),
+                lambda c, value: value.set_value(self._shown_frame(c)),
+                {self.discrete_state_ticket(self._shown_state),
+                 self.discrete_state_ticket(self._time)})
+        else:
+            if delay > 0:
+                self._image = self.DeclareAbstractState(
+                    AbstractValue.Make(_HeldFrame(ImageRgba8U())))
+                self._time = self.DeclareDiscreteState([np.nan])
                 self._taken_image = self.DeclareAbstractState(
                     AbstractValue.Make(_HeldFrame(ImageRgba8U(width, height))))
-            self._taken_time = self.DeclareDiscreteState([np.nan])
-        else:
-            self._image = self._taken_image = self.DeclareAbstractState(
-                AbstractValue.Make(_HeldFrame(ImageRgba8U(width, height))))
-            self._time = self._taken_time = self.DeclareDiscreteState(1)
-        self.DeclareAbstractOutputPort(
-            "rgb_image", lambda: AbstractValue.Make(ImageRgba8U(width, height)),
-            lambda c, value: value.set_value(c.get_abstract_state(int(self._image))
-                                             .get_value().image),
-            {self.abstract_state_ticket(self._image)})
+                self._taken_time = self.DeclareDiscreteState([np.nan])
+            else:
+                self._image = self._taken_image = self.DeclareAbstractState(
+                    AbstractValue.Make(_HeldFrame(ImageRgba8U(width, height))))
+                self._time = self._taken_time = self.DeclareDiscreteState(1)
+            self.DeclareAbstractOutputPort(
+                "rgb_image", lambda: AbstractValue.Make(ImageRgba8U(width, height)),
+                lambda c, value: value.set_value(c.get_abstract_state(int(self._image))
+                                                 .get_value().image),
+                {self.abstract_state_ticket(self._image)})
         self.DeclareStateOutputPort("image_time", self._time)
         if not delay:  # a delayed camera, like Drake's, shows nothing before its first tick
             self.DeclareInitializationUnrestrictedUpdateEvent(self._capture)
@@ -268,12 +281,21 @@ class CameraHold(LeafSystem):
             return False
         if self._worker is None:
             frame = context.get_abstract_state(int(self._taken_image)).get_value()
-        else:
-            x = context.get_discrete_state(int(self._taken_state)).get_value()
-            frame = _HeldFrame(self._worker.take((taken, x.tobytes()), x))
-        state.get_mutable_abstract_state(int(self._image)).set_value(frame)
+            state.get_mutable_abstract_state(int(self._image)).set_value(frame)
+        else:  # rendered when read
+            state.get_mutable_discrete_state(int(self._shown_state)).SetFrom(
+                context.get_discrete_state(int(self._taken_state)))
         state.get_mutable_discrete_state(int(self._time)).SetAtIndex(0, taken)
         return True
+
+    def _shown_frame(self, context) -> ImageRgba8U:
+        """The worker's render of the frame out (its capture's plant state); before the first,
+        an empty image."""
+        taken = context.get_discrete_state(self._time).GetAtIndex(0)
+        if np.isnan(taken):
+            return ImageRgba8U()
+        x = context.get_discrete_state(self._shown_state).get_value()
+        return self._worker.take((taken, x.tobytes()), x)
 
     def _capture(self, context, state):
         if self._worker is not None:  # the plant's state now; the worker renders it

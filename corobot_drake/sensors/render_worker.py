@@ -33,8 +33,8 @@ from pydrake.systems.sensors import ImageRgba8U
 PERIOD = 1.0
 """s of the copy's own clock per frame: its hold samples the sensor once per advance."""
 IN_FLIGHT = 4
-"""Renders kept waiting to be taken (one frame is in flight at a time; the rest are left by
-a Context that was restored or reset mid-flight)."""
+"""Renders kept waiting to be taken (frames nobody read, or left by a Context that was
+restored or reset mid-flight); an older one not yet started is cancelled."""
 
 
 @dc.dataclass
@@ -110,13 +110,13 @@ class RenderWorker:
         `state`."""
         self._pending[key] = self._executor.submit(self._render, np.array(state, dtype=float))
         while len(self._pending) > IN_FLIGHT:
-            self._pending.popitem(last=False)
+            self._pending.popitem(last=False)[1].cancel()  # nobody took it: render no more
 
     def take(self, key, state) -> ImageRgba8U:
         """The frame `key`: the render `submit` started (waiting for it), or, when none was
-        started here, one made now from `state`."""
+        started here (or it was cancelled), one made now from `state`."""
         future = self._pending.pop(key, None)
-        if future is None:
+        if future is None or future.cancelled():
             future = self._executor.submit(self._render, np.array(state, dtype=float))
         return future.result()
 

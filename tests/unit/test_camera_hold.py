@@ -79,5 +79,39 @@ def test_with_a_worker_the_frame_is_rendered_from_the_plant_state_at_its_capture
     s.fix("plant_state", [9.0, 0.5])
     assert [state for _, state in worker.submitted] == [[3.0, 0.5]]
     s.tick(3)  # 0.04 s: out
+    assert worker.taken == []  # nothing read yet: nothing waited for
     assert s.output("image_time")[0] == 0.01 and (s.output("rgb_image").data == 3).all()
     assert worker.taken == worker.submitted  # the same key and state
+    s.output("rgb_image")
+    assert len(worker.taken) == 1  # the frame is kept (Drake's cache) until the next is out
+
+
+def test_a_render_worker_cancels_renders_nobody_took_and_renders_them_when_taken():
+    """Frames submitted faster than they render: only the newest `IN_FLIGHT` wait, older
+    ones not started are cancelled (never rendered); taking one renders it then, the same
+    image."""
+    import threading
+    import time
+
+    from corobot_drake.sensors.render_worker import IN_FLIGHT, RenderWorker
+
+    rendered = []
+
+    class SlowScene:
+        def render(self, state):
+            time.sleep(0.02)
+            rendered.append(int(state[0]))
+            return image(int(state[0]))
+
+    worker = RenderWorker(SlowScene, num_states=2)
+    worker.wait_ready()
+    release = threading.Event()
+    worker._executor.submit(release.wait)  # the thread busy until every frame is submitted
+    for k in range(10):
+        worker.submit(k, [k, 0.0])
+    release.set()
+    assert (worker.take(9, [9, 0.0]).data == 9).all()
+    assert rendered == list(range(10 - IN_FLIGHT, 10))  # the older ones cancelled
+    assert (worker.take(2, [2, 0.0]).data == 2).all()  # cancelled: rendered when taken
+    assert rendered[-1] == 2
+    worker.close()
