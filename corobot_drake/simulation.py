@@ -433,7 +433,7 @@ class Robot:
         with `Simulation.run_log_window`, only its last part."""
         sim = self._sim
         rows = log_rows(sim._run_log_sink(self.name), sim.context, self._tip_margin(),
-                        sim._contact_samples.get(self.name))
+                        sim._contact_samples, self.name)
         chunks = sim._run_log_chunks[self.name]
         return np.concatenate([*chunks, rows]) if chunks else rows
 
@@ -616,11 +616,10 @@ class Simulation:
         self._max_tilt_moved_out = dict.fromkeys(self.robots, 0.0)
         """Each robot's largest tilt (deg) over the samples moved out of its sink (kept
         whatever the window)."""
-        self._contact_samples = {} if not self.continuous_step else {
-            name: ContactSamples(self.station.diagram, self.station.plant, name)
-            for name in self.robots}
-        """On a continuous plant, what makes each robot's run-log contact telemetry when it
-        is read."""
+        self._contact_samples = (ContactSamples(self.station.diagram, self.station.plant,
+                                                self.robots) if self.continuous_step else None)
+        """On a continuous plant, what makes the robots' run-log contact telemetry when it
+        is read (with the chunks, what was moved out of the Context)."""
         self._start()
 
     def _start(self) -> None:
@@ -663,14 +662,12 @@ class Simulation:
         self.scenario = scenario or self.scenario
         self.station.diagram.SetDefaultContext(self.context)
         for name in self.robots:  # a log sink keeps its log beside the state: clear it too
-            self._run_log_sink(name).GetMutableLog(
-                self._run_log_sink(name).GetMyMutableContextFromRoot(self.context)).Clear()
+            self._clear_log(self._run_log_sink(name))
             self._run_log_chunks[name].clear()
             self._max_tilt_moved_out[name] = 0.0
-        for samples in self._contact_samples.values():
-            samples.sink.GetMutableLog(samples.sink.GetMyMutableContextFromRoot(
-                self.context)).Clear()
-            samples.clear()
+        if self._contact_samples is not None:
+            self._clear_log(self._contact_samples.sink)
+            self._contact_samples.clear()
         self.context.SetTime(self.scenario.simulator_config.start_time)
         self._start()
 
@@ -837,18 +834,15 @@ class Simulation:
         """Bounds the run logs to `run_log_window`: once a sink holds `RUN_LOG_CHUNK` samples
         they move out of it (the sink then starts again, small) into the robot's chunks,
         whose samples older than the window go."""
+        moved = False
         for name, chunks in self._run_log_chunks.items():
             sink = self._run_log_sink(name)
             log = sink.GetMutableLog(sink.GetMyMutableContextFromRoot(self.context))
             if log.num_samples() < RUN_LOG_CHUNK:
                 continue
-            samples = self._contact_samples.get(name)
+            moved = True
             chunks.append(log_rows(sink, self.context, self.robots[name]._tip_margin(),
-                                   samples))
-            if samples is not None:
-                samples.moved_out(self.context)
-                samples.sink.GetMutableLog(samples.sink.GetMyMutableContextFromRoot(
-                    self.context)).Clear()
+                                   self._contact_samples, name))
             self._max_tilt_moved_out[name] = max(self._max_tilt_moved_out[name],
                                                  max_tilt_deg(log.data().T))
             log.Clear()
@@ -857,6 +851,12 @@ class Simulation:
                 chunks.popleft()
             if chunks and chunks[0][0, 0] < cutoff:  # a long advance: one chunk spans it
                 chunks[0] = chunks[0][chunks[0][:, 0] >= cutoff].copy()
+        if moved and self._contact_samples is not None:  # every robot's rows made from it
+            self._contact_samples.moved_out(self.context)
+            self._clear_log(self._contact_samples.sink)
+
+    def _clear_log(self, sink) -> None:
+        sink.GetMutableLog(sink.GetMyMutableContextFromRoot(self.context)).Clear()
 
     def saved_scenario(self) -> sc.Scenario:
         """This scenario with the current state: time, every robot's and free body's pose

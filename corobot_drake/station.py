@@ -39,7 +39,7 @@ from pydrake.multibody.plant import (
 )
 from pydrake.multibody.tree import CalcSpatialInertia, SpatialInertia, UnitInertia
 from pydrake.systems.framework import Diagram, DiagramBuilder
-from pydrake.systems.primitives import MatrixGain, Multiplexer
+from pydrake.systems.primitives import MatrixGain
 
 from corobot_drake import signals
 from corobot_drake.config import scenario as sc
@@ -54,7 +54,7 @@ from corobot_drake.systems.dead_reckoning import DeadReckoning
 from corobot_drake.systems.drive import CommandSource, DriveController
 from corobot_drake.systems.motion import MotionCommands
 from corobot_drake.systems.odometry import add_chassis_poses, add_chassis_states, add_odometry
-from corobot_drake.systems.runlog import SAMPLED, add_run_log
+from corobot_drake.systems.runlog import SAMPLED, add_contact_states, add_run_log
 from corobot_drake.systems.servo import add_servo_sign, servo_velocity_sign
 from corobot_drake.systems.stability import add_tip_margin
 
@@ -351,7 +351,11 @@ def _build_station(scenario: sc.Scenario, meshcat, save_camera, extras, mouse_dr
         extra(builder, plant, scene_graph, robots, scenario)
     continuous = sc.continuous_step(scenario.plant_config, scenario.simulator_config) > 0
     for name in robots:
-        _add_signal_outputs(builder, plant, name, continuous)
+        _add_signal_outputs(builder, name, continuous)
+    if continuous:
+        add_contact_states(builder, plant, [
+            builder.GetSubsystemByName(f"{name}.held_chassis_velocity").get_output_port()
+            for name in robots])
     builder.ExportOutput(plant.get_body_poses_output_port(), "body_poses")
     builder.ExportOutput(scene_graph.get_query_output_port(), "query_object")
     lcm = None
@@ -434,7 +438,7 @@ def signal_output(builder, robot: str, spec: signals.Signal):
     return builder.GetSubsystemByName(f"{robot}.{spec.system}").GetOutputPort(spec.port)
 
 
-def _add_signal_outputs(builder, plant, name: str, continuous: bool) -> None:
+def _add_signal_outputs(builder, name: str, continuous: bool) -> None:
     """Exports each signal's port from its system as `<name>.<port>` (`signals.SIGNALS`
     with a `system`; once every system is in, the front ends' extras too), and adds the run
     log (`runlog.add_run_log`), which samples those of `runlog.SAMPLED` (on a `continuous`
@@ -449,19 +453,7 @@ def _add_signal_outputs(builder, plant, name: str, continuous: bool) -> None:
                 builder.GetSubsystemByName(f"{name}.drive_controller").GetOutputPort(
                     "drive_status"),
                 builder.GetSubsystemByName(f"{name}.encoder_ticks").get_output_port(),
-                {port: by_port[port] for port, _ in SAMPLED},
-                _contact_state(builder, plant, name) if continuous else None)
-
-
-def _contact_state(builder, plant, name: str):
-    """`<name>.contact_state`: [the plant's state; the robot's held chassis velocity], what
-    its contact telemetry is a function of on a continuous plant (`runlog.ContactSamples`)."""
-    held = builder.GetSubsystemByName(f"{name}.held_chassis_velocity").get_output_port()
-    state = builder.AddNamedSystem(f"{name}.contact_state", Multiplexer(
-        [plant.num_multibody_states(), held.size()]))
-    builder.Connect(plant.get_state_output_port(), state.get_input_port(0))
-    builder.Connect(held, state.get_input_port(1))
-    return state.get_output_port()
+                {port: by_port[port] for port, _ in SAMPLED}, held_when_read=continuous)
 
 
 MESHCAT_DRAG_STIFFNESS = 100.0

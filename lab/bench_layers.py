@@ -46,13 +46,13 @@ from corobot_drake.config import scenario as sc
 from corobot_drake.model import dimensions as dim
 from corobot_drake.resources import DEFAULT_SCENARIO
 from corobot_drake.simulation import apply_simulator_config
-from corobot_drake.station import _add_robot, _add_world, _contact_state
+from corobot_drake.station import _add_robot, _add_world
 from corobot_drake.systems.contact import add_wheel_contacts
 from corobot_drake.systems.dead_reckoning import DeadReckoning
 from corobot_drake.systems.drive import CommandSource, DriveController, DriveRequest
 from corobot_drake.systems.motion import MotionCommands
 from corobot_drake.systems.odometry import add_chassis_poses, add_chassis_states, add_odometry
-from corobot_drake.systems.runlog import HELD_PERIOD, SAMPLED, add_run_log
+from corobot_drake.systems.runlog import HELD_PERIOD, SAMPLED, add_contact_states, add_run_log
 from corobot_drake.systems.servo import add_servo_sign, servo_velocity_sign
 from corobot_drake.systems.stability import add_tip_margin
 from lab import bench
@@ -138,8 +138,9 @@ def build_layers(scenario: sc.Scenario, layers: int, seconds: float = 10.0,
         builder.Connect(replay.get_output_port(), plant.get_desired_state_input_port(instance))
         if sc.continuous_step(scenario.plant_config, scenario.simulator_config):
             # CENIC steps to the next event: the station's drive ends each step at k x step
-            # (Drake's periodic times) and its 10 Hz holds at k x 0.1 (some a rounding error
-            # off a step); C++ holds on the same grids give the plant alone those stops.
+            # (Drake's periodic times) and its run log's 10 Hz samples at k x 0.1 (some a
+            # rounding error off a step); C++ holds on the same grids give the plant alone
+            # those stops.
             zero = builder.AddSystem(ConstantVectorSource([0.0])).get_output_port()
             for period in (step, HELD_PERIOD):
                 builder.Connect(zero, builder.AddSystem(ZeroOrderHold(period, 1)).get_input_port())
@@ -245,7 +246,10 @@ def _add_robot_layers(builder, plant, name, robot, chassis, joints, selector, co
         add_run_log(builder, name, state, controller.GetOutputPort("drive_status"),
                     odometry.encoder_ticks,
                     {port: contacts.GetOutputPort(port) for port, _ in SAMPLED},
-                    _contact_state(builder, plant, name) if continuous_step else None)
+                    held_when_read=bool(continuous_step))
+        if continuous_step:
+            add_contact_states(builder, plant, [builder.GetSubsystemByName(
+                f"{name}.held_chassis_velocity").get_output_port()])
 
 
 def _cpu_seconds(layers: int | None, scenario: sc.Scenario, seconds: float,

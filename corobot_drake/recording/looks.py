@@ -32,10 +32,12 @@ stops)."""
 TELEMETRY_PERIOD = HELD_PERIOD
 """s: the costly signals' topics (`signals.Signal.costly`: /wheel_loads, /wheel_slip) are
 sampled at 10 Hz by holds of their own at the instants the run log samples them
-(`runlog.HELD_PERIOD`), and published a period later. Sampled in the same discrete update as the
-run log's, they share its evaluation of the ports (one cache); a publish event could not: it
-runs before the updates at its time, whose new commands change the contact results again, so
-each look would evaluate the plant's contact solution once more."""
+(`runlog.HELD_PERIOD`: no Simulator stop of their own), and published a period later. On a
+discrete plant they sample in the same discrete update as the run log's holds and share their
+evaluation of the ports (one cache; on a continuous plant the run log makes its own when it is
+read); a publish event could not: it runs before the updates at its time, whose new commands
+change the contact results again, so each look would evaluate the plant's contact solution
+once more."""
 TOLERANCE = 1e-9
 """s: an event this close to a look counts as at it (float sums of periods)."""
 

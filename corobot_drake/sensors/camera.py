@@ -194,11 +194,10 @@ class CameraHold(LeafSystem):
     Input `color_image` (abstract ImageRgba8U, an RgbdSensor's; with a `worker`, never read:
     the worker renders the frame from input `plant_state`, the plant's [q; v] at the capture,
     held in state of its own). Outputs `rgb_image` (abstract ImageRgba8U, width x height) and
-    `image_time` (1-vector, s: when the frame was taken), both held in state (the frame as a
-    `_HeldFrame`, copied out when read). With a `worker` the frame out is held as the plant
-    state it shows, and `rgb_image` takes the worker's render of it when it is read (the
-    render starts at the capture): a simulation whose frames nobody reads never waits for
-    them.
+    `image_time` (1-vector, s: when the frame was taken), both held in state: without a
+    worker the frame itself (a `_HeldFrame`, copied out when read); with one the plant state
+    it shows, and `rgb_image` takes the worker's render of that when it is read (the render
+    starts at the capture): a simulation whose frames nobody reads never waits for them.
 
     With a plant step (`step` > 0) frames are taken on the plant's steps: at the first step at
     or after each tick. On a discrete plant the scene only changes at steps, so the image is

@@ -83,7 +83,7 @@ class RenderWorker:
     """Renders frames on one thread of its own (`concurrent.futures`), the copy of the scene
     made there by `make_scene()` (a `RenderScene`) as soon as the worker starts (`wait_ready`
     waits for it). `submit` a frame's key and state at its capture, `take` its image when it
-    is due."""
+    is read."""
 
     def __init__(self, make_scene: Callable[[], RenderScene], num_states: int):
         self.num_states = num_states
@@ -92,8 +92,12 @@ class RenderWorker:
             max_workers=1, thread_name_prefix="corobot-camera")
         self._scene = self._executor.submit(make_scene)
         self._pending: collections.OrderedDict = collections.OrderedDict()
-        """Renders started, by frame key; touched only by the simulation's thread (`submit`
-        and `take`), so no lock."""
+        """Renders started, by frame key, oldest first; touched only by the thread that
+        advances and reads the simulation (`submit` and `take`; a Simulation is used from one
+        thread at a time), so no lock."""
+        self._taken: tuple = (None, None)
+        """(key, image) of the frame taken last: read again (Drake's cache of the output that
+        reads it is cleared by the hold's next update) it is not rendered again."""
         self.renders = 0
         """Frames rendered so far (on the worker's thread)."""
 
@@ -114,11 +118,20 @@ class RenderWorker:
 
     def take(self, key, state) -> ImageRgba8U:
         """The frame `key`: the render `submit` started (waiting for it), or, when none was
-        started here (or it was cancelled), one made now from `state`."""
+        started here (or it was cancelled), one made now from `state`. Renders submitted
+        before it and not started are cancelled: frames are read in order."""
+        if key == self._taken[0]:
+            return self._taken[1]
+        if key in self._pending:
+            for older in list(self._pending):
+                if older == key:
+                    break
+                self._pending.pop(older).cancel()
         future = self._pending.pop(key, None)
         if future is None or future.cancelled():
             future = self._executor.submit(self._render, np.array(state, dtype=float))
-        return future.result()
+        self._taken = (key, future.result())
+        return self._taken[1]
 
     def close(self) -> None:
         """Drops the copy on the worker's thread (its GL engine is torn down there, not

@@ -393,8 +393,8 @@ class Tracking:
     """The hold angles are up to date: held wheels' hold angles, the others' angles at the
     last update."""
     UNTRACKED = 1.0
-    """Both sides were commanded to turn at the last update: no wheel held, hold angles not
-    updated."""
+    """Both sides were commanded to turn at the last update (or the drive has no hold,
+    `hold_gain` 0): no wheel held, hold angles not updated."""
     IDLE = 2.0
     """UNTRACKED, and the axles at their targets: nothing changes until a new request."""
 
@@ -612,9 +612,13 @@ class DriveController(LeafSystem):
 
     def SetHoldAngles(self, context, angles) -> None:
         """Sets the hold angles (rad, per wheel): an initial condition (a saved scene; the
-        wheels' own angles when none is given). `context` is this system's."""
+        wheels' own angles when none is given), after the axle speeds (`SetAxleSpeeds`): with
+        both sides turning they are not tracked, as in the run the scene was saved from.
+        `context` is this system's."""
         context.SetDiscreteState(self._hold_angle, np.asarray(angles, dtype=float))
-        self._set_tracking(context, Tracking.TRACKING)
+        left, right = context.get_discrete_state(self._axle).get_value()
+        turning = (left != 0.0 and right != 0.0) or self._drive.hold_gain == 0.0
+        self._set_tracking(context, Tracking.UNTRACKED if turning else Tracking.TRACKING)
 
     def _set_tracking(self, context, tracking: float) -> None:
         seq = context.get_discrete_state(self._mode).GetAtIndex(0)

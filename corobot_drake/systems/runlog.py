@@ -44,12 +44,13 @@ RUN_LOG_CHUNK = 1000
 """Samples (10 s at 100 Hz) moved out of the sink at a time when the run log is bounded
 (`Simulation.run_log_window`)."""
 HELD_PERIOD = 0.1
-"""s: the loads and the slip are sampled every 0.1 s (10 Hz) and held between (ZeroOrderHolds):
-evaluated every 10 ms step, the loads (the plant's contact results) and the slip (the bodies'
-velocities) cost well over the ~3% of a step the run log may add (the
-measurement is in the commit that added this). A row's loads and slip are those of the latest
-0.1 s sample; its tip margin is the step's (a few sums from the chassis pose, made when the log
-is read; the run's least margin, `Robot.min_tip_margin_deg`, is read from it)."""
+"""s: the loads and the slip are sampled every 0.1 s (10 Hz) and held between: evaluated every
+10 ms step, the loads (the plant's contact results) and the slip (the bodies' velocities) cost
+well over the ~3% of a step the run log may add. On a discrete plant ZeroOrderHolds sample
+them; on a continuous one the plant's state is kept at those times and they are made from it
+when the log is read (`ContactSamples`). A row's loads and slip are those of the latest 0.1 s
+sample; its tip margin is the step's (a few sums from the chassis pose, made when the log is
+read; the run's least margin, `Robot.min_tip_margin_deg`, is read from it)."""
 MADE_WHEN_READ = ("commanded_power", "encoders", "pose", "tip_margin")
 """The signals whose columns `rows_of` makes from the drive status, the encoders' counts and
 the chassis state when the log is read (`_made_when_read`); every other signal with run-log
@@ -88,17 +89,21 @@ def raw_columns(held_when_read: bool) -> tuple[str, ...]:
     return tuple(c for c in RAW_COLUMNS if not (held_when_read and c in HELD_COLUMNS))
 
 
+CONTACT_STATES = "run_log_contact_states"
+"""The station's sink of [the plant's state; each robot's held chassis velocity] every
+`HELD_PERIOD` s on a continuous plant (`add_contact_states`, `ContactSamples`)."""
+
+
 def add_run_log(builder, name: str, chassis_state_port, drive_status_port, encoder_ticks_port,
-                sampled_ports: dict, contact_state_port=None):
+                sampled_ports: dict, held_when_read: bool = False):
     """Adds `<name>.run_log_row` (a Multiplexer of `raw_columns`: `drive_status_port`,
     `encoder_ticks_port`, `chassis_state_port` and the `sampled_ports`, {`SAMPLED` port name:
     output port}, the `HELD` ones each through a hold `<name>.run_log_<port>`) and its sink
-    `<name>.run_log`; returns the sink. With `contact_state_port` (a continuous plant's
-    [plant state; the robot's held chassis velocity], `ContactSamples`), the `HELD` ports are
-    not sampled: a sink `<name>.run_log_contact_states` keeps that port every `HELD_PERIOD`
-    s instead, and their columns are made from it when the log is read."""
+    `<name>.run_log`; returns the sink. With `held_when_read` (a continuous plant, whose
+    station has `add_contact_states`) the `HELD` ports are not sampled: their columns are made
+    when the log is read (`ContactSamples`)."""
     sampled = [(port, columns) for port, columns in SAMPLED
-               if contact_state_port is None or port not in HELD]
+               if not (held_when_read and port in HELD)]
     sizes = [len(DriveStatus.get_fields()), 2, len(CHASSIS_STATE),
              *(len(columns) for _, columns in sampled)]
     row = builder.AddNamedSystem(f"{name}.run_log_row", Multiplexer(sizes))
@@ -112,72 +117,96 @@ def add_run_log(builder, name: str, chassis_state_port, drive_status_port, encod
             builder.Connect(source, hold.get_input_port())
             source = hold.get_output_port()
         builder.Connect(source, row.get_input_port(k))
-    if contact_state_port is not None:
-        # Its publish events fall where the holds' updates would (k x HELD_PERIOD), so the
-        # simulator stops at the same times either way.
-        contacts = LogVectorOutput(contact_state_port, builder, HELD_PERIOD)
-        contacts.set_name(f"{name}.run_log_contact_states")
     sink = LogVectorOutput(row.get_output_port(), builder, LOG_PERIOD)
     sink.set_name(f"{name}.run_log")
     return sink
 
 
+def add_contact_states(builder, plant, held_velocity_ports: list):
+    """Adds the `CONTACT_STATES` sink (and its Multiplexer `run_log_contact_state`): the plant's
+    state and each robot's held chassis velocity (`held_velocity_ports`, the robots' order),
+    what their contact telemetry is a function of on a continuous plant, every
+    `HELD_PERIOD` s. Its publishes fall where the holds' updates would (k x `HELD_PERIOD`), so
+    the simulator stops at the same times either way. Returns the sink."""
+    state = builder.AddNamedSystem("run_log_contact_state", Multiplexer(
+        [plant.num_multibody_states(), *(port.size() for port in held_velocity_ports)]))
+    builder.Connect(plant.get_state_output_port(), state.get_input_port(0))
+    for k, port in enumerate(held_velocity_ports, start=1):
+        builder.Connect(port, state.get_input_port(k))
+    sink = LogVectorOutput(state.get_output_port(), builder, HELD_PERIOD)
+    sink.set_name(CONTACT_STATES)
+    return sink
+
+
 class ContactSamples:
-    """Makes a robot's `HELD_COLUMNS` when its run log is read, on a continuous plant: each
-    sample of `<name>.run_log_contact_states` (the plant's state and the robot's held chassis
-    velocity at a `HELD_PERIOD` time) is set into a copy of the Context at its time and the
-    robot's `WheelContacts` ports are evaluated there: what holds sampling them live would
-    have held, to the bit, and nothing evaluated while the simulation runs. Each sample is
-    made once (kept until `moved_out` or `clear`)."""
+    """Makes the robots' `HELD_COLUMNS` when their run logs are read, on a continuous plant:
+    each sample of the `CONTACT_STATES` sink is set into a scratch Context (the root's state,
+    time and parameters copied in) and each robot's `WheelContacts` ports are evaluated there:
+    what holds sampling them live would have held, to the bit, and nothing is evaluated while
+    the simulation runs. A sample is taken at the end of the step at its time, so a change
+    made between advances at that very time (a teleport) shows from the next sample on.
 
-    def __init__(self, diagram, plant, name: str):
-        self.sink = diagram.GetSubsystemByName(f"{name}.run_log_contact_states")
-        self._plant = plant
-        self._hold = diagram.GetSubsystemByName(f"{name}.held_chassis_velocity")
-        contacts = diagram.GetSubsystemByName(f"{name}.wheel_contacts")
-        self._ports = [contacts.GetOutputPort(port) for port in HELD]
-        self._made: list[np.ndarray] = []
-        """The columns of the sink's first samples, made so far."""
-        self._before = np.zeros(len(HELD_COLUMNS))
-        """The columns of rows before the sink's first sample: the holds' initial values, or
-        the last sample moved out."""
+    Each sample's columns are made once. With the run log's chunks (`Simulation`), the
+    columns of the last sample moved out of the sink are kept here (`moved_out`): what rows
+    after it show until the next sample."""
 
-    def columns(self, root_context, times: np.ndarray) -> np.ndarray:
-        """[len(times), `HELD_COLUMNS`]: at each row time (s), the latest sample before it."""
+    def __init__(self, diagram, plant, robots):
+        self.sink = diagram.GetSubsystemByName(CONTACT_STATES)
+        self._diagram, self._plant = diagram, plant
+        self._holds = [diagram.GetSubsystemByName(f"{name}.held_chassis_velocity")
+                       for name in robots]
+        self._ports = {name: [diagram.GetSubsystemByName(f"{name}.wheel_contacts")
+                              .GetOutputPort(port) for port in HELD] for name in robots}
+        self._scratch = None
+        self._made: dict[str, list] = {name: [] for name in robots}
+        """Each robot's columns of the sink's first samples, made so far."""
+        self._before = dict.fromkeys(robots, np.zeros(len(HELD_COLUMNS)))
+        """Each robot's columns of rows before the sink's first sample: the holds' initial
+        values, or the last sample moved out."""
+
+    def columns(self, name: str, root_context, times: np.ndarray) -> np.ndarray:
+        """[len(times), `HELD_COLUMNS`] of robot `name`: at each row time (s), the latest
+        sample before it."""
         log = self.sink.FindLog(root_context)
-        sample_times, data = log.sample_times(), log.data()
-        if len(self._made) < len(sample_times):
-            self._make(root_context, sample_times, data)
-        table = np.vstack([self._before, *self._made[:len(sample_times)]])
+        sample_times = log.sample_times()
+        made = self._made[name]
+        if len(made) < len(sample_times):
+            self._make(root_context, sample_times, log.data())
+        table = np.vstack([self._before[name], *made[:len(sample_times)]])
         return table[np.searchsorted(sample_times, times, side="left")]
 
     def _make(self, root_context, sample_times, data) -> None:
-        scratch = root_context.Clone()
+        """Makes every robot's columns of the samples not made yet."""
+        if self._scratch is None:
+            self._scratch = self._diagram.CreateDefaultContext()
+        scratch = self._scratch
+        scratch.SetTimeStateAndParametersFrom(root_context)
         plant_context = self._plant.GetMyMutableContextFromRoot(scratch)
-        hold_context = self._hold.GetMyMutableContextFromRoot(scratch)
+        holds = [hold.GetMyMutableContextFromRoot(scratch) for hold in self._holds]
         states = self._plant.num_multibody_states()
-        for j in range(len(self._made), len(sample_times)):
+        for j in range(len(next(iter(self._made.values()))), len(sample_times)):
             scratch.SetTime(sample_times[j])
             self._plant.SetPositionsAndVelocities(plant_context, data[:states, j])
-            hold_context.SetDiscreteState(data[states:, j])
-            self._made.append(np.concatenate([port.Eval(self._port_context(port, scratch))
-                                              for port in self._ports]))
-
-    @staticmethod
-    def _port_context(port, root_context):
-        return port.get_system().GetMyContextFromRoot(root_context)
+            for k, hold_context in enumerate(holds):
+                hold_context.SetDiscreteState(data[states + 6 * k:states + 6 * k + 6, j])
+            for name, ports in self._ports.items():
+                self._made[name].append(np.concatenate([
+                    port.Eval(port.get_system().GetMyContextFromRoot(scratch))
+                    for port in ports]))
 
     def moved_out(self, root_context) -> None:
         """The sink's samples are about to be cleared: later rows start from its last one."""
         log = self.sink.FindLog(root_context)
         if log.num_samples():
-            self.columns(root_context, log.sample_times()[-1:])
-            self._before = self._made[log.num_samples() - 1]
-        self._made = []
+            self._make(root_context, log.sample_times(), log.data())
+            self._before = {name: made[log.num_samples() - 1]
+                            for name, made in self._made.items()}
+        self._made = {name: [] for name in self._made}
 
     def clear(self) -> None:
         """The sink was cleared for a run from the start."""
-        self._made, self._before = [], np.zeros(len(HELD_COLUMNS))
+        self._made = {name: [] for name in self._made}
+        self._before = dict.fromkeys(self._made, np.zeros(len(HELD_COLUMNS)))
 
 
 def rows_of(times: np.ndarray, raw: np.ndarray, tip_margin, held=None) -> np.ndarray:
@@ -228,14 +257,21 @@ def max_tilt_deg(raw: np.ndarray) -> float:
     return math.degrees(math.acos(min(1.0, max(-1.0, float(cos_tilt.min())))))
 
 
-def log_rows(sink, root_context, tip_margin, contact_samples=None) -> np.ndarray:
+def log_rows(sink, root_context, tip_margin, contact_samples=None,
+             name: str = "") -> np.ndarray:
     """The log so far as an array with the `COLUMNS` (one row per sample; `rows_of`), its
-    `HELD_COLUMNS` from `contact_samples` (a `ContactSamples`) when it has them."""
+    `HELD_COLUMNS` from `contact_samples` (a `ContactSamples`, robot `name`) when the sink has
+    none."""
     log = sink.FindLog(root_context)
     if not log.num_samples():
         return np.zeros((0, len(COLUMNS)))
+    if (contact_samples is None) != (log.data().shape[0] == len(RAW_COLUMNS)):
+        raise ValueError(f"run log {sink.get_name()}: its held columns are "
+                         f"{'made when read' if contact_samples is None else 'sampled'}: "
+                         f"{'pass' if contact_samples is None else 'pass no'} ContactSamples")
     times = log.sample_times()
-    held = None if contact_samples is None else contact_samples.columns(root_context, times)
+    held = (None if contact_samples is None
+            else contact_samples.columns(name, root_context, times))
     return rows_of(times, log.data().T, tip_margin, held)
 
 

@@ -83,13 +83,14 @@ def test_with_a_worker_the_frame_is_rendered_from_the_plant_state_at_its_capture
     assert s.output("image_time")[0] == 0.01 and (s.output("rgb_image").data == 3).all()
     assert worker.taken == worker.submitted  # the same key and state
     s.output("rgb_image")
-    assert len(worker.taken) == 1  # the frame is kept (Drake's cache) until the next is out
+    assert len(worker.taken) == 1  # read again before any update: Drake's cached frame
 
 
 def test_a_render_worker_cancels_renders_nobody_took_and_renders_them_when_taken():
     """Frames submitted faster than they render: only the newest `IN_FLIGHT` wait, older
-    ones not started are cancelled (never rendered); taking one renders it then, the same
-    image."""
+    ones not started are cancelled (never rendered), and so are those submitted before a frame
+    read; taking one renders it then, the same image; the frame taken last is not rendered
+    again."""
     import threading
     import time
 
@@ -110,8 +111,19 @@ def test_a_render_worker_cancels_renders_nobody_took_and_renders_them_when_taken
     for k in range(10):
         worker.submit(k, [k, 0.0])
     release.set()
+    assert len(worker._pending) == IN_FLIGHT  # 0-5 cancelled
     assert (worker.take(9, [9, 0.0]).data == 9).all()
-    assert rendered == list(range(10 - IN_FLIGHT, 10))  # the older ones cancelled
+    assert rendered == [9]  # 6-8, submitted before the frame read, cancelled too
     assert (worker.take(2, [2, 0.0]).data == 2).all()  # cancelled: rendered when taken
     assert rendered[-1] == 2
+    count = len(rendered)
+    assert (worker.take(2, [2, 0.0]).data == 2).all()  # taken again: not rendered again
+    assert len(rendered) == count
+    release = threading.Event()
+    worker._executor.submit(release.wait)
+    worker.submit(10, [10, 0.0])
+    worker.submit(11, [11, 0.0])
+    threading.Timer(0.05, release.set).start()  # once take has run
+    worker.take(11, [11, 0.0])  # a later frame read: the one before it is not rendered
+    assert 10 not in rendered
     worker.close()

@@ -146,10 +146,20 @@ def test_run_log_samples_every_log_period_and_writes_csv(tmp_path):
                          "10,11,12,13,20,21,22,23,30,31,32,33,40")
 
 
-def test_with_a_contact_state_the_held_ports_are_not_sampled_but_their_state_is():
+def test_held_when_read_the_held_ports_are_not_sampled_but_the_contact_states_are():
     """A continuous plant's run log: the row leaves the held telemetry out (made when read:
-    `runlog.ContactSamples`), and a second sink keeps the contact state every 0.1 s."""
-    from corobot_drake.systems.runlog import HELD, HELD_COLUMNS, HELD_PERIOD, raw_columns
+    `runlog.ContactSamples`), and the station's contact-state sink keeps the plant's state and
+    each robot's held chassis velocity every 0.1 s."""
+    from pydrake.multibody.plant import MultibodyPlant
+
+    from corobot_drake.systems.runlog import (
+        CONTACT_STATES,
+        HELD,
+        HELD_COLUMNS,
+        HELD_PERIOD,
+        add_contact_states,
+        raw_columns,
+    )
 
     builder = DiagramBuilder()
     pose = builder.AddSystem(ConstantVectorSource(chassis_state(RigidTransform())))
@@ -157,9 +167,13 @@ def test_with_a_contact_state_the_held_ports_are_not_sampled_but_their_state_is(
     ticks = builder.AddSystem(ConstantVectorSource([3.0, 4.0]))
     telemetry = {name: builder.AddSystem(ConstantVectorSource(np.zeros(len(columns))))
                  .get_output_port() for name, columns in SAMPLED}
-    state = builder.AddSystem(ConstantVectorSource([7.0, 8.0, 9.0]))
     sink = add_run_log(builder, "robot", pose.get_output_port(), status.get_output_port(),
-                       ticks.get_output_port(), telemetry, state.get_output_port())
+                       ticks.get_output_port(), telemetry, held_when_read=True)
+    plant = builder.AddSystem(MultibodyPlant(0.0))  # no bodies: an empty state
+    plant.Finalize()
+    held = [builder.AddSystem(ConstantVectorSource(np.arange(6.0) + k)).get_output_port()
+            for k in (0, 10)]
+    add_contact_states(builder, plant, held)
     diagram = builder.Build()
     assert not any(diagram.HasSubsystemNamed(f"robot.run_log_{port}") for port in HELD)
     simulator = Simulator(diagram)
@@ -167,7 +181,8 @@ def test_with_a_contact_state_the_held_ports_are_not_sampled_but_their_state_is(
     log = sink.FindLog(simulator.get_context())
     assert log.data().shape == (len(raw_columns(True)), 26)
     assert set(raw_columns(True)) == set(RAW_COLUMNS) - set(HELD_COLUMNS)
-    contacts = diagram.GetSubsystemByName("robot.run_log_contact_states")
-    samples = contacts.FindLog(simulator.get_context())
+    samples = diagram.GetSubsystemByName(CONTACT_STATES).FindLog(simulator.get_context())
     np.testing.assert_allclose(samples.sample_times(), np.arange(3) * HELD_PERIOD, atol=1e-12)
-    np.testing.assert_array_equal(samples.data()[:, -1], [7.0, 8.0, 9.0])
+    np.testing.assert_array_equal(samples.data()[:, -1], [*range(6), *range(10, 16)])
+    with pytest.raises(ValueError, match="made when read"):
+        log_rows(sink, simulator.get_context(), FlatMargin())
