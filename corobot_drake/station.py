@@ -353,9 +353,7 @@ def _build_station(scenario: sc.Scenario, meshcat, save_camera, extras, mouse_dr
     for name in robots:
         _add_signal_outputs(builder, name, continuous)
     if continuous:
-        add_contact_states(builder, plant, [
-            builder.GetSubsystemByName(f"{name}.held_chassis_velocity").get_output_port()
-            for name in robots])
+        add_contact_states(builder, plant, robots)
     builder.ExportOutput(plant.get_body_poses_output_port(), "body_poses")
     builder.ExportOutput(scene_graph.get_query_output_port(), "query_object")
     lcm = None

@@ -248,8 +248,7 @@ def _add_robot_layers(builder, plant, name, robot, chassis, joints, selector, co
                     {port: contacts.GetOutputPort(port) for port, _ in SAMPLED},
                     held_when_read=bool(continuous_step))
         if continuous_step:
-            add_contact_states(builder, plant, [builder.GetSubsystemByName(
-                f"{name}.held_chassis_velocity").get_output_port()])
+            add_contact_states(builder, plant, [name])
 
 
 def _cpu_seconds(layers: int | None, scenario: sc.Scenario, seconds: float,

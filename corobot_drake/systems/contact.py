@@ -265,6 +265,11 @@ def slip_angle_deg(ground: float, lateral: float) -> float:
     return math.degrees(math.atan2(lateral, max(abs(ground), SLIP_SPEED_FLOOR)))
 
 
+def held_velocity_name(robot: str) -> str:
+    """The name of the robot's hold of its chassis velocity (`add_chassis_velocities`)."""
+    return f"{robot}.held_chassis_velocity"
+
+
 def add_chassis_velocities(builder, name: str, plant, chassis, step: float):
     """Adds `<name>.chassis_velocity` (the chassis' velocities, angular and of its origin,
     world, picked out of the plant's state) and `<name>.held_chassis_velocity` (them held at
@@ -275,7 +280,7 @@ def add_chassis_velocities(builder, name: str, plant, chassis, step: float):
     pick[:, start:start + 6] = np.eye(6)
     velocity = builder.AddNamedSystem(f"{name}.chassis_velocity", MatrixGain(pick))
     builder.Connect(plant.get_state_output_port(), velocity.get_input_port())
-    held = builder.AddNamedSystem(f"{name}.held_chassis_velocity", ZeroOrderHold(step, 6))
+    held = builder.AddNamedSystem(held_velocity_name(name), ZeroOrderHold(step, 6))
     builder.Connect(velocity.get_output_port(), held.get_input_port())
     return velocity.get_output_port(), held.get_output_port()
 

@@ -529,8 +529,7 @@ class DriveController(LeafSystem):
         else:
             new_left = _slew(left, target_left, self._step)
             new_right = _slew(right, target_right, self._step)
-        if (new_left != 0.0 and new_right != 0.0) or self._drive.hold_gain == 0.0:
-            # No wheel can be held: the desired state is the axles' alone.
+        if self._holds_none(new_left, new_right):  # the desired state is the axles' alone
             correction = None
             new_tracking = (Tracking.IDLE if (new_left, new_right) == (target_left, target_right)
                             else Tracking.UNTRACKED)
@@ -542,6 +541,11 @@ class DriveController(LeafSystem):
             discrete_state.set_value(self._mode, np.array([float(request.seq), new_tracking]))
         if (new_left, new_right) != (left, right) or correction is not None:
             self._set_axle(discrete_state, new_left, new_right, correction)
+
+    def _holds_none(self, left: float, right: float) -> bool:
+        """Whether no wheel can be held at these slewed axle speeds (rad/s): both sides turn,
+        or the drive has no hold."""
+        return (left != 0.0 and right != 0.0) or self._drive.hold_gain == 0.0
 
     def _take(self, context, discrete_state, request) -> tuple[float, float, bool]:
         """Acts on a new request: writes its seq and the `DriveStatus` it makes; returns the
@@ -617,8 +621,8 @@ class DriveController(LeafSystem):
         `context` is this system's."""
         context.SetDiscreteState(self._hold_angle, np.asarray(angles, dtype=float))
         left, right = context.get_discrete_state(self._axle).get_value()
-        turning = (left != 0.0 and right != 0.0) or self._drive.hold_gain == 0.0
-        self._set_tracking(context, Tracking.UNTRACKED if turning else Tracking.TRACKING)
+        self._set_tracking(context, Tracking.UNTRACKED if self._holds_none(left, right)
+                           else Tracking.TRACKING)
 
     def _set_tracking(self, context, tracking: float) -> None:
         seq = context.get_discrete_state(self._mode).GetAtIndex(0)

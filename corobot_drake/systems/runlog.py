@@ -34,6 +34,7 @@ import numpy as np
 from pydrake.systems.primitives import LogVectorOutput, Multiplexer, ZeroOrderHold
 
 from corobot_drake import signals
+from corobot_drake.systems.contact import held_velocity_name
 from corobot_drake.systems.drive import DriveStatus
 from corobot_drake.systems.odometry import CHASSIS_STATE, rotation_rows
 
@@ -122,12 +123,14 @@ def add_run_log(builder, name: str, chassis_state_port, drive_status_port, encod
     return sink
 
 
-def add_contact_states(builder, plant, held_velocity_ports: list):
+def add_contact_states(builder, plant, robots):
     """Adds the `CONTACT_STATES` sink (and its Multiplexer `run_log_contact_state`): the plant's
-    state and each robot's held chassis velocity (`held_velocity_ports`, the robots' order),
-    what their contact telemetry is a function of on a continuous plant, every
+    state and each robot's held chassis velocity (`contact.held_velocity_name`; `robots`' names
+    in order), what their contact telemetry is a function of on a continuous plant, every
     `HELD_PERIOD` s. Its publishes fall where the holds' updates would (k x `HELD_PERIOD`), so
     the simulator stops at the same times either way. Returns the sink."""
+    held_velocity_ports = [builder.GetSubsystemByName(held_velocity_name(name))
+                           .get_output_port() for name in robots]
     state = builder.AddNamedSystem("run_log_contact_state", Multiplexer(
         [plant.num_multibody_states(), *(port.size() for port in held_velocity_ports)]))
     builder.Connect(plant.get_state_output_port(), state.get_input_port(0))
@@ -154,8 +157,7 @@ class ContactSamples:
     def __init__(self, diagram, plant, robots):
         self.sink = diagram.GetSubsystemByName(CONTACT_STATES)
         self._diagram, self._plant = diagram, plant
-        self._holds = [diagram.GetSubsystemByName(f"{name}.held_chassis_velocity")
-                       for name in robots]
+        self._holds = [diagram.GetSubsystemByName(held_velocity_name(name)) for name in robots]
         self._ports = {name: [diagram.GetSubsystemByName(f"{name}.wheel_contacts")
                               .GetOutputPort(port) for port in HELD] for name in robots}
         self._scratch = None
@@ -183,13 +185,18 @@ class ContactSamples:
         scratch = self._scratch
         scratch.SetTimeStateAndParametersFrom(root_context)
         plant_context = self._plant.GetMyMutableContextFromRoot(scratch)
-        holds = [hold.GetMyMutableContextFromRoot(scratch) for hold in self._holds]
+        # Each hold's rows of a sample: after the plant's state, in the robots' order.
+        start, holds = self._plant.num_multibody_states(), []
+        for hold in self._holds:
+            size = hold.get_output_port().size()
+            holds.append((hold.GetMyMutableContextFromRoot(scratch), slice(start, start + size)))
+            start += size
         states = self._plant.num_multibody_states()
         for j in range(len(next(iter(self._made.values()))), len(sample_times)):
             scratch.SetTime(sample_times[j])
             self._plant.SetPositionsAndVelocities(plant_context, data[:states, j])
-            for k, hold_context in enumerate(holds):
-                hold_context.SetDiscreteState(data[states + 6 * k:states + 6 * k + 6, j])
+            for hold_context, rows in holds:
+                hold_context.SetDiscreteState(data[rows, j])
             for name, ports in self._ports.items():
                 self._made[name].append(np.concatenate([
                     port.Eval(port.get_system().GetMyContextFromRoot(scratch))

@@ -152,6 +152,7 @@ def test_held_when_read_the_held_ports_are_not_sampled_but_the_contact_states_ar
     each robot's held chassis velocity every 0.1 s."""
     from pydrake.multibody.plant import MultibodyPlant
 
+    from corobot_drake.systems.contact import held_velocity_name
     from corobot_drake.systems.runlog import (
         CONTACT_STATES,
         HELD,
@@ -171,9 +172,9 @@ def test_held_when_read_the_held_ports_are_not_sampled_but_the_contact_states_ar
                        ticks.get_output_port(), telemetry, held_when_read=True)
     plant = builder.AddSystem(MultibodyPlant(0.0))  # no bodies: an empty state
     plant.Finalize()
-    held = [builder.AddSystem(ConstantVectorSource(np.arange(6.0) + k)).get_output_port()
-            for k in (0, 10)]
-    add_contact_states(builder, plant, held)
+    for robot, k in (("a", 0), ("b", 10)):  # each robot's held chassis velocity
+        builder.AddNamedSystem(held_velocity_name(robot), ConstantVectorSource(np.arange(6.0) + k))
+    add_contact_states(builder, plant, ["a", "b"])
     diagram = builder.Build()
     assert not any(diagram.HasSubsystemNamed(f"robot.run_log_{port}") for port in HELD)
     simulator = Simulator(diagram)
