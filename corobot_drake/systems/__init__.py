@@ -4,7 +4,8 @@
 - `motion.py`: `MotionCommands`, the DriveDistance / RotateDegrees / SetPose state machine;
 - `odometry.py`: `ChassisPoses`, the chassis states (a C++ gain on the plant's state),
   encoders, `Compass`, `Gps`, `DriveStateReporter`;
-- `dead_reckoning.py`: `DeadReckoning`, the pose integrated from the encoders;
+- `dead_reckoning.py`: `DeadReckoning`, the pose integrated from the encoders (their samples
+  held by a C++ shift register, folded by `PoseIntegrator`);
 - `contact.py`: `WheelContacts`, each wheel's load (from the contact results), slip ratio
   and slip angle;
 - `stability.py`: `TipMargin`, the tip-over margin and its least over the run;

@@ -18,7 +18,13 @@ from corobot_drake.resources import DEFAULT_SCENARIO, make_parser
 from corobot_drake.simulation import Simulation, quiet_drake_warnings
 from corobot_drake.study.metrics import METRICS, RobotRun
 from corobot_drake.systems import contact
-from corobot_drake.systems.dead_reckoning import DeadReckoning
+from corobot_drake.systems.dead_reckoning import (
+    HISTORY,
+    DeadReckoning,
+    PoseIntegrator,
+    advance_pose,
+    encoder_history,
+)
 from corobot_drake.systems.slip_markers import MARKER_PERIOD, SlipMarkers
 from corobot_drake.systems.stability import TipMargin
 from corobot_drake.tuning import odometry_calibration as oc
@@ -79,6 +85,46 @@ def test_odometry_turns_by_the_wheel_difference_over_the_track():
     left, right = -50 * TICK * 0.06, 50 * TICK * 0.06
     assert yaw == pytest.approx((right - left) / 0.3, abs=1e-12)
     assert math.hypot(x, y) == pytest.approx(0.0, abs=1e-12)  # equal and opposite: in place
+
+
+def test_the_encoder_history_keeps_exact_samples_newest_first():
+    s = Stepper(encoder_history(PERIOD, length=3), PERIOD)
+    samples = [[0.1, -7.0], [1e9 + 0.3, 2.0 / 3.0], [-1e-300, 5.0], [12345.678, -0.25]]
+    for sample in samples:
+        s.fix("u0", sample)
+        s.tick()
+    history = s.system.get_output_port().Eval(s.context)
+    assert history.tolist() == [4.0, *samples[3], *samples[2], *samples[1]]  # bit for bit
+
+
+def test_odometry_folds_the_samples_as_an_update_every_period_would():
+    """A random walk of counts over a number of periods that is not a multiple of the fold's:
+    the pose read after every period is, bit for bit, the per-period integration's."""
+    s = odometry(start=(0.3, -0.2, 3.0))
+    rng = np.random.default_rng(7)
+    counts = np.array([100.0, 100.0])
+    x, y, yaw, last = 0.3, -0.2, 3.0, counts.copy()
+    k = 2 * math.pi * 0.06 / dim.ENCODER_TICKS_PER_REVOLUTION
+    for period in range(5 * HISTORY + 3):
+        s.tick()  # takes the counts fixed before it
+        assert s.output("pose").tolist() == [x, y, math.remainder(yaw, 2 * math.pi)], period
+        counts = counts + rng.integers(-3, 12, size=2)
+        s.fix("encoder_ticks", counts)
+        x, y, yaw = advance_pose(x, y, yaw, *(k * (counts - last)), 0.3)
+        last = counts
+    context = s.system.GetMyMutableContextFromRoot(s.context)
+    s.tick()
+    assert s.system.State(context) == [x, y, yaw, *counts]
+
+
+def test_odometry_refuses_a_history_it_has_fallen_behind():
+    """More samples since the last fold than the history holds would lose motion: an error,
+    not a wrong pose."""
+    integrator = PoseIntegrator(Drive(), 1.0, length=2)
+    context = integrator.CreateDefaultContext()
+    integrator.GetInputPort("encoder_history").FixValue(context, [3.0, 1, 1, 0, 0])
+    with pytest.raises(RuntimeError, match="3 encoder samples to fold, the history holds 2"):
+        integrator.GetOutputPort("pose").Eval(context)
 
 
 def synthetic_log(radius: float, track: float) -> oc.PoseLog:
