@@ -99,6 +99,12 @@ class CommandSourceState(SharedState):
     """seq of the scripted completing command the script waits for (0: none)."""
     teleport: DriveRequest | None = None
     """A SetPose not yet applied to the plant (the Simulation applies it, `TakeTeleport`)."""
+    quiet_until: float = 0.0
+    """Simulation time before which an update changes nothing unless the status it reads is a
+    new one (every level command ended, the script held by a Wait or a completing command):
+    set by the update that made this state, 0 by anything else that changes the state."""
+    status_seen: object = None
+    """The CommandStatus that update read (already recorded)."""
 
 
 def command_name(command) -> str:
@@ -204,7 +210,8 @@ class CommandSource(LeafSystem):
         enabled = command.enabled if isinstance(command, Enable) else state.request.enabled
         request = DriveRequest(seq, command, time, enabled)
         teleport = request if isinstance(command, SetPose) else state.teleport
-        return state.replace(request=request, log=_bounded(log), teleport=teleport)
+        return state.replace(request=request, log=_bounded(log), teleport=teleport,
+                             quiet_until=0.0)
 
     @staticmethod
     def _with_status(state: CommandSourceState, status: CommandStatus) -> CommandSourceState:
@@ -219,7 +226,7 @@ class CommandSource(LeafSystem):
                 log = list(state.log)
                 log[i] = record.replace(end_time=status.time, status=status.status,
                                         reason=status.reason)
-                return state.replace(log=tuple(log))
+                return state.replace(log=tuple(log), quiet_until=0.0)
         return state
 
     @staticmethod
@@ -296,14 +303,38 @@ class CommandSource(LeafSystem):
     def _update(self, context, state):
         original = self.get_state(context)
         now = context.get_time()
-        current = self._with_ended(self._with_status(original, self._status(context)), now)
-        current = self._next_script_command(current, self.script(context), now)
+        status = self._status(context)
+        if now < original.quiet_until and (status is original.status_seen
+                                           or status.seq == 0 or status.status == "running"):
+            return EventStatus.DidNothing()  # what the updates below would find (most steps)
+        current = self._with_ended(self._with_status(original, status), now)
+        script = self.script(context)
+        current = self._next_script_command(current, script, now)
         if current is original:
             # Drake then skips copying the state back (and what reads the request stays
             # valid), when no other system's update at this step changed anything either.
             return EventStatus.DidNothing()
+        current = current.replace(quiet_until=self._quiet_until(current, script, now),
+                                  status_seen=status)
         self._set_state(state, current)
         return EventStatus.Succeeded()
+
+    def _quiet_until(self, current: CommandSourceState, script: tuple, now: float) -> float:
+        """The time until which updates after this one (at `now`) find nothing to do, as long
+        as no new status comes: `_with_ended`'s and `_next_script_command`'s conditions."""
+        last = current.log[-1] if current.log else None
+        if last is not None and last.end_time is None and last.seq != 0 and (
+                last.command not in _COMPLETING_NAMES):
+            return 0.0  # a level command issued now ends at the next update
+        if current.next_script_index >= len(script) or self._script_waiting(current):
+            until = math.inf  # the script is done or waits on a status
+        else:
+            until = current.script_blocked_until - 1e-12 if current.script_blocked_until > now \
+                else 0.0
+        running_wait = any(r.seq == 0 and r.end_time is None for r in current.log[-3:])
+        if running_wait:
+            until = min(until, current.script_blocked_until - 1e-12)
+        return until
 
     def _initialize(self, context, state):
         """The script's commands up to its first Wait (even of 0 s: what follows it is
@@ -320,8 +351,9 @@ class CommandSource(LeafSystem):
             current = self._with_ended(issued, now)
             if isinstance(script[issued.next_script_index - 1], Wait):
                 break
-        if current is not original:
-            self._set_state(state, current)
+        quiet_until = self._quiet_until(current, script, now)
+        if current is not original or original.quiet_until != quiet_until:
+            self._set_state(state, current.replace(quiet_until=quiet_until, status_seen=None))
 
     def _next_script_command(self, current: CommandSourceState, script: tuple,
                              now: float) -> CommandSourceState:
@@ -516,7 +548,7 @@ class DriveController(LeafSystem):
         request = self._request_port.Eval(context)
         seq, tracking = context.get_discrete_state(self._mode).get_value().tolist()
         if request.seq == seq and tracking == Tracking.IDLE:
-            return
+            return EventStatus.DidNothing()
         if request.seq != seq:
             target_left, target_right, jump = self._take(context, discrete_state, request)
         else:

@@ -475,8 +475,11 @@ def test_a_steady_drive_writes_no_state():
     turned = wheels([1.0, -2.0, 1.5, -2.5], [0.1 * K / 2, -0.2 * K, 0.1 * K, -0.2 * K])
     s.fix("wheel_state", turned)
     s.tick(3)
+    updates = s.simulator.get_num_discrete_updates()
+    s.tick(3)
     for i, values in enumerate(before):
         np.testing.assert_array_equal(state.get_vector(i).CopyToVector(), values)
+    assert s.simulator.get_num_discrete_updates() == updates  # DidNothing: nothing copied back
     assert s.system.hold_angles(s.context) == [1.0, -2.0, 1.5, -2.5]
     s.fix("request", DriveRequest(2, SetPower(0.1, -0.2)))  # the same again: still steady
     s.tick()
@@ -503,3 +506,39 @@ def test_a_wheel_stopped_from_a_steady_drive_is_held_where_it_stops():
     gain = DRIVE.hold_gain
     np.testing.assert_allclose(s.output("desired_state")[4:],
                                [-gain * 2e-5, 0.0, 0.0, gain * 1e-5], rtol=1e-9, atol=1e-15)
+
+
+def test_what_comes_during_a_quiet_wait_is_taken_at_the_next_update():
+    """While the script waits, the updates skip their work (`quiet_until`); a command issued
+    then still ends at the next update, and a completing command's reported end is recorded
+    at the next update, as on any other step."""
+    s = source([SetPower(0.1, 0.1), Wait(1.0), AllStop()], CommandStatus())
+    s.tick(5)
+    updates = s.simulator.get_num_unrestricted_updates()
+    s.tick(5)
+    assert s.simulator.get_num_unrestricted_updates() == updates  # nothing to do, nothing done
+    seq = s.system.Issue(s.context, SetSpeed(0.2, 0.2))
+    s.tick()
+    assert (s.system.record(s.context, seq).status,
+            s.system.record(s.context, seq).end_time) == ("succeeded", s.last_tick_time)
+    seq = s.system.Issue(s.context, DriveDistance(0.5, 0.5))
+    s.tick(3)
+    assert s.system.record(s.context, seq).status == "running"
+    s.fix("command_status", CommandStatus(seq, "succeeded", "", s.context.get_time()))
+    s.tick()
+    assert s.system.record(s.context, seq).status == "succeeded"
+    s.tick(round(1.0 / PERIOD))  # the Wait ends and the script carries on with the AllStop
+    assert [r.command for r in log(s)][-1] == "AllStop"
+    assert log(s)[-1].start_time == pytest.approx(1.0, abs=PERIOD)
+
+
+def test_a_failed_scripted_set_pose_lets_the_script_carry_on_at_the_next_update():
+    """The Simulation fails a SetPose it cannot apply (`Fail`) between updates, while the
+    script waits on it and the motion still reports it running: the next update goes on."""
+    s = source([SetPose(1.0, 0.0), SetPower(0.1, 0.1)], CommandStatus(1, "running"))
+    s.tick(3)
+    assert [r.command for r in log(s)] == ["SetPose"]
+    s.system.Fail(s.context, 1, "blocked")
+    s.tick()
+    assert [(r.command, r.status) for r in log(s)] == [("SetPose", "failed"),
+                                                        ("SetPower", "running")]
