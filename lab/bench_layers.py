@@ -12,7 +12,8 @@ station's wiring, each diagram driving the benchmark's figure of eight (`bench.D
 - + the chassis poses, encoders, compass, GPS and drive state (no events of their own: they
   cost only when something reads them);
 - + the command source and motion (the script replaces the fixed request);
-- + dead reckoning (an event every 10 ms);
+- + dead reckoning (Drake's shift register of the encoder counts every 10 ms, folded into
+  the pose in Python every 80 ms);
 - + the wheel contacts and the tip margin (read by nothing per step yet);
 - + the run log (an event every 10 ms; its contact telemetry: the tip margin every row, the
   loads and slip every 0.1 s, made when the log is read on a continuous plant; the run's
@@ -62,9 +63,9 @@ LAYERS = ("plant alone (the station's desired state replayed)",
           "+ chassis poses, encoders, compass, GPS, drive state",
           "+ command source and motion (the script)", "+ dead reckoning",
           "+ wheel contacts and tip margin", "+ run log (with the contact telemetry)")
-IDLE_UPDATES = 4
-"""The station's Python updates per step and robot (drive controller, command source, motion,
-dead reckoning)."""
+IDLE_UPDATES = 3
+"""The station's Python updates per step and robot (drive controller, command source,
+motion)."""
 IDLE = f"plant alone + {IDLE_UPDATES} Python updates per step that do nothing"
 """A row of the floor the station's design sets: Drake's dispatch of that many Python updates."""
 STATION = "the station (Simulation, physics only)"

@@ -48,6 +48,12 @@ continuous plant; on SAP's discrete plant, with sampled output ports (Drake's de
 unrestricted update, without them a discrete one. Callgrind's inclusive count of it is the
 plant's share of a row; the rest is the framework's and the project's systems'."""
 
+EVENT_HANDLERS = ("Simulator<double>::HandleDiscreteUpdate",
+                  "Simulator<double>::HandleUnrestrictedUpdate",
+                  "Simulator<double>::HandlePublish")
+"""The Simulator's handlers of the systems' events (the robot's updates, the log sinks'
+samples): of the rest, what the systems' events cost, each handler's inclusive count."""
+
 
 def require_valgrind() -> None:
     """ValgrindMissingError unless valgrind and its two scripts are installed."""
@@ -65,6 +71,10 @@ class Count(typing.NamedTuple):
     """Of them, in the plant's step (`PLANT_STEPS`, inclusive)."""
     i1_misses: int | None = None
     """First-level instruction-cache misses (callgrind's cache model; None: not simulated)."""
+    event_handlers: int = 0
+    """Of the instructions, in the Simulator's event handlers (`EVENT_HANDLERS`, inclusive)."""
+    event_i1_misses: int | None = None
+    """Of the misses, in the event handlers (None: not simulated)."""
 
 
 def count(row: str, seconds: float, override: str | None = None,
@@ -83,8 +93,9 @@ def count(row: str, seconds: float, override: str | None = None,
         if done.returncode != 0 or not out.exists():
             raise RuntimeError(f"callgrind failed on {row!r}: {done.stderr.strip()[-300:]}")
         annotated = subprocess.run(
-            ["callgrind_annotate", "--inclusive=yes", f"--show={'Ir,I1mr' if cache else 'Ir'}",
-             str(out)], capture_output=True, text=True, check=True).stdout
+            ["callgrind_annotate", "--inclusive=yes", "--threshold=100",
+             f"--show={'Ir,I1mr' if cache else 'Ir'}", str(out)],
+            capture_output=True, text=True, check=True).stdout
     return _parse(row, annotated, cache)
 
 
@@ -97,9 +108,14 @@ def _parse(row: str, annotated: str, cache: bool) -> Count:
     totals = [numbers(line) for line in annotated.splitlines() if "PROGRAM TOTALS" in line]
     if not totals:
         raise RuntimeError(f"callgrind counted nothing on {row!r}")
-    step = [numbers(line)[0] for line in annotated.splitlines()
-            if any(f in line for f in PLANT_STEPS)]
-    return Count(totals[0][0], max(step, default=0), totals[0][1] if cache else None)
+    lines = annotated.splitlines()
+    step = [numbers(line)[0] for line in lines if any(f in line for f in PLANT_STEPS)]
+    # Each handler's outermost line: a recursive call's (name'2) is inside it.
+    handlers = [max((numbers(line) for line in lines if f"{name}(" in line),
+                    default=[0, 0]) for name in EVENT_HANDLERS]
+    return Count(totals[0][0], max(step, default=0), totals[0][1] if cache else None,
+                 sum(h[0] for h in handlers),
+                 sum(h[1] for h in handlers) if cache else None)
 
 
 def _instrument(on: bool) -> None:

@@ -6,7 +6,9 @@
 The rows of `tools/bench.py --layers` (the plant alone, then the robot's systems added one
 layer at a time, then the station), each counted over `--seconds` of the figure of eight's
 first segment (`lab.instructions`): a count that is the same run after run,
-where time on this shared machine is not, split into the plant's step and the rest. Each
+where time on this shared machine is not, split into the plant's step and the rest, and of
+the rest what the Simulator's handlers of the systems' events (their updates and publishes,
+`instructions.EVENT_HANDLERS`) take. Each
 `--override` adds a station row with that scenario override (e.g. a Drake setting to try).
 `--cache-sim` adds callgrind's count of first-level instruction-cache misses (its cache model:
 what code the rows keep evicting), at about twice the run time. Rows run two at a time, ~20 s
@@ -45,23 +47,30 @@ def _counted(jobs: list, seconds: float, cache: bool) -> list[instructions.Count
 
 
 def _print_table(jobs: list, counts: list[instructions.Count], seconds: float) -> None:
-    millions = [(c.instructions / seconds / 1e6, c.plant_step / seconds / 1e6,
-                 None if c.i1_misses is None else c.i1_misses / seconds / 1e6) for c in counts]
-    cache = millions[0][2] is not None
+    def per_second(n):
+        return None if n is None else n / seconds / 1e6
+
+    millions = [(per_second(c.instructions), per_second(c.plant_step),
+                 per_second(c.event_handlers), per_second(c.i1_misses),
+                 per_second(c.event_i1_misses)) for c in counts]
+    cache = millions[0][3] is not None
     station = millions[len(instructions.rows()) - 1][0]
     print(f"{seconds:g} simulated s per row, from {instructions.WARM_UP:g} s of the figure "
           "of eight\n\n| layers (cumulative) | million instructions per simulated s | added | "
-          "of the station's | in the plant's step | in the rest (framework and systems) |"
-          + (" million first-level instruction-cache misses per simulated s |" if cache else "")
-          + "\n|---|---|---|---|---|---|" + ("---|" if cache else ""))
-    for k, ((row, override), (value, step, misses)) in enumerate(
+          "of the station's | in the plant's step | in the rest (framework and systems) | "
+          "of the rest, in the systems' events |"
+          + (" million first-level instruction-cache misses per simulated s | of them, in "
+             "the systems' events |" if cache else "")
+          + "\n|---|---|---|---|---|---|---|" + ("---|---|" if cache else ""))
+    for k, ((row, override), (value, step, events, misses, event_misses)) in enumerate(
             zip(jobs, millions, strict=True)):
         name = f"the station, `{override}`" if override else (
             "the station (Simulation, physics only)" if row == instructions.STATION else row)
         added = (f"{value - millions[k - 1][0]:+.1f}"
                  if row in bench_layers.LAYERS[1:] else "")
         print(f"| {name} | {value:.1f} | {added} | {value / station:.2f} | {step:.1f} | "
-              f"{value - step:.1f} |" + (f" {misses:.2f} |" if cache else ""))
+              f"{value - step:.1f} | {events:.1f} |"
+              + (f" {misses:.2f} | {event_misses:.2f} |" if cache else ""))
 
 
 REPEATABLE = 0.01

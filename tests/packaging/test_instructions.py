@@ -35,9 +35,16 @@ def test_the_counts_are_read_from_callgrind_annotates_totals_and_the_plants_step
     one = (f"690,107,262 (100.0%)  PROGRAM TOTALS\n"
            f"572,900,001 (83.01%)  ???:drake::multibody::{step} [libdrake.so]\n"
            f"1,000 ( 0.00%)  ???:drake::multibody::{step}'2 [libdrake.so]\n")
-    assert instructions._parse("station", one, cache=False) == (690107262, 572900001, None)
+    assert instructions._parse("station", one, cache=False) == (690107262, 572900001, None,
+                                                                0, None)
+    handle = "drake::systems::Simulator<double>::Handle{}(drake::systems::EventCollection<...>)"
     two = ("690,107,262 (100.0%) 4,150,000 (100.0%)  PROGRAM TOTALS\n"
-           f"572,900,001 (83.01%) 2,000,000 (48.2%)  ???:drake::multibody::{step}\n")
-    assert instructions._parse("station", two, cache=True) == (690107262, 572900001, 4150000)
+           f"572,900,001 (83.01%) 2,000,000 (48.2%)  ???:drake::multibody::{step}\n"
+           f"3,000,000 ( 0.43%) 900,000 (21.7%)  ???:{handle.format('DiscreteUpdate')}\n"
+           f"2,000,000 ( 0.29%) 800,000 (19.3%)  ???:{handle.format('UnrestrictedUpdate')}\n"
+           f"5 ( 0.00%) 1 ( 0.00%)  ???:{handle.format('UnrestrictedUpdate')}'2\n"
+           f"1,000 ( 0.00%) 10 ( 0.00%)  ???:{handle.format('Publish')}\n")
+    assert instructions._parse("station", two, cache=True) == (
+        690107262, 572900001, 4150000, 5001000, 1700010)
     with pytest.raises(RuntimeError, match="counted nothing"):
         instructions._parse("station", "no totals here\n", cache=False)
