@@ -72,9 +72,10 @@ class Count(typing.NamedTuple):
     i1_misses: int | None = None
     """First-level instruction-cache misses (callgrind's cache model; None: not simulated)."""
     event_handlers: int = 0
-    """Of the instructions, in the Simulator's event handlers (`EVENT_HANDLERS`, inclusive)."""
+    """Of the instructions, in the systems' events: the Simulator's event handlers
+    (`EVENT_HANDLERS`, inclusive), without a discrete plant's step (which is an update)."""
     event_i1_misses: int | None = None
-    """Of the misses, in the event handlers (None: not simulated)."""
+    """Of the misses, in the systems' events (None: not simulated)."""
 
 
 def count(row: str, seconds: float, override: str | None = None,
@@ -109,13 +110,17 @@ def _parse(row: str, annotated: str, cache: bool) -> Count:
     if not totals:
         raise RuntimeError(f"callgrind counted nothing on {row!r}")
     lines = annotated.splitlines()
-    step = [numbers(line)[0] for line in lines if any(f in line for f in PLANT_STEPS)]
+    step = max(([*numbers(line), 0][:2] for line in lines if any(f in line for f in PLANT_STEPS)),
+               default=[0, 0])
     # Each handler's outermost line: a recursive call's (name'2) is inside it.
-    handlers = [max((numbers(line) for line in lines if f"{name}(" in line),
+    handlers = [max(([*numbers(line), 0][:2] for line in lines if f"{name}(" in line),
                     default=[0, 0]) for name in EVENT_HANDLERS]
-    return Count(totals[0][0], max(step, default=0), totals[0][1] if cache else None,
-                 sum(h[0] for h in handlers),
-                 sum(h[1] for h in handlers) if cache else None)
+    events = [sum(h[i] for h in handlers) for i in (0, 1)]
+    if not any(f"{PLANT_STEPS[0]}(" in line for line in lines):
+        # A discrete plant steps in an update event: the systems' events are the rest of them.
+        events = [events[0] - step[0], events[1] - step[1]]
+    return Count(totals[0][0], step[0], totals[0][1] if cache else None, events[0],
+                 events[1] if cache else None)
 
 
 def _instrument(on: bool) -> None:
