@@ -74,6 +74,10 @@ class CommandRecord(SharedState):
     reason: str = ""
 
 
+WAIT_SLACK = 1e-12
+"""s: a Wait has elapsed at an update this close before its end (the updates' times are
+multiples of the period, a Wait's end a sum of seconds: one instant may differ in the last
+bits)."""
 COMMAND_LOG_CAPACITY = 10_000
 """Records the command log keeps (the newest; ~220 bytes each, so ~2.2 MB at most): a day of
 driving from the dashboard must not fill the memory. Older records are dropped as new ones
@@ -146,7 +150,8 @@ class CommandSource(LeafSystem):
     running completing one as failed: `superseded`, or `disabled` when the new command is
     `Enable(false)`; a level command (SetPower, SetSpeed, AllStop, Enable) ends at the first
     update after it is issued, when the drive takes it (`_with_ended`), and a Wait when it has
-    elapsed.
+    elapsed. An update that makes a change also notes until when the next ones can find
+    nothing to do but for a new status (`quiet_until`): those read the status and return.
     """
 
     def __init__(self, script: list, period: float):
@@ -242,7 +247,7 @@ class CommandSource(LeafSystem):
             if r.end_time is not None or r.command in _COMPLETING_NAMES:
                 continue
             if r.seq == 0:  # a Wait: the script is held until script_blocked_until
-                if now < state.script_blocked_until - 1e-12:
+                if now < state.script_blocked_until - WAIT_SLACK:
                     continue
                 ended = r.replace(end_time=state.script_blocked_until, status="succeeded")
             elif r.command in _MOTION_LEVEL_NAMES and not state.request.enabled:
@@ -326,14 +331,13 @@ class CommandSource(LeafSystem):
         if last is not None and last.end_time is None and last.seq != 0 and (
                 last.command not in _COMPLETING_NAMES):
             return 0.0  # a level command issued now ends at the next update
+        wait_end = current.script_blocked_until - WAIT_SLACK
         if current.next_script_index >= len(script) or self._script_waiting(current):
             until = math.inf  # the script is done or waits on a status
         else:
-            until = current.script_blocked_until - 1e-12 if current.script_blocked_until > now \
-                else 0.0
-        running_wait = any(r.seq == 0 and r.end_time is None for r in current.log[-3:])
-        if running_wait:
-            until = min(until, current.script_blocked_until - 1e-12)
+            until = wait_end if current.script_blocked_until > now else 0.0
+        if any(r.seq == 0 and r.end_time is None for r in current.log[-3:]):
+            until = min(until, wait_end)  # a Wait's record ends at its end
         return until
 
     def _initialize(self, context, state):
@@ -546,7 +550,8 @@ class DriveController(LeafSystem):
         # two to eight numbers pydrake's numpy views, input-port copies and list conversions
         # cost more than the update's arithmetic, and this runs every control period.
         request = self._request_port.Eval(context)
-        seq, tracking = context.get_discrete_state(self._mode).get_value().tolist()
+        mode = context.get_discrete_state(self._mode)
+        seq, tracking = mode[0], mode[1]
         if request.seq == seq and tracking == Tracking.IDLE:
             return EventStatus.DidNothing()
         if request.seq != seq:
