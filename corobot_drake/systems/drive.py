@@ -326,18 +326,18 @@ class CommandSource(LeafSystem):
 
     def _quiet_until(self, current: CommandSourceState, script: tuple, now: float) -> float:
         """The time until which updates after this one (at `now`) find nothing to do, as long
-        as no new status comes: `_with_ended`'s and `_next_script_command`'s conditions."""
-        last = current.log[-1] if current.log else None
-        if last is not None and last.end_time is None and last.seq != 0 and (
-                last.command not in _COMPLETING_NAMES):
+        as no new status comes: before it neither `_with_ended` nor `_next_script_command`
+        changes `current`. Only a Wait's end (`script_blocked_until`) is a time they wait
+        for, so each is asked whether it would change anything ever (at infinity) or at once
+        (at minus infinity)."""
+        if self._with_ended(current, -math.inf) is not current:
             return 0.0  # a level command issued now ends at the next update
+        until = math.inf
         wait_end = current.script_blocked_until - WAIT_SLACK
-        if current.next_script_index >= len(script) or self._script_waiting(current):
-            until = math.inf  # the script is done or waits on a status
-        else:
-            until = wait_end if current.script_blocked_until > now else 0.0
-        if any(r.seq == 0 and r.end_time is None for r in current.log[-3:]):
-            until = min(until, wait_end)  # a Wait's record ends at its end
+        if self._with_ended(current, math.inf) is not current:
+            until = wait_end  # a Wait's record ends at its end
+        if self._next_script_command(current, script, math.inf) is not current:
+            until = min(until, wait_end if current.script_blocked_until > now else 0.0)
         return until
 
     def _initialize(self, context, state):

@@ -234,7 +234,13 @@ def rows_of(times: np.ndarray, raw: np.ndarray, tip_margin, held=None) -> np.nda
 
 def tip_margins(raw: np.ndarray, tip_margin) -> np.ndarray:
     """deg: the tip margin (`stability.TipMargin`) of each raw sample's chassis."""
-    R = rotation_rows(raw[:, [RAW_COLUMNS.index(c) for c in CHASSIS_STATE[:4]]])
+    return _margins(rotation_rows(raw[:, [RAW_COLUMNS.index(c) for c in CHASSIS_STATE[:4]]]),
+                    tip_margin)
+
+
+def _margins(R: np.ndarray, tip_margin) -> np.ndarray:
+    """deg: the tip margin of each chassis rotation R [n, 3, 3] (from its last row: the world's
+    up in the chassis frame)."""
     return tip_margin.margin_of_up(R[:, 2, 0], R[:, 2, 1], R[:, 2, 2])
 
 
@@ -249,7 +255,7 @@ def _made_when_read(column: dict, tip_margin) -> dict:
                      "front_right": np.rint(column["right_ticks"])},
         "pose": {"x": column["x"], "y": column["y"],
                  "yaw": np.arctan2(R[:, 1, 0], R[:, 0, 0])},  # as `odometry.heading_of`
-        "tip_margin": {"": tip_margin.margin_of_up(R[:, 2, 0], R[:, 2, 1], R[:, 2, 2])},
+        "tip_margin": {"": _margins(R, tip_margin)},
     }
 
 
