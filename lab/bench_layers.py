@@ -19,7 +19,10 @@ station's wiring, each diagram driving the benchmark's figure of eight (`bench.D
   loads and slip every 0.1 s, made when the log is read on a continuous plant; the run's
   largest tilt is read from its samples);
 - the station itself (`Simulation`, physics only), which the last layer should match;
-- the station with one Drake-side setting changed (`VARIANTS`).
+- the station with one Drake-side setting changed (`VARIANTS`);
+- the plant alone with as many Python updates per step as the station runs, changing nothing
+  (`FLOORS`): reading nothing, reading an abstract input and two state numbers (what the
+  station's updates read when they have nothing to do), reading numbers only.
 
 Each row's cost is CPU time per simulated second; the difference from the layer before is
 what that layer adds. The rows run interleaved, `repeats` rounds; medians.
@@ -31,11 +34,13 @@ import statistics
 import time
 
 import numpy as np
+from pydrake.common.value import Value
 from pydrake.common.yaml import yaml_dump_typed
 from pydrake.multibody.plant import AddMultibodyPlant
 from pydrake.systems.analysis import Simulator
-from pydrake.systems.framework import DiagramBuilder, LeafSystem
+from pydrake.systems.framework import DiagramBuilder, EventStatus, LeafSystem
 from pydrake.systems.primitives import (
+    ConstantValueSource,
     ConstantVectorSource,
     MatrixGain,
     TrajectorySource,
@@ -68,6 +73,13 @@ IDLE_UPDATES = 3
 motion)."""
 IDLE = f"plant alone + {IDLE_UPDATES} Python updates per step that do nothing"
 """A row of the floor the station's design sets: Drake's dispatch of that many Python updates."""
+QUIET = (f"plant alone + {IDLE_UPDATES} Python updates per step that read an abstract input "
+         "(a request's seq) and two state numbers, and change nothing")
+"""The floor with what the station's updates read on their quiet path (a steady drive, a
+quiet script, no motion command): Drake's dispatch and pydrake's accessors."""
+NUMERIC = (f"plant alone + {IDLE_UPDATES} Python updates per step that read a vector input's "
+           "number and two state numbers, and change nothing")
+"""The floor of updates whose quiet path reads numbers only (vector ports, discrete state)."""
 STATION = "the station (Simulation, physics only)"
 VARIANTS = {
     "the station under SAP at 10 ms (the default before CENIC)": sc.SAP_PLANT % 0.01,
@@ -112,11 +124,45 @@ class _Idle(LeafSystem):
         self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, lambda context, state: None)
 
 
+class _Quiet(LeafSystem):
+    """A Python update every `period` s that reads what the drive's does in a steady drive
+    (input `request`, an abstract `DriveRequest`: its seq; its own two numbers of discrete
+    state) and reports that it changed nothing; with `numeric`, input `request` is a
+    1-vector, the seq alone."""
+
+    def __init__(self, period: float, numeric: bool = False):
+        super().__init__()
+        self._numeric = numeric
+        self._request = (self.DeclareVectorInputPort("request", 1) if numeric
+                         else self.DeclareAbstractInputPort("request", Value(DriveRequest())))
+        self._mode = self.DeclareDiscreteState(2)
+        self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._update)
+
+    def source(self):
+        """A C++ source of the input: a request that never changes."""
+        return (ConstantVectorSource([0.0]) if self._numeric
+                else ConstantValueSource(Value(DriveRequest())))
+
+    def _update(self, context, discrete_state):
+        seq = (self._request.EvalBasicVector(context)[0] if self._numeric
+               else self._request.Eval(context).seq)
+        mode = context.get_discrete_state(self._mode)
+        if seq != mode[0] or mode[1] != 0.0:
+            raise RuntimeError("bench_layers: a quiet update found a change")
+        return EventStatus.DidNothing()
+
+
+FLOORS = (IDLE, QUIET, NUMERIC)
+"""The rows of the plant alone with `IDLE_UPDATES` Python updates that change nothing
+(`build_layers`' `floor`)."""
+
+
 def build_layers(scenario: sc.Scenario, layers: int, seconds: float = 10.0,
-                 idle_updates: int = 0) -> _Layered:
+                 idle_updates: int = 0, floor: str = IDLE) -> _Layered:
     """The default scene's plant with the first `layers` of `LAYERS` (1: the plant alone, fed
     the station's desired state over its first `seconds`: `station_desired_state`), and
-    `idle_updates` Python updates per physics step that do nothing (`_Idle`)."""
+    `idle_updates` Python updates per physics step that change nothing, as the `FLOORS` row
+    `floor` has them (`_Idle`, `_Quiet`)."""
     builder = DiagramBuilder()
     plant, _ = AddMultibodyPlant(scenario.plant_config, builder)
     _add_world(plant, scenario.world)
@@ -162,7 +208,13 @@ def build_layers(scenario: sc.Scenario, layers: int, seconds: float = 10.0,
                           layers, fixed,
                           sc.continuous_step(scenario.plant_config, scenario.simulator_config))
     for _ in range(idle_updates):
-        builder.AddSystem(_Idle(sc.physics_step(scenario.plant_config, scenario.simulator_config)))
+        period = sc.physics_step(scenario.plant_config, scenario.simulator_config)
+        if floor == IDLE:
+            builder.AddSystem(_Idle(period))
+        else:
+            quiet = builder.AddSystem(_Quiet(period, numeric=floor == NUMERIC))
+            builder.Connect(builder.AddSystem(quiet.source()).get_output_port(),
+                            quiet.get_input_port())
     diagram = builder.Build()
     simulator = Simulator(diagram)
     apply_simulator_config(scenario, simulator)
@@ -253,9 +305,10 @@ def _add_robot_layers(builder, plant, name, robot, chassis, joints, selector, co
 
 
 def _cpu_seconds(layers: int | None, scenario: sc.Scenario, seconds: float,
-                 idle_updates: int = 0) -> float:
+                 idle_updates: int = 0, floor: str = IDLE) -> float:
     """CPU s to simulate `seconds` of the figure of eight with the first `layers` of `LAYERS`
-    (None: the station itself) and `idle_updates` (`build_layers`), building excluded."""
+    (None: the station itself) and `idle_updates`, `floor` (`build_layers`), building
+    excluded."""
     if layers is None:
         from corobot_drake.simulation import Simulation
 
@@ -263,7 +316,7 @@ def _cpu_seconds(layers: int | None, scenario: sc.Scenario, seconds: float,
         start = time.process_time()
         sim.advance(seconds)
         return time.process_time() - start
-    built = build_layers(scenario, layers, seconds, idle_updates)
+    built = build_layers(scenario, layers, seconds, idle_updates, floor)
     context = built.simulator.get_mutable_context()
     segments = [*_segments(scenario.robots[bench.ROBOT]), (seconds, None)]
     start = time.process_time()
@@ -277,18 +330,19 @@ def _cpu_seconds(layers: int | None, scenario: sc.Scenario, seconds: float,
 
 
 def layer_costs(seconds: float, repeats: int, progress=None) -> dict[str, tuple[float, float]]:
-    """{row (`LAYERS`, `STATION`, then `VARIANTS`): (median, least) CPU ms per simulated
+    """{row (`LAYERS`, `STATION`, `VARIANTS`, `FLOORS`): (median, least) CPU ms per simulated
     second}; the rows run in turn, `repeats` rounds. The least is the run least disturbed by
     other work on a shared machine (contention only adds CPU time: cache and memory bandwidth).
     `progress()` is called after each run."""
-    rows = [(name, i + 1, _scenario(), 0) for i, name in enumerate(LAYERS)]
-    rows += [(STATION, None, _scenario(), 0)]
-    rows += [(name, None, _scenario(override), 0) for name, override in VARIANTS.items()]
-    rows += [(IDLE, 1, _scenario(), IDLE_UPDATES)]
-    runs = {name: [] for name, _, _, _ in rows}
+    rows = [(name, i + 1, _scenario(), 0, IDLE) for i, name in enumerate(LAYERS)]
+    rows += [(STATION, None, _scenario(), 0, IDLE)]
+    rows += [(name, None, _scenario(override), 0, IDLE) for name, override in VARIANTS.items()]
+    rows += [(name, 1, _scenario(), IDLE_UPDATES, name) for name in FLOORS]
+    runs = {name: [] for name, *_ in rows}
     for _ in range(repeats):
-        for name, layers, scenario, idle in rows:
-            runs[name].append(_cpu_seconds(layers, scenario, seconds, idle) / seconds * 1000)
+        for name, layers, scenario, idle, floor in rows:
+            runs[name].append(
+                _cpu_seconds(layers, scenario, seconds, idle, floor) / seconds * 1000)
             if progress:
                 progress()
     return {name: (statistics.median(values), min(values)) for name, values in runs.items()}

@@ -35,9 +35,14 @@ class ValgrindMissingError(RuntimeError):
     """valgrind (with callgrind_control) is not installed."""
 
 
+FLOORS = bench_layers.FLOORS
+"""The plant alone with Python updates that change nothing (`bench_layers.build_layers`'s
+`floor`): what the station's count of updates costs before they do anything."""
+
+
 def rows() -> list[str]:
-    """Row names: the layers (cumulative), then the station."""
-    return [*bench_layers.LAYERS, STATION]
+    """Row names: the layers (cumulative), the station, then the `FLOORS`."""
+    return [*bench_layers.LAYERS, STATION, *FLOORS]
 
 
 PLANT_STEPS = ("CenicIntegrator<double>::DoStep",
@@ -123,6 +128,15 @@ def _parse(row: str, annotated: str, cache: bool) -> Count:
                  events[1] if cache else None)
 
 
+def _layered(row: str, scenario, seconds: float):
+    """The Simulator of a layer row or a `FLOORS` row, for `seconds`."""
+    if row in FLOORS:
+        return bench_layers.build_layers(scenario, 1, seconds, bench_layers.IDLE_UPDATES,
+                                         floor=row).simulator
+    return bench_layers.build_layers(scenario, bench_layers.LAYERS.index(row) + 1,
+                                     seconds).simulator
+
+
 def _instrument(on: bool) -> None:
     subprocess.run(["callgrind_control", "-i", "on" if on else "off", str(os.getpid())],
                    check=True, capture_output=True)
@@ -139,8 +153,7 @@ def _child(row: str, seconds: float, override: str | None) -> None:
         _instrument(True)
         sim.advance(seconds)
     else:
-        simulator = bench_layers.build_layers(scenario, bench_layers.LAYERS.index(row) + 1,
-                                              WARM_UP + seconds).simulator
+        simulator = _layered(row, scenario, WARM_UP + seconds)
         simulator.AdvanceTo(WARM_UP)
         _instrument(True)
         simulator.AdvanceTo(WARM_UP + seconds)

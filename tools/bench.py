@@ -80,7 +80,7 @@ def _fleets(counts: list[int], seconds: float, repeats: int) -> None:
 
 def _layers(seconds: float, repeats: int) -> None:
     """Prints the physics-only stack layer by layer (median CPU ms per simulated second)."""
-    rows = len(bench_layers.LAYERS) + 2 + len(bench_layers.VARIANTS)
+    rows = len(bench_layers.LAYERS) + 1 + len(bench_layers.VARIANTS) + len(bench_layers.FLOORS)
     with tqdm(total=rows * repeats, desc="layers", leave=False) as bar:
         costs = bench_layers.layer_costs(seconds, repeats, progress=bar.update)
     print("| layers (cumulative) | CPU ms per simulated s, median (least) | added (least) | "
@@ -89,7 +89,7 @@ def _layers(seconds: float, repeats: int) -> None:
     for name, (median, least) in costs.items():
         if name in bench_layers.LAYERS[1:]:
             added = f"{median - previous[0]:+.1f} ({least - previous[1]:+.1f})"
-        elif name == bench_layers.IDLE:
+        elif name in bench_layers.FLOORS:
             plant = costs[bench_layers.LAYERS[0]]
             added = f"{median - plant[0]:+.1f} ({least - plant[1]:+.1f}) over the plant alone"
         elif name in bench_layers.VARIANTS:

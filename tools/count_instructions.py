@@ -4,7 +4,8 @@
     python tools/count_instructions.py [--seconds 1] [--override YAML ...] [--cache-sim]
 
 The rows of `tools/bench.py --layers` (the plant alone, then the robot's systems added one
-layer at a time, then the station), each counted over `--seconds` of the figure of eight's
+layer at a time, then the station, then the plant alone with Python updates that change
+nothing), each counted over `--seconds` of the figure of eight's
 first segment (`lab.instructions`): a count that is the same run after run,
 where time on this shared machine is not, split into the plant's step and the rest, and of
 the rest what the Simulator's handlers of the systems' events (their updates and publishes,
@@ -54,7 +55,7 @@ def _print_table(jobs: list, counts: list[instructions.Count], seconds: float) -
                  per_second(c.event_handlers), per_second(c.i1_misses),
                  per_second(c.event_i1_misses)) for c in counts]
     cache = millions[0][3] is not None
-    station = millions[len(instructions.rows()) - 1][0]
+    station = millions[instructions.rows().index(instructions.STATION)][0]
     print(f"{seconds:g} simulated s per row, from {instructions.WARM_UP:g} s of the figure "
           "of eight\n\n| layers (cumulative) | million instructions per simulated s | added | "
           "of the station's | in the plant's step | in the rest (framework and systems) | "
@@ -66,8 +67,9 @@ def _print_table(jobs: list, counts: list[instructions.Count], seconds: float) -
             zip(jobs, millions, strict=True)):
         name = f"the station, `{override}`" if override else (
             "the station (Simulation, physics only)" if row == instructions.STATION else row)
-        added = (f"{value - millions[k - 1][0]:+.1f}"
-                 if row in bench_layers.LAYERS[1:] else "")
+        added = (f"{value - millions[k - 1][0]:+.1f}" if row in bench_layers.LAYERS[1:]
+                 else f"{value - millions[0][0]:+.1f} over the plant alone"
+                 if row in instructions.FLOORS else "")
         print(f"| {name} | {value:.1f} | {added} | {value / station:.2f} | {step:.1f} | "
               f"{value - step:.1f} | {events:.1f} |"
               + (f" {misses:.2f} | {event_misses:.2f} |" if cache else ""))

@@ -165,7 +165,7 @@ def _performance_specs(c: SimpleNamespace) -> list[Spec]:
                       "--seconds 5 --repeats 1"),), r.render_bench_robots, TIMING, 300),
         Spec("bench-layers", "docs/performance.md",
              (Command("python tools/bench.py --layers --no-table --no-micro --seconds 8 "
-                      "--repeats 11"),), r.render_bench_robots, TIMING, 90),
+                      "--repeats 41"),), r.render_bench_robots, TIMING, 300),
         Spec("layers-instructions", "docs/performance.md",
              (Command("python tools/count_instructions.py --seconds 0.5"),),
              r.render_bench_robots, TIMING, 900),

@@ -46,13 +46,16 @@ def test_the_plant_alone_steps_the_station_bit_for_bit(overrides):
 
 
 def test_idle_python_updates_leave_the_plant_alone_s_steps():
-    # The floor row adds Python updates that do nothing: the same steps and trajectory, so
-    # what it adds over the plant alone is Drake's dispatch of those updates alone.
+    # The floor rows add Python updates that change nothing (reading nothing, or what the
+    # station's quiet updates read, or numbers alone): the same steps and trajectory, so what
+    # they add over the plant alone is Drake's dispatch of those updates and their reads alone
+    # (a read that finds a change raises).
     scenario = bl._scenario()
     runs = []
-    for idle in (0, bl.IDLE_UPDATES):
-        built = bl.build_layers(scenario, 1, 1.0, idle_updates=idle)
+    for idle, floor in ((0, bl.IDLE), *((bl.IDLE_UPDATES, floor) for floor in bl.FLOORS)):
+        built = bl.build_layers(scenario, 1, 1.0, idle_updates=idle, floor=floor)
         built.simulator.AdvanceTo(1.0)
         runs.append((built.simulator.get_num_steps_taken(), _plant_state(built.simulator)))
-    assert runs[0][0] == runs[1][0] == 102
-    assert np.array_equal(runs[0][1], runs[1][1])
+    assert [steps for steps, _ in runs] == [102] * 4
+    for _, state in runs[1:]:
+        assert np.array_equal(state, runs[0][1])
