@@ -6,6 +6,11 @@ or file descriptors (docs/services.md, "Security").
   an incomplete event: 400 beyond) and must arrive whole within `REQUEST_TIMEOUT` s of the
   connection opening or of the previous response; so must a body. A connection that has not
   sent its request by then is closed (`DeadlineH11Protocol`, on uvicorn's h11 protocol).
+- **A refused request is answered, then the connection closed gracefully**: for up to
+  `LINGER` s the server reads and discards what the client still sends (the rest of its head,
+  or the body of a refused upload) until the client closes, as Apache and nginx do; closing at
+  once with bytes unread makes the kernel reset the connection, and the client's then drops
+  the answer before it is read.
 - **A body** is at most `MAX_BODY_BYTES` (413, the connection closed unread) and declares
   its length: a chunked body (no length to check first) gets 411. Every request body of the
   API is a small JSON object.
@@ -35,28 +40,86 @@ KEEP_ALIVE_TIMEOUT = 5
 MAX_CONNECTIONS = 512
 """Connections and requests served at once; more get 503 (each dashboard holds one event
 stream and polls on a second)."""
+LINGER = 2.0
+"""s a refused request's connection stays half closed, its input read and discarded, before
+it is closed (the answer has long reached a client on the loopback or a LAN by then)."""
+_STILL_SENDING = (h11.ERROR, h11.SEND_BODY)
+"""h11's states of a client whose request was answered before it was all read."""
+
+
+class _LingeringTransport:
+    """A connection's transport whose `close`, while the client may still be sending
+    (`_STILL_SENDING`), half closes it and lets `protocol` discard its input for `LINGER` s
+    (`DeadlineH11Protocol._linger`); everything else is the transport's."""
+
+    def __init__(self, transport, protocol):
+        self._transport, self._protocol = transport, protocol
+
+    def __getattr__(self, name):
+        return getattr(self._transport, name)
+
+    def close(self) -> None:
+        if self._protocol.lingering or self._transport.is_closing():
+            return
+        if self._protocol.conn.their_state in _STILL_SENDING and not self._protocol.lost:
+            self._protocol._linger()
+        else:
+            self._transport.close()
+
+    def is_closing(self) -> bool:
+        return self._protocol.lingering or self._transport.is_closing()
+
+    def close_now(self) -> None:
+        """Closes the connection without lingering."""
+        self._transport.close()
 
 
 class DeadlineH11Protocol(H11Protocol):
     """uvicorn's h11 protocol with a deadline for each request: a client that has not sent a
     whole request (head and body) `request_timeout` s after connecting, or after its previous
     response, is disconnected. (uvicorn bounds only the idle time between requests: a client
-    sending its headers a byte at a time was held for ever.)"""
+    sending its headers a byte at a time was held for ever.) A request answered before it was
+    all read is closed lingering (`_LingeringTransport`)."""
 
     request_timeout = REQUEST_TIMEOUT
 
+    lingering = False
+    """Whether the connection is half closed, its input discarded (`_LingeringTransport`)."""
+    lost = False
+    """Whether the connection is gone (nothing to linger on)."""
+
     def connection_made(self, transport) -> None:
-        super().connection_made(transport)
-        self._deadline = None
+        super().connection_made(_LingeringTransport(transport, self))
+        self._deadline = self._linger_end = None
         self._arm_deadline()
+
+    def data_received(self, data: bytes) -> None:
+        if not self.lingering:  # else the request was answered: what follows is dropped
+            super().data_received(data)
+
+    def eof_received(self) -> bool | None:
+        if self.lingering:
+            self.transport.close_now()  # the client is done: close at once
+        return super().eof_received()
+
+    def _linger(self) -> None:
+        self.lingering = True
+        if self._deadline is not None:
+            self._deadline.cancel()
+        if self.transport.can_write_eof():
+            self.transport.write_eof()  # the answer, then the end of what the server sends
+        self._linger_end = self.loop.call_later(LINGER, self.transport.close_now)
 
     def on_response_complete(self) -> None:
         super().on_response_complete()
-        self._arm_deadline()  # the next request on this connection has its own
+        if not self.lingering:
+            self._arm_deadline()  # the next request on this connection has its own
 
     def connection_lost(self, exc) -> None:
-        if self._deadline is not None:
-            self._deadline.cancel()
+        self.lost = True
+        for timer in (self._deadline, self._linger_end):
+            if timer is not None:
+                timer.cancel()
         super().connection_lost(exc)
 
     def _arm_deadline(self) -> None:
@@ -68,7 +131,8 @@ class DeadlineH11Protocol(H11Protocol):
         self._deadline = None
         if self.conn.their_state in (h11.IDLE, h11.SEND_BODY) and not (
                 self.transport.is_closing()):
-            self.transport.close()  # the request is not all here: the client is too slow
+            # The request is not all here: the client is too slow (no lingering for it).
+            self.transport.close_now()
 
 
 def http_config(app, *, log_level: str = "warning",

@@ -145,3 +145,44 @@ def test_robot_names_that_are_not_url_path_segments_are_refused_at_load(name):
     with pytest.raises(ScenarioError, match="a robot name must be letters, digits"):
         load_scenario(data=f'robots: {{"{name}": {{}}}}')
     assert list(load_scenario(data='robots: {"r_1.b-c~": {}}').robots) == ["r_1.b-c~"]
+
+
+def test_a_refused_client_still_sending_reads_its_answer(server):
+    """A client that goes on sending after its request was refused (the rest of an oversized
+    head, or the body of a refused upload) still reads the answer: the server keeps reading
+    and discarding what comes for a while instead of closing at once, when its kernel would
+    reset the connection and the client's kernel drop the answer unread."""
+    with _connect(server) as client:
+        client.sendall(b"GET /simulation HTTP/1.1\r\nHost: 127.0.0.1\r\nX-Big: "
+                       + b"a" * (2 * MAX_HEAD_BYTES))
+        client.settimeout(WAIT)
+        first = client.recv(1, socket.MSG_PEEK)  # answered: the server has refused it
+        assert first == b"H"
+        client.sendall(b"a" * MAX_HEAD_BYTES)  # still sending after the answer
+        threading.Event().wait(0.2)  # the server's kernel answers what it could not deliver
+        assert _answer(client).startswith(b"HTTP/1.1 400 ")
+    with _connect(server) as client:
+        client.sendall(f"POST {ROBOT}/drive/set_power HTTP/1.1\r\nHost: 127.0.0.1\r\n"
+                       f"Content-Type: application/json\r\nContent-Length: "
+                       f"{2 * MAX_BODY_BYTES}\r\n\r\n".encode())
+        assert client.recv(1, socket.MSG_PEEK) == b"H"
+        client.sendall(b"{" * (2 * MAX_BODY_BYTES))  # the body, after its refusal
+        threading.Event().wait(0.2)
+        assert _answer(client).startswith(b"HTTP/1.1 413 ")
+
+
+def test_a_refused_client_is_let_go_after_the_linger(server, monkeypatch):
+    """The lingering is bounded: a refused client that neither stops sending nor closes is
+    disconnected `LINGER` s after its answer (shortened here)."""
+    from corobot_drake.serving import http_limits
+
+    monkeypatch.setattr(http_limits, "LINGER", 0.3)
+    with _connect(server) as client:
+        client.sendall(b"GET /simulation HTTP/1.1\r\nHost: 127.0.0.1\r\nX-Big: "
+                       + b"a" * (2 * MAX_HEAD_BYTES))
+        assert _answer(client).startswith(b"HTTP/1.1 400 ")  # then the server's end
+        threading.Event().wait(1.0)  # past the linger: the server has closed
+        with pytest.raises(OSError):  # reset: nobody reads there any more
+            for _ in range(100):
+                client.sendall(b"a" * 65536)
+                threading.Event().wait(0.01)
