@@ -108,6 +108,7 @@ class DeadlineH11Protocol(H11Protocol):
             self._deadline.cancel()
         if self.transport.can_write_eof():
             self.transport.write_eof()  # the answer, then the end of what the server sends
+        self.flow.resume_reading()  # paused for a large body: read it now, to drop it
         self._linger_end = self.loop.call_later(LINGER, self.transport.close_now)
 
     def on_response_complete(self) -> None:
