@@ -48,6 +48,7 @@ from __future__ import annotations
 import copy
 import dataclasses as dc
 import functools
+import os
 import warnings
 from pathlib import Path
 
@@ -127,6 +128,22 @@ def make_vtk_engine(params: RenderEngineVtkParams, backend: str | None = None):
             f"{str(e).splitlines()[0]}") from e
 
 
+SIMULATION_THREADS = 2
+"""Threads a simulation with a camera keeps busy on cores of their own: the physics and the
+camera's render worker (CENIC's default, `render_worker`)."""
+
+
+def llvmpipe_threads(environ=os.environ, cores: int | None = None) -> None:
+    """Leaves Mesa's software rasterizer (llvmpipe, what GL renders with where no GPU driver
+    is loaded) the cores beyond `SIMULATION_THREADS` (of `cores`, default this process's):
+    sets `LP_NUM_THREADS` in `environ` unless it is set (0: a frame is rasterized in the thread
+    that renders it). With threads of its own beside the physics and the worker on a 2-core
+    machine, a reader of every frame runs ~20% slower (docs/sensors.md). Mesa reads it when
+    the process makes its first GL screen; a GPU driver ignores it."""
+    cores = cores if cores is not None else len(os.sched_getaffinity(0))
+    environ.setdefault("LP_NUM_THREADS", str(max(0, cores - SIMULATION_THREADS)))
+
+
 def make_render_engine(renderer_class, sun_direction, sun_intensity: float, sky_color):
     """(engine, class name) for a `CameraConfig.renderer_class`: "RenderEngineGl" (or its
     params) needs an X display (`xdisplay.x_display`: the user's or a private Xvfb) and
@@ -143,6 +160,7 @@ def make_render_engine(renderer_class, sun_direction, sun_intensity: float, sky_
     if x_display() is None:
         problem = "no X display: set DISPLAY or install Xvfb (Debian: apt-get install xvfb)"
     else:
+        llvmpipe_threads()
         try:
             return MakeRenderEngineGl(params), "RenderEngineGl"
         except RuntimeError as e:

@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from conftest import CENIC, DEFAULT_SCENARIO, SAP, TWO_CAMERAS, make_sim
+from conftest import CENIC, DEFAULT_SCENARIO, REPO, SAP, TWO_CAMERAS, make_sim
 from corobot_drake.cli import main
 from corobot_drake.config.scenario import (
     ScenarioError,
@@ -702,3 +702,32 @@ def test_a_stop_while_the_private_xvfb_starts_stops_the_server():
     if run.stdout.strip() == "no Xvfb":
         pytest.skip("no Xvfb or Xlib (tools/setup installs both)")
     assert run.stdout.strip() == "stopped", run.stdout + run.stderr
+
+
+def test_llvmpipe_keeps_off_the_simulation_s_cores():
+    """Mesa's software rasterizer gets the cores beyond the physics and the render worker,
+    unless the user chose (`LP_NUM_THREADS` set)."""
+    from corobot_drake.sensors.camera import llvmpipe_threads
+
+    for cores, threads in ((1, "0"), (2, "0"), (3, "1"), (16, "14")):
+        environ = {}
+        llvmpipe_threads(environ, cores)
+        assert environ == {"LP_NUM_THREADS": threads}
+    environ = {"LP_NUM_THREADS": "4"}
+    llvmpipe_threads(environ, 2)
+    assert environ == {"LP_NUM_THREADS": "4"}
+
+
+def test_a_gl_camera_sets_llvmpipe_s_threads_before_its_first_frame():
+    """In a fresh process (Mesa reads the variable when it makes its first GL screen)."""
+    code = ("import os; from conftest import make_sim; "
+            "sim = make_sim(camera=True); "
+            f"print(sim.station.renderers[{RENDERER_NAME!r}], os.environ.get('LP_NUM_THREADS'))")
+    env = {k: v for k, v in os.environ.items() if k != "LP_NUM_THREADS"}
+    env["PYTHONPATH"] = os.pathsep.join([str(REPO / "tests"), str(REPO)])
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env,
+                          cwd=REPO, timeout=120)
+    renderer, threads = done.stdout.split()[-2:]
+    if renderer != "RenderEngineGl":
+        pytest.skip("no GL renderer here")
+    assert threads == str(max(0, len(os.sched_getaffinity(0)) - 2))
