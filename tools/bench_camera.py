@@ -6,10 +6,15 @@ GLX when a display is available), in the default scene with the robot driving a 
 render itself (`camera_frame_ms`), and what the camera adds to a simulation at 30 Hz
 (`camera_overhead_ms`) under CENIC (the default: taken on its steps) and under SAP, rendering
 in the simulation's thread or on a worker thread; both in `lab.bench_camera`. Prints a markdown
-table, medians of `--repeats` runs.
+table, medians of `--repeats` runs. Each renderer is measured in a process of its own: a GL
+camera sets Mesa's thread count for the process (`camera.llvmpipe_threads`), which a VTK engine
+made after it would render with too.
 """
 
+import argparse
+import json
 import statistics
+import subprocess
 import sys
 
 from corobot_drake.arguments import (
@@ -37,14 +42,43 @@ def main(argv=None) -> int:
                         help="median of this many runs")
     parser.add_argument("--renderers", nargs="+", default=list(RENDERERS), choices=RENDERERS,
                         help="renderers to measure")
+    parser.add_argument("--column", choices=RENDERERS, help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
-
-    def median(fn, **kwargs):
-        return statistics.median(fn(**kwargs) for _ in range(args.repeats))
-
+    if args.column:
+        print(json.dumps(_column(args, args.column)))
+        return 0
+    columns = {r: _measured_apart(args, r) for r in args.renderers}
     print(f"| camera, 320x240, ms per frame (median of {args.repeats}) | "
           + " | ".join(args.renderers) + " |")
     print("|---|" + "---|" * len(args.renderers))
+    for k, (label, *_rest) in enumerate(_rows(args)):
+        print(f"| {label} | " + " | ".join(columns[r][k] for r in args.renderers) + " |",
+              flush=True)
+    return 0
+
+
+def _measured_apart(args, renderer: str) -> list[str]:
+    """`renderer`'s cells, measured in a child process of this tool."""
+    done = subprocess.run([sys.executable, __file__, "--column", renderer, "--frames",
+                           str(args.frames), "--seconds", str(args.seconds), "--repeats",
+                           str(args.repeats)], capture_output=True, text=True)
+    if done.returncode != 0:
+        last = (done.stderr.strip().splitlines() or ["no output"])[-1]
+        raise RuntimeError(f"bench_camera: measuring {renderer} failed: {last}")
+    return json.loads(done.stdout.splitlines()[-1])
+
+
+def _column(args, renderer: str) -> list[str]:
+    """The cells of `renderer`'s column, one per `_rows` row ("-": not measured)."""
+    def median(fn, **kwargs):
+        return statistics.median(fn(**kwargs) for _ in range(args.repeats))
+
+    return [f"{median(fn, renderer=renderer, **kwargs):.2f}" if renderer in renderers else "-"
+            for _, fn, kwargs, renderers in _rows(args)]
+
+
+def _rows(args) -> list[tuple]:
+    """(label, function, its arguments, the renderers it applies to) of each row."""
     frames, seconds = {"frames": args.frames}, {"seconds": args.seconds}
     rows = [("render (the sensor's colour image), wall clock", camera_frame_ms,
              dict(clock="wall", **frames), RENDERERS),
@@ -68,11 +102,7 @@ def main(argv=None) -> int:
                          camera_overhead_ms,
                          dict(clock=clock, delay=delay, overrides=plant, read=read,
                               **seconds), renderers))
-    for label, fn, kwargs, renderers in rows:
-        cells = [f"{median(fn, renderer=r, **kwargs):.2f}" if r in renderers else "-"
-                 for r in args.renderers]
-        print(f"| {label} | " + " | ".join(cells) + " |", flush=True)
-    return 0
+    return rows
 
 
 if __name__ == "__main__":
