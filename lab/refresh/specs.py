@@ -180,7 +180,7 @@ def _performance_specs(c: SimpleNamespace) -> list[Spec]:
                       '--override "robots: {corobot: {drive: {control_period: 0.02}}}"'),),
              r.render_command_table, TIMING, 450),
         Spec("bench-compare", "docs/performance.md",
-             (Command(f"python tools/bench_compare.py --old {OLD_CHECKOUT} --rounds 9"),),
+             (Command(f"python tools/bench_compare.py --old {OLD_CHECKOUT} --rounds 15"),),
              r.render_bench_robots, TIMING, 600),
         Spec("bench-compare-drive-test", "docs/performance.md",
              (Command(f"python tools/bench_compare.py --old {OLD_CHECKOUT} --rounds 2 "
