@@ -6,9 +6,9 @@ GLX when a display is available), in the default scene with the robot driving a 
 render itself (`camera_frame_ms`), and what the camera adds to a simulation at 30 Hz
 (`camera_overhead_ms`) under CENIC (the default: taken on its steps) and under SAP, rendering
 in the simulation's thread or on a worker thread; both in `lab.bench_camera`. Prints a markdown
-table, medians of `--repeats` runs. Each renderer is measured in a process of its own: a GL
-camera sets Mesa's thread count for the process (`camera.llvmpipe_threads`), which a VTK engine
-made after it would render with too.
+table, medians of `--repeats` runs. Each row and renderer is measured in a process of its own,
+as a user's simulation would run: a camera on a render worker sets Mesa's thread count for the
+whole process (`camera.llvmpipe_threads`), at its first engine.
 """
 
 import argparse
@@ -42,24 +42,23 @@ def main(argv=None) -> int:
                         help="median of this many runs")
     parser.add_argument("--renderers", nargs="+", default=list(RENDERERS), choices=RENDERERS,
                         help="renderers to measure")
-    parser.add_argument("--column", choices=RENDERERS, help=argparse.SUPPRESS)
+    parser.add_argument("--cell", nargs=2, metavar=("RENDERER", "ROW"), help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
-    if args.column:
-        print(json.dumps(_column(args, args.column)))
+    if args.cell:
+        print(json.dumps(_cell(args, args.cell[0], int(args.cell[1]))))
         return 0
-    columns = {r: _measured_apart(args, r) for r in args.renderers}
     print(f"| camera, 320x240, ms per frame (median of {args.repeats}) | "
           + " | ".join(args.renderers) + " |")
     print("|---|" + "---|" * len(args.renderers))
     for k, (label, *_rest) in enumerate(_rows(args)):
-        print(f"| {label} | " + " | ".join(columns[r][k] for r in args.renderers) + " |",
-              flush=True)
+        cells = [_measured_apart(args, r, k) for r in args.renderers]
+        print(f"| {label} | " + " | ".join(cells) + " |", flush=True)
     return 0
 
 
-def _measured_apart(args, renderer: str) -> list[str]:
-    """`renderer`'s cells, measured in a child process of this tool."""
-    done = subprocess.run([sys.executable, __file__, "--column", renderer, "--frames",
+def _measured_apart(args, renderer: str, row: int) -> str:
+    """`renderer`'s cell of `_rows` row `row`, measured in a child process of this tool."""
+    done = subprocess.run([sys.executable, __file__, "--cell", renderer, str(row), "--frames",
                            str(args.frames), "--seconds", str(args.seconds), "--repeats",
                            str(args.repeats)], capture_output=True, text=True)
     if done.returncode != 0:
@@ -68,13 +67,12 @@ def _measured_apart(args, renderer: str) -> list[str]:
     return json.loads(done.stdout.splitlines()[-1])
 
 
-def _column(args, renderer: str) -> list[str]:
-    """The cells of `renderer`'s column, one per `_rows` row ("-": not measured)."""
-    def median(fn, **kwargs):
-        return statistics.median(fn(**kwargs) for _ in range(args.repeats))
-
-    return [f"{median(fn, renderer=renderer, **kwargs):.2f}" if renderer in renderers else "-"
-            for _, fn, kwargs, renderers in _rows(args)]
+def _cell(args, renderer: str, row: int) -> str:
+    """`renderer`'s cell of `_rows` row `row` ("-": not measured)."""
+    _, fn, kwargs, renderers = _rows(args)[row]
+    if renderer not in renderers:
+        return "-"
+    return f"{statistics.median(fn(renderer=renderer, **kwargs) for _ in range(args.repeats)):.2f}"
 
 
 def _rows(args) -> list[tuple]:

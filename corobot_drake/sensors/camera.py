@@ -138,7 +138,9 @@ def llvmpipe_threads(environ=os.environ, cores: int | None = None) -> None:
     is loaded) the cores beyond `SIMULATION_THREADS` (of `cores`, default this process's):
     sets `LP_NUM_THREADS` in `environ` unless it is set (0: a frame is rasterized in the thread
     that renders it). With threads of its own beside the physics and the worker on a 2-core
-    machine, a reader of every frame runs ~20% slower (docs/sensors.md). Mesa reads it when
+    machine, a reader of every frame runs ~20% slower (docs/sensors.md); a frame rendered in
+    the simulation's thread, or by Drake's `RgbdSensorAsync` under SAP, is faster with them, so
+    only a camera that renders on a worker asks for this (`add_camera`). Mesa reads it when
     the process makes its first GL screen; a GPU driver ignores it."""
     cores = cores if cores is not None else len(os.sched_getaffinity(0))
     environ.setdefault("LP_NUM_THREADS", str(max(0, cores - SIMULATION_THREADS)))
@@ -160,7 +162,6 @@ def make_render_engine(renderer_class, sun_direction, sun_intensity: float, sky_
     if x_display() is None:
         problem = "no X display: set DISPLAY or install Xvfb (Debian: apt-get install xvfb)"
     else:
-        llvmpipe_threads()
         try:
             return MakeRenderEngineGl(params), "RenderEngineGl"
         except RuntimeError as e:
@@ -433,6 +434,15 @@ def save_directory(root: str | Path, robot: str, camera: str) -> Path:
     return path if camera == FRONT_CAMERA else path / camera
 
 
+def _renders_on_a_worker(site: SensorSite, config: CameraConfig) -> bool:
+    """Whether the camera's frames will render on a `RenderWorker`: GL (asked for, or the
+    default with an X display) with an output delay, on a continuous plant."""
+    gl = (isinstance(config.renderer_class, RenderEngineGlParams)
+          or config.renderer_class in ("", "RenderEngineGl"))
+    return (gl and config.output_delay > 0 and site.continuous_step > 0
+            and x_display() is not None)
+
+
 def add_camera(site: SensorSite, name: str, config: CameraConfig,
                save_rate: float | None = None) -> Camera | None:
     """Adds the robot's camera `name` (see the module doc), lit by the site's world (sun,
@@ -454,6 +464,8 @@ def add_camera(site: SensorSite, name: str, config: CameraConfig,
     step, prefix = site.physics_step, f"{site.robot}.camera.{name}"
     if not scene_graph.HasRenderer(config.renderer_name):
         world = site.world
+        if _renders_on_a_worker(site, config):
+            llvmpipe_threads()  # before the engine: Mesa reads it then
         engine, site.renderers[config.renderer_name] = make_render_engine(
             config.renderer_class, world.sun.direction, world.sun.intensity, world.sky_color)
         site.renderer_classes[config.renderer_name] = config.renderer_class

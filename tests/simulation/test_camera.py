@@ -718,10 +718,11 @@ def test_llvmpipe_keeps_off_the_simulation_s_cores():
     assert environ == {"LP_NUM_THREADS": "4"}
 
 
-def test_a_gl_camera_sets_llvmpipe_s_threads_before_its_first_frame():
-    """In a fresh process (Mesa reads the variable when it makes its first GL screen)."""
+def _llvmpipe_threads_after_building(*overrides: str) -> tuple[str, str]:
+    """(renderer, LP_NUM_THREADS or "None") in a fresh process that built a simulation with a
+    camera and `overrides` (Mesa reads the variable when it makes its first GL screen)."""
     code = ("import os; from conftest import make_sim; "
-            "sim = make_sim(camera=True); "
+            f"sim = make_sim(*{list(overrides)!r}, camera=True); "
             f"print(sim.station.renderers[{RENDERER_NAME!r}], os.environ.get('LP_NUM_THREADS'))")
     env = {k: v for k, v in os.environ.items() if k != "LP_NUM_THREADS"}
     env["PYTHONPATH"] = os.pathsep.join([str(REPO / "tests"), str(REPO)])
@@ -730,4 +731,17 @@ def test_a_gl_camera_sets_llvmpipe_s_threads_before_its_first_frame():
     renderer, threads = done.stdout.split()[-2:]
     if renderer != "RenderEngineGl":
         pytest.skip("no GL renderer here")
-    assert threads == str(max(0, len(os.sched_getaffinity(0)) - 2))
+    return renderer, threads
+
+
+def test_a_camera_on_a_render_worker_sets_llvmpipe_s_threads_before_its_first_frame():
+    assert _llvmpipe_threads_after_building()[1] == str(
+        max(0, len(os.sched_getaffinity(0)) - 2))
+
+
+@pytest.mark.parametrize("overrides", [
+    (SAP,), ("robots: {corobot: {cameras: {front: {output_delay: 0}}}}",)], ids=["sap", "in-place"])
+def test_a_camera_rendering_elsewhere_leaves_llvmpipe_s_threads(overrides):
+    # Drake's RgbdSensorAsync (SAP) and a render in the simulation's thread are faster with
+    # llvmpipe's own threads.
+    assert _llvmpipe_threads_after_building(*overrides)[1] == "None"
