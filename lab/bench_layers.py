@@ -207,8 +207,8 @@ def build_layers(scenario: sc.Scenario, layers: int, seconds: float = 10.0,
         _add_robot_layers(builder, plant, name, robot, chassis, joints, selector, controller,
                           layers, fixed,
                           sc.continuous_step(scenario.plant_config, scenario.simulator_config))
+    period = sc.physics_step(scenario.plant_config, scenario.simulator_config)
     for _ in range(idle_updates):
-        period = sc.physics_step(scenario.plant_config, scenario.simulator_config)
         if floor == IDLE:
             builder.AddSystem(_Idle(period))
         else:

@@ -35,14 +35,10 @@ class ValgrindMissingError(RuntimeError):
     """valgrind (with callgrind_control) is not installed."""
 
 
-FLOORS = bench_layers.FLOORS
-"""The plant alone with Python updates that change nothing (`bench_layers.build_layers`'s
-`floor`): what the station's count of updates costs before they do anything."""
-
-
 def rows() -> list[str]:
-    """Row names: the layers (cumulative), the station, then the `FLOORS`."""
-    return [*bench_layers.LAYERS, STATION, *FLOORS]
+    """Row names: the layers (cumulative), the station, then the plant alone with Python
+    updates that change nothing (`bench_layers.FLOORS`)."""
+    return [*bench_layers.LAYERS, STATION, *bench_layers.FLOORS]
 
 
 PLANT_STEPS = ("CenicIntegrator<double>::DoStep",
@@ -129,8 +125,8 @@ def _parse(row: str, annotated: str, cache: bool) -> Count:
 
 
 def _layered(row: str, scenario, seconds: float):
-    """The Simulator of a layer row or a `FLOORS` row, for `seconds`."""
-    if row in FLOORS:
+    """The Simulator of a layer row or a `bench_layers.FLOORS` row, for `seconds`."""
+    if row in bench_layers.FLOORS:
         return bench_layers.build_layers(scenario, 1, seconds, bench_layers.IDLE_UPDATES,
                                          floor=row).simulator
     return bench_layers.build_layers(scenario, bench_layers.LAYERS.index(row) + 1,

@@ -69,7 +69,7 @@ def _print_table(jobs: list, counts: list[instructions.Count], seconds: float) -
             "the station (Simulation, physics only)" if row == instructions.STATION else row)
         added = (f"{value - millions[k - 1][0]:+.1f}" if row in bench_layers.LAYERS[1:]
                  else f"{value - millions[0][0]:+.1f} over the plant alone"
-                 if row in instructions.FLOORS else "")
+                 if row in bench_layers.FLOORS else "")
         print(f"| {name} | {value:.1f} | {added} | {value / station:.2f} | {step:.1f} | "
               f"{value - step:.1f} | {events:.1f} |"
               + (f" {misses:.2f} | {event_misses:.2f} |" if cache else ""))

@@ -140,7 +140,7 @@ def llvmpipe_threads(environ=os.environ, cores: int | None = None) -> None:
     that renders it). With threads of its own beside the physics and the worker on a 2-core
     machine, a reader of every frame runs ~20% slower (docs/sensors.md); a frame rendered in
     the simulation's thread, or by Drake's `RgbdSensorAsync` under SAP, is faster with them, so
-    only a camera that renders on a worker asks for this (`add_camera`). Mesa reads it when
+    only a camera that is to render on a worker asks for this (`add_camera`). Mesa reads it when
     the process makes its first GL screen; a GPU driver ignores it."""
     cores = cores if cores is not None else len(os.sched_getaffinity(0))
     environ.setdefault("LP_NUM_THREADS", str(max(0, cores - SIMULATION_THREADS)))
@@ -434,13 +434,11 @@ def save_directory(root: str | Path, robot: str, camera: str) -> Path:
     return path if camera == FRONT_CAMERA else path / camera
 
 
-def _renders_on_a_worker(site: SensorSite, config: CameraConfig) -> bool:
-    """Whether the camera's frames will render on a `RenderWorker`: GL (asked for, or the
-    default with an X display) with an output delay, on a continuous plant."""
-    gl = (isinstance(config.renderer_class, RenderEngineGlParams)
-          or config.renderer_class in ("", "RenderEngineGl"))
-    return (gl and config.output_delay > 0 and site.continuous_step > 0
-            and x_display() is not None)
+def _gl_wanted(config: CameraConfig) -> bool:
+    """Whether `make_render_engine` is to make a GL engine for the camera: asked for, or the
+    default with an X display."""
+    return (isinstance(config.renderer_class, RenderEngineGlParams)
+            or config.renderer_class in ("", "RenderEngineGl")) and x_display() is not None
 
 
 def add_camera(site: SensorSite, name: str, config: CameraConfig,
@@ -462,9 +460,15 @@ def add_camera(site: SensorSite, name: str, config: CameraConfig,
         return None
     builder, plant, scene_graph = site.builder, site.plant, site.scene_graph
     step, prefix = site.physics_step, f"{site.robot}.camera.{name}"
+    look = frame_look_period(config, step)
+    continuous = site.continuous_step > 0
+    # On a continuous plant every capture is on a step, with the delay held there; with GL,
+    # rendered meanwhile by a worker (VTK cannot render on another thread).
+    held_delay = config.output_delay if continuous and look == step else 0.0
+    on_a_worker = held_delay > 0 and site.add_scene_copy is not None
     if not scene_graph.HasRenderer(config.renderer_name):
         world = site.world
-        if _renders_on_a_worker(site, config):
+        if on_a_worker and _gl_wanted(config):
             llvmpipe_threads()  # before the engine: Mesa reads it then
         engine, site.renderers[config.renderer_name] = make_render_engine(
             config.renderer_class, world.sun.direction, world.sun.intensity, world.sky_color)
@@ -472,19 +476,13 @@ def add_camera(site: SensorSite, name: str, config: CameraConfig,
         scene_graph.AddRenderer(config.renderer_name, engine)
     body, X_AB = mount_frame(plant, site.model_instance, config.X_PB)
     frame_id = plant.GetBodyFrameIdOrThrow(body.index())
-    look = frame_look_period(config, step)
-    continuous = site.continuous_step > 0
     if (config.output_delay > 0 and not continuous
             and site.renderers.get(config.renderer_name) == "RenderEngineGl"):
         camera = _add_async(builder, scene_graph, prefix, config, frame_id, X_AB, step)
         image, delay = camera.GetOutputPort("color_image"), config.output_delay
     else:
-        # On a continuous plant every capture is on a step, with the delay held there; with
-        # GL, rendered meanwhile by a worker (VTK cannot render on another thread).
-        delay = config.output_delay if continuous and look == step else 0.0
-        worker = None
-        if (delay > 0 and site.add_scene_copy is not None
-                and site.renderers.get(config.renderer_name) == "RenderEngineGl"):
+        delay, worker = held_delay, None
+        if on_a_worker and site.renderers.get(config.renderer_name) == "RenderEngineGl":
             worker = render_worker(site, config)
             if worker is not None:
                 site.render_workers.append(worker)

@@ -61,7 +61,7 @@ class _LingeringTransport:
     def close(self) -> None:
         if self._protocol.lingering or self._transport.is_closing():
             return
-        if self._protocol.conn.their_state in _STILL_SENDING and not self._protocol.lost:
+        if self._protocol.conn.their_state in _STILL_SENDING:
             self._protocol._linger()
         else:
             self._transport.close()
@@ -85,8 +85,6 @@ class DeadlineH11Protocol(H11Protocol):
 
     lingering = False
     """Whether the connection is half closed, its input discarded (`_LingeringTransport`)."""
-    lost = False
-    """Whether the connection is gone (nothing to linger on)."""
 
     def connection_made(self, transport) -> None:
         super().connection_made(_LingeringTransport(transport, self))
@@ -97,12 +95,9 @@ class DeadlineH11Protocol(H11Protocol):
         if not self.lingering:  # else the request was answered: what follows is dropped
             super().data_received(data)
 
-    def eof_received(self) -> bool | None:
-        if self.lingering:
-            self.transport.close_now()  # the client is done: close at once
-        return super().eof_received()
-
     def _linger(self) -> None:
+        # Ends when the client closes (asyncio closes a transport whose protocol's
+        # `eof_received` returns nothing, as uvicorn's does) or at `LINGER`.
         self.lingering = True
         if self._deadline is not None:
             self._deadline.cancel()
@@ -117,7 +112,6 @@ class DeadlineH11Protocol(H11Protocol):
             self._arm_deadline()  # the next request on this connection has its own
 
     def connection_lost(self, exc) -> None:
-        self.lost = True
         for timer in (self._deadline, self._linger_end):
             if timer is not None:
                 timer.cancel()
