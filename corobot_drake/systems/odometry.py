@@ -286,7 +286,9 @@ class DriveStateReporter(LeafSystem):
         self._ports = {name: self.DeclareVectorInputPort(name, size) for name, size in (
             ("drive_status", len(DriveStatus.get_fields())), ("axle_speed", 4),
             ("encoder_ticks", 2), ("position", 3), ("heading", 1))}
-        self.DeclareAbstractOutputPort("drive_state", self._default, self._calc)
+        # Its time and inputs only: every subsystem's state changes at every step.
+        self.DeclareAbstractOutputPort("drive_state", self._default, self._calc,
+                                       {self.time_ticket(), self.all_input_ports_ticket()})
 
     def _default(self):
         wheel = WheelState(0.0, 0.0)
