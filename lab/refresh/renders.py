@@ -179,6 +179,13 @@ def render_bench_robots(outs) -> str:
             f"{table(o.stdout)}")
 
 
+def render_profile_step(outs) -> str:
+    o = outs[0][0]
+    summary = next(line for line in o.stdout.splitlines() if line.startswith("The robot's"))
+    return (f"Measured {o.started:%Y-%m-%d}, load average {load_line([o])} (`{o.command}`):\n\n"
+            f"{table(o.stdout)}\n\n{summary}")
+
+
 def render_continuous_sensors(outs) -> str:
     o = outs[0][0]
     m = json_output(outs)

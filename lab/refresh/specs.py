@@ -166,6 +166,9 @@ def _performance_specs(c: SimpleNamespace) -> list[Spec]:
         Spec("bench-layers", "docs/performance.md",
              (Command("python tools/bench.py --layers --no-table --no-micro --seconds 8 "
                       "--repeats 41"),), r.render_bench_robots, TIMING, 300),
+        Spec("profile-step", "docs/performance.md",
+             (Command("python tools/profile_step.py --seconds 20 --repeats 9"),),
+             r.render_profile_step, TIMING, 300),
         Spec("layers-instructions", "docs/performance.md",
              (Command("python tools/count_instructions.py --seconds 0.5"),),
              r.render_bench_robots, TIMING, 900),
