@@ -398,10 +398,9 @@ def _add_drive(builder, plant, scenario: sc.Scenario, name: str, added, chassis_
     builder.ExportOutput(dead_reckoning.GetOutputPort("pose"), f"{name}.odometry")
     # Command source -> motion commands -> drive controller; status back to the source.
     builder.Connect(source.GetOutputPort("request"), motion.GetInputPort("request"))
-    builder.Connect(source.GetOutputPort("request_seq"), motion.GetInputPort("request_seq"))
     builder.Connect(odometry.position, motion.GetInputPort("position"))
     builder.Connect(odometry.heading, motion.GetInputPort("heading"))
-    builder.Connect(motion.GetOutputPort("drive_setpoint"), controller.GetInputPort("setpoint"))
+    builder.Connect(motion.GetOutputPort("drive_request"), controller.GetInputPort("request"))
     builder.Connect(motion.GetOutputPort("command_status"), source.GetInputPort("command_status"))
     for port_name, port in (("encoder_ticks", odometry.encoder_ticks),
                             ("heading", odometry.heading), ("position", odometry.position),

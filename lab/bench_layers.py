@@ -55,12 +55,7 @@ from corobot_drake.simulation import apply_simulator_config
 from corobot_drake.station import _add_robot, _add_world
 from corobot_drake.systems.contact import add_wheel_contacts
 from corobot_drake.systems.dead_reckoning import DeadReckoning
-from corobot_drake.systems.drive import (
-    CommandSource,
-    DriveController,
-    DriveRequest,
-    setpoint_for,
-)
+from corobot_drake.systems.drive import CommandSource, DriveController, DriveRequest
 from corobot_drake.systems.motion import MotionCommands
 from corobot_drake.systems.odometry import add_chassis_poses, add_chassis_states, add_odometry
 from corobot_drake.systems.runlog import HELD_PERIOD, SAMPLED, add_contact_states, add_run_log
@@ -226,10 +221,10 @@ def build_layers(scenario: sc.Scenario, layers: int, seconds: float = 10.0,
     context = simulator.get_mutable_context()
 
     def set_command(root, seq, command):
-        if "setpoint" in fixed:
-            port = fixed["setpoint"]
+        if "request" in fixed:
+            port = fixed["request"]
             port.FixValue(port.get_system().GetMyMutableContextFromRoot(root),
-                          setpoint_for(robot.drive, seq, command))
+                          DriveRequest(seq, command, root.get_time()))
 
     set_command(context, 1, _segments(robot)[0][1])
     simulator.Initialize()
@@ -271,7 +266,7 @@ def _add_robot_layers(builder, plant, name, robot, chassis, joints, selector, co
     """Layers 3 and up of `LAYERS`, wired as `station.build_station` wires them
     (`continuous_step`: `scenario.continuous_step`)."""
     if layers < 3:
-        fixed["setpoint"] = controller.GetInputPort("setpoint")
+        fixed["request"] = controller.GetInputPort("request")
         return
     pose = add_chassis_poses(builder, plant, {name: chassis})[name]
     state = add_chassis_states(builder, plant, {name: chassis})[name]
@@ -280,15 +275,14 @@ def _add_robot_layers(builder, plant, name, robot, chassis, joints, selector, co
                             controller.GetOutputPort("axle_speed"),
                             robot.drive.motor_torque_scaling)
     if layers < 4:
-        fixed["setpoint"] = controller.GetInputPort("setpoint")
+        fixed["request"] = controller.GetInputPort("request")
         return
     source = builder.AddSystem(CommandSource(robot.commands, robot.drive.control_period))
     motion = builder.AddSystem(MotionCommands(robot.drive, robot.motion))
     builder.Connect(source.GetOutputPort("request"), motion.GetInputPort("request"))
-    builder.Connect(source.GetOutputPort("request_seq"), motion.GetInputPort("request_seq"))
     builder.Connect(odometry.position, motion.GetInputPort("position"))
     builder.Connect(odometry.heading, motion.GetInputPort("heading"))
-    builder.Connect(motion.GetOutputPort("drive_setpoint"), controller.GetInputPort("setpoint"))
+    builder.Connect(motion.GetOutputPort("drive_request"), controller.GetInputPort("request"))
     builder.Connect(motion.GetOutputPort("command_status"), source.GetInputPort("command_status"))
     if layers >= 5:
         dead_reckoning = builder.AddSystem(DeadReckoning(robot.drive, robot.drive.control_period))

@@ -47,48 +47,18 @@ class DriveRequest(SharedState):
     seed profile's stop: the book sets the axle speed to 0 when the goal is reached)."""
 
 
-STATUSES = ("running", "succeeded", "failed")
-"""A command's status; its code in a `CommandStatus` vector is its index."""
-REASONS = ("", "superseded", "disabled", "stalled", "not_applied", "blocked")
-"""Why a command failed; its code in a `CommandStatus` vector is its index."""
-
-
 @dc.dataclass(frozen=True)
 class CommandStatus(SharedState):
     """How a completing command (DriveDistance, RotateDegrees, SetPose) ended, reported by
-    `motion.MotionCommands`: its request's seq, status and reason, end time (s). Carried
-    between systems as numbers (`vector`, `from_vector`): [seq, status code, reason code,
-    time]."""
+    `motion.MotionCommands`: its request's seq, status and reason, end time (s)."""
 
     seq: int = 0
     status: str = "running"
-    """running, succeeded or failed (`STATUSES`)."""
+    """running, succeeded or failed."""
     reason: str = ""
     """Why it failed: superseded, disabled, stalled (or, for a SetPose, not_applied or
-    blocked) (`REASONS`)."""
+    blocked)."""
     time: float = 0.0
-
-    def vector(self) -> np.ndarray:
-        """[seq, status code, reason code, time s]."""
-        return np.array([self.seq, STATUSES.index(self.status), REASONS.index(self.reason),
-                         self.time], dtype=float)
-
-    @classmethod
-    def from_vector(cls, vector) -> "CommandStatus":
-        """The status a `vector` ([seq, status code, reason code, time s]) carries."""
-        seq, status, reason, time = (float(v) for v in vector)
-        return cls(int(seq), STATUSES[int(status)], REASONS[int(reason)], time)
-
-
-COMMAND_STATUS_SIZE = 4
-"""Numbers in a `CommandStatus` vector."""
-RUNNING = float(STATUSES.index("running"))
-
-Quiet = namedview("Quiet", ("until", "seen_seq", "seen_status", "seen_reason", "seen_time"))
-"""The command source's discrete state: until when (s) its updates find nothing to do unless
-the status they read is a new one (every level command ended, the script held by a Wait or a
-completing command), and the `CommandStatus.vector` the update that set it read (already
-recorded). Set by the update that changed the state; zero after anything else changes it."""
 
 
 @dc.dataclass(frozen=True)
@@ -133,6 +103,12 @@ class CommandSourceState(SharedState):
     """seq of the scripted completing command the script waits for (0: none)."""
     teleport: DriveRequest | None = None
     """A SetPose not yet applied to the plant (the Simulation applies it, `TakeTeleport`)."""
+    quiet_until: float = 0.0
+    """Simulation time before which an update changes nothing unless the status it reads is a
+    new one (every level command ended, the script held by a Wait or a completing command):
+    set by the update that made this state, 0 by anything else that changes the state."""
+    status_seen: object = None
+    """The CommandStatus that update read (already recorded)."""
 
 
 def command_name(command) -> str:
@@ -159,17 +135,14 @@ class CommandSource(LeafSystem):
         - command_status
         output_ports:
         - request
-        - request_seq
         - command_log
 
-    Output `request` (DriveRequest, abstract); output `request_seq` (1: its seq, what a
-    reader checks every step for a new request); output `command_log` (tuple of
-    CommandRecord, abstract: every command so far, with the latest reported status
-    recorded). Input `command_status` (4, `CommandStatus.vector`, from
-    `motion.MotionCommands`; may be left unconnected, then no completing command is ever
-    reported ended): how completing commands end, recorded in the log.
-    Abstract state `CommandSourceState`; discrete state `Quiet` (when its updates have
-    nothing to do). At initialization it issues the script's commands
+    Output `request` (DriveRequest, abstract); output `command_log` (tuple of CommandRecord,
+    abstract: every command so far, with the latest reported status recorded). Input
+    `command_status` (CommandStatus, abstract, from `motion.MotionCommands`; may be left
+    unconnected, then no completing command is ever reported ended): how completing commands
+    end, recorded in the log.
+    Abstract state `CommandSourceState`. At initialization it issues the script's commands
     up to the first Wait or completing command; then every `period` s it records that status
     and issues the next command; a `Wait` holds the script for its duration and a completing
     command holds it until it ends. `Issue()` writes a command into the Context directly
@@ -188,17 +161,11 @@ class CommandSource(LeafSystem):
         # A parameter, not a constructor constant: a reset Context may run another script.
         self._script_index = self.DeclareAbstractParameter(Value(tuple(script)))
         self._state_index = self.DeclareAbstractState(Value(CommandSourceState()))
-        # The update's quiet check reads these numbers alone: reading an abstract value from
-        # Python costs several times what reading a vector does, at every step.
-        self._quiet = self.DeclareDiscreteState(len(Quiet.get_fields()))
-        ticket = {self.abstract_state_ticket(self._state_index)}
-        self.DeclareAbstractOutputPort("request", lambda: Value(DriveRequest()),
-                                       self._calc_request, ticket)
-        self.DeclareVectorOutputPort(
-            "request_seq", 1,
-            lambda context, output: output.SetAtIndex(0, self.get_state(context).request.seq),
-            ticket)
-        self._status_port = self.DeclareVectorInputPort("command_status", COMMAND_STATUS_SIZE)
+        self.DeclareAbstractOutputPort(
+            "request", lambda: Value(DriveRequest()), self._calc_request,
+            {self.abstract_state_ticket(self._state_index)})
+        self._status_port = self.DeclareAbstractInputPort("command_status",
+                                                          Value(CommandStatus()))
         self.DeclareAbstractOutputPort(
             "command_log", lambda: Value(()),
             lambda context, output: output.set_value(self.current_state(context).log),
@@ -225,12 +192,8 @@ class CommandSource(LeafSystem):
     def get_state(self, context) -> CommandSourceState:
         return context.get_abstract_state(self._state_index).get_value()
 
-    def _set_state(self, state_or_context, value: CommandSourceState,
-                   quiet: np.ndarray | None = None) -> None:
-        """Writes `value` and the `Quiet` numbers (None: none, the next update looks)."""
+    def _set_state(self, state_or_context, value: CommandSourceState) -> None:
         state_or_context.get_mutable_abstract_state(self._state_index).set_value(value)
-        discrete = state_or_context.get_mutable_discrete_state(self._quiet)
-        discrete.set_value(np.zeros(len(Quiet.get_fields())) if quiet is None else quiet)
 
     @staticmethod
     def _with_command(state: CommandSourceState, command, time: float) -> CommandSourceState:
@@ -252,7 +215,8 @@ class CommandSource(LeafSystem):
         enabled = command.enabled if isinstance(command, Enable) else state.request.enabled
         request = DriveRequest(seq, command, time, enabled)
         teleport = request if isinstance(command, SetPose) else state.teleport
-        return state.replace(request=request, log=_bounded(log), teleport=teleport)
+        return state.replace(request=request, log=_bounded(log), teleport=teleport,
+                             quiet_until=0.0)
 
     @staticmethod
     def _with_status(state: CommandSourceState, status: CommandStatus) -> CommandSourceState:
@@ -267,7 +231,7 @@ class CommandSource(LeafSystem):
                 log = list(state.log)
                 log[i] = record.replace(end_time=status.time, status=status.status,
                                         reason=status.reason)
-                return state.replace(log=tuple(log))
+                return state.replace(log=tuple(log), quiet_until=0.0)
         return state
 
     @staticmethod
@@ -297,7 +261,7 @@ class CommandSource(LeafSystem):
     def _status(self, context) -> CommandStatus:
         if not self._status_port.HasValue(context):
             return CommandStatus()
-        return CommandStatus.from_vector(self._status_port.EvalBasicVector(context).get_value())
+        return self._status_port.Eval(context)
 
     def current_state(self, context) -> CommandSourceState:
         """The state with the latest reported command status recorded."""
@@ -327,9 +291,7 @@ class CommandSource(LeafSystem):
         state = self.get_state(context)
         if state.teleport is None:
             return None
-        # The quiet numbers stand: the update reads nothing of the teleport.
-        context.get_mutable_abstract_state(self._state_index).set_value(
-            state.replace(teleport=None))
+        self._set_state(context, state.replace(teleport=None))
         return state.teleport
 
     def has_teleport(self, context) -> bool:
@@ -343,26 +305,13 @@ class CommandSource(LeafSystem):
         record = next((r for r in reversed(state.log) if r.seq == state.script_waits_for), None)
         return record is not None and record.end_time is None  # None: dropped, long over
 
-    def _is_quiet(self, context, now: float) -> bool:
-        """Whether this update finds what the last one that changed something left: before
-        its `Quiet.until`, no new status (numbers only: this runs every step)."""
-        quiet = context.get_discrete_state(self._quiet)
-        if now >= quiet[0]:
-            return False
-        if not self._status_port.HasValue(context):
-            return True
-        status = self._status_port.EvalBasicVector(context)
-        seq, code = status[0], status[1]
-        return (seq == 0.0 or code == RUNNING
-                or (seq == quiet[1] and code == quiet[2] and status[2] == quiet[3]
-                    and status[3] == quiet[4]))
-
     def _update(self, context, state):
-        now = context.get_time()
-        if self._is_quiet(context, now):
-            return EventStatus.DidNothing()  # what the updates below would find (most steps)
         original = self.get_state(context)
+        now = context.get_time()
         status = self._status(context)
+        if now < original.quiet_until and (status is original.status_seen
+                                           or status.seq == 0 or status.status == "running"):
+            return EventStatus.DidNothing()  # what the updates below would find (most steps)
         current = self._with_ended(self._with_status(original, status), now)
         script = self.script(context)
         current = self._next_script_command(current, script, now)
@@ -370,8 +319,9 @@ class CommandSource(LeafSystem):
             # Drake then skips copying the state back (and what reads the request stays
             # valid), when no other system's update at this step changed anything either.
             return EventStatus.DidNothing()
-        self._set_state(state, current,
-                        np.array([self._quiet_until(current, script, now), *status.vector()]))
+        current = current.replace(quiet_until=self._quiet_until(current, script, now),
+                                  status_seen=status)
+        self._set_state(state, current)
         return EventStatus.Succeeded()
 
     def _quiet_until(self, current: CommandSourceState, script: tuple, now: float) -> float:
@@ -405,10 +355,9 @@ class CommandSource(LeafSystem):
             current = self._with_ended(issued, now)
             if isinstance(script[issued.next_script_index - 1], Wait):
                 break
-        quiet = np.array([self._quiet_until(current, script, now), *CommandStatus().vector()])
-        if current is not original or any(context.get_discrete_state(self._quiet).get_value()
-                                          != quiet):
-            self._set_state(state, current, quiet)
+        quiet_until = self._quiet_until(current, script, now)
+        if current is not original or original.quiet_until != quiet_until:
+            self._set_state(state, current.replace(quiet_until=quiet_until, status_seen=None))
 
     def _next_script_command(self, current: CommandSourceState, script: tuple,
                              now: float) -> CommandSourceState:
@@ -457,64 +406,12 @@ DriveStatus = namedview("DriveStatus", (
   rad/s (before the slew limit; the rear axles follow the front).
 """
 
-DriveSetpoint = namedview("DriveSetpoint", (
-    "seq", "enabled", "immediate", "has_target", "power_left", "power_right", "target_left",
-    "target_right"))
-"""The drive controller's `setpoint` input: a `DriveRequest` made numbers (`setpoint_for`).
-
-- ``seq``: the request's; the drive acts on a new one;
-- ``enabled``, ``immediate``: the request's, 1 or 0;
-- ``has_target``: 1 for a motion command, 0 for one that leaves the targets (an Enable);
-- ``power_left`` .. ``target_right``: what the command asks for (`drive_target`): the power
-  per side in [-1, 1], the axle speed per side, rad/s.
-"""
-
-
-def drive_target(drive: Drive, command) -> tuple[float, float, float, float] | None:
-    """(power_l, power_r, axle_l, axle_r) a motion command asks of this drive (powers in
-    [-1, 1], axle speeds rad/s); None if it is not a motion command."""
-    # min/max, not np.clip: the same numbers at a sixtieth of the cost, and a closed-loop
-    # command sends a new request every control period.
-    if isinstance(command, SetPower):
-        pl, pr = (_clip(p, 1.0) for p in (command.left, command.right))
-        return pl, pr, pl * drive.motor_torque_scaling, pr * drive.motor_torque_scaling
-    if isinstance(command, SetSpeed | SetVelocity):
-        if isinstance(command, SetSpeed):
-            al, ar = (_clip(v / dim.WHEEL_RADIUS, drive.max_axle_speed)
-                      for v in (command.left, command.right))
-        else:
-            al, ar = _velocity_axle_speeds(drive, command)
-        # The power a SetSpeed amounts to; past full power (axle speed above the scaling) it
-        # reports 1: power is a fraction of the motor's range.
-        pl, pr = (_clip(a / drive.motor_torque_scaling, 1.0) for a in (al, ar))
-        return pl, pr, al, ar
-    if isinstance(command, AllStop):
-        return 0.0, 0.0, 0.0, 0.0
-    return None
-
-
-def _velocity_axle_speeds(drive: Drive, command: SetVelocity) -> tuple[float, float]:
-    """Axle speeds (rad/s) for a SetVelocity: both scaled down together past the max axle
-    speed, so the robot keeps the commanded path's curvature at a lower speed."""
-    rims = skid_steer_rim_speeds(command.linear, command.angular, velocity_track_width(drive))
-    left, right = (v / dim.WHEEL_RADIUS for v in rims)
-    scale = min(1.0, drive.max_axle_speed / max(abs(left), abs(right), 1e-300))
-    return left * scale, right * scale
-
-
-def setpoint_for(drive: Drive, seq: int, command, enabled: bool = True,
-                 immediate: bool = False) -> tuple[float, ...]:
-    """The `DriveSetpoint` values of request `seq` carrying `command` to this drive."""
-    target = drive_target(drive, command)
-    return (float(seq), float(enabled), float(immediate), float(target is not None),
-            *(target or (0.0, 0.0, 0.0, 0.0)))
-
-
 _TARGETS = slice(3, 5)
 """Where the targets sit in a `DriveStatus` vector."""
 _TARGET_LEFT, _TARGET_RIGHT = range(_TARGETS.start, _TARGETS.stop)
 assert DriveStatus.get_fields()[_TARGETS] == ("target_left", "target_right")
-assert DriveStatus.get_fields()[1:] == DriveSetpoint.get_fields()[4:]  # `drive_target`'s order
+assert DriveStatus.get_fields()[1:] == ("power_left", "power_right", *DriveStatus.get_fields()[
+    _TARGETS])  # the order of `DriveController.target_for`'s tuple
 
 
 HOLD_SPEED = 1e-3
@@ -555,7 +452,7 @@ class DriveController(LeafSystem):
 
         name: DriveController
         input_ports:
-        - setpoint
+        - request
         - wheel_state
         output_ports:
         - desired_state
@@ -563,8 +460,7 @@ class DriveController(LeafSystem):
         - drive_status
         - axle_speed
 
-    Input `setpoint` (8, `DriveSetpoint`: the request, from `motion.MotionCommands`); input
-    `wheel_state` [q, v] of the four axles in
+    Input `request` (DriveRequest, abstract); input `wheel_state` [q, v] of the four axles in
     `dimensions.WHEEL_NAMES` order (rad, rad/s).
     Output `desired_state` [q_d, v_d] for the plant's desired-state input (actuator order;
     q_d = 0: the servo has kp = 0 and only v_d matters). v_d is the slewed axle speed of the
@@ -598,8 +494,7 @@ class DriveController(LeafSystem):
         self._drive = drive
         self._step = drive.slew_rate * drive.control_period
         """rad/s: the most the axle speed moves per update."""
-        self._setpoint_port = self.DeclareVectorInputPort("setpoint", len(
-            DriveSetpoint.get_fields()))
+        self._request_port = self.DeclareAbstractInputPort("request", Value(DriveRequest()))
         self._wheel_state_port = self.DeclareVectorInputPort("wheel_state", 8)
         # Each output is a state group of its own, so the ports are Drake's state output
         # ports (no Python call when the plant reads its desired state every step).
@@ -618,19 +513,49 @@ class DriveController(LeafSystem):
             "axle_speed", 4, lambda c, o: o.SetFromVector(self._wheel_state_port.Eval(c)[4:]),
             {self.input_port_ticket(self._wheel_state_port.get_index())})
 
+    def target_for(self, command, enabled: bool) -> tuple[float, float, float, float] | None:
+        """(power_l, power_r, axle_l, axle_r) a motion command asks for; None if not motion."""
+        d = self._drive
+        # min/max, not np.clip: the same numbers at a sixtieth of the cost, and a closed-loop
+        # command sends a new request every control period.
+        if isinstance(command, SetPower):
+            pl, pr = (_clip(p, 1.0) for p in (command.left, command.right))
+            return pl, pr, pl * d.motor_torque_scaling, pr * d.motor_torque_scaling
+        if isinstance(command, SetSpeed | SetVelocity):
+            if isinstance(command, SetSpeed):
+                al, ar = (_clip(v / dim.WHEEL_RADIUS, d.max_axle_speed)
+                          for v in (command.left, command.right))
+            else:
+                al, ar = self._velocity_axle_speeds(command)
+            # The power a SetSpeed amounts to; past full power (axle speed above the
+            # scaling) it reports 1: power is a fraction of the motor's range.
+            pl, pr = (_clip(a / d.motor_torque_scaling, 1.0) for a in (al, ar))
+            return pl, pr, al, ar
+        if isinstance(command, AllStop):
+            return 0.0, 0.0, 0.0, 0.0
+        return None
+
+    def _velocity_axle_speeds(self, command: SetVelocity) -> tuple[float, float]:
+        """Axle speeds (rad/s) for a SetVelocity: both scaled down together past the max axle
+        speed, so the robot keeps the commanded path's curvature at a lower speed."""
+        rims = skid_steer_rim_speeds(command.linear, command.angular,
+                                     velocity_track_width(self._drive))
+        left, right = (v / dim.WHEEL_RADIUS for v in rims)
+        scale = min(1.0, self._drive.max_axle_speed / max(abs(left), abs(right), 1e-300))
+        return left * scale, right * scale
+
     def _update(self, context, discrete_state):
         # Only the groups that change are written (the others keep their copied values).
         # Every read is a BasicVector's element and every write a numpy array: on vectors of
         # two to eight numbers pydrake's numpy views, input-port copies and list conversions
         # cost more than the update's arithmetic, and this runs every control period.
-        setpoint = self._setpoint_port.EvalBasicVector(context)
-        request_seq = setpoint[0]
+        request = self._request_port.Eval(context)
         mode = context.get_discrete_state(self._mode)
         seq, tracking = mode[0], mode[1]
-        if request_seq == seq and tracking == Tracking.IDLE:
+        if request.seq == seq and tracking == Tracking.IDLE:
             return EventStatus.DidNothing()
-        if request_seq != seq:
-            target_left, target_right, jump = self._take(context, discrete_state, setpoint)
+        if request.seq != seq:
+            target_left, target_right, jump = self._take(context, discrete_state, request)
         else:
             status = context.get_discrete_state(self._status)
             target_left, target_right, jump = status[_TARGET_LEFT], status[_TARGET_RIGHT], False
@@ -649,8 +574,8 @@ class DriveController(LeafSystem):
             correction = self._hold(context, discrete_state, new_left, new_right,
                                     tracking != Tracking.TRACKING)
             new_tracking = Tracking.TRACKING
-        if request_seq != seq or new_tracking != tracking:
-            discrete_state.set_value(self._mode, np.array([request_seq, new_tracking]))
+        if request.seq != seq or new_tracking != tracking:
+            discrete_state.set_value(self._mode, np.array([float(request.seq), new_tracking]))
         if (new_left, new_right) != (left, right) or correction is not None:
             self._set_axle(discrete_state, new_left, new_right, correction)
 
@@ -659,21 +584,20 @@ class DriveController(LeafSystem):
         or the drive has no hold."""
         return (left != 0.0 and right != 0.0) or self._drive.hold_gain == 0.0
 
-    def _take(self, context, discrete_state, setpoint) -> tuple[float, float, bool]:
-        """Acts on a new request (`setpoint`, a `DriveSetpoint` BasicVector): writes the
-        `DriveStatus` it makes; returns the axle speed targets (rad/s) and whether the axles
-        jump to them (a request marked `immediate`, or a disabled drive, held at zero at
-        once). The status as a plain list: a closed-loop command sends a request every
-        period."""
-        _, enabled, immediate, has_target, *target = setpoint.get_value().tolist()
-        if not enabled:
+    def _take(self, context, discrete_state, request) -> tuple[float, float, bool]:
+        """Acts on a new request: writes its seq and the `DriveStatus` it makes; returns the
+        axle speed targets (rad/s) and whether the axles jump to them (a request marked
+        `immediate`, or a disabled drive, held at zero at once). The status as a plain list:
+        a closed-loop command sends a request every period."""
+        if not request.enabled:
             discrete_state.set_value(self._status, np.zeros(len(DriveStatus.get_fields())))
             return 0.0, 0.0, True
-        if not has_target:  # not motion (an Enable): the powers and targets stay
+        target = self.target_for(request.command, True)
+        if target is None:  # not motion (an Enable): the powers and targets stay
             status = context.get_discrete_state(self._status).get_value().tolist()
             target, jump = status[1:], False
         else:
-            jump = bool(immediate)
+            jump = request.immediate
         discrete_state.set_value(self._status, np.array([1.0, *target]))
         return float(target[2]), float(target[3]), jump
 

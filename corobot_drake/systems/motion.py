@@ -29,7 +29,6 @@ teleported the robot (its pose matches) and succeeds after `POSE_SETTLE_TIME`.
 import dataclasses as dc
 import math
 
-import numpy as np
 from pydrake.common.value import Value
 from pydrake.systems.framework import EventStatus, LeafSystem
 
@@ -44,13 +43,7 @@ from corobot_drake.config.scenario import (
     SetPower,
 )
 from corobot_drake.model import dimensions as dim
-from corobot_drake.systems.drive import (
-    COMMAND_STATUS_SIZE,
-    CommandStatus,
-    DriveRequest,
-    DriveSetpoint,
-    setpoint_for,
-)
+from corobot_drake.systems.drive import CommandStatus, DriveRequest
 from corobot_drake.systems.shared_state import SharedState
 
 # The seed profile (the book's constants, per second: it counted 1/60 s frames); its window,
@@ -140,32 +133,16 @@ class ActiveCommand(SharedState):
     still_frames: int = 0
 
 
-_NO_SETPOINT = (0.0,) * len(DriveSetpoint.get_fields())
-
-
 @dc.dataclass(frozen=True)
 class MotionState(SharedState):
-    """MotionCommands' whole memory, as its state machine reads and writes it (held in the
-    Context as numbers: `MotionCommands` packs it into discrete state)."""
+    """MotionCommands' whole memory (abstract state in the Context)."""
 
     handled_seq: int = 0
     """seq of the last input request acted on."""
-    setpoint: tuple[float, ...] = _NO_SETPOINT
-    """The `DriveSetpoint` values output to the drive (seq 0: none yet)."""
+    output: DriveRequest = dc.field(default_factory=DriveRequest)
     active: ActiveCommand | None = None
     status: CommandStatus = dc.field(default_factory=CommandStatus)
     """How the last completing command ended."""
-
-
-_KINDS = (None, "drive", "rotate", "pose")
-"""An active command's kind; its code in the machine state is its index (0: none)."""
-_ACTIVE = ("kind", "seq", "target", "sign", "power", "start_x", "start_y", "start_yaw",
-           "start_time", "heading", "progress", "scale", "stall_progress", "stall_time",
-           "still_frames", "samples")
-"""The machine state after `handled_seq`: the active command's numbers (`samples`: how many
-progress samples follow)."""
-_KIND, _SAMPLES = 1, len(_ACTIVE)
-"""Where the kind and the samples' count sit in the machine state (the samples follow)."""
 
 
 def _count_still(a, at_goal: bool, frames: int):
@@ -183,22 +160,17 @@ class MotionCommands(LeafSystem):
         name: MotionCommands
         input_ports:
         - request
-        - request_seq
         - position
         - heading
         output_ports:
-        - drive_setpoint
+        - drive_request
         - command_status
 
-    Inputs: `request` (DriveRequest, abstract, from the command source), `request_seq` (1,
-    its seq), `position` (3, m, chassis origin in the world frame, GPS), `heading` (1, rad,
-    chassis yaw about world z, compass). Outputs: `drive_setpoint` (8, `drive.DriveSetpoint`,
-    for the drive controller, its own seq), `command_status` (4, `CommandStatus.vector`: how
-    the last completing command ended). Discrete state, changed by an unrestricted update
-    every `drive.control_period` s (before the drive's): the `MotionState` as numbers (the
-    machine: the seq handled and the active command; the setpoint; the status), each output a
-    state output port. With no new seq and no command running an update reads two numbers and
-    the seq, and returns.
+    Inputs: `request` (DriveRequest, abstract, from the command source), `position` (3, m,
+    chassis origin in the world frame, GPS), `heading` (1, rad, chassis yaw about world z,
+    compass). Outputs: `drive_request` (DriveRequest, abstract, for the drive controller, its
+    own seq), `command_status` (CommandStatus, abstract: how the last completing command
+    ended). Abstract state `MotionState`, updated every `drive.control_period` s.
     """
 
     def __init__(self, drive: Drive, motion: Motion):
@@ -210,19 +182,16 @@ class MotionCommands(LeafSystem):
         self._still_frames = max(1, math.ceil(STILL_TIME / self._period - 1e-9))
         """Updates at rest on the goal before a closed-loop command succeeds."""
         self._request_port = self.DeclareAbstractInputPort("request", Value(DriveRequest()))
-        self._request_seq_port = self.DeclareVectorInputPort("request_seq", 1)
         self._position_port = self.DeclareVectorInputPort("position", 3)
         self._heading_port = self.DeclareVectorInputPort("heading", 1)
-        # Numbers, not a Python value: the quiet check reads two of them every step, and
-        # Drake copies a Python value (`copy.deepcopy`) before every update that may change
-        # it. The update is an unrestricted one, as the command source's: both run before
-        # the drive's (a discrete update), which acts on this update's setpoint at once.
-        self._machine = self.DeclareDiscreteState(_SAMPLES + 1 + self._seed_samples)
-        self._setpoint = self.DeclareDiscreteState(len(_NO_SETPOINT))
-        self._status = self.DeclareDiscreteState(CommandStatus().vector())
-        assert len(CommandStatus().vector()) == COMMAND_STATUS_SIZE
-        self.DeclareStateOutputPort("drive_setpoint", self._setpoint)
-        self.DeclareStateOutputPort("command_status", self._status)
+        self._state_index = self.DeclareAbstractState(Value(MotionState()))
+        ticket = {self.abstract_state_ticket(self._state_index)}
+        self.DeclareAbstractOutputPort("drive_request", lambda: Value(DriveRequest()),
+                                       lambda c, o: o.set_value(self.get_state(c).output),
+                                       ticket)
+        self.DeclareAbstractOutputPort("command_status", lambda: Value(CommandStatus()),
+                                       lambda c, o: o.set_value(self.get_state(c).status),
+                                       ticket)
         self.DeclarePeriodicUnrestrictedUpdateEvent(self._period, 0.0, self._update)
 
     @property
@@ -231,39 +200,7 @@ class MotionCommands(LeafSystem):
         return self._period
 
     def get_state(self, context) -> MotionState:
-        """The state this Context holds (`context` is this system's)."""
-        m = context.get_discrete_state(self._machine).get_value().tolist()
-        active = None
-        if m[_KIND]:
-            (kind, seq, target, sign, power, x, y, yaw, start_time, heading, progress, scale,
-             stall_progress, stall_time, still_frames, samples) = m[_KIND:_SAMPLES + 1]
-            active = ActiveCommand(
-                int(seq), _KINDS[int(kind)], target, sign, power, (x, y, yaw), start_time,
-                heading, progress=progress,
-                samples=tuple(m[_SAMPLES + 1:_SAMPLES + 1 + int(samples)]), scale=scale,
-                stall_progress=stall_progress, stall_time=stall_time,
-                still_frames=int(still_frames))
-        return MotionState(
-            int(m[0]), tuple(context.get_discrete_state(self._setpoint).get_value().tolist()),
-            active, CommandStatus.from_vector(context.get_discrete_state(self._status).get_value()))
-
-    def _set_state(self, discrete_state, s: MotionState, original: MotionState) -> None:
-        """Writes the groups of `s` that differ from `original` into `discrete_state`."""
-        if s.handled_seq != original.handled_seq or s.active is not original.active:
-            m = np.zeros(discrete_state.get_vector(self._machine).size())
-            m[0] = s.handled_seq
-            a = s.active
-            if a is not None:
-                m[_KIND:_SAMPLES + 1] = (
-                    _KINDS.index(a.kind), a.seq, a.target, a.sign, a.power, *a.start,
-                    a.start_time, a.heading, a.progress, a.scale, a.stall_progress,
-                    a.stall_time, a.still_frames, len(a.samples))
-                m[_SAMPLES + 1:_SAMPLES + 1 + len(a.samples)] = a.samples
-            discrete_state.set_value(self._machine, m)
-        if s.setpoint is not original.setpoint:
-            discrete_state.set_value(self._setpoint, np.array(s.setpoint))
-        if s.status is not original.status:
-            discrete_state.set_value(self._status, s.status.vector())
+        return context.get_abstract_state(self._state_index).get_value()
 
     def remaining_command(self, context):
         """The DriveDistance/RotateDegrees that carries the running one on from now (None if
@@ -294,13 +231,11 @@ class MotionCommands(LeafSystem):
 
     # --- the state machine ----------------------------------------------------------------
     def _update(self, context, state):
-        machine = context.get_discrete_state(self._machine)
-        if (self._request_seq_port.EvalBasicVector(context)[0] == machine[0]
-                and machine[_KIND] == 0.0):
-            return EventStatus.DidNothing()  # nothing new, nothing running
         original = self.get_state(context)
         s = original
         request = self._request_port.Eval(context)
+        if request.seq == s.handled_seq and s.active is None:
+            return EventStatus.DidNothing()  # nothing new, nothing running
         now = context.get_time()
         x, y = (float(v) for v in self._position_port.Eval(context)[:2])
         heading = float(self._heading_port.Eval(context)[0])
@@ -316,34 +251,34 @@ class MotionCommands(LeafSystem):
                 target = (command.x, command.y, math.radians(command.yaw_deg))
                 s = s.replace(active=ActiveCommand(
                     request.seq, "pose", 0.0, 1.0, 0.0, target, now, heading))
-                s = self._emit(s, AllStop(), request)
+                s = self._emit(s, AllStop(), request, now)
             else:
-                s = self._emit(s, command, request)
+                s = self._emit(s, command, request, now)
         if s.active is not None:
             step = {"drive": self._step_drive, "rotate": self._step_rotate,
                     "pose": self._step_pose}[s.active.kind]
             s = step(s, request, x, y, heading, now)
         if s is original:
             return EventStatus.DidNothing()  # as `CommandSource._update`
-        self._set_state(state.get_mutable_discrete_state(), s, original)
+        state.get_mutable_abstract_state(self._state_index).set_value(s)
         return EventStatus.Succeeded()
 
-    def _emit(self, s: MotionState, command, request: DriveRequest,
+    @staticmethod
+    def _emit(s: MotionState, command, request: DriveRequest, now: float,
               immediate: bool = False) -> MotionState:
-        """Outputs `command` as the drive's setpoint (a new seq only when it asks the drive
-        for something else than the last one); `immediate`: the drive skips the slew limit
-        for it."""
-        out = s.setpoint
-        setpoint = setpoint_for(self._drive, int(out[0]) + 1, command, request.enabled,
-                                immediate)
-        if out[0] and out[1:] == setpoint[1:]:
+        """Outputs `command` (a new seq only when it differs from the last one output);
+        `immediate`: the drive skips the slew limit for it."""
+        out = s.output
+        if (out.seq and out.command == command and out.enabled == request.enabled
+                and out.immediate == immediate):
             return s
-        return s.replace(setpoint=setpoint)
+        return s.replace(output=DriveRequest(out.seq + 1, command, now, request.enabled,
+                                             immediate))
 
     def _finish(self, s, request, seq, status, reason, now, immediate=False) -> MotionState:
         """Ends the active command with `status`; the wheels stop (at once if `immediate`)."""
         s = s.replace(active=None, status=CommandStatus(seq, status, reason, now))
-        return self._emit(s, AllStop(), request, immediate)
+        return self._emit(s, AllStop(), request, now, immediate)
 
     def _start(self, s, request, command, pose, now) -> MotionState:
         seed = self._motion.profile == "seed"
@@ -392,9 +327,9 @@ class MotionCommands(LeafSystem):
             return self._finish(s, request, a.seq, "failed", "stalled", now), None
         return s, a
 
-    def _set_power(self, s, request, left_axle: float, right_axle: float):
+    def _set_power(self, s, request, left_axle: float, right_axle: float, now):
         k = self._drive.motor_torque_scaling
-        return self._emit(s, SetPower(left_axle / k, right_axle / k), request)
+        return self._emit(s, SetPower(left_axle / k, right_axle / k), request, now)
 
     def _step_drive(self, s, request, x, y, heading, now) -> MotionState:
         a = s.active
@@ -413,7 +348,7 @@ class MotionCommands(LeafSystem):
             if a is None:
                 return s
             axle = a.sign * a.scale * cruise
-            return self._set_power(s.replace(active=a), request, axle, axle)
+            return self._set_power(s.replace(active=a), request, axle, axle, now)
         speed = (progress - previous) / self._period  # m/s towards the goal
         v = self._servo(remaining, speed, DRIVE_TOLERANCE, DRIVE_STILL_SPEED,
                         BRAKE_FRACTION * self._drive.slew_rate * dim.WHEEL_RADIUS, DRIVE_GAIN,
@@ -432,7 +367,7 @@ class MotionCommands(LeafSystem):
             correction = max(-HEADING_CORRECTION_LIMIT, min(
                 HEADING_CORRECTION_LIMIT, HEADING_GAIN * wrap(yaw0 - heading)))
         return self._set_power(s.replace(active=a), request, axle - correction,
-                               axle + correction)
+                               axle + correction, now)
 
     def _step_rotate(self, s, request, x, y, heading, now) -> MotionState:
         a = s.active
@@ -453,7 +388,7 @@ class MotionCommands(LeafSystem):
             if a is None:
                 return s
             axle = a.sign * a.scale * cruise
-            return self._set_power(s.replace(active=a), request, -axle, axle)
+            return self._set_power(s.replace(active=a), request, -axle, axle, now)
         rate = delta / self._period
         to_axle = 1.0 / (SPIN_YAW_PER_RIM_SPEED * dim.WHEEL_RADIUS)  # axle rad/s per yaw rad/s
         w = self._servo(remaining, rate, TURN_TOLERANCE, TURN_STILL_RATE,
@@ -468,7 +403,7 @@ class MotionCommands(LeafSystem):
         if a is None:
             return s
         axle = w * to_axle
-        return self._set_power(s.replace(active=a), request, -axle, axle)
+        return self._set_power(s.replace(active=a), request, -axle, axle, now)
 
     def _seed_slowdown(self, a: ActiveCommand, remaining: float,
                        progress: float) -> ActiveCommand:

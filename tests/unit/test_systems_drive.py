@@ -22,16 +22,11 @@ from corobot_drake.model import dimensions as dim
 from corobot_drake.systems.drive import (
     HOLD_SLACK,
     HOLD_SPEED,
-    REASONS,
-    STATUSES,
     CommandSource,
     CommandStatus,
     DriveController,
     DriveRequest,
-    DriveSetpoint,
     DriveStatus,
-    drive_target,
-    setpoint_for,
     skid_steer_rim_speeds,
     velocity_track_width,
 )
@@ -47,15 +42,9 @@ EXACT = 1e-12  # the controller adds, clamps and scales doubles: equal to roundi
 
 def controller(wheel_state=None) -> Stepper:
     s = Stepper(DriveController(DRIVE), DRIVE.control_period)
-    ask(s, DriveRequest())
+    s.fix("request", DriveRequest())
     s.fix("wheel_state", np.zeros(8) if wheel_state is None else wheel_state)
     return s
-
-
-def ask(s: Stepper, request: DriveRequest) -> None:
-    """Fixes the controller's setpoint to `request` made numbers, as motion makes it."""
-    s.fix("setpoint", setpoint_for(DRIVE, request.seq, request.command, request.enabled,
-                                   request.immediate))
 
 
 def status(s: Stepper):
@@ -79,7 +68,7 @@ def test_controller_starts_enabled_and_still():
 
 def test_set_power_targets_and_slews_by_at_most_one_step_per_update():
     s = controller()
-    ask(s, DriveRequest(1, SetPower(0.5, -0.25)))
+    s.fix("request", DriveRequest(1, SetPower(0.5, -0.25)))
     expected = np.zeros(2)
     target = np.array([0.5 * K, -0.25 * K])
     assert math.isclose(STEP / DRIVE.control_period, 30.0)  # the SPEC's 30 rad/s^2
@@ -98,14 +87,14 @@ def test_set_power_targets_and_slews_by_at_most_one_step_per_update():
 
 def test_first_update_moves_exactly_one_slew_step():
     s = controller()
-    ask(s, DriveRequest(1, SetPower(1.0, -1.0)))
+    s.fix("request", DriveRequest(1, SetPower(1.0, -1.0)))
     s.tick()
     np.testing.assert_allclose(s.output("axle_speed_command"), [STEP, -STEP], atol=EXACT)
 
 
 def test_power_is_clamped_to_one():
     s = controller()
-    ask(s, DriveRequest(1, SetPower(2.0, -3.0)))
+    s.fix("request", DriveRequest(1, SetPower(2.0, -3.0)))
     s.tick()
     st = status(s)
     assert (st.power_left, st.power_right) == (1.0, -1.0)
@@ -116,7 +105,7 @@ def test_set_speed_clamps_to_the_max_axle_speed_and_reports_power():
     s = controller()
     fast = 2 * DRIVE.max_axle_speed * dim.WHEEL_RADIUS  # m/s: twice what the axle may do
     slow = 0.2  # m/s
-    ask(s, DriveRequest(1, SetSpeed(fast, -slow)))
+    s.fix("request", DriveRequest(1, SetSpeed(fast, -slow)))
     s.tick()
     st = status(s)
     assert st.target_left == DRIVE.max_axle_speed
@@ -131,7 +120,7 @@ def test_set_velocity_maps_through_the_skid_steer_kinematics():
     left, right = skid_steer_rim_speeds(0.1, 1.0, track)  # turning left: the right side faster
     assert (left, right) == pytest.approx((0.1 - track / 2, 0.1 + track / 2), rel=EXACT)
     s = controller()
-    ask(s, DriveRequest(1, SetVelocity(0.1, 1.0)))
+    s.fix("request", DriveRequest(1, SetVelocity(0.1, 1.0)))
     s.tick()
     st = status(s)
     assert st.target_left == pytest.approx(left / dim.WHEEL_RADIUS, rel=EXACT)
@@ -140,7 +129,7 @@ def test_set_velocity_maps_through_the_skid_steer_kinematics():
 
 def test_set_velocity_past_the_max_axle_speed_keeps_the_curvature():
     s = controller()
-    ask(s, DriveRequest(1, SetVelocity(3.0, 10.0)))  # 50 and 68.5 rad/s asked
+    s.fix("request", DriveRequest(1, SetVelocity(3.0, 10.0)))  # 50 and 68.5 rad/s asked
     s.tick()
     st = status(s)
     left, right = skid_steer_rim_speeds(3.0, 10.0, velocity_track_width(DRIVE))
@@ -149,37 +138,15 @@ def test_set_velocity_past_the_max_axle_speed_keeps_the_curvature():
     assert st.power_right == 1.0
 
 
-def test_a_setpoint_carries_what_the_command_asks_of_the_drive():
-    """The numbers motion hands the drive: the request's seq and levels, and the command's
-    powers and axle speeds (`drive_target`); an Enable asks for no target."""
-    sent = DriveSetpoint(np.array(setpoint_for(DRIVE, 7, SetSpeed(0.1, -0.2), enabled=True,
-                                               immediate=True)))
-    assert (sent.seq, sent.enabled, sent.immediate, sent.has_target) == (7, 1, 1, 1)
-    assert (sent.power_left, sent.power_right, sent.target_left, sent.target_right) == \
-        drive_target(DRIVE, SetSpeed(0.1, -0.2))
-    assert sent.target_left == pytest.approx(0.1 / dim.WHEEL_RADIUS, abs=1e-12)
-    enable = DriveSetpoint(np.array(setpoint_for(DRIVE, 8, Enable(False), enabled=False)))
-    assert (enable.enabled, enable.has_target) == (0, 0)
-    assert drive_target(DRIVE, Wait(1.0)) is None
-
-
-@pytest.mark.parametrize("status", STATUSES)
-@pytest.mark.parametrize("reason", REASONS)
-def test_a_command_status_survives_its_vector(status, reason):
-    """How a command ended crosses between systems as four numbers, and back unchanged."""
-    ended = CommandStatus(12, status, reason, 3.25)
-    assert CommandStatus.from_vector(ended.vector()) == ended
-
-
 def test_a_request_acts_once_by_its_sequence_number():
     s = controller()
-    ask(s, DriveRequest(1, SetPower(0.5, 0.5)))
+    s.fix("request", DriveRequest(1, SetPower(0.5, 0.5)))
     s.tick()
     # The same seq with another command is the same message: ignored.
-    ask(s, DriveRequest(1, SetPower(-0.5, -0.5)))
+    s.fix("request", DriveRequest(1, SetPower(-0.5, -0.5)))
     s.tick()
     assert status(s).power_left == 0.5
-    ask(s, DriveRequest(2, AllStop()))
+    s.fix("request", DriveRequest(2, AllStop()))
     s.tick()
     st = status(s)
     assert (st.power_left, st.target_left, st.target_right) == (0.0, 0.0, 0.0)
@@ -189,37 +156,37 @@ def test_a_request_acts_once_by_its_sequence_number():
 
 def test_an_immediate_request_skips_the_slew_limit():
     s = controller()
-    ask(s, DriveRequest(1, SetPower(1.0, -1.0)))
+    s.fix("request", DriveRequest(1, SetPower(1.0, -1.0)))
     s.tick(10)
     assert s.output("axle_speed_command")[0] == pytest.approx(10 * STEP)
-    ask(s, DriveRequest(2, AllStop(), immediate=True))  # the seed profile's stop
+    s.fix("request", DriveRequest(2, AllStop(), immediate=True))  # the seed profile's stop
     s.tick()
     np.testing.assert_array_equal(s.output("axle_speed_command"), [0.0, 0.0])
     np.testing.assert_array_equal(s.output("desired_state"), np.zeros(8))
-    ask(s, DriveRequest(3, SetPower(1.0, 1.0)))  # an ordinary request slews again
+    s.fix("request", DriveRequest(3, SetPower(1.0, 1.0)))  # an ordinary request slews again
     s.tick()
     np.testing.assert_allclose(s.output("axle_speed_command"), [STEP, STEP], atol=EXACT)
 
 
 def test_disable_stops_at_once_and_ignores_motion_until_enabled():
     s = controller()
-    ask(s, DriveRequest(1, SetPower(1.0, 1.0)))
+    s.fix("request", DriveRequest(1, SetPower(1.0, 1.0)))
     s.tick(4)
     assert s.output("axle_speed_command")[0] == pytest.approx(4 * STEP)
-    ask(s, DriveRequest(2, Enable(False), enabled=False))
+    s.fix("request", DriveRequest(2, Enable(False), enabled=False))
     s.tick()
     st = status(s)
     assert st.enabled == 0.0
     np.testing.assert_array_equal(s.output("axle_speed_command"), [0.0, 0.0])  # not slewed
     assert [st.power_left, st.power_right, st.target_left, st.target_right] == [0, 0, 0, 0]
-    ask(s, DriveRequest(3, SetPower(1.0, 1.0), enabled=False))
+    s.fix("request", DriveRequest(3, SetPower(1.0, 1.0), enabled=False))
     s.tick(3)
     np.testing.assert_array_equal(s.output("axle_speed_command"), [0.0, 0.0])
-    ask(s, DriveRequest(4, Enable(True), enabled=True))
+    s.fix("request", DriveRequest(4, Enable(True), enabled=True))
     s.tick()
     assert status(s).enabled == 1.0
     np.testing.assert_array_equal(s.output("axle_speed_command"), [0.0, 0.0])  # no target
-    ask(s, DriveRequest(5, SetPower(1.0, 1.0), enabled=True))
+    s.fix("request", DriveRequest(5, SetPower(1.0, 1.0), enabled=True))
     s.tick()
     np.testing.assert_allclose(s.output("axle_speed_command"), [STEP, STEP], atol=EXACT)
 
@@ -287,19 +254,19 @@ def test_the_hold_pulls_at_most_half_the_rest_speed_and_lets_a_driven_wheel_go()
     s.fix("wheel_state", wheels([-HOLD_SLACK] * 4))  # a big error, inside the slack
     s.tick()
     np.testing.assert_allclose(s.output("desired_state")[4:], [0.5 * HOLD_SPEED] * 4)
-    ask(s, DriveRequest(1, SetPower(0.0, 1.0)))  # the right side drives
+    s.fix("request", DriveRequest(1, SetPower(0.0, 1.0)))  # the right side drives
     s.tick()
     v_d = s.output("desired_state")[4:]
     np.testing.assert_allclose(v_d, [0.5 * HOLD_SPEED, STEP, 0.5 * HOLD_SPEED, STEP])
     s.fix("wheel_state", wheels([-HOLD_SLACK] * 4, [0.0, 2 * HOLD_SPEED, 0.0, 0.0]))
-    ask(s, DriveRequest(2, AllStop(), immediate=True))
+    s.fix("request", DriveRequest(2, AllStop(), immediate=True))
     s.tick()  # commanded 0 but still turning: not at rest, so not held
     np.testing.assert_allclose(s.output("desired_state")[4:], [0.5 * HOLD_SPEED, 0.0] * 2)
 
 
 def test_no_hold_at_hold_gain_zero():
     s = Stepper(DriveController(Drive(hold_gain=0.0)), DRIVE.control_period)
-    ask(s, DriveRequest())
+    s.fix("request", DriveRequest())
     s.fix("wheel_state", wheels([0.0] * 4))
     s.tick()
     s.fix("wheel_state", wheels([1e-5] * 4))
@@ -315,7 +282,7 @@ PERIOD = 1.0 / 60.0  # the script tests count 1/60 s ticks (the source works at 
 def source(script=(), status=None) -> Stepper:
     s = Stepper(CommandSource(list(script), PERIOD), PERIOD)
     if status is not None:
-        s.fix("command_status", status.vector())
+        s.fix("command_status", status)
     return s
 
 
@@ -325,15 +292,6 @@ def request(s: Stepper) -> DriveRequest:
 
 def log(s: Stepper):
     return s.system.current_state(s.context).log
-
-
-def test_request_seq_is_the_requests():
-    """`request_seq`, what motion checks every step, follows the request's seq."""
-    s = source([SetPower(0.1, 0.1)], CommandStatus())
-    assert s.output("request_seq")[0] == request(s).seq == 0
-    s.tick()
-    s.system.Issue(s.context, SetPower(0.2, 0.2))
-    assert s.output("request_seq")[0] == request(s).seq == 2
 
 
 def test_script_runs_in_order_with_waits_and_completing_commands():
@@ -353,7 +311,7 @@ def test_script_runs_in_order_with_waits_and_completing_commands():
     assert (request(s).seq, request(s).command) == (3, DriveDistance(1.0, 0.5))
     s.tick(10)  # the DriveDistance runs (no end reported): the script waits for it
     assert request(s).seq == 3
-    s.fix("command_status", CommandStatus(3, "succeeded", "", 0.2).vector())
+    s.fix("command_status", CommandStatus(3, "succeeded", "", 0.2))
     s.tick()
     assert (request(s).seq, request(s).command) == (4, AllStop())
     assert [(r.seq, r.command) for r in log(s)] == [
@@ -422,12 +380,11 @@ def test_disable_fails_a_running_completing_command_and_is_carried_as_a_level():
 def test_a_reported_end_is_recorded_only_once():
     s = source(status=CommandStatus())
     seq = s.system.Issue(s.context, DriveDistance(1.0, 0.5))
-    s.fix("command_status", CommandStatus(seq, "failed", "stalled", 0.5).vector())
+    s.fix("command_status", CommandStatus(seq, "failed", "stalled", 0.5))
     s.tick()
     record = s.system.record(s.context, seq)
     assert (record.status, record.reason, record.end_time) == ("failed", "stalled", 0.5)
-    s.fix("command_status",
-          CommandStatus(seq, "succeeded", "", 0.9).vector())  # too late: ignored
+    s.fix("command_status", CommandStatus(seq, "succeeded", "", 0.9))  # too late: ignored
     s.tick()
     assert s.system.record(s.context, seq).status == "failed"
 
@@ -509,7 +466,7 @@ def test_a_steady_drive_writes_no_state():
     """Both sides turning at their targets: the updates change nothing, however the wheels
     turn (no hold is tracked), and `hold_angles` reads the wheels' angles now."""
     s = controller()
-    ask(s, DriveRequest(1, SetPower(0.1, -0.2)))
+    s.fix("request", DriveRequest(1, SetPower(0.1, -0.2)))
     s.tick(round(0.2 * K / STEP) + 1)  # slewed to the targets (0.2 K rad/s at STEP a tick)
     np.testing.assert_allclose(s.output("axle_speed_command"), [0.1 * K, -0.2 * K],
                                atol=EXACT)
@@ -524,7 +481,7 @@ def test_a_steady_drive_writes_no_state():
         np.testing.assert_array_equal(state.get_vector(i).CopyToVector(), values)
     assert s.simulator.get_num_discrete_updates() == updates  # DidNothing: nothing copied back
     assert s.system.hold_angles(s.context) == [1.0, -2.0, 1.5, -2.5]
-    ask(s, DriveRequest(2, SetPower(0.1, -0.2)))  # the same again: still steady
+    s.fix("request", DriveRequest(2, SetPower(0.1, -0.2)))  # the same again: still steady
     s.tick()
     np.testing.assert_array_equal(s.output("desired_state")[4:],
                                   [0.1 * K, -0.2 * K, 0.1 * K, -0.2 * K])
@@ -535,12 +492,12 @@ def test_a_wheel_stopped_from_a_steady_drive_is_held_where_it_stops():
     stops (at once: disabled) is held at its angle at that update (not at its angle at the
     update before, within `HOLD_SLACK` of it), and pulled back to it."""
     s = controller()
-    ask(s, DriveRequest(1, SetPower(0.05, 0.05)))
+    s.fix("request", DriveRequest(1, SetPower(0.05, 0.05)))
     stopped = [0.7, 0.8, 0.9, 1.0]
     s.fix("wheel_state", wheels([a - 5e-5 for a in stopped], [1e-4] * 4))  # slow (a wall)
     s.tick(round(0.05 * K / STEP) + 3)  # steady
     s.fix("wheel_state", wheels(stopped))  # at rest
-    ask(s, DriveRequest(2, Enable(False), enabled=False))
+    s.fix("request", DriveRequest(2, Enable(False), enabled=False))
     s.tick()
     np.testing.assert_array_equal(s.output("desired_state"), np.zeros(8))
     assert s.system.hold_angles(s.context) == stopped
@@ -567,8 +524,7 @@ def test_what_comes_during_a_quiet_wait_is_taken_at_the_next_update():
     seq = s.system.Issue(s.context, DriveDistance(0.5, 0.5))
     s.tick(3)
     assert s.system.record(s.context, seq).status == "running"
-    s.fix("command_status",
-          CommandStatus(seq, "succeeded", "", s.context.get_time()).vector())
+    s.fix("command_status", CommandStatus(seq, "succeeded", "", s.context.get_time()))
     s.tick()
     assert s.system.record(s.context, seq).status == "succeeded"
     s.tick(round(1.0 / PERIOD))  # the Wait ends and the script carries on with the AllStop

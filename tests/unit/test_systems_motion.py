@@ -2,7 +2,6 @@
 stepped by a Simulator on the lone system (conftest.Stepper)."""
 
 import math
-import typing
 
 import pytest
 
@@ -17,7 +16,7 @@ from corobot_drake.config.scenario import (
     SetPower,
 )
 from corobot_drake.model import dimensions as dim
-from corobot_drake.systems.drive import CommandStatus, DriveRequest, DriveSetpoint
+from corobot_drake.systems.drive import DriveRequest
 from corobot_drake.systems.motion import (
     POSE_SETTLE_TIME,
     POSE_TIMEOUT,
@@ -36,7 +35,7 @@ EXACT = 1e-12  # products and sums of a few doubles
 
 def motion(profile: str = "closed_loop", x: float = 0.0, heading: float = 0.0) -> Stepper:
     s = Stepper(MotionCommands(DRIVE, Motion(profile=profile)), PERIOD)
-    ask(s, DriveRequest())
+    s.fix("request", DriveRequest())
     at(s, x, heading)
     return s
 
@@ -47,33 +46,12 @@ def at(s: Stepper, x: float, heading: float, y: float = 0.0) -> None:
     s.fix("heading", [heading])
 
 
-def ask(s: Stepper, request: DriveRequest) -> None:
-    """Fixes the request input (and its seq, what the quiet check reads) to `request`."""
-    s.fix("request", request)
-    s.fix("request_seq", [request.seq])
+def out(s: Stepper) -> DriveRequest:
+    return s.output("drive_request")
 
 
-class Sent(typing.NamedTuple):
-    """The drive setpoint output, read back as the command that asks the drive for it: the
-    powers, or AllStop for none (the drive takes SetPower(0, 0) and AllStop alike)."""
-
-    seq: int
-    command: object
-    enabled: bool
-    immediate: bool
-
-
-def out(s: Stepper) -> Sent:
-    sent = DriveSetpoint(s.output("drive_setpoint").copy())
-    assert sent.has_target  # motion sends the drive motion commands only
-    command = (AllStop() if sent.power_left == sent.power_right == 0.0
-               else SetPower(sent.power_left, sent.power_right))
-    assert sent.target_left == sent.power_left * K  # the drive's own scaling
-    return Sent(int(sent.seq), command, bool(sent.enabled), bool(sent.immediate))
-
-
-def status(s: Stepper) -> CommandStatus:
-    return CommandStatus.from_vector(s.output("command_status"))
+def status(s: Stepper):
+    return s.output("command_status")
 
 
 def ticks_until_ended(s: Stepper, limit: int = 200) -> int:
@@ -86,13 +64,13 @@ def ticks_until_ended(s: Stepper, limit: int = 200) -> int:
 
 def test_ordinary_commands_pass_through_with_their_own_sequence_numbers():
     s = motion()
-    ask(s, DriveRequest(5, SetPower(0.3, -0.3)))
+    s.fix("request", DriveRequest(5, SetPower(0.3, -0.3)))
     s.tick()
     assert (out(s).seq, out(s).command, out(s).enabled) == (1, SetPower(0.3, -0.3), True)
-    ask(s, DriveRequest(6, SetPower(0.3, -0.3)))  # the same command again
+    s.fix("request", DriveRequest(6, SetPower(0.3, -0.3)))  # the same command again
     s.tick()
     assert out(s).seq == 1  # not re-sent
-    ask(s, DriveRequest(7, AllStop()))
+    s.fix("request", DriveRequest(7, AllStop()))
     s.tick()
     assert (out(s).seq, out(s).command) == (2, AllStop())
     assert status(s).seq == 0  # only completing commands report an end
@@ -100,7 +78,7 @@ def test_ordinary_commands_pass_through_with_their_own_sequence_numbers():
 
 def test_closed_loop_drive_cruises_then_succeeds_after_resting_on_the_goal():
     s = motion()
-    ask(s, DriveRequest(1, DriveDistance(1.0, 0.5)))
+    s.fix("request", DriveRequest(1, DriveDistance(1.0, 0.5)))
     s.tick()
     # Far from the goal the speed is the cruise speed: power 0.5 on both sides.
     assert out(s).command.left == pytest.approx(0.5, abs=EXACT)
@@ -122,7 +100,7 @@ def test_closed_loop_drive_cruises_then_succeeds_after_resting_on_the_goal():
 
 def test_closed_loop_drive_holds_its_start_heading():
     s = motion()
-    ask(s, DriveRequest(1, DriveDistance(1.0, 0.5)))
+    s.fix("request", DriveRequest(1, DriveDistance(1.0, 0.5)))
     s.tick()
     at(s, 0.01, 0.1)  # drifted 0.1 rad to the left
     s.tick()
@@ -133,7 +111,7 @@ def test_closed_loop_drive_holds_its_start_heading():
 
 def test_seed_drive_succeeds_as_soon_as_the_goal_is_reached():
     s = motion("seed")
-    ask(s, DriveRequest(1, DriveDistance(-0.5, 1.0)))  # backwards
+    s.fix("request", DriveRequest(1, DriveDistance(-0.5, 1.0)))  # backwards
     s.tick()
     assert (out(s).command.left, out(s).command.right) == pytest.approx((-1.0, -1.0), abs=EXACT)
     at(s, -0.4999, 0.0)
@@ -148,7 +126,7 @@ def test_seed_drive_succeeds_as_soon_as_the_goal_is_reached():
 
 def test_seed_halves_the_speed_when_under_a_tenth_of_a_second_remains():
     s = motion("seed")
-    ask(s, DriveRequest(1, DriveDistance(1.0, 1.0)))
+    s.fix("request", DriveRequest(1, DriveDistance(1.0, 1.0)))
     s.tick()  # starts at x = 0, full power
     speed = 0.45  # m/s, steady: the 0.1 s threshold (0.045 m left) falls between updates
     x, n = 0.0, 0
@@ -168,7 +146,7 @@ def test_seed_halves_the_speed_when_under_a_tenth_of_a_second_remains():
 
 def test_a_drive_that_does_not_move_fails_stalled_after_the_stall_time():
     s = motion()
-    ask(s, DriveRequest(1, DriveDistance(1.0, 0.5)))
+    s.fix("request", DriveRequest(1, DriveDistance(1.0, 0.5)))
     stall_ticks = round(Motion().stall_time / PERIOD)  # updates in 1 s
     s.tick(stall_ticks)  # the last one period before 1 s
     assert status(s).seq == 0
@@ -181,7 +159,7 @@ def test_a_drive_that_does_not_move_fails_stalled_after_the_stall_time():
 
 def test_a_completing_command_to_a_disabled_drive_fails_at_once():
     s = motion()
-    ask(s, DriveRequest(1, RotateDegrees(90.0, 0.5), enabled=False))
+    s.fix("request", DriveRequest(1, RotateDegrees(90.0, 0.5), enabled=False))
     s.tick()
     st = status(s)
     assert (st.seq, st.status, st.reason) == (1, "failed", "disabled")
@@ -190,9 +168,9 @@ def test_a_completing_command_to_a_disabled_drive_fails_at_once():
 
 def test_a_new_request_supersedes_the_running_command():
     s = motion()
-    ask(s, DriveRequest(1, DriveDistance(1.0, 0.5)))
+    s.fix("request", DriveRequest(1, DriveDistance(1.0, 0.5)))
     s.tick(3)
-    ask(s, DriveRequest(2, SetPower(0.2, 0.2)))
+    s.fix("request", DriveRequest(2, SetPower(0.2, 0.2)))
     s.tick()
     assert out(s).command == SetPower(0.2, 0.2)
     assert s.system.remaining_command(s.context) is None
@@ -202,7 +180,7 @@ def test_a_new_request_supersedes_the_running_command():
 
 def test_rotation_unwraps_across_180_degrees_and_lands():
     s = motion(heading=3.0)
-    ask(s, DriveRequest(1, RotateDegrees(90.0, 0.5)))
+    s.fix("request", DriveRequest(1, RotateDegrees(90.0, 0.5)))
     s.tick()
     assert out(s).command.left < 0 < out(s).command.right  # counter-clockwise
     at(s, 0.0, -3.0)  # turned 2 pi - 6 = 0.283 rad through +-pi
@@ -217,7 +195,7 @@ def test_rotation_unwraps_across_180_degrees_and_lands():
 
 def test_set_pose_succeeds_once_the_robot_has_settled_where_it_was_put():
     s = motion()
-    ask(s, DriveRequest(1, SetPose(1.0, 2.0, 90.0)))
+    s.fix("request", DriveRequest(1, SetPose(1.0, 2.0, 90.0)))
     s.tick()
     assert out(s).command == AllStop()
     at(s, 1.0, math.pi / 2, y=2.0)  # the Simulation teleported it
@@ -234,7 +212,7 @@ def test_set_pose_succeeds_once_the_robot_has_settled_where_it_was_put():
 
 def test_set_pose_not_applied_fails_after_the_timeout():
     s = motion()
-    ask(s, DriveRequest(1, SetPose(1.0, 2.0, 90.0)))
+    s.fix("request", DriveRequest(1, SetPose(1.0, 2.0, 90.0)))
     n = ticks_until_ended(s)
     st = status(s)
     assert (st.seq, st.status, st.reason) == (1, "failed", "not_applied")
@@ -244,7 +222,7 @@ def test_set_pose_not_applied_fails_after_the_timeout():
 @pytest.mark.parametrize("profile", ["closed_loop", "seed"])
 def test_a_drive_given_its_start_counts_from_there(profile):
     s = motion(profile, x=0.3)
-    ask(s, DriveRequest(1, DriveDistance(1.0, 0.5, [0.0, 0.0, 0.0])))
+    s.fix("request", DriveRequest(1, DriveDistance(1.0, 0.5, [0.0, 0.0, 0.0])))
     s.tick()
     assert out(s).command.left == pytest.approx(0.5, abs=EXACT)  # far from the goal: cruise
     assert s.system.get_state(s.context).active.progress == pytest.approx(0.3, abs=EXACT)
@@ -257,7 +235,7 @@ def test_a_drive_given_its_start_counts_from_there(profile):
 
 def test_a_turn_given_its_start_heading_counts_from_it():
     s = motion(heading=0.5)
-    ask(s, DriveRequest(1, RotateDegrees(60.0, 0.5, [0.0, 0.0, 0.0])))
+    s.fix("request", DriveRequest(1, RotateDegrees(60.0, 0.5, [0.0, 0.0, 0.0])))
     s.tick()
     # Already 0.5 rad of the 60 deg turned: 60 - 28.6 deg are left.
     left = s.system.remaining_command(s.context)
@@ -267,7 +245,7 @@ def test_a_turn_given_its_start_heading_counts_from_it():
 
 def test_a_seed_turn_saved_past_its_goal_resumes_as_done():
     s = motion("seed")
-    ask(s, DriveRequest(1, RotateDegrees(30.0, 1.0)))
+    s.fix("request", DriveRequest(1, RotateDegrees(30.0, 1.0)))
     s.tick()
     at(s, 0.0, math.radians(29.0))
     s.tick()
@@ -275,7 +253,7 @@ def test_a_seed_turn_saved_past_its_goal_resumes_as_done():
     left = s.system.remaining_command(s.context)
     assert left.degrees == pytest.approx(1.0, abs=1e-9)  # counted from the last update
     resumed = motion("seed", heading=math.radians(31.0))
-    ask(resumed, DriveRequest(1, left))
+    resumed.fix("request", DriveRequest(1, left))
     resumed.tick()  # its first update sees the overshoot, as the saved run's next one would
     assert (status(resumed).status, out(resumed).command, out(resumed).immediate) == (
         "succeeded", AllStop(), True)
@@ -283,9 +261,9 @@ def test_a_seed_turn_saved_past_its_goal_resumes_as_done():
 
 def test_a_request_not_yet_taken_is_saved_as_issued():
     s = motion("seed")
-    ask(s, DriveRequest(1, DriveDistance(0.3, 1.0)))
+    s.fix("request", DriveRequest(1, DriveDistance(0.3, 1.0)))
     s.tick()
-    ask(s, DriveRequest(2, RotateDegrees(-45.0, 0.5)))  # the next update takes it
+    s.fix("request", DriveRequest(2, RotateDegrees(-45.0, 0.5)))  # the next update takes it
     assert s.system.remaining_command(s.context) == RotateDegrees(-45.0, 0.5)
 
 
@@ -325,14 +303,14 @@ def test_a_command_resumed_at_any_update_replays_the_same_requests(profile, comm
     update), so the powers agree to 1e-9."""
     follow = round(0.15 / PERIOD)
     s = motion(profile)
-    ask(s, DriveRequest(1, command))
+    s.fix("request", DriveRequest(1, command))
     runs, x, heading, halvings = [], 0.0, 0.0, 0
     for tick in range(400):
         runs = [r for r in runs if r[1] > tick]
         left = s.system.remaining_command(s.context)
         if left is not None:
             resumed = motion(profile, x, heading)
-            ask(resumed, DriveRequest(1, left))
+            resumed.fix("request", DriveRequest(1, left))
             runs.append((resumed, tick + follow))
         s.tick()
         if status(s).seq and profile == "closed_loop":
@@ -357,23 +335,6 @@ def test_an_update_that_changes_nothing_is_not_applied():
     s = motion()
     s.tick(10)
     assert s.simulator.get_num_unrestricted_updates() == 0
-    ask(s, DriveRequest(1, DriveDistance(1.0, 0.5), 0.0))
+    s.fix("request", DriveRequest(1, DriveDistance(1.0, 0.5), 0.0))
     s.tick(10)
     assert s.simulator.get_num_unrestricted_updates() == 10
-
-
-def test_the_state_machine_survives_its_numbers():
-    """Motion keeps its state machine's values as numbers: a running seed drive (with its
-    progress samples) and a finished command's status read back as they were written."""
-    s = motion("seed")
-    ask(s, DriveRequest(1, DriveDistance(1.0, 0.5)))
-    for x in (0.0, 0.01, 0.03, 0.06):
-        at(s, x, 0.0)
-        s.tick()
-    state = s.system.get_state(s.context)
-    assert state.active is not None and len(state.active.samples) == 4
-    fresh = motion("seed")
-    blank = fresh.system.get_state(fresh.context)
-    ended = state.replace(status=CommandStatus(1, "failed", "stalled", 0.5))
-    fresh.system._set_state(fresh.context.get_mutable_discrete_state(), ended, blank)
-    assert fresh.system.get_state(fresh.context) == ended
