@@ -21,6 +21,7 @@ apart), and at the session's end that none is left at all.
 """
 
 import fcntl
+import importlib.util
 import os
 import shutil
 import tempfile
@@ -35,6 +36,14 @@ from corobot_drake.simulation import Simulation, quiet_drake_warnings
 from lab.processes import children_by_parent, descendants
 
 REPO = Path(__file__).resolve().parent.parent
+
+
+def load_tool(name: str):
+    """The module of `tools/<name>.py` (the tools are scripts, not a package)."""
+    spec = importlib.util.spec_from_file_location(f"{name}_tool", REPO / "tools" / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
 
 quiet_drake_warnings()
 

@@ -1,20 +1,13 @@
 """`tools/bench_compare.py`'s table: medians, ratios, and cases with no CPU figure."""
 
-import importlib.util
-
 import pytest
 
-from conftest import REPO
-
-TOOL = REPO / "tools" / "bench_compare.py"
+from conftest import load_tool
 
 
 @pytest.fixture(scope="module")
 def bench_compare():
-    spec = importlib.util.spec_from_file_location("bench_compare_tool", TOOL)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_tool("bench_compare")
 
 
 def test_the_table_gives_medians_and_new_over_old(bench_compare):

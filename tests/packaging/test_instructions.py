@@ -3,22 +3,16 @@
 How repeatable a count is, is the measure's own figure, not a behaviour: `python
 tools/count_instructions.py --repeatability --seconds 0.02` (two counts, ~30 s)."""
 
-import importlib.util
 import shutil
 
 import pytest
 
-from conftest import REPO
+from conftest import load_tool
 from lab import instructions
-
-TOOL = REPO / "tools" / "count_instructions.py"
 
 
 def _tool_main():
-    spec = importlib.util.spec_from_file_location("count_instructions_tool", TOOL)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module.main
+    return load_tool("count_instructions").main
 
 
 def test_no_valgrind_is_a_clear_error(monkeypatch, capsys):

@@ -3,29 +3,19 @@
 A profile itself is a measurement (`python tools/profile_step.py`, about a minute a round),
 not a behaviour: these tests check how its numbers are read."""
 
-import importlib.util
 import shutil
 
 import pytest
 
-from conftest import REPO
+from conftest import load_tool
 from lab import profile_step
-
-TOOL = REPO / "tools" / "profile_step.py"
-
-
-def _tool_main():
-    spec = importlib.util.spec_from_file_location("profile_step_tool", TOOL)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module.main
 
 
 def test_no_perf_is_a_clear_error(monkeypatch, capsys):
     monkeypatch.setattr(shutil, "which", lambda name: None)
     with pytest.raises(profile_step.PerfMissingError, match="needs Linux perf"):
         profile_step.profile(1.0, 1)
-    assert _tool_main()(["--seconds", "1", "--repeats", "1"]) == 2
+    assert load_tool("profile_step").main(["--seconds", "1", "--repeats", "1"]) == 2
     assert capsys.readouterr().err.count("\n") == 1
 
 
