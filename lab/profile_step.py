@@ -43,8 +43,8 @@ Context's trackers; CENIC changes time and state inside its step, the Simulator 
 PYTHON_LIBRARIES = ("libpython", "nanobind", "framework.so", "__init__.so", "analysis.so",
                     "primitives.so", "_multiarray_umath", "_umath")
 """The interpreter, pydrake's bindings and numpy: the Python systems' updates and outputs."""
-PHYSICS = ("drake::multibody::", "drake::geometry::", "drake::math::", "Eigen::",
-           "drake::SortedPair", "drake::multibody", "drake::geometry")
+PHYSICS = ("drake::multibody", "drake::geometry", "drake::math::", "Eigen::",
+           "drake::SortedPair")
 """The plant's step: contact geometry, the contact problem and its solver, kinematics."""
 KINDS = ("the plant's physics (contact, solver, kinematics)",
          "Drake's dependency tracking (noting time and state changes)",
@@ -53,13 +53,14 @@ KINDS = ("the plant's physics (contact, solver, kinematics)",
          "memory allocation and the rest")
 """How `classify` sorts a sample, in the table's order."""
 ALL = "all of the run"
+"""The sum of the `KINDS`: the child's CPU time while it simulated."""
 
 
 def classify(library: str, function: str) -> str:
     """The `KINDS` entry of a sample in `library` (file name) and `function` (demangled)."""
     if any(name in function for name in TRACKING):
         return KINDS[1]
-    if any(library.startswith(name) or name in library for name in PYTHON_LIBRARIES):
+    if any(name in library for name in PYTHON_LIBRARIES):
         return KINDS[3]
     if "libdrake" in library and any(name in function for name in PHYSICS):
         return KINDS[0]
