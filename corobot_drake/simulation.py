@@ -627,8 +627,9 @@ class Simulation:
         Context, then initializes the simulator."""
         self._set_per_run_values()
         self._set_initial_velocities()
-        if any(isinstance(c, sc.SetPose) for r in self.scenario.robots.values()
-               for c in r.commands):
+        self._scripted_teleports = any(isinstance(c, sc.SetPose)
+                                       for r in self.scenario.robots.values() for c in r.commands)
+        if self._scripted_teleports:
             # A scripted SetPose: stop after the step that issued it, to teleport (advance_to).
             # The monitor holds the command sources, not this Simulation: the Simulator keeps
             # it from C++, where a reference back to the Simulation is a cycle never freed.
@@ -802,6 +803,10 @@ class Simulation:
         try:
             while True:
                 self._advance_simulator(t)
+                # Only a script leaves a SetPose pending (one the API issues is applied at
+                # once): without one, no robot is looked at (this runs at every advance).
+                if not self._scripted_teleports:
+                    break
                 applied = [robot._apply_teleport() for robot in self.robots.values()]
                 if not any(applied) or self.time >= t:
                     break
