@@ -231,6 +231,24 @@ def build_layers(scenario: sc.Scenario, layers: int, seconds: float = 10.0,
     return _Layered(simulator, set_command)
 
 
+def warmed_up(row: str, scenario: sc.Scenario, warm_up: float, seconds: float):
+    """Builds `row` (`STATION`, a `LAYERS` row or a `FLOORS` row) of `scenario`, simulates
+    `warm_up` s now, and returns a function that simulates the next `seconds` (a layer row
+    keeps the figure of eight's first request: its first segment's 3 s only)."""
+    if row == STATION:
+        from corobot_drake.simulation import Simulation
+
+        sim = Simulation(scenario)
+        sim.advance(warm_up)
+        return lambda: sim.advance(seconds)
+    if row in FLOORS:
+        simulator = build_layers(scenario, 1, warm_up + seconds, IDLE_UPDATES, floor=row).simulator
+    else:
+        simulator = build_layers(scenario, LAYERS.index(row) + 1, warm_up + seconds).simulator
+    simulator.AdvanceTo(warm_up)
+    return lambda: simulator.AdvanceTo(warm_up + seconds)
+
+
 _RECORDED = {}
 """{(scenario YAML, seconds): `station_desired_state`}: recorded once per process."""
 

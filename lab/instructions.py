@@ -124,15 +124,6 @@ def _parse(row: str, annotated: str, cache: bool) -> Count:
                  events[1] if cache else None)
 
 
-def _layered(row: str, scenario, seconds: float):
-    """The Simulator of a layer row or a `bench_layers.FLOORS` row, for `seconds`."""
-    if row in bench_layers.FLOORS:
-        return bench_layers.build_layers(scenario, 1, seconds, bench_layers.IDLE_UPDATES,
-                                         floor=row).simulator
-    return bench_layers.build_layers(scenario, bench_layers.LAYERS.index(row) + 1,
-                                     seconds).simulator
-
-
 def _instrument(on: bool) -> None:
     subprocess.run(["callgrind_control", "-i", "on" if on else "off", str(os.getpid())],
                    check=True, capture_output=True)
@@ -141,18 +132,10 @@ def _instrument(on: bool) -> None:
 def _child(row: str, seconds: float, override: str | None) -> None:
     """Builds `row`, warms up, counts `seconds` of simulation (under callgrind)."""
     scenario = bench_layers._scenario(*([override] if override and row == STATION else []))
-    if row == STATION:
-        from corobot_drake.simulation import Simulation
-
-        sim = Simulation(scenario)
-        sim.advance(WARM_UP)
-        _instrument(True)
-        sim.advance(seconds)
-    else:
-        simulator = _layered(row, scenario, WARM_UP + seconds)
-        simulator.AdvanceTo(WARM_UP)
-        _instrument(True)
-        simulator.AdvanceTo(WARM_UP + seconds)
+    run = bench_layers.warmed_up(bench_layers.STATION if row == STATION else row, scenario,
+                                 WARM_UP, seconds)
+    _instrument(True)
+    run()
     _instrument(False)
 
 

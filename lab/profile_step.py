@@ -158,21 +158,7 @@ def profile(seconds: float, repeats: int, progress=None) -> dict[str, dict[str, 
 def _child(row: str, seconds: float) -> None:
     """Builds `row`, warms up, says ready, waits for a line, simulates `seconds`, prints the
     CPU s that took."""
-    scenario = bench_layers._scenario()
-    if row == STATION:
-        from corobot_drake.simulation import Simulation
-
-        sim = Simulation(scenario)
-        sim.advance(WARM_UP)
-
-        def run():
-            sim.advance(seconds)
-    else:
-        simulator = bench_layers.build_layers(scenario, 1, WARM_UP + seconds).simulator
-        simulator.AdvanceTo(WARM_UP)
-
-        def run():
-            simulator.AdvanceTo(WARM_UP + seconds)
+    run = bench_layers.warmed_up(row, bench_layers._scenario(), WARM_UP, seconds)
     print("ready", flush=True)
     sys.stdin.readline()
     start = time.process_time()
