@@ -119,6 +119,27 @@ def measure_event_times(repeats: int = 5, seconds: float = 10.0) -> dict:
             for name, r in runs.items()}
 
 
+def measure_hot_reads(reads: int = 100_000, repeats: int = 5) -> dict:
+    """us per read, in a loop (hot caches), on the station's own Context after 0.5 s of the
+    figure of eight, physics only: the drive's `request` input (abstract, what the quiet
+    updates read) and a number of its discrete state. Least of `repeats` rounds."""
+    import timeit
+
+    from lab.bench import physics_only_overrides
+
+    sim = _driving([*physics_only_overrides()])
+    sim.advance(0.5)
+    drive = sim.robot()._parts.drive_controller
+    context = drive.GetMyContextFromRoot(sim.context)
+    request, mode = drive.GetInputPort("request"), drive._mode
+
+    def least(read) -> float:
+        return min(timeit.repeat(read, number=reads, repeat=repeats)) / reads * 1e6
+
+    return {"request_input": least(lambda: request.Eval(context).seq),
+            "state_number": least(lambda: context.get_discrete_state(mode)[0])}
+
+
 def measure_step_counts(seconds: float = 3.0) -> dict:
     """Simulator steps per simulated second of the default scene driving (`_event_cases`),
     under the default (CENIC) and SAP at 10 ms: the same on every machine."""
@@ -242,6 +263,7 @@ MEASUREMENTS = {
     "wheel-turn": measure_wheel_turn,
     "event-times": measure_event_times,
     "step-counts": measure_step_counts,
+    "hot-reads": measure_hot_reads,
 }
 
 

@@ -347,6 +347,12 @@ def render_step_counts(outs) -> str:
             f"unless a row adds IR):\n\n" + "\n".join(lines))
 
 
+def render_hot_reads(outs) -> str:
+    m = json_output(outs)
+    return (f"an abstract input costs {m['request_input']:.2f} us and a discrete state number "
+            f"{m['state_number']:.2f} us")
+
+
 def render_bench_ir(outs) -> str:
     o = outs[0][0]
     text = "\n".join(line for line in o.stdout.splitlines() if not line.startswith(

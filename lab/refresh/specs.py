@@ -149,6 +149,8 @@ def _performance_specs(c: SimpleNamespace) -> list[Spec]:
              r.render_unit_costs, TIMING, 150),
         Spec("event-times", "docs/performance.md", (measure_command("event-times"),),
              r.render_event_times, TIMING, 70),
+        Spec("hot-reads", "docs/performance.md", (measure_command("hot-reads"),),
+             r.render_hot_reads, TIMING, 20),
         Spec("step-counts", "docs/performance.md", (measure_command("step-counts"),),
              r.render_step_counts, DETERMINISTIC, 15),
         Spec("tire-grip", "docs/tuning.md",
