@@ -40,6 +40,12 @@ def ended_command(robot: str, seq: int, sim) -> CommandResult | None:
     return None if result.end_time is None else result
 
 
+def frame_time(robot: str, sim, camera: str | None = None) -> float:
+    """Simulated time (s) of the latest frame the robot's camera (default: its front camera)
+    has rendered, without fetching it; NaN before the first."""
+    return sim.robot(robot).camera_image_time(camera)
+
+
 def grab_frame(robot: str, sim, camera: str | None = None) -> tuple[float, float, Any]:
     """(sim time, frame time, RGB uint8 image h x w x 3) of the latest frame of the robot's
     camera (default: its front camera); (sim time, NaN, None) before the first."""

@@ -596,6 +596,35 @@ def test_each_camera_is_served_at_its_own_routes():
     assert runner.error is None
 
 
+def test_a_cameras_description_has_its_latest_frame_time_before_any_fetch():
+    """`GET .../camera` reports the latest frame the camera has rendered, which advances with
+    the simulation, though no one has fetched a frame."""
+    from fastapi.testclient import TestClient
+
+    from conftest import TWO_CAMERAS
+    from corobot_drake.config.scenario import load_scenario
+    from corobot_drake.resources import DEFAULT_SCENARIO
+    from corobot_drake.serving.runner import SimRunner
+    from corobot_drake.serving.webapp import create_app
+    from corobot_drake.simulation import Simulation
+
+    scenario = load_scenario(DEFAULT_SCENARIO, overrides=[TWO_CAMERAS])
+    runner = SimRunner(lambda: Simulation(scenario)).start()
+    try:
+        with TestClient(create_app(runner), base_url="http://127.0.0.1") as client:
+            first = client.get(f"{ROBOT}/camera").json()["latest_frame_time"]
+            assert first is not None and first >= 0
+            deadline = time.monotonic() + 30
+            while client.get("/simulation").json()["time"] < first + 0.2:
+                assert time.monotonic() < deadline, "the simulation stopped advancing"
+                time.sleep(0.05)
+            later = client.get(f"{ROBOT}/cameras/rear").json()["latest_frame_time"]
+            assert later > first
+    finally:
+        runner.stop()
+    assert runner.error is None
+
+
 def test_transport_carries_calls_watches_and_snapshots():
     """`RemoteRunner` over a pipe to `SimSide` is the `Runner` that `SimRunner` is: same
     robots, calls answered (exceptions too), watches resolved when the command log says the

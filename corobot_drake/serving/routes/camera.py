@@ -22,21 +22,28 @@ from corobot_drake.serving.routes.backend import (
     camera_path,
     json_response,
 )
+from corobot_drake.serving.snapshots import jsonable
 
 router = APIRouter(tags=["webcam"])
 
 CameraInterval = Annotated[int, Query(ge=20, le=60000, description="refresh interval, ms")]
 
 
-def describe(backend: Backend, robot: str, camera: str) -> Response:
-    """The camera's description: its frames' and page's URLs, the latest frame's time."""
+async def describe(backend: Backend, robot: str, camera: str) -> Response:
+    """The camera's description: its frames' and page's URLs, the time of the latest frame
+    the camera has rendered (asked of the simulation: fetched or not; null before the first,
+    or the last one fetched once the simulation has stopped)."""
     backend.camera(robot, camera)
     base = f"/robots/{robot}/{camera_path(camera)}"
+    try:
+        latest = await backend.in_sim(partial(calls.frame_time, robot, camera=camera))
+    except HTTPException:  # the simulation is not running
+        latest = backend.frames.latest_time(f"{robot}/{camera}")
     return json_response({"robot": robot, "camera": camera,
                           "frame_png_url": f"{base}/frame.png",
                           "frame_jpeg_url": f"{base}/frame.jpg", "page_url": f"{base}/page",
                           "max_rate_hz": CAMERA_MAX_RATE,
-                          "latest_frame_time": backend.frames.latest_time(f"{robot}/{camera}")})
+                          "latest_frame_time": jsonable(latest)})
 
 
 async def frame_response(backend: Backend, robot: str, camera: str, fmt: str) -> Response:
@@ -67,7 +74,7 @@ def page(backend: Backend, robot: str, camera: str, interval: int) -> HTMLRespon
 @router.get("/robots/{robot}/camera", responses=schemas.ERRORS,
             summary="The front camera: its description and the latest frame's URLs")
 async def camera(robot: str, backend: BackendDep):
-    return describe(backend, robot, FRONT_CAMERA)
+    return await describe(backend, robot, FRONT_CAMERA)
 
 
 @router.get("/robots/{robot}/camera/frame.png", responses=schemas.ERRORS,
@@ -92,7 +99,7 @@ async def camera_page(robot: str, backend: BackendDep, interval: CameraInterval 
 @router.get("/robots/{robot}/cameras/{camera}", responses=schemas.ERRORS,
             summary="A camera: its description and the latest frame's URLs")
 async def named_camera(robot: str, camera: str, backend: BackendDep):
-    return describe(backend, robot, camera)
+    return await describe(backend, robot, camera)
 
 
 @router.get("/robots/{robot}/cameras/{camera}/frame.png", responses=schemas.ERRORS,
