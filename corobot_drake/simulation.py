@@ -35,6 +35,7 @@ from corobot_drake.config.placement import Owner, Problem, overlap_problems
 from corobot_drake.config.poses import ground_pose, transform_from
 from corobot_drake.config.sensors import FRONT_CAMERA
 from corobot_drake.config.validate import check_scenario
+from corobot_drake.names import unknown_robot
 from corobot_drake.readings import (
     BodyPose,
     BodyVelocity,
@@ -727,7 +728,7 @@ class Simulation:
         try:
             return self.robots[name]
         except KeyError:
-            raise KeyError(f"no robot named {name!r}; robots: {', '.join(self.robots)}") from None
+            raise KeyError(unknown_robot(name, self.robots)) from None
 
     def _set_initial_velocities(self) -> None:
         """The scenario's robot and free-body velocities, the robots' wheel angles and

@@ -42,6 +42,7 @@ from corobot_drake.config.sensors import IrSensorConfig, default_cameras, defaul
 from corobot_drake.limits import OneOf, Range, bounded
 from corobot_drake.model import dimensions as dim
 from corobot_drake.model.sdf import VISUALS, WheelContact
+from corobot_drake.names import did_you_mean
 
 # --- shapes -----------------------------------------------------------------------------
 
@@ -447,12 +448,30 @@ def load_scenario(filename: str | Path | None = None, *, data: str | None = None
         layers.append(("<scenario text>", data, Path.cwd()))
     layers += [("--override", text, Path.cwd()) for text in overrides]
     for i, (source, text, base) in enumerate(layers):
-        scenario, checks = load_layer(source, text, Scenario, scenario)
-        resolve_paths(scenario, base)
-        checks.validate(scenario, final=i == len(layers) - 1)  # what the types cannot say
+        before = list(scenario.robots)
+        try:
+            scenario, checks = load_layer(source, text, Scenario, scenario)
+            resolve_paths(scenario, base)
+            checks.validate(scenario, final=i == len(layers) - 1)  # what the types cannot say
+        except ScenarioError as e:
+            raise _new_robot_hint(e, before) from None
     if layers:  # the merged scenario passed every check: `Simulation` need not repeat them
         mark_checked(scenario)
     return scenario
+
+
+def _new_robot_hint(error: ScenarioError, before: list[str]) -> ScenarioError:
+    """`error`, saying "did you mean" when the robot its field names is new in this layer and
+    close to one the layers below have: a misspelt name in an override adds a robot, which
+    then fails as a robot (starts inside the one it meant, lacks a field)."""
+    parts = error.field.split(".")
+    if len(parts) < 2 or parts[0] != "robots" or parts[1] in before:
+        return error
+    hint = did_you_mean(parts[1], before)
+    if not hint:
+        return error
+    return ScenarioError(error.source, error.field, f"{error.message}; {parts[1]!r} adds a "
+                         f"robot{hint}", error.line)
 
 
 def resolve_path(path: str, base: Path) -> str:

@@ -25,6 +25,7 @@ from typing import Any
 
 import httpx
 
+from corobot_drake.names import unknown_robot
 from corobot_drake.readings import BodyPose, BodyVelocity, CommandResult, IrReading
 
 
@@ -103,8 +104,7 @@ class CorobotClient:
         try:
             return self.robots[name]
         except KeyError:
-            raise KeyError(f"no robot named {name!r}; robots: {', '.join(self.robots)}") \
-                from None
+            raise KeyError(unknown_robot(name, self.robots)) from None
 
     @property
     def time(self) -> float:

@@ -16,6 +16,7 @@ from fastapi.responses import Response
 
 from corobot_drake import commands
 from corobot_drake.config.sensors import FRONT_CAMERA
+from corobot_drake.names import unknown_robot
 from corobot_drake.serving.frames import FrameCache
 from corobot_drake.serving.operations import Operations
 from corobot_drake.serving.runner import Runner, SimulationStoppedError
@@ -60,8 +61,7 @@ class Backend:
         """The named robot's info; 404 naming the robots if there is none."""
         info = self.runner.robots.get(name)
         if info is None:
-            raise HTTPException(404, f"no robot named {name!r}; robots: "
-                                f"{', '.join(self.robot_names)}")
+            raise HTTPException(404, unknown_robot(name, self.robot_names))
         return info
 
     def snapshot_of(self, robot: str) -> dict:
