@@ -217,6 +217,9 @@ class _SchemaWalk:
         if tp is str:
             if not isinstance(node, yaml.ScalarNode):
                 self.fail(node, path, f"expected text, got a {_kind(node)}")
+            if node.tag in _NOT_TEXT:  # the typed load would refuse it without a line
+                self.fail(node, path, f"expected text, got {_plain(node)}; quote it for "
+                          f"text: '{node.value}'")
             return
         origin, args = typing.get_origin(tp), typing.get_args(tp)
         if origin in (list, typing.List):  # noqa: UP006
@@ -256,6 +259,8 @@ class _SchemaWalk:
             if isinstance(node, yaml.ScalarNode) and node.value in ("", "null", "~"):
                 return
             return self.check(node, options[0], path)
+        if str in options and node.tag in _NOT_A_SCALAR:  # not one of bool, int, float, str
+            self.fail(node, path, f"expected {_variants_text(options)}, got {_plain(node)}")
         tag = node.tag[1:] if node.tag.startswith("!") else None
         if tag is None:  # untagged: the first variant of the node's kind, as the typed load
             size = _vector_size(options)
@@ -389,6 +394,22 @@ def _untagged_variant(node, options):
             if _reads(option, node.value):
                 return option
     return same_kind[0]
+
+
+_NOT_TEXT = {"tag:yaml.org,2002:null": "null", "tag:yaml.org,2002:bool": "true or false",
+             "tag:yaml.org,2002:int": "a number", "tag:yaml.org,2002:float": "a number",
+             "tag:yaml.org,2002:timestamp": "a date"}
+"""The tags YAML gives a plain (unquoted) scalar that does not load as text: what the typed
+load makes of it, in words."""
+
+
+def _plain(node) -> str:
+    """A plain scalar that does not load as text, in words: `null`, `a date ('2026-01-01')`."""
+    word = _NOT_TEXT[node.tag]
+    return word if node.value == word else f"{word} ({node.value!r})"
+
+
+_NOT_A_SCALAR = ("tag:yaml.org,2002:null", "tag:yaml.org,2002:timestamp")
 
 
 def _reads(tp, text: str) -> bool:

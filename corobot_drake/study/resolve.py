@@ -21,6 +21,7 @@ from corobot_drake.config.bounds import DRAKE_BOUNDS
 from corobot_drake.config.scenario import ScenarioError, load_scenario, one_line
 from corobot_drake.config.validate import LayerChecks
 from corobot_drake.limits import Range, bound_of
+from corobot_drake.study.programs import PROGRAMS
 from corobot_drake.study.spec import (
     Choice,
     Normal,
@@ -64,6 +65,7 @@ def check_against_scenario(study: Study, study_file: str | Path, checks: LayerCh
     from corobot_drake.study.runner import run_scenario
 
     base = base_scenario(study, study_file, checks)
+    _check_program_robots(study, base, checks)
     file = scenario_path(study, study_file)
     first = Run(0, seeds(study)[0], 0, ())
     start = run_scenario(study, file, first, base)  # the programs' scripts in place
@@ -87,6 +89,25 @@ def check_against_scenario(study: Study, study_file: str | Path, checks: LayerCh
             except (ScenarioError, ValueError, TypeError) as e:
                 text = f"{e.field}: {e.message}" if isinstance(e, ScenarioError) else one_line(e)
                 checks.fail(where, f"with {value!r}: {text}")
+
+
+def _check_program_robots(study: Study, base, checks: LayerChecks) -> None:
+    """Each program's `robot` (its grid and `!Choice` values too) names a robot of the
+    scenario a run starts from; else fails at that value's line."""
+    for name in PROGRAMS:
+        program = getattr(study, name)
+        if program is None:
+            continue
+        path = f"{name}.robot"
+        named = [(path, program.robot)]
+        named += [(f"grid.{path}[{i}]", v) for i, v in enumerate(study.grid.get(path, []))]
+        if isinstance(study.random.get(path), Choice):
+            named += [(f"random.{path}.values[{i}]", v)
+                      for i, v in enumerate(study.random[path].values)]
+        for where, robot in named:
+            if robot not in base.robots:  # at the program's line when `robot` is its default
+                checks.fail(where, f"the scenario has no robot {robot!r}; it has: "
+                            + (", ".join(base.robots) or "none"))
 
 
 def _values(section: str, values, tp, where: str, checks: LayerChecks):

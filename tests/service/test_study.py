@@ -132,6 +132,18 @@ S = f"scenario: {DEFAULT_SCENARIO}\n"
      r"grid.drive_test.loops: loops: expected an integer, got 2.5"),
     (S + "drive_test: {}\nbox_approach: {}\n", r":3: box_approach: a study has a drive_test or "
      r"a box_approach, not both"),
+    # a program's robot, and each grid value of it, is one of the scenario's
+    (S + "drive_test: {robot: nobody}\n",
+     r":2: drive_test.robot: the scenario has no robot 'nobody'; it has: corobot"),
+    (S + "box_approach: {}\ngrid:\n  box_approach.robot:\n    - corobot\n    - nobody\n",
+     r":6: grid.box_approach.robot\[1\]: the scenario has no robot 'nobody'"),
+    # a grid value YAML reads as null or a date (no scalar a field takes), at its line
+    (S + "grid:\n  robots.corobot.drive.motor_torque_scaling: [10.0, fast, null, true]\n",
+     r":3: grid.robots.corobot.drive.motor_torque_scaling\[2\]: expected true or false, an "
+     r"integer, a number or text, got null$"),
+    (S + "grid:\n  robots.corobot.drive.motor_torque_scaling:\n    - 10.0\n    - 2026-01-01\n",
+     r":5: grid.robots.corobot.drive.motor_torque_scaling\[1\]: .* got a date \('2026-01-01'\)"),
+    (S + "until: 5\n", r":2: until: expected text, got a number \('5'\); quote it for text"),
     # user metrics: module:function, loaded at load
     (S + "metrics: [x, no_such_module:f]\n",
      r"metrics\[1\]: no_such_module:f: cannot import 'no_such_module' \(No module named"),
@@ -147,6 +159,20 @@ def test_a_study_is_checked_against_its_scenario_at_load(tmp_path, text, expecte
     message = str(e.value)
     assert message.startswith(str(path)) and "\n" not in message
     assert re.search(expected, message), message
+
+
+def test_the_command_line_ends_a_study_wrong_for_its_scenario_in_one_line(tmp_path, capsys):
+    """A program's robot the scenario lacks is found as the study loads (it was a ValueError
+    out of the command line): one line naming the file, the line and the field, exit 2."""
+    from corobot_drake.study.__main__ import main
+
+    path = tmp_path / "bad.yaml"
+    path.write_text(S + "duration: 0.3\ndrive_test: {robot: nobody}\n")
+    assert main([str(path), "--out", str(tmp_path / "out"), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert err == (f"error: {path}:3: drive_test.robot: the scenario has no robot 'nobody'; "
+                   "it has: corobot\n")
+    assert not (tmp_path / "out").exists()
 
 
 USER_METRICS = """\
