@@ -40,8 +40,9 @@ if ENV_ID not in gymnasium.registry:
 
 
 def load_policy(path=None):
-    """The shipped policy (or the one saved at `path`): a callable observation -> action,
-    with a `reset()` to call at every env reset (it remembers the episode's IR hits)."""
+    """The shipped policy (or the one saved at `path`): a callable observation -> action. It
+    remembers the episode's IR hits and forgets them by itself at an episode's first
+    observation, so any loop plays it (its `reset()` forgets too)."""
     from corobot_drake.gym.policy import load
 
     return load(path)

@@ -17,8 +17,10 @@ step it
   toward it (`turn_gain`) and driving forward as it comes into line (`speed`, falling to 0 at
   `align` rad off), or backward when the point is behind (`reverse`).
 
-Only observations and its own state (no simulator state). `reset()` forgets: call it at every
-env reset (`rollouts.run_episode` does). Its parameters are what `train.py` tunes.
+Only observations and its own state (no simulator state). It forgets by itself at an
+episode's first observation (`starts_episode`), so any loop gets its score, a plain Gymnasium
+one included; `reset()` forgets too (`rollouts.run_episode` calls it). Its parameters are what
+`train.py` tunes.
 """
 
 from __future__ import annotations
@@ -48,6 +50,9 @@ SEGMENT_CHECKS = 4
 """Points checked for blocked cells along the way to each lookahead point."""
 REVERSE_HYSTERESIS = 0.3
 """rad between starting and ending a backward drive (see `DetourParameters.reverse`)."""
+GOAL_JUMP_SPEED = 2.0
+"""m/s: a goal distance changing faster than this between two calls (over three times the
+robot's top speed) is a new episode's goal."""
 
 
 @dc.dataclass(frozen=True)
@@ -211,6 +216,19 @@ class DetourPolicy:
         self._map: CostMap | None = None
         self._chosen: float | None = None  # rad, goal frame: the last heading chosen
         self._backward = False
+        self._last: tuple[float, bool] | None = None  # the last call's goal distance, at rest
+
+    def starts_episode(self, distance: float, speed: float, yaw_rate: float) -> bool:
+        """Whether an observation (goal distance m, forward speed m/s, yaw rate rad/s) is an
+        episode's first: the robot at rest (both exactly 0, as every env reset leaves it; a
+        driven robot never stops exactly) after a call where it was not, or the goal farther
+        from the last call's than the robot can drive in a control period."""
+        if self._last is None:
+            return True
+        last_distance, was_at_rest = self._last
+        at_rest = speed == 0.0 and yaw_rate == 0.0
+        return ((at_rest and not was_at_rest)
+                or abs(distance - last_distance) > GOAL_JUMP_SPEED * self.control_period)
 
     # --- training's vector form -----------------------------------------------------------
     @classmethod
@@ -224,10 +242,13 @@ class DetourPolicy:
     def __call__(self, observation) -> np.ndarray:
         obs = np.asarray(observation["state"] if isinstance(observation, dict) else observation,
                          dtype=float)
-        distance, bearing, _, yaw_rate = obs[NUM_RAYS:NUM_RAYS + 4]
+        distance, bearing, speed, yaw_rate = map(float, obs[NUM_RAYS:NUM_RAYS + 4])
+        if self.starts_episode(distance, speed, yaw_rate):
+            self.reset()
+        self._last = (distance, speed == 0.0 and yaw_rate == 0.0)
         if self._yaw_rate is not None:
             self._heading += self.control_period * (self._yaw_rate + yaw_rate) / 2
-        self._yaw_rate = float(yaw_rate)
+        self._yaw_rate = yaw_rate
         goal = distance * np.array([math.cos(bearing), math.sin(bearing)])  # robot frame
         rotation = _rotation(self._heading)  # robot frame -> goal-centred frame
         if self._map is None:
@@ -237,8 +258,8 @@ class DetourPolicy:
         if len(hits):
             self._hits.append((hits - goal) @ rotation.T)
             self._map.update(np.concatenate(self._hits), self.parameters)
-        heading = self._choose_heading(-rotation @ goal, rotation, float(bearing))
-        return self._powers(heading, float(yaw_rate))
+        heading = self._choose_heading(-rotation @ goal, rotation, bearing)
+        return self._powers(heading, yaw_rate)
 
     def _ray_hits(self, distances: np.ndarray) -> np.ndarray:
         """Robot-frame points of the rays that hit, each with its `box_depth` behind it."""

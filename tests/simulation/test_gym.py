@@ -203,6 +203,25 @@ def test_shipped_policy_goes_round_a_box_the_hand_written_one_runs_into(env):
         assert episode.success and episode.steps < 55
 
 
+def test_shipped_policy_in_a_plain_gymnasium_loop_plays_as_in_the_projects(env):
+    # A user's loop (and SB3's evaluate_policy) never calls policy.reset(): the policy starts
+    # afresh by itself. Seed 119 after 118 is one it missed when it remembered 118's boxes.
+    wrapped = gymnasium.make(ENV_ID)
+    policy = load_policy()
+    plain = []
+    for seed in (118, 119):
+        obs, _ = wrapped.reset(seed=seed)
+        steps, done = 0, False
+        while not done:
+            obs, _, terminated, truncated, info = wrapped.step(policy(obs))
+            steps, done = steps + 1, terminated or truncated
+        plain.append((info["is_success"], steps, info["goal_distance"]))
+    ours = [(e.success, e.steps, e.final_distance)
+            for e in (run_episode(env, load_policy(), seed) for seed in (118, 119))]
+    assert plain == ours
+    assert plain[1][0]
+
+
 def test_policy_round_trips_through_json(tmp_path):
     policy = LinearPolicy(np.random.default_rng(0).normal(size=(2, 13)))
     policy.save(tmp_path / "p.json", note="test")

@@ -21,12 +21,13 @@ from corobot_drake.model import dimensions as dim
 CLEAR = [dim.IR_MAXIMUM_RANGE] * 12
 
 
-def observation(goal_distance, goal_bearing=0.0, front=None):
-    """A GoToGoal observation at rest: the front rays at `front` m (None: nothing seen)."""
+def observation(goal_distance, goal_bearing=0.0, front=None, speed=0.0, yaw_rate=0.0):
+    """A GoToGoal observation (default at rest): the front rays at `front` m (None: nothing
+    seen)."""
     rays = list(CLEAR)
     if front is not None:
         rays[:6] = [front] * 6
-    return np.array([*rays, goal_distance, goal_bearing, 0.0, 0.0], np.float32)
+    return np.array([*rays, goal_distance, goal_bearing, speed, yaw_rate], np.float32)
 
 
 def test_a_box_seen_ahead_is_avoided_after_it_leaves_the_cone():
@@ -41,6 +42,20 @@ def test_a_box_seen_ahead_is_avoided_after_it_leaves_the_cone():
     # ... which a reset forgets.
     policy.reset()
     left, right = policy(observation(1.5))
+    assert left == pytest.approx(right)
+
+
+def test_the_detour_policy_forgets_by_itself_at_an_episodes_first_observation():
+    policy = DetourPolicy()
+    policy(observation(1.5, front=0.4))  # a box on the way, at rest: the first observation
+    left, right = policy(observation(1.45, speed=0.3, yaw_rate=0.1))  # driving
+    assert abs(left - right) > 0.5  # remembers the box
+    # At rest after driving: a new episode (a reset leaves the robot still) ...
+    left, right = policy(observation(1.45))
+    assert left == pytest.approx(right)
+    # ... and so is a goal farther than a step's drive from the last one, even moving.
+    policy(observation(1.45, front=0.4, speed=0.3))
+    left, right = policy(observation(1.2, speed=0.3))
     assert left == pytest.approx(right)
 
 
