@@ -488,7 +488,8 @@ def _main(args) -> int:
         return 2
     with sinks, _ros2_front(args, scenario) as ros2:
         status = _run(args, scenario, duration, sinks.context, ros2)
-    return status if sinks.finished else max(status, 1)
+    finished = sinks.finished and (ros2 is None or ros2.finished)  # a full disk: one line said
+    return status if finished else max(status, 1)
 
 
 def _run(args, scenario, duration: float, foxglove, ros2=None) -> int:

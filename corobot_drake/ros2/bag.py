@@ -8,7 +8,11 @@ stamp (simulation time), with the QoS the node offers, so that a replay offers t
 
 from __future__ import annotations
 
+import collections
+import contextlib
+import dataclasses as dc
 import queue
+import sys
 import threading
 from pathlib import Path
 
@@ -44,23 +48,57 @@ def _qos(kind: Qos):
 
 
 def bag_problem(path: Path) -> str | None:
-    """Why a bag cannot be written at `path` (it must not exist; its parent must be a
-    writable directory), else None."""
+    """Why a bag cannot be written at `path`, else None: its parent must be a writable
+    directory, its name (with `.mcap`, its MCAP file's) must fit the file system, and it must
+    not exist, not even as a dangling symlink (rosbag2 makes the directory)."""
     import os
+    import stat
 
-    if path.exists():
-        return "exists already: name a new directory (rosbag2 makes it)"
     parent = path.parent
-    if not parent.is_dir():
-        return f"the directory {parent} does not exist"
+    try:
+        if not parent.exists():
+            return f"the directory {parent} does not exist"
+        if not parent.is_dir():
+            mode = parent.stat().st_mode
+            kind = ("a FIFO" if stat.S_ISFIFO(mode) else "a device" if (
+                stat.S_ISCHR(mode) or stat.S_ISBLK(mode)) else "a file")
+            return f"{parent} is {kind}, not a directory"
+        name_max = os.pathconf(parent, "PC_NAME_MAX")
+        size = len(os.fsencode(path.name))
+        if size + len(MCAP_SUFFIX) > name_max:
+            return (f"its name is {size} bytes: with {MCAP_SUFFIX} (its MCAP file's name) it "
+                    f"must fit the file system's {name_max}")
+        if path.is_symlink() and not path.exists():
+            return (f"is a dangling symlink (to {os.readlink(path)}): name a new directory "
+                    "(rosbag2 makes it)")
+        if path.exists():
+            return "exists already: name a new directory (rosbag2 makes it)"
+    except OSError as e:  # a path too long, a loop of symlinks, ...
+        return f"cannot be looked at ({e.strerror})"
     if not os.access(parent, os.W_OK | os.X_OK):
         return f"the directory {parent} is not writable"
     return None
 
 
+MCAP_SUFFIX = ".mcap"
+"""The bag's MCAP file is `<DIR>/<DIR's name>.mcap` (the rosbags writer's naming)."""
+
+
 QUEUE_SIZE = 256
 """Messages waiting for the writer thread; a full queue holds the simulation back (at most
 ~60 MB of camera frames waiting)."""
+
+
+@dc.dataclass(frozen=True)
+class _Kept:
+    """What the MCAP file holds on disk up to `offset` (bytes): its first `chunks` chunks,
+    `counts` messages per connection id, stamped `start` to `end` (ns)."""
+
+    offset: int
+    chunks: int
+    counts: dict
+    start: int
+    end: int
 
 
 class BagSink:
@@ -69,20 +107,46 @@ class BagSink:
 
     The file is written by a thread of its own: the rosbags writer copies each message a few
     times in Python (~1.3 ms a camera frame), which then overlaps the simulation's steps (its
-    C++ runs without the GIL) instead of adding to them."""
+    C++ runs without the GIL) instead of adding to them.
 
-    def __init__(self, path: str | Path):
+    A write that fails (the disk filled) finishes the bag with what is on disk: the MCAP file
+    cut back to its last whole chunk (~1 MiB each), then its index and metadata.yaml for those
+    messages, dropping chunks until they fit; one line says so (`report`), the later
+    messages are dropped, and `failed` is True."""
+
+    def __init__(self, path: str | Path, report=None):
         from rosbags.rosbag2 import StoragePlugin, Writer
 
         self.path = Path(path)
+        self.report = report or (lambda line: print(line, file=sys.stderr, flush=True))
+        self.failed = False
         self._writer = Writer(self.path, version=BAG_VERSION, storage_plugin=StoragePlugin.MCAP)
         self._writer.open()
+        # The MCAP writer's state at each chunk it finishes (written out: flushed), which a
+        # failed write falls back to (`_salvage`).
+        self._storage = self._writer.storage
+        self._kept: list[_Kept] = []
+        close_chunk = self._storage.close_chunk
+
+        def chunk_closed():
+            close_chunk()
+            self._keep()
+
+        self._storage.close_chunk = chunk_closed
+        self._keep()
         self._connections: dict = {}
         self.messages = 0
         self._queue: queue.Queue = queue.Queue(QUEUE_SIZE)
         self._error: BaseException | None = None
         self._thread = threading.Thread(target=self._drain, name="corobot-rosbag", daemon=True)
         self._thread.start()
+
+    def _keep(self) -> None:
+        storage = self._storage
+        storage.bio.flush()
+        self._kept.append(_Kept(storage.bio.tell(), len(storage.chunks),
+                                dict(storage.channel_stats), storage.message_start_time,
+                                storage.message_end_time))
 
     def declare(self, topic: str, msgtype: str, qos: Qos) -> None:
         self._connections[topic] = self._writer.add_connection(
@@ -92,15 +156,19 @@ class BagSink:
     def write(self, topic: str, data, t_ns: int) -> None:
         if self._error is not None:
             raise self._error
+        if self.failed:
+            return
         self._queue.put((self._connections[topic], t_ns, data))
         self.messages += 1
 
     def _drain(self) -> None:
         while (item := self._queue.get()) is not None:
-            if self._error is None:
+            if self._error is None and not self.failed:
                 try:
                     self._writer.write(*item)
-                except BaseException as e:  # the disk filled: raised in the simulation thread
+                except OSError as e:  # the disk filled: the bag is finished as it stands
+                    self._fail(e)
+                except BaseException as e:  # raised in the simulation thread
                     self._error = e
 
     def close(self) -> None:
@@ -108,7 +176,53 @@ class BagSink:
             return
         self._queue.put(None)
         self._thread.join()
-        self._writer.close()
+        if not self.failed:
+            try:
+                self._writer.close()
+            except OSError as e:
+                self._fail(e)
         self._writer = None
         if self._error is not None:
             raise self._error
+
+    def _fail(self, error: OSError) -> None:
+        self.failed = True
+        kept = self._salvage()
+        problem = f"error: --rosbag: {self.path}: cannot write ({error.strerror or error})"
+        if kept is None:
+            self.report(f"{problem}; its index does not fit either: the bag is incomplete")
+        elif not sum(kept.counts.values()):
+            self.report(f"{problem}; the bag is finished, with no messages")
+        else:
+            self.report(f"{problem}; the bag is finished with the {sum(kept.counts.values())} "
+                        f"messages written before, up to t = {kept.end * 1e-9:.2f} s")
+
+    def _salvage(self) -> _Kept | None:
+        """The bag finished with what the MCAP file holds on disk (`_kept`, the latest that
+        fits with its index and metadata), or None if not even the header's does."""
+        from io import BytesIO
+
+        from rosbags.rosbag2.storage_mcap import PendingChunk
+
+        writer, storage = self._writer, self._storage
+        with contextlib.suppress(OSError):
+            storage.bio.close()  # what its buffer held cannot be written
+        ids = list(storage.channel_stats)
+        for kept in reversed(self._kept):
+            counts = {i: kept.counts.get(i, 0) for i in ids}
+            try:
+                storage.bio = storage.path.open("r+b")
+                storage.bio.truncate(kept.offset)
+                storage.bio.seek(kept.offset)
+                del storage.chunks[kept.chunks:]
+                storage.chunk = PendingChunk(2**63 - 1, 0, BytesIO(), collections.defaultdict(list))
+                storage.channel_stats, writer.counts = dict(counts), dict(counts)
+                storage.message_start_time = writer.min_timestamp = kept.start
+                storage.message_end_time = writer.max_timestamp = kept.end
+                writer.storage = storage
+                writer.close()
+                return kept
+            except OSError:
+                with contextlib.suppress(OSError):
+                    storage.bio.close()
+        return None

@@ -39,7 +39,8 @@ def missing(flag: str, live: bool) -> str | None:
 
 class Ros2Front(contextlib.ExitStack):
     """The node (`args.ros2`) and the bag (`args.rosbag`) of a run, closed on leaving the
-    block (the node shut down, the bag's metadata written); `extras` for the Simulation."""
+    block (the node shut down, the bag's metadata written); `extras` for the Simulation;
+    `finished` once closed."""
 
     def __init__(self, args, robots: list[str]):
         super().__init__()
@@ -48,13 +49,14 @@ class Ros2Front(contextlib.ExitStack):
 
         self.robots = robots
         self.node = None
+        self.bag = None
         sinks = []
         if args.rosbag is not None:
             from corobot_drake.ros2.bag import BagSink
 
-            bag = BagSink(args.rosbag)
-            self.callback(bag.close)
-            sinks.append(bag)
+            self.bag = BagSink(args.rosbag)
+            self.callback(self.bag.close)
+            sinks.append(self.bag)
         if args.ros2:
             from corobot_drake.ros2.node import Ros2Node
 
@@ -63,6 +65,12 @@ class Ros2Front(contextlib.ExitStack):
             sinks.append(self.node.sink)
         self.bus = Bus(sinks)
         self.extras = [partial(add_ros2_topics, self.bus)]
+
+    @property
+    def finished(self) -> bool:
+        """False when the bag could not be written whole (the disk filled: one line said so,
+        and it holds what was written before)."""
+        return self.bag is None or not self.bag.failed
 
     def attach(self, runner) -> None:
         """Joins the node to `runner` (before it starts) and starts it spinning."""

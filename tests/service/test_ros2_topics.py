@@ -345,3 +345,51 @@ def test_rosbag_into_an_existing_directory_is_one_line(tmp_path, capsys):
     assert cli.main(["--headless", "--rosbag", str(tmp_path)]) == 2
     err = capsys.readouterr().err
     assert re.fullmatch(r"error: --rosbag: .*: exists already: name a new directory.*\n", err)
+
+
+def test_rosbag_paths_that_cannot_be_a_bag_are_one_line(tmp_path, capsys):
+    import os
+
+    (tmp_path / "dangling").symlink_to(tmp_path / "gone")
+    os.mkfifo(tmp_path / "fifo")
+    long = tmp_path / ("b" * 300)
+    for path, problem in (
+            (tmp_path / "dangling", f"is a dangling symlink (to {tmp_path / 'gone'}): name a "
+                                    "new directory (rosbag2 makes it)"),
+            (long, "its name is 300 bytes: with .mcap (its MCAP file's name) it must fit the "
+                   "file system's 255"),
+            (tmp_path / "fifo" / "bag", f"{tmp_path / 'fifo'} is a FIFO, not a directory")):
+        assert cli.main(["--headless", "--rosbag", str(path)]) == 2
+        assert capsys.readouterr().err == f"error: --rosbag: {path}: {problem}\n"
+
+
+def test_a_full_disk_finishes_the_bag_with_what_was_written(tmp_path):
+    """A 3 MiB tmpfs (as root; else skipped) that the camera's frames fill in a third of a
+    simulated second: one line, exit status 1, and a bag whose metadata counts the messages
+    its MCAP file holds."""
+    import os
+
+    from rosbags.rosbag2 import Reader
+
+    disk = tmp_path / "disk"
+    disk.mkdir()
+    if os.geteuid() != 0 or subprocess.run(
+            ["mount", "-t", "tmpfs", "-o", "size=3m", "tmpfs", str(disk)],
+            capture_output=True).returncode != 0:
+        pytest.skip("needs root to mount a small tmpfs")
+    try:
+        run = subprocess.run([sys.executable, "-m", "corobot_drake", "--headless", "--duration",
+                              "1", "--rosbag", str(disk / "bag")], capture_output=True,
+                             text=True, timeout=300)
+        with Reader(disk / "bag") as reader:
+            counted = reader.message_count
+            read = sum(1 for _ in reader.messages())
+    finally:
+        subprocess.run(["umount", str(disk)], check=True)
+    assert run.returncode == 1, run.stderr
+    error, = [line for line in run.stderr.splitlines() if line.startswith("error")]
+    assert error.startswith(f"error: --rosbag: {disk / 'bag'}: cannot write (No space left on "
+                            f"device); the bag is finished with the {read} messages written "
+                            "before, up to t = ")
+    assert "Traceback" not in run.stderr
+    assert counted == read > 0
