@@ -25,7 +25,7 @@ from urllib.parse import parse_qs, urlsplit
 
 import foxglove
 
-from corobot_drake.serving.security import Access, host_header_name
+from corobot_drake.serving.security import Access, host_header_name, reachable_host
 
 DEFAULT_PORT = 8765
 """Foxglove's own default."""
@@ -71,9 +71,10 @@ class FoxgloveLive:
 
     @property
     def url(self) -> str:
-        """The URL to open, with the token when there is one."""
-        host = f"[{self.host}]" if ":" in self.host else self.host
-        return f"ws://{host}:{self.port}" + (f"/?token={self.token}" if self.token else "")
+        """The URL to open, with the token when there is one (on every address, 0.0.0.0:
+        its loopback address)."""
+        return (f"ws://{reachable_host(self.host)}:{self.port}"
+                + (f"/?token={self.token}" if self.token else ""))
 
     def stop(self) -> None:
         """Stops the server (idempotent): its clients are disconnected, its port freed."""

@@ -102,6 +102,18 @@ class Access:
         return f"{base}{path}" + (f"#token={self.token}" if self.token else "")
 
 
+def reachable_host(host: str) -> str:
+    """`host` as a URL names it for a client on this machine: a wildcard (0.0.0.0, ::), which
+    no client can connect to, becomes the loopback address of its family; an IPv6 address is
+    bracketed."""
+    host = host.strip("[]")
+    if host in ("0.0.0.0", ""):
+        host = "127.0.0.1"
+    elif host == "::":
+        host = "::1"
+    return f"[{host}]" if ":" in host else host
+
+
 def _is_address(name: str) -> bool:
     try:
         ipaddress.ip_address(name)

@@ -24,7 +24,7 @@ import sys
 import threading
 
 from corobot_drake.limits import LIVE_RUN_LOG_WINDOW
-from corobot_drake.serving.security import is_loopback
+from corobot_drake.serving.security import is_loopback, reachable_host
 
 SWITCH_INTERVAL = 0.001
 """s. Python's GIL hand-over interval in the simulation process while serving. The
@@ -91,10 +91,10 @@ def serve(make_sim, host: str = "127.0.0.1", port: int = 50000, meshcat: bool = 
     if not _started(runner, http, label):
         return 2
     bridge = SimSide(runner, conn)
-    shown = f"http://[{host}]:{value}" if ":" in host else f"http://{host}:{value}"
+    shown = f"http://{reachable_host(host)}:{value}"
     stats, lost = runner.stats(), False
     try:  # a Ctrl-C from the first line printed on stops cleanly
-        _announce(shown, host, access, runner)
+        _announce(shown, host, value, access, runner)
         while http.is_alive() and runner.alive and not bridge.closed.is_set():
             http.join(0.5)  # wakes at once when the HTTP process ends
             stats = runner.stats()
@@ -189,11 +189,18 @@ def _die_with_parent(parent: int | None) -> bool:
     return os.getppid() == parent  # it may have died before the request
 
 
-def _announce(shown: str, host: str, access, runner) -> None:
-    """The lines that say where the server is (and, beyond loopback, the warning)."""
+def _announce(shown: str, host: str, port: int, access, runner) -> None:
+    """The lines that say where the server is (and, beyond loopback, the warning). A server
+    on every address (0.0.0.0) is shown on loopback, and also by this machine's name, which
+    other machines may reach it by (any of its addresses does too)."""
+    import socket
+
     print(f"serving {shown}", flush=True)
     print(f"  dashboard {access.page_url(shown)}  services {shown}/services  API {shown}/docs"
           + (f"  Meshcat {runner.meshcat_url}" if runner.meshcat_url else ""), flush=True)
+    if access.wildcard:
+        print(f"  from other machines {access.page_url(f'http://{socket.gethostname()}:{port}')}"
+              "  (or any of this machine's addresses)", flush=True)
     if access.token:
         print(f"  token {access.token}  (send 'Authorization: Bearer <token>'; the dashboard "
               "link carries it)", flush=True)

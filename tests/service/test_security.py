@@ -9,6 +9,7 @@ TestClient; one test runs the real server on 0.0.0.0 in a child process.
 
 import re
 import signal
+import socket
 import threading
 import time
 
@@ -196,6 +197,16 @@ def test_serving_on_every_address_prints_a_token_and_enforces_it(tmp_path):
         assert token and len(token) >= 32
         dashboard = next(line.split()[1] for line in s.lines if line.startswith("  dashboard"))
         assert dashboard.endswith(f"/dashboard#token={token}")
+        # Printed URLs are reachable ones (no client connects to 0.0.0.0): loopback, and
+        # this machine's name for the others, each answered.
+        port = s.url.rpartition(":")[2]
+        assert s.url == f"http://127.0.0.1:{port}" and dashboard.startswith(s.url)
+        other = next(line.split()[3] for line in s.lines
+                     if line.startswith("  from other machines "))
+        assert other == f"http://{socket.gethostname()}:{port}/dashboard#token={token}"
+        assert httpx.get(f"{s.url}{ROBOT}/drive", headers={
+            "Authorization": f"Bearer {token}", "Host": f"{socket.gethostname()}:{port}"}
+        ).status_code == 200
         assert httpx.get(f"{s.url}{ROBOT}/drive").status_code == 401
         with CorobotClient(dashboard) as sim:  # the printed URL carries the token
             sim.robot().all_stop()
@@ -224,3 +235,16 @@ def test_serving_on_every_address_prints_a_token_and_enforces_it(tmp_path):
     assert answers and answers[0].status_code == 503, answers
     assert answers[0].json()["detail"] == "the simulation stopped"
     assert "warning: serving on 0.0.0.0" in stderr.read_text()
+
+
+def test_the_foxglove_server_on_every_address_prints_a_reachable_url():
+    """`--foxglove` on 0.0.0.0 prints a loopback URL (no client connects to 0.0.0.0)."""
+    pytest.importorskip("foxglove")
+    from corobot_drake.recording.foxglove_live import FoxgloveLive
+
+    with FoxgloveLive(port=0, host="0.0.0.0") as live:
+        assert live.url == f"ws://127.0.0.1:{live.port}/?token={live.token}"
+    from corobot_drake.serving.security import reachable_host
+
+    assert [reachable_host(h) for h in ("0.0.0.0", "::", "[::]", "::1", "10.0.0.5", "box")] == [
+        "127.0.0.1", "[::1]", "[::1]", "[::1]", "10.0.0.5", "box"]

@@ -119,6 +119,11 @@ def test_openapi_document_is_served_and_valid(http):
 def test_pages_are_served(http):
     for path in ("/dashboard", "/static/dashboard.js", "/static/style.css"):
         assert http.get(path).status_code == 200, path
+    icon = http.get("/favicon.ico")  # what browsers ask for, and what the pages link
+    assert icon.status_code == 200 and icon.headers["content-type"] == "image/svg+xml"
+    assert icon.content.startswith(b"<svg ")
+    for page in ("/dashboard", f"{ROBOT}/camera/page", "/services?format=html"):
+        assert '<link rel="icon" href="/favicon.ico"' in http.get(page).text, page
     assert http.get("/", follow_redirects=False).status_code in (302, 307)
 
 

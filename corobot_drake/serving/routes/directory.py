@@ -6,7 +6,7 @@ from __future__ import annotations
 import html
 
 from fastapi import APIRouter, HTTPException, Request
-from fastapi.responses import HTMLResponse, RedirectResponse
+from fastapi.responses import FileResponse, HTMLResponse, RedirectResponse
 
 from corobot_drake.serving import schemas
 from corobot_drake.serving.routes.backend import STATIC_DIR, BackendDep, json_response
@@ -17,6 +17,13 @@ router = APIRouter()
 @router.get("/", include_in_schema=False)
 async def root():
     return RedirectResponse("/dashboard")
+
+
+@router.get("/favicon.ico", include_in_schema=False)
+async def favicon():
+    """The pages' icon (SVG: every current browser takes one, whatever its path)."""
+    return FileResponse(STATIC_DIR / "favicon.svg", media_type="image/svg+xml",
+                        headers={"Cache-Control": "max-age=86400"})
 
 
 @router.get("/dashboard", response_class=HTMLResponse, tags=["pages"],
@@ -78,7 +85,8 @@ def directory_html(entries: list[dict], meshcat_url: str | None) -> str:
     meshcat = (f' | <a href="{html.escape(meshcat_url)}">Meshcat</a>' if meshcat_url else "")
     return f"""<!doctype html>
 <html><head><meta charset="utf-8"><title>Service directory - corobot-drake</title>
-<link rel="stylesheet" href="/static/style.css"></head>
+<link rel="stylesheet" href="/static/style.css">
+<link rel="icon" href="/favicon.ico" type="image/svg+xml"></head>
 <body><h1>Service directory</h1>
 <p><a href="/dashboard">Dashboard</a> | <a href="/simulation">Simulation</a> |
 <a href="/docs">API docs</a> | <a href="/openapi.json">OpenAPI</a>{meshcat}</p>
