@@ -1,10 +1,11 @@
 """The metrics registry: named measurements of one robot at the end of a run.
 
-A metric is one small function `(RobotRun) -> value`, registered with `@metric("name")`. A
-value is a number or text (one column `<robot>.<name>`), or a dict of them (one column per key,
-`<robot>.<name>.<key>`). Adding a metric is writing one such function here (`reads_ir=True`
-if it reads the IR sensors, which a study's runs otherwise switch off), or in a module of your
-own, named in a study as `module:function` (`load_user_metrics`).
+A metric is one small function `(RobotRun) -> value`, registered with `@metric("name",
+"unit")`. A value is a number or text (one column `<robot>.<name>`), or a dict of them (one
+column per key, `<robot>.<name>.<key>`). Adding a metric is writing one such function here
+(`reads_ir=True` if it reads the IR sensors, which a study's runs otherwise switch off;
+`needs_seconds` if a shorter run cannot give it), or in a module of your own, named in a study
+as `module:function` (`load_user_metrics`; its `unit` attribute labels its plots).
 """
 
 from __future__ import annotations
@@ -40,15 +41,34 @@ class RobotRun:
 
 READS_IR: set[str] = set()
 """The metrics that read the IR sensors: a study's runs scan only when one is asked for."""
+UNITS: dict[str, str] = {}
+"""Each registered metric's unit (its values', per key for a mapping): the plots' axes."""
+NEEDS_SECONDS: dict[str, float] = {}
+"""The simulated s a run must last for the metric to mean anything (a study whose runs are
+shorter is refused as it loads)."""
 
 
-def metric(name: str, reads_ir: bool = False):
+def metric(name: str, unit: str = "", reads_ir: bool = False, needs_seconds: float = 0.0):
+    """Registers a metric `name` whose values are in `unit` ("" for text)."""
     def register(fn):
         METRICS[name] = fn
+        UNITS[name] = unit
         if reads_ir:
             READS_IR.add(name)
+        if needs_seconds:
+            NEEDS_SECONDS[name] = needs_seconds
         return fn
     return register
+
+
+def unit_of(column: str, names: Iterable[str], user: dict[str, Callable] | None = None) -> str:
+    """The unit of a row's metric column `<robot>.<metric>[.<key>]` of one of `names` (the
+    study's metrics): the registry's, or a user metric's `unit` attribute, else ""."""
+    rest = column.partition(".")[2]
+    for name in sorted(names, key=len, reverse=True):  # `ir` must not take `ir_x`'s column
+        if rest == name or rest.startswith(name + "."):
+            return UNITS.get(name) or str(getattr((user or {}).get(name), "unit", ""))
+    return ""
 
 
 def load_user_metrics(names: Iterable[str], directory: str | Path) -> dict[str, Callable]:
@@ -87,38 +107,38 @@ def reads_ir(names: Iterable[str], functions: dict[str, Callable] | None = None)
                for name in names)
 
 
-@metric("x")
+@metric("x", "m")
 def _x(run: RobotRun) -> float:
     """Final chassis x in the world, m."""
     return run.robot.pose().x
 
 
-@metric("y")
+@metric("y", "m")
 def _y(run: RobotRun) -> float:
     """Final chassis y in the world, m."""
     return run.robot.pose().y
 
 
-@metric("yaw_deg")
+@metric("yaw_deg", "deg")
 def _yaw_deg(run: RobotRun) -> float:
     """Final heading, degrees in (-180, 180]."""
     return math.degrees(run.robot.pose().yaw)
 
 
-@metric("distance_from_start")
+@metric("distance_from_start", "m")
 def _distance_from_start(run: RobotRun) -> float:
     """Straight-line distance from the start position, m."""
     p = run.robot.pose()
     return math.hypot(p.x - run.start.x, p.y - run.start.y)
 
 
-@metric("speed")
+@metric("speed", "m/s")
 def _speed(run: RobotRun) -> float:
     """Final forward speed, m/s."""
     return run.robot.velocity().forward
 
 
-@metric("yaw_rate")
+@metric("yaw_rate", "rad/s")
 def _yaw_rate(run: RobotRun) -> float:
     """Final yaw rate, rad/s."""
     return run.robot.velocity().yaw_rate
@@ -128,7 +148,7 @@ WINDOW = 1.0
 """s: the window of the `steady_*` metrics, the run's last second."""
 
 
-@metric("steady_speed")
+@metric("steady_speed", "m/s", needs_seconds=WINDOW)
 def _steady_speed(run: RobotRun) -> float:
     """Mean forward speed over the run's last `WINDOW` s (the displacement along the mean
     heading over the window's length), m/s: a steady speed without a sample's noise."""
@@ -139,7 +159,7 @@ def _steady_speed(run: RobotRun) -> float:
     return float(dx * math.cos(heading) + dy * math.sin(heading)) / _span(rows)
 
 
-@metric("steady_yaw_rate")
+@metric("steady_yaw_rate", "rad/s", needs_seconds=WINDOW)
 def _steady_yaw_rate(run: RobotRun) -> float:
     """Mean yaw rate over the run's last `WINDOW` s, rad/s (the heading unwrapped sample to
     sample: any number of turns)."""
@@ -161,45 +181,45 @@ def _span(rows) -> float:
     return float(rows[-1, 0] - rows[0, 0])
 
 
-@metric("max_tilt_deg")
+@metric("max_tilt_deg", "deg")
 def _max_tilt_deg(run: RobotRun) -> float:
     """Largest tilt from upright during the run, degrees."""
     return run.robot.max_tilt_deg()
 
 
-@metric("ir", reads_ir=True)
+@metric("ir", "m", reads_ir=True)
 def _ir(run: RobotRun) -> dict[str, float]:
     """Final raw reading of each IR sensor, m."""
     return run.robot.ir_distances()
 
 
-@metric("wheel_loads")
+@metric("wheel_loads", "N")
 def _wheel_loads(run: RobotRun) -> dict[str, float]:
     """Final load on each wheel (N, vertical contact force), by wheel name."""
     return run.robot.wheel_loads()
 
 
-@metric("wheel_slip")
+@metric("wheel_slip", "ratio")
 def _wheel_slip(run: RobotRun) -> dict[str, float]:
     """Final longitudinal slip ratio of each wheel ((rim - ground speed) / the faster, +
     traction, `systems.contact`), by wheel name."""
     return run.robot.wheel_slip_ratio()
 
 
-@metric("wheel_slip_angle")
+@metric("wheel_slip_angle", "deg")
 def _wheel_slip_angle(run: RobotRun) -> dict[str, float]:
     """Final slip angle of each wheel, deg (+ moving to the left of the heading), by wheel
     name."""
     return run.robot.wheel_slip_angle()
 
 
-@metric("min_tip_margin_deg")
+@metric("min_tip_margin_deg", "deg")
 def _min_tip_margin_deg(run: RobotRun) -> float:
     """Least tip-over margin during the run, deg (`systems.stability`; from the run log)."""
     return run.robot.min_tip_margin_deg()
 
 
-@metric("odometry_error")
+@metric("odometry_error", "m")
 def _odometry_error(run: RobotRun) -> float:
     """Final distance of the dead-reckoned position (`Robot.odometry()`) from the true one, m."""
     odometry, pose = run.robot.odometry(), run.robot.pose()
@@ -213,14 +233,14 @@ def _command_status(run: RobotRun) -> dict[str, str]:
             for i, r in enumerate(run.robot.command_log())}
 
 
-@metric("command_duration")
+@metric("command_duration", "s")
 def _command_duration(run: RobotRun) -> dict[str, float]:
     """Each ended command's duration, simulated s (NaN while running), by index."""
     return {str(i): (r.end_time - r.start_time) if r.end_time is not None else math.nan
             for i, r in enumerate(run.robot.command_log())}
 
 
-@metric("landing_error")
+@metric("landing_error", "mm (drive) or deg (rotate)")
 def _landing_error(run: RobotRun) -> dict[str, float]:
     """Each DriveDistance's (mm) and RotateDegrees' (deg) landing error, by command index:
     measured from the run log at the command's start and at the run's end, so a study with
@@ -244,7 +264,7 @@ def _landing_error(run: RobotRun) -> dict[str, float]:
     return out
 
 
-@metric("drive_test_drift")
+@metric("drive_test_drift", "mm")
 def _drive_test_drift(run: RobotRun) -> dict[str, float]:
     """The drive test's drift (a study with `drive_test`): mm from the start position when each
     loop's last command ended, by loop (1, 2, ...); NaN for a loop that did not end."""
@@ -252,7 +272,7 @@ def _drive_test_drift(run: RobotRun) -> dict[str, float]:
             if row is not None else math.nan for k, row in _loop_ends(run)}
 
 
-@metric("drive_test_heading_error")
+@metric("drive_test_heading_error", "deg")
 def _drive_test_heading_error(run: RobotRun) -> dict[str, float]:
     """The drive test's heading error (deg, wrapped) when each loop's last command ended."""
     return {str(k): math.degrees(math.remainder(row[7] - run.start_heading, 2 * math.pi))

@@ -163,7 +163,7 @@ def load_study(filename: str | Path) -> Study:
 
 def _validate(study: Study, checks: LayerChecks) -> None:
     """Checks of meaning, failing at the field's line (`checks.fail`)."""
-    from corobot_drake.study.metrics import METRICS, load_user_metrics
+    from corobot_drake.study.metrics import METRICS, NEEDS_SECONDS, load_user_metrics
 
     if not study.scenario:
         checks.fail("scenario", "name the scenario file")
@@ -198,6 +198,10 @@ def _validate(study: Study, checks: LayerChecks) -> None:
             load_user_metrics([name], Path(checks.source).parent)
         except ValueError as e:
             checks.fail(f"metrics[{i}]", str(e))
+        if study.duration < NEEDS_SECONDS.get(name, 0.0):  # every run would be an error row
+            checks.fail(f"metrics[{i}]", f"{name} needs runs of at least "
+                        f"{NEEDS_SECONDS[name]:g} s; this study's last {study.duration:g} s "
+                        "(`duration`)")
 
 
 def _check_runs(study: Study, checks: LayerChecks) -> None:

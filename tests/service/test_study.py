@@ -143,6 +143,9 @@ S = f"scenario: {DEFAULT_SCENARIO}\n"
      r"integer, a number or text, got null$"),
     (S + "grid:\n  robots.corobot.drive.motor_torque_scaling:\n    - 10.0\n    - 2026-01-01\n",
      r":5: grid.robots.corobot.drive.motor_torque_scaling\[1\]: .* got a date \('2026-01-01'\)"),
+    # a metric a run of the study's duration cannot give
+    (S + "duration: 0.3\nmetrics: [x, steady_speed]\n",
+     r":3: metrics\[1\]: steady_speed needs runs of at least 1 s; this study's last 0.3 s"),
     (S + "until: 5\n", r":2: until: expected text, got a number \('5'\); quote it for text"),
     # user metrics: module:function, loaded at load
     (S + "metrics: [x, no_such_module:f]\n",
