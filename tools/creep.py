@@ -70,10 +70,15 @@ def main(argv=None) -> int:
         print(f"| {math.degrees(a):.2f} | {r * 1e6:+.2f} | {r * radius * 1e6:+.3f} | "
               f"{r * damping:+.2g} |")
     stable = creep.stable_angles(angles, rates)
-    farthest = max(max(s, angles[-1] - s) for s in stable) if stable else float("nan")
-    print(f"\nstable wheel angles: {', '.join(f'{math.degrees(s):.2f}' for s in stable)} deg "
-          f"(and mirrored about half a facet); unheld, a resting robot rolls at most "
-          f"{farthest * radius * 1000:.2f} mm in all")
+    if stable:
+        farthest = max(max(s, angles[-1] - s) for s in stable)
+        print(f"\nstable wheel angles: {', '.join(f'{math.degrees(s):.2f}' for s in stable)} "
+              f"deg (and mirrored about half a facet); unheld, a resting robot rolls at most "
+              f"{farthest * radius * 1000:.2f} mm in all")
+    else:  # the roll turns back over a fraction of a facet: a coarse map steps over it
+        print(f"\nstable wheel angles: none among the {args.points} mapped angles, "
+              f"{math.degrees(angles[1] - angles[0]):.2f} deg apart (one between two of them "
+              f"goes unseen: more --points map it finer)")
     from_zero = creep.predict(angles, rates, 0.0, seconds)
     start, rotation = creep.worst_prediction(angles, rates, seconds)
     print(f"\npredicted unheld over {args.minutes:g} min: {abs(from_zero) * radius * 1e6:.3g} um "

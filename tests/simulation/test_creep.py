@@ -7,6 +7,7 @@ import math
 import numpy as np
 import pytest
 
+from conftest import load_tool
 from corobot_drake.model.sdf import WheelContact
 from lab import creep
 
@@ -52,3 +53,13 @@ def test_predict_integrates_the_rate_map_to_the_stable_angle():
     assert 0.0 < creep.predict(angles, rates, 0.01, 100) < 1e-3  # ~1e-5 rad/s x 100 s
     # The mirror half: from 0.09 (0.01 before the next facet) it rolls back to 0.07.
     assert creep.predict(angles, rates, 0.09, 1e5) == pytest.approx(-0.02, abs=1e-4)
+
+
+def test_a_map_too_coarse_for_the_stable_angle_says_so(capsys):
+    # 5 angles 0.59 deg apart step over the roll's turn back (at 1.94 deg, 0.43 deg from
+    # half a facet): no stable angle to print, and no distance rolled to it.
+    assert load_tool("creep").main(["--points", "5", "--seconds", "0.1", "--minutes", "1"]) == 0
+    out = capsys.readouterr().out
+    assert "nan" not in out
+    assert ("stable wheel angles: none among the 5 mapped angles, 0.59 deg apart (one between "
+            "two of them goes unseen: more --points map it finer)") in out
