@@ -322,7 +322,10 @@ def run_study(study_file: str | Path, out_dir: str | Path, *, workers: int | Non
         _simulate_all(todo, study, scenario_file, rows, runs_csv, workers, address, progress,
                       user)
     write_rows(runs_csv, rows, study)
-    report.write(out, study, read_rows(runs_csv))
+    from corobot_drake.study.resolve import parameter_units
+
+    report.write(out, study, read_rows(runs_csv), Path(study_file).stem,
+                 parameter_units(study, study_file), user)
     return runs_csv
 
 

@@ -85,22 +85,36 @@ def _file_name(text: str) -> str:
     return re.sub(r"[^A-Za-z0-9_.-]+", "_", text)
 
 
-def plot(out: Path, rows: list[dict], study: Study) -> list[Path]:
+def _label(name: str, unit: str) -> str:
+    return f"{name} ({unit})" if unit else name
+
+
+def plot(out: Path, rows: list[dict], study: Study, name: str = "",
+         units: dict[str, str] | None = None, user: dict | None = None) -> list[Path]:
     """One PNG per metric: against each grid parameter (points, mean line), or a histogram
-    over seeds when the study has no grid."""
+    over seeds when the study has no grid; titled with the study's `name` and the metric,
+    each axis with its unit (the metric's from the registry or the user metric `user[name]`,
+    a parameter's from `units`: `resolve.parameter_units`)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    from corobot_drake.study.metrics import unit_of
+
     ok = [r for r in rows if r["status"] == "ok"]
     written = []
     for metric in metric_columns(ok, study):
         params = list(study.grid) or [None]
-        fig, axes = plt.subplots(1, len(params), figsize=(4.5 * len(params), 3.4),
+        fig, axes = plt.subplots(1, len(params), figsize=(4.5 * len(params), 3.6),
                                  squeeze=False)
+        y_label = _label(metric, unit_of(metric, study.metrics, user))
         for ax, param in zip(axes[0], params, strict=True):
-            _draw(ax, ok, metric, param)
+            x_label = None if param is None else _label(param.split(".")[-1],
+                                                        (units or {}).get(param, ""))
+            _draw(ax, ok, metric, param, x_label, y_label)
+        runs = f"{len(ok)} run{'s' if len(ok) != 1 else ''}"
+        fig.suptitle(f"{name}: {metric} ({runs})" if name else f"{metric} ({runs})")
         fig.tight_layout()
         path = out / "plots" / f"{_file_name(metric)}.png"
         try:
@@ -113,11 +127,12 @@ def plot(out: Path, rows: list[dict], study: Study) -> list[Path]:
     return written
 
 
-def _draw(ax, rows: list[dict], metric: str, param: str | None) -> None:
+def _draw(ax, rows: list[dict], metric: str, param: str | None, x_label: str | None,
+          y_label: str) -> None:
     ys = [_number(r[metric]) for r in rows]
     if param is None:
         ax.hist([y for y in ys if y is not None and math.isfinite(y)], bins="auto")
-        ax.set_xlabel(metric)
+        ax.set_xlabel(y_label)
         ax.set_ylabel("runs")
         return
     labels = sorted({r[param] for r in rows}, key=lambda v: (_number(v) is None, _number(v)
@@ -131,11 +146,13 @@ def _draw(ax, rows: list[dict], metric: str, param: str | None) -> None:
     ax.plot([_number(v) if numeric else position[v] for v in labels], means, "-", color="k")
     if not numeric:
         ax.set_xticks(range(len(labels)), labels)
-    ax.set_xlabel(param.split(".")[-1])
-    ax.set_ylabel(metric)
+    ax.set_xlabel(x_label)
+    ax.set_ylabel(y_label)
 
 
-def write(out: Path, study: Study, rows: list[dict]) -> None:
+def write(out: Path, study: Study, rows: list[dict], name: str = "",
+          units: dict[str, str] | None = None, user: dict | None = None) -> None:
+    """summary.md and the plots (`plot`'s `name`, `units` and `user`)."""
     with writing(out / "summary.md"):
         (out / "summary.md").write_text(summary_markdown(rows, study))
-    plot(out, rows, study)
+    plot(out, rows, study, name, units, user)

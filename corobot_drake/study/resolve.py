@@ -91,6 +91,22 @@ def check_against_scenario(study: Study, study_file: str | Path, checks: LayerCh
                 checks.fail(where, f"with {value!r}: {text}")
 
 
+def parameter_units(study: Study, study_file: str | Path) -> dict[str, str]:
+    """Each grid and random path's unit (its field's bound's; "" for none, or a path that
+    does not resolve), for the plots' axes. For a study `load_study` accepted."""
+    from corobot_drake.study.runner import run_scenario
+
+    start = run_scenario(study, scenario_path(study, study_file), Run(0, seeds(study)[0], 0, ()))
+    units = {}
+    for path in [*study.grid, *study.random]:
+        try:
+            _, bound = field_at(study if path_kind(path) == "program" else start, path)
+        except ValueError:
+            bound = None
+        units[path] = getattr(bound, "unit", "") or ""
+    return units
+
+
 def _check_program_robots(study: Study, base, checks: LayerChecks) -> None:
     """Each program's `robot` (its grid and `!Choice` values too) names a robot of the
     scenario a run starts from; else fails at that value's line."""

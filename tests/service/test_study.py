@@ -178,6 +178,34 @@ def test_the_command_line_ends_a_study_wrong_for_its_scenario_in_one_line(tmp_pa
     assert not (tmp_path / "out").exists()
 
 
+def test_a_study_s_plots_have_a_title_and_units(tmp_path, monkeypatch):
+    """Each plot is titled with the study and the metric; its axes carry the metric's unit
+    (the registry's) and the parameter's (its scenario field's bound's)."""
+    from matplotlib.figure import Figure
+
+    from corobot_drake.study import report
+    from corobot_drake.study.resolve import parameter_units
+
+    saved = {}
+    monkeypatch.setattr(Figure, "savefig", lambda fig, path, **_: saved.update({
+        Path(path).name: fig}))
+    study_file = write_study(tmp_path)
+    study = load_study(study_file)
+    table = [{"run": str(r.index), "seed": str(r.seed), **{k: str(v) for k, v in r.params},
+              "corobot.speed": str(0.3 + r.index), "corobot.ir.rear": "0.7", "status": "ok",
+              "error": ""} for r in expand(study)]
+    report.plot(tmp_path, table, study, "tiny", parameter_units(study, study_file))
+    speed, ir = saved["corobot.speed.png"], saved["corobot.ir.rear.png"]
+    assert speed.get_suptitle() == "tiny: corobot.speed (4 runs)"
+    assert speed.axes[0].get_xlabel() == "motor_torque_scaling (rad/s)"
+    assert speed.axes[0].get_ylabel() == "corobot.speed (m/s)"
+    assert ir.axes[0].get_ylabel() == "corobot.ir.rear (m)"
+    no_grid = load_study(study_file)
+    no_grid.grid = {}
+    report.plot(tmp_path, table, no_grid, "tiny")  # a histogram over the runs
+    assert saved["corobot.speed.png"].axes[0].get_xlabel() == "corobot.speed (m/s)"
+
+
 USER_METRICS = """\
 import math
 
