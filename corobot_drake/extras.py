@@ -9,7 +9,8 @@ checks its own, with the interfaces `tools/setup` builds: `ros2/run.py`).
 import importlib.util
 
 EXTRAS = {
-    "serve": ("fastapi", "uvicorn", "httpx", "pydantic", "starlette", "fastapi_offline", "h11"),
+    "serve": ("fastapi", "uvicorn", "httpx", "pydantic", "starlette", "fastapi_offline", "h11",
+              "sse_starlette"),
     "study": ("ray", "tqdm", "matplotlib"),
     "gym": ("gymnasium", "ray", "tqdm", "matplotlib"),
     "record": ("foxglove", "websockets"),

@@ -14,9 +14,9 @@ import time
 from collections.abc import AsyncIterator, Callable
 from typing import Annotated
 
-from fastapi import APIRouter, HTTPException, Query, Request
+from fastapi import APIRouter, HTTPException, Query
 from fastapi.responses import Response
-from starlette.responses import StreamingResponse
+from sse_starlette import EventSourceResponse
 
 from corobot_drake import signals
 from corobot_drake.serving.routes.backend import Backend, BackendDep
@@ -42,32 +42,31 @@ IGNORED = ("time", "time_stamp")
 
 @router.get("/robots/{robot}/subscribe", response_class=Response,
             summary="Server-Sent Events: one event per service whose state changed")
-async def subscribe_all(request: Request, robot: str, backend: BackendDep,
+async def subscribe_all(robot: str, backend: BackendDep,
                         services: str | None = None,
                         period: SubscribePeriod = SUBSCRIPTION_CHECK_PERIOD,
                         limit: SubscribeLimit = None, heartbeat: SubscribeHeartbeat = None):
     names = services.split(",") if services else backend.subscribable(robot)
-    return event_stream(request, backend, robot, names, period, limit, heartbeat)
+    return event_stream(backend, robot, names, period, limit, heartbeat)
 
 
 @router.get("/robots/{robot}/{service}/subscribe", response_class=Response,
             summary="Server-Sent Events for one service (when its reading changes)")
-async def subscribe(request: Request, robot: str, service: str, backend: BackendDep,
+async def subscribe(robot: str, service: str, backend: BackendDep,
                     period: SubscribePeriod = SUBSCRIPTION_CHECK_PERIOD,
                     limit: SubscribeLimit = None, heartbeat: SubscribeHeartbeat = None):
-    return event_stream(request, backend, robot, [service], period, limit, heartbeat)
+    return event_stream(backend, robot, [service], period, limit, heartbeat)
 
 
-def event_stream(request: Request, backend: Backend, robot: str, services: list[str],
-                 period: float, limit: float | None, heartbeat: float | None = None
-                 ) -> Response:
-    """The stream of `services`' changes (404 for an unknown robot or service)."""
+def event_stream(backend: Backend, robot: str, services: list[str], period: float,
+                 limit: float | None, heartbeat: float | None = None) -> Response:
+    """The stream of `services`' changes (404 for an unknown robot or service), framed by
+    sse-starlette (lines end in LF, as the dashboard's reader splits them; it ends the stream
+    when the client goes, and sends a comment line every 15 s, which clients skip)."""
     extractors = {s: extractor(backend, robot, s) for s in services}
     thresholds = {s: thresholds_of(backend, robot, s) for s in services}
-    return StreamingResponse(_events(request, backend, robot, extractors, thresholds, period,
-                                     limit, heartbeat),
-                             media_type="text/event-stream",
-                             headers={"Cache-Control": "no-store", "X-Accel-Buffering": "no"})
+    return EventSourceResponse(_events(backend, robot, extractors, thresholds, period, limit,
+                                       heartbeat), sep="\n")
 
 
 def extractor(backend: Backend, robot: str, service: str) -> Callable[[dict], dict]:
@@ -110,13 +109,14 @@ def changed(old, new, thresholds: dict[str, float], field: str = "") -> bool:
     return old != new
 
 
-async def _events(request: Request, backend: Backend, robot: str,
-                  extractors: dict[str, Callable[[dict], dict]],
+async def _events(backend: Backend, robot: str, extractors: dict[str, Callable[[dict], dict]],
                   thresholds: dict[str, dict[str, float]], period: float,
-                  limit: float | None, heartbeat: float | None) -> AsyncIterator[str]:
+                  limit: float | None, heartbeat: float | None
+                  ) -> AsyncIterator[dict]:
+    """The stream's events, as sse-starlette's fields (`event`, `data`, `retry`)."""
     sent: dict[str, tuple[dict, float]] = {}  # service -> (state sent, monotonic time)
     started = time.monotonic()
-    yield "retry: 1000\n\n"
+    yield {"retry": 1000}
     while True:
         snap = backend.runner.snapshot["robots"][robot]
         now = time.monotonic()
@@ -127,9 +127,7 @@ async def _events(request: Request, backend: Backend, robot: str,
                 heartbeat is not None and now - last[1] >= heartbeat)
             if due:
                 sent[name] = (state, now)
-                yield f"event: {name}\ndata: {json.dumps(state, allow_nan=False)}\n\n"
+                yield {"event": name, "data": json.dumps(state, allow_nan=False)}
         if limit is not None and now - started > limit:
-            return
-        if await request.is_disconnected():
             return
         await asyncio.sleep(period)
