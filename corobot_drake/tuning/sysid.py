@@ -24,6 +24,7 @@ import numpy as np
 
 from corobot_drake.config.scenario import ScenarioError, load_scenario, read_text
 from corobot_drake.model import dimensions as dim
+from corobot_drake.names import unknown_robot
 
 MAX_LOG_BYTES = 64 << 20
 """The largest log read (64 MiB: an hour of the simulator's 100 Hz run log is 360k lines);
@@ -348,87 +349,89 @@ def _check_dropped(log: DriveLog, driven, keep, dropped) -> None:
 
 # --- editing a scenario file in place ----------------------------------------------------
 
-_NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
-
-
-def _indent(line: str) -> int:
-    return len(line) - len(line.lstrip(" "))
-
-
-def _is_content(line: str) -> bool:
-    stripped = line.strip()
-    return bool(stripped) and not stripped.startswith("#")
-
-
-def _robot_block(lines: list[str], robot: str) -> tuple[int, int]:
-    """(first, end) line indices of robot `robot`'s block under the top-level `robots:`."""
-    import re
-
-    robots_line = next((i for i, ln in enumerate(lines)
-                        if re.match(r"^robots\s*:\s*(#.*)?$", ln.rstrip("\n"))), None)
-    if robots_line is None:
-        raise ValueError("no block-style `robots:` section at the top level")
-    start = None
-    robot_re = re.compile(rf"^(\s+)(['\"]?){re.escape(robot)}\2\s*:(.*)$")
-    for i in range(robots_line + 1, len(lines)):
-        line = lines[i].rstrip("\n")
-        if _is_content(line) and _indent(line) == 0:
-            break
-        if robot_re.match(line):
-            start = i
-            break
-    if start is None:
-        raise ValueError(f"robot {robot!r} not found under `robots:`")
-    depth = _indent(lines[start])
-    end = start + 1
-    while end < len(lines) and not (_is_content(lines[end]) and _indent(lines[end]) <= depth):
-        end += 1
-    return start, end
-
 
 def set_drive_field(text: str, robot: str, field: str, value: float, comment: str | None = None,
                     digits: int = 4) -> str:
     """`text` (a scenario YAML) with robot `robot`'s `drive.<field>` set to `value` (`digits`
     significant digits).
 
-    Only that field's line changes (a missing field is added to a block-style `drive:` as a
-    new line); every other line, comment and the layout stay. With `comment`, the line's comment
-    becomes it (a line that holds other fields too keeps its own). Raises ValueError if the
-    robot is absent, or the field is absent and cannot be added.
+    A round trip through ruamel.yaml: every other value, comment, tag, quote, flow or block
+    style and the indentation stay; the field's line keeps its comment (at its column, at least
+    two spaces after the value), and a missing field is added at the end of the robot's
+    `drive:` mapping. With `comment`, the field's comment becomes it, two spaces after the
+    value, unless the field sits in a flow mapping (`drive: {...}`), whose line holds other
+    fields too: that line keeps its own. Raises ValueError if the robot is absent (naming the
+    closest robots) or has no `drive:` mapping to hold the field.
     """
-    import re
+    import io
 
-    lines = text.splitlines(keepends=True)
-    start, end = _robot_block(lines, robot)
+    from ruamel.yaml import YAML
+    from ruamel.yaml.comments import CommentedMap
+    from ruamel.yaml.emitter import RoundTripEmitter
+    from ruamel.yaml.util import load_yaml_guess_indent
+
+    _, indent, block_seq_indent = load_yaml_guess_indent(text)
+    indent, offset = indent or 2, block_seq_indent or 0  # None: no block mapping, no list
+    yaml = YAML()  # round-trip
+    yaml.preserve_quotes = True
+    yaml.width = 1 << 16  # never fold a long line
+    yaml.indent(mapping=indent, sequence=indent + offset, offset=offset)
+    data = yaml.load(text)
+    robots = data.get("robots") if isinstance(data, CommentedMap) else None
+    if not isinstance(robots, CommentedMap):
+        raise ValueError("no `robots:` mapping at the top level")
+    if robot not in robots:
+        raise ValueError(unknown_robot(robot, robots))
     number = f"{value:.{digits}g}"
-    pattern = re.compile(rf"(\b{re.escape(field)}\s*:\s*)({_NUMBER})")
-    for i in range(start, end):
-        code, hash_, old_comment = lines[i].partition("#")
-        if pattern.search(code):
-            code = pattern.sub(lambda m: m.group(1) + number, code, count=1)
-            alone = re.fullmatch(rf"\s*{re.escape(field)}\s*:\s*{_NUMBER}\s*", code.rstrip("\n"))
-            if comment is not None and alone:
-                lines[i] = f"{code.rstrip()}  # {comment}\n"
-            else:
-                lines[i] = code + hash_ + old_comment
-            return "".join(lines)
-    drive = next((i for i in range(start, end)
-                  if re.match(r"^\s+drive\s*:\s*(#.*)?$", lines[i].rstrip("\n"))), None)
-    if drive is None:
-        raise ValueError(f"robot {robot!r} has no `{field}:` line and no block-style `drive:` to "
+    spec = robots[robot]
+    drive = spec.get("drive") if isinstance(spec, CommentedMap) else None
+    if not isinstance(drive, CommentedMap):
+        raise ValueError(f"robot {robot!r} has no `{field}:` line and no `drive:` mapping to "
                          f"add it to; add `{field}: {number}` under its `drive:`")
-    last = drive
-    for i in range(drive + 1, end):
-        if _is_content(lines[i]) and _indent(lines[i]) <= _indent(lines[drive]):
-            break
-        if _is_content(lines[i]):
-            last = i
-    indent = " " * (_indent(lines[last]) if last != drive else _indent(lines[drive]) + 2)
-    line = f"{indent}{field}: {number}" + (f"  # {comment}" if comment else "") + "\n"
-    if not lines[last].endswith("\n"):
-        lines[last] += "\n"
-    lines.insert(last + 1, line)
-    return "".join(lines)
+    flow = drive.fa.flow_style()
+    # A key's comment token holds its line's comment and the blank and comment lines below it:
+    # a field added after the last key takes those below, so they stay above what follows.
+    below = ""
+    if field not in drive and drive and not flow:
+        last = _comment_token(drive, list(drive)[-1])
+        if last is not None and "\n" in last.value:
+            cut = last.value.index("\n") + 1
+            last.value, below = last.value[:cut], last.value[cut:]
+    drive[field] = float(number)
+    if flow:  # the comment on the line is the `drive:` key's
+        edited = [_comment_token(spec, "drive"), drive.ca.comment and drive.ca.comment[0]]
+    else:
+        own = _comment_token(drive, field)
+        if own is None and (comment is not None or below):
+            drive.yaml_add_eol_comment("#", field, column=0)
+            own = _comment_token(drive, field)
+            own.value = "\n"
+        if own is not None and (comment is not None or below):
+            rest = own.value[own.value.index("\n"):] if "\n" in own.value else "\n"
+            head = own.value[:len(own.value) - len(rest)]
+            own.value = (f"# {comment}" if comment is not None else head) + rest + below
+            if comment is not None:
+                own.start_mark.column = 0  # two spaces after the value (below)
+        edited = [own]
+    edited = [c for c in edited if c is not None]
+
+    class Emitter(RoundTripEmitter):
+        def write_comment(self, token, pre=False):
+            """The edited line's comment at least two spaces after the new value."""
+            if any(token is c for c in edited) and self.column:
+                token.start_mark.column = max(token.start_mark.column, self.column + 2)
+            super().write_comment(token, pre)
+
+    yaml.Emitter = Emitter
+    out = io.StringIO()
+    yaml.dump(data, out)
+    return out.getvalue()
+
+
+def _comment_token(mapping, key):
+    """The ruamel comment token after `key`'s value in `mapping` (None if it has none)."""
+    tokens = mapping.ca.items.get(key) or []
+    return tokens[2] if len(tokens) > 2 else None
 
 
 @dc.dataclass(frozen=True)

@@ -119,10 +119,26 @@ def test_set_drive_field_keeps_the_file():
            "  b:\n    drive:\n      motor_torque_scaling: 7  # b's\n")
     assert set_motor_torque_scaling(two, "b", 9.5) == two.replace("7  # b's", "9.5  # b's")
     assert set_motor_torque_scaling(two, "a", 6.25) == two.replace("5.0,", "6.25,")
-    with pytest.raises(ValueError, match="not found"):
+    with pytest.raises(ValueError, match=r"no robot named 'c'; robots: a, b"):
         set_motor_torque_scaling(two, "c", 1.0)
     with pytest.raises(ValueError, match="no `motor_torque_scaling:`"):
         set_motor_torque_scaling("robots:\n  a:\n    pose: {translation: [1, 0, 0]}\n", "a", 1.0)
+
+
+def test_set_drive_field_edits_any_layout_yaml_can_take():
+    """A round trip through a YAML library, not lines matched by indentation: flow-style
+    `robots:` and `drive:` mappings take a field (added or changed), a quoted robot name and a
+    tag are read as YAML reads them, and the comments below the last field stay below the
+    field added after it."""
+    flow = "robots: {corobot: {drive: {slew_rate: 3}, commands: [!AllStop {}]}}\n"
+    assert sysid.set_drive_field(flow, "corobot", "hold_gain", 2.5) == (
+        "robots: {corobot: {drive: {slew_rate: 3, hold_gain: 2.5}, commands: [!AllStop {}]}}\n")
+    quoted = 'robots:\n  "corobot":\n    drive:\n      slew_rate: 3\n'
+    assert sysid.set_drive_field(quoted, "corobot", "slew_rate", 4) == quoted.replace("3", "4.0")
+    block = ("robots:\n  corobot:\n    drive:\n      slew_rate: 3  # old\n\n"
+             "    # the script\n    commands: []\n")
+    assert sysid.set_drive_field(block, "corobot", "hold_gain", 2.5, "new") == block.replace(
+        "# old\n", "# old\n      hold_gain: 2.5  # new\n")
 
 
 def test_tuner_steps_toward_the_target(tmp_path):
@@ -225,5 +241,5 @@ def test_write_drive_fields_writes_loads_back_and_refuses_a_bad_value(tmp_path):
     assert load_scenario(out).robots["corobot"].drive.slew_rate == 23.46  # left as it was
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out.yaml", "s.yaml"]  # no probe
     with pytest.raises(ScenarioError, match=r"^.*s\.yaml: robots\.nobody\.drive\.slew_rate: "
-                                            r"robot 'nobody' not found"):
+                                            r"no robot named 'nobody'"):
         sysid.write_drive_fields(source, "nobody", [sysid.DriveField("slew_rate", 5.0)])
