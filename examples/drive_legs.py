@@ -3,8 +3,10 @@
 
 Each loop: rotate a random angle in [-45, 45] deg, drive a random 0.5-1.5 m, rotate 180 deg,
 drive the same distance back, rotate 180 deg - angle (power 0.2); print the drift from the start
-after each loop. The orchestration (`legs`) uses only methods the Python API and the client
-share, so the same function drives the in-process simulation (`--local`).
+after each loop. The legs are the drive test's (`DriveTest.commands`): a seed gives the same
+legs as `tools/drive_test.py --seed` and a study's `drive_test`. The orchestration (`legs`) uses
+only methods the Python API and the client share, so the same function drives the in-process
+simulation (`--local`).
 
     python -m corobot_drake --serve &                 # then:
     python examples/drive_legs.py --url http://127.0.0.1:50000 --loops 3 --seed 1
@@ -14,34 +16,36 @@ share, so the same function drives the in-process simulation (`--local`).
 
 import argparse
 import math
-import random
 import sys
 
+from corobot_drake.commands import RotateDegrees
 from corobot_drake.resources import DEFAULT_SCENARIO
 from corobot_drake.serving.client import CorobotClient
+from corobot_drake.study.programs import COMMANDS_PER_LOOP, DriveTest
 
 
 def legs(robot, loops: int, seed: int, power: float = 0.2, out=print) -> list[float]:
-    """Drives `loops` random legs out and back; returns the drift (m) after each loop."""
-    rng = random.Random(seed)
+    """Drives the drive test's `loops` legs of `seed` out and back; returns the drift (m)
+    after each loop."""
+    commands = DriveTest(loops, power).commands(seed)
     x0, y0, _ = robot.position()
     drift = []
     for loop in range(1, loops + 1):
-        angle = rng.uniform(-45.0, 45.0)
-        distance = rng.uniform(0.5, 1.5)
-        for step, (name, value) in enumerate((("rotate_degrees", angle),
-                                              ("drive_distance", distance),
-                                              ("rotate_degrees", 180.0),
-                                              ("drive_distance", distance),
-                                              ("rotate_degrees", 180.0 - angle))):
-            result = getattr(robot, name)(value, power)
+        mine = commands[(loop - 1) * COMMANDS_PER_LOOP:loop * COMMANDS_PER_LOOP]
+        for step, command in enumerate(mine):
+            if isinstance(command, RotateDegrees):
+                name, value = "rotate_degrees", command.degrees
+            else:  # DriveDistance
+                name, value = "drive_distance", command.distance
+            result = getattr(robot, name)(value, command.power)
             if not result.succeeded:
                 out(f"  loop {loop} step {step + 1}: {name}({value:.3f}) {result.status}"
                     f" ({result.reason})")
         x, y, _ = robot.position()
         drift.append(math.hypot(x - x0, y - y0))
-        out(f"loop {loop}: rotate {angle:+6.1f} deg, drive {distance:.3f} m -> drift "
-            f"{drift[-1] * 1000:7.1f} mm, heading {math.degrees(robot.heading()):+6.2f} deg")
+        out(f"loop {loop}: rotate {mine[0].degrees:+6.1f} deg, drive {mine[1].distance:.3f} m "
+            f"-> drift {drift[-1] * 1000:7.1f} mm, heading {math.degrees(robot.heading()):+6.2f}"
+            f" deg")
     return drift
 
 
