@@ -1,8 +1,9 @@
 """`python -m corobot_drake.study STUDY.yaml [--workers N] [--address ADDR] [--out DIR]
 [--resume]`: run a study on Ray and write its runs, summary and plots.
 
-Exit status: 0 when every run is ok, 1 when some runs are error rows or an output file could
-not be written (a full disk: the line names the file), 2 for a bad study file
+Exit status: 0 when every run is ok, 1 when some runs are error rows, an output file could
+not be written (a full disk: the line names the file) or Ray's local instance did not start (a
+loaded machine), 2 for a bad study file
 or arguments (an --address where no Ray cluster answers, an OUT/runs.csv that --resume cannot
 continue), 130 when stopped with Ctrl-C (the finished rows are kept: `--resume`).
 """
@@ -44,7 +45,13 @@ def main(argv: list[str] | None = None) -> int:
     except MissingExtraError as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
-    from corobot_drake.study.engine import AddressError, ResumeError, read_rows, run_study
+    from corobot_drake.study.engine import (
+        AddressError,
+        RayStartError,
+        ResumeError,
+        read_rows,
+        run_study,
+    )
     from corobot_drake.study.report import OutputError
 
     out = args.out or Path("studies") / Path(args.study).stem
@@ -60,6 +67,9 @@ def main(argv: list[str] | None = None) -> int:
     except ResumeError as e:
         print(f"error: --resume: {e}", file=sys.stderr)
         return 2
+    except RayStartError as e:  # not the study's fault: the same command may work later
+        print(f"error: {e}", file=sys.stderr)
+        return 1
     except OutputError as e:  # a full disk: the file named is not (wholly) written
         print(f"error: {e.filename}: cannot write ({e.strerror}); the study did not finish",
               file=sys.stderr)

@@ -127,11 +127,33 @@ def check_run(study_file, out_dir, workers, address, resume, progress) -> int | 
     return check_session(address, workers)
 
 
+class RayStartError(RuntimeError):
+    """Ray's local instance did not start (on a loaded machine its processes can take longer
+    than Ray waits for them); the message is the one line to show."""
+
+
+def _start_local(workers: int | None) -> None:
+    """ray.init of a new local instance; RayStartError (one line) when it does not start."""
+    import ray
+
+    try:
+        # "local": a new instance even when RAY_ADDRESS or a running cluster would be joined.
+        ray.init(address="local", num_cpus=workers or os.cpu_count(),
+                 include_dashboard=False, log_to_driver=False, configure_logging=False)
+    except Exception as e:  # Ray raises bare Exceptions and TimeoutErrors starting up
+        raise RayStartError(
+            f"Ray's local instance did not start ({one_line(e)}); Ray waits a fixed time for "
+            "its processes, which a busy machine can exceed: run the study again when the "
+            "machine is less loaded, or start Ray yourself (`ray start --head`) and pass its "
+            "address with --address") from None
+
+
 @contextlib.contextmanager
 def ray_session(address: str | None, workers: int | None) -> Iterator[int]:
     """Connects to Ray for the study; yields the number of workers to start. Without an
     address, starts a local instance with `workers` CPUs (default: this machine's cores) and
-    stops it, with its processes, on exit. ValueError for a bad argument (`check_session`)."""
+    stops it, with its processes, on exit. ValueError for a bad argument (`check_session`);
+    RayStartError when the local instance does not start."""
     workers = check_session(address, workers)
     import ray
 
@@ -145,10 +167,7 @@ def ray_session(address: str | None, workers: int | None) -> Iterator[int]:
         if address:
             _join(address)
         else:
-            # "local": a new instance even when RAY_ADDRESS or a running cluster would be
-            # joined.
-            ray.init(address="local", num_cpus=workers or os.cpu_count(),
-                     include_dashboard=False, log_to_driver=False, configure_logging=False)
+            _start_local(workers)
         if callable(on_sigterm) and threading.current_thread() is threading.main_thread():
             signal.signal(signal.SIGTERM, on_sigterm)
         yield workers or int(ray.cluster_resources().get("CPU", 1))
@@ -332,9 +351,12 @@ def run_study(study_file: str | Path, out_dir: str | Path, *, workers: int | Non
 def _simulate_all(todo, study, scenario_file, rows, runs_csv, workers, address,
                   progress, user) -> None:
     saved = -math.inf  # the first row is written at once
-    bar = tqdm(total=len(todo), unit="run", disable=not progress, smoothing=0.1)
+    bar = None
     try:
         with ray_session(address, workers) as n:
+            # Once Ray has started: the lines it prints starting (token authentication's)
+            # then come before the bar instead of inside it.
+            bar = tqdm(total=len(todo), unit="run", disable=not progress, smoothing=0.1)
             start = time.perf_counter()
             for row in _results(todo, study, scenario_file, n, user):
                 # When the row arrived, from the workers' start: the study's steady rate is
@@ -346,5 +368,6 @@ def _simulate_all(todo, study, scenario_file, rows, runs_csv, workers, address,
                     write_rows(runs_csv, rows, study)
                     saved = time.monotonic()
     finally:  # Ctrl-C or an error: keep every finished row
-        bar.close()
+        if bar is not None:
+            bar.close()
         write_rows(runs_csv, rows, study)

@@ -587,6 +587,59 @@ def test_a_killed_worker_is_retried_then_an_error_row(tmp_path, connected):
     assert table[1]["corobot.killer:die_once"] == "1.0" and float(table[1]["corobot.x"]) > 0
 
 
+RAY_TIMEOUT = ("The current node timed out during startup. This could happen because some of "
+               "the raylet failed to startup or the GCS has become overloaded.")
+"""What ray.init raises (a bare Exception) when its processes start slower than it waits."""
+
+
+def test_ray_s_local_start_timing_out_is_one_line(tmp_path, monkeypatch, capsys):
+    """A local Ray instance that does not start in time (a loaded machine): one line saying
+    so and what to do, exit status 1 (not the study's fault), no traceback."""
+    import ray
+
+    from corobot_drake.study.__main__ import main
+
+    def timed_out(**_):
+        raise Exception(RAY_TIMEOUT)  # as Ray does
+
+    # Whatever this worker's Ray session is (the `connected` fixture's), the study starts its own.
+    monkeypatch.setattr(ray, "is_initialized", lambda: False)
+    monkeypatch.setattr(ray, "init", timed_out)
+    monkeypatch.setattr(ray, "shutdown", lambda: None)
+    study_file = write_study(tmp_path)
+    assert main([str(study_file), "--out", str(tmp_path / "out"), "--quiet"]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith(
+        f"error: Ray's local instance did not start ({RAY_TIMEOUT}); ")
+    assert "--address" in err and "Traceback" not in err
+
+
+def test_ray_s_start_up_lines_come_before_the_progress_bar(tmp_path, monkeypatch, capsys):
+    """What Ray prints as it starts (token authentication's line) is printed before the
+    study's progress bar is drawn, not inside it."""
+    import contextlib
+    import sys
+
+    token_line = "Token authentication is enabled for this Ray cluster."
+
+    @contextlib.contextmanager
+    def session(address, workers):
+        print(token_line, file=sys.stderr)
+        yield 2
+
+    def results(todo, study, scenario_file, workers, user):
+        for run in todo:
+            yield {"run": run.index, "seed": run.seed, **dict(run.params), "corobot.x": 1.0,
+                   "status": "ok", "error": ""}
+
+    monkeypatch.setattr(engine, "ray_session", session)
+    monkeypatch.setattr(engine, "_results", results)
+    engine.run_study(write_study(tmp_path), tmp_path / "out", progress=True)
+    err = capsys.readouterr().err
+    assert token_line in err and "4/4" in err
+    assert err.index(token_line) < err.index("0/4"), err
+
+
 def test_an_address_where_no_cluster_answers_is_one_line(tmp_path):
     """--address: malformed, or nothing listening there: one line naming --address, exit 2,
     nothing written (Ray itself would retry for minutes, or print a traceback)."""
