@@ -587,6 +587,27 @@ def test_a_killed_worker_is_retried_then_an_error_row(tmp_path, connected):
     assert table[1]["corobot.killer:die_once"] == "1.0" and float(table[1]["corobot.x"]) > 0
 
 
+def docs_example_study() -> str:
+    """The study file docs/studies.md shows (its first YAML block)."""
+    docs = (Path(__file__).resolve().parents[2] / "docs" / "studies.md").read_text()
+    return re.search(r"```yaml\n(scenario: .*?)```", docs, re.S).group(1)
+
+
+def test_the_docs_example_study_runs(tmp_path, connected):
+    """docs/studies.md's example study loads as written (it was refused, exit 2, when it
+    combined two programs) and runs, shortened to one seed of 1 s."""
+    text = docs_example_study()
+    (tmp_path / "example.yaml").write_text(text)
+    load_study(tmp_path / "example.yaml")
+    short = re.sub(r"(?m)^seeds: 4 ", "seeds: 1 ", re.sub(r"(?m)^duration: 8.0 ", "duration: 1.0 ",
+                                                        text))
+    assert "\nseeds: 1 " in short and "\nduration: 1.0 " in short
+    (tmp_path / "short.yaml").write_text(short)
+    table = rows(engine.run_study(tmp_path / "short.yaml", tmp_path / "out", progress=False))
+    assert [r["status"] for r in table] == ["ok", "ok"], [r["error"] for r in table]
+    assert all(float(r["corobot.speed"]) > 0.1 for r in table)  # the override's SetPower
+
+
 RAY_TIMEOUT = ("The current node timed out during startup. This could happen because some of "
                "the raylet failed to startup or the GCS has become overloaded.")
 """What ray.init raises (a bare Exception) when its processes start slower than it waits."""
