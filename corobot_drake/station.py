@@ -165,14 +165,18 @@ def _body_contact(spec: sc.WorldBody) -> ProximityProperties:
     return props
 
 
-def _add_directives(plant: MultibodyPlant, scene_graph, directives: list) -> dict:
-    """The scenario's model directives (Drake's `ProcessModelDirectives`); returns {model
-    name: model instance} of the models they add."""
+def _add_directives(plant: MultibodyPlant, scene_graph, directives: list,
+                    friction: float | None = None) -> dict:
+    """The scenario's model directives (Drake's `ProcessModelDirectives`), their collision
+    geometries given `friction` unless None (`World.model_friction`); returns {model name:
+    model instance} of the models they add."""
     if not directives:
         return {}
     added = ProcessModelDirectives(ModelDirectives(directives=directives), plant,
                                    make_parser(plant))
     models = {info.model_name: info.model_instance for info in added}
+    if friction is not None:
+        set_model_friction(plant, scene_graph, models.values(), friction)
     for gid in free_point_contact_geometries(plant, scene_graph, models.values()):
         props = ProximityProperties(scene_graph.model_inspector().GetProximityProperties(gid))
         shape = scene_graph.model_inspector().GetShape(gid)
@@ -181,6 +185,19 @@ def _add_directives(plant: MultibodyPlant, scene_graph, directives: list) -> dic
             hydroelastic_modulus=sc.WorldBody.hydroelastic_modulus, properties=props)
         scene_graph.AssignRole(plant.get_source_id(), gid, props, RoleAssign.kReplace)
     return models
+
+
+def set_model_friction(plant: MultibodyPlant, scene_graph, instances, friction: float) -> None:
+    """Gives every collision geometry of the model instances the Coulomb friction `friction`
+    (static = dynamic), whatever their files said (before the plant is finalized)."""
+    inspector = scene_graph.model_inspector()
+    for instance in instances:
+        for index in plant.GetBodyIndices(instance):
+            for gid in plant.GetCollisionGeometriesForBody(plant.get_body(index)):
+                props = ProximityProperties(inspector.GetProximityProperties(gid))
+                props.UpdateProperty("material", "coulomb_friction",
+                                     CoulombFriction(friction, friction))
+                scene_graph.AssignRole(plant.get_source_id(), gid, props, RoleAssign.kReplace)
 
 
 def free_point_contact_geometries(plant: MultibodyPlant, scene_graph, instances) -> list:
@@ -296,7 +313,8 @@ def add_scene(builder, scenario: sc.Scenario, plant_config=None):
     {robot name: (instance, chassis, wheel joints)})."""
     plant, scene_graph = AddMultibodyPlant(plant_config or scenario.plant_config, builder)
     bodies = _add_world(plant, scenario.world)
-    models = _add_directives(plant, scene_graph, scenario.directives)
+    models = _add_directives(plant, scene_graph, scenario.directives,
+                             scenario.world.model_friction)
     added = {name: _add_robot(plant, name, robot) for name, robot in scenario.robots.items()}
     plant.Finalize()
     return plant, scene_graph, bodies, models, added

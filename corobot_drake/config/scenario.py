@@ -170,6 +170,11 @@ class World:
     sun: Sun = dc.field(default_factory=Sun)
     sky_color: list[float] = bounded(lambda: [0.53, 0.73, 0.92], lim.COLOR, size=3)
     """RGB in [0, 1]: the background of the camera images and of Meshcat."""
+    model_friction: float | None = bounded(None, lim.FRICTION)
+    """Coulomb friction (static = dynamic) of every collision geometry of the directives'
+    models; None keeps their files' own, and Drake's parsers give 1.0 to a geometry whose file
+    sets none (URDF, SDFormat and MJCF alike). Two surfaces in contact combine theirs as
+    2 mu1 mu2 / (mu1 + mu2): on the ground's 0.5, 1.0 gives 0.67."""
 
 
 # --- robots -----------------------------------------------------------------------------
