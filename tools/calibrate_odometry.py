@@ -7,13 +7,17 @@ Prints the fit, plots the dead-reckoned path against the true one before (nomina
 track) and after calibration, and with `--write` puts both in the scenario's drive fields
 (`effective_wheel_radius`, `effective_track_width`) with a comment saying where they came from.
 `--drive-test` then runs the book's 3-loop drive test with the calibrated odometry and prints
-the dead-reckoned end position error before and after. The fit is
+the dead-reckoned end position error before and after. The squares' log and the plots go in
+`--out` (default: a new temporary directory, printed). The fit is
 `corobot_drake.tuning.odometry_calibration`.
 
-Usage: python tools/calibrate_odometry.py [LOG.csv | --simulate] [--write SCENARIO] [--drive-test]
+Usage: python tools/calibrate_odometry.py [LOG.csv | --simulate] [--out DIR] [--write SCENARIO]
+       [--drive-test]
 """
 
+import contextlib
 import sys
+import tempfile
 from pathlib import Path
 
 from tqdm import tqdm
@@ -24,6 +28,7 @@ from corobot_drake.arguments import (
     bounded,
     existing_file,
     one_line_errors,
+    output_directory,
     output_file,
 )
 from corobot_drake.limits import DRAKE_INT
@@ -44,8 +49,11 @@ def _parser() -> ToolParser:
     p.add_argument("--ticks-per-revolution", type=bounded(TICKS_PER_REVOLUTION, int),
                    default=dim.ENCODER_TICKS_PER_REVOLUTION,
                    help="encoder counts per wheel revolution")
-    p.add_argument("--plot", type=output_file, default="out/calibrate_odometry.png",
-                   help="before/after plot of the log")
+    p.add_argument("--out", type=output_directory, default=None,
+                   help="directory for the squares' log and the plots (None: a new temporary "
+                   "directory)")
+    p.add_argument("--plot", type=output_file, default=None,
+                   help="before/after plot of the log (None: OUT/calibrate_odometry.png)")
     p.add_argument("--write", metavar="SCENARIO", type=existing_file,
                    help="put the fit in this scenario file")
     p.add_argument("--drive-test", action="store_true",
@@ -54,21 +62,35 @@ def _parser() -> ToolParser:
     return p
 
 
-def _progress(total: float, description: str):
-    bar = tqdm(total=round(total), desc=description, unit="sim s", file=sys.stderr)
+@contextlib.contextmanager
+def _progress(estimate: float, description: str):
+    """A bar of simulated seconds, yielding the run's `progress(sim)`: `estimate` s long until
+    the run ends (or outgrows it), then as long as the run was, so a finished run ends at
+    100%."""
+    with tqdm(total=round(estimate), desc=description, unit="sim s", file=sys.stderr) as bar:
+        def update(sim):
+            done = round(sim.time)
+            bar.total = max(bar.total, done)
+            bar.update(done - bar.n)
+        yield update
+        bar.total = bar.n
+        bar.refresh()
 
-    def update(sim):
-        bar.update(round(sim.time) - bar.n)
-    return bar, update
+
+def _make_out(args) -> None:
+    """Makes `args.out` (None: a new temporary directory), says where it is, and puts the plot
+    in it unless `--plot` names another file."""
+    args.out = args.out or Path(tempfile.mkdtemp(prefix="calibrate_odometry-"))
+    args.out.mkdir(parents=True, exist_ok=True)
+    args.plot = args.plot or args.out / "calibrate_odometry.png"
+    print(f"outputs in {args.out}", flush=True)
 
 
 def _simulated_log(args) -> oc.PoseLog:
     commands = oc.square_commands()
-    bar, update = _progress(110, "UMBmark squares")
-    with bar:
+    with _progress(110, "UMBmark squares") as update:
         sim = oc.run_script(args.scenario, args.robot, commands, progress=update)
-    path = Path("out") / "odometry_squares_log.csv"  # under the working directory
-    path.parent.mkdir(parents=True, exist_ok=True)
+    path = args.out / "odometry_squares_log.csv"
     sim.robot(args.robot).write_log(path)
     print(f"simulated UMBmark squares ({sim.time:.1f} s) -> {path}", flush=True)
     return oc.read_pose_log(path)
@@ -86,8 +108,7 @@ def _write(args, fit: oc.OdometryFit, source: str) -> None:
 def _drive_test(args, fit: oc.OdometryFit) -> None:
     """The drive test run with the calibrated odometry; the nominal odometry's error is the
     same encoder ticks dead reckoned with the nominal radius and track."""
-    bar, update = _progress(150, f"drive test, seed {args.seed}")
-    with bar:
+    with _progress(150, f"drive test, seed {args.seed}") as update:
         run = oc.drive_test_odometry_error(args.scenario, args.robot, fit.effective_wheel_radius,
                                            fit.effective_track_width, args.seed,
                                            progress=update)
@@ -115,9 +136,14 @@ def main(argv=None) -> int:
     args = p.parse_args(argv)
     if (args.log is None) == (not args.simulate):
         p.error("give a LOG or --simulate (not both)")
-    log = (_simulated_log(args) if args.simulate
-           else oc.read_pose_log(args.log, args.ticks_per_revolution))
+    if args.simulate:
+        _make_out(args)
+        log = _simulated_log(args)
+    else:
+        log = oc.read_pose_log(args.log, args.ticks_per_revolution)
     fit = oc.fit_odometry(log)  # a bad log or scenario: one_line_errors' one line
+    if args.plot is None:  # made once the log is good: no empty directory for a bad one
+        _make_out(args)
     print(fit.describe())
     nominal = (dim.WHEEL_RADIUS, dim.TRACK)
     fitted = (fit.effective_wheel_radius, fit.effective_track_width)

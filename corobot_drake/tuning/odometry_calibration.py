@@ -139,7 +139,8 @@ def square_commands(side: float = SQUARE_SIDE, power: float = CALIBRATION_POWER)
 
 def run_script(scenario_path, robot: str, commands: list, overrides=(), progress=None):
     """Runs `commands` on `robot` (physics only: the odometry needs neither the camera nor
-    the IR sensors) until they end; returns the Simulation."""
+    the IR sensors) until they end, and 0.5 s more at rest; returns the Simulation.
+    `progress(sim)` after every simulated second and at the end."""
     from corobot_drake.config.presets import physics_only_overrides
     from corobot_drake.simulation import Simulation, quiet_drake_warnings
     from corobot_drake.study.runner import commands_ended
@@ -154,6 +155,8 @@ def run_script(scenario_path, robot: str, commands: list, overrides=(), progress
         if progress is not None:
             progress(sim)
     sim.advance(0.5)  # at rest
+    if progress is not None:
+        progress(sim)
     return sim
 
 
