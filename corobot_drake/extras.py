@@ -11,7 +11,7 @@ import importlib.util
 EXTRAS = {
     "serve": ("fastapi", "uvicorn", "httpx", "pydantic", "starlette", "fastapi_offline", "h11",
               "sse_starlette"),
-    "study": ("ray", "tqdm", "matplotlib"),
+    "study": ("ray", "tqdm", "matplotlib", "scipy"),
     "gym": ("gymnasium", "ray", "tqdm", "matplotlib"),
     "record": ("foxglove", "websockets"),
     "ros2": ("rclpy", "rosbags"),

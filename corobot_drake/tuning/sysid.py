@@ -4,8 +4,8 @@ The drive model: each side's axle speed command moves toward
 power x MotorTorqueScaling at no more than the slew limit (rad/s^2), and the wheels follow it.
 `fit_drive` finds MotorTorqueScaling S, the slew limit L and a small time offset tau (the
 controller's frame and the servo's lag) that make the modelled front-wheel speeds match the ones
-measured by the encoders, by Gauss-Newton (Levenberg-Marquardt damped) on the speed residuals,
-started from a coarse grid. numpy only.
+measured by the encoders, by least squares on the speed residuals (scipy's `least_squares`,
+the [study] extra's), started from a coarse grid.
 
 The CSV is what `Robot.write_log` / `python -m corobot_drake --log` write, or what a real
 robot's logger writes with the same header (docs/tuning.md):
@@ -152,9 +152,11 @@ class DriveFit:
     residual_rms: float
     """rad/s: RMS of measured minus modelled front-wheel speed."""
     stderr: tuple[float, float, float]
-    """Approximate standard errors of (scaling, slew, delay) from the Gauss-Newton Hessian."""
+    """Approximate standard errors of (scaling, slew, delay): the Gauss-Newton covariance at the
+    solution (the Jacobian's J^T J), scaled by the residuals' variance."""
     samples: int
     iterations: int
+    """Iterations of the least-squares solver."""
 
     def describe(self) -> str:
         s_err, l_err, d_err = self.stderr
@@ -162,7 +164,7 @@ class DriveFit:
                 f"slew_rate: {self.slew_rate:.3f} rad/s^2 (+- {l_err:.3f})\n"
                 f"delay: {self.delay * 1000:.2f} ms (+- {d_err * 1000:.2f})\n"
                 f"residual: {self.residual_rms:.4f} rad/s RMS over {self.samples} speed samples "
-                f"({self.iterations} Gauss-Newton iterations)")
+                f"({self.iterations} least-squares iterations)")
 
 
 def fit_speeds(log: DriveLog, fit: DriveFit) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -186,7 +188,11 @@ def fit_drive(log: DriveLog, max_iterations: int = 30, progress=None,
               keep: np.ndarray | None = None) -> DriveFit:
     """Least-squares MotorTorqueScaling, slew limit and delay from the log's encoder speeds,
     over the interior samples `keep` (a bool mask [n - 2]; default all: `robust_fit` drops
-    stalls and outliers)."""
+    stalls and outliers): scipy's `least_squares` (trust region, scaling and slew bounded
+    below by 1e-3) from a coarse start, at most `max_iterations` evaluations of the model;
+    `progress(iteration, (scaling, slew, delay), rms rad/s)` after each iteration."""
+    from scipy.optimize import least_squares
+
     measured_all = _central_speed(log.time, log.angle)
     keep = np.ones(len(measured_all), bool) if keep is None else keep
     measured = measured_all[keep]
@@ -202,44 +208,29 @@ def fit_drive(log: DriveLog, max_iterations: int = 30, progress=None,
         sse = float(r @ r)
         if best is None or sse < best[0]:
             best = (sse, slew)
-    p = np.array([scaling0, best[1], 0.0])
-    r = _residuals(log, measured_all, p, keep)
-    sse = float(r @ r)
-    damping = 1e-3
+    size = r.size
     iterations = 0
-    J = None
-    for iterations in range(1, max_iterations + 1):
-        J = np.empty((r.size, 3))
-        for j in range(3):
-            h = 1e-4 if j == 2 else 1e-3 * max(abs(p[j]), 1.0)
-            dp = np.zeros(3)
-            dp[j] = h
-            J[:, j] = (_residuals(log, measured_all, p + dp, keep) - r) / h
-        JtJ = J.T @ J
-        g = J.T @ r
-        improved = False
-        for _ in range(8):
-            A = JtJ + damping * np.diag(np.diag(JtJ) + 1e-12)
-            step = -np.linalg.lstsq(A, g, rcond=None)[0]
-            candidate = p + step
-            candidate[0] = max(candidate[0], 1e-3)
-            candidate[1] = max(candidate[1], 1e-3)
-            rc = _residuals(log, measured_all, candidate, keep)
-            sse_c = float(rc @ rc)
-            if sse_c < sse:
-                improved = True
-                relative = (sse - sse_c) / max(sse, 1e-300)
-                p, r, sse = candidate, rc, sse_c
-                damping = max(damping / 3, 1e-9)
-                break
-            damping *= 10
+
+    def iterated(intermediate_result) -> None:
+        nonlocal iterations
+        iterations += 1
         if progress is not None:
-            progress(iterations, p, math.sqrt(sse / r.size))
-        if not improved or relative < 1e-10:
-            break
+            progress(iterations, intermediate_result.x,
+                     math.sqrt(2.0 * intermediate_result.cost / size))
+
+    result = least_squares(
+        lambda p: _residuals(log, measured_all, p, keep),
+        [max(scaling0, 2e-3), best[1], 0.0],
+        # Forward differences of 0.1% of scaling and slew, 0.1 ms of delay: the limiter's
+        # corners make the residuals only piecewise smooth, so a finer step sees noise.
+        jac="2-point", diff_step=[1e-3, 1e-3, 1e-4],
+        bounds=([1e-3, 1e-3, -np.inf], np.inf), method="trf", x_scale="jac",
+        max_nfev=max_iterations, callback=iterated)
+    p, r = result.x, result.fun
+    sse = float(r @ r)
     sigma2 = sse / max(r.size - 3, 1)
-    try:
-        cov = np.linalg.inv(J.T @ J) * sigma2
+    try:  # the Gauss-Newton approximation of the covariance at the solution
+        cov = np.linalg.inv(result.jac.T @ result.jac) * sigma2
         stderr = tuple(float(math.sqrt(max(v, 0.0))) for v in np.diag(cov))
     except np.linalg.LinAlgError:
         stderr = (math.nan, math.nan, math.nan)
