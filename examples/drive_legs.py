@@ -14,14 +14,15 @@ simulation (`--local`).
     python examples/drive_legs.py --local --loops 2   # the same legs, in-process
 """
 
-import argparse
 import math
 import sys
 
+from corobot_drake.arguments import ToolParser, bounded
 from corobot_drake.commands import RotateDegrees
+from corobot_drake.limits import DRAKE_INT, DRIVE_POWER
 from corobot_drake.resources import DEFAULT_SCENARIO
 from corobot_drake.serving.client import CorobotClient
-from corobot_drake.study.programs import COMMANDS_PER_LOOP, DriveTest
+from corobot_drake.study.programs import COMMANDS_PER_LOOP, LOOPS, DriveTest
 
 
 def legs(robot, loops: int, seed: int, power: float = 0.2, out=print) -> list[float]:
@@ -50,12 +51,14 @@ def legs(robot, loops: int, seed: int, power: float = 0.2, out=print) -> list[fl
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p = ToolParser(description=__doc__.splitlines()[0])
     p.add_argument("--url", help="a running server (default: start a headless one)")
     p.add_argument("--local", action="store_true", help="drive an in-process simulation")
-    p.add_argument("--loops", type=int, default=3)
-    p.add_argument("--seed", type=int, default=1)
-    p.add_argument("--power", type=float, default=0.2)
+    # The drive test's own bounds, so that a seed's legs are the same as its.
+    p.add_argument("--loops", type=bounded(LOOPS, int), default=3, help="loops of the test")
+    p.add_argument("--seed", type=bounded(DRAKE_INT, int), default=1, help="the legs' seed")
+    p.add_argument("--power", type=bounded(DRIVE_POWER), default=0.2,
+                   help="power of every command")
     args = p.parse_args(argv)
     if args.local:
         from corobot_drake.simulation import Simulation, quiet_drake_warnings

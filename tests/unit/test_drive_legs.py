@@ -4,6 +4,8 @@
 import importlib.util
 import types
 
+import pytest
+
 from conftest import REPO
 from corobot_drake.commands import RotateDegrees
 from corobot_drake.study.programs import DriveTest
@@ -48,3 +50,16 @@ def test_the_example_drives_the_drive_tests_legs_of_a_seed():
                     for c in DriveTest(2, 0.3).commands(seed)]
         assert robot.calls == expected
         assert len(expected) == 10
+
+
+def test_the_examples_flags_are_the_drive_tests_bounds(capsys):
+    """A loop count of 0 crashed on the empty drift list; each bad flag is one line, exit 2,
+    before any server starts."""
+    main = _example().main
+    for argv, flag in ((["--loops", "0"], "--loops"), (["--power", "2"], "--power"),
+                       (["--seed", "x"], "--seed")):
+        with pytest.raises(SystemExit) as stop:
+            main(["--local", *argv])
+        assert stop.value.code == 2
+        err = capsys.readouterr().err.strip()
+        assert err.startswith(f"error: argument {flag}:") and "\n" not in err
