@@ -32,11 +32,13 @@ from corobot_drake.study import report
 from corobot_drake.study.metrics import load_user_metrics
 from corobot_drake.study.runner import TIMING_COLUMNS, StudyWorker, error_row, finite_or_text
 from corobot_drake.study.spec import (
+    DIGEST_COLUMN,
     Run,
     Study,
     expand,
     load_study,
     scenario_path,
+    study_digest,
     study_path,
 )
 
@@ -191,11 +193,12 @@ MAX_RUNS_CSV = 1 << 30
 in well under this)."""
 
 
-def resumed_rows(path: Path, study: Study, runs: list[Run]) -> list[dict]:
+def resumed_rows(path: Path, study: Study, runs: list[Run], digest: str) -> list[dict]:
     """The rows of `path` (none when it does not exist), each checked to be a run of this
-    study: its run index one of `runs`, its seed and parameter values that run's, no run
-    twice. ResumeError (one line, with the row's line) otherwise, or when the file is not a
-    readable CSV table (a FIFO or a device: refused unread)."""
+    study: its run index one of `runs`, its seed and parameter values that run's, its
+    `study_digest` `digest` (the rest of what makes the study), no run twice. ResumeError
+    (one line, with the row's line) otherwise, or when the file is not a readable CSV table
+    (a FIFO or a device: refused unread)."""
     if not path.exists():
         return []
     try:
@@ -220,14 +223,14 @@ def resumed_rows(path: Path, study: Study, runs: list[Run]) -> list[dict]:
             rows.append(row)
     except csv.Error as e:  # the row after the last good one (a study's cells are one line)
         raise ResumeError(f"{path}:{len(rows) + 2}: not a CSV runs table ({e})") from None
-    _check_rows(path, rows, study, runs, reader.fieldnames or [])
+    _check_rows(path, rows, study, runs, reader.fieldnames or [], digest)
     return rows
 
 
 def _check_rows(path: Path, rows: list[dict], study: Study, runs: list[Run],
-                header: list[str]) -> None:
+                header: list[str], digest: str) -> None:
     """ResumeError at the first row (or the header) that is not one of this study's runs."""
-    fixed = ["run", "seed", *study.grid, *study.random, "status"]
+    fixed = ["run", "seed", *study.grid, *study.random, "status", DIGEST_COLUMN]
     missing = [c for c in fixed if c not in header]
     if missing:
         raise ResumeError(f"{path}:1: no column {missing[0]!r}: not the runs table of this "
@@ -238,12 +241,17 @@ def _check_rows(path: Path, rows: list[dict], study: Study, runs: list[Run],
         run = runs[int(text)] if text.isdigit() and int(text) < len(runs) else None
         expected = {} if run is None else {"seed": str(run.seed), **{
             k: str(finite_or_text(v)) for k, v in run.params}}
+        if run is not None:  # last: a parameter's value says more than the digest
+            expected[DIGEST_COLUMN] = digest
         wrong = next((k for k, v in expected.items() if row.get(k) != v), None)
         if run is None or wrong or text in seen:
             what = (f"run {text!r} is not one of this study's {len(runs)} runs" if run is None
                     else f"run {text} is listed twice" if text in seen else
                     f"run {text}'s {wrong} is {row.get(wrong)!r}, this study's is "
                     f"{expected[wrong]!r}")
+            if wrong == DIGEST_COLUMN:
+                what += (" (its scenario file, overrides, duration, until, settle, metrics, "
+                         "programs or cameras differ)")
             raise ResumeError(f"{path}:{line}: {what}: these rows are another study's; resume "
                               "with the study that wrote them, or write to another --out")
         seen.add(text)
@@ -253,7 +261,7 @@ def columns(rows: list[dict], study: Study) -> list[str]:
     """run, seed, the parameters in study order, the metrics in order of appearance, status,
     error, then the timing columns."""
     fixed = ["run", "seed", *study.grid, *study.random]
-    tail = ["status", "error", *TIMING_COLUMNS]
+    tail = ["status", "error", DIGEST_COLUMN, *TIMING_COLUMNS]
     metric_columns: dict[str, None] = {}
     for row in rows:
         metric_columns.update((k, None) for k in row if k not in fixed and k not in tail)
@@ -329,7 +337,8 @@ def run_study(study_file: str | Path, out_dir: str | Path, *, workers: int | Non
     out = Path(out_dir)
     runs_csv = out / "runs.csv"
     runs = expand(study)
-    rows = resumed_rows(runs_csv, study, runs) if resume else []
+    digest = study_digest(study, study_file)
+    rows = resumed_rows(runs_csv, study, runs, digest) if resume else []
     out.mkdir(parents=True, exist_ok=True)
     finished = {int(r["run"]) for r in rows}
     todo = [run for run in runs if run.index not in finished]
@@ -339,7 +348,7 @@ def run_study(study_file: str | Path, out_dir: str | Path, *, workers: int | Non
             shutil.copyfile(study_file, copy)
     if todo:
         _simulate_all(todo, study, scenario_file, rows, runs_csv, workers, address, progress,
-                      user)
+                      user, digest)
     write_rows(runs_csv, rows, study)
     from corobot_drake.study.resolve import parameter_units
 
@@ -349,7 +358,7 @@ def run_study(study_file: str | Path, out_dir: str | Path, *, workers: int | Non
 
 
 def _simulate_all(todo, study, scenario_file, rows, runs_csv, workers, address,
-                  progress, user) -> None:
+                  progress, user, digest) -> None:
     saved = -math.inf  # the first row is written at once
     bar = None
     try:
@@ -362,6 +371,7 @@ def _simulate_all(todo, study, scenario_file, rows, runs_csv, workers, address,
                 # When the row arrived, from the workers' start: the study's steady rate is
                 # read from these (`lab.bench_study`).
                 row["finished_seconds"] = round(time.perf_counter() - start, 3)
+                row[DIGEST_COLUMN] = digest  # what `resume` checks the row against
                 rows.append(row)
                 bar.update()
                 if time.monotonic() - saved > SAVE_EVERY:

@@ -12,9 +12,9 @@ from pathlib import Path
 import numpy as np
 
 from corobot_drake.study.runner import TIMING_COLUMNS
-from corobot_drake.study.spec import Study
+from corobot_drake.study.spec import DIGEST_COLUMN, Study
 
-NOT_METRICS = {"run", "seed", "status", "error", *TIMING_COLUMNS}
+NOT_METRICS = {"run", "seed", "status", "error", DIGEST_COLUMN, *TIMING_COLUMNS}
 
 
 class OutputError(OSError):

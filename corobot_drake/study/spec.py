@@ -252,6 +252,23 @@ def scenario_path(study: Study, study_file: str | Path) -> Path:
     return beside if beside.exists() else shipped_scenario(study.scenario) or beside
 
 
+DIGEST_COLUMN = "study_digest"
+"""The runs.csv column holding each row's `study_digest`."""
+_PER_ROW = ("scenario", "seeds", "grid", "random")
+"""Study fields a row's own cells say (its seed and parameter values), or the digest holds
+otherwise (the scenario file's content, not its path)."""
+
+
+def study_digest(study: Study, study_file: str | Path) -> str:
+    """What makes a run's row this study's beyond its run index, seed and parameter values
+    (which `--resume` compares cell by cell): the scenario file's content, the overrides, the
+    run length, the metrics, the programs and the cameras. 12 hex digits of their SHA-256."""
+    fields = {k: v for k, v in dc.asdict(study).items() if k not in _PER_ROW}
+    digest = hashlib.sha256(json.dumps(fields, sort_keys=True, default=repr).encode())
+    digest.update(scenario_path(study, study_file).read_bytes())
+    return digest.hexdigest()[:12]
+
+
 def study_path(name: str | Path) -> Path:
     """The study file `name` names: a path as it is when it exists, else, for a bare file
     name, the shipped study of that name (`tiny.yaml` from any folder, also from a wheel)."""

@@ -522,9 +522,20 @@ def test_resume_refuses_a_runs_table_not_this_studys(tmp_path, tiny_study):
     study_file, full_out = tiny_study
     table = (full_out / "runs.csv").read_text()
     other = write_study(tmp_path, scalings="6.0, 8.0", name="other.yaml")
+    longer = tmp_path / "longer.yaml"  # the same runs, each of another length
+    longer.write_text(study_file.read_text().replace("duration: 0.3", "duration: 0.5"))
+    header, *lines = table.splitlines()
+    digest = header.split(",").index("study_digest")
+    old = "\n".join(",".join(c for i, c in enumerate(line.split(",")) if i != digest)
+                    for line in [header, *lines]) + "\n"  # a table without the column
     cases = [
         (table, other, r"runs.csv:4: run 2's robots.corobot.drive.motor_torque_scaling is "
          r"'10.16', this study's is '8.0': these rows are another study's"),
+        (table, longer, r"runs.csv:2: run 0's study_digest is '[0-9a-f]{12}', this study's is "
+         r"'[0-9a-f]{12}' \(its scenario file, overrides, duration, until, settle, metrics, "
+         r"programs or cameras differ\): these rows are another study's"),
+        (old, study_file, r"runs.csv:1: no column 'study_digest': not the runs table of this "
+         r"study"),
         (table.replace("\n3,", "\n7,"), study_file,
          r"runs.csv:5: run '7' is not one of this study's 4 runs"),
         (table.replace("\n3,", "\n2,"), study_file, r"runs.csv:5: run 2 is listed twice"),
