@@ -250,7 +250,13 @@ def http_main(conn, access, port: int, log_level: str, niceness: int,
         return
     import uvicorn
 
-    from corobot_drake.serving.http_limits import http_config, raise_file_limit
+    from corobot_drake.serving.http_limits import (
+        MAX_CONNECTIONS,
+        connection_cap,
+        file_limit,
+        http_config,
+        raise_file_limit,
+    )
     from corobot_drake.serving.transport import RemoteRunner
     from corobot_drake.serving.webapp import create_app
 
@@ -258,6 +264,10 @@ def http_main(conn, access, port: int, log_level: str, niceness: int,
         with contextlib.suppress(OSError):
             os.nice(niceness)
     raise_file_limit()
+    cap = connection_cap()
+    if cap < MAX_CONNECTIONS:  # (the simulation process prints its lines on stdout)
+        print(f"note: the HTTP server holds at most {cap} connections at once: this process "
+              f"may open {file_limit()} files (ulimit -n)", file=sys.stderr, flush=True)
     sock = _listen(conn, access.host, port)
     if sock is None:
         return
@@ -274,7 +284,7 @@ def http_main(conn, access, port: int, log_level: str, niceness: int,
     except (TimeoutError, EOFError, OSError):
         return
     config = http_config(create_app(runner, access), log_level=log_level,
-                         timeout_graceful_shutdown=1)
+                         max_connections=cap, timeout_graceful_shutdown=1)
     server = uvicorn.Server(config)
     server_box.append(server)
     if gone.is_set():  # it stopped while the app was built (this niced process is slow to start)
@@ -313,8 +323,10 @@ class ServerProcess:
     scripts: `with ServerProcess(["--headless"]) as server: server.url`."""
 
     def __init__(self, args: list[str] = (), startup_timeout: float = 120.0,
-                 stderr_path: str | None = None):
+                 stderr_path: str | None = None, file_limit: int | None = None):
         self.args = list(args)
+        self.file_limit = file_limit
+        """The files each of the server's processes may open (`ulimit -n`; None: as is)."""
         self.startup_timeout = startup_timeout
         self.stderr_path = stderr_path
         self.url: str | None = None
@@ -330,9 +342,12 @@ class ServerProcess:
         import threading
 
         stderr = open(self.stderr_path, "w") if self.stderr_path else subprocess.DEVNULL
-        self.process = subprocess.Popen(
-            [sys.executable, "-m", "corobot_drake", *self.args, "--serve", "--port", "0"],
-            stdout=subprocess.PIPE, stderr=stderr, text=True)
+        command = [sys.executable, "-m", "corobot_drake", *self.args, "--serve", "--port", "0"]
+        if self.file_limit is not None:  # the shell's ulimit, then the server in its place
+            command = ["sh", "-c", f'ulimit -n {int(self.file_limit)} && exec "$@"', "sh",
+                       *command]
+        self.process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=stderr,
+                                        text=True)
         line: list[str] = []
         reader = threading.Thread(target=lambda: line.append(self.process.stdout.readline()),
                                   daemon=True)

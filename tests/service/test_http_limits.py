@@ -6,6 +6,7 @@ with a bound."""
 
 import socket
 import threading
+import time
 
 import httpx
 import pytest
@@ -186,3 +187,37 @@ def test_a_refused_client_is_let_go_after_the_linger(server, monkeypatch):
             for _ in range(100):
                 client.sendall(b"a" * 65536)
                 threading.Event().wait(0.01)
+
+
+def test_slow_clients_beyond_the_file_limit_do_not_lock_others_out(tmp_path):
+    """Under `ulimit -n 128` the HTTP process holds at most 32 connections, and says so as it
+    starts. 150 slow clients, more than it could open files for, do not keep a whole request
+    from being answered while they hang (well before their deadline): each new connection
+    takes the place of the one that has waited longest for its request."""
+    from corobot_drake.serving.http_limits import REQUEST_TIMEOUT
+    from corobot_drake.serving.serve import ServerProcess
+
+    stderr = tmp_path / "stderr.log"
+    with ServerProcess(["--headless"], stderr_path=str(stderr), file_limit=128) as server:
+        assert ("note: the HTTP server holds at most 32 connections at once: this process "
+                "may open 128 files (ulimit -n)\n") in stderr.read_text()
+        host, port = server.url.removeprefix("http://").rsplit(":", 1)
+        address = (host, int(port))
+        started = time.monotonic()
+        slow = [_connect(address) for _ in range(150)]
+        for client in slow:
+            client.sendall(b"GET /simulation HTTP/1.1\r\nHost: 127.0.0.1\r\n")
+        r = httpx.get(f"{server.url}/simulation", timeout=REQUEST_TIMEOUT)
+        answered = time.monotonic() - started
+        assert r.status_code == 200 and answered < REQUEST_TIMEOUT - 2, answered
+        hanging = 0
+        for client in slow:
+            client.setblocking(False)
+            try:
+                hanging += client.recv(1) != b""  # b"": closed by the server
+            except BlockingIOError:  # still open, waiting
+                hanging += 1
+            except OSError:  # reset by the server
+                pass
+            client.close()
+        assert 0 < hanging <= 32, hanging
