@@ -4,6 +4,7 @@ behind a token; raw sockets play the clients. The request deadline is 1 s here (
 so that waiting for it stays short; every wait is on an event (a closed socket, an answer)
 with a bound."""
 
+import contextlib
 import socket
 import threading
 import time
@@ -23,9 +24,9 @@ WAIT = 20.0
 ROBOT = "/robots/corobot"
 
 
-@pytest.fixture(scope="module")
-def server():
-    """(host, port) of the served app, with the token TOKEN."""
+@contextlib.contextmanager
+def serving(**limits):
+    """(host, port) of the served app, with the token TOKEN; `limits` go to `http_config`."""
     import uvicorn
 
     from corobot_drake.serving.runner import SimRunner
@@ -34,13 +35,21 @@ def server():
     runner = SimRunner(make_sim()).start()
     sock = socket.create_server(("127.0.0.1", 0), backlog=2048)
     app = create_app(runner, Access("127.0.0.1", TOKEN))
-    uv = uvicorn.Server(http_config(app, request_timeout=DEADLINE))
+    uv = uvicorn.Server(http_config(app, request_timeout=DEADLINE, **limits))
     thread = threading.Thread(target=uv.run, kwargs={"sockets": [sock]}, daemon=True)
     thread.start()  # connections queue on the listening socket until it serves
-    yield sock.getsockname()
-    uv.should_exit = True
-    thread.join(WAIT)
-    runner.stop()
+    try:
+        yield sock.getsockname()
+    finally:
+        uv.should_exit = True
+        thread.join(WAIT)
+        runner.stop()
+
+
+@pytest.fixture(scope="module")
+def server():
+    with serving() as address:
+        yield address
 
 
 def _connect(address) -> socket.socket:
@@ -221,3 +230,31 @@ def test_slow_clients_beyond_the_file_limit_do_not_lock_others_out(tmp_path):
                 pass
             client.close()
         assert 0 < hanging <= 32, hanging
+
+
+def test_at_the_connection_cap_a_waiting_client_gives_way_and_a_served_one_does_not():
+    """With 4 connections at most: a fifth closes the one that has waited longest for its
+    request; requests pipelined on one connection are each answered (the guard follows them
+    one by one); with all 4 served (event streams), a new one gets 503."""
+    auth = {"Authorization": f"Bearer {TOKEN}"}
+    with serving(max_connections=4) as address:
+        base = f"http://{address[0]}:{address[1]}"
+        waiting = [_connect(address) for _ in range(4)]
+        waiting[0].sendall(b"GET /simulation HTTP/1.1\r\n")
+        assert _legitimate(address).status_code == 200
+        with contextlib.suppress(ConnectionResetError):  # (reset if its bytes were unread)
+            assert _answer(waiting[0]) == b""  # closed for it, unanswered
+        for client in waiting:
+            client.close()
+        with _connect(address) as client:
+            request = (f"GET /robots HTTP/1.1\r\nHost: 127.0.0.1\r\nAuthorization: Bearer "
+                       f"{TOKEN}\r\n").encode()
+            client.sendall(request + b"\r\n" + request + b"Connection: close\r\n\r\n")
+            assert _answer(client).count(b"HTTP/1.1 200 ") == 2
+        with contextlib.ExitStack() as streams:
+            clients = [streams.enter_context(httpx.Client(base_url=base, headers=auth,
+                                                          timeout=WAIT)) for _ in range(4)]
+            for client in clients:
+                streams.enter_context(client.stream("GET", f"{ROBOT}/gps/subscribe?limit=5"))
+            busy = _answer(_connect(address))
+            assert busy.startswith(b"HTTP/1.1 503 ") and b'"detail"' in busy, busy
