@@ -752,6 +752,11 @@ STUDIES = [
               "a standard deviation"),
     StudyCase("choice empty", "random:\n  a.b: !Choice {values: []}\n", "random.a.b.values",
               "at least one value"),
+    StudyCase("grid of mixed values", "grid:\n  robots.corobot.drive.motor_torque_scaling: "
+              "[10.0, fast, null, true]\n",
+              "grid.robots.corobot.drive.motor_torque_scaling[2]", "got null"),
+    StudyCase("steady metric on a short run", "duration: 0.3\nmetrics: [steady_speed]\n",
+              "metrics[0]", "needs runs of at least 1 s"),
 ]
 
 
