@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from conftest import REPO
+from conftest import REPO, load_tool
 
 TOOLS = sorted((REPO / "tools").glob("*.py"))
 
@@ -86,7 +86,8 @@ def test_a_tool_writes_under_the_current_directory_by_default(tool, monkeypatch)
 
 def test_the_generators_write_into_the_current_directory(tmp_path):
     """make_model and make_meshes, run with no option in an empty folder, write there what
-    is shipped, byte for byte, and leave the shipped files alone."""
+    is shipped (byte for byte; the PNG texture, its pixels and palette) and leave the shipped
+    files alone."""
     import subprocess
 
     from corobot_drake.resources import MODELS_DIR
@@ -97,9 +98,10 @@ def test_the_generators_write_into_the_current_directory(tmp_path):
     assert (tmp_path / "corobot.sdf").read_bytes() == (MODELS_DIR / "corobot.sdf").read_bytes()
     written = sorted(p.name for p in (tmp_path / "meshes").iterdir())
     assert "wheel.obj" in written
+    same_content = load_tool("make_meshes").same_content  # a PNG by its pixels and palette
     for name in written:
-        assert (tmp_path / "meshes" / name).read_bytes() == \
-            (MODELS_DIR / "meshes" / name).read_bytes(), name
+        assert same_content(name, (tmp_path / "meshes" / name).read_bytes(),
+                            MODELS_DIR / "meshes" / name), name
 
 
 def test_tuning_writes_a_scenario_only_when_it_is_named(tmp_path):

@@ -21,7 +21,7 @@ from pydrake.geometry import (
 from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.systems.framework import DiagramBuilder
 
-from conftest import REPO
+from conftest import REPO, load_tool
 from corobot_drake.model import dimensions as dim
 from corobot_drake.model import meshes
 from corobot_drake.sensors.camera import make_vtk_engine
@@ -32,6 +32,7 @@ TOLERANCE = 0.005
 BACKGROUND = (204, 229, 255)
 """RenderEngineVtkParams' default background colour."""
 CHASSIS_MOUNTED = ("chassis", "platform", "camera", "ir_front", "ir_rear", "standoffs")
+make_meshes = load_tool("make_meshes")
 
 
 def read_obj(path: Path):
@@ -56,23 +57,65 @@ def read_obj(path: Path):
     return np.array(v), np.array(tris), vn[np.array(tri_normals)], used
 
 
+def corners_by_material(path: Path) -> dict[str, np.ndarray]:
+    """{material: (n, 3, 8) corners [position, normal, UV]} of an OBJ file's triangles, in
+    the file's order (its v, vn and vt indexed separately, as OBJ allows)."""
+    v, vt, vn, out, current = [], [], [], {}, None
+    for line in path.read_text().splitlines():
+        parts = line.split()
+        if not parts:
+            continue
+        if parts[0] in ("v", "vt", "vn"):
+            {"v": v, "vt": vt, "vn": vn}[parts[0]].append([float(x) for x in parts[1:]])
+        elif parts[0] == "usemtl":
+            current = out.setdefault(parts[1], [])
+        elif parts[0] == "f":
+            corners = [[int(i) - 1 for i in p.split("/")] for p in parts[1:]]
+            current.append([v[a] + vn[c] + vt[b] for a, b, c in corners])
+    return {material: np.array(tris) for material, tris in out.items()}
+
+
 @pytest.fixture(scope="module")
 def files() -> dict[str, bytes]:
-    return meshes.generate_files()
+    return make_meshes.generate_files()
 
 
 def test_generation_is_deterministic(files):
-    assert meshes.generate_files() == files
+    assert make_meshes.generate_files() == files
 
 
-def test_regenerated_files_are_byte_identical_to_committed(tmp_path, files):
-    meshes.write_files(tmp_path, files)
+def test_regenerated_files_are_the_committed_ones(tmp_path, files):
+    """Byte for byte, the PNG texture aside: its pixels and palette (its compressed bytes
+    depend on the zlib Pillow was built with)."""
+    make_meshes.write_files(tmp_path, files)
     for name in files:
         committed = meshes.MESH_DIR / name
         assert committed.is_file(), (
             f"{committed} is not committed; run tools/make_meshes.py --out models/meshes")
-        assert (tmp_path / name).read_bytes() == committed.read_bytes(), (
+        assert make_meshes.same_content(name, (tmp_path / name).read_bytes(), committed), (
             f"{name} is stale; run tools/make_meshes.py --out models/meshes")
+
+
+def test_the_obj_files_hold_each_triangle_as_built():
+    """trimesh writes a vertex per distinct (position, normal, UV) corner: read back, each
+    material's triangles have the corners `MeshBuilder` built, in its order."""
+    for name, mesh in meshes.build_meshes().items():
+        written = corners_by_material(meshes.MESH_DIR / f"{name}.obj")
+        built = mesh.groups()
+        assert list(written) == list(built), name
+        for material, (positions, normals, uvs) in built.items():
+            np.testing.assert_array_equal(
+                written[material], np.concatenate([positions, normals, uvs], axis=2))
+
+
+def test_the_texture_is_a_palette_png_of_the_drawn_pixels():
+    from PIL import Image
+
+    indices, palette = meshes.platform_texture()
+    with Image.open(meshes.MESH_DIR / meshes.TEXTURE_NAME) as image:
+        assert image.format == "PNG" and image.mode == "P"
+        np.testing.assert_array_equal(np.asarray(image), indices)
+        assert image.getpalette()[:3 * len(palette)] == [c for rgb in palette for c in rgb]
 
 
 def test_tool_check_flag(tmp_path):
