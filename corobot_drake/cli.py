@@ -49,8 +49,17 @@ class ArgumentError(Exception):
     """A bad command line value: `str()` is `--flag: what is wrong and what is allowed`."""
 
 
+def program_name() -> str:
+    """How this program was invoked, for its --help: `python -m corobot_drake`, or the console
+    script's name (`corobot-drake`)."""
+    name = Path(sys.argv[0]).name
+    return "python -m corobot_drake" if name in ("__main__.py", "") else name
+
+
 def _parser() -> argparse.ArgumentParser:
-    p = _ArgumentParser(prog="python -m corobot_drake", description=__doc__.splitlines()[0])
+    prog = program_name()
+    p = _ArgumentParser(prog=prog, description=__doc__.split("\n\n")[0].replace(
+        "python -m corobot_drake", prog))
     p.add_argument("scenario", nargs="?", default=str(DEFAULT_SCENARIO),
                    help="scenario YAML, or a shipped scenario's name (maze.yaml) from any "
                    "folder (default: scenarios/corobot.yaml)")
@@ -306,7 +315,7 @@ def check_extras(args) -> None:
               "--mcap": ("record", args.mcap)}
     try:
         for flag, (extra, value) in wanted.items():
-            if value not in (None, False):
+            if value is not None and value is not False:  # `--foxglove 0` asks too (0 == False)
                 require(extra, flag)
     except MissingExtraError as e:
         raise ArgumentError(str(e)) from None
@@ -565,6 +574,13 @@ def _run_here(sim: Simulation, meshcat, headless: bool, duration: float, live: b
         progress.finish()
 
 
+def simulated_line(end: float, start: float) -> str:
+    """The closing line's start: the simulated time the run took (s), and where it began and
+    ended when not at 0 (a saved scenario resumed, a `start_time`)."""
+    line = f"simulated {end - start:.2f} s"
+    return line + (f" (t = {start:.2f} to {end:.2f} s)" if start != 0 else "")
+
+
 def _finish(sim: Simulation, args) -> int:
     """The run's closing line and its outputs (`_write_results`), written whole even if a
     stop signal comes meanwhile (it sets the exit status)."""
@@ -575,7 +591,7 @@ def _finish(sim: Simulation, args) -> int:
     try:
         summary = sim.summary()
         rate = summary["realtime_factor"]  # NaN when no step was taken
-        print(f"simulated {summary['time']:.2f} s"
+        print(simulated_line(summary["time"], sim.scenario.simulator_config.start_time)
               + (f" at {rate:.1f}x real time" if math.isfinite(rate) else ""))
         status = _write_results(sim, args, summary)
     finally:

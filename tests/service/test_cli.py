@@ -3,6 +3,7 @@
 import json
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -367,3 +368,38 @@ def test_a_foxglove_server_started_before_a_failing_mcap_file_is_stopped(tmp_pat
     while sockets_held(os.getpid()) & listening_sockets() - before:
         assert time.monotonic() < deadline, "the Foxglove server still listens"
         time.sleep(0.05)
+
+
+@pytest.mark.parametrize("port", ["0", "8765"])
+def test_foxglove_without_the_extra_is_one_line_on_any_port(port, monkeypatch, capsys):
+    """Port 0 (a free one) asks for the [record] extra like any other port."""
+    monkeypatch.setitem(sys.modules, "foxglove", None)  # as if not installed
+    assert main(["--headless", "--foxglove", port]) == 2
+    assert capsys.readouterr().err == ("error: --foxglove needs the [record] extra: pip install "
+                                       "'corobot-drake[record]'\n")
+
+
+def test_the_closing_line_says_the_time_simulated_not_the_end_time(capsys):
+    """A run from t = 3 s (a resumed saved scenario starts where it was saved) for 0.5 s."""
+    assert main(["--headless", "--duration", "0.5", "--override", NO_CAMERA,
+                 "--override", "simulator_config: {start_time: 3.0}"]) == 0
+    assert capsys.readouterr().out.startswith("simulated 0.50 s (t = 3.00 to 3.50 s) at ")
+    assert main(["--headless", "--duration", "0.5", "--override", NO_CAMERA]) == 0
+    assert capsys.readouterr().out.startswith("simulated 0.50 s at ")
+
+
+def test_help_names_the_program_as_it_was_invoked():
+    """The console script's --help says `corobot-drake`, `python -m`'s says `python -m ...`;
+    the description is the module's whole first sentence."""
+    script = Path(sys.executable).with_name("corobot-drake")
+    if not script.exists():
+        pytest.skip("no corobot-drake console script in this environment")
+    for argv, prog in (([str(script)], "corobot-drake"),
+                       ([sys.executable, "-m", "corobot_drake"], "python -m corobot_drake")):
+        run = subprocess.run([*argv, "--help"], capture_output=True, text=True, timeout=120)
+        assert run.returncode == 0, run.stderr
+        assert run.stdout.startswith(f"usage: {prog} [-h]")
+        text = " ".join(run.stdout.split())
+        assert f"`{prog} [SCENARIO]`: run a scenario in Meshcat or headless." in text
+        if prog == "corobot-drake":
+            assert "python -m" not in text
