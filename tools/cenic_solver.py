@@ -18,7 +18,7 @@ from lab.bench import machine
 
 @one_line_errors
 def main(argv=None) -> int:
-    parser = ToolParser(description=__doc__.splitlines()[0])
+    parser = ToolParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--repeats", type=bounded(REPEATS, int), default=3,
                         help="gym runs per setting, interleaved (the median is shown)")
     args = parser.parse_args(argv)

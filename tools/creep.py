@@ -36,7 +36,7 @@ MINUTES = Range(0.0, 1e4, low_open=True, unit="min")
 
 @one_line_errors
 def main(argv=None) -> int:
-    p = ToolParser(description=__doc__.splitlines()[0])
+    p = ToolParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--seconds", type=bounded(SECONDS), default=30.0,
                    help="simulated seconds each resting robot is measured")
     p.add_argument("--points", type=bounded(POINTS, int), default=13,

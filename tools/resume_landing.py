@@ -26,7 +26,7 @@ SETTLE = Range(0.0, 100.0, unit="s")
 
 @one_line_errors
 def main(argv=None) -> int:
-    p = ToolParser(description=__doc__.splitlines()[0])
+    p = ToolParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--step", type=bounded(STEP), default=0.02,
                    help="s between saves (a multiple of the 10 ms control period)")
     p.add_argument("--settle", type=bounded(SETTLE), default=1.0,

@@ -18,7 +18,7 @@ STEPS = (0.005, 0.01, 0.02, 0.025, 0.03, 0.05, 0.1, 1.0)
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0],
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                 formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     p.add_argument("--steps", type=float, nargs="+", default=list(STEPS),
                    help="plant steps to try, s")

@@ -126,7 +126,7 @@ def main(argv: list[str] | None = None) -> int:
     import argparse
 
     p = argparse.ArgumentParser(prog="python -m corobot_drake.ros2.build",
-                                description=__doc__.splitlines()[0])
+                                description=__doc__.split("\n\n")[0])
     p.add_argument("--force", action="store_true", help="build even when up to date")
     p.add_argument("--verbose", action="store_true", help="show CMake's and Ninja's output")
     args = p.parse_args(argv)

@@ -32,7 +32,7 @@ class _ArgumentParser(argparse.ArgumentParser):
 
 def _parser() -> argparse.ArgumentParser:
     p = _ArgumentParser(prog="python -m corobot_drake.ros2",
-                        description=__doc__.splitlines()[0])
+                        description=__doc__.split("\n\n")[0])
     p.add_argument("--wait", type=float, default=DEFAULT_WAIT,
                    help=f"s to wait for discovery (default {DEFAULT_WAIT:g})")
     p.add_argument("--network", action="store_true",

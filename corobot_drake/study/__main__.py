@@ -24,7 +24,7 @@ from corobot_drake.extras import MissingExtraError, require
 
 def _parser() -> argparse.ArgumentParser:
     p = ToolParser(formatter_class=argparse.HelpFormatter,  # its help states the defaults
-                   prog="python -m corobot_drake.study", description=__doc__.splitlines()[0])
+                   prog="python -m corobot_drake.study", description=__doc__.split("\n\n")[0])
     p.add_argument("study", help="study YAML file, or a shipped study's name (tiny.yaml)")
     p.add_argument("--workers", type=bounded(WORKERS, int), default=None,
                    help="Ray workers (default: this machine's cores, or the cluster's CPUs)")

@@ -113,3 +113,29 @@ def test_tuning_writes_a_scenario_only_when_it_is_named(tmp_path):
     assert run.stderr.splitlines() == [
         "error: --write: name the scenario file to write with --scenario (the shipped scenario "
         "is never written by default)"]
+
+
+def _first_paragraph(doc: str) -> str:
+    """A docstring's first paragraph, its whitespace as --help wraps it."""
+    return " ".join(doc.strip().split("\n\n")[0].split())
+
+
+@pytest.mark.parametrize("tool", TOOLS, ids=lambda t: t.stem)
+def test_help_describes_a_tool_in_its_whole_first_paragraph(tool, monkeypatch):
+    """Not its first line alone: a sentence running over two lines was cut off."""
+    import ast
+
+    parser = _parser_of(tool, monkeypatch)
+    assert " ".join(parser.description.split()) == \
+        _first_paragraph(ast.get_docstring(ast.parse(tool.read_text())))
+
+
+@pytest.mark.parametrize("module", ["corobot_drake.cli", "corobot_drake.study.__main__",
+                                    "corobot_drake.ros2.inspection", "corobot_drake.ros2.build"])
+def test_help_describes_a_module_in_its_whole_first_paragraph(module, monkeypatch, capsys):
+    monkeypatch.setattr(sys, "argv", ["corobot_drake/__main__.py"])  # as `python -m` runs it
+    imported = importlib.import_module(module)
+    with pytest.raises(SystemExit) as stop:
+        imported.main(["--help"])
+    assert stop.value.code == 0
+    assert _first_paragraph(imported.__doc__) in " ".join(capsys.readouterr().out.split())
