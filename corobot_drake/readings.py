@@ -6,6 +6,25 @@ No Drake import here, so `corobot_drake.serving.client` works where pydrake is n
 import dataclasses as dc
 
 
+def _rounded_repr(reading, formats: dict[str, str]) -> str:
+    """`Name(field=value unit, ...)`: each number of `formats` ({field: format spec and unit,
+    e.g. ".4f m"}) rounded for a reader (0.1 mm, 0.1 mrad, 1 ms; the fields keep every
+    digit), other fields as repr()."""
+    parts = []
+    for field in dc.fields(reading):
+        value = getattr(reading, field.name)
+        if field.name in formats and value is not None:
+            spec, _, unit = formats[field.name].partition(" ")
+            text = format(float(value), spec)
+            if float(text) == 0.0:  # -1e-6 m is 0.0000 m, not -0.0000 m
+                text = text.lstrip("-")
+            value = f"{text} {unit}".rstrip()
+        else:
+            value = repr(value)
+        parts.append(f"{field.name}={value}")
+    return f"{type(reading).__name__}({', '.join(parts)})"
+
+
 @dc.dataclass(frozen=True)
 class BodyPose:
     """Chassis pose in the world: metres and radians (roll, pitch, yaw extrinsic x-y-z)."""
@@ -17,6 +36,10 @@ class BodyPose:
     pitch: float
     yaw: float
 
+    def __repr__(self) -> str:
+        return _rounded_repr(self, {"x": ".4f m", "y": ".4f m", "z": ".4f m", "roll": ".4f rad",
+                                    "pitch": ".4f rad", "yaw": ".4f rad"})
+
 
 @dc.dataclass(frozen=True)
 class BodyVelocity:
@@ -25,6 +48,10 @@ class BodyVelocity:
     forward: float
     lateral: float
     yaw_rate: float
+
+    def __repr__(self) -> str:
+        return _rounded_repr(self, {"forward": ".4f m/s", "lateral": ".4f m/s",
+                                    "yaw_rate": ".4f rad/s"})
 
 
 @dc.dataclass(frozen=True)
@@ -35,6 +62,9 @@ class OdometryPose:
     x: float
     y: float
     yaw: float
+
+    def __repr__(self) -> str:
+        return _rounded_repr(self, {"x": ".4f m", "y": ".4f m", "yaw": ".4f rad"})
 
 
 @dc.dataclass(frozen=True)
@@ -54,6 +84,9 @@ class CommandResult:
     def succeeded(self) -> bool:
         return self.status == "succeeded"
 
+    def __repr__(self) -> str:
+        return _rounded_repr(self, {"start_time": ".3f s", "end_time": ".3f s"})
+
 
 @dc.dataclass(frozen=True)
 class IrReading:
@@ -67,3 +100,7 @@ class IrReading:
     """raw / range, in [0, 1]."""
     time: float
     """Simulated time of the scan."""
+
+    def __repr__(self) -> str:
+        return _rounded_repr(self, {"raw": ".4f m", "range": ".4f m", "normalized": ".3f",
+                                    "time": ".3f s"})

@@ -94,6 +94,18 @@ class CommandHandle:
     def __init__(self, robot: "Robot", seq: int):
         self.robot, self.seq = robot, seq
 
+    def __repr__(self) -> str:
+        """E.g. `<CommandHandle corobot seq 3: DriveDistance succeeded, t = 0.500 to 2.310 s>`."""
+        head = f"<CommandHandle {self.robot.name} seq {self.seq}"
+        try:
+            r = self.result()
+        except KeyError:  # the command log keeps the newest records only
+            return f"{head}: no longer in the command log>"
+        status = r.status + (f" ({r.reason})" if r.reason else "")
+        times = (f"since t = {r.start_time:.3f} s" if r.end_time is None
+                 else f"t = {r.start_time:.3f} to {r.end_time:.3f} s")
+        return f"{head}: {r.command} {status}, {times}>"
+
     def result(self) -> CommandResult:
         return self.robot.command_result(self.seq)
 

@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 import re
 
+from corobot_drake.readings import IrReading
 from corobot_drake.resources import DEFAULT_SCENARIO
 from lab.docs_blocks import wrap_markdown
 from lab.refresh.measures import json_output
@@ -37,8 +38,7 @@ def _top_speed(text: str) -> tuple[float, float]:
 
 def _ir_code(m: dict) -> str:
     rear, d = m["rear"], m["distances"]
-    reading = (f"IrReading(raw={rear['raw']:.5g}, range={rear['range']:.5g}, "
-               f"normalized={rear['normalized']:.3g}, time={rear['time']:.1f})")
+    reading = repr(IrReading(**rear))  # as Python prints it
     distances = "{" + ", ".join(f"'{k}': {v:.5g}" for k, v in d.items()) + "}"
     return "\n".join(["```python", "robot = sim.robot()",
                       "robot.ir(\"rear\")".ljust(24) + f"# {reading}",

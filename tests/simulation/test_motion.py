@@ -125,6 +125,32 @@ def test_supersede_disable_and_stall_end_with_their_reasons():
         ("Enable", "succeeded", ""), ("DriveDistance", "failed", "stalled")]
 
 
+def test_a_handle_and_the_readings_print_rounded_with_units():
+    import re
+
+    sim = fast_sim()
+    robot = sim.robot()
+    handle = robot.drive_distance_async(0.2, 0.5)
+    sim.advance(0.25)
+    assert repr(handle) == "<CommandHandle corobot seq 1: DriveDistance running, since t = 0.000 s>"
+    end = handle.wait().end_time
+    assert repr(handle) == ("<CommandHandle corobot seq 1: DriveDistance succeeded, "
+                            f"t = 0.000 to {end:.3f} s>")
+    start = sim.time
+    superseded = robot.drive_distance_async(1.0, 0.2)
+    sim.advance(0.1)
+    robot.set_power(0.0, 0.0)
+    assert repr(superseded) == ("<CommandHandle corobot seq 2: DriveDistance failed (superseded), "
+                                f"t = {start:.3f} to {sim.time:.3f} s>")
+    n = r"-?\d+\.\d"
+    assert re.fullmatch(rf"IrReading\(raw=0\.\d{{4}} m, range=0\.7620 m, normalized={n}{{3}}, "
+                        rf"time={n}{{3}} s\)", repr(robot.ir("front")))
+    assert re.fullmatch(rf"BodyPose\(x={n}{{4}} m, y={n}{{4}} m, z={n}{{4}} m, "
+                        rf"roll={n}{{4}} rad, pitch={n}{{4}} rad, yaw={n}{{4}} rad\)",
+                        repr(robot.pose()))
+    assert "-0.0000" not in repr(robot.velocity())  # at rest: no negative zeros
+
+
 def test_encoders_count_600_ticks_per_revolution():
     sim = fast_sim(extra="wheel_angles: [6.2831853072, -0.0001, 0, 0]")
     robot = sim.robot()
