@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from corobot_drake.config.scenario import ScenarioError, load_scenario, read_text
+from corobot_drake.config.scenario import ScenarioError, load_scenario, one_line, read_text
 from corobot_drake.model import dimensions as dim
 from corobot_drake.names import unknown_robot
 
@@ -359,15 +359,23 @@ def set_drive_field(text: str, robot: str, field: str, value: float, comment: st
     from ruamel.yaml import YAML
     from ruamel.yaml.comments import CommentedMap
     from ruamel.yaml.emitter import RoundTripEmitter
+    from ruamel.yaml.error import YAMLError
     from ruamel.yaml.util import load_yaml_guess_indent
 
-    _, indent, block_seq_indent = load_yaml_guess_indent(text)
-    indent, offset = indent or 2, block_seq_indent or 0  # None: no block mapping, no list
     yaml = YAML()  # round-trip
     yaml.preserve_quotes = True
     yaml.width = 1 << 16  # never fold a long line
-    yaml.indent(mapping=indent, sequence=indent + offset, offset=offset)
-    data = yaml.load(text)
+    try:
+        data, indent, block_seq_indent = load_yaml_guess_indent(text)
+        indent, offset = indent or 2, block_seq_indent or 0  # None: no block mapping, no list
+        yaml.indent(mapping=indent, sequence=indent + offset, offset=offset)
+        data = yaml.load(text)  # with preserve_quotes
+    except YAMLError as e:  # the loader would refuse it too: one line, where and why
+        mark = getattr(e, "problem_mark", None)
+        where = f" at line {mark.line + 1}" if mark is not None else ""
+        problem = getattr(e, "problem", None) or one_line(e)
+        raise ValueError(f"not a YAML file ruamel.yaml can edit{where}: "
+                         f"{problem.strip().splitlines()[0]}") from None
     robots = data.get("robots") if isinstance(data, CommentedMap) else None
     if not isinstance(robots, CommentedMap):
         raise ValueError("no `robots:` mapping at the top level")

@@ -139,6 +139,10 @@ def test_set_drive_field_edits_any_layout_yaml_can_take():
              "    # the script\n    commands: []\n")
     assert sysid.set_drive_field(block, "corobot", "hold_gain", 2.5, "new") == block.replace(
         "# old\n", "# old\n      hold_gain: 2.5  # new\n")
+    with pytest.raises(ValueError, match=r"^not a YAML file ruamel.yaml can edit at line 3: "
+                                         r"expected ',' or '}', but got '<stream end>'$"):
+        sysid.set_drive_field("robots:\n  corobot: {drive: {slew_rate: 3}\n", "corobot",
+                              "slew_rate", 4)
 
 
 def test_tuner_steps_toward_the_target(tmp_path):
