@@ -15,7 +15,9 @@ import contextlib
 import dataclasses as dc
 import logging
 import math
+import sys
 import threading
+import time
 from functools import partial
 
 import rclpy
@@ -30,6 +32,7 @@ from rclpy.qos import (
     qos_profile_sensor_data,
 )
 
+from corobot_drake import limits as lim
 from corobot_drake.config import scenario as sc
 from corobot_drake.ros2 import interfaces as ifc
 from corobot_drake.ros2.graph import configure_discovery, ros_type
@@ -48,6 +51,19 @@ BLOCKING_CALLBACKS_PER_ROBOT = len(ifc.ACTIONS) + 1
 """Callbacks that wait on the simulation, per robot: each action's running goal, /set_pose."""
 OTHER_CALLBACK_THREADS = 4
 """Executor threads for the quick callbacks (/cmd_vel, the services, the parameters)."""
+REQUEST_QUEUE = 1000
+"""Requests a service (and an action's goal, cancel and result services) keeps waiting:
+the executor takes them one at a time, so a burst waits in this queue (ROS's default 10
+dropped the rest of a burst unanswered); as rclpy's parameter services keep."""
+YAW = lim.Range(math.radians(lim.YAW_DEG.low), math.radians(lim.YAW_DEG.high), unit="rad")
+"""/set_pose's `yaw` (rad): the scenario command's yaw_deg range."""
+NODE_STOPPED = "the node stopped (the simulation ended) before the goal did"
+"""The reason of a goal still running when the node stops (aborted)."""
+RESULT_GRACE = 0.5
+"""s (wall clock) the node keeps serving after aborting the goals still running as it
+stops, for their results to reach their clients."""
+GRAPH_CHECK_PERIOD = 2.0
+"""s (wall clock) between looks for another node of the same name in the domain."""
 
 _log = logging.getLogger(__name__)
 
@@ -58,6 +74,7 @@ QOS = {
     ifc.Qos.LATCHED: QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
                                 durability=DurabilityPolicy.TRANSIENT_LOCAL),
 }
+SERVICE_QOS = QoSProfile(depth=REQUEST_QUEUE, reliability=ReliabilityPolicy.RELIABLE)
 
 
 class LiveSink:
@@ -104,6 +121,10 @@ class Ros2Node:
         self._closing = threading.Event()
         self._servers: list = []
         self._robots = 0
+        self._goals = 0  # running (`_execute`)
+        self._goals_changed = threading.Condition()
+        self._namesakes = 1
+        self.node.create_timer(GRAPH_CHECK_PERIOD, self._check_namesakes)
 
     @property
     def log(self):
@@ -138,11 +159,13 @@ class Ros2Node:
                     execute_callback=partial(self._execute, robot, action),
                     goal_callback=lambda goal: GoalResponse.ACCEPT,
                     cancel_callback=lambda goal: CancelResponse.ACCEPT,
-                    callback_group=self._group))
+                    callback_group=self._group, goal_service_qos_profile=SERVICE_QOS,
+                    result_service_qos_profile=SERVICE_QOS,
+                    cancel_service_qos_profile=SERVICE_QOS))
             for service in ifc.SERVICES:
                 self.node.create_service(ros_type(service.type), names.topic(service.name),
                                          partial(getattr(self, f"_{service.name}"), robot),
-                                         callback_group=self._group)
+                                         qos_profile=SERVICE_QOS, callback_group=self._group)
         runner.hooks.append(self._check_deadman)
 
     def _call(self, fn, timeout: float = ANSWER_TIMEOUT):
@@ -177,8 +200,31 @@ class Ros2Node:
             if last is not None and last.seq == twist.seq:
                 sim.robot(robot).all_stop()
 
+    def _check_namesakes(self) -> None:
+        """Warns (a line on stderr) when another node of this one's name joins the domain:
+        its commands and topics would mix with this one's."""
+        me = (self.node.get_name(), self.node.get_namespace())
+        namesakes = self.node.get_node_names_and_namespaces().count(me)
+        if namesakes > self._namesakes:
+            print(f"warning: ROS 2: {namesakes} nodes named {self.node.get_fully_qualified_name()}"
+                  f" in ROS_DOMAIN_ID {self.context.get_domain_id()}: their topics, services "
+                  "and actions mix (run each simulation in a ROS_DOMAIN_ID of its own)",
+                  file=sys.stderr, flush=True)
+        self._namesakes = max(namesakes, 1)
+
     # --- actions ---
     def _execute(self, robot: str, action: ifc.Action, goal_handle):
+        """A goal, counted while it runs (`close` waits for them to be aborted)."""
+        with self._goals_changed:
+            self._goals += 1
+        try:
+            return self._run_goal(robot, action, goal_handle)
+        finally:
+            with self._goals_changed:
+                self._goals -= 1
+                self._goals_changed.notify_all()
+
+    def _run_goal(self, robot: str, action: ifc.Action, goal_handle):
         Result = ros_type(action.type).Result
         goal = goal_handle.request
         arguments = {name: getattr(goal, name) for name in ifc.goal_fields(action.command)}
@@ -195,12 +241,20 @@ class Ros2Node:
                 break
             except concurrent.futures.TimeoutError:
                 pass
-            except SimulationStoppedError as e:
+            except SimulationStoppedError:
                 goal_handle.abort()
-                return Result(success=False, reason=str(e))
+                return Result(success=False, reason=NODE_STOPPED)
+            if self._closing.is_set():
+                with contextlib.suppress(SimulationStoppedError, TimeoutError):
+                    self._call(partial(stop_if_running, robot, started.seq), RESULT_GRACE)
+                goal_handle.abort()
+                return Result(success=False, reason=NODE_STOPPED)
             if goal_handle.is_cancel_requested:
                 return self._cancel(robot, started.seq, goal_handle, ended, Result)
-            left = self._call(partial(remaining, robot, action.command))
+            try:
+                left = self._call(partial(remaining, robot, action.command))
+            except (SimulationStoppedError, TimeoutError):
+                continue  # the next look at `ended` says why
             if left is not None:
                 goal_handle.publish_feedback(Feedback(**{action.feedback: left}))
         if result.succeeded:
@@ -237,6 +291,11 @@ class Ros2Node:
         return response
 
     def _set_pose(self, robot: str, request, response):
+        # The service's own field, in rad (the command's yaw_deg would name another).
+        problem = YAW.problem(request.yaw)
+        if problem:
+            response.success, response.reason = False, f"yaw: {problem}"
+            return response
         arguments = {"x": request.x, "y": request.y, "yaw_deg": math.degrees(request.yaw)}
         try:
             result = self._call(partial(calls.start_operation, robot, "set_pose", arguments))
@@ -273,6 +332,11 @@ class Ros2Node:
         if self._closing.is_set():
             return
         self._closing.set()
+        with self._goals_changed:  # each aborts within a feedback period (`_run_goal`)
+            aborted = self._goals > 0
+            self._goals_changed.wait_for(lambda: self._goals == 0, ANSWER_TIMEOUT)
+        if aborted and self._executor is not None:
+            time.sleep(RESULT_GRACE)  # still spinning: their results go out
         if self._executor is not None:
             self._executor.shutdown(timeout_sec=5.0)
         if self._thread is not None:

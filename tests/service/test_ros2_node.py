@@ -290,6 +290,25 @@ def test_services_act(ros):
     assert yaw_of(rest.pose.pose.orientation) == pytest.approx(-1.0, abs=0.01)
 
 
+def test_a_bad_yaw_is_named_in_rad(ros):
+    probe, _, _ = ros
+    response = set_pose(probe, 0.0, 0.0, 100.0)
+    assert not response.success
+    assert response.reason == "yaw: must be in [-62.8319, 62.8319] rad; got 100"
+
+
+def test_a_burst_of_service_calls_is_answered_in_full(ros):
+    """200 calls at once from one client: each answered (the requests wait in the service's
+    queue while the executor takes them one by one; ROS's default keeps 10)."""
+    probe, _, _ = ros
+    probe.call("/all_stop", Trigger, Trigger.Request())  # each side has discovered the other
+    client = probe.client("/all_stop", Trigger)
+    futures = [client.call_async(Trigger.Request()) for _ in range(200)]
+    answers = [probe.wait_future(f) for f in futures]
+    assert all(a.success for a in answers)
+    assert len({a.message for a in answers}) == 200  # each its own AllStop
+
+
 def inspect_topics(*commands: list[str]) -> list[subprocess.CompletedProcess]:
     """`python -m corobot_drake.ros2 ARGS` for each of `commands`, as a user runs it, all at
     once: each a process (and so a DDS participant) of its own, in this test's network and
@@ -386,3 +405,42 @@ def test_the_node_goes_on_serving_after_a_callback_fails(caplog):
     never = Executor([])
     spin_until_closed(never, closed)
     assert never.spins == 0
+
+
+def test_a_namesake_is_warned_about_and_a_goal_running_at_the_stop_is_aborted():
+    """A simulation of its own (cameras off): a second node named corobot_drake joins its
+    domain (warned about on stderr); then the simulation is stopped (Ctrl-C) during a long
+    drive, whose goal ends aborted, with the reason."""
+    import os
+    import signal
+    import threading
+
+    from corobot_drake.ros2.node import NODE_STOPPED
+    from ros2_probe import WAIT, Probe
+
+    quiet = "robots: {corobot: {commands: [], cameras: {front: {rgb: false}}}}"
+    with ros2_simulation(["--headless", "--override", quiet], serve=False) as (sim, probe):
+        lines, seen = [], threading.Condition()
+
+        def read():
+            for line in sim.stderr:
+                with seen:
+                    lines.append(line.rstrip("\n"))
+                    seen.notify_all()
+
+        threading.Thread(target=read, daemon=True).start()
+        domain = int(os.environ["ROS_DOMAIN_ID"])  # the simulation's (`ros2_simulation`)
+        namesake = Probe(domain, name="corobot_drake")
+        try:
+            with seen:
+                assert seen.wait_for(lambda: any(
+                    line.startswith("warning: ROS 2: 2 nodes named /corobot_drake in "
+                                    f"ROS_DOMAIN_ID {domain}: ") for line in lines), WAIT), lines
+        finally:
+            namesake.close()
+        _, handle, _ = action(probe, DriveDistance, "/drive_distance", distance=5.0, power=0.3)
+        result = handle.get_result_async()
+        sim.send_signal(signal.SIGINT)
+        stopped = probe.wait_future(result)
+        assert (stopped.status, stopped.result.reason) == (6, NODE_STOPPED)  # ABORTED
+        assert not stopped.result.success
