@@ -27,6 +27,23 @@ def measure_ir_at_start() -> dict:
     return {"rear": dc.asdict(robot.ir("rear")), "distances": robot.ir_distances()}
 
 
+SAMPLES_ERROR_OVERRIDE = "robots: {corobot: {ir_sensors: {front: {samples: 1}}}}"
+
+
+def measure_samples_error() -> dict:
+    """The one line `python -m corobot_drake --override SAMPLES_ERROR_OVERRIDE` prints (exit
+    status 2, before anything is built)."""
+    import contextlib
+    import io
+
+    from corobot_drake.cli import main
+
+    err = io.StringIO()
+    with contextlib.redirect_stderr(err):
+        status = main(["--headless", "--override", SAMPLES_ERROR_OVERRIDE])
+    return {"status": status, "stderr": err.getvalue()}
+
+
 def measure_saved_mid_drive() -> dict:
     """Saved while a DriveDistance runs (the scene of tests/simulation/test_motion.py),
     reloaded, both run on: the robots' distance apart (m) after 0.2 s and after 3.2 s."""
@@ -259,6 +276,7 @@ MEASUREMENTS = {
     "spin-steps": measure_spin_steps,
     "continuous-sensors": measure_continuous_sensors,
     "ir-at-start": measure_ir_at_start,
+    "samples-error": measure_samples_error,
     "saved-mid-drive": measure_saved_mid_drive,
     "wheel-turn": measure_wheel_turn,
     "event-times": measure_event_times,

@@ -49,6 +49,14 @@ def render_ir_start_sensors(outs) -> str:
     return _ir_code(json_output(outs))
 
 
+def render_samples_error(outs) -> str:
+    """The CLI's line for a bad `samples`, inline (exactly one line, exit status 2)."""
+    m = json_output(outs)
+    (line,) = m["stderr"].splitlines()
+    assert m["status"] == 2, m
+    return f"`{line}`"
+
+
 def render_looks_triangles(outs) -> str:
     text = outs[0][0].stdout
     counts = [line for line in text.splitlines() if " triangles" in line]

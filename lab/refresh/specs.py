@@ -69,6 +69,8 @@ def _model_and_command_specs(c: SimpleNamespace) -> list[Spec]:
              DETERMINISTIC, 3),
         Spec("sensors-ir-at-start", "docs/sensors.md", (c.ir_start,), r.render_ir_start_sensors,
              DETERMINISTIC, 8),
+        Spec("sensors-samples-error", "docs/sensors.md", (measure_command("samples-error"),),
+             r.render_samples_error, DETERMINISTIC, 3),
         Spec("tune-motor-torque-scaling", "docs/tuning.md",
              (Command("python tools/tune_motor_torque_scaling.py --scaling 20"), c.top_speed),
              r.render_tune, DETERMINISTIC, 10),
