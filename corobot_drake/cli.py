@@ -2,7 +2,8 @@
 
 Exit status: 0 on success, 2 for a bad scenario or bad arguments (one line on stderr, before
 anything is built), 1 when an output could not be written at the end (it went to a fallback
-file, named on stderr).
+file, named on stderr) or camera frames could not be written during the run (they went to a
+fallback directory, named on stderr).
 """
 
 from __future__ import annotations
@@ -362,6 +363,10 @@ def _write_results(sim: Simulation, args, summary: dict) -> int:
         ("--record", args.record, sim.save_recording),
     )
     written = [write_output(flag, path, write) for flag, path, write in outputs if path]
+    for robot in sim.robots.values():  # written as the run went: a full disk is said here
+        for problem in robot.camera_save_problems():
+            print(f"error: --save-camera: {problem}", file=sys.stderr)
+            written.append(False)
     return 0 if all(written) else 1
 
 

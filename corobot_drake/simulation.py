@@ -505,6 +505,13 @@ class Robot:
         return sum(c.saver.frames_saved for c in self._parts.cameras.values()
                    if c.saver is not None)
 
+    def camera_save_problems(self) -> list[str]:
+        """One line for each of the robot's cameras whose frames could not all be written
+        where asked (a full disk): the file, why, and where they went instead
+        (`CameraFrameSaver.problem`); the run goes on either way."""
+        return [problem for c in self._parts.cameras.values()
+                if c.saver is not None and (problem := c.saver.problem()) is not None]
+
     def command_result(self, seq: int) -> CommandResult:
         """How the command with sequence number `seq` has gone so far (its command-log
         record); KeyError if this robot issued no such command."""

@@ -350,7 +350,11 @@ class CameraFrameSaver(LeafSystem):
     lies in (t - period, t). A publish event runs before the updates at its own time, so a
     frame that comes out at a look is saved at the next. Whether to save is decided from the
     Context alone; only the file counter `frames_saved` is this object's (a publish event
-    cannot write the Context: the saver is a file sink)."""
+    cannot write the Context: the saver is a file sink).
+
+    A frame that cannot be written (a full disk, a quota) does not stop the run: that frame
+    and the next go to a fallback directory in the temporary directory (or, if that fails too,
+    are lost), and `problem()` says so in one line."""
 
     def __init__(self, directory: str | Path, width: int, height: int, fps: float,
                  rate: float, offset: float = 0.0, period: float | None = None,
@@ -359,6 +363,12 @@ class CameraFrameSaver(LeafSystem):
         self.directory = Path(directory)
         self.directory.mkdir(parents=True, exist_ok=True)
         self.frames_saved = 0
+        self.failed: tuple[Path, OSError] | None = None
+        """The first frame file that could not be written, and why."""
+        self.fallback: Path | None = None
+        """Where the frames went from the failed one on (None: not yet, or lost)."""
+        self.fallback_error: OSError | None = None
+        """Why the fallback could not be written either: the frames from then on are lost."""
         self._fps, self._rate, self._offset = float(fps), float(rate), float(offset)
         self._period, self._delay = float(period or 1.0 / rate), float(delay)
         self._image = self.DeclareAbstractInputPort(
@@ -367,7 +377,19 @@ class CameraFrameSaver(LeafSystem):
         self.DeclarePeriodicPublishEvent(self._period, 0.0, self._save)
 
     def frame_path(self, index: int) -> Path:
-        return self.directory / f"frame_{index:06d}.png"
+        return (self.fallback or self.directory) / f"frame_{index:06d}.png"
+
+    def problem(self) -> str | None:
+        """One line when a frame could not be written where asked: the file, why, and where
+        that frame and the next went (None when every frame was written there)."""
+        if self.failed is None:
+            return None
+        path, error = self.failed
+        line = f"{path}: cannot write ({error.strerror})"
+        if self.fallback_error is None:
+            return f"{line}; it and the frames after it written to {self.fallback} instead"
+        return (f"{line}; nor to the temporary directory ({self.fallback_error.strerror}): it "
+                "and the frames after it are lost")
 
     def is_new(self, t: float, captured: float) -> bool:
         """Whether the frame captured at `captured` came out since the look before `t` and
@@ -384,10 +406,37 @@ class CameraFrameSaver(LeafSystem):
 
         if not self.is_new(context.get_time(), float(self._image_time.Eval(context)[0])):
             return
-        image = self._image.Eval(context)
-        Image.fromarray(np.array(image.data[:, :, :3])).save(
-            self.frame_path(self.frames_saved), compress_level=1)
-        self.frames_saved += 1
+        if self.fallback_error is not None:
+            return  # nowhere left to write
+        image = Image.fromarray(np.array(self._image.Eval(context).data[:, :, :3]))
+        while True:
+            path = self.frame_path(self.frames_saved)
+            try:
+                image.save(path, compress_level=1)
+            except OSError as e:
+                if path.is_file() and not path.is_symlink():
+                    path.unlink(missing_ok=True)  # a partly written PNG is no frame
+                if self._fall_back(path, e):
+                    continue
+                return
+            self.frames_saved += 1
+            return
+
+    def _fall_back(self, path: Path, error: OSError) -> bool:
+        """After `path` failed with `error`: True when there is a fallback directory to write
+        it to (made now, in the temporary directory), False when the frames are lost."""
+        import tempfile
+
+        if self.fallback is not None:  # the fallback failed too
+            self.fallback_error = error
+            return False
+        self.failed = (path, error)
+        try:
+            self.fallback = Path(tempfile.mkdtemp(prefix="corobot-save-camera-"))
+        except OSError as e:
+            self.fallback_error = e
+            return False
+        return True
 
 
 def frame_look_period(config: CameraConfig, step: float) -> float:

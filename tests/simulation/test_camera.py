@@ -270,6 +270,58 @@ def test_cli_saves_numbered_frames(tmp_path, capsys):
     assert "--camera-rate" in capsys.readouterr().err
 
 
+def _full_disk_frames(tmp_path, monkeypatch):
+    """A --save-camera directory whose first frame's file is a link to /dev/full (every
+    write fails: No space left on device), and a temporary directory of its own."""
+    import tempfile
+
+    frames = tmp_path / "frames"
+    (frames / "corobot").mkdir(parents=True)
+    (frames / "corobot" / "frame_000000.png").symlink_to("/dev/full")
+    temp = tmp_path / "temp"
+    temp.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(temp))
+    return frames, temp
+
+
+def _save_camera_lines(err: str) -> list[str]:
+    assert "Traceback" not in err
+    return [line for line in err.splitlines() if "--save-camera" in line]
+
+
+def test_frames_on_a_full_disk_go_to_a_fallback_named_in_one_line(tmp_path, monkeypatch,
+                                                                  capsys):
+    """The run goes on and writes its other outputs; exit status 1, as for --summary."""
+    frames, temp = _full_disk_frames(tmp_path, monkeypatch)
+    summary = tmp_path / "summary.json"
+    assert main([str(DEFAULT_SCENARIO), "--headless", "--duration", "0.5", "--save-camera",
+                 str(frames), "--camera-rate", "10", "--summary", str(summary)]) == 1
+    (fallback,) = temp.glob("corobot-save-camera-*")
+    assert _save_camera_lines(capsys.readouterr().err) == [
+        f"error: --save-camera: {frames}/corobot/frame_000000.png: cannot write (No space left "
+        f"on device); it and the frames after it written to {fallback} instead"]
+    assert sorted(f.name for f in fallback.iterdir()) == [f"frame_{i:06d}.png" for i in range(5)]
+    assert json.loads(summary.read_text())["robots"]["corobot"]["camera_frames"] == 5
+
+
+def test_frames_with_no_fallback_either_are_lost_in_one_line(tmp_path, monkeypatch, capsys):
+    import errno
+    import tempfile
+
+    frames, _ = _full_disk_frames(tmp_path, monkeypatch)
+
+    def full(*args, **kwargs):
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    monkeypatch.setattr(tempfile, "mkdtemp", full)
+    assert main([str(DEFAULT_SCENARIO), "--headless", "--duration", "0.5", "--save-camera",
+                 str(frames), "--camera-rate", "10"]) == 1
+    assert _save_camera_lines(capsys.readouterr().err) == [
+        f"error: --save-camera: {frames}/corobot/frame_000000.png: cannot write (No space left "
+        "on device); nor to the temporary directory (No space left on device): it and the "
+        "frames after it are lost"]
+
+
 CIRCLE = "robots: {corobot: {commands: [!SetPower {left: 0.4, right: 0.8}]}}"
 
 
