@@ -11,12 +11,17 @@ none has come for 0.5 s (its `cmd_vel_timeout`), as a real base's watchdog would
 
     python -m corobot_drake --ros2 &                 # Meshcat shows it; then:
     python examples/ros2_teleop.py [--robot NAME]
+
+It first waits for the simulation's /cmd_vel subscription, at most `--timeout` s, and says
+so if none comes (keys sent to nobody would look like a robot that does not move).
 """
 
 import argparse
+import math
 import select
 import sys
 import termios
+import time
 import tty
 
 import rclpy
@@ -28,6 +33,9 @@ MOVES = {"i": (1, 0), ",": (-1, 0), "j": (0, 1), "l": (0, -1), "u": (1, 1), "o":
 SCALES = {"q": 1.1, "z": 0.9}
 REPEAT = 0.1
 """s between Twists while a move is on (well inside the simulation's 0.5 s deadman)."""
+TIMEOUT = 30.0
+"""s (wall clock) to wait for the simulation's /cmd_vel subscription (discovery takes a few
+seconds)."""
 
 
 def read_key(timeout: float) -> str | None:
@@ -41,14 +49,27 @@ def main(argv=None) -> int:
     p.add_argument("--robot", default="", help="the robot's namespace (several robots)")
     p.add_argument("--speed", type=float, default=0.3, help="m/s (default 0.3)")
     p.add_argument("--turn", type=float, default=1.0, help="rad/s (default 1.0)")
+    p.add_argument("--timeout", type=float, default=TIMEOUT,
+                   help=f"s to wait for the simulation's /cmd_vel (default {TIMEOUT:g})")
     args = p.parse_args(argv)
+    if not (math.isfinite(args.timeout) and args.timeout > 0):
+        p.error(f"--timeout: a number of s > 0; got {args.timeout}")
     if not sys.stdin.isatty():
         print("error: ros2_teleop.py reads keys from a terminal", file=sys.stderr)
         return 2
     rclpy.init()
     node = rclpy.create_node("corobot_teleop")
-    publisher = node.create_publisher(Twist, f"/{args.robot}/cmd_vel" if args.robot
-                                      else "/cmd_vel", 10)
+    topic = f"/{args.robot}/cmd_vel" if args.robot else "/cmd_vel"
+    publisher = node.create_publisher(Twist, topic, 10)
+    deadline = time.monotonic() + args.timeout
+    while publisher.get_subscription_count() == 0:  # the graph fills as discovery goes
+        if time.monotonic() >= deadline:
+            print(f"error: no subscriber on {topic} in {args.timeout:g} s (is `python -m "
+                  "corobot_drake --ros2` running in this ROS_DOMAIN_ID?)", file=sys.stderr)
+            node.destroy_node()
+            rclpy.try_shutdown()
+            return 1
+        time.sleep(0.1)
     speed, turn, move = args.speed, args.turn, (0, 0)
     saved = termios.tcgetattr(sys.stdin)
     print(__doc__.split("\n\n")[1])

@@ -9,19 +9,42 @@ import os
 import subprocess
 
 DISCOVERY_VARIABLE = "ROS_AUTOMATIC_DISCOVERY_RANGE"
+DISCOVERY_RANGES = ("LOCALHOST", "SUBNET", "OFF", "SYSTEM_DEFAULT")
+"""The values rcl takes (exactly: another is warned about and taken as SUBNET)."""
+DOMAIN_VARIABLE = "ROS_DOMAIN_ID"
+MAX_DOMAIN_ID = 232
+"""Fast DDS's highest domain id (its ports, 7400 + 250 per domain, must stay below 65536)."""
 ARRAY_SHOWN = 16
 """Values of an array printed in full (`as_data`); longer ones (an image) are summarized."""
 
 
 def configure_discovery(network: bool = False, environ=os.environ) -> str:
     """Sets where DDS discovery reaches, before a node starts: `SUBNET` with `network`, else the
-    user's ROS_AUTOMATIC_DISCOVERY_RANGE if set, else `LOCALHOST` (this machine only, as the
-    HTTP server listens on loopback by default). Returns the range in force."""
+    user's ROS_AUTOMATIC_DISCOVERY_RANGE if set (not empty), else `LOCALHOST` (this machine
+    only, as the HTTP server listens on loopback by default). Returns the range in force
+    (`environment_problem` has refused a value rcl would not take)."""
     if network:
         environ[DISCOVERY_VARIABLE] = "SUBNET"
-    else:
-        environ.setdefault(DISCOVERY_VARIABLE, "LOCALHOST")
+    elif not environ.get(DISCOVERY_VARIABLE):
+        environ[DISCOVERY_VARIABLE] = "LOCALHOST"
     return environ[DISCOVERY_VARIABLE]
+
+
+def environment_problem(environ=os.environ) -> str | None:
+    """Why ROS 2's environment cannot be used as it stands (one line), else None: a
+    ROS_DOMAIN_ID rcl or Fast DDS refuses (a traceback or an error per port otherwise), a
+    ROS_AUTOMATIC_DISCOVERY_RANGE rcl does not know (it would warn and discover on the
+    subnet, while the node said otherwise)."""
+    domain = environ.get(DOMAIN_VARIABLE, "")
+    if domain and not (domain.isdecimal() and domain.isascii()
+                       and int(domain) <= MAX_DOMAIN_ID and (domain == "0" or domain[0] != "0")):
+        return (f"{DOMAIN_VARIABLE}={domain}: must be a whole number in [0, {MAX_DOMAIN_ID}] "
+                "(0-101 are clear of the ephemeral ports)")
+    discovery = environ.get(DISCOVERY_VARIABLE, "")
+    if discovery and discovery not in DISCOVERY_RANGES:
+        return (f"{DISCOVERY_VARIABLE}={discovery}: must be one of {', '.join(DISCOVERY_RANGES)}"
+                " (or unset: LOCALHOST)")
+    return None
 
 
 def ros_type(name: str):

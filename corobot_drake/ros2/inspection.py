@@ -5,14 +5,20 @@ Discovery as the node's (`graph.configure_discovery`: this machine unless
 ROS_AUTOMATIC_DISCOVERY_RANGE or `--network` says otherwise), in ROS_DOMAIN_ID. A subscription
 asks for the QoS its publisher offers (a best-effort sensor stream, a latched /tf_static).
 
-Exit status: 0; 1 when the topic or the node is not found within `--wait` s; 2 for bad
-arguments (one line).
+`--timeout` bounds the whole command, and a watchdog ends it with a line naming what it was
+waiting for should ROS 2 itself not answer (a starved machine): it never hangs.
+
+Exit status: 0; 1 when the topic or the node is not found within `--wait` s, or too few
+messages came by `--timeout`; 2 for bad arguments or a bad ROS 2 environment (one line).
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import itertools
+import math
+import os
 import sys
 import threading
 import time
@@ -23,6 +29,9 @@ INSPECT_NODE = "corobot_drake_inspect"
 """The tool's own node (its parameter services are left out of `list`)."""
 HZ_REPORT = 1.0
 """s (wall clock) between `hz`'s lines."""
+STAGE_GRACE = 30.0
+"""s (wall clock) ROS 2 gets beyond a stage's own limit (starting, closing: rclpy calls that
+wait on DDS) before the watchdog ends the tool."""
 
 
 class _ArgumentParser(argparse.ArgumentParser):
@@ -30,29 +39,101 @@ class _ArgumentParser(argparse.ArgumentParser):
         self.exit(2, f"error: {message}\n")
 
 
+def _seconds(text: str) -> float:
+    """An argparse type: a finite number of s >= 0."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"a number of s >= 0; got {text!r}") from None
+    if not (math.isfinite(value) and value >= 0):
+        raise argparse.ArgumentTypeError(f"a number of s >= 0; got {text}")
+    return value
+
+
+def _count(text: str) -> int:
+    """An argparse type: a whole number >= 0."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"a whole number >= 0; got {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"a whole number >= 0; got {text}")
+    return value
+
+
+def topic_problem(topic: str) -> str | None:
+    """Why `topic` is not a ROS 2 topic name (rcl's rules), else None."""
+    from rclpy.expand_topic_name import expand_topic_name
+    from rclpy.validate_full_topic_name import validate_full_topic_name
+    from rclpy.validate_topic_name import validate_topic_name
+
+    try:
+        validate_topic_name(topic)
+        validate_full_topic_name(expand_topic_name(topic, INSPECT_NODE, "/"))
+    except Exception as e:  # rclpy's InvalidTopicNameException (several lines), ValueError
+        first = str(e).splitlines()[0].removeprefix("Invalid topic name: ").rstrip(":")
+        return first.split(" is invalid: ")[-1].split(", at ")[0]
+    return None
+
+
 def _parser() -> argparse.ArgumentParser:
     p = _ArgumentParser(prog="python -m corobot_drake.ros2",
                         description=__doc__.split("\n\n")[0])
-    p.add_argument("--wait", type=float, default=DEFAULT_WAIT,
+    p.add_argument("--wait", type=_seconds, default=DEFAULT_WAIT,
                    help=f"s to wait for discovery (default {DEFAULT_WAIT:g})")
+    p.add_argument("--timeout", type=_seconds, default=None,
+                   help="s the command takes at most: echo and hz then report what came "
+                   "(default: until -n messages or Ctrl-C; list: its discovery waits)")
     p.add_argument("--network", action="store_true",
                    help="discover on the local network (SUBNET), not this machine only")
     sub = p.add_subparsers(dest="command", required=True)
-    sub.add_parser("list", help="the topics, services and actions, with their types")
+    listing = sub.add_parser("list", help="the topics, services and actions, with their types")
+    listing.add_argument("--timeout", type=_seconds, default=argparse.SUPPRESS,
+                         help="s the listing takes at most (default: its discovery waits)")
     echo = sub.add_parser("echo", help="print a topic's messages (YAML)")
     echo.add_argument("topic")
-    echo.add_argument("--count", "-n", type=int, default=0,
+    echo.add_argument("--count", "-n", type=_count, default=0,
                       help="stop after this many messages (default: until Ctrl-C)")
-    echo.add_argument("--timeout", type=float, default=None,
+    echo.add_argument("--timeout", type=_seconds, default=argparse.SUPPRESS,
                       help="stop after this many s (default: until Ctrl-C)")
     hz = sub.add_parser("hz", help="a topic's rate: messages per second of wall clock and "
                                    "of simulation time (from their stamps)")
     hz.add_argument("topic")
-    hz.add_argument("--count", "-n", type=int, default=0,
+    hz.add_argument("--count", "-n", type=_count, default=0,
                     help="stop after this many messages (default: until Ctrl-C)")
-    hz.add_argument("--timeout", type=float, default=None,
+    hz.add_argument("--timeout", type=_seconds, default=argparse.SUPPRESS,
                     help="stop after this many s (default: until Ctrl-C)")
     return p
+
+
+class _Watchdog:
+    """Ends the process (`exit`) with a line naming what it waited for when a stage outlasts
+    its limit: an rclpy call that never returns on a starved machine must not hang the tool.
+    The results printed so far stay (stdout is flushed first)."""
+
+    def __init__(self, exit=os._exit):
+        self._exit = exit
+        self._timer: threading.Timer | None = None
+
+    def stage(self, what: str, limit: float | None, status: int = 1) -> None:
+        """From now on: waiting for `what`, at most `limit` s (None: no limit)."""
+        self.stop()
+        if limit is not None:
+            self._timer = threading.Timer(limit, self._expired, (what, limit, status))
+            self._timer.daemon = True
+            self._timer.start()
+
+    def stop(self) -> None:
+        if self._timer is not None:
+            self._timer.cancel()
+            self._timer = None
+
+    def _expired(self, what: str, limit: float, status: int) -> None:
+        with contextlib.suppress(Exception):
+            sys.stdout.flush()
+        print(f"error: still waiting for {what} after {limit:g} s (a starved machine?): "
+              "stopped", file=sys.stderr, flush=True)
+        self._exit(status)
 
 
 class _Session:
@@ -113,14 +194,16 @@ class _Session:
 def _list(session: _Session, args, out) -> int:
     from corobot_drake.ros2.interfaces import NODE_NAME
 
-    found = session.wait_for(lambda: NODE_NAME in session.node.get_node_names(), args.wait)
+    found = session.wait_for(lambda: NODE_NAME in session.node.get_node_names(),
+                             _left(args, args.wait))
     if not found:
         print(f"error: no node /{NODE_NAME} found in {args.wait:g} s (is `python -m "
               "corobot_drake --ros2` running in this ROS_DOMAIN_ID?)", file=sys.stderr)
         return 1
     # Its topics, services and actions appear over a moment after the node itself.
     session.wait_for(lambda: any(n.endswith("/_action/status") for n, _ in
-                                 session.node.get_topic_names_and_types()), args.wait)
+                                 session.node.get_topic_names_and_types()),
+                     _left(args, args.wait))
     topics = session.node.get_topic_names_and_types()
     actions = sorted(n.removesuffix("/_action/status") for n, _ in topics
                      if n.endswith("/_action/status"))
@@ -142,7 +225,7 @@ def _list(session: _Session, args, out) -> int:
 def _subscribe(session: _Session, args, on_message, raw: bool = False) -> bool:
     from corobot_drake.ros2.graph import ros_type
 
-    msgtype = session.topic_type(args.topic, args.wait)
+    msgtype = session.topic_type(args.topic, _left(args, args.wait))
     if msgtype is None:
         print(f"error: no topic {args.topic} found in {args.wait:g} s (`python -m "
               "corobot_drake.ros2 list` shows them)", file=sys.stderr)
@@ -150,6 +233,12 @@ def _subscribe(session: _Session, args, on_message, raw: bool = False) -> bool:
     session.node.create_subscription(ros_type(msgtype), args.topic, on_message,
                                      session.offered_qos(args.topic), raw=raw)
     return True
+
+
+def _left(args, wait: float | None = None) -> float | None:
+    """s left of `wait` and of `--timeout` (counted from the start), None if neither."""
+    left = None if args.deadline is None else max(0.0, args.deadline - time.monotonic())
+    return wait if left is None else left if wait is None else min(wait, left)
 
 
 def _until(done: threading.Event, timeout: float | None, report=None) -> None:
@@ -189,7 +278,7 @@ def _echo(session: _Session, args, out) -> int:
 
     if not _subscribe(session, args, on_message):
         return 1
-    _until(done, args.timeout)
+    _until(done, _left(args))
     return _enough(args, seen[0], 1)
 
 
@@ -239,7 +328,7 @@ def _hz(session: _Session, args, out) -> int:
 
     if not _subscribe(session, args, on_message):
         return 1
-    _until(done, args.timeout, report)
+    _until(done, _left(args), report)
     report()
     with lock:
         received = len(arrivals)
@@ -253,12 +342,29 @@ def main(argv: list[str] | None = None, out=None) -> int:
     from corobot_drake.ros2.run import missing
 
     problem = missing("python -m corobot_drake.ros2", live=True)
+    if problem is None and args.command != "list":
+        problem = topic_problem(args.topic)
+        problem = problem and f"{args.command}: {args.topic}: not a topic name ({problem})"
     if problem:
         print(f"error: {problem}", file=sys.stderr)
         return 2
+    if args.timeout is not None:  # the discovery waits and the messages' within it
+        args.wait = min(args.wait, args.timeout)
+    args.deadline = None if args.timeout is None else time.monotonic() + args.timeout
     configure_discovery(args.network)
+    watchdog = _Watchdog()
+    watchdog.stage("ROS 2 to start (rclpy.init, the node)", STAGE_GRACE)
     session = _Session()
+    status = 1
     try:
-        return {"list": _list, "echo": _echo, "hz": _hz}[args.command](session, args, out)
+        # Each command's own waits are bounded (--wait, --timeout); the watchdog only ends
+        # one whose rclpy calls stop answering.
+        limit = (None if args.command != "list" and args.timeout is None
+                 else 2 * args.wait + (args.timeout or 0.0) + STAGE_GRACE)
+        watchdog.stage(f"`{args.command}` to finish", limit)
+        status = {"list": _list, "echo": _echo, "hz": _hz}[args.command](session, args, out)
+        return status
     finally:
+        watchdog.stage("ROS 2 to shut down", STAGE_GRACE, status)
         session.close()
+        watchdog.stop()

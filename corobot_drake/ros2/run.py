@@ -9,7 +9,6 @@ simulation in a `serving.runner.SimRunner`, as `--serve` runs it), `attach` join
 from __future__ import annotations
 
 import contextlib
-import os
 import sys
 from functools import partial
 from pathlib import Path
@@ -21,7 +20,8 @@ INTERFACES_HINT = "python -m corobot_drake.ros2.build (tools/setup runs it)"
 def missing(flag: str, live: bool) -> str | None:
     """Why `flag` cannot run here (one line, for `error: ...`), else None: the [ros2] extra
     (rclpy and Fast DDS for the live node; rosbags for a bag) and, live, the interface
-    packages built into the environment."""
+    packages built into the environment and ROS 2's environment variables
+    (`graph.environment_problem`)."""
     modules = ("rclpy", "rosbags") if live else ("rosbags",)
     for module in modules:
         try:
@@ -34,6 +34,11 @@ def missing(flag: str, live: bool) -> str | None:
                 __import__(f"{package}.msg")
             except ImportError:
                 return f"{flag} needs the {package} interfaces built: {INTERFACES_HINT}"
+        from corobot_drake.ros2.graph import environment_problem
+
+        problem = environment_problem()
+        if problem:
+            return f"{flag}: {problem}"
     return None
 
 
@@ -81,7 +86,7 @@ class Ros2Front(contextlib.ExitStack):
     def announce(self) -> None:
         """The line that says where the node is (stderr: --serve's first stdout line is its
         URL)."""
-        domain = os.environ.get("ROS_DOMAIN_ID", "0")
+        domain = self.node.context.get_domain_id()  # rcl's, as it took it
         print(f"ROS 2: node /{self.node.node.get_name()}, ROS_DOMAIN_ID {domain}, discovery "
               f"{self.node.discovery} (python -m corobot_drake.ros2 list)", file=sys.stderr,
               flush=True)

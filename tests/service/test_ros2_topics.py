@@ -289,6 +289,43 @@ def test_discovery_stays_on_this_machine_unless_asked():
     assert configure_discovery(False, {}) == "LOCALHOST"
     assert configure_discovery(False, {"ROS_AUTOMATIC_DISCOVERY_RANGE": "SUBNET"}) == "SUBNET"
     assert configure_discovery(True, {}) == "SUBNET"
+    assert configure_discovery(False, {"ROS_AUTOMATIC_DISCOVERY_RANGE": ""}) == "LOCALHOST"
+
+
+def test_a_bad_ros_environment_or_topic_is_one_line(monkeypatch, capsys):
+    """Refused before any DDS starts (in a private network all the same, should one)."""
+    from corobot_drake.ros2 import inspection
+    from ros2_probe import private_network
+
+    with private_network():
+        for variable, value, allowed in (
+                ("ROS_DOMAIN_ID", "abc", "a whole number in [0, 232] (0-101 are clear of the "
+                                         "ephemeral ports)"),
+                ("ROS_DOMAIN_ID", "300", "a whole number in [0, 232] (0-101 are clear of the "
+                                         "ephemeral ports)"),
+                ("ROS_AUTOMATIC_DISCOVERY_RANGE", "BOGUS",
+                 "one of LOCALHOST, SUBNET, OFF, SYSTEM_DEFAULT (or unset: LOCALHOST)")):
+            with monkeypatch.context() as env:
+                env.setenv(variable, value)
+                assert cli.main(["--ros2", "--headless", "--duration", "0.1"]) == 2
+                assert capsys.readouterr().err == (f"error: --ros2: {variable}={value}: must "
+                                                   f"be {allowed}\n")
+                assert inspection.main(["--wait", "0", "list"]) == 2
+                assert capsys.readouterr().err == (
+                    f"error: python -m corobot_drake.ros2: {variable}={value}: must be "
+                    f"{allowed}\n")
+        monkeypatch.setenv("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+        assert inspection.main(["--wait", "0", "echo", "bad name"]) == 2
+        assert capsys.readouterr().err == (
+            "error: echo: bad name: not a topic name (topic name must not contain characters "
+            "other than alphanumerics, '_', '~', '{', or '}')\n")
+        for argv in (["echo", "/odom", "-n", "-1"], ["--timeout", "nan", "list"]):
+            with pytest.raises(SystemExit) as stop:
+                inspection.main(argv)
+            assert stop.value.code == 2
+        assert capsys.readouterr().err == (
+            "error: argument --count/-n: a whole number >= 0; got -1\n"
+            "error: argument --timeout: a number of s >= 0; got nan\n")
 
 
 # --- a bag read back ---
