@@ -2,11 +2,14 @@
 
 The core (`pip install corobot-drake`) runs a scenario headless or in Meshcat; each front end
 needs its extra. A front end used without it stops with one line naming the extra (`--ros2`
-checks its own, with the interfaces `tools/setup` builds: `ros2/run.py`).
+checks its own, with the interfaces `tools/setup` builds: `ros2/run.py`); so does a tool of
+`tools/` (its imports of an extra's modules in a `try:` whose handler calls `exit_without`).
 `tests/packaging/test_wheel.py` holds this table to pyproject's optional dependencies.
 """
 
 import importlib.util
+import sys
+from typing import NoReturn
 
 EXTRAS = {
     "serve": ("fastapi", "uvicorn", "httpx", "pydantic", "starlette", "fastapi_offline", "h11",
@@ -34,3 +37,17 @@ def require(extra: str, what: str) -> None:
     if missing_modules(extra):
         raise MissingExtraError(f"{what} needs the [{extra}] extra: "
                            f"pip install 'corobot-drake[{extra}]'")
+
+
+def exit_without(what: str, *extras: str) -> NoReturn:
+    """For a program whose imports need `extras`, called in their `except ImportError:`: when
+    one of them is missing, its one line on stderr ("error: `what` needs the [extra] extra:
+    pip install ...") and exit status 2, not a traceback; else the ImportError being handled
+    goes on (something else is missing)."""
+    missing = [extra for extra in extras if missing_modules(extra)]
+    if not missing:
+        raise  # (called from the handler: the ImportError it handles)
+    names = " and ".join(f"[{extra}]" for extra in missing)
+    print(f"error: {what} needs the {names} extra{'s' if len(missing) > 1 else ''}: "
+          f"pip install 'corobot-drake[{','.join(missing)}]'", file=sys.stderr)
+    raise SystemExit(2)

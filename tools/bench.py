@@ -19,7 +19,12 @@ robot's systems added one layer at a time, CPU ms per simulated second
 import statistics
 import sys
 
-from tqdm import tqdm
+try:  # without the [study] extra: one line naming it, not a traceback
+    from tqdm import tqdm
+except ImportError:
+    from corobot_drake.extras import exit_without
+
+    exit_without("tools/bench.py", "study")
 
 from corobot_drake.arguments import (
     BENCH_SECONDS,

@@ -10,12 +10,18 @@ workers (`lab.bench_gym`).
 import os
 import sys
 
-from tqdm import tqdm
-
 from corobot_drake.arguments import ToolParser, bounded, one_line_errors
 from corobot_drake.limits import Range
 from corobot_drake.simulation import quiet_drake_warnings
-from lab import bench_gym as bench
+
+try:  # without the [gym] extra: one line naming it, not a traceback
+    from tqdm import tqdm
+
+    from lab import bench_gym as bench
+except ImportError:
+    from corobot_drake.extras import exit_without
+
+    exit_without("tools/bench_gym.py", "gym")
 
 STEPS = Range(1, 1_000_000, why="env steps per case")
 EPISODES = Range(1, 10_000, why="episodes per Ray run")

@@ -13,7 +13,12 @@ a shorter run the growth so far plus the slope for the rest of the hour). The me
 import shlex
 import sys
 
-from tqdm import tqdm
+try:  # without the [study] extra: one line naming it, not a traceback
+    from tqdm import tqdm
+except ImportError:
+    from corobot_drake.extras import exit_without
+
+    exit_without("tools/bench_memory.py", "study")
 
 from corobot_drake.arguments import ToolParser, bounded, one_line_errors
 from corobot_drake.limits import Range

@@ -11,7 +11,12 @@ import statistics
 import sys
 import tempfile
 
-from tqdm import tqdm
+try:  # without the [study] and [record] extras: one line naming it, not a traceback
+    from tqdm import tqdm
+except ImportError:
+    from corobot_drake.extras import exit_without
+
+    exit_without("tools/bench_recording.py", "study", "record")
 
 from corobot_drake.arguments import (
     BENCH_SECONDS,

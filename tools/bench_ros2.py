@@ -13,7 +13,12 @@ import statistics
 import sys
 import tempfile
 
-from tqdm import tqdm
+try:  # without the [study] extra: one line naming it, not a traceback
+    from tqdm import tqdm
+except ImportError:
+    from corobot_drake.extras import exit_without
+
+    exit_without("tools/bench_ros2.py", "study")
 
 from corobot_drake.arguments import (
     BENCH_SECONDS,

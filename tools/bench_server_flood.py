@@ -8,7 +8,13 @@ malformed requests (`lab.server_load`: the flood test's load, whose answers the 
 import sys
 
 from corobot_drake.arguments import BENCH_SECONDS, ToolParser, bounded, one_line_errors
-from lab import server_load
+
+try:  # without the [serve] extra: one line naming it, not a traceback
+    from lab import server_load
+except ImportError:
+    from corobot_drake.extras import exit_without
+
+    exit_without("tools/bench_server_flood.py", "serve")
 
 
 @one_line_errors

@@ -14,7 +14,12 @@ import sys
 import tempfile
 from pathlib import Path
 
-from tqdm import tqdm
+try:  # without the [study] extra: one line naming it, not a traceback
+    from tqdm import tqdm
+except ImportError:
+    from corobot_drake.extras import exit_without
+
+    exit_without("tools/bench_study.py", "study")
 
 from corobot_drake.arguments import BENCH_SECONDS, ToolParser, bounded, one_line_errors
 from corobot_drake.limits import Range

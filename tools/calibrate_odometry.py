@@ -20,7 +20,12 @@ import sys
 import tempfile
 from pathlib import Path
 
-from tqdm import tqdm
+try:  # without the [study] extra: one line naming it, not a traceback
+    from tqdm import tqdm
+except ImportError:
+    from corobot_drake.extras import exit_without
+
+    exit_without("tools/calibrate_odometry.py", "study")
 
 from corobot_drake.arguments import (
     TICKS_PER_REVOLUTION,

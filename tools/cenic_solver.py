@@ -8,7 +8,12 @@ table.
 
 import sys
 
-from tqdm import tqdm
+try:  # without the [study] extra: one line naming it, not a traceback
+    from tqdm import tqdm
+except ImportError:
+    from corobot_drake.extras import exit_without
+
+    exit_without("tools/cenic_solver.py", "study")
 
 from corobot_drake.arguments import REPEATS, ToolParser, bounded, one_line_errors
 from corobot_drake.simulation import quiet_drake_warnings

@@ -21,7 +21,12 @@ import subprocess
 import sys
 from concurrent.futures import ThreadPoolExecutor
 
-from tqdm import tqdm
+try:  # without the [study] extra: one line naming it, not a traceback
+    from tqdm import tqdm
+except ImportError:
+    from corobot_drake.extras import exit_without
+
+    exit_without("tools/count_instructions.py", "study")
 
 from corobot_drake.arguments import ToolParser, bounded, one_line_errors
 from corobot_drake.limits import Range

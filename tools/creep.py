@@ -16,7 +16,12 @@ contact): the experiments that found the cause.
 import math
 import sys
 
-from tqdm import tqdm
+try:  # without the [study] extra: one line naming it, not a traceback
+    from tqdm import tqdm
+except ImportError:
+    from corobot_drake.extras import exit_without
+
+    exit_without("tools/creep.py", "study")
 
 from corobot_drake.arguments import ToolParser, bounded, one_line_errors
 from corobot_drake.config.scenario import load_scenario

@@ -27,7 +27,13 @@ from corobot_drake.arguments import (
 from corobot_drake.config import scenario as sc
 from corobot_drake.limits import DRAKE_INT, DRIVE_POWER, Range
 from corobot_drake.study.programs import LOOPS
-from lab import drive_test
+
+try:  # without the [study] extra: one line naming it, not a traceback
+    from lab import drive_test
+except ImportError:
+    from corobot_drake.extras import exit_without
+
+    exit_without("tools/drive_test.py", "study")
 
 SEEDS = Range(1, 10_000, why="runs of the study")
 

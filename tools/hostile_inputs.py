@@ -17,7 +17,12 @@ import sys
 import tempfile
 from pathlib import Path
 
-from tqdm import tqdm
+try:  # without the [study] extra: one line naming it, not a traceback
+    from tqdm import tqdm
+except ImportError:
+    from corobot_drake.extras import exit_without
+
+    exit_without("tools/hostile_inputs.py", "study")
 
 from corobot_drake.simulation import quiet_drake_warnings
 from lab import hostile_inputs as hi

@@ -24,7 +24,13 @@ from corobot_drake.arguments import (
     output_directory,
     output_file,
 )
-from lab import landing
+
+try:  # without the [study] extra: one line naming it, not a traceback
+    from lab import landing
+except ImportError:
+    from corobot_drake.extras import exit_without
+
+    exit_without("tools/landing_errors.py", "study")
 
 
 @one_line_errors

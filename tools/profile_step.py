@@ -12,7 +12,12 @@ the station adds to each. Needs Linux perf.
 
 import sys
 
-from tqdm import tqdm
+try:  # without the [study] extra: one line naming it, not a traceback
+    from tqdm import tqdm
+except ImportError:
+    from corobot_drake.extras import exit_without
+
+    exit_without("tools/profile_step.py", "study")
 
 from corobot_drake.arguments import ToolParser, bounded, one_line_errors
 from corobot_drake.limits import Range

@@ -13,7 +13,12 @@ distance and heading gap between the two landings (docs/commands.md).
 
 import sys
 
-from tqdm import tqdm
+try:  # without the [study] extra: one line naming it, not a traceback
+    from tqdm import tqdm
+except ImportError:
+    from corobot_drake.extras import exit_without
+
+    exit_without("tools/resume_landing.py", "study")
 
 from corobot_drake.arguments import ToolParser, bounded, one_line_errors
 from corobot_drake.limits import Range

@@ -8,7 +8,12 @@ largest `plant_config.time_step` (`lab/step_limit.py`): a markdown table.
 import argparse
 import sys
 
-from tqdm import tqdm
+try:  # without the [study] extra: one line naming it, not a traceback
+    from tqdm import tqdm
+except ImportError:
+    from corobot_drake.extras import exit_without
+
+    exit_without("tools/step_limit.py", "study")
 
 from corobot_drake.limits import MAX_TIME_STEP
 from corobot_drake.simulation import quiet_drake_warnings

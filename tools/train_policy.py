@@ -24,12 +24,18 @@ from corobot_drake.arguments import (
     output_directory,
 )
 from corobot_drake.cli import ctrl_c_stops, stopped_status
-from corobot_drake.gym.policy import SHIPPED, LinearPolicy, load
-from corobot_drake.gym.rollouts import episode_pool
-from corobot_drake.gym.train import HELD_OUT, CemSettings, evaluate, plot_curve, train
 from corobot_drake.limits import OneOf, bound_of
 from corobot_drake.simulation import quiet_drake_warnings
-from corobot_drake.study.engine import AddressError
+
+try:  # without the [gym] extra: one line naming it, not a traceback
+    from corobot_drake.gym.policy import SHIPPED, LinearPolicy, load
+    from corobot_drake.gym.rollouts import episode_pool
+    from corobot_drake.gym.train import HELD_OUT, CemSettings, evaluate, plot_curve, train
+    from corobot_drake.study.engine import AddressError
+except ImportError:
+    from corobot_drake.extras import exit_without
+
+    exit_without("tools/train_policy.py", "gym")
 
 REPO = Path(__file__).resolve().parent.parent
 POLICY_FILE = "policy.json"

@@ -23,7 +23,13 @@ from corobot_drake.arguments import (
     output_directory,
     output_file,
 )
-from corobot_drake.tuning import tire_grip
+
+try:  # without the [study] extra: one line naming it, not a traceback
+    from corobot_drake.tuning import tire_grip
+except ImportError:
+    from corobot_drake.extras import exit_without
+
+    exit_without("tools/tune_tire_grip.py", "study")
 
 
 @one_line_errors

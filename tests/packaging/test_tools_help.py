@@ -139,3 +139,54 @@ def test_help_describes_a_module_in_its_whole_first_paragraph(module, monkeypatc
         imported.main(["--help"])
     assert stop.value.code == 0
     assert _first_paragraph(imported.__doc__) in " ".join(capsys.readouterr().out.split())
+
+
+WITHOUT_EXTRAS = """
+import contextlib, io, json, runpy, sys
+
+from corobot_drake.extras import EXTRAS
+
+for module in {m for modules in EXTRAS.values() for m in modules}:
+    sys.modules[module] = None  # as if no extra were installed: its import fails
+results = {}
+for tool in sys.argv[1:]:
+    out, err = io.StringIO(), io.StringIO()
+    sys.argv = [tool, "--help"]
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        try:
+            runpy.run_path(tool, run_name="__main__")
+            status = None
+        except SystemExit as e:
+            status = e.code
+        except BaseException as e:  # what a user would see as a traceback
+            status = f"{type(e).__name__}: {e}"
+    results[tool] = [status, out.getvalue(), err.getvalue()]
+print(json.dumps(results))
+"""
+
+
+def test_a_tool_without_its_extra_says_which_in_one_line():
+    """Every tool's --help with no extra installed: its help, or one line naming the extras
+    it needs (exit status 2), never a traceback. One process runs them all (each import of
+    a missing module fails again)."""
+    import json
+    import re
+    import subprocess
+
+    run = subprocess.run([sys.executable, "-c", WITHOUT_EXTRAS, *map(str, TOOLS)], cwd=REPO,
+                         capture_output=True, text=True, timeout=600)
+    assert run.returncode == 0, run.stderr
+    needs = re.compile(r"error: tools/(\w+)\.py needs the \[(\w+)\]( and \[(\w+)\] extras| extra)"
+                       r": pip install 'corobot-drake\[[\w,]+\]'\n")
+    wrong, said = [], set()
+    for tool, (status, out, err) in json.loads(run.stdout).items():
+        name = Path(tool).stem
+        if status in (0, None) and out.startswith("usage: ") and not err:
+            continue
+        match = needs.fullmatch(err)
+        if status == 2 and not out and match and match[1] == name:
+            said.add(name)
+            continue
+        wrong.append(f"{name}: exit {status}: {(err or out)[-300:]}")
+    assert not wrong, "\n".join(wrong)
+    assert {"train_policy", "bench", "bench_server_flood", "bench_recording"} <= said
