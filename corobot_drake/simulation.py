@@ -604,7 +604,8 @@ class Simulation:
         if meshcat is not None:  # the IR rays and slip marks beside Drake's visualizers
             from corobot_drake.markers import add_meshcat_markers
 
-            extras.append(functools.partial(add_meshcat_markers, meshcat))
+            extras.append(functools.partial(add_meshcat_markers, meshcat,
+                                            record=self._record_live))
         if foxglove is not None:  # the run's Foxglove topics, attached as a front end
             from corobot_drake.recording.publishers import add_foxglove_topics
 

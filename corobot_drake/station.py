@@ -512,8 +512,10 @@ def _add_meshcat(builder, plant, scene_graph, meshcat, world: sc.World, mouse_dr
     ApplyVisualizationConfig(config, builder, plant=plant, scene_graph=scene_graph,
                              meshcat=meshcat, lcm=lcm)
     sky = list(world.sky_color)
-    meshcat.SetProperty("/Background", "top_color", sky)
-    meshcat.SetProperty("/Background", "bottom_color", [min(1.0, c * 1.15) for c in sky])
+    # Its <object>: the page warns about a colour set on "/Background" itself.
+    meshcat.SetProperty("/Background/<object>", "top_color", sky)
+    meshcat.SetProperty("/Background/<object>", "bottom_color",
+                        [min(1.0, c * 1.15) for c in sky])
     meshcat.SetProperty("/Grid", "visible", False)
     _set_meshcat_sun(meshcat, world.sun)
     return lcm

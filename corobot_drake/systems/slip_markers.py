@@ -6,6 +6,11 @@ green (0) through yellow to red at full slip, `slip_severity`: the larger of |sl
 |slip angle| / 45 deg, capped at 1 (a free-rolling wheel ~0.01, a spin in place ~0.9). It is
 redrawn at `MARKER_PERIOD` (10 Hz), stamped with the simulation time so a recording
 (`recording.meshcat_html`) replays it; the station adds it only with a Meshcat.
+
+A colour is a Meshcat property ("color") for the live page, but three.js animates only a
+property of the object itself: the recording keys `material.color` of the ball's
+`<object>` instead (a "color" track would name a property the scene node lacks, and the
+replay would log a three.js error for each ball when opened).
 """
 
 import math
@@ -51,13 +56,16 @@ class SlipMarkers(LeafSystem):
     Inputs: `chassis_pose` (abstract RigidTransform X_WC), `wheel_slip_ratio` and
     `wheel_slip_angle` (4 each, deg, `dimensions.WHEEL_NAMES` order, from
     `contact.WheelContacts`). Draws `<path>/<wheel>` (spheres) every `MARKER_PERIOD` s from
-    time 0; no state (the balls are drawn from the inputs alone).
+    time 0; no state (the balls are drawn from the inputs alone). `record`: whether `meshcat`
+    is recording (None: no; True: recording and showing live; False: recording only), as
+    `Simulation` starts it (`recording.meshcat_html.start_recording`).
     """
 
-    def __init__(self, meshcat: Meshcat, path: str):
+    def __init__(self, meshcat: Meshcat, path: str, record: bool | None = None):
         super().__init__()
         self._meshcat = meshcat
         self.path = path
+        self._record = record
         self._pose = self.DeclareAbstractInputPort("chassis_pose",
                                                    AbstractValue.Make(RigidTransform()))
         self._ratio = self.DeclareVectorInputPort("wheel_slip_ratio", 4)
@@ -74,18 +82,24 @@ class SlipMarkers(LeafSystem):
         X_WC = self._pose.Eval(context)
         t = context.get_time()
         ratios, angles = self._ratio.Eval(context), self._angle.Eval(context)
+        animation = self._meshcat.get_mutable_recording() if self._record is not None else None
         for k, name in enumerate(dim.WHEEL_NAMES):
             path = f"{self.path}/{name}"
             self._meshcat.SetTransform(path, X_WC @ self._X_CM[name], t)
-            self._meshcat.SetProperty(
-                path, "color", severity_rgba(slip_severity(ratios[k], angles[k])), t)
+            rgba = severity_rgba(slip_severity(ratios[k], angles[k]))
+            if self._record is not False:  # someone may watch: the live page
+                self._meshcat.SetProperty(path, "color", rgba)
+            if animation is not None:  # opaque: the colour alone (three.js's Color is RGB)
+                animation.SetProperty(animation.frame(t), f"{path}/<object>", "material.color",
+                                      rgba[:3])
 
 
-def add_slip_markers(builder, meshcat: Meshcat, name: str, chassis_pose_port, wheel_contacts):
+def add_slip_markers(builder, meshcat: Meshcat, name: str, chassis_pose_port, wheel_contacts,
+                     record: bool | None = None):
     """Adds `<name>.slip_markers` (drawing under `/slip/<name>`) fed by `chassis_pose_port`
-    and `wheel_contacts`' slip ports; returns it."""
+    and `wheel_contacts`' slip ports; returns it. `record`: see `SlipMarkers`."""
     system = builder.AddNamedSystem(f"{name}.slip_markers",
-                                    SlipMarkers(meshcat, f"/slip/{name}"))
+                                    SlipMarkers(meshcat, f"/slip/{name}", record))
     builder.Connect(chassis_pose_port, system.GetInputPort("chassis_pose"))
     for port in ("wheel_slip_ratio", "wheel_slip_angle"):
         builder.Connect(wheel_contacts.GetOutputPort(port), system.GetInputPort(port))
