@@ -61,7 +61,7 @@ def run_goal(node, client: ActionClient, goal, label: str, timeout: float) -> bo
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--side", type=float, default=1.0, help="m (default 1.0)")
     p.add_argument("--power", type=float, default=0.5, help="in (0, 1] (default 0.5)")
     p.add_argument("--robot", default="", help="the robot's namespace (several robots)")

@@ -45,7 +45,7 @@ def read_key(timeout: float) -> str | None:
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--robot", default="", help="the robot's namespace (several robots)")
     p.add_argument("--speed", type=float, default=0.3, help="m/s (default 0.3)")
     p.add_argument("--turn", type=float, default=1.0, help="rad/s (default 1.0)")

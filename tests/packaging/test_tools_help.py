@@ -190,3 +190,18 @@ def test_a_tool_without_its_extra_says_which_in_one_line():
         wrong.append(f"{name}: exit {status}: {(err or out)[-300:]}")
     assert not wrong, "\n".join(wrong)
     assert {"train_policy", "bench", "bench_server_flood", "bench_recording"} <= said
+
+
+EXAMPLES = sorted((REPO / "examples").glob("*.py"))
+
+
+@pytest.mark.parametrize("example", EXAMPLES, ids=lambda e: e.stem)
+def test_help_describes_an_example_in_its_whole_first_paragraph(example):
+    import ast
+    import subprocess
+
+    run = subprocess.run([sys.executable, str(example), "--help"], capture_output=True,
+                         text=True, timeout=120)
+    assert run.returncode == 0, run.stderr
+    assert _first_paragraph(ast.get_docstring(ast.parse(example.read_text()))) in \
+        " ".join(run.stdout.split())
