@@ -111,8 +111,11 @@ def serve(make_sim, host: str = "127.0.0.1", port: int = 50000, meshcat: bool = 
                   f"{HTTP_STOP_TIMEOUT:g} s: terminated", file=sys.stderr)
             http.terminate()
             http.join(5)
-    print(f"simulated {runner.sim.time:.2f} s at {stats['realtime_factor'] or 0:.2f}x real "
-          f"time ({stats['slips']} slips)", file=sys.stderr)
+    from corobot_drake.cli import simulated_line
+
+    print(f"{simulated_line(runner.sim.time, runner.started_sim)} at "
+          f"{stats['realtime_factor'] or 0:.2f}x real time ({stats['slips']} slips)",
+          file=sys.stderr)
     if lost:
         print(f"error: the HTTP server process ({http.pid}) {_ended(http.exitcode)}: the "
               f"simulation stopped with it", file=sys.stderr)

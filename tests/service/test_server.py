@@ -769,11 +769,15 @@ def test_the_http_side_stops_when_the_simulation_stops_while_it_starts():
 
 def test_ctrl_c_stops_both_processes_in_turn(tmp_path):
     """Ctrl-C (SIGINT to the simulation process): the simulation stops, closes the pipe, and
-    the HTTP process sees it closed and ends by itself (it is not terminated), exit status 0."""
+    the HTTP process sees it closed and ends by itself (it is not terminated), exit status 0.
+    The closing line says the time simulated, not the end time (the run starts at t = 3 s, as a
+    resumed saved scenario does)."""
+    import re
     import signal
 
     log = tmp_path / "stderr.log"
-    with ServerProcess(["--headless"], stderr_path=str(log)) as server:
+    with ServerProcess(["--headless", "--override", "simulator_config: {start_time: 3.0}"],
+                       stderr_path=str(log)) as server:
         assert httpx.get(f"{server.url}/simulation").status_code == 200
         http_pid = _http_process(server)
         server.process.send_signal(signal.SIGINT)
@@ -781,7 +785,9 @@ def test_ctrl_c_stops_both_processes_in_turn(tmp_path):
     assert not alive(http_pid)
     lines = log.read_text().splitlines()
     assert not [line for line in lines if "HTTP server process" in line], lines
-    assert lines[-1].startswith("simulated "), lines
+    simulated = re.match(r"simulated (\S+) s \(t = 3\.00 to (\S+) s\) at ", lines[-1])
+    assert simulated, lines
+    assert float(simulated[1]) == pytest.approx(float(simulated[2]) - 3.0, abs=0.011), lines
 
 
 def test_the_http_process_stops_when_its_served_simulation_dies(tmp_path):
