@@ -354,11 +354,22 @@ def set_drive_field(text: str, robot: str, field: str, value: float, comment: st
     fields too: that line keeps its own. Raises ValueError if the robot is absent (naming the
     closest robots) or has no `drive:` mapping to hold the field.
     """
-    import io
+    yaml, data = _round_trip(text)
+    number = f"{value:.{digits}g}"
+    spec, drive = _drive_mapping(data, robot, field, number)
+    if drive.fa.flow_style():
+        drive[field] = float(number)
+        # The comment on the line is the `drive:` key's.
+        edited = [_comment_token(spec, "drive"), drive.ca.comment and drive.ca.comment[0]]
+    else:
+        edited = [_set_block_field(drive, field, float(number), comment)]
+    return _dump(yaml, data, [c for c in edited if c is not None])
 
+
+def _round_trip(text: str):
+    """ruamel.yaml's round-trip loader set to `text`'s indentation, and `text` loaded by it;
+    ValueError (where and why, one line) if it cannot read it."""
     from ruamel.yaml import YAML
-    from ruamel.yaml.comments import CommentedMap
-    from ruamel.yaml.emitter import RoundTripEmitter
     from ruamel.yaml.error import YAMLError
     from ruamel.yaml.util import load_yaml_guess_indent
 
@@ -366,57 +377,71 @@ def set_drive_field(text: str, robot: str, field: str, value: float, comment: st
     yaml.preserve_quotes = True
     yaml.width = 1 << 16  # never fold a long line
     try:
-        data, indent, block_seq_indent = load_yaml_guess_indent(text)
+        _, indent, block_seq_indent = load_yaml_guess_indent(text)
         indent, offset = indent or 2, block_seq_indent or 0  # None: no block mapping, no list
         yaml.indent(mapping=indent, sequence=indent + offset, offset=offset)
-        data = yaml.load(text)  # with preserve_quotes
+        return yaml, yaml.load(text)  # with preserve_quotes
     except YAMLError as e:  # the loader would refuse it too: one line, where and why
         mark = getattr(e, "problem_mark", None)
         where = f" at line {mark.line + 1}" if mark is not None else ""
         problem = getattr(e, "problem", None) or one_line(e)
         raise ValueError(f"not a YAML file ruamel.yaml can edit{where}: "
                          f"{problem.strip().splitlines()[0]}") from None
+
+
+def _drive_mapping(data, robot: str, field: str, number: str):
+    """Robot `robot`'s mapping and its `drive:` mapping in the loaded scenario `data`;
+    ValueError naming what is missing."""
+    from ruamel.yaml.comments import CommentedMap
+
     robots = data.get("robots") if isinstance(data, CommentedMap) else None
     if not isinstance(robots, CommentedMap):
         raise ValueError("no `robots:` mapping at the top level")
     if robot not in robots:
         raise ValueError(unknown_robot(robot, robots))
-    number = f"{value:.{digits}g}"
     spec = robots[robot]
     drive = spec.get("drive") if isinstance(spec, CommentedMap) else None
     if not isinstance(drive, CommentedMap):
         raise ValueError(f"robot {robot!r} has no `{field}:` line and no `drive:` mapping to "
                          f"add it to; add `{field}: {number}` under its `drive:`")
-    flow = drive.fa.flow_style()
+    return spec, drive
+
+
+def _set_block_field(drive, field: str, value: float, comment: str | None):
+    """Sets `field` in the block mapping `drive`; returns the comment token of its line (None
+    if it has none), `comment` when given."""
     # A key's comment token holds its line's comment and the blank and comment lines below it:
     # a field added after the last key takes those below, so they stay above what follows.
     below = ""
-    if field not in drive and drive and not flow:
+    if field not in drive and drive:
         last = _comment_token(drive, list(drive)[-1])
         if last is not None and "\n" in last.value:
             cut = last.value.index("\n") + 1
             last.value, below = last.value[:cut], last.value[cut:]
-    drive[field] = float(number)
-    if flow:  # the comment on the line is the `drive:` key's
-        edited = [_comment_token(spec, "drive"), drive.ca.comment and drive.ca.comment[0]]
-    else:
+    drive[field] = value
+    own = _comment_token(drive, field)
+    if own is None and (comment is not None or below):
+        drive.yaml_add_eol_comment("#", field, column=0)
         own = _comment_token(drive, field)
-        if own is None and (comment is not None or below):
-            drive.yaml_add_eol_comment("#", field, column=0)
-            own = _comment_token(drive, field)
-            own.value = "\n"
-        if own is not None and (comment is not None or below):
-            rest = own.value[own.value.index("\n"):] if "\n" in own.value else "\n"
-            head = own.value[:len(own.value) - len(rest)]
-            own.value = (f"# {comment}" if comment is not None else head) + rest + below
-            if comment is not None:
-                own.start_mark.column = 0  # two spaces after the value (below)
-        edited = [own]
-    edited = [c for c in edited if c is not None]
+        own.value = "\n"
+    if own is not None and (comment is not None or below):
+        rest = own.value[own.value.index("\n"):] if "\n" in own.value else "\n"
+        head = own.value[:len(own.value) - len(rest)]
+        own.value = (f"# {comment}" if comment is not None else head) + rest + below
+        if comment is not None:
+            own.start_mark.column = 0  # two spaces after the value (_dump)
+    return own
+
+
+def _dump(yaml, data, edited: list) -> str:
+    """`data` written by `yaml`, each comment token in `edited` at least two spaces after its
+    line's new value."""
+    import io
+
+    from ruamel.yaml.emitter import RoundTripEmitter
 
     class Emitter(RoundTripEmitter):
         def write_comment(self, token, pre=False):
-            """The edited line's comment at least two spaces after the new value."""
             if any(token is c for c in edited) and self.column:
                 token.start_mark.column = max(token.start_mark.column, self.column + 2)
             super().write_comment(token, pre)
