@@ -87,6 +87,13 @@ class CommandResult:
     def __repr__(self) -> str:
         return _rounded_repr(self, {"start_time": ".3f s", "end_time": ".3f s"})
 
+    def describe(self) -> str:
+        """E.g. `DriveDistance succeeded, t = 0.500 to 2.310 s` (a handle's repr)."""
+        status = self.status + (f" ({self.reason})" if self.reason else "")
+        times = (f"since t = {self.start_time:.3f} s" if self.end_time is None
+                 else f"t = {self.start_time:.3f} to {self.end_time:.3f} s")
+        return f"{self.command} {status}, {times}"
+
 
 @dc.dataclass(frozen=True)
 class IrReading:

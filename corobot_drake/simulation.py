@@ -101,10 +101,7 @@ class CommandHandle:
             r = self.result()
         except KeyError:  # the command log keeps the newest records only
             return f"{head}: no longer in the command log>"
-        status = r.status + (f" ({r.reason})" if r.reason else "")
-        times = (f"since t = {r.start_time:.3f} s" if r.end_time is None
-                 else f"t = {r.start_time:.3f} to {r.end_time:.3f} s")
-        return f"{head}: {r.command} {status}, {times}>"
+        return f"{head}: {r.describe()}>"
 
     def result(self) -> CommandResult:
         return self.robot.command_result(self.seq)

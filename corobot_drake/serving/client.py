@@ -148,6 +148,13 @@ class RemoteCommandHandle:
         self.seq = operation.get("seq")
         self.status_url = operation["status_url"]
 
+    def __repr__(self) -> str:
+        """What the server last said of the command (a repr asks it nothing), e.g.
+        `<RemoteCommandHandle seq 3: drive_distance running, since t = 0.500 s, as last
+        fetched>`."""
+        return (f"<RemoteCommandHandle seq {self.seq}: {_result(self._op).describe()}, "
+                f"as last fetched>")
+
     def result(self) -> CommandResult:
         if self._op["status"] == "running":
             self._op = self._client._get(self.status_url)

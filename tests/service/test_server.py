@@ -10,6 +10,7 @@ import itertools
 import json
 import math
 import os
+import re
 import time
 
 import httpx
@@ -504,8 +505,13 @@ def test_client_has_the_python_apis_methods(server, http, caps):
             result = bot.drive_distance(0.2, 0.4)
             assert result.succeeded and result.end_time > result.start_time
             handle = bot.rotate_degrees_async(-20, 0.3)
+            assert re.fullmatch(rf"<RemoteCommandHandle seq {handle.seq}: rotate_degrees "
+                                r"running, since t = \d+\.\d{3} s, as last fetched>",
+                                repr(handle))
             assert not handle.done()
             assert handle.wait(30).succeeded
+            assert re.fullmatch(r"<.*: rotate_degrees succeeded, t = [\d.]+ to [\d.]+ s, as last "
+                                r"fetched>", repr(handle))
             assert math.degrees(bot.heading()) == pytest.approx(-20, abs=2)
         if caps["ir"]:
             assert bot.ir("front").raw == pytest.approx(bot.ir_distances()["front"])
