@@ -5,8 +5,9 @@ Discovery as the node's (`graph.configure_discovery`: this machine unless
 ROS_AUTOMATIC_DISCOVERY_RANGE or `--network` says otherwise), in ROS_DOMAIN_ID. A subscription
 asks for the QoS its publisher offers (a best-effort sensor stream, a latched /tf_static).
 
-`--timeout` bounds the whole command, and a watchdog ends it with a line naming what it was
-waiting for should ROS 2 itself not answer (a starved machine): it never hangs.
+`--timeout` bounds each command (echo, hz: the listening, after discovery's `--wait`), and a
+watchdog ends it with a line naming what it was waiting for should ROS 2 itself not answer (a
+starved machine): it never hangs.
 
 Exit status: 0; 1 when the topic or the node is not found within `--wait` s, or too few
 messages came by `--timeout`; 2 for bad arguments or a bad ROS 2 environment (one line).
@@ -82,8 +83,8 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--wait", type=_seconds, default=DEFAULT_WAIT,
                    help=f"s to wait for discovery (default {DEFAULT_WAIT:g})")
     p.add_argument("--timeout", type=_seconds, default=None,
-                   help="s the command takes at most: echo and hz then report what came "
-                   "(default: until -n messages or Ctrl-C; list: its discovery waits)")
+                   help="list: s it waits at most; echo, hz: s of listening once the topic is "
+                   "found, then they report what came (default: until -n messages or Ctrl-C)")
     p.add_argument("--network", action="store_true",
                    help="discover on the local network (SUBNET), not this machine only")
     sub = p.add_subparsers(dest="command", required=True)
@@ -225,7 +226,7 @@ def _list(session: _Session, args, out) -> int:
 def _subscribe(session: _Session, args, on_message, raw: bool = False) -> bool:
     from corobot_drake.ros2.graph import ros_type
 
-    msgtype = session.topic_type(args.topic, _left(args, args.wait))
+    msgtype = session.topic_type(args.topic, args.wait)
     if msgtype is None:
         print(f"error: no topic {args.topic} found in {args.wait:g} s (`python -m "
               "corobot_drake.ros2 list` shows them)", file=sys.stderr)
@@ -278,7 +279,7 @@ def _echo(session: _Session, args, out) -> int:
 
     if not _subscribe(session, args, on_message):
         return 1
-    _until(done, _left(args))
+    _until(done, args.timeout)
     return _enough(args, seen[0], 1)
 
 
@@ -328,7 +329,7 @@ def _hz(session: _Session, args, out) -> int:
 
     if not _subscribe(session, args, on_message):
         return 1
-    _until(done, _left(args), report)
+    _until(done, args.timeout, report)
     report()
     with lock:
         received = len(arrivals)
@@ -348,9 +349,12 @@ def main(argv: list[str] | None = None, out=None) -> int:
     if problem:
         print(f"error: {problem}", file=sys.stderr)
         return 2
-    if args.timeout is not None:  # the discovery waits and the messages' within it
+    # list: its discovery waits within --timeout; echo, hz: --timeout s of listening, once
+    # the topic is found (within --wait)
+    if args.command == "list" and args.timeout is not None:
         args.wait = min(args.wait, args.timeout)
-    args.deadline = None if args.timeout is None else time.monotonic() + args.timeout
+    args.deadline = (time.monotonic() + args.timeout
+                     if args.command == "list" and args.timeout is not None else None)
     configure_discovery(args.network)
     watchdog = _Watchdog()
     watchdog.stage("ROS 2 to start (rclpy.init, the node)", STAGE_GRACE)

@@ -59,9 +59,9 @@ YAW = lim.Range(math.radians(lim.YAW_DEG.low), math.radians(lim.YAW_DEG.high), u
 """/set_pose's `yaw` (rad): the scenario command's yaw_deg range."""
 NODE_STOPPED = "the node stopped (the simulation ended) before the goal did"
 """The reason of a goal still running when the node stops (aborted)."""
-RESULT_GRACE = 0.5
+RESULT_GRACE = 1.0
 """s (wall clock) the node keeps serving after aborting the goals still running as it
-stops, for their results to reach their clients."""
+stops, for their results to reach their clients (an rclpy task sends each)."""
 GRAPH_CHECK_PERIOD = 2.0
 """s (wall clock) between looks for another node of the same name in the domain."""
 
@@ -123,6 +123,7 @@ class Ros2Node:
         self._robots = 0
         self._goals = 0  # running (`_execute`)
         self._goals_changed = threading.Condition()
+        self._aborted_at_stop = threading.Event()
         self._namesakes = 1
         self.node.create_timer(GRAPH_CHECK_PERIOD, self._check_namesakes)
 
@@ -242,13 +243,11 @@ class Ros2Node:
             except concurrent.futures.TimeoutError:
                 pass
             except SimulationStoppedError:
-                goal_handle.abort()
-                return Result(success=False, reason=NODE_STOPPED)
+                return self._abort_at_stop(goal_handle, Result)
             if self._closing.is_set():
                 with contextlib.suppress(SimulationStoppedError, TimeoutError):
                     self._call(partial(stop_if_running, robot, started.seq), RESULT_GRACE)
-                goal_handle.abort()
-                return Result(success=False, reason=NODE_STOPPED)
+                return self._abort_at_stop(goal_handle, Result)
             if goal_handle.is_cancel_requested:
                 return self._cancel(robot, started.seq, goal_handle, ended, Result)
             try:
@@ -262,6 +261,13 @@ class Ros2Node:
         else:
             goal_handle.abort()
         return Result(success=result.succeeded, reason=result.reason)
+
+    def _abort_at_stop(self, goal_handle, Result):
+        """A goal the node's stop (or the simulation's) ends: aborted, saying so (`close`
+        then serves a moment longer, for its result to go out)."""
+        self._aborted_at_stop.set()
+        goal_handle.abort()
+        return Result(success=False, reason=NODE_STOPPED)
 
     def _cancel(self, robot: str, seq: int, goal_handle, ended, Result):
         """Stops the robot (an AllStop, unless the command ended meanwhile), waits for the
@@ -333,9 +339,8 @@ class Ros2Node:
             return
         self._closing.set()
         with self._goals_changed:  # each aborts within a feedback period (`_run_goal`)
-            aborted = self._goals > 0
             self._goals_changed.wait_for(lambda: self._goals == 0, ANSWER_TIMEOUT)
-        if aborted and self._executor is not None:
+        if self._aborted_at_stop.is_set() and self._executor is not None:
             time.sleep(RESULT_GRACE)  # still spinning: their results go out
         if self._executor is not None:
             self._executor.shutdown(timeout_sec=5.0)

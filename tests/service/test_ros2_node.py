@@ -4,6 +4,7 @@ topics' types and values against the simulation (its HTTP services: `robot.pose(
 the module (real time, headless, with `--serve` beside it), in a private network
 (`ros2_probe`)."""
 
+import contextlib
 import inspect
 import math
 import re
@@ -299,10 +300,20 @@ def test_a_bad_yaw_is_named_in_rad(ros):
 
 def test_a_burst_of_service_calls_is_answered_in_full(ros):
     """200 calls at once from one client: each answered (the requests wait in the service's
-    queue while the executor takes them one by one; ROS's default keeps 10)."""
+    queue while the executor takes them one by one; ROS's default keeps 10). The client keeps
+    as many answers (its own queue: the probe's executor is busy with the topics)."""
+    from ros2_probe import RETRY
+
     probe, _, _ = ros
-    probe.call("/all_stop", Trigger, Trigger.Request())  # each side has discovered the other
-    client = probe.client("/all_stop", Trigger)
+    deep = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
+    client = probe.node.create_client(Trigger, "/all_stop", qos_profile=deep)
+    assert client.wait_for_service(timeout_sec=60)
+    for _ in range(6):  # each side has discovered the other once one call is answered
+        first = client.call_async(Trigger.Request())
+        with contextlib.suppress(AssertionError):
+            probe.wait_future(first, RETRY)
+            break
+        client.remove_pending_request(first)
     futures = [client.call_async(Trigger.Request()) for _ in range(200)]
     answers = [probe.wait_future(f) for f in futures]
     assert all(a.success for a in answers)
@@ -429,6 +440,7 @@ def test_a_namesake_is_warned_about_and_a_goal_running_at_the_stop_is_aborted():
                     seen.notify_all()
 
         threading.Thread(target=read, daemon=True).start()
+        probe.action_client(DriveDistance, "/drive_distance")  # discovered long before the goal
         domain = int(os.environ["ROS_DOMAIN_ID"])  # the simulation's (`ros2_simulation`)
         namesake = Probe(domain, name="corobot_drake")
         try:

@@ -6,6 +6,7 @@ private network (`ros2_probe`), against no simulation or a stand-in that never f
 import contextlib
 import os
 import pty
+import re
 import subprocess
 import sys
 import threading
@@ -87,9 +88,12 @@ def test_ros2_square_says_which_goal_the_simulation_left_unanswered(graph):
         for server in servers:
             server.destroy()
         stand_in.close()
-    assert (square.returncode, square.stderr) == (1, (
-        "error: leg 1: drive 1 m: no feedback nor result in 3 s (is the simulation stopped, "
-        "or the machine starved?)\n"))
+    # The goal is accepted, and never heard of again; or (DDS's discovery race: the stand-in
+    # has not yet discovered the example's reader) its acceptance is lost: either is said.
+    assert square.returncode == 1
+    assert re.fullmatch(r"error: leg 1: drive 1 m: no (feedback nor result|answer to the goal) "
+                        r"in 3 s \(is the simulation stopped, or the machine starved\?\)\n",
+                        square.stderr), square.stderr
 
 
 def test_ros2_teleop_says_nobody_listens(graph):
