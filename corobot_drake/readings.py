@@ -111,3 +111,20 @@ class IrReading:
     def __repr__(self) -> str:
         return _rounded_repr(self, {"raw": ".4f m", "range": ".4f m", "normalized": ".3f",
                                     "time": ".3f s"})
+
+
+@dc.dataclass(frozen=True, repr=False)
+class CameraImage:
+    """A camera's latest frame (its reading; field names those of sensor_msgs/Image): `data`
+    a numpy array height x width x 4 (RGBA, uint8, a copy; None before the first frame),
+    `time` the simulated time (s) it was captured (NaN before the first)."""
+
+    width: int
+    height: int
+    encoding: str
+    data: object
+    time: float
+
+    def __repr__(self) -> str:
+        return (f"CameraImage({self.width} x {self.height} {self.encoding}, "
+                f"time={self.time:.3f} s{'' if self.data is not None else ', no frame yet'})")

@@ -235,18 +235,22 @@ class RobotParts:
     chassis_pose: object = None
     """The output port of its chassis pose (RigidTransform, world frame)."""
     sensors: dict = dc.field(default_factory=dict)
-    """{kind (`config.sensors.SENSOR_KINDS`): {name: the sensor as built}}: what
+    """{kind field (`sensors.registry.KINDS`): {name: `kind.BuiltSensor`}}: what
     `sensors.registry.add_sensors` returns (sensors turned off left out)."""
+
+    def all_sensors(self) -> dict:
+        """{sensor name: `kind.BuiltSensor`} of every kind (names are unique in a robot)."""
+        return {name: s for sensors in self.sensors.values() for name, s in sensors.items()}
 
     @property
     def ir_sensors(self) -> dict:
         """{sensor name: `ir_sensor.IrSensor`}."""
-        return self.sensors.get("ir_sensors", {})
+        return {name: s.system for name, s in self.sensors.get("ir_sensors", {}).items()}
 
     @property
     def cameras(self) -> dict:
         """{camera name: `camera.Camera`}."""
-        return self.sensors.get("cameras", {})
+        return {name: s.extra["camera"] for name, s in self.sensors.get("cameras", {}).items()}
 
 
 @dc.dataclass

@@ -66,7 +66,14 @@ from pydrake.systems.framework import EventStatus, LeafSystem
 from pydrake.systems.sensors import CameraConfig, ImageRgba8U, RgbdSensor, RgbdSensorAsync
 
 from corobot_drake.config.poses import mount_frame
-from corobot_drake.config.sensors import FRONT_CAMERA
+from corobot_drake.config.sensors import (
+    FRONT_CAMERA,
+    camera_names,
+    default_camera_config,
+    default_cameras,
+)
+from corobot_drake.readings import CameraImage
+from corobot_drake.sensors.kind import BuiltSensor, SensorKind
 from corobot_drake.sensors.render_worker import RenderWorker, build_render_scene
 from corobot_drake.sensors.site import SensorSite
 from corobot_drake.sensors.ticks import TICK_TOLERANCE, last_tick, tick_in_step
@@ -622,3 +629,59 @@ def _add_held(builder, scene_graph, prefix: str, config: CameraConfig, frame_id,
         config.width, config.height, config.fps, config.capture_offset, step, delay, worker))
     builder.Connect(sensor.color_image_output_port(), hold.GetInputPort("color_image"))
     return hold
+
+
+# --- the kind ------------------------------------------------------------------------------
+
+
+class CameraKind(SensorKind):
+    """Cameras: `robots.<robot>.cameras.<camera>` (Drake's `CameraConfig`; off with `rgb:
+    false`), read as a `CameraImage` (RGBA, its capture time in s). The front camera's topics
+    are `camera/...` and its frames `camera_link` and `camera_optical_frame` (the image's, +z
+    forward, +x right, +y down); another camera's carry its name (`camera_names`)."""
+
+    field = "cameras"
+    config_type = CameraConfig
+    reading_type = CameraImage
+    topic = "camera"
+    ros2_type = "sensor_msgs/msg/Image"
+
+    def defaults(self) -> dict:
+        return default_cameras()
+
+    def new_sensor(self, name: str) -> CameraConfig:
+        return default_camera_config(name)
+
+    def enabled(self, config: CameraConfig) -> bool:
+        return bool(config.rgb)
+
+    def add(self, site: SensorSite, name: str, config: CameraConfig) -> BuiltSensor | None:
+        camera = add_camera(site, name, config)
+        if camera is None:
+            return None
+        return BuiltSensor(self, site.robot, name, config, camera.system, camera.image,
+                           config.fps, config.X_PB, {"camera": camera})
+
+    def read(self, sensor: BuiltSensor, root_context) -> CameraImage:
+        camera, config = sensor.extra["camera"], sensor.config
+        context = camera.system.GetMyContextFromRoot(root_context)
+        image = camera.image.Eval(context)
+        data = None if image.width() == 0 else np.array(image.data, dtype=np.uint8, copy=True)
+        return CameraImage(config.width, config.height, "rgba8", data,
+                           float(camera.image_time.Eval(context)[0]))
+
+    def to_json(self, reading: CameraImage) -> dict:
+        """The frame's size and time, not its pixels (`/robots/<robot>/camera` serves them
+        as PNG)."""
+        return {"width": reading.width, "height": reading.height,
+                "encoding": reading.encoding, "time": _finite(reading.time)}
+
+    def topic_name(self, sensor: str) -> str:
+        return camera_names(sensor)[0]
+
+    def frame_name(self, sensor: str) -> str:
+        return f"{camera_names(sensor)[1]}_optical_frame"
+
+
+def _finite(value: float) -> float | None:
+    return value if np.isfinite(value) else None

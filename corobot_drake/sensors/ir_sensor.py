@@ -58,9 +58,10 @@ from pydrake.math import RigidTransform
 from pydrake.systems.framework import BasicVector, EventStatus, LeafSystem
 
 from corobot_drake.config.poses import mount_frame
-from corobot_drake.config.sensors import IrSensorConfig
+from corobot_drake.config.sensors import IrSensorConfig, default_ir_sensors
 from corobot_drake.model.ir_models import SharpGP2D12
 from corobot_drake.readings import IrReading
+from corobot_drake.sensors.kind import BuiltSensor, SensorKind
 from corobot_drake.sensors.raycast import (
     RayCaster,
     RayFan,
@@ -474,10 +475,43 @@ def add_ir_meshcat(builder, meshcat: Meshcat, robot: str, sensors: dict[str, IrS
         builder.Connect(sensor.GetOutputPort("scan_state"), viz.get_input_port())
 
 
+# --- the kind ------------------------------------------------------------------------------
+
+
+class IrSensorKind(SensorKind):
+    """IR distance sensors: `robots.<robot>.ir_sensors.<sensor>` (`IrSensorConfig`), one
+    `IrSensor` each, read as an `IrReading` (m, s) per scan; topic `ir/<sensor>`, frame
+    `ir_<sensor>` (looking along its +x)."""
+
+    field = "ir_sensors"
+    config_type = IrSensorConfig
+    reading_type = IrReading
+    topic = "ir"
+    ros2_type = "sensor_msgs/msg/Range"
+
+    def defaults(self) -> dict:
+        return default_ir_sensors()
+
+    def new_sensor(self, name: str) -> IrSensorConfig:
+        return IrSensorConfig()
+
+    def add(self, site: SensorSite, name: str, config: IrSensorConfig) -> BuiltSensor | None:
+        sensor = add_ir_sensor(site, name, config)
+        if sensor is None:
+            return None
+        return BuiltSensor(self, site.robot, name, config, sensor,
+                           sensor.GetOutputPort("reading"), config.scan_rate_hz, config.X_PB)
+
+    def read(self, sensor: BuiltSensor, root_context) -> IrReading:
+        system = sensor.system
+        return system.reading(system.GetMyContextFromRoot(root_context))
+
+
 __all__ = [
     "IrMeshcatVisualizer",
     "IrReading",
     "IrSensor",
+    "IrSensorKind",
     "add_ir_meshcat",
     "add_ir_sensor",
     "cross_of_rays_in_sensor_frame",

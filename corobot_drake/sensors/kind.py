@@ -42,8 +42,8 @@ class BuiltSensor:
     """What the kind keeps for itself (e.g. a camera's frame saver, an IR sensor's rays)."""
 
     def read(self, root_context):
-        """The latest reading, from the diagram's root context."""
-        return self.reading.Eval(self.system.GetMyContextFromRoot(root_context))
+        """The latest reading (a `kind.reading_type`), from the diagram's root context."""
+        return self.kind.read(self, root_context)
 
 
 class SensorKind:
@@ -72,6 +72,9 @@ class SensorKind:
     """The QoS profile name of its ROS 2 topic (`ros2.interfaces`)."""
     foxglove_schema: ClassVar[str | None] = None
     """The foxglove-sdk message class name (`foxglove.messages.<name>`; None: not recorded)."""
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({self.field!r})"
 
     # --- the scenario ------------------------------------------------------------------------
     def defaults(self) -> dict:
@@ -102,6 +105,12 @@ class SensorKind:
         """After the plant is finalized: the sensor's systems in `site.builder`
         (`sensors.site.SensorSite`); None when `config` turns it off."""
         raise NotImplementedError
+
+    def read(self, sensor: BuiltSensor, root_context):
+        """The sensor's latest reading from the diagram's root context: by default the value
+        of its `reading` port (a kind whose systems put the reading out in parts overrides
+        this and assembles it)."""
+        return sensor.reading.Eval(sensor.system.GetMyContextFromRoot(root_context))
 
     def add_meshcat(self, builder, meshcat, sensor: BuiltSensor) -> None:
         """What Meshcat draws of the sensor (its rays, a pressed bumper); default nothing."""

@@ -1,6 +1,7 @@
 """Each kind of sensor's `add_<kind>` alone, on a small plant: a robot that is one welded
 `chassis` box, and (or not) a red wall ahead of it; the sensor's exported ports evaluated after
-initialization. Then the registry: every kind of `Robot` has its add function."""
+initialization. Then the registry: every kind of `Robot` is a registered kind, and each built
+sensor reads its kind's reading."""
 
 import dataclasses as dc
 import gc
@@ -19,7 +20,7 @@ from corobot_drake.config import scenario as sc
 from corobot_drake.config.sensors import SENSOR_KINDS, IrSensorConfig, default_camera_config
 from corobot_drake.sensors.camera import add_camera
 from corobot_drake.sensors.ir_sensor import add_ir_sensor
-from corobot_drake.sensors.registry import ADD_SENSOR, add_sensors
+from corobot_drake.sensors.registry import KINDS, add_sensors
 from corobot_drake.sensors.site import SensorSite
 
 WALL_X = 0.5
@@ -136,13 +137,12 @@ def test_add_camera_saves_another_camera_in_its_own_folder(tmp_path):
     assert rear.saver.directory == tmp_path / "bot" / "rear"
 
 
-def test_every_kind_of_sensor_has_its_add_function():
-    """Each typed map of `Robot` (a dict of sensor configs) is a kind the registry adds."""
+def test_every_kind_of_sensor_is_registered():
+    """Each typed map of `Robot` (a dict of sensor configs) is a registered kind."""
     hints = typing.get_type_hints(sc.Robot)
     maps = {f.name: typing.get_args(hints[f.name])[1] for f in dc.fields(sc.Robot)
             if typing.get_origin(hints[f.name]) is dict}
-    assert maps == SENSOR_KINDS
-    assert ADD_SENSOR.keys() == SENSOR_KINDS.keys()
+    assert maps == SENSOR_KINDS == {k.field: k.config_type for k in KINDS}
 
 
 def test_add_sensors_adds_every_kind_and_leaves_out_those_turned_off():
@@ -152,3 +152,23 @@ def test_add_sensors_adds_every_kind_and_leaves_out_those_turned_off():
     built = add_sensors(site, robot)
     assert {kind: list(sensors) for kind, sensors in built.items()} == {
         "ir_sensors": ["front"], "cameras": ["front"]}
+
+
+def test_each_built_sensor_reads_its_kind_reading():
+    """A `BuiltSensor` of each kind reads its kind's reading type from the root context: the
+    IR sensor the wall's distance, the camera a frame of its size (rendered at init)."""
+    site = small_site(wall=True)
+    config = IrSensorConfig()
+    built = add_sensors(site, sc.Robot(cameras={"front": small_camera()},
+                                       ir_sensors={"front": config}))
+    _, context = initialized(site)
+    for k in KINDS:
+        for sensor in built[k.field].values():
+            assert isinstance(sensor.read(context), k.reading_type)
+    ir = built["ir_sensors"]["front"].read(context)
+    origin_x = config.X_PB.GetDeterministicValue().translation()[0]
+    assert ir.raw == pytest.approx(WALL_X - origin_x, abs=EXACT)
+    image = built["cameras"]["front"].read(context)
+    assert image.data.shape == (image.height, image.width, 4) == (24, 32, 4)
+    assert built["cameras"]["front"].kind.to_json(image) == {
+        "width": 32, "height": 24, "encoding": "rgba8", "time": 0.0}
