@@ -53,6 +53,10 @@ class SensorKind:
     Wire formats: `to_json` (HTTP and the summary), `foxglove_message` (MCAP and live
     Foxglove; `foxglove_schema` names the foxglove-sdk message class), `ros2_message`
     (`ros2_type`, `ros2_qos`). A kind that has no message on a wire leaves its schema None.
+    One publisher per sensor and wire (`recording.looks.SensorPublisher`) looks for a new
+    reading (`looks`, `out_time`) and hands it to the wire; a kind with several topics on a
+    wire (a camera's image and calibration) declares them (`foxglove_channels`,
+    `ros2_channels`) and its message methods return {subtopic: message}.
     """
 
     field: ClassVar[str]
@@ -70,8 +74,9 @@ class SensorKind:
     """`package/msg/Name` of its ROS 2 message (None: not on ROS 2)."""
     ros2_qos: ClassVar[str] = "sensor"
     """The QoS profile name of its ROS 2 topic (`ros2.interfaces`)."""
-    foxglove_schema: ClassVar[str | None] = None
-    """The foxglove-sdk message class name (`foxglove.messages.<name>`; None: not recorded)."""
+    foxglove_schema: ClassVar[str | dict | None] = None
+    """The foxglove-sdk message class name (`foxglove.messages.<name>`), or a JSON schema (a
+    dict with a `title`) for a message Foxglove has no schema for; None: not recorded."""
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}({self.field!r})"
@@ -130,19 +135,64 @@ class SensorKind:
         return {f.name: _jsonable(getattr(reading, f.name)) for f in dc.fields(reading)}
 
     def foxglove_message(self, reading, frame: str):
-        """The foxglove-sdk message of a reading, stamped with its own time; None: nothing to
-        publish for this reading."""
+        """The foxglove-sdk message (a dict for a JSON schema) of a reading, stamped with its
+        own time, or {subtopic: message} (`foxglove_channels`); None: nothing to publish for
+        this reading."""
         raise NotImplementedError
 
     def ros2_message(self, messages, reading, frame: str):
         """The ROS 2 message of a reading (`messages`: `ros2.messages.Messages`, whose
-        `header(t, frame)` stamps it), stamped with the reading's own time."""
+        `header(t, frame)` stamps it), stamped with the reading's own time, or {subtopic:
+        message} (`ros2_channels`)."""
         raise NotImplementedError
 
     def reading_time(self, reading) -> float:
         """s: the simulated time a reading was taken (a publisher sends a reading once, when
         this moves)."""
         return float(reading.time)
+
+    def foxglove_channels(self) -> dict[str, str | dict]:
+        """{subtopic: schema} of a sensor's Foxglove channels, each on its `topic_name` ("")
+        or `<topic_name>/<subtopic>`: by default its one topic of `foxglove_schema`. A kind
+        with several returns them here and {subtopic: message} from `foxglove_message`."""
+        return {} if self.foxglove_schema is None else {"": self.foxglove_schema}
+
+    def ros2_channels(self) -> dict[str, tuple[str, str]]:
+        """{subtopic: (ROS 2 type, QoS name)} of a sensor's ROS 2 topics, as
+        `foxglove_channels`: by default its one topic of `ros2_type` and `ros2_qos`."""
+        return {} if self.ros2_type is None else {"": (self.ros2_type, self.ros2_qos)}
+
+    def ros2_frames(self, sensor: str) -> list[tuple[str, Any]]:
+        """The frames /tf_static places for the sensor, a chain from its mount: (frame, X)
+        pairs, the first's pose in the mount's link `X_PB @ X`, each other's in the frame
+        before it. By default its `frame_name` at the mount (X None: the mount itself)."""
+        return [(self.frame_name(sensor), None)]
+
+    # --- what a publisher reads ----------------------------------------------------------------
+    def wire_ports(self, sensor: BuiltSensor) -> dict:
+        """{input name: output port} a publisher of the sensor's messages reads: by default
+        {"reading": its `reading` port}."""
+        return {"reading": sensor.reading}
+
+    def looks(self, sensor: BuiltSensor) -> tuple[float, float]:
+        """(period, offset), s: when a publisher looks for a new reading; by default every
+        1 / `rate` s from 0. A kind whose readings are discrete updates on a schedule of their
+        own gives that schedule (a look and a reading at one time are then at the same float
+        time, the look first, and the look after sees it)."""
+        return 1.0 / sensor.rate, 0.0
+
+    def out_time(self, sensor: BuiltSensor, inputs) -> float:
+        """s: when the sensor's latest reading came out (NaN: none yet), `inputs(name)` being
+        the value of the publisher's input `name` (`wire_ports`); a look publishes a reading
+        that came out since the look before. By default `reading_time` of input `reading`."""
+        return self.reading_time(inputs("reading"))
+
+    def wire_reading(self, sensor: BuiltSensor, inputs):
+        """What `foxglove_message` and `ros2_message` make the messages of (asked only for a
+        new reading): by default input `reading`, the reading. A kind whose messages carry
+        more than its reading (an IR scan's rays, a camera's calibration) returns a value of
+        its own, whose time is its `reading_time`."""
+        return inputs("reading")
 
 
 def _jsonable(value):
