@@ -1,8 +1,8 @@
 """The scenario, as a file describes it and as the rest of the package trusts it.
 
 - `scenario.py`: the schema (`Scenario` and its parts), `load_scenario`, `save_scenario`;
-- `sensors.py`: the sensors' configuration, a typed map per kind (`SENSOR_KINDS`: IR sensors,
-  cameras), and their defaults;
+- `sensors.py`: the IR sensors' and cameras' configuration and defaults (each registered
+  kind, `sensors/registry.KINDS`, gives `Robot` its map of sensors by name);
 - `poses.py`: the one pose convention, Drake's schema `Transform`, and its helpers;
 - `bounds.py`: every field's allowed values (`Range`, `OneOf`), stated once beside the schema;
 - `placement.py`: the start poses against the ground, the world's bodies and each other;

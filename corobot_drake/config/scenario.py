@@ -22,7 +22,6 @@ from pydrake.multibody.contact_solvers import IcfSolverParameters
 from pydrake.multibody.parsing import ModelDirective
 from pydrake.multibody.plant import MultibodyPlantConfig
 from pydrake.systems.analysis import SimulatorConfig
-from pydrake.systems.sensors import CameraConfig
 
 from corobot_drake import limits as lim
 from corobot_drake.commands import (  # noqa: F401 (the scenario's commands, `sc.SetPower`)
@@ -38,11 +37,11 @@ from corobot_drake.commands import (  # noqa: F401 (the scenario's commands, `sc
     SetVelocity,
     Wait,
 )
-from corobot_drake.config.sensors import IrSensorConfig, default_cameras, default_ir_sensors
 from corobot_drake.limits import OneOf, Range, bounded
 from corobot_drake.model import dimensions as dim
 from corobot_drake.model.sdf import VISUALS, WheelContact
 from corobot_drake.names import did_you_mean
+from corobot_drake.sensors.registry import KINDS
 
 # --- shapes -----------------------------------------------------------------------------
 
@@ -231,9 +230,24 @@ class Motion:
     """deg: progress a RotateDegrees must make within `stall_time`."""
 
 
+def with_sensor_maps(cls):
+    """Gives a robot's class one field per registered kind of sensor
+    (`sensors.registry.KINDS`, in their order): `<kind.field>: dict[str, kind.config_type]`,
+    its sensors by name, default `kind.defaults()` (the Corobot's own); e.g. `ir_sensors`
+    (defaults `front` and `rear`, `{enabled: false}` removes one) and `cameras` (Drake's
+    CameraConfig, default `front`; `{rgb: false}` removes one). A name the defaults lack
+    starts as `kind.new_sensor(name)`; `X_PB.base_frame` names a link of the robot."""
+    for kind in KINDS:
+        cls.__annotations__[kind.field] = dict[str, kind.config_type]
+        setattr(cls, kind.field, dc.field(default_factory=kind.defaults))
+    return cls
+
+
 @dc.dataclass
+@with_sensor_maps
 class Robot:
-    """One Corobot: where it starts, how it drives, its tyres and its script."""
+    """One Corobot: where it starts, how it drives, its tyres, its script, and its sensors
+    (a map by name per kind, `with_sensor_maps`)."""
 
     pose: Transform = dc.field(default_factory=Transform)
     """X_WB: the chassis frame in the world (its origin on the ground midway between the
@@ -266,13 +280,6 @@ class Robot:
     then optionally the front wheels' encoder counts [left, right] it last integrated
     (default: the counts at the start); empty: the true start pose. A saved scene records all
     five (the odometry has drifted from the true pose, and carries on from its last update)."""
-    cameras: dict[str, CameraConfig] = dc.field(default_factory=default_cameras)
-    """Cameras by name, Drake's CameraConfig each (`config/sensors.py`); default `front`,
-    the Corobot's camera; a new name starts as it too. `X_PB.base_frame` names a
-    link of this robot (`chassis`); `{rgb: false}` removes one."""
-    ir_sensors: dict[str, IrSensorConfig] = dc.field(default_factory=default_ir_sensors)
-    """IR distance sensors by name (`config/sensors.py`); defaults `front` and `rear` at the
-    the Corobot's positions; `{enabled: false}` removes one."""
 
 
 CENIC = "cenic"

@@ -1,12 +1,12 @@
 """The sensors' configuration: each robot's sensors, a typed map per kind, as the scenario
 holds them.
 
-`SENSOR_KINDS` names them: `robots.<name>.ir_sensors.<sensor>` (`IrSensorConfig`) and
-`robots.<name>.cameras.<camera>` (Drake's `CameraConfig`, as Drake's hardware_sim holds its
-`cameras:`). The map key names the sensor (its systems, ports, topics and URLs); a
-`CameraConfig.name` is not read. A key the defaults lack starts as the Corobot's own sensor of
-that kind (`NEW_SENSOR`: a second camera is the Corobot's camera until its fields say otherwise).
-`sensors/registry.py` adds each kind to the diagram (`add_ir_sensor`, `add_camera`).
+Each registered kind (`sensors/registry.KINDS`) gives the scenario's `Robot` its map:
+`robots.<name>.ir_sensors.<sensor>` (`IrSensorConfig`) and `robots.<name>.cameras.<camera>`
+(Drake's `CameraConfig`, as Drake's hardware_sim holds its `cameras:`). The map key names the
+sensor (its systems, ports, topics and URLs); a `CameraConfig.name` is not read. A key the
+defaults lack starts as the Corobot's own sensor of that kind (`SensorKind.new_sensor`: a
+second camera is the Corobot's camera until its fields say otherwise).
 
 Every sensor is mounted the same way, by Drake's `pydrake.common.schema.Transform` `X_PB`: the
 sensor's pose in the frame `X_PB.base_frame` (a link of its robot, `chassis` by default; a
@@ -130,14 +130,3 @@ def camera_names(camera: str) -> tuple[str, str]:
     if camera == FRONT_CAMERA:
         return "camera", "camera"
     return f"camera/{camera}", f"camera_{camera}"
-
-
-# --- the kinds ------------------------------------------------------------------------------
-
-SENSOR_KINDS = {"ir_sensors": IrSensorConfig, "cameras": CameraConfig}
-"""{`Robot` field: the config type of its sensors}: each robot's sensors, one typed map per
-kind. A new kind: its config here, a `Robot` field, and its `add_<kind>` in
-`sensors/registry.py`."""
-
-NEW_SENSOR = {"ir_sensors": lambda name: IrSensorConfig(), "cameras": default_camera_config}
-"""{`Robot` field: what a sensor the defaults lack starts as, given its name}."""

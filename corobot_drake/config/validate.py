@@ -33,20 +33,14 @@ import yaml
 from pydrake.common import pretty_class_name
 from pydrake.common.schema import Transform
 from pydrake.common.yaml import yaml_dump_typed, yaml_load_typed
-from pydrake.geometry import RenderEngineGlParams, RenderEngineVtkParams, Rgba
+from pydrake.geometry import Rgba
 
 from corobot_drake.config import placement
 from corobot_drake.config import scenario as sc
 from corobot_drake.config.bounds import DRAKE_BOUNDS
 from corobot_drake.config.directives import DirectiveError, check_directives
 from corobot_drake.config.mesh_files import MeshFileError, check_mesh_file, scale_problem
-from corobot_drake.config.sensors import (
-    FRONT_CAMERA,
-    NEW_SENSOR,
-    RENDERERS,
-    SENSOR_KINDS,
-    IrSensorConfig,
-)
+from corobot_drake.config.sensors import FRONT_CAMERA
 from corobot_drake.limits import (
     ANGLE,
     COLOR,
@@ -61,6 +55,7 @@ from corobot_drake.limits import (
 )
 from corobot_drake.model.sdf import LINKS
 from corobot_drake.resources import resolve_file
+from corobot_drake.sensors.registry import KINDS
 
 # --- 1. the YAML against the schema --------------------------------------------------------
 
@@ -654,9 +649,9 @@ class LayerChecks:
         if name in s.world.bodies:
             self.fail(path, "a world body already has this name")
         self._world_pose(f"{path}.pose", robot.pose)
-        for kind in SENSOR_KINDS:
-            for sensor, config in getattr(robot, kind).items():
-                self._sensor(f"{path}.{kind}.{sensor}", sensor, config, s)
+        for kind in KINDS:
+            for sensor, config in getattr(robot, kind.field).items():
+                self._sensor(f"{path}.{kind.field}.{sensor}", kind, sensor, config, s)
         self._resume_fields(path, robot)
 
     def _resume_fields(self, path: str, robot: sc.Robot) -> None:
@@ -741,41 +736,20 @@ class LayerChecks:
 
     # -- sensors ----------------------------------------------------------------------------
 
-    def _sensor(self, path: str, name: str, config, s: sc.Scenario) -> None:
-        """A sensor of any kind (`SENSOR_KINDS`): its name, then its kind's checks."""
+    def _sensor(self, path: str, kind, name: str, config, s: sc.Scenario) -> None:
+        """A sensor of any kind (`registry.KINDS`): its name, its mount (every config has an
+        `X_PB` on a link of its robot), then, unless it is turned off, its kind's own checks
+        (`SensorKind.check`)."""
         if not SENSOR_NAME.fullmatch(name):
             # It appears in port names, Meshcat paths, topics and URLs
             # (/robots/<robot>/<sensor>).
             self.fail(path, "a sensor name must be letters, digits, '_', '-' or '~'; got "
                       f"{name!r}")
-        if isinstance(config, IrSensorConfig):
-            self._mount(f"{path}.X_PB", config.X_PB, s)
-        else:
-            self._camera(path, config, s)
-
-    def _camera(self, path: str, config, s: sc.Scenario) -> None:
-        """A camera this project can build (nothing to check without one)."""
-        if not config.rgb:
-            return
-        if config.depth or config.label:
-            self.fail(f"{path}.{'depth' if config.depth else 'label'}",
-                      "only the colour image is simulated; set it false")
-        if not config.output_delay < 1.0 / config.fps:
-            self.fail(f"{path}.output_delay", f"must be >= 0 and less than one frame "
-                      f"(1/fps = {1.0 / config.fps:.4g} s); got {config.output_delay:g}")
-        rc = config.renderer_class
-        if not (isinstance(rc, RenderEngineVtkParams | RenderEngineGlParams) or rc in RENDERERS):
-            self.fail(f"{path}.renderer_class", "must be RenderEngineGl, RenderEngineVtk or "
-                      "empty (the faster one available)")
-        for near, far in (("clipping_near", "clipping_far"), ("z_near", "z_far")):
-            if not getattr(config, near) < getattr(config, far):
-                self.fail(f"{path}.{far}", f"must be more than {near} "
-                          f"({getattr(config, near):g} m); got {getattr(config, far):g}")
         self._mount(f"{path}.X_PB", config.X_PB, s)
-        try:
-            config.MakeCameras()
-        except Exception as e:  # Drake's own validation, its reasons on lines of their own
-            self.fail(path, " ".join(str(e).split()))
+        if not kind.enabled(config):
+            return
+        for field, problem in kind.check(config):
+            self.fail(f"{path}.{field}" if field else path, problem)
 
 
 
@@ -920,17 +894,18 @@ def _field_node(node, name: str):
 
 def _with_new_sensors(robots_node, defaults: sc.Scenario) -> sc.Scenario:
     """`defaults`, or a copy of it holding each sensor this layer names that it lacks as its
-    kind's `NEW_SENSOR` (a new camera is the Corobot's camera before the layer's fields apply;
+    kind's `new_sensor` (a new camera is the Corobot's camera before the layer's fields apply;
     Drake's typed load would start it from its type's defaults)."""
     new = [(robot.value, kind, key.value)
            for robot, fields in getattr(robots_node, "value", ())
-           for kind in SENSOR_KINDS
-           for key, _ in getattr(_field_node(fields, kind), "value", ())
-           if key.value not in getattr(defaults.robots.get(robot.value, sc.Robot()), kind)]
+           for kind in KINDS
+           for key, _ in getattr(_field_node(fields, kind.field), "value", ())
+           if key.value not in getattr(defaults.robots.get(robot.value, sc.Robot()),
+                                       kind.field)]
     if not new:
         return defaults
     defaults = copy.deepcopy(defaults)
     for robot, kind, sensor in new:
-        getattr(defaults.robots.setdefault(robot, sc.Robot()), kind)[sensor] = (
-            NEW_SENSOR[kind](sensor))
+        getattr(defaults.robots.setdefault(robot, sc.Robot()), kind.field)[sensor] = (
+            kind.new_sensor(sensor))
     return defaults

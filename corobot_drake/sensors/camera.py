@@ -68,6 +68,7 @@ from pydrake.systems.sensors import CameraConfig, ImageRgba8U, RgbdSensor, RgbdS
 from corobot_drake.config.poses import mount_frame
 from corobot_drake.config.sensors import (
     FRONT_CAMERA,
+    RENDERERS,
     camera_names,
     default_camera_config,
     default_cameras,
@@ -654,6 +655,29 @@ class CameraKind(SensorKind):
 
     def enabled(self, config: CameraConfig) -> bool:
         return bool(config.rgb)
+
+    def check(self, config: CameraConfig) -> list[tuple[str, str]]:
+        """A camera this project can build: colour only, a delay within a frame, a renderer
+        it makes, each far plane beyond its near one, and what Drake's `MakeCameras` takes."""
+        if config.depth or config.label:
+            return [("depth" if config.depth else "label",
+                     "only the colour image is simulated; set it false")]
+        if not config.output_delay < 1.0 / config.fps:
+            return [("output_delay", f"must be >= 0 and less than one frame (1/fps = "
+                     f"{1.0 / config.fps:.4g} s); got {config.output_delay:g}")]
+        rc = config.renderer_class
+        if not (isinstance(rc, RenderEngineVtkParams | RenderEngineGlParams) or rc in RENDERERS):
+            return [("renderer_class", "must be RenderEngineGl, RenderEngineVtk or empty (the "
+                     "faster one available)")]
+        for near, far in (("clipping_near", "clipping_far"), ("z_near", "z_far")):
+            if not getattr(config, near) < getattr(config, far):
+                return [(far, f"must be more than {near} ({getattr(config, near):g} m); got "
+                         f"{getattr(config, far):g}")]
+        try:
+            config.MakeCameras()
+        except Exception as e:  # Drake's own validation, its reasons on lines of their own
+            return [("", " ".join(str(e).split()))]
+        return []
 
     def add(self, site: SensorSite, name: str, config: CameraConfig) -> BuiltSensor | None:
         camera = add_camera(site, name, config)

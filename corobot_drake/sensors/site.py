@@ -1,10 +1,24 @@
-"""Where a robot's sensors are added: what every `add_<kind>` (`registry.py`) is given."""
+"""Where a robot's sensors are added: what every kind's `add` (`registry.py`) is given.
+
+No module of a kind imports `config.scenario` when it is imported: the scenario's `Robot` is
+made from the registered kinds (`scenario.with_sensor_maps`).
+"""
+
+from __future__ import annotations
 
 import dataclasses as dc
 from collections.abc import Callable
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-from corobot_drake.config import scenario as sc
+if TYPE_CHECKING:
+    from corobot_drake.config import scenario as sc
+
+
+def _default_world() -> sc.World:
+    from corobot_drake.config import scenario as sc
+
+    return sc.World()
 
 
 @dc.dataclass
@@ -18,7 +32,7 @@ class SensorSite:
     scene_graph: object
     robot: str
     model_instance: object
-    world: sc.World = dc.field(default_factory=sc.World)
+    world: sc.World = dc.field(default_factory=_default_world)
     """The sun and sky the cameras are lit by."""
     random_seed: int = 0
     """The scenario's, mixed into each noisy sensor's own key."""
