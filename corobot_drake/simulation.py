@@ -43,7 +43,8 @@ from corobot_drake.readings import (
     IrReading,
     OdometryPose,
 )
-from corobot_drake.sensors.ir_sensor import noise_key
+from corobot_drake.sensors.kind import BuiltSensor, SensorKind
+from corobot_drake.sensors.registry import KINDS
 from corobot_drake.station import RobotParts, Station, build_station
 from corobot_drake.systems.drive import CommandRecord, DriveStatus
 from corobot_drake.systems.odometry import DriveState
@@ -413,6 +414,50 @@ class Robot:
         log = sim._run_log_sink(self.name).FindLog(sim.context)
         return max(sim._max_tilt_moved_out[self.name], max_tilt_deg(log.data().T))
 
+    # --- sensors, of every kind (`sensors.registry.KINDS`) ------------------------------------
+    def sensors(self) -> dict[str, dict[str, SensorKind]]:
+        """The sensors built, by kind and name: {kind field (`ir_sensors`, `cameras`, ...):
+        {sensor name: its `SensorKind`}}, every registered kind (those turned off left out)."""
+        return {kind.field: {name: kind for name in self._parts.sensors.get(kind.field, {})}
+                for kind in KINDS}
+
+    def _sensor(self, name: str, kind: str | None = None) -> BuiltSensor:
+        """The sensor `name` (of the kind whose field or topic stem is `kind`, needed when
+        sensors of several kinds share the name); KeyError naming those the robot has."""
+        found = [s for field, sensors in self._parts.sensors.items() for n, s in sensors.items()
+                 if n == name and kind in (None, field, s.kind.topic)]
+        if len(found) == 1:
+            return found[0]
+        if found:
+            raise KeyError(f"robot {self.name!r} has sensors {name!r} of several kinds ("
+                           f"{', '.join(s.kind.field for s in found)}); say which: "
+                           f"reading({name!r}, kind={found[0].kind.field!r})")
+        have = [f"{field}.{n}" for field, sensors in self._parts.sensors.items() for n in sensors]
+        raise KeyError(f"robot {self.name!r} has no sensor {name!r}"
+                       + (f" of kind {kind!r}" if kind else "")
+                       + f"; it has {', '.join(have) or 'none'}")
+
+    def reading(self, name: str, kind: str | None = None):
+        """The latest reading of the sensor `name`, of any kind: its kind's reading type
+        (`IrReading`, `CameraImage`, ...; the kind's module states its units and frame).
+        `kind` (a kind's field, e.g. `cameras`, or topic stem, `camera`) picks among sensors
+        of several kinds that share the name (the Corobot's IR sensor and camera are both
+        `front`). KeyError naming the robot's sensors for one it lacks."""
+        return self._sensor(name, kind).read(self._sim.context)
+
+    def sensor_json(self, name: str, kind: str | None = None) -> dict:
+        """The latest reading of the sensor `name` as JSON (`SensorKind.to_json`: what HTTP and
+        the summary show)."""
+        sensor = self._sensor(name, kind)
+        return sensor.kind.to_json(sensor.read(self._sim.context))
+
+    def sensor_readings(self) -> dict[str, dict[str, dict]]:
+        """Every sensor's latest reading as the summary shows it, {kind field: {name: JSON}}
+        (`SensorKind.summary_json`)."""
+        context = self._sim.context
+        return {field: {name: s.kind.summary_json(s.read(context)) for name, s in sensors.items()}
+                for field, sensors in self._parts.sensors.items()}
+
     def ir(self, name: str) -> IrReading:
         """The latest scan of the named IR sensor (`front`, `rear`, ...): raw distance (m),
         range (m), normalized = raw / range, and the scan's time (s)."""
@@ -541,7 +586,8 @@ class Robot:
         """The robot's figures now: every signal at its `summary` place (`signals.SIGNALS`:
         `wheel_loads_N` (N) and `slip`'s `ratio` and `angle_deg` lists are per wheel in
         `dimensions.WHEEL_NAMES` order), the largest tilt, the frames saved, the least tip
-        margin over the run (`min_tip_margin_deg`) and the command log."""
+        margin over the run (`min_tip_margin_deg`), each sensor's latest reading
+        (`sensor_readings`) and the command log."""
         out: dict = {"max_tilt_deg": self.max_tilt_deg(),
                      "camera_frames": self.camera_frames_saved()}
         for spec in signals.SIGNALS.values():
@@ -550,6 +596,7 @@ class Robot:
         return {
             **out,
             "min_tip_margin_deg": self.min_tip_margin_deg(),
+            "sensors": self.sensor_readings(),
             "commands": [
                 {"command": r.command, "status": r.status, "reason": r.reason,
                  "start_time": r.start_time, "end_time": r.end_time}
@@ -698,10 +745,10 @@ class Simulation:
             plant.SetFreeBodyPose(plant_context, parts.chassis, spec.pose.GetDeterministicValue())
             source = parts.command_source
             source.SetScript(source.GetMyMutableContextFromRoot(self.context), spec.commands)
-            for sensor_name, sensor in parts.ir_sensors.items():
-                key = noise_key(self.scenario.random_seed, name, sensor_name,
-                                spec.ir_sensors[sensor_name].noise_seed)
-                sensor.SetNoiseKey(sensor.GetMyMutableContextFromRoot(self.context), key)
+            for field, sensors in parts.sensors.items():
+                for sensor_name, sensor in sensors.items():
+                    sensor.kind.set_seed(sensor, self.context, self.scenario.random_seed,
+                                         getattr(spec, field)[sensor_name])
         for name, body in self.station.bodies.items():
             spec = self.scenario.world.bodies[name]
             if not spec.fixed:

@@ -2,10 +2,11 @@
 
 One function, `build_station`, in the style of Drake's hardware_sim and the manipulation
 station: every robot's systems are named `<robot>.<system>` and its ports are exported as
-`<robot>.<port>`. It builds in phases (the plant; each robot's drive, telemetry and sensors,
-every sensor through `sensors.registry`; then the hooks; then Meshcat's own visualizers), and
-knows no front end: the Meshcat markers, the Foxglove and MCAP topics and the ROS 2 topics
-attach through its `extras` hooks, which their callers pass.
+`<robot>.<port>`. It builds in phases (the plant, with each sensor's own geometry; each
+robot's drive, telemetry and sensors, every sensor through its kind in `sensors.registry`;
+then the hooks; then Meshcat's own visualizers), and knows no front end: the Meshcat
+markers, the Foxglove and MCAP topics and the ROS 2 topics attach through its `extras` hooks,
+which their callers pass.
 """
 
 import dataclasses as dc
@@ -47,7 +48,7 @@ from corobot_drake.config.mesh_files import mesh_source
 from corobot_drake.model import dimensions as dim
 from corobot_drake.model.sdf import corobot_sdf
 from corobot_drake.resources import make_parser
-from corobot_drake.sensors.registry import add_sensors
+from corobot_drake.sensors.registry import add_geometry, add_sensors
 from corobot_drake.sensors.site import SensorSite
 from corobot_drake.systems.contact import add_wheel_contacts
 from corobot_drake.systems.dead_reckoning import DeadReckoning
@@ -312,14 +313,17 @@ its sink with `functools.partial`."""
 
 def add_scene(builder, scenario: sc.Scenario, plant_config=None):
     """The station's first phase: the scenario's plant (`plant_config`, default the
-    scenario's) and scene graph with the world, the directives' models and the robots,
-    finalized. Returns (plant, scene_graph, {world body name: body}, {model name: instance},
-    {robot name: (instance, chassis, wheel joints)})."""
+    scenario's) and scene graph with the world, the directives' models and the robots with
+    their sensors' own geometry and frames (each kind's `add_geometry`), finalized. Returns
+    (plant, scene_graph, {world body name: body}, {model name: instance}, {robot name:
+    (instance, chassis, wheel joints)})."""
     plant, scene_graph = AddMultibodyPlant(plant_config or scenario.plant_config, builder)
     bodies = _add_world(plant, scenario.world)
     models = _add_directives(plant, scene_graph, scenario.directives,
                              scenario.world.model_friction)
     added = {name: _add_robot(plant, name, robot) for name, robot in scenario.robots.items()}
+    for name, robot in scenario.robots.items():
+        add_geometry(plant, added[name][0], name, robot)
     plant.Finalize()
     return plant, scene_graph, bodies, models, added
 

@@ -502,6 +502,12 @@ class IrSensorKind(SensorKind):
         return BuiltSensor(self, site.robot, name, config, sensor,
                            sensor.GetOutputPort("reading"), config.scan_rate_hz, config.X_PB)
 
+    def set_seed(self, sensor: BuiltSensor, root_context, random_seed: int,
+                 config: IrSensorConfig) -> None:
+        system = sensor.system
+        system.SetNoiseKey(system.GetMyMutableContextFromRoot(root_context), noise_key(
+            random_seed, sensor.robot, sensor.name, config.noise_seed))
+
     def read(self, sensor: BuiltSensor, root_context) -> IrReading:
         system = sensor.system
         return system.reading(system.GetMyContextFromRoot(root_context))

@@ -117,6 +117,11 @@ class SensorKind:
         this and assembles it)."""
         return sensor.reading.Eval(sensor.system.GetMyContextFromRoot(root_context))
 
+    def set_seed(self, sensor: BuiltSensor, root_context, random_seed: int, config) -> None:
+        """At each run's start: key the sensor's noise in `root_context` from the scenario's
+        `random_seed` and its `config` (a study varies the seed between runs of one built
+        diagram); default nothing (a kind without noise, or keyed when built)."""
+
     def add_meshcat(self, builder, meshcat, sensor: BuiltSensor) -> None:
         """What Meshcat draws of the sensor (its rays, a pressed bumper); default nothing."""
 
@@ -128,6 +133,11 @@ class SensorKind:
     def frame_name(self, sensor: str) -> str:
         """The sensor's frame (the frame its readings are in), relative to its robot's."""
         return f"{self.topic}_{sensor}"
+
+    def summary_json(self, reading) -> dict:
+        """The reading as the run's summary holds it (`Robot.summary()["sensors"]`): by
+        default `to_json`; a kind with bulky readings keeps a summary-sized part."""
+        return self.to_json(reading)
 
     def to_json(self, reading) -> dict:
         """The reading as JSON (HTTP, dashboard, summary): its fields, non-finite numbers as
