@@ -480,6 +480,9 @@ class RayCaster:
         self.unsupported: tuple[tuple[GeometryId, str, str], ...] = tuple(unsupported)
         """(id, name, shape type) of the proximity geometries that can't be ray cast."""
         self.excluded: frozenset[GeometryId] = frozenset(excluded)
+        self._X_FG: tuple[np.ndarray, ...] = tuple(
+            inspector.GetPoseInFrame(t.geometry_id).GetAsMatrix34() for t in targets)
+        """Each target's pose in its frame (3x4; the world's when anchored): cast_plane's."""
 
     def cast_fan(
         self,
@@ -545,6 +548,57 @@ class RayCaster:
                 others.append((ft.index, R, p))
         if others:
             self._cast_others(others, origin, directions, max_range, best)
+        return best
+
+    def cast_plane(
+        self,
+        query_object: QueryObject,
+        origin: np.ndarray,
+        directions: np.ndarray,
+        max_range: float,
+        normal: np.ndarray | None = None,
+    ) -> np.ndarray:
+        """The nearest hit distance of each ray ``origin + t directions[i]``,
+        ``0 <= t <= max_range``, in numpy: (N,) floats, inf for a miss. For many rays from one
+        origin (a lidar's scan), where cast_fan's per-ray Python costs more than numpy's
+        per-call overhead.
+
+        origin (3,) and unit directions (N, 3) in the world frame. normal: the unit normal of
+        a plane through origin holding every ray (a planar scan), or None; a geometry whose
+        bounding sphere misses that plane, or is farther than max_range, is skipped before
+        any exact test.
+        """
+        if not max_range >= 0.0:
+            raise ValueError(f"max_range must be >= 0, got {max_range}")
+        o = np.asarray(origin, dtype=float).reshape(1, 3)
+        d = np.asarray(directions, dtype=float)
+        best = np.full(len(d), np.inf)
+        if not np.isfinite(o).all():
+            return best  # no hit from an undefined origin
+        frame_poses: dict = {}
+        for ft, target, X_FG, planes in zip(self._fan, self._targets, self._X_FG,
+                                            self._anchored_planes, strict=True):
+            if ft.frame is None:
+                X_WG = X_FG
+            else:
+                X_WF = frame_poses.get(ft.frame)
+                if X_WF is None:
+                    X_WF = frame_poses[ft.frame] = query_object.GetPoseInWorld(
+                        ft.frame).GetAsMatrix34()
+                X_WG = np.hstack([X_WF[:, :3] @ X_FG[:, :3],
+                                  (X_WF[:, :3] @ X_FG[:, 3] + X_WF[:, 3])[:, None]])
+            if ft.radius != math.inf:
+                v = X_WG[:, :3] @ target.center + X_WG[:, 3] - o[0]
+                if float(np.linalg.norm(v)) - ft.radius > max_range or (
+                        normal is not None and abs(float(v @ normal)) > ft.radius):
+                    continue
+            if target.normals is not None:
+                normals, offsets = planes or _posed_planes(target, X_WG)
+                t = _polytope_distances(o, d, normals, offsets, [0], max_range)[:, 0]
+            else:
+                R_WG = X_WG[:, :3]
+                t = target.hit((o - X_WG[:, 3]) @ R_WG, d @ R_WG, target.params, max_range)
+            np.minimum(best, t, out=best)
         return best
 
     def _cast_others(self, others, origin, directions, max_range: float, best: list) -> None:

@@ -731,3 +731,34 @@ def test_cast_fan_from_an_undefined_origin_hits_nothing(axis):
     hits = scene.caster().cast(scene.query_object, np.array([origin] * 3), np.array(directions),
                                10.0)
     assert np.all(np.isinf(hits.distance))
+
+
+# --- cast_plane: many rays in one plane (a lidar's scan) ------------------------------------
+
+
+@pytest.mark.parametrize("anchored", [True, False], ids=["anchored", "moving"])
+def test_cast_plane_agrees_with_cast_in_a_random_scene(mesh_files, anchored):
+    """Planar scans (every shape kind, a tilted ground) read what cast() reads for the same
+    rays, though cast_plane skips what lies off the scan's plane or out of its range."""
+    rng = np.random.default_rng(13)
+    ground = HalfSpace.MakePose(unit(0.05, -0.1, 1.0), [0, 0, -0.5])
+    shapes = random_shapes(rng, mesh_files, 21, ground)
+    scene = Scene(shapes, anchored=anchored)
+    caster = scene.caster()
+    n_hits = n_rays = 0
+    for _ in range(60):
+        origin = rng.uniform(-3.5, 3.5, 3)
+        origin[2] = rng.uniform(-0.8, 2.5)
+        R = RotationMatrix(RollPitchYaw(*rng.uniform(-math.pi, math.pi, 3))).matrix()
+        a = np.linspace(-math.pi, math.pi, int(rng.integers(1, 90)), endpoint=False)
+        d = np.column_stack([np.cos(a), np.sin(a), np.zeros_like(a)]) @ R.T
+        max_range = rng.uniform(0.5, 6.0)
+        expected = caster.cast(scene.query_object, np.tile(origin, (len(d), 1)), d, max_range)
+        got = caster.cast_plane(scene.query_object, origin, d, max_range, R[:, 2])
+        np.testing.assert_allclose(got, expected.distance, rtol=0, atol=1e-9)
+        np.testing.assert_array_equal(
+            caster.cast_plane(scene.query_object, origin, d, max_range), got)
+        n_rays += len(d)
+        n_hits += int(np.isfinite(expected.distance).sum())
+    assert n_rays // 4 < n_hits < n_rays  # both hits and misses are exercised
+    assert np.all(np.isinf(caster.cast_plane(scene.query_object, [math.nan, 0.0, 0.0], d, 6.0)))
