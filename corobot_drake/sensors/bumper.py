@@ -1,0 +1,453 @@
+"""The bumper: a contact switch on a link of the robot, pressed when its box touches anything
+but the ground, reporting the contact force.
+
+The bumper is a box of its own (`BumperConfig.size`), fixed to a link by its `X_PB`: the
+bumper frame S at the box's centre, +x out of its face. By default it spans the Corobot's
+front, 5 mm ahead of the front tyres (which stick out 44 mm past the chassis) and 5 cm above
+the ground, as wide as the outer faces of the wheels. It adds no mass.
+
+Its geometry is added before the plant is finalized (`BumperKind.add_geometry`): a collision
+box (compliant hydroelastic rubber, low friction, so that it meets the compliant world
+bodies, rigid meshes and the rigid ground hydroelastically under `hydroelastic_with_fallback`,
+and slides along a wall rather than grabbing it) and a visual box of the same size.
+
+The `Bumper` system samples the plant's contact results at its rate (a periodic discrete
+update, and one at initialization), never at every physics step: the force on the bumper's
+box is the sum of the contact forces (hydroelastic surfaces and point pairs) between it and
+every geometry but the ground's (the world's half-spaces), expressed in S. It is pressed when
+that force's magnitude exceeds `force_threshold`. On SAP's discrete plant the contact results
+are the forces of the last step; on a continuous plant (CENIC) the compliant law at the
+current state.
+
+Wire formats: HTTP JSON (the reading's fields); Foxglove/MCAP as JSON (`BUMPER_SCHEMA`:
+foxglove-sdk has no contact message); ROS 2 as `geometry_msgs/msg/WrenchStamped`: ROS 2 has
+no standard contact or bumper message (Gazebo's, the Create 3's and the Kobuki's are their
+own packages), and a WrenchStamped is the standard message of a measured force: stamped, in
+the bumper's frame (on /tf_static), the force in N (torque 0). A subscriber reads pressed as
+|force| > the bumper's force_threshold; `std_msgs/Bool` would have kept pressed alone, with
+neither the force nor the time of the sample.
+
+Meshcat: the bumper's visual box turns red while pressed (`BumperMeshcat`).
+"""
+
+from __future__ import annotations
+
+import dataclasses as dc
+import math
+
+import numpy as np
+from pydrake.common.schema import Transform
+from pydrake.common.value import AbstractValue, Value
+from pydrake.geometry import (
+    AddCompliantHydroelasticProperties,
+    AddContactMaterial,
+    Box,
+    HalfSpace,
+    ProximityProperties,
+    Rgba,
+)
+from pydrake.math import RigidTransform
+from pydrake.multibody.plant import ContactResults, CoulombFriction
+from pydrake.systems.framework import EventStatus, LeafSystem
+
+from corobot_drake.config.poses import mount, mount_frame
+from corobot_drake.limits import RATE, Range, bounded
+from corobot_drake.model import dimensions as dim
+from corobot_drake.sensors.kind import BuiltSensor, SensorKind
+from corobot_drake.sensors.ticks import tick_in_step
+from corobot_drake.topics import nanoseconds
+
+# --- the config (the scenario's `robots.<name>.bumpers.<sensor>`) --------------------------
+
+CLEARANCE = 0.005
+"""m: the gap between the front tyres' reach and the default bumper's back face."""
+SIZE = (0.02, 2 * (dim.HALF_TRACK + dim.WHEEL_WIDTH / 2), 0.04)
+"""m: the default box (thickness along S's x, width along y, height along z): 2 cm thick,
+0.2794 m wide (the outer faces of the wheels), 4 cm high."""
+FRONT = (dim.HALF_WHEELBASE + dim.WHEEL_RADIUS + CLEARANCE + SIZE[0] / 2, 0.0,
+         dim.CHASSIS.center[2])
+"""m: the default bumper's centre in the chassis frame, (0.1674, 0, 0.06985): ahead of the
+front tyres (x = 0.1524), at the chassis box's height (its bottom 0.0499 above the ground)."""
+
+
+@dc.dataclass
+class BumperConfig:
+    """One bumper on a robot."""
+
+    X_PB: Transform = dc.field(default_factory=lambda: mount(FRONT, (0.0, 0.0, 0.0)))
+    """The bumper frame S (at the box's centre, +x out of its face) in `base_frame` (default
+    `chassis`: across the front, ahead of the front tyres)."""
+    size: list[float] = bounded(lambda: list(SIZE),
+                                Range(1e-3, 2.0, unit="m", why="a bumper's box"), size=3)
+    """m: the box's extent along S's x (thickness), y (width) and z (height)."""
+    force_threshold: float = bounded(1.0, Range(0.0, 1e4, unit="N"))
+    """N: pressed while the contact force's magnitude exceeds this."""
+    rate_hz: float = bounded(50.0, RATE)
+    """Samples per second (periodic discrete updates, independent of the physics step)."""
+    enabled: bool = True
+    """False: no bumper."""
+
+
+# --- the geometry (before the plant is finalized) -------------------------------------------
+
+FRICTION = 0.1
+"""Coulomb friction of the bumper (static = dynamic): low, so it slides along what it hits."""
+MODULUS = 5.0e6
+"""Pa: the bumper's hydroelastic modulus, a stiff rubber strip (a world body's is 1e7)."""
+DISSIPATION = 5.0
+"""s/m: Hunt-Crossley dissipation (the tyres'): a knock does not bounce the robot back."""
+COLOR = Rgba(0.12, 0.12, 0.12, 1.0)
+"""The bumper's look at rest: black rubber."""
+PRESSED_COLOR = Rgba(0.9, 0.1, 0.1, 1.0)
+"""Its look in Meshcat while pressed."""
+
+
+def geometry_name(name: str) -> str:
+    """The bumper's geometry name on its link (its collision and visual boxes)."""
+    return f"bumper_{name}"
+
+
+def contact_properties(size) -> ProximityProperties:
+    """Compliant hydroelastic rubber of low friction (`MODULUS`, `FRICTION`, `DISSIPATION`);
+    `size` (m) gives the resolution hint a box does not use but Drake asks for."""
+    props = ProximityProperties()
+    AddContactMaterial(dissipation=DISSIPATION, friction=CoulombFriction(FRICTION, FRICTION),
+                       properties=props)
+    AddCompliantHydroelasticProperties(resolution_hint=float(min(size)),
+                                       hydroelastic_modulus=MODULUS, properties=props)
+    return props
+
+
+def add_bumper_geometry(plant, model_instance, name: str, config: BumperConfig) -> None:
+    """Registers the bumper's collision and visual boxes on the link `config.X_PB` names (a
+    link of `model_instance`); the plant must not be finalized yet."""
+    body, X_BS = mount_frame(plant, model_instance, config.X_PB)
+    box = Box(*config.size)
+    plant.RegisterCollisionGeometry(body, X_BS, box, geometry_name(name),
+                                    contact_properties(config.size))
+    plant.RegisterVisualGeometry(body, X_BS, box, geometry_name(name), COLOR.rgba)
+
+
+def bumper_geometries(plant, scene_graph, body, name: str) -> tuple:
+    """(collision GeometryId, visual GeometryId) of the bumper `name` on `body`."""
+    inspector = scene_graph.model_inspector()
+
+    def find(ids):
+        for gid in ids:
+            if inspector.GetName(gid).split("::")[-1] == geometry_name(name):
+                return gid
+        raise ValueError(f"no bumper {name!r} on {body.name()}: add_geometry was not called")
+
+    return (find(plant.GetCollisionGeometriesForBody(body)),
+            find(plant.GetVisualGeometriesForBody(body)))
+
+
+def ground_geometries(plant, scene_graph) -> frozenset:
+    """The ground's GeometryIds: the world's half-spaces (whatever else touches counts)."""
+    inspector = scene_graph.model_inspector()
+    return frozenset(gid for gid in plant.GetCollisionGeometriesForBody(plant.world_body())
+                     if isinstance(inspector.GetShape(gid), HalfSpace))
+
+
+# --- the reading -------------------------------------------------------------------------
+
+
+@dc.dataclass(frozen=True, repr=False)
+class BumperState:
+    """One bumper sample: `pressed` (the force's magnitude over the threshold), `force` (N,
+    that magnitude), `force_vector` (N, the contact force on the bumper from everything but
+    the ground, in the bumper frame S: +x out of its face, so a push back reads -x) and `time`
+    (s, the simulated time of the sample; NaN before the first)."""
+
+    pressed: bool
+    force: float
+    force_vector: tuple[float, float, float]
+    time: float
+
+    def __repr__(self) -> str:
+        fx, fy, fz = self.force_vector
+        return (f"BumperState(pressed={self.pressed}, force={self.force:.3f} N, "
+                f"force_vector=({fx:.3f}, {fy:.3f}, {fz:.3f}) N, time={self.time:.3f} s)")
+
+
+# --- the system ----------------------------------------------------------------------------
+
+PRESSED, FORCE, FORCE_VECTOR, TIME, INDEX = 0, 1, slice(2, 5), 5, 6
+STATE_SIZE = 7
+"""The discrete state: [pressed (0 or 1), force (N), force vector in S (3, N), sample time
+(s), sample index]."""
+
+
+class Bumper(LeafSystem):
+    """One bumper (module docstring): the contact force on its box, sampled at its rate.
+
+    .. pydrake_system::
+
+        name: Bumper
+        input_ports:
+        - contact_results
+        - body_poses
+        output_ports:
+        - reading
+        - pressed
+        - force
+        - force_vector
+        - sample_state
+
+    Inputs: `contact_results` (abstract ContactResults, the plant's), `body_poses` (abstract
+    list of RigidTransform X_WB by BodyIndex, the plant's; read only while something
+    touches). Outputs: `reading` (abstract `BumperState`), `pressed` (0 or 1), `force` (N),
+    `force_vector` (3, N, in S), `sample_state` (the discrete state, `STATE_SIZE`).
+
+    Samples at initialization and every 1/`rate_hz` s from then on. With `step` (a
+    continuous plant's physics step, s) each sample is taken on the plant's steps instead,
+    at the first at or after its time (as the IR sensor's scans: an event between CENIC's
+    steps would split one).
+
+    geometry: the bumper's collision GeometryId; ground: the GeometryIds that do not press
+    it; body_index: the link it is on; X_BS: S in that link's frame.
+    """
+
+    def __init__(self, config: BumperConfig, geometry, ground, body_index, X_BS: RigidTransform,
+                 step: float = 0.0):
+        super().__init__()
+        self._geometry = geometry
+        self._ground = frozenset(ground)
+        self._body = int(body_index)
+        self._R_BS = X_BS.rotation()
+        self._threshold = float(config.force_threshold)
+        self.rate = float(config.rate_hz)
+        self._step = float(step)
+        self._contacts = self.DeclareAbstractInputPort("contact_results",
+                                                       AbstractValue.Make(ContactResults()))
+        self._poses = self.DeclareAbstractInputPort("body_poses",
+                                                    AbstractValue.Make([RigidTransform()]))
+        initial = np.zeros(STATE_SIZE)
+        initial[TIME] = math.nan
+        self._state = self.DeclareDiscreteState(initial)
+        self.DeclareInitializationDiscreteUpdateEvent(self._first_sample)
+        period = 1.0 / self.rate
+        if step > 0:
+            self.DeclarePeriodicDiscreteUpdateEvent(step, 0.0, self._sample_if_due)
+        else:
+            self.DeclarePeriodicDiscreteUpdateEvent(period, period, self._sample)
+        self.events = (step, 0.0) if step > 0 else (period, period)
+        """(period, offset), s: the schedule of the sample events (a publisher looking on it
+        sees each sample at the look after it)."""
+        state = {self.discrete_state_ticket(self._state)}
+        self.DeclareAbstractOutputPort(
+            "reading", lambda: Value(self.reading_of(initial)),
+            lambda c, out: out.set_value(self.reading_of(self._x(c))), state)
+        self.DeclareVectorOutputPort("pressed", 1, lambda c, out: out.SetAtIndex(
+            0, self._x(c)[PRESSED]), state)
+        self.DeclareVectorOutputPort("force", 1, lambda c, out: out.SetAtIndex(
+            0, self._x(c)[FORCE]), state)
+        self.DeclareVectorOutputPort("force_vector", 3, lambda c, out: out.SetFromVector(
+            self._x(c)[FORCE_VECTOR]), state)
+        self.DeclareStateOutputPort("sample_state", self._state)
+
+    def _x(self, context) -> np.ndarray:
+        return context.get_discrete_state(self._state).value()
+
+    @staticmethod
+    def reading_of(x) -> BumperState:
+        """The reading of a state vector (`STATE_SIZE`)."""
+        fx, fy, fz = (float(v) for v in x[FORCE_VECTOR])
+        return BumperState(bool(x[PRESSED] > 0.5), float(x[FORCE]), (fx, fy, fz), float(x[TIME]))
+
+    def force_in_world(self, results) -> tuple[float, float, float] | None:
+        """N: the sum of the contact forces on the bumper's box from every geometry but the
+        ground's, in the world; None when nothing but the ground touches it."""
+        g, ground = self._geometry, self._ground
+        f = [0.0, 0.0, 0.0]
+        touched = False
+        for i in range(results.num_hydroelastic_contacts()):
+            info = results.hydroelastic_contact_info(i)
+            surface = info.contact_surface()
+            # F_Ac_W acts on the body of geometry M; the body of N gets its opposite.
+            m, n = surface.id_M(), surface.id_N()
+            if (m != g and n != g) or (n if m == g else m) in ground:
+                continue
+            sign = 1.0 if m == g else -1.0
+            for k, v in enumerate(info.F_Ac_W().translational()):
+                f[k] += sign * float(v)
+            touched = True
+        for i in range(results.num_point_pair_contacts()):
+            info = results.point_pair_contact_info(i)
+            pair = info.point_pair()
+            # contact_force acts on body B (geometry id_B); body A gets its opposite.
+            a, b = pair.id_A, pair.id_B
+            if (a != g and b != g) or (a if b == g else b) in ground:
+                continue
+            sign = 1.0 if b == g else -1.0
+            for k, v in enumerate(info.contact_force()):
+                f[k] += sign * float(v)
+            touched = True
+        return tuple(f) if touched else None
+
+    def _first_sample(self, context, discrete_state) -> None:
+        self._take(context, discrete_state.get_mutable_value(), 0)
+
+    def _sample(self, context, discrete_state) -> None:
+        x = discrete_state.get_mutable_value()
+        self._take(context, x, int(x[INDEX]) + 1)
+
+    def sample_due(self, t: float) -> bool:
+        """Whether the plant step at `t` (`step` > 0) takes a sample: a sample time k / rate
+        (k >= 1) in (t - step, t]."""
+        return tick_in_step(t, self.rate, 1.0 / self.rate, self._step)
+
+    def _sample_if_due(self, context, discrete_state):
+        if not self.sample_due(context.get_time()):
+            return EventStatus.DidNothing()
+        self._sample(context, discrete_state)
+        return EventStatus.Succeeded()
+
+    def _take(self, context, x, index: int) -> None:
+        f_W = self.force_in_world(self._contacts.Eval(context))
+        f_S = (0.0, 0.0, 0.0)
+        if f_W is not None:
+            R_WS = self._poses.Eval(context)[self._body].rotation() @ self._R_BS
+            f_S = R_WS.inverse() @ np.array(f_W)
+        force = math.sqrt(sum(v * v for v in f_S))
+        x[:] = [1.0 if force > self._threshold else 0.0, force, *f_S, context.get_time(),
+                index]
+
+
+# --- Meshcat -------------------------------------------------------------------------------
+
+MESHCAT_PREFIX = "/drake/illustration"
+"""Where Drake's Meshcat visualizer of the visual geometry draws (`station.visualization_config`:
+its prefix `drake`, the role `illustration`), each geometry at `<prefix>/<frame>/<geometry>`,
+their scoped names' `::` as `/`."""
+
+
+def meshcat_path(scene_graph, visual) -> str:
+    """The Meshcat path of the visual geometry `visual` as Drake's visualizer draws it."""
+    inspector = scene_graph.model_inspector()
+    frame = inspector.GetName(inspector.GetFrameId(visual))
+    return "/".join((MESHCAT_PREFIX, frame.replace("::", "/"),
+                     inspector.GetName(visual).replace("::", "/")))
+
+
+class BumperMeshcat(LeafSystem):
+    """Colours the bumper's box in Meshcat: red while pressed, black rubber otherwise.
+
+    .. pydrake_system::
+
+        name: BumperMeshcat
+        input_ports:
+        - pressed
+
+    Its input is a Bumper's `pressed`. At the end of every step it sets the colour of `path`
+    (the box as Drake's visualizer draws it, `meshcat_path`) when `pressed` has changed since
+    it last set it: one Meshcat message per press and per release. (Not at initialization:
+    Drake's visualizer sends its objects then, and would put the box's own colour back.)
+    """
+
+    def __init__(self, meshcat, path: str):
+        super().__init__()
+        self._meshcat = meshcat
+        self.path = path
+        self._pressed = self.DeclareVectorInputPort("pressed", 1)
+        self.shown = None
+        """Whether the box was last coloured pressed (None: not yet; for tests)."""
+        self.DeclarePerStepPublishEvent(self._draw)
+
+    def _draw(self, context) -> None:
+        pressed = bool(self._pressed.Eval(context)[0] > 0.5)
+        if pressed == self.shown or (self.shown is None and not pressed):
+            return
+        c = PRESSED_COLOR if pressed else COLOR
+        self._meshcat.SetProperty(self.path, "color", [c.r(), c.g(), c.b(), c.a()])
+        self.shown = pressed
+
+
+# --- the kind ------------------------------------------------------------------------------
+
+BUMPER_SCHEMA = {
+    "title": "corobot.Bumper",
+    "description": "One bumper sample: pressed, and the contact force on it (N) in its frame "
+                   "(+x out of its face), from everything but the ground.",
+    "type": "object",
+    "properties": {
+        "timestamp": {"type": "object", "properties": {
+            "sec": {"type": "integer"}, "nsec": {"type": "integer"}}},
+        "frame_id": {"type": "string"},
+        "pressed": {"type": "boolean"},
+        "force": {"type": "number", "description": "N, the force's magnitude"},
+        "force_vector": {"type": "object", "description": "N, in frame_id", "properties": {
+            "x": {"type": "number"}, "y": {"type": "number"}, "z": {"type": "number"}}},
+    },
+}
+"""The JSON schema of a bumper's Foxglove channel (foxglove-sdk has no contact message)."""
+
+
+class BumperKind(SensorKind):
+    """Bumpers: `robots.<robot>.bumpers.<sensor>` (`BumperConfig`), one `Bumper` each, read as
+    a `BumperState` (pressed; N, in the bumper frame; s); topic `bumper/<sensor>`, frame
+    `bumper_<sensor>`; ROS 2 geometry_msgs/WrenchStamped, Foxglove JSON (`BUMPER_SCHEMA`)
+    (the module docstring says why)."""
+
+    field = "bumpers"
+    config_type = BumperConfig
+    reading_type = BumperState
+    topic = "bumper"
+    ros2_type = "geometry_msgs/msg/WrenchStamped"
+    ros2_qos = "reliable"  # a press is an event a controller acts on: none may be dropped
+    foxglove_schema = BUMPER_SCHEMA
+
+    def new_sensor(self, name: str) -> BumperConfig:
+        return BumperConfig()
+
+    def add_geometry(self, plant, model_instance, robot: str, name: str,
+                     config: BumperConfig) -> None:
+        add_bumper_geometry(plant, model_instance, name, config)
+
+    def add(self, site, name: str, config: BumperConfig) -> BuiltSensor | None:
+        """The bumper `name` on the site's robot (`<robot>.bumper.<name>`), fed by the plant's
+        contact results and body poses; its vector outputs exported as
+        `<robot>.bumper.<name>.<port>`."""
+        if not config.enabled:
+            return None
+        plant, builder, robot = site.plant, site.builder, site.robot
+        body, X_BS = mount_frame(plant, site.model_instance, config.X_PB)
+        collision, visual = bumper_geometries(plant, site.scene_graph, body, name)
+        sensor = builder.AddNamedSystem(f"{robot}.bumper.{name}", Bumper(
+            config, collision, ground_geometries(plant, site.scene_graph), body.index(), X_BS,
+            site.continuous_step))
+        builder.Connect(plant.get_contact_results_output_port(),
+                        sensor.GetInputPort("contact_results"))
+        builder.Connect(plant.get_body_poses_output_port(), sensor.GetInputPort("body_poses"))
+        for i in range(1, sensor.num_output_ports()):  # the vectors (0: the abstract reading)
+            port = sensor.get_output_port(i)
+            builder.ExportOutput(port, f"{robot}.bumper.{name}.{port.get_name()}")
+        return BuiltSensor(self, robot, name, config, sensor, sensor.GetOutputPort("reading"),
+                           sensor.rate, config.X_PB,
+                           {"meshcat_path": meshcat_path(site.scene_graph, visual)})
+
+    def add_meshcat(self, builder, meshcat, sensor: BuiltSensor) -> None:
+        viz = builder.AddNamedSystem(f"{sensor.robot}.bumper.{sensor.name}.meshcat",
+                                     BumperMeshcat(meshcat, sensor.extra["meshcat_path"]))
+        builder.Connect(sensor.system.GetOutputPort("pressed"), viz.get_input_port())
+
+    def looks(self, sensor: BuiltSensor) -> tuple[float, float]:
+        return sensor.system.events  # a sample and a look at one time: the look first
+
+    def foxglove_message(self, reading: BumperState, frame: str) -> dict:
+        """The reading as `BUMPER_SCHEMA` (JSON)."""
+        ns = nanoseconds(reading.time) if math.isfinite(reading.time) else 0
+        return {"timestamp": {"sec": ns // 1_000_000_000, "nsec": ns % 1_000_000_000},
+                "frame_id": frame, "pressed": reading.pressed, "force": reading.force,
+                "force_vector": dict(zip("xyz", reading.force_vector, strict=True))}
+
+    def ros2_message(self, messages, reading: BumperState, frame: str):
+        T = messages.T
+        return T["geometry_msgs/msg/WrenchStamped"](
+            header=messages.header(reading.time, frame),
+            wrench=T["geometry_msgs/msg/Wrench"](force=messages.vector3(reading.force_vector),
+                                                 torque=messages.vector3((0.0, 0.0, 0.0))))
+
+
+BUMPER = BumperKind()
+"""The kind's one instance (`sensors/registry.KINDS`)."""
