@@ -27,8 +27,6 @@ frame `lidar_<name>`, sensor_msgs/LaserScan on ROS 2 and Foxglove's LaserScan in
 Meshcat draws each scan's rays and hits under `/lidar/<robot>/<name>`.
 """
 
-from __future__ import annotations
-
 import copy
 import dataclasses as dc
 import math

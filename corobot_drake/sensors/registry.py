@@ -11,11 +11,13 @@ from __future__ import annotations
 from corobot_drake.sensors.camera import CameraKind
 from corobot_drake.sensors.ir_sensor import IrSensorKind
 from corobot_drake.sensors.kind import BuiltSensor, SensorKind
+from corobot_drake.sensors.lidar import LidarKind
 from corobot_drake.sensors.site import SensorSite
 
 KINDS: tuple[SensorKind, ...] = (
     IrSensorKind(),
     CameraKind(),
+    LidarKind(),
 )
 """The registered kinds, in the order the scenario's maps and the front ends list them."""
 
