@@ -147,6 +147,10 @@ def _ir(name: str, yaml: str, field: str, words: str) -> Case:
                   words)
 
 
+def _lidar(name: str, yaml: str, field: str, words: str) -> Case:
+    return _robot(name, f"{{lidars: {{top: {yaml}}}}}", f"lidars.top.{field}", words)
+
+
 def _file(name: str, data: bytes, field: str, words: str, line: int | None = 1) -> Case:
     return Case(name, field, words, data=data, line=line)
 
@@ -437,6 +441,21 @@ OVERRIDES = [
     _ir("mount inf", "{X_PB: {translation: [.inf, 0, 0]}}", "X_PB.translation[0]", "got inf"),
     _robot("sensor name", "{ir_sensors: {a.b: {}}}", "ir_sensors.a.b",
            "a sensor name must be letters, digits"),
+    # the planar lidar
+    _lidar("lidar 0 rays", "{samples: 0}", "samples", "[1, 10000] (rays per scan)"),
+    _lidar("lidar 1e7 rays", "{samples: 10000000}", "samples", "got 10000000"),
+    _lidar("lidar range negative", "{range_min: -1}", "range_min", "[0, 1000] m"),
+    _lidar("lidar range inverted", "{range_min: 5, range_max: 2}", "range_min",
+           "must be below range_max (2 m); got 5"),
+    _lidar("lidar angles inverted", "{angle_min: 1, angle_max: -1}", "angle_max",
+           "must be at least angle_min"),
+    _lidar("lidar noise NaN", "{noise_std: .nan}", "noise_std", "NaN is not allowed"),
+    _lidar("lidar noise negative", "{noise_std: -0.1}", "noise_std", "[0, 10] m"),
+    _lidar("lidar rate 0", "{scan_rate_hz: 0}", "scan_rate_hz", "(0, 1000] Hz"),
+    _lidar("lidar rate 1e6", "{scan_rate_hz: 1e6}", "scan_rate_hz", "got 1e+06"),
+    _lidar("lidar dropout 2", "{dropout: 2}", "dropout", "[0, 1]"),
+    _lidar("lidar on no link", "{X_PB: {base_frame: mast}}", "X_PB.base_frame",
+           "'mast' is not a link"),
     _override("robot name with ?", "robots: {'a?b': {pose: {translation: [2, 0, 0]}}}",
               "robots.a?b", "a URL path segment"),
     # directives Drake's parser would crash on, or take a NaN pose from
