@@ -1,12 +1,11 @@
-"""Meshcat's markers beside the scene: each robot's IR rays and hit points
-(`sensors.ir_sensor.IrMeshcatVisualizer`, under `/ir/<robot>/<sensor>`) and its wheels' slip
+"""Meshcat's markers beside the scene: what each robot's sensors draw (their kind's
+`add_meshcat`: rays, hits, ...) and its wheels' slip
 (`systems.slip_markers`, under `/slip/<robot>`).
 
 A station hook (`station.build_station`'s `extras`): `Simulation` attaches it when it has a
 Meshcat, as `functools.partial(add_meshcat_markers, meshcat, record=...)`.
 """
 
-from corobot_drake.sensors.ir_sensor import add_ir_meshcat
 from corobot_drake.systems.slip_markers import add_slip_markers
 
 
@@ -17,4 +16,6 @@ def add_meshcat_markers(meshcat, builder, plant, scene_graph, robots: dict, scen
     for name, parts in robots.items():
         add_slip_markers(builder, meshcat, name, parts.chassis_pose,
                          builder.GetSubsystemByName(f"{name}.wheel_contacts"), record)
-        add_ir_meshcat(builder, meshcat, name, parts.ir_sensors)
+        for sensors in parts.sensors.values():
+            for sensor in sensors.values():
+                sensor.kind.add_meshcat(builder, meshcat, sensor)

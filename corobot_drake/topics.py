@@ -13,7 +13,6 @@ No Foxglove or ROS import here: each front end brings its own wire format.
 import dataclasses as dc
 
 from corobot_drake import signals
-from corobot_drake.config.sensors import camera_names
 
 CHASSIS_FRAME = "base_link"
 """The chassis body's frame name (ROS's base frame)."""
@@ -36,30 +35,11 @@ class RobotNames:
         """The frame of one of the robot's links (`chassis` is `base_link`)."""
         return self.frame(CHASSIS_FRAME if body_name == "chassis" else body_name)
 
-    def ir_frame(self, sensor: str) -> str:
-        return self.frame(f"ir_{sensor}")
-
-    def camera_topic(self, camera: str, name: str) -> str:
-        """A camera's topic `name` (`image/compressed`, `camera_info`, ...): `/camera/<name>`
-        for the front camera, `/camera/<camera>/<name>` for another
-        (`config.sensors.camera_names`)."""
-        return self.topic(f"{camera_names(camera)[0]}/{name}")
-
-    def camera_frame(self, camera: str, suffix: str = "optical_frame") -> str:
-        """A camera's frame: `camera_optical_frame` (`camera_link`) for the front camera,
-        `camera_<camera>_optical_frame` for another."""
-        return self.frame(f"{camera_names(camera)[1]}_{suffix}")
-
-
 
 def nanoseconds(t: float) -> int:
     """Simulation time (s) as integer nanoseconds (an MCAP log time)."""
     return round(t * 1e9)
 
-
-
-INFRARED = 1
-"""sensor_msgs/Range's radiation_type for an infrared sensor."""
 
 
 TIMESTAMP_SCHEMA = {"type": "object", "properties": {"sec": {"type": "integer"},

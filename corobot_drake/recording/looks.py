@@ -1,8 +1,8 @@
 """What the publishers of the run's topics share, the recording's (`recording.publishers`,
 Foxglove) and ROS 2's (`ros2.publishers`): when they look at the simulation, the robot state
-they read (`RobotStateLooks`: its input ports and the chassis read), the camera frames and IR
-scans they find (`CameraLooks`, `IrScanLooks`) and how the topics of signals with a message of
-their own are fed (`connect_signal_topics`).
+they read (`RobotStateLooks`: its input ports and the chassis read), the one publisher of every
+sensor's readings, whatever its kind (`SensorPublisher`, handing them to a wire's sink), and
+how the topics of signals with a message of their own are fed (`connect_signal_topics`).
 
 A publisher looks on periodic publish events from its input ports alone: what to publish at
 time t is decided from the Context, so it keeps no memory and a reset or replayed Context
@@ -16,13 +16,10 @@ import numpy as np
 from pydrake.common.value import AbstractValue, Value
 from pydrake.math import RigidTransform
 from pydrake.multibody.math import SpatialVelocity
-from pydrake.systems.framework import LeafSystem
+from pydrake.systems.framework import LeafSystem, PortDataType
 from pydrake.systems.primitives import ZeroOrderHold
-from pydrake.systems.sensors import ImageRgba8U
 
 from corobot_drake.model import dimensions as dim
-from corobot_drake.model.ir_models import SharpGP2D12
-from corobot_drake.sensors.ir_sensor import SCAN_TIME, scan_state_layout
 from corobot_drake.systems.runlog import HELD_PERIOD
 
 STATE_PERIOD = 0.02
@@ -106,77 +103,46 @@ class RobotStateLooks(LeafSystem):
             builder.Connect(source, publisher.GetInputPort(port))
 
 
-class CameraLooks(LeafSystem):
-    """The base of a camera's frame publishers: their input ports, and the frame each look
-    finds.
+class SensorPublisher(LeafSystem):
+    """One sensor's publisher on one wire: it looks for a new reading and hands it to
+    `sink(reading)` (the wire's messages of it: `recording.publishers.FoxgloveSensorSink`,
+    `ros2.publishers.RosSensorSink`), once, at the first look after it came out.
 
     .. pydrake_system::
 
-        name: CameraLooks
+        name: SensorPublisher
         input_ports:
-        - rgb_image
-        - image_time
+        - <the kind's wire_ports> (e.g. reading)
 
-    Inputs `rgb_image` (abstract ImageRgba8U, `width` x `height`) and `image_time` (1, s: its
-    capture; NaN before the first), the camera's outputs. It looks every `look` s and hands
-    a frame that came out (capture + `delay`) since the previous look to the subclass's
-    `publish_frame(context, captured, image)`, as `camera.CameraFrameSaver` saves one."""
+    Everything comes from the sensor's kind (`sensors.kind.SensorKind`): its inputs are the
+    ports the kind names (`wire_ports`: vector or abstract as they are), its looks are on
+    the kind's schedule (`looks`), and a look at t hands on the reading (`wire_reading`,
+    asked only then) that came out (`out_time`; NaN: none yet) in [t - period, t)."""
 
-    def __init__(self, width: int, height: int, look: float, delay: float):
+    def __init__(self, sensor, sink):
         super().__init__()
-        self._look, self._delay = float(look), float(delay)
-        self._image = self.DeclareAbstractInputPort(
-            "rgb_image", AbstractValue.Make(ImageRgba8U(width, height)))
-        self._image_time = self.DeclareVectorInputPort("image_time", 1)
-        self.DeclarePeriodicPublishEvent(self._look, 0.0, self._find_frame)
+        self._sensor, self._kind, self._sink = sensor, sensor.kind, sink
+        self._inputs = {}
+        for name, port in self._kind.wire_ports(sensor).items():
+            if port.get_data_type() == PortDataType.kVectorValued:
+                self._inputs[name] = self.DeclareVectorInputPort(name, port.size())
+            else:
+                self._inputs[name] = self.DeclareAbstractInputPort(name, port.Allocate())
+        self._period, offset = self._kind.looks(sensor)
+        self.DeclarePeriodicPublishEvent(self._period, offset, self._look)
 
-    def _find_frame(self, context):
-        captured = float(self._image_time.Eval(context)[0])
-        if in_window(captured + self._delay, context.get_time(), self._look):  # False: NaN
-            self.publish_frame(context, captured, self._image.Eval(context))
+    def connect(self, builder) -> None:
+        """Connects the sensor's ports (`wire_ports`) to this publisher's inputs."""
+        for name, port in self._kind.wire_ports(self._sensor).items():
+            builder.Connect(port, self._inputs[name])
 
-    def publish_frame(self, context, captured: float, image: ImageRgba8U) -> None:
-        """Publishes the frame captured at `captured` (s)."""
-        raise NotImplementedError
+    def _look(self, context):
+        def inputs(name):
+            return self._inputs[name].Eval(context)
 
-
-class IrScanLooks(LeafSystem):
-    """The base of an IR sensor's scan publishers: its input port, the sensor's limits, and
-    the scan each look finds.
-
-    .. pydrake_system::
-
-        name: IrScanLooks
-        input_ports:
-        - scan_state
-
-    Input `scan_state` (the `IrSensor`'s, `ir_sensor.scan_state_layout`). It looks on the
-    sensor's own event schedule (`IrSensor.events`: a look and a scan at one time are at the
-    same float time, the look first; a look scheduled apart could fall an ulp after a scan
-    and miss the scan before it) and hands the scan taken since the previous look to the
-    subclass's `publish_scan(context, when, scan)`. `fov_deg`, `min_range` and `max_range`
-    (m) are the sensor's cone and the distances it can read."""
-
-    def __init__(self, sensor_system):
-        super().__init__()
-        config = sensor_system.config
-        self._period = sensor_system.events[0]
-        self.fov_deg = config.dispersion_cone_angle
-        self.min_range = SharpGP2D12.min_distance if config.model == "sharp_gp2d12" else 0.0
-        self.max_range = config.maximum_range
-        self._scan = self.DeclareVectorInputPort(
-            "scan_state", scan_state_layout(sensor_system.num_rays)[0])
-        self.DeclarePeriodicPublishEvent(*sensor_system.events, self._find_scan)
-
-    def _find_scan(self, context):
-        scan = self._scan.Eval(context)
-        when = float(scan[SCAN_TIME])
-        if in_window(when, context.get_time(), self._period):  # False: NaN, no scan yet
-            self.publish_scan(context, when, scan)
-
-    def publish_scan(self, context, when: float, scan) -> None:
-        """Publishes `scan` (the sensor's scan state) taken at `when` (s)."""
-        raise NotImplementedError
+        out = self._kind.out_time(self._sensor, inputs)
+        if in_window(out, context.get_time(), self._period):  # False: NaN, nothing yet
+            self._sink(self._kind.wire_reading(self._sensor, inputs))
 
 
 def connect_signal_topics(builder, robot: str, publisher, topics, prefix: str) -> None:

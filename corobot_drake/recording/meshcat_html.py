@@ -6,7 +6,7 @@ transform and property they send with the simulation time; while a Meshcat is re
 `RECORDING_FPS`. `write_recording` publishes that animation to the Meshcat scene and writes
 `Meshcat.StaticHtml()`: the scene, its meshes and textures, Meshcat's JavaScript and the
 animation in one file that a browser opens offline, with the Animations panel's play/pause
-and time slider. Objects drawn without a time stamp (the IR rays, `/ir`) are not animated:
+and time slider. Objects drawn without a time stamp (the sensors' markers) are not animated:
 the file shows them as they were at the end.
 
 The recording lives in the Meshcat object, beside the Context, like a file being written:

@@ -9,16 +9,15 @@ look at t sees what happened in [t - period, t): the event's own time stamps the
 its log time. What happens at the last instant of a run (after the last look) is not published.
 
 `add_foxglove_topics` adds them all to a station's builder. The schedules, the robot state's
-inputs and the wiring of the signals' own topics are shared with ROS 2's publishers
-(`recording.looks`).
+inputs, the wiring of the signals' own topics and the sensors' publisher are shared with ROS
+2's publishers (`recording.looks`). Each sensor's topics, frame and messages are its kind's
+(`sensors.kind.SensorKind`): one `looks.SensorPublisher` per sensor hands each new reading
+to its `FoxgloveSensorSink`.
 """
 
 import itertools
 
-import numpy as np
 from foxglove.channels import (
-    CameraCalibrationChannel,
-    CompressedImageChannel,
     FrameTransformsChannel,
     JointStatesChannel,
     LogChannel,
@@ -26,8 +25,6 @@ from foxglove.channels import (
     SceneUpdateChannel,
 )
 from foxglove.messages import (
-    CameraCalibration,
-    CompressedImage,
     CubePrimitive,
     CylinderPrimitive,
     Duration,
@@ -47,7 +44,6 @@ from pydrake.geometry import Box, Convex, Cylinder, Mesh, Rgba, Sphere
 from pydrake.math import RigidTransform
 from pydrake.multibody.tree import BodyIndex
 from pydrake.systems.framework import LeafSystem
-from pydrake.systems.sensors import ImageRgba8U
 
 from corobot_drake import topics as ros_names
 from corobot_drake.config.poses import mount_frame
@@ -57,18 +53,14 @@ from corobot_drake.recording.looks import (
     STATE_PERIOD,
     TELEMETRY_PERIOD,
     TOLERANCE,
-    CameraLooks,
-    IrScanLooks,
     RobotStateLooks,
+    SensorPublisher,
     connect_signal_topics,
     in_window,
 )
-from corobot_drake.sensors.ir_sensor import DISTANCE, TRUE_DISTANCE, scan_state_layout
 
 SCENE_PERIOD = 1.0
 """s: /scene (the shapes) again every second, for viewers that connect late."""
-JPEG_QUALITY = 80
-"""PIL's JPEG quality (0-100) of the camera frames."""
 
 
 class TransformPublisher(LeafSystem):
@@ -240,86 +232,37 @@ class TelemetryPublisher(LeafSystem):
         return publish
 
 
-class IrPublisher(IrScanLooks):
-    """One IR sensor's scans: /ir/<sensor> (corobot.Range, JSON) and /ir/<sensor>/rays
-    (foxglove.SceneUpdate: the rays in the world), one per scan, stamped with the scan's time
-    (`IrScanLooks`).
+class FoxgloveSensorSink:
+    """A sensor's Foxglove channels (its kind's `foxglove_channels`, under the robot's
+    namespace), and what a `looks.SensorPublisher` hands them: each new reading's messages
+    (`foxglove_message`, in the sensor's frame), logged at the reading's time."""
 
-    .. pydrake_system::
+    def __init__(self, context, names: ros_names.RobotNames, sensor):
+        self._kind, self._frame = sensor.kind, names.frame(sensor.kind.frame_name(sensor.name))
+        topic = self._kind.topic_name(sensor.name)
+        self._channels = {sub: _channel(names.topic(f"{topic}/{sub}" if sub else topic),
+                                        schema, context)
+                          for sub, schema in self._kind.foxglove_channels().items()}
 
-        name: IrPublisher
-        input_ports:
-        - scan_state
-    """
-
-    def __init__(self, context, names: ros_names.RobotNames, sensor: str, sensor_system):
-        super().__init__(sensor_system)
-        self._names, self._sensor = names, sensor
-        _, self._origin, self._ends, self._hits = scan_state_layout(sensor_system.num_rays)
-        self._range_channel = tp.json_channel(names.topic(f"ir/{sensor}"), tp.RANGE_SCHEMA,
-                                              context)
-        self._rays_channel = SceneUpdateChannel(names.topic(f"ir/{sensor}/rays"),
-                                                context=context)
-
-    def publish_scan(self, context, when: float, scan) -> None:
-        ns = ros_names.nanoseconds(when)
-        self._range_channel.log(tp.range_message(
-            when, self._names.ir_frame(self._sensor), self.fov_deg, self.min_range,
-            self.max_range, scan[DISTANCE], scan[TRUE_DISTANCE]), log_time=ns)
-        ends = np.asarray(scan[self._ends]).reshape(-1, 3)
-        entity = SceneEntity(timestamp=tp.stamp(when), frame_id="world",
-                             id=self._names.ir_frame(self._sensor),
-                             lines=[tp.ray_lines(scan[self._origin], ends, scan[self._hits])])
-        self._rays_channel.log(SceneUpdate(entities=[entity]), log_time=ns)
+    def __call__(self, reading) -> None:
+        messages = self._kind.foxglove_message(reading, self._frame)
+        if messages is None:
+            return
+        if list(self._channels) == [""]:  # one topic: the message itself (JSON: a dict)
+            messages = {"": messages}
+        ns = ros_names.nanoseconds(self._kind.reading_time(reading))
+        for sub, message in messages.items():
+            self._channels[sub].log(message, log_time=ns)
 
 
-class CameraPublisher(CameraLooks):
-    """One camera's frames: /camera/image/compressed (foxglove.CompressedImage, JPEG) and
-    /camera/camera_info (foxglove.CameraCalibration), stamped with the capture time (another
-    camera than `front`: /camera/<camera>/..., `topics.RobotNames.camera_topic`).
+def _channel(topic: str, schema, context):
+    """The channel of `topic`: of a foxglove-sdk message class by its name, or JSON of a
+    JSON schema (a dict)."""
+    if isinstance(schema, dict):
+        return tp.json_channel(topic, schema, context)
+    import foxglove.channels
 
-    .. pydrake_system::
-
-        name: CameraPublisher
-        input_ports:
-        - rgb_image
-        - image_time
-
-    The ports, and when a frame is published: `looks.CameraLooks`."""
-
-    def __init__(self, context, names: ros_names.RobotNames, camera: str, config, look: float,
-                 delay: float):
-        super().__init__(config.width, config.height, look, delay)
-        self._image_channel = CompressedImageChannel(
-            names.camera_topic(camera, "image/compressed"), context=context)
-        self._info_channel = CameraCalibrationChannel(names.camera_topic(camera, "camera_info"),
-                                                      context=context)
-        self._frame = names.camera_frame(camera)
-        fx, fy = config.focal_x(), config.focal_y()
-        cx, cy = config.principal_point()
-        self._calibration = dict(
-            frame_id=self._frame, width=config.width, height=config.height,
-            distortion_model="plumb_bob", D=[0.0] * 5, K=[fx, 0, cx, 0, fy, cy, 0, 0, 1],
-            R=[1.0, 0, 0, 0, 1, 0, 0, 0, 1], P=[fx, 0, cx, 0, 0, fy, cy, 0, 0, 0, 1, 0])
-
-    def publish_frame(self, context, captured: float, image: ImageRgba8U) -> None:
-        ns = ros_names.nanoseconds(captured)
-        self._image_channel.log(CompressedImage(
-            timestamp=tp.stamp(captured), frame_id=self._frame, format="jpeg",
-            data=jpeg(image)), log_time=ns)
-        self._info_channel.log(CameraCalibration(timestamp=tp.stamp(captured),
-                                                 **self._calibration), log_time=ns)
-
-
-def jpeg(image: ImageRgba8U) -> bytes:
-    import io
-
-    from PIL import Image
-
-    out = io.BytesIO()
-    Image.fromarray(np.array(image.data[:, :, :3])).save(out, format="JPEG",
-                                                          quality=JPEG_QUALITY)
-    return out.getvalue()
+    return getattr(foxglove.channels, f"{schema}Channel")(topic, context=context)
 
 
 # --- wiring -------------------------------------------------------------------------------
@@ -444,14 +387,10 @@ def add_foxglove_topics(builder, plant, scene_graph, robots: dict, scenario, con
         builder.Connect(parts.command_source.GetOutputPort("command_log"),
                         state.GetInputPort("command_log"))
         _add_telemetry(builder, context, names)
-        for sensor, system in parts.ir_sensors.items():
-            ir = builder.AddNamedSystem(f"{name}.foxglove_ir.{sensor}",
-                                        IrPublisher(context, names, sensor, system))
-            builder.Connect(system.GetOutputPort("scan_state"), ir.get_input_port())
-            mounts.append(_mount(plant, frames, names.ir_frame(sensor), mount_frame(
-                plant, parts.model_instance, system.config.X_PB)))
-        for camera in parts.cameras.values():
-            mounts.append(_add_camera(builder, plant, frames, context, names, parts, camera))
+        for sensors in parts.sensors.values():
+            for sensor in sensors.values():
+                mounts.append(_add_sensor(builder, plant, frames, context, names, parts,
+                                          sensor))
     tf = builder.AddNamedSystem("foxglove_tf", TransformPublisher(
         context, [(i, f, p) for i, (f, p) in frames.items()], mounts))
     builder.Connect(plant.get_body_poses_output_port(), tf.get_input_port())
@@ -475,18 +414,20 @@ def _mount(plant, frames: dict, child: str, mount) -> tuple:
     return parent, child, X_BS
 
 
-def _add_camera(builder, plant, frames: dict, context, names, parts, camera) -> tuple:
-    """Adds `<robot>.foxglove_camera.<camera>` for one of the robot's cameras (a
-    `sensors.camera.Camera`); returns the camera frame's mount."""
-    publisher = builder.AddNamedSystem(
-        f"{names.robot}.foxglove_camera.{camera.name}",
-        CameraPublisher(context, names, camera.name, camera.config, camera.look, camera.delay))
-    builder.Connect(camera.image, publisher.GetInputPort("rgb_image"))
-    builder.Connect(camera.image_time, publisher.GetInputPort("image_time"))
-    return _mount(plant, frames, names.camera_frame(camera.name),
-                  mount_frame(plant, parts.model_instance, camera.config.X_PB))
+def _add_sensor(builder, plant, frames: dict, context, names, parts, sensor) -> tuple:
+    """Adds `<robot>.foxglove_<kind topic>.<sensor>` for one of the robot's sensors (a
+    `sensors.kind.BuiltSensor`) if its kind has Foxglove channels; returns the mount of the
+    sensor's frame."""
+    kind = sensor.kind
+    if kind.foxglove_channels():
+        publisher = builder.AddNamedSystem(
+            f"{names.robot}.foxglove_{kind.topic}.{sensor.name}",
+            SensorPublisher(sensor, FoxgloveSensorSink(context, names, sensor)))
+        publisher.connect(builder)
+    return _mount(plant, frames, names.frame(kind.frame_name(sensor.name)),
+                  mount_frame(plant, parts.model_instance, sensor.X_PB))
 
 
-__all__ = ["STATE_PERIOD", "TELEMETRY_PERIOD", "CameraPublisher", "IrPublisher",
-           "RobotStatePublisher", "ScenePublisher", "TelemetryPublisher", "TransformPublisher",
-           "add_foxglove_topics", "in_window"]
+__all__ = ["STATE_PERIOD", "TELEMETRY_PERIOD", "FoxgloveSensorSink", "RobotStatePublisher",
+           "ScenePublisher", "TelemetryPublisher", "TransformPublisher", "add_foxglove_topics",
+           "in_window"]

@@ -13,11 +13,7 @@ as a ROS robot's; with several, each robot's are under its name (`/<robot>/odom`
 | `/joint_states` | foxglove.JointStates | the four wheel axles: angle (rad), rate (rad/s) |
 | `/odom` | foxglove.Odometry | the chassis in the world; velocity in base_link (ground truth) |
 | `/drive_state` | corobot.DriveState (JSON) | enabled, power, axle speed, encoder ticks per wheel |
-| `/ir/<sensor>` | corobot.Range (JSON) | each scan, sensor_msgs/Range's fields |
-| `/ir/<sensor>/rays` | foxglove.SceneUpdate | each scan's rays, in the world |
-| `/camera/image/compressed` | foxglove.CompressedImage | each frame, JPEG |
-| `/camera/camera_info` | foxglove.CameraCalibration | with each frame |
-| `/camera/<camera>/...` | (the same two) | another camera than `front` |
+| `/<topic>/<sensor>...` | the sensor's kind's | each reading (`SensorKind.foxglove_channels`) |
 | `/commands` | foxglove.Log | each command issued and how it ended |
 | `/wheel_loads` | corobot.WheelLoads (JSON) | each wheel's load (N) |
 | `/wheel_slip` | corobot.WheelSlip (JSON) | each wheel's slip ratio and slip angle (deg) |
@@ -25,21 +21,16 @@ as a ROS robot's; with several, each robot's are under its name (`/<robot>/odom`
 
 Frames: `world` (z up); `base_link`, the chassis frame (on the ground midway between the axles,
 +x forward, +z up: ROS's base_footprint, REP 103's axes); `<wheel>_wheel` (the wheel links);
-`camera_optical_frame` (Drake's camera frame: +z forward, +x right, +y down, ROS's optical
-frame; another camera's `camera_<camera>_optical_frame`); `ir_<sensor>` (+x along the beam, as
-sensor_msgs/Range's frame). Times are simulation time (a run starts at 1970-01-01 00:00:00,
+each sensor's frame (its kind's `frame_name`, at its mount on a link: its readings' frame).
+Times are simulation time (a run starts at 1970-01-01 00:00:00,
 as a ROS simulation's /clock starts at 0).
 """
 
-import math
 
-import numpy as np
 from foxglove import Channel
 from foxglove.messages import (
     Color,
     FrameTransform,
-    LinePrimitive,
-    LinePrimitiveLineType,
     Point3,
     Pose,
     Quaternion,
@@ -48,7 +39,7 @@ from foxglove.messages import (
 )
 from pydrake.math import RigidTransform
 
-from corobot_drake.topics import INFRARED, nanoseconds
+from corobot_drake.topics import nanoseconds
 
 
 def json_channel(topic: str, schema: dict, context) -> Channel:
@@ -87,52 +78,6 @@ def frame_transform(t: float, parent: str, child: str, X_PC: RigidTransform) -> 
 def color(rgba) -> Color:
     r, g, b, a = (float(c) for c in rgba)
     return Color(r=r, g=g, b=b, a=a)
-
-
-RAY_HIT_COLOR = (1.0, 0.2, 0.1, 1.0)
-RAY_MISS_COLOR = (0.3, 0.8, 0.3, 0.6)
-"""The IR rays drawn in Foxglove: red where a ray hit something, green where it ran out."""
-
-
-def ray_lines(origin, ends: np.ndarray, hits: np.ndarray) -> LinePrimitive:
-    """The rays of one IR scan as a line list in the world frame: origin (3) to each end
-    (N x 3, m), coloured by whether it hit (N, 0 or 1)."""
-    points, colors = [], []
-    o = point3(origin)
-    for end, hit in zip(ends, hits, strict=True):
-        c = color(RAY_HIT_COLOR if hit > 0.5 else RAY_MISS_COLOR)
-        points += [o, point3(end)]
-        colors += [c, c]
-    return LinePrimitive(type=LinePrimitiveLineType.LineList, thickness=2.0,
-                         scale_invariant=True, points=points, colors=colors)
-
-
-RANGE_SCHEMA = {
-    "title": "corobot.Range",
-    "description": "One IR scan, with ROS sensor_msgs/Range's fields (metres, radians).",
-    "type": "object",
-    "properties": {
-        "timestamp": {"type": "object", "properties": {
-            "sec": {"type": "integer"}, "nsec": {"type": "integer"}}},
-        "frame_id": {"type": "string"},
-        "radiation_type": {"type": "integer", "description": "1: INFRARED"},
-        "field_of_view": {"type": "number", "description": "rad, the cone's full angle"},
-        "min_range": {"type": "number"},
-        "max_range": {"type": "number"},
-        "range": {"type": "number", "description": "the reading (m); max_range: nothing"},
-        "true_range": {"type": "number", "description": "the geometric nearest hit (m)"},
-    },
-}
-
-
-def range_message(t: float, frame_id: str, field_of_view_deg: float, min_range: float,
-                  max_range: float, reading: float, true_range: float) -> dict:
-    """One IR scan as `RANGE_SCHEMA` (JSON)."""
-    ts = stamp(t)
-    return {"timestamp": {"sec": ts.sec, "nsec": ts.nsec}, "frame_id": frame_id,
-            "radiation_type": INFRARED, "field_of_view": math.radians(field_of_view_deg),
-            "min_range": min_range, "max_range": max_range, "range": float(reading),
-            "true_range": float(true_range)}
 
 
 DRIVE_STATE_SCHEMA = {

@@ -21,7 +21,6 @@ from pathlib import Path
 
 from corobot_drake import topics as tp
 from corobot_drake.config import scenario as sc
-from corobot_drake.config.sensors import camera_names
 from corobot_drake.model.dimensions import WHEEL_NAMES
 
 INTERFACES_DIR = Path(__file__).resolve().parent / "ros_packages"
@@ -64,7 +63,7 @@ TOPICS = (
     Topic("tf", "tf2_msgs/msg/TFMessage", Qos.RELIABLE,
           "odom -> base_link (ground truth), base_link -> the wheels, at 50 Hz", shared=True),
     Topic("tf_static", "tf2_msgs/msg/TFMessage", Qos.LATCHED,
-          "base_link -> camera_link -> camera_optical_frame, ir_front, ir_rear", shared=True),
+          "each sensor's frames at its mount (its kind's `ros2_frames`)", shared=True),
     Topic("robot_description", "std_msgs/msg/String", Qos.LATCHED,
           "the robot's URDF (`ros2.urdf`), for RViz and robot_state_publisher"),
     Topic("odom", "nav_msgs/msg/Odometry", Qos.RELIABLE,
@@ -73,31 +72,15 @@ TOPICS = (
           "the encoders' dead reckoning, with a covariance, at 50 Hz"),
     Topic("joint_states", "sensor_msgs/msg/JointState", Qos.RELIABLE,
           "the four wheel axles: angle (rad), rate (rad/s), at 50 Hz"),
-    Topic("ir/front", "sensor_msgs/msg/Range", Qos.SENSOR, "each scan, INFRARED"),
-    Topic("ir/rear", "sensor_msgs/msg/Range", Qos.SENSOR, "each scan, INFRARED"),
-    Topic("camera/image_raw", "sensor_msgs/msg/Image", Qos.SENSOR, "each frame, rgb8"),
-    Topic("camera/camera_info", "sensor_msgs/msg/CameraInfo", Qos.SENSOR, "with each frame"),
     Topic("drive_state", f"{PACKAGE}/msg/DriveState", Qos.RELIABLE,
           "enabled, power, axle speed, encoder ticks per wheel, GPS and compass, at 50 Hz"),
     *(Topic(t.name, _telemetry_type(t), Qos.RELIABLE,
             t.description.split(":")[0].lower() + (" at 10 Hz" if t.costly else " at 50 Hz"))
       for t in tp.TELEMETRY_TOPICS),
 )
-"""Everything the node publishes (the IR topics are each sensor's: `ir_topic`; the camera
-topics each camera's: `camera_topic`)."""
+"""Everything the node publishes but the sensors' topics (each sensor's kind says its own:
+`sensors.kind.SensorKind.ros2_channels`)."""
 TOPIC = {t.name: t for t in TOPICS}
-
-
-def ir_topic(sensor: str) -> Topic:
-    """The topic of the IR sensor `sensor` (the scenario's sensors: `front`, `rear`, ...)."""
-    return dc.replace(TOPIC["ir/front"], name=f"ir/{sensor}")
-
-
-def camera_topic(camera: str, name: str) -> Topic:
-    """The topic `name` (`image_raw`, `camera_info`) of the robot's camera `camera`:
-    `camera/<name>` for the front camera, `camera/<camera>/<name>` for another
-    (`config.sensors.camera_names`)."""
-    return dc.replace(TOPIC[f"camera/{name}"], name=f"{camera_names(camera)[0]}/{name}")
 
 
 CMD_VEL = ("cmd_vel", "geometry_msgs/msg/Twist")

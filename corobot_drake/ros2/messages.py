@@ -5,18 +5,13 @@ ROS's conventions: SI units, REP 103 axes, time stamps in simulation time (a run
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
-from pydrake.math import RigidTransform, RollPitchYaw, RotationMatrix
+from pydrake.math import RigidTransform, RotationMatrix
 
 from corobot_drake import topics as tp
 from corobot_drake.model.dimensions import WHEEL_NAMES
 from corobot_drake.ros2.bus import typestore
 from corobot_drake.signals import put_value
-
-INFRARED = tp.INFRARED
-"""sensor_msgs/Range's radiation_type for an infrared sensor."""
 
 UNUSED_VARIANCE = 1e6
 """A covariance's diagonal for what a planar odometry does not measure (z, roll, pitch):
@@ -29,11 +24,6 @@ WHEEL_ODOM_TWIST_STDDEV = (0.05, 0.1)
 """m/s, rad/s: /wheel_odom's twist uncertainty (forward, yaw rate): the encoders' speeds
 through the calibrated radius and track."""
 
-R_LINK_OPTICAL = RotationMatrix(RollPitchYaw(-math.pi / 2, 0.0, -math.pi / 2))
-"""ROS's camera_link (x forward, y left, z up) to its optical frame (z forward, x right, y
-down): camera_link -> camera_optical_frame on /tf_static."""
-
-
 def _covariance(stddevs: tuple) -> list[float]:
     """A 6 x 6 row-major covariance (x, y, z, roll, pitch, yaw) from the planar stddevs (x, y,
     yaw), or (forward, yaw rate) for a twist."""
@@ -42,17 +32,6 @@ def _covariance(stddevs: tuple) -> list[float]:
             [stddevs[0] ** 2, UNUSED_VARIANCE, UNUSED_VARIANCE, UNUSED_VARIANCE,
              UNUSED_VARIANCE, stddevs[1] ** 2])
     return np.diag(diag).flatten()
-
-
-def rgb_bytes(rgba: np.ndarray) -> np.ndarray:
-    """The RGB bytes (h x w x 3, flat) of an RGBA image, a channel at a time: numpy copies a
-    strided 1-D column several times faster than the h x w x 3 slice (~0.3 ms against ~1.2 ms
-    a 320 x 240 frame)."""
-    pixels = rgba.reshape(-1, 4)
-    out = np.empty((pixels.shape[0], 3), dtype=np.uint8)
-    for c in range(3):
-        out[:, c] = pixels[:, c]
-    return out.reshape(-1)
 
 
 class Messages:
@@ -127,37 +106,6 @@ class Messages:
             position=np.asarray(positions, dtype=np.float64),
             velocity=np.asarray(velocities, dtype=np.float64),
             effort=np.zeros(0, dtype=np.float64))
-
-    def range(self, t: float, frame: str, field_of_view: float, min_range: float,
-              max_range: float, reading: float):
-        """sensor_msgs/Range of an infrared sensor (rad, m)."""
-        return self.T["sensor_msgs/msg/Range"](
-            header=self.header(t, frame), radiation_type=INFRARED,
-            field_of_view=float(field_of_view), min_range=float(min_range),
-            max_range=float(max_range), range=float(reading),
-            variance=0.0)  # unknown: the sensor's noise is in volts, through a nonlinear curve
-
-    def image(self, t: float, frame: str, rgba: np.ndarray):
-        """sensor_msgs/Image, rgb8, from an h x w x 4 uint8 array (Drake's ImageRgba8U)."""
-        h, w = rgba.shape[:2]
-        return self.T["sensor_msgs/msg/Image"](
-            header=self.header(t, frame), height=h, width=w, encoding="rgb8", is_bigendian=0,
-            step=3 * w, data=rgb_bytes(rgba))
-
-    def camera_info(self, t: float, frame: str, config):
-        """sensor_msgs/CameraInfo of a Drake `CameraConfig`: a pinhole, no distortion."""
-        fx, fy = config.focal_x(), config.focal_y()
-        cx, cy = config.principal_point()
-        T = self.T
-        return T["sensor_msgs/msg/CameraInfo"](
-            header=self.header(t, frame), height=config.height, width=config.width,
-            distortion_model="plumb_bob", d=np.zeros(5),
-            k=np.array([fx, 0, cx, 0, fy, cy, 0, 0, 1], dtype=np.float64),
-            r=np.eye(3).flatten(),
-            p=np.array([fx, 0, cx, 0, 0, fy, cy, 0, 0, 0, 1, 0], dtype=np.float64),
-            binning_x=0, binning_y=0,
-            roi=T["sensor_msgs/msg/RegionOfInterest"](x_offset=0, y_offset=0, height=0,
-                                                      width=0, do_rectify=False))
 
     def string(self, text: str):
         return self.T["std_msgs/msg/String"](data=text)

@@ -7,17 +7,15 @@ replayed Context publishes the same messages, at the same simulated times, live 
 into a bag (`--rosbag`). A look at t sees what happened in [t - period, t).
 
 `add_ros2_topics` adds them all to a station's builder (`station.build_station`'s `extras`).
+Each sensor's topics, frames and messages are its kind's (`sensors.kind.SensorKind`): one
+`recording.looks.SensorPublisher` per sensor hands each new reading to its `RosSensorSink`.
 """
 
 from __future__ import annotations
 
-import math
-
-import numpy as np
 from pydrake.common.value import AbstractValue
 from pydrake.math import RigidTransform
 from pydrake.systems.framework import LeafSystem
-from pydrake.systems.sensors import ImageRgba8U
 
 from corobot_drake import topics as tp
 from corobot_drake.config.poses import mount_frame
@@ -26,14 +24,12 @@ from corobot_drake.recording.looks import (
     STATE_PERIOD,
     TELEMETRY_PERIOD,
     TOLERANCE,
-    CameraLooks,
-    IrScanLooks,
     RobotStateLooks,
+    SensorPublisher,
     connect_signal_topics,
 )
 from corobot_drake.ros2 import interfaces as ifc
-from corobot_drake.ros2.messages import R_LINK_OPTICAL, Messages
-from corobot_drake.sensors.ir_sensor import DISTANCE
+from corobot_drake.ros2.messages import Messages
 
 CLOCK_PERIOD = 0.01
 """s: /clock at 100 Hz (the plant's default step: a look adds no Simulator stop)."""
@@ -222,56 +218,29 @@ class TelemetryPublisher(LeafSystem):
                                              publish)
 
 
-class IrPublisher(IrScanLooks):
-    """One IR sensor's scans: /ir/<sensor> (sensor_msgs/Range, INFRARED), one per scan,
-    stamped with the scan's time (`IrScanLooks`).
+class RosSensorSink:
+    """A sensor's ROS 2 topics (its kind's `ros2_channels`, under the robot's namespace) on a
+    bus, and what a `recording.looks.SensorPublisher` hands them: each new reading's messages
+    (`ros2_message`, in the sensor's frame), at the reading's time."""
 
-    .. pydrake_system::
-
-        name: IrPublisher
-        input_ports:
-        - scan_state
-    """
-
-    def __init__(self, bus, names: tp.RobotNames, sensor: str, sensor_system):
-        super().__init__(sensor_system)
+    def __init__(self, bus, names: tp.RobotNames, sensor):
         self._m = Messages(bus.store)
-        self._frame = names.ir_frame(sensor)
-        self._channel = _channel(bus, names, ifc.ir_topic(sensor))
+        self._kind, self._frame = sensor.kind, names.frame(sensor.kind.frame_name(sensor.name))
+        topic = self._kind.topic_name(sensor.name)
+        self._channels = {
+            sub: bus.channel(names.topic(f"{topic}/{sub}" if sub else topic), msgtype,
+                             ifc.Qos(qos))
+            for sub, (msgtype, qos) in self._kind.ros2_channels().items()}
 
-    def publish_scan(self, context, when: float, scan) -> None:
-        self._channel.publish(tp.nanoseconds(when), self._m.range(
-            when, self._frame, math.radians(self.fov_deg), self.min_range, self.max_range,
-            scan[DISTANCE]))
-
-
-class CameraPublisher(CameraLooks):
-    """One camera's frames: /camera/image_raw (sensor_msgs/Image, rgb8) and
-    /camera/camera_info, stamped with the capture time (another camera than `front`:
-    /camera/<camera>/..., `interfaces.camera_topic`).
-
-    .. pydrake_system::
-
-        name: CameraPublisher
-        input_ports:
-        - rgb_image
-        - image_time
-
-    The ports, and when a frame is published: `recording.looks.CameraLooks`."""
-
-    def __init__(self, bus, names: tp.RobotNames, camera: str, config, look: float,
-                 delay: float):
-        super().__init__(config.width, config.height, look, delay)
-        self._m, self._config = Messages(bus.store), config
-        self._frame = names.camera_frame(camera)
-        self._image_channel = _channel(bus, names, ifc.camera_topic(camera, "image_raw"))
-        self._info_channel = _channel(bus, names, ifc.camera_topic(camera, "camera_info"))
-
-    def publish_frame(self, context, captured: float, image: ImageRgba8U) -> None:
-        ns = tp.nanoseconds(captured)
-        self._image_channel.publish(ns, self._m.image(captured, self._frame, image.data))
-        self._info_channel.publish(ns, self._m.camera_info(captured, self._frame,
-                                                           self._config))
+    def __call__(self, reading) -> None:
+        messages = self._kind.ros2_message(self._m, reading, self._frame)
+        if messages is None:
+            return
+        if list(self._channels) == [""]:  # one topic: the message itself
+            messages = {"": messages}
+        ns = tp.nanoseconds(self._kind.reading_time(reading))
+        for sub, message in messages.items():
+            self._channels[sub].publish(ns, message)
 
 
 # --- wiring -------------------------------------------------------------------------------
@@ -307,25 +276,24 @@ def add_ros2_topics(bus, builder, plant, scene_graph, robots: dict, scenario) ->
 
 
 def _robot_mounts(builder, bus, plant, names, parts) -> list:
-    """Adds the robot's IR and camera publishers; returns their frames' fixed mounts."""
+    """Adds a publisher of each of the robot's sensors whose kind has ROS 2 topics
+    (`<robot>.ros2_<kind topic>.<sensor>`); returns every sensor's frames' fixed mounts (its
+    kind's `ros2_frames`, the first at the sensor's mount)."""
     mounts = []
-    for sensor, system in parts.ir_sensors.items():
-        ir = builder.AddNamedSystem(f"{names.robot}.ros2_ir.{sensor}",
-                                    IrPublisher(bus, names, sensor, system))
-        builder.Connect(system.GetOutputPort("scan_state"), ir.get_input_port())
-        mounts.append(_mount(plant, parts, names, names.ir_frame(sensor),
-                             system.config.X_PB))
-    for camera in parts.cameras.values():
-        publisher = builder.AddNamedSystem(
-            f"{names.robot}.ros2_camera.{camera.name}",
-            CameraPublisher(bus, names, camera.name, camera.config, camera.look, camera.delay))
-        builder.Connect(camera.image, publisher.GetInputPort("rgb_image"))
-        builder.Connect(camera.image_time, publisher.GetInputPort("image_time"))
-        parent, optical, X_PO = _mount(plant, parts, names, names.camera_frame(camera.name),
-                                       camera.config.X_PB)
-        link = names.camera_frame(camera.name, "link")
-        X_LO = RigidTransform(R_LINK_OPTICAL, np.zeros(3))
-        mounts += [(parent, link, X_PO @ X_LO.inverse()), (link, optical, X_LO)]
+    for sensors in parts.sensors.values():
+        for sensor in sensors.values():
+            kind = sensor.kind
+            if kind.ros2_channels():
+                publisher = builder.AddNamedSystem(
+                    f"{names.robot}.ros2_{kind.topic}.{sensor.name}",
+                    SensorPublisher(sensor, RosSensorSink(bus, names, sensor)))
+                publisher.connect(builder)
+            (first, X), *rest = kind.ros2_frames(sensor.name)
+            parent, child, X_PS = _mount(plant, parts, names, names.frame(first), sensor.X_PB)
+            mounts.append((parent, child, X_PS if X is None else X_PS @ X))
+            for frame, X_CF in rest:
+                mounts.append((child, names.frame(frame), X_CF))
+                child = names.frame(frame)
     return mounts
 
 

@@ -48,6 +48,7 @@ from __future__ import annotations
 import copy
 import dataclasses as dc
 import functools
+import math
 import os
 import warnings
 from pathlib import Path
@@ -62,6 +63,7 @@ from pydrake.geometry import (
     RenderEngineVtkParams,
     Rgba,
 )
+from pydrake.math import RigidTransform, RollPitchYaw, RotationMatrix
 from pydrake.systems.framework import EventStatus, LeafSystem
 from pydrake.systems.sensors import CameraConfig, ImageRgba8U, RgbdSensor, RgbdSensorAsync
 
@@ -706,6 +708,114 @@ class CameraKind(SensorKind):
     def frame_name(self, sensor: str) -> str:
         return f"{camera_names(sensor)[1]}_optical_frame"
 
+    # --- the wire formats: each frame's image and calibration, on topics of their own -----
+    def foxglove_channels(self) -> dict:
+        return {"image/compressed": "CompressedImage", "camera_info": "CameraCalibration"}
+
+    def ros2_channels(self) -> dict:
+        return {"image_raw": ("sensor_msgs/msg/Image", "sensor"),
+                "camera_info": ("sensor_msgs/msg/CameraInfo", "sensor")}
+
+    def ros2_frames(self, sensor: str) -> list:
+        """ROS's `camera_link` (x forward, y left, z up) at the optical frame's origin, and
+        the optical frame in it."""
+        X_LO = RigidTransform(R_LINK_OPTICAL, np.zeros(3))
+        return [(f"{camera_names(sensor)[1]}_link", X_LO.inverse()),
+                (self.frame_name(sensor), X_LO)]
+
+    def wire_ports(self, sensor: BuiltSensor) -> dict:
+        camera = sensor.extra["camera"]
+        return {"rgb_image": camera.image, "image_time": camera.image_time}
+
+    def looks(self, sensor: BuiltSensor) -> tuple[float, float]:
+        return sensor.extra["camera"].look, 0.0  # every plant step (`frame_look_period`)
+
+    def out_time(self, sensor: BuiltSensor, inputs) -> float:
+        """The latest frame's capture + the camera's output delay (NaN: none yet)."""
+        return float(inputs("image_time")[0]) + sensor.extra["camera"].delay
+
+    def wire_reading(self, sensor: BuiltSensor, inputs) -> CameraFrame:
+        return CameraFrame(float(inputs("image_time")[0]), inputs("rgb_image"), sensor.config)
+
+    def foxglove_message(self, reading: CameraFrame, frame: str) -> dict:
+        """foxglove.CompressedImage (JPEG) and foxglove.CameraCalibration."""
+        from foxglove.messages import CameraCalibration, CompressedImage
+
+        from corobot_drake.recording.topics import stamp
+
+        config = reading.config
+        fx, fy = config.focal_x(), config.focal_y()
+        cx, cy = config.principal_point()
+        return {"image/compressed": CompressedImage(
+                    timestamp=stamp(reading.time), frame_id=frame, format="jpeg",
+                    data=jpeg(reading.image)),
+                "camera_info": CameraCalibration(
+                    timestamp=stamp(reading.time), frame_id=frame, width=config.width,
+                    height=config.height, distortion_model="plumb_bob", D=[0.0] * 5,
+                    K=[fx, 0, cx, 0, fy, cy, 0, 0, 1], R=[1.0, 0, 0, 0, 1, 0, 0, 0, 1],
+                    P=[fx, 0, cx, 0, 0, fy, cy, 0, 0, 0, 1, 0])}
+
+    def ros2_message(self, messages, reading: CameraFrame, frame: str) -> dict:
+        """sensor_msgs/Image (rgb8) and sensor_msgs/CameraInfo (a pinhole, no distortion)."""
+        T, header = messages.T, messages.header(reading.time, frame)
+        rgba, config = reading.image.data, reading.config
+        h, w = rgba.shape[:2]
+        fx, fy = config.focal_x(), config.focal_y()
+        cx, cy = config.principal_point()
+        return {"image_raw": T["sensor_msgs/msg/Image"](
+                    header=header, height=h, width=w, encoding="rgb8", is_bigendian=0,
+                    step=3 * w, data=rgb_bytes(rgba)),
+                "camera_info": T["sensor_msgs/msg/CameraInfo"](
+                    header=messages.header(reading.time, frame), height=config.height,
+                    width=config.width, distortion_model="plumb_bob", d=np.zeros(5),
+                    k=np.array([fx, 0, cx, 0, fy, cy, 0, 0, 1], dtype=np.float64),
+                    r=np.eye(3).flatten(),
+                    p=np.array([fx, 0, cx, 0, 0, fy, cy, 0, 0, 0, 1, 0], dtype=np.float64),
+                    binning_x=0, binning_y=0,
+                    roi=T["sensor_msgs/msg/RegionOfInterest"](
+                        x_offset=0, y_offset=0, height=0, width=0, do_rectify=False))}
+
 
 def _finite(value: float) -> float | None:
     return value if np.isfinite(value) else None
+
+
+@dc.dataclass(frozen=True)
+class CameraFrame:
+    """A frame as its messages carry it (`CameraKind.wire_reading`): its capture time (s),
+    the image (Drake's ImageRgba8U, read in place) and the camera's config (its
+    calibration)."""
+
+    time: float
+    image: ImageRgba8U
+    config: CameraConfig
+
+
+R_LINK_OPTICAL = RotationMatrix(RollPitchYaw(-math.pi / 2, 0.0, -math.pi / 2))
+"""ROS's camera_link (x forward, y left, z up) to its optical frame (z forward, x right, y
+down): camera_link -> camera_optical_frame on /tf_static."""
+JPEG_QUALITY = 80
+"""PIL's JPEG quality (0-100) of the frames on Foxglove."""
+
+
+def jpeg(image: ImageRgba8U) -> bytes:
+    """The image as JPEG (`JPEG_QUALITY`), RGB."""
+    import io
+
+    from PIL import Image
+
+    out = io.BytesIO()
+    Image.fromarray(np.array(image.data[:, :, :3])).save(out, format="JPEG",
+                                                          quality=JPEG_QUALITY)
+    return out.getvalue()
+
+
+def rgb_bytes(rgba: np.ndarray) -> np.ndarray:
+    """The RGB bytes (h x w x 3, flat) of an RGBA image, a channel at a time: numpy copies a
+    strided 1-D column several times faster than the h x w x 3 slice (~0.3 ms against ~1.2 ms
+    a 320 x 240 frame)."""
+    pixels = rgba.reshape(-1, 4)
+    out = np.empty((pixels.shape[0], 3), dtype=np.uint8)
+    for c in range(3):
+        out[:, c] = pixels[:, c]
+    return out.reshape(-1)

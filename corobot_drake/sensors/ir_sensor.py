@@ -42,12 +42,15 @@ A scan due at time t is taken when the simulator steps away from t (Drake's disc
 semantics): right after ``AdvanceTo(t)`` the latest reading is the previous scan's.
 
 :class:`IrMeshcatVisualizer` draws each sensor's rays and hit points in Meshcat under
-``/ir/<robot>/<sensor>`` (toggle them with the scene tree's checkboxes); ``add_ir_meshcat``
-adds them, from the station's Meshcat hook (``corobot_drake/markers.py``).
+``/ir/<robot>/<sensor>`` (toggle them with the scene tree's checkboxes); the kind's
+``add_meshcat`` adds them, from the station's Meshcat hook (``corobot_drake/markers.py``).
 """
 
 
+from __future__ import annotations
+
 import copy
+import dataclasses as dc
 import math
 import zlib
 
@@ -464,15 +467,78 @@ def add_ir_sensor(site: SensorSite, name: str, config: IrSensorConfig) -> IrSens
     return sensor
 
 
-def add_ir_meshcat(builder, meshcat: Meshcat, robot: str, sensors: dict[str, IrSensor]
-                   ) -> None:
-    """An IrMeshcatVisualizer per sensor ({name: IrSensor} of `robot`), drawing under
-    /ir/<robot>/<sensor> (`<robot>.ir.<sensor>.meshcat`)."""
-    for name, sensor in sensors.items():
-        viz = builder.AddNamedSystem(
-            f"{robot}.ir.{name}.meshcat",
-            IrMeshcatVisualizer(meshcat, f"/ir/{robot}/{name}", sensor.num_rays, sensor.period))
-        builder.Connect(sensor.GetOutputPort("scan_state"), viz.get_input_port())
+# --- the wire formats -------------------------------------------------------------------
+INFRARED = 1
+"""sensor_msgs/Range's radiation_type for an infrared sensor."""
+
+RANGE_SCHEMA = {
+    "title": "corobot.Range",
+    "description": "One IR scan, with ROS sensor_msgs/Range's fields (metres, radians).",
+    "type": "object",
+    "properties": {
+        "timestamp": {"type": "object", "properties": {
+            "sec": {"type": "integer"}, "nsec": {"type": "integer"}}},
+        "frame_id": {"type": "string"},
+        "radiation_type": {"type": "integer", "description": "1: INFRARED"},
+        "field_of_view": {"type": "number", "description": "rad, the cone's full angle"},
+        "min_range": {"type": "number"},
+        "max_range": {"type": "number"},
+        "range": {"type": "number", "description": "the reading (m); max_range: nothing"},
+        "true_range": {"type": "number", "description": "the geometric nearest hit (m)"},
+    },
+}
+"""The JSON schema of an IR scan on Foxglove (`IrSensorKind.foxglove_message`)."""
+
+
+@dc.dataclass(frozen=True)
+class IrScan:
+    """One scan as its messages carry it (`IrSensorKind.wire_reading`): sensor_msgs/Range's
+    fields in the sensor's frame (m; `field_of_view` rad, the cone's full angle), the
+    geometric nearest hit, and the rays in the world (m; `hits` 1 where a ray hit)."""
+
+    time: float
+    range: float
+    true_range: float
+    field_of_view: float
+    min_range: float
+    max_range: float
+    origin: np.ndarray
+    ends: np.ndarray
+    """N x 3."""
+    hits: np.ndarray
+
+    @staticmethod
+    def of(config: IrSensorConfig, num_rays: int, scan) -> IrScan:
+        """The scan in an IrSensor's state vector `scan` (`scan_state_layout`)."""
+        _, origin, ends, hits = scan_state_layout(num_rays)
+        return IrScan(float(scan[SCAN_TIME]), float(scan[DISTANCE]), float(scan[TRUE_DISTANCE]),
+                      math.radians(config.dispersion_cone_angle),
+                      SharpGP2D12.min_distance if config.model == "sharp_gp2d12" else 0.0,
+                      config.maximum_range, scan[origin], np.asarray(scan[ends]).reshape(-1, 3),
+                      scan[hits])
+
+
+RAY_HIT_COLOR = (1.0, 0.2, 0.1, 1.0)
+RAY_MISS_COLOR = (0.3, 0.8, 0.3, 0.6)
+"""The IR rays drawn in Foxglove: red where a ray hit something, green where it ran out."""
+
+
+def ray_lines(origin, ends: np.ndarray, hits: np.ndarray):
+    """The rays of one IR scan as a Foxglove line list in the world frame: origin (3) to each
+    end (N x 3, m), coloured by whether it hit (N, 0 or 1)."""
+    from foxglove.messages import LinePrimitive, LinePrimitiveLineType
+
+    from corobot_drake.recording.topics import color, point3
+
+    points, colors = [], []
+    o = point3(origin)
+    for end, hit in zip(ends, hits, strict=True):
+        c = color(RAY_HIT_COLOR if hit > 0.5 else RAY_MISS_COLOR)
+        points += [o, point3(end)]
+        colors += [c, c]
+    return LinePrimitive(type=LinePrimitiveLineType.LineList, thickness=2.0,
+                         scale_invariant=True, points=points, colors=colors)
+
 
 
 # --- the kind ------------------------------------------------------------------------------
@@ -512,13 +578,65 @@ class IrSensorKind(SensorKind):
         system = sensor.system
         return system.reading(system.GetMyContextFromRoot(root_context))
 
+    # --- the wire formats: one scan, on /ir/<sensor> (and its rays on /ir/<sensor>/rays) ---
+    foxglove_schema = RANGE_SCHEMA
+
+    def foxglove_channels(self) -> dict:
+        return {"": RANGE_SCHEMA, "rays": "SceneUpdate"}
+
+    def wire_ports(self, sensor: BuiltSensor) -> dict:
+        return {"scan_state": sensor.system.GetOutputPort("scan_state")}
+
+    def looks(self, sensor: BuiltSensor) -> tuple[float, float]:
+        return sensor.system.events  # a scan and a look at one time: the look first
+
+    def out_time(self, sensor: BuiltSensor, inputs) -> float:
+        return float(inputs("scan_state")[SCAN_TIME])
+
+    def wire_reading(self, sensor: BuiltSensor, inputs) -> IrScan:
+        return IrScan.of(sensor.config, sensor.system.num_rays, inputs("scan_state"))
+
+    def foxglove_message(self, reading: IrScan, frame: str) -> dict:
+        """corobot.Range (JSON, `RANGE_SCHEMA`) and the rays in the world
+        (foxglove.SceneUpdate, entity `frame`)."""
+        from foxglove.messages import SceneEntity, SceneUpdate
+
+        from corobot_drake.recording.topics import stamp
+
+        ts = stamp(reading.time)
+        scan = {"timestamp": {"sec": ts.sec, "nsec": ts.nsec}, "frame_id": frame,
+                "radiation_type": INFRARED, "field_of_view": reading.field_of_view,
+                "min_range": reading.min_range, "max_range": reading.max_range,
+                "range": reading.range, "true_range": reading.true_range}
+        entity = SceneEntity(timestamp=ts, frame_id="world", id=frame, lines=[
+            ray_lines(reading.origin, reading.ends, reading.hits)])
+        return {"": scan, "rays": SceneUpdate(entities=[entity])}
+
+    def ros2_message(self, messages, reading: IrScan, frame: str):
+        """sensor_msgs/Range, INFRARED (rad, m)."""
+        return messages.msg("sensor_msgs/msg/Range")(
+            header=messages.header(reading.time, frame), radiation_type=INFRARED,
+            field_of_view=float(reading.field_of_view), min_range=float(reading.min_range),
+            max_range=float(reading.max_range), range=reading.range,
+            variance=0.0)  # unknown: the sensor's noise is in volts, through a nonlinear curve
+
+    def add_meshcat(self, builder, meshcat, sensor: BuiltSensor) -> None:
+        """Its rays and hit points under /ir/<robot>/<sensor> (`IrMeshcatVisualizer`,
+        `<robot>.ir.<sensor>.meshcat`)."""
+        system = sensor.system
+        viz = builder.AddNamedSystem(
+            f"{sensor.robot}.ir.{sensor.name}.meshcat",
+            IrMeshcatVisualizer(meshcat, f"/ir/{sensor.robot}/{sensor.name}", system.num_rays,
+                                system.period))
+        builder.Connect(system.GetOutputPort("scan_state"), viz.get_input_port())
+
 
 __all__ = [
     "IrMeshcatVisualizer",
     "IrReading",
+    "IrScan",
     "IrSensor",
     "IrSensorKind",
-    "add_ir_meshcat",
     "add_ir_sensor",
     "cross_of_rays_in_sensor_frame",
 ]

@@ -575,30 +575,42 @@ def test_cli_output_paths_are_checked(flag, tmp_path, capsys):
     assert len(err) == 2 and all(line.startswith(f"error: {flag}: ") for line in err)
 
 
-def test_ir_publisher_alone_publishes_each_scan_once():
-    """IrPublisher on its own, its scan_state fixed: the look at t publishes a scan taken in
-    [t - period, t), at the scan's time, with its range and rays."""
+def ir_sensor_alone(period: float = 0.05):
+    """A BuiltSensor of an IR sensor `front` on robot `r` whose system is in no diagram:
+    what its publisher reads (its `scan_state`, fixed by a test) and how often."""
+    from corobot_drake.config.sensors import IrSensorConfig
+    from corobot_drake.sensors.ir_sensor import IrSensor, IrSensorKind
+    from corobot_drake.sensors.kind import BuiltSensor
+
+    config = IrSensorConfig(scan_rate_hz=1.0 / period)
+    system = IrSensor(config, None, [])
+    return BuiltSensor(IrSensorKind(), "r", "front", config, system,
+                       system.GetOutputPort("reading"), config.scan_rate_hz)
+
+
+def test_ir_sensor_publisher_alone_publishes_each_scan_once():
+    """An IR sensor's SensorPublisher on its own, its scan_state fixed: the look at t
+    publishes a scan taken in [t - period, t), at the scan's time, with its range and rays,
+    on the IR kind's two channels."""
     import io
-    import types
 
     from pydrake.systems.analysis import Simulator
 
-    from corobot_drake.config.sensors import IrSensorConfig
-    from corobot_drake.recording.publishers import IrPublisher
+    from corobot_drake.recording.looks import SensorPublisher
+    from corobot_drake.recording.publishers import FoxgloveSensorSink
     from corobot_drake.sensors.ir_sensor import DISTANCE, SCAN_TIME, scan_state_layout
 
     context = foxglove.Context()
     buffer = io.BytesIO()
     writer = foxglove.open_mcap(buffer, context=context)
-    sensor = types.SimpleNamespace(config=IrSensorConfig(), period=0.05, num_rays=6,
-                                   events=(0.05, 0.05))
-    publisher = IrPublisher(context, RobotNames("r"), "front", sensor)
+    sensor = ir_sensor_alone()
+    publisher = SensorPublisher(sensor, FoxgloveSensorSink(context, RobotNames("r"), sensor))
     simulator = Simulator(publisher)
     system_context = simulator.get_mutable_context()
-    size, _, ends, hits = scan_state_layout(6)
+    size, _, ends, hits = scan_state_layout(sensor.system.num_rays)
     scan = np.zeros(size)
     scan[[DISTANCE, SCAN_TIME]] = 0.4, 0.1
-    scan[ends] = np.tile([1.0, 0.0, 0.0], 6)
+    scan[ends] = np.tile([1.0, 0.0, 0.0], sensor.system.num_rays)
     scan[hits] = 1.0
     publisher.get_input_port().FixValue(system_context, scan)
     simulator.AdvanceTo(0.22)  # looks at 0.05, 0.1, 0.15, 0.2 s: only 0.15 s sees the scan
@@ -610,7 +622,8 @@ def test_ir_publisher_alone_publishes_each_scan_once():
     assert [(topic, ns) for topic, ns, _ in got] == [("/ir/front", 100_000_000),
                                                      ("/ir/front/rays", 100_000_000)]
     assert got[0][2]["range"] == 0.4 and got[0][2]["max_range"] == 0.762
-    assert len(got[1][2].entities[0].lines[0].points) == 12
+    assert got[0][2]["frame_id"] == "ir_front"
+    assert len(got[1][2].entities[0].lines[0].points) == 2 * sensor.system.num_rays
 
 
 def test_cli_foxglove_on_a_taken_port_is_one_line(capsys):

@@ -8,7 +8,6 @@ import math
 import re
 import subprocess
 import sys
-import types
 from pathlib import Path
 
 import numpy as np
@@ -38,7 +37,6 @@ from corobot_drake.ros2.bus import Bus
 from corobot_drake.ros2.graph import configure_discovery, ros_type
 from corobot_drake.ros2.publishers import (
     ClockPublisher,
-    IrPublisher,
     RobotStatePublisher,
     StaticPublisher,
     TelemetryPublisher,
@@ -186,12 +184,22 @@ def test_robot_state_publisher_odom_and_wheel_odom():
     assert state.wheels[0].encoder_ticks == 7 and state.heading == 0.5
 
 
-def test_ir_publisher_sends_each_scan_once():
+def test_ir_sensor_publisher_sends_each_scan_once():
+    """An IR sensor's SensorPublisher on the bus: sensor_msgs/Range on /ir/<sensor>, in its
+    frame, once per scan, at the scan's time."""
+    from corobot_drake.recording.looks import SensorPublisher
+    from corobot_drake.ros2.publishers import RosSensorSink
+    from corobot_drake.sensors.ir_sensor import IrSensor, IrSensorKind
+    from corobot_drake.sensors.kind import BuiltSensor
+
     memory = Memory()
-    config = IrSensorConfig()
-    sensor = types.SimpleNamespace(config=config, period=0.05, num_rays=3, events=(0.05, 0.05))
-    system = IrPublisher(Bus([memory]), tp.RobotNames("corobot"), "front", sensor)
-    size = scan_state_layout(3)[0]
+    config = IrSensorConfig(scan_rate_hz=20.0)
+    ir = IrSensor(config, None, [])
+    sensor = BuiltSensor(IrSensorKind(), "corobot", "front", config, ir,
+                         ir.GetOutputPort("reading"), config.scan_rate_hz)
+    system = SensorPublisher(sensor, RosSensorSink(Bus([memory]), tp.RobotNames("corobot"),
+                                                   sensor))
+    size = scan_state_layout(ir.num_rays)[0]
     stepper = Stepper(system, 0.05)
     scan = np.zeros(size)
     scan[SCAN_TIME], scan[DISTANCE] = math.nan, 0.3
@@ -203,7 +211,7 @@ def test_ir_publisher_sends_each_scan_once():
     (t_ns, msg), = memory.messages["/ir/front"]
     assert t_ns == 50_000_000 and msg.range == pytest.approx(0.3)
     assert msg.max_range == pytest.approx(config.maximum_range)
-    assert msg.header.frame_id == "ir_front"
+    assert msg.header.frame_id == "ir_front" and msg.radiation_type == msg.INFRARED
 
 
 def test_transform_publisher_odom_to_base_link_to_wheels():

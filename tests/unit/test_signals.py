@@ -1,19 +1,23 @@
 """The signals table's places (`signals.put_value`, `read_value`) and the publishers' shared
-bases (`recording.looks.RobotStateLooks`, `CameraLooks`, `IrScanLooks`) alone."""
+bases (`recording.looks.RobotStateLooks`) and the one sensor publisher (`SensorPublisher`,
+on the IR and camera kinds' schedules) alone."""
 
 import math
 import types
 
 import numpy as np
 import pytest
+from pydrake.common.value import Value
 from pydrake.math import RigidTransform, RollPitchYaw
 from pydrake.multibody.math import SpatialVelocity
+from pydrake.systems.framework import DiagramBuilder, LeafSystem
 from pydrake.systems.sensors import ImageRgba8U
 
 from corobot_drake import signals
-from corobot_drake.config.sensors import IrSensorConfig
-from corobot_drake.recording.looks import CameraLooks, IrScanLooks, RobotStateLooks
-from corobot_drake.sensors.ir_sensor import SCAN_TIME
+from corobot_drake.config.sensors import IrSensorConfig, default_camera_config
+from corobot_drake.recording.looks import RobotStateLooks, SensorPublisher
+from corobot_drake.sensors.ir_sensor import DISTANCE, SCAN_TIME
+from corobot_drake.sensors.kind import BuiltSensor
 from corobot_drake.systems.odometry import DriveState, WheelState
 
 
@@ -80,15 +84,19 @@ def test_robot_state_looks_read_the_chassis_in_base_link():
     assert looks.drive_state(context) == state
 
 
-class _Frames(CameraLooks):
-    """Keeps what it is handed: (context time, capture time, the image's first pixel)."""
+class _Frame(LeafSystem):
+    """A camera's outputs, for a publisher to read: `rgb_image` (4 x 3, every byte 7) and
+    `image_time` (input `captured`, s)."""
 
     def __init__(self):
-        super().__init__(4, 3, look=0.01, delay=0.03)
-        self.handed = []
-
-    def publish_frame(self, context, captured, image):
-        self.handed.append((context.get_time(), captured, int(image.data[0, 0, 0])))
+        super().__init__()
+        image = ImageRgba8U(4, 3)
+        image.mutable_data[:] = 7
+        self.DeclareAbstractOutputPort("rgb_image", lambda: Value(image),
+                                       lambda c, v: v.set_value(image))
+        self.DeclareVectorOutputPort("image_time", 1, lambda c, o: o.SetFromVector(
+            self.get_input_port().Eval(c)))
+        self.DeclareVectorInputPort("captured", 1)
 
 
 @pytest.mark.parametrize("captured, look", [
@@ -97,53 +105,66 @@ class _Frames(CameraLooks):
     (0.010, 0.05),     # out at 0.04: not the look at 0.04 (it runs before the updates at 0.04)
     (0.0, 0.04),
 ])
-def test_camera_looks_hand_on_a_frame_once_at_the_look_after_it_comes_out(captured, look):
+def test_a_camera_s_publisher_hands_on_a_frame_once_at_the_look_after_it_comes_out(captured,
+                                                                                   look):
     """A frame comes out `delay` (30 ms) after its capture; of the looks every 10 ms over
-    0.1 s, only the first after that instant hands it on, with its capture time and image."""
+    0.1 s (the camera kind's: its `look`), only the first after that instant hands it on,
+    with its capture time and image."""
     from pydrake.systems.analysis import Simulator
 
-    frames = _Frames()
-    simulator = Simulator(frames)
-    context = simulator.get_mutable_context()
-    image = ImageRgba8U(4, 3)
-    image.mutable_data[:] = 7
-    frames.GetInputPort("rgb_image").FixValue(context, image)
-    frames.GetInputPort("image_time").FixValue(context, [captured])
+    from corobot_drake.sensors.camera import CameraKind
+
+    frame = _Frame()
+    camera = types.SimpleNamespace(image=frame.GetOutputPort("rgb_image"),
+                                   image_time=frame.GetOutputPort("image_time"), delay=0.03,
+                                   look=0.01)
+    sensor = BuiltSensor(CameraKind(), "r", "front", default_camera_config(), frame,
+                         camera.image, 30.0, extra={"camera": camera})
+    handed = []  # (look time, capture time, first byte)
+    publisher = SensorPublisher(sensor, lambda r: handed.append(
+        (simulator.get_context().get_time(), r.time, int(r.image.data[0, 0, 0]))))
+    builder = DiagramBuilder()
+    builder.AddSystem(frame)
+    builder.AddSystem(publisher)
+    publisher.connect(builder)
+    builder.ExportInput(frame.get_input_port(), "captured")
+    diagram = builder.Build()
+    simulator = Simulator(diagram)
+    diagram.get_input_port().FixValue(simulator.get_mutable_context(), [captured])
     simulator.AdvanceTo(0.1)
     expected = [] if look is None else [(look, captured, 7)]
-    assert [(pytest.approx(t, abs=1e-12), c, v) for t, c, v in frames.handed] == expected
+    assert [(pytest.approx(t, abs=1e-12), c, v) for t, c, v in handed] == expected
 
 
-class _Scans(IrScanLooks):
-    """Keeps what it is handed: (context time, scan time)."""
-
-    def __init__(self, events):
-        super().__init__(types.SimpleNamespace(config=IrSensorConfig(), num_rays=6,
-                                               events=events))
-        self.handed = []
-
-    def publish_scan(self, context, when, scan):
-        self.handed.append((context.get_time(), when))
-
-
-@pytest.mark.parametrize("events, scanned, look", [
-    ((0.05, 0.05), math.nan, None),  # no scan yet: nothing handed on
-    ((0.05, 0.05), 0.05, 0.1),       # a look and a scan at 0.05: the look ran first
-    ((0.01, 0.0), 0.05, 0.06),       # on a continuous plant's steps: the next step's look
+@pytest.mark.parametrize("step, scanned, look", [
+    (0.0, math.nan, None),  # no scan yet: nothing handed on
+    (0.0, 0.05, 0.1),       # a look and a scan at 0.05 (the scans' schedule): the look ran first
+    (0.01, 0.05, 0.06),     # on a continuous plant's steps: the next step's look
 ])
-def test_ir_scan_looks_hand_on_a_scan_once_at_the_look_after_it(events, scanned, look):
-    """The looks run on the sensor's event schedule; over 0.2 s only the first look after
-    the scan hands it on, with its time; the base knows the sensor's limits."""
+def test_an_ir_sensor_s_publisher_hands_on_a_scan_once_at_the_look_after_it(step, scanned, look):
+    """The looks run on the sensor's event schedule (the IR kind's `looks`); over 0.2 s only
+    the first look after the scan hands it on, with its time and the sensor's limits."""
     from pydrake.systems.analysis import Simulator
 
-    scans = _Scans(events)
-    assert (scans.fov_deg, scans.max_range) == (IrSensorConfig().dispersion_cone_angle,
-                                                IrSensorConfig().maximum_range)
-    simulator = Simulator(scans)
+    from corobot_drake.sensors.ir_sensor import IrSensor, IrSensorKind
+
+    config = IrSensorConfig()
+    system = IrSensor(config, None, [], step=step)
+    sensor = BuiltSensor(IrSensorKind(), "r", "front", config, system,
+                         system.GetOutputPort("reading"), config.scan_rate_hz)
+    handed = []  # (look time, scan)
+    publisher = SensorPublisher(sensor, lambda r: handed.append((context.get_time(), r)))
+    simulator = Simulator(publisher)
     context = simulator.get_mutable_context()
-    state = np.zeros(scans.get_input_port().size())
-    state[SCAN_TIME] = scanned
-    scans.get_input_port().FixValue(context, state)
+    state = np.zeros(system.state_size)
+    state[SCAN_TIME], state[DISTANCE] = scanned, 0.3
+    publisher.GetInputPort("scan_state").FixValue(context, state)
     simulator.AdvanceTo(0.2)
-    expected = [] if look is None else [(look, scanned)]
-    assert [(pytest.approx(t, abs=1e-12), w) for t, w in scans.handed] == expected
+    if look is None:
+        assert handed == []
+        return
+    ((when, scan),) = handed
+    assert when == pytest.approx(look, abs=1e-12)
+    assert (scan.time, scan.range, scan.max_range) == (scanned, 0.3, config.maximum_range)
+    assert scan.field_of_view == pytest.approx(math.radians(config.dispersion_cone_angle))
+    assert scan.ends.shape == (system.num_rays, 3)
