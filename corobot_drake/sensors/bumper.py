@@ -30,8 +30,6 @@ neither the force nor the time of the sample.
 Meshcat: the bumper's visual box turns red while pressed (`BumperMeshcat`).
 """
 
-from __future__ import annotations
-
 import dataclasses as dc
 import math
 
