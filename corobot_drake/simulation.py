@@ -451,11 +451,13 @@ class Robot:
         sensor = self._sensor(name, kind)
         return sensor.kind.to_json(sensor.read(self._sim.context))
 
-    def sensor_readings(self) -> dict[str, dict[str, dict]]:
-        """Every sensor's latest reading as the summary shows it, {kind field: {name: JSON}}
+    def sensor_readings(self, summary: bool = False) -> dict[str, dict[str, dict]]:
+        """Every sensor's latest reading as JSON, {kind field: {name: JSON}}: as HTTP shows it
+        (`SensorKind.to_json`), or with `summary` as the run's summary holds it
         (`SensorKind.summary_json`)."""
         context = self._sim.context
-        return {field: {name: s.kind.summary_json(s.read(context)) for name, s in sensors.items()}
+        return {field: {name: (s.kind.summary_json if summary else s.kind.to_json)(
+                            s.read(context)) for name, s in sensors.items()}
                 for field, sensors in self._parts.sensors.items()}
 
     def ir(self, name: str) -> IrReading:
@@ -596,7 +598,7 @@ class Robot:
         return {
             **out,
             "min_tip_margin_deg": self.min_tip_margin_deg(),
-            "sensors": self.sensor_readings(),
+            "sensors": self.sensor_readings(summary=True),
             "commands": [
                 {"command": r.command, "status": r.status, "reason": r.reason,
                  "start_time": r.start_time, "end_time": r.end_time}

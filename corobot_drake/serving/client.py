@@ -290,6 +290,22 @@ class RemoteRobot:
         snapshot = self._client._get(self._base)["state"]["ir"]
         return {name.removesuffix("_ir"): s["raw"] for name, s in snapshot.items()}
 
+    def sensor_readings(self) -> dict[str, dict[str, dict]]:
+        """Every sensor's latest reading as JSON, {kind field: {name: JSON}}, as
+        `Robot.sensor_readings` gives it."""
+        return self._client._get(f"{self._base}/sensors")
+
+    def sensor_json(self, name: str, kind: str | None = None) -> dict:
+        """The latest reading of the sensor `name` as JSON, as `Robot.sensor_json` gives it
+        (`kind`, a kind's field, picks among sensors of several kinds sharing the name)."""
+        if kind is None:
+            kinds = [k for k, named in self.sensor_readings().items() if name in named]
+            if len(kinds) != 1:
+                raise KeyError(f"robot {self.name!r} has {len(kinds) or 'no'} sensors {name!r}"
+                               + (f" ({', '.join(kinds)}); say which kind" if kinds else ""))
+            kind = kinds[0]
+        return self._client._get(f"{self._base}/sensors/{kind}/{name}")
+
     def camera_image(self, camera: str | None = None):
         """The latest frame of the camera `camera` (default: the front camera): numpy array
         height x width x 4 (RGBA), uint8."""

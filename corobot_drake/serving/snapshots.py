@@ -46,6 +46,8 @@ class RobotInfo:
     """Its cameras' names (`front`, ...; those turned off left out)."""
     ir_change_thresholds: tuple[tuple[str, float], ...] = ()
     """(service name, m): the reading change each IR sensor counts as a change."""
+    sensors: tuple[tuple[str, tuple[str, ...]], ...] = ()
+    """(kind field, its sensors' names) of every registered kind (`Robot.sensors`)."""
 
     @classmethod
     def of(cls, robot) -> RobotInfo:
@@ -53,7 +55,8 @@ class RobotInfo:
         return cls(robot.name, tuple(f"{name}_ir" for name in robot.ir_names),
                    robot.camera_names,
                    tuple((f"{name}_ir", robot.ir_change_threshold(name))
-                         for name in robot.ir_names))
+                         for name in robot.ir_names),
+                   tuple((field, tuple(names)) for field, names in robot.sensors().items()))
 
     @property
     def has_camera(self) -> bool:
@@ -122,8 +125,9 @@ def analog_sensor(reading: IrReading) -> dict:
 
 def robot_snapshot(robot, time: float) -> dict:
     """Every service's state of one robot: drive, ir (by service name), encoders, compass,
-    gps; each signal at its places (`signals.Signal.http`). A per-wheel field that some
-    wheels lack (the rear wheels' encoder ticks) is null."""
+    gps; each signal at its places (`signals.Signal.http`); and every sensor's latest reading
+    by kind and name (`sensors`: {kind field: {name: `SensorKind.to_json`}}). A per-wheel
+    field that some wheels lack (the rear wheels' encoder ticks) is null."""
     stamp = {"time_stamp": time}
     state = {
         "drive": drive_state(robot, time),
@@ -131,6 +135,7 @@ def robot_snapshot(robot, time: float) -> dict:
         "encoders": {**stamp, "ticks_per_revolution": dim.ENCODER_TICKS_PER_REVOLUTION},
         "compass": dict(stamp),
         "gps": dict(stamp),
+        "sensors": robot.sensor_readings(),
     }
     for spec in signals.SIGNALS.values():
         if spec.http:

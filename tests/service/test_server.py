@@ -277,6 +277,33 @@ def test_ir_analog_sensor_contract(http, caps):
         assert rear["raw"] == pytest.approx(0.62865, abs=0.002)
 
 
+def test_every_sensor_reading_by_kind_and_name(http, caps):
+    """`/sensors` gives each sensor's latest reading by kind and name, `/sensors/<kind>/<name>`
+    one of them (the kind's reading fields), as the Python client's `sensor_json`; a sensor the
+    robot lacks is a 404 naming those it has."""
+    from corobot_drake.serving.client import CorobotClient
+
+    need(caps, "ir")
+    reset(http, caps)
+    wait_sim(http, 0.3)
+    sensors = http.get(f"{ROBOT}/sensors").json()
+    assert set(sensors["ir_sensors"]) == {"front", "rear"}
+    rear = http.get(f"{ROBOT}/sensors/ir_sensors/rear").json()
+    assert set(rear) == {"raw", "range", "normalized", "time"}
+    if caps["set_pose"]:  # back at the start: the SPEC's figure
+        assert rear["raw"] == pytest.approx(0.62865, abs=0.002)
+    if caps["camera"]:
+        camera = http.get(f"{ROBOT}/sensors/cameras/front").json()
+        assert (camera["width"], camera["height"], camera["encoding"]) == (320, 240, "rgba8")
+        assert camera["time"] > 0
+    missing = http.get(f"{ROBOT}/sensors/ir_sensors/side")
+    assert missing.status_code == 404 and "ir_sensors/rear" in missing.json()["detail"]
+    with CorobotClient(str(http.base_url)) as client:
+        bot = client.robot()
+        assert set(bot.sensor_json("rear")) == set(rear)
+        assert bot.sensor_readings().keys() == sensors.keys()
+
+
 def read_events(lines, want: int, timeout: float) -> list[tuple[str, dict, float]]:
     """Up to `want` events from an SSE line iterator: (name, data, arrival time)."""
     events, name, deadline = [], None, time.monotonic() + timeout

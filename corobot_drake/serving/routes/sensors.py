@@ -1,6 +1,7 @@
-"""The odometry sensors (`/encoders`, `/compass`, `/gps`) and the IR analog sensors, whose
-services are named after the sensors (`/front_ir`, ...): `ir_router`'s path matches any
-service name, so the app includes it after every other router."""
+"""The odometry sensors (`/encoders`, `/compass`, `/gps`), every sensor's reading by kind and
+name (`/sensors`, `/sensors/<kind>/<name>`), and the IR analog sensors, whose services are
+named after the sensors (`/front_ir`, ...): `ir_router`'s path matches any service name, so
+the app includes it after every other router."""
 
 from __future__ import annotations
 
@@ -29,6 +30,28 @@ async def compass(robot: str, backend: BackendDep):
             summary="Chassis position in the world")
 async def gps(robot: str, backend: BackendDep):
     return json_response(backend.snapshot_of(robot)["gps"])
+
+
+@router.get("/robots/{robot}/sensors", responses=schemas.ERRORS,
+            summary="Every sensor's latest reading, by kind and name")
+async def sensor_readings(robot: str, backend: BackendDep):
+    """{kind (the scenario's map: `ir_sensors`, `cameras`, ...): {sensor name: its latest
+    reading as JSON}}, every kind the simulation knows (a kind the robot lacks: {})."""
+    return json_response(backend.snapshot_of(robot)["sensors"])
+
+
+@router.get("/robots/{robot}/sensors/{kind}/{name}", responses=schemas.ERRORS,
+            summary="One sensor's latest reading")
+async def sensor_reading(robot: str, kind: str, name: str, backend: BackendDep):
+    """The latest reading of the robot's sensor `name` of `kind` (its scenario map, e.g.
+    `ir_sensors/rear`), as JSON with the field names of its kind's reading."""
+    sensors = backend.snapshot_of(robot)["sensors"]
+    reading = sensors.get(kind, {}).get(name)
+    if reading is None:
+        have = [f"{k}/{n}" for k, named in sensors.items() for n in named]
+        raise HTTPException(404, f"robot {robot!r} has no sensor {kind}/{name}; sensors: "
+                            f"{', '.join(have) or 'none'}")
+    return json_response(reading)
 
 
 @ir_router.get("/robots/{robot}/{service}", responses=schemas.ERRORS,

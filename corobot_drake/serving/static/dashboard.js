@@ -1,5 +1,5 @@
 // The dashboard: drive pad (drag or keys), stop/enable, IR gauges, pose, encoders, contact
-// telemetry (wheel loads, slip, tip margin), camera.
+// telemetry (wheel loads, slip, tip margin), every sensor's reading, camera.
 // State arrives by Server-Sent Events from /robots/<name>/subscribe; commands are POSTs to
 // the drive contract; every request carries the server's token (token.js). No framework, no
 // build step.
@@ -194,6 +194,44 @@ function showIr(name, s) {
   gauge.firstElementChild.style.width = `${Math.max(0, Math.min(1, s.normalized)) * 100}%`;
 }
 
+// Every sensor's latest reading, by kind and name (/robots/<robot>/sensors), whatever its
+// kind: numbers rounded, a long list summarized.
+function showValue(v) {
+  if (v === null || v === undefined) return "-";
+  if (typeof v === "number") return Number.isInteger(v) ? String(v) : fmt(v, 3);
+  if (Array.isArray(v)) {
+    if (v.length > 4) {
+      const xs = v.filter((x) => typeof x === "number");
+      const range = xs.length ? ` ${fmt(Math.min(...xs))}..${fmt(Math.max(...xs))}` : "";
+      return `[${v.length} values${range}]`;
+    }
+    return `[${v.map(showValue).join(", ")}]`;
+  }
+  if (typeof v === "object") return `{${Object.entries(v).map(([k, x]) => `${k}: ${showValue(x)}`).join(", ")}}`;
+  return String(v);
+}
+
+function showSensors(sensors) {
+  const table = $("sensors");
+  while (table.rows.length > 1) table.deleteRow(1);
+  for (const [kind, named] of Object.entries(sensors)) {
+    for (const [name, reading] of Object.entries(named)) {
+      const row = table.insertRow();
+      row.dataset.sensor = `${kind}/${name}`;
+      row.insertCell().textContent = kind;
+      row.insertCell().textContent = name;
+      row.insertCell().textContent = Object.entries(reading)
+        .map(([k, x]) => `${k} ${showValue(x)}`).join(", ");
+    }
+  }
+  $("sensors-none").hidden = table.rows.length > 1;
+}
+
+async function refreshSensors() {
+  if (!state.robot) return;
+  try { showSensors(await api(`${base()}/sensors`)); } catch (e) { /* try again */ }
+}
+
 // Server-Sent Events read with fetch (EventSource cannot send the token's header); like
 // EventSource, it reconnects a second after the stream ends or fails.
 async function subscribe() {
@@ -268,6 +306,7 @@ async function selectRobot(name) {
   state.services = info.services;
   showDrive(info.state.drive);
   for (const [n, s] of Object.entries(info.state.ir)) showIr(n, s);
+  showSensors(info.state.sensors);
   $("completing").hidden = !(info.capabilities.drive_distance && info.capabilities.rotate_degrees);
   const hasCamera = state.services.some((s) => s.name === "camera");
   $("webcam-link").href = hasCamera ? withToken(`${base()}/camera/page`) : "#";
@@ -284,6 +323,7 @@ async function main() {
   await selectRobot(robots[0]);
   refreshStats();
   setInterval(refreshStats, 2000);
+  setInterval(refreshSensors, 500);
   document.body.dataset.ready = "1";
 }
 
