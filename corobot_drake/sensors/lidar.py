@@ -218,6 +218,8 @@ class Lidar(LeafSystem):
         self._state = self.DeclareDiscreteState(initial)
         self.DeclareInitializationDiscreteUpdateEvent(self._initial_scan)
         self._step = float(step)
+        self.events = (step, 0.0) if step > 0 else (self.period, self.period)
+        """(period, offset), s: the schedule of the scan events (`LidarKind.looks`)."""
         if step > 0:
             self.DeclarePeriodicDiscreteUpdateEvent(step, 0.0, self._scan_if_due)
         else:
@@ -421,6 +423,27 @@ class LidarKind(SensorKind):
             builder.ExportOutput(port, f"{robot}.lidar.{name}.{port.get_name()}")
         return BuiltSensor(self, robot, name, config, lidar, lidar.GetOutputPort("reading"),
                            float(config.scan_rate_hz), config.X_PB)
+
+    def set_seed(self, sensor: BuiltSensor, root_context, random_seed: int,
+                 config: LidarConfig) -> None:
+        system = sensor.system
+        system.SetNoiseKey(system.GetMyMutableContextFromRoot(root_context), noise_key(
+            random_seed, sensor.robot, sensor.name, config.noise_seed))
+
+    def looks(self, sensor: BuiltSensor) -> tuple[float, float]:
+        return sensor.system.events  # a scan and a look at one time: the look first
+
+    def summary_json(self, reading: LaserScan) -> dict:
+        """The scan in brief: its time (s), rays, how many read a range, were dropped
+        (NaN) or too near (-inf), and the nearest range (m) and its bearing (rad)."""
+        r = np.asarray(reading.ranges)
+        valid = np.isfinite(r)
+        nearest = int(np.argmin(np.where(valid, r, np.inf))) if valid.any() else None
+        return {"time": reading.time, "rays": len(r), "in_range": int(valid.sum()),
+                "dropped": int(np.isnan(r).sum()), "too_near": int((r == -np.inf).sum()),
+                "nearest": None if nearest is None else float(r[nearest]),
+                "nearest_bearing": None if nearest is None else float(
+                    reading.angle_min + nearest * reading.angle_increment)}
 
     def add_meshcat(self, builder, meshcat, sensor: BuiltSensor) -> None:
         viz = builder.AddNamedSystem(

@@ -1,0 +1,121 @@
+"""The lidar-carrying Corobot (scenarios/corobot_lidar.yaml) driving in its room: each scan
+read exactly against the room's walls, the crate and the pillar at the scan's own pose, the
+step below its plane unseen; its summary, Meshcat drawing and seeded noise end to end."""
+
+import math
+
+import numpy as np
+import pytest
+from pydrake.geometry import Meshcat
+
+from conftest import make_sim
+from corobot_drake.config.scenario import load_scenario
+from corobot_drake.resources import SCENARIOS_DIR
+from corobot_drake.sensors.lidar import POSE, LaserScan
+from corobot_drake.simulation import Simulation
+
+SCENARIO = SCENARIOS_DIR / "corobot_lidar.yaml"
+EXACT = 1e-9
+"""m: closed-form intersections in doubles, posed by the same X_WS."""
+TURN = "robots: {corobot: {commands: [!SetPower {left: 0.5, right: 0.2}]}}"
+"""An arc to the right: the scans move across the room."""
+NO_CAMERA = "robots: {corobot: {cameras: {front: {rgb: false}}}}"
+
+
+def lidar_of(sim):
+    return sim.station.robots["corobot"].sensors["lidars"]["top"].system
+
+
+def walls(o, d):
+    """Distance to the room's inner faces (x = +-3, y = +-2) along each ray: the nearest
+    crossing ahead (the room is convex and the rays start inside it)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.stack([(3.0 - o[0]) / d[:, 0], (-3.0 - o[0]) / d[:, 0],
+                      (2.0 - o[1]) / d[:, 1], (-2.0 - o[1]) / d[:, 1]])
+    return np.where(t > 0, t, np.inf).min(axis=0)
+
+
+def crate(o, d, X_WC, half=0.2):
+    """The crate (a 0.4 m cube at X_WC): the slab test in its frame, inf for a miss."""
+    R, p = X_WC.rotation().matrix(), X_WC.translation()
+    oc, dc = R.T @ (o - p), d @ R
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t1, t2 = (-half - oc) / dc, (half - oc) / dc
+    near = np.minimum(t1, t2).max(axis=1)
+    far = np.maximum(t1, t2).min(axis=1)
+    return np.where((near <= far) & (near >= 0), near, np.inf)
+
+
+def pillar(o, d, center=(1.0, -1.0), r=0.15):
+    """The upright pillar: the first crossing of its circle in x-y (its height, 1 m, holds the
+    scan plane), inf for a miss."""
+    c = np.asarray(center) - o[:2]
+    a = (d[:, :2] ** 2).sum(axis=1)
+    b = d[:, :2] @ c
+    disc = b * b - a * (c @ c - r * r)
+    t = (b - np.sqrt(np.maximum(disc, 0.0))) / a
+    return np.where((disc >= 0) & (t >= 0), t, np.inf)
+
+
+def test_each_scan_reads_the_room_the_crate_and_the_pillar_exactly_while_it_drives():
+    sim = make_sim(TURN, scenario=SCENARIO)
+    lidar = lidar_of(sim)
+    plant = sim.station.plant
+    crate_body = sim.station.bodies["crate"]
+    for t in (0.3, 0.6, 0.9):
+        sim.advance_to(t)
+        X_WC = plant.EvalBodyPoseInWorld(plant.GetMyContextFromRoot(sim.context), crate_body)
+        sim.advance_to(t + 0.001)  # the scan due at t is taken leaving t, from its state
+        scan = sim.robot().reading("top")
+        assert isinstance(scan, LaserScan) and scan.time == pytest.approx(t, abs=1e-12)
+        x = lidar.GetOutputPort("scan_state").Eval(lidar.GetMyContextFromRoot(sim.context))
+        X_WS = x[POSE].reshape(3, 4)
+        a = scan.bearings()
+        o, d = X_WS[:, 3], np.column_stack([np.cos(a), np.sin(a), np.zeros_like(a)]) \
+            @ X_WS[:, :3].T
+        each = np.stack([walls(o, d), crate(o, d, X_WC), pillar(o, d)])
+        expected = each.min(axis=0)
+        np.testing.assert_allclose(scan.ranges, expected, rtol=0, atol=EXACT)
+        assert all(np.sum(each.argmin(axis=0) == k) >= 5 for k in (1, 2))  # both are seen
+        assert np.all(np.abs((o + expected[:, None] * d)[:, 2] - 0.27225) < 0.01)  # level
+    assert sim.body_pose(sim.station.plant.GetBodyByName("chassis")).x > 0.1  # it drove
+
+
+def test_a_still_robot_sees_the_pillar_nearest_and_the_summary_says_so():
+    sim = make_sim(scenario=SCENARIO)
+    sim.advance(0.25)
+    scan = sim.robot().reading("top")
+    ranges = np.array(scan.ranges)
+    assert scan.time == pytest.approx(0.2) and len(ranges) == 360
+    assert np.isfinite(ranges).all()  # the walls close every bearing within 12 m
+    nearest = int(np.argmin(ranges))
+    assert scan.bearings()[nearest] == pytest.approx(-math.pi / 4, abs=1e-12)
+    assert ranges[nearest] == pytest.approx(math.sqrt(2) - 0.15, abs=1e-5)  # settled on tyres
+    brief = sim.summary()["robots"]["corobot"]["sensors"]["lidars"]["top"]
+    assert brief["rays"] == brief["in_range"] == 360 and brief["dropped"] == 0
+    assert brief["nearest"] == ranges[nearest]
+
+
+def test_the_seeded_noise_replays_and_a_new_random_seed_changes_it():
+    noisy = "robots: {corobot: {lidars: {top: {noise_std: 0.01, dropout: 0.02}}}}"
+
+    def ranges(*overrides):
+        sim = make_sim(noisy, *overrides, scenario=SCENARIO)
+        sim.advance(0.25)
+        return np.array(sim.robot().reading("top").ranges)
+
+    first = ranges()
+    assert np.array_equal(first, ranges(), equal_nan=True)
+    assert 0 < np.isnan(first).sum() < 30  # 2% of 360: 7 expected
+    assert not np.array_equal(first, ranges("random_seed: 5"), equal_nan=True)
+
+
+def test_meshcat_draws_the_rays_and_hits_once_a_scan():
+    meshcat = Meshcat()
+    sim = Simulation(load_scenario(SCENARIO, overrides=[NO_CAMERA]), meshcat)
+    viz = sim.station.diagram.GetSubsystemByName("corobot.lidar.top.meshcat")
+    assert viz.draws == 1
+    for path in ("/lidar/corobot/top/rays", "/lidar/corobot/top/hits"):
+        assert meshcat.HasPath(path), path
+    sim.advance(0.55)
+    assert viz.draws == 6  # the scans at 0 (at initialization), 0.1, ... 0.5
