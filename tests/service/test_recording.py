@@ -671,3 +671,50 @@ def test_several_robots_are_namespaced(tmp_path):
     assert {("second/base_link", "second/front_left_wheel"), ("corobot/base_link",
             "corobot/ir_rear")} <= {(x.parent_frame_id, x.child_frame_id) for x in tf}
     assert topics["/second/odom"][-1][2].body_frame_id == "second/base_link"
+
+
+def test_a_sensor_kind_added_to_the_registry_reaches_the_mcap_and_the_ros2_bag(tmp_path):
+    """A kind that is one module and one registry entry (`sensor_kind_wires.py`: a
+    thermometer sampling 20 + 0.5 t degC at 10 Hz, on the chassis 0.1 m ahead and 0.2 m up;
+    in a process of its own, the registry being read when the scenario is imported): its
+    readings are on its own topic in the MCAP file (its JSON schema) and the ROS 2 bag (its
+    ROS type), each once at its sample's time, in its frame, which /tf and /tf_static mount
+    on base_link."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    pytest.importorskip("rosbags", reason="the [ros2] extra (tools/setup installs it)")
+    from rosbags.rosbag2 import Reader
+
+    from corobot_drake.ros2.bus import typestore
+
+    script = Path(__file__).with_name("sensor_kind_wires.py")
+    done = subprocess.run([sys.executable, str(script), str(tmp_path)], capture_output=True,
+                          text=True, timeout=300, check=False)
+    assert done.returncode == 0, done.stderr
+    samples = [(round(t * 1e9), "thermometer_cabin", 20.0 + 0.5 * t)
+               for t in (0.0, 0.1, 0.2, 0.3)]  # looks until 0.45 s: each a period later
+    topics = read_mcap(tmp_path / "run.mcap")
+    mcap = topics["/thermometer/cabin"]
+    assert {schema for _, schema, _ in mcap} == {"toy.Temperature"}
+    assert [(round(t * 1e9), m["frame_id"], m["temperature"]) for t, _, m in mcap] == samples
+    mount = next(x for x in topics["/tf"][-1][2].transforms
+                 if x.child_frame_id == "thermometer_cabin")
+    assert mount.parent_frame_id == "base_link"
+    assert (mount.translation.x, mount.translation.z) == pytest.approx((0.1, 0.2), abs=1e-12)
+    store, bag, static = typestore(), [], {}
+    with Reader(tmp_path / "bag") as reader:
+        types = {c.topic: c.msgtype for c in reader.connections}
+        for connection, t_ns, data in reader.messages():
+            msg = store.deserialize_cdr(data, connection.msgtype)
+            if connection.topic == "/thermometer/cabin":
+                bag.append((t_ns, msg.header.frame_id, msg.temperature))
+            elif connection.topic == "/tf_static":
+                static = {x.child_frame_id: x for x in msg.transforms}
+    assert types["/thermometer/cabin"] == "sensor_msgs/msg/Temperature"
+    assert bag == samples
+    x = static["thermometer_cabin"]
+    assert x.header.frame_id == "base_link"
+    assert (x.transform.translation.x, x.transform.translation.z) == pytest.approx((0.1, 0.2),
+                                                                                   abs=1e-12)
