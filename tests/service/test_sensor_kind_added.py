@@ -1,0 +1,58 @@
+"""The sensor kinds' contract: a kind is one module and one line in `sensors.registry.KINDS`,
+and every front end finds it (`sensor_kind_added.py`, in a process of its own: the scenario's
+robot is made from the registry when it is imported)."""
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+
+@pytest.fixture(scope="module")
+def added() -> dict:
+    script = Path(__file__).with_name("sensor_kind_added.py")
+    done = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
+                          timeout=300, check=False, cwd=script.parent)
+    assert done.returncode == 0, done.stderr
+    return json.loads(done.stdout)
+
+
+def test_a_kind_added_to_the_registry_is_a_map_of_the_scenarios_robots(added):
+    """Its map is in the schema (no sensor by default); `{}` is a working sensor and its
+    bounded fields load over the kind's new sensor."""
+    assert added["schema"] == "dict[str, __main__.LightSensorConfig]"
+    assert added["default"] == []
+    assert added["loaded"] == {"top": 10.0, "side": 20.0}
+
+
+@pytest.mark.parametrize(("bad", "line"), [
+    ("inverted", "--override:1: robots.corobot.light_sensors.top.high: must be more than low "
+                 "(50 lx); got 5"),
+    ("unknown_link", "--override:1: robots.corobot.light_sensors.top.X_PB.base_frame: "
+                     "'antenna' is not a link of the robot"),
+    ("rate", "--override:1: robots.corobot.light_sensors.top.rate_hz: must be in (0, 1000] Hz; "
+             "got 0"),
+    ("file", "bad.yaml:6: robots.corobot.light_sensors.top.high: must be more than low (50 lx)"),
+])
+def test_a_bad_sensor_of_the_added_kind_is_one_line_naming_file_line_and_field(added, bad, line):
+    """The kind's own check, the mount every kind has, a field's bound; from an override and
+    from a file (line 6: `high`)."""
+    error = added["errors"][bad]
+    assert error.startswith(line) and "\n" not in error
+
+
+def test_every_front_end_carries_the_added_kinds_readings(added):
+    """The station built its frame before finalizing the plant; the Python `Robot` lists the
+    sensors and reads them by name (the sample at 0.2 s, read at 0.25 s); the summary, the
+    snapshot and the HTTP routes carry the same reading as JSON."""
+    assert added["frame"] is True
+    assert added["sensors"]["light_sensors"] == ["top", "side"]
+    assert list(added["sensors"])[:2] == ["ir_sensors", "cameras"]
+    expected = added["expected"]
+    assert added["reading"] == pytest.approx(expected, abs=1e-12)
+    assert added["reading_type"] == "Illuminance"
+    for front_end in ("summary", "snapshot", "http_all"):
+        assert added[front_end] == {"top": added["reading"], "side": added["reading"]}, front_end
+    assert added["http"] == added["reading"]
