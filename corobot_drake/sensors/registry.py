@@ -8,6 +8,7 @@ station its two build phases, and every front end its readings by sensor name.
 
 from __future__ import annotations
 
+from corobot_drake.sensors.bumper import BumperKind
 from corobot_drake.sensors.camera import CameraKind
 from corobot_drake.sensors.ir_sensor import IrSensorKind
 from corobot_drake.sensors.kind import BuiltSensor, SensorKind
@@ -18,6 +19,7 @@ KINDS: tuple[SensorKind, ...] = (
     IrSensorKind(),
     CameraKind(),
     LidarKind(),
+    BumperKind(),
 )
 """The registered kinds, in the order the scenario's maps and the front ends list them."""
 

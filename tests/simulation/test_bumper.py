@@ -1,0 +1,84 @@
+"""The bumper through the whole station: the Corobot rams the default scene's giant box (2 m,
+100 kg) with a front bumper (`bumpers: {front_bumper: {}}`), while a second Corobot stands
+beside it on a skid, a bumper under its chassis that the ground alone touches."""
+
+import pytest
+
+from conftest import make_sim
+from corobot_drake.model import dimensions as dim
+from corobot_drake.sensors.bumper import BumperConfig, BumperState
+
+BOX_FACE = dim.GIANT_BOX_CENTER[0] + dim.GIANT_BOX_SIZE / 2  # m: its near face's x, -0.7366
+START = -0.45  # m: the rammer starts facing the box 0.11 m from it, at full speed on arrival
+RAM = (f"robots: {{corobot: {{pose: {{translation: [{START}, 0, 0], "
+       "rotation: !Rpy {deg: [0, 0, 180]}}, bumpers: {front_bumper: {}}}, "
+       "skidder: {pose: {translation: [0, 1.0, 0]}, "
+       "bumpers: {skid: {X_PB: {base_frame: chassis, translation: [0, 0, 0.0185]}, "
+       "size: [0.06, 0.06, 0.04]}}}}")
+"""The skid's box reaches 1.5 mm below the tyres' bottoms: the skidder stands on it."""
+DURATION = 0.8  # s: the rammer reaches the box at 0.35 s and is at rest against it by 0.5
+MU = 0.5  # the tyres' and the ground's friction (Drake combines two 0.5s as 0.5)
+STALL_PUSH = dim.WHEEL_RADIUS  # m: a stalled wheel pushes with its effort limit / this
+
+
+@pytest.fixture(scope="module")
+def ram():
+    """The rammer at full power for DURATION s: (sim, [(t, chassis x, reading) at each
+    physics step], the skidder's readings)."""
+    sim = make_sim(RAM)
+    rammer, skidder = sim.robot("corobot"), sim.robot("skidder")
+    rammer.set_power(1.0, 1.0)
+    trace, skid = [], []
+    while sim.time < DURATION - 1e-9:
+        trace.append((sim.time, rammer.pose().x, rammer.reading("front_bumper")))
+        skid.append(skidder.reading("skid"))
+        sim.advance(0.01)
+    return sim, trace, skid
+
+
+def test_pressed_exactly_while_the_bumper_is_into_the_box(ram):
+    _, trace, _ = ram
+    config = BumperConfig()
+    face = config.X_PB.GetDeterministicValue().translation()[0] + config.size[0] / 2
+    contact_x = BOX_FACE + face  # the chassis origin's x when the bumper's face meets the box
+    x_at = {round(t, 2): x for t, x, _ in trace}
+    # Each sample (every 20 ms) against where the robot was at its time.
+    samples = {round(r.time, 2): r for _, _, r in trace}
+    assert samples[0.0] == BumperState(False, 0.0, (0.0, 0.0, 0.0), 0.0)
+    assert len(samples) == round(DURATION / 0.02)
+    assert {t: r.pressed for t, r in samples.items()} == {
+        t: bool(x_at[t] < contact_x) for t in samples}
+    # It arrived at speed (the first sample past the face is 2.9 mm in, at 0.36 s) and stays.
+    first = min(t for t, r in samples.items() if r.pressed)
+    assert 0.3 < first < 0.4
+    assert all(r.pressed for t, r in samples.items() if t >= first)
+
+
+def test_the_push_at_rest_is_what_the_tyres_can_give(ram):
+    sim, trace, _ = ram
+    reading = trace[-1][2]
+    rammer = sim.robot("corobot")
+    assert abs(rammer.velocity().forward) < 1e-3  # at rest against the box
+    # The box pushes the bumper back along its -x, level (the bumper's low friction).
+    fx, fy, _ = reading.force_vector
+    assert fx == pytest.approx(-reading.force, rel=1e-3)
+    assert abs(fy) < 0.01 * reading.force
+    # The drive's limit: four stalled motors at their effort limit. At rest the push is what
+    # the tyres hand the ground: a stalled wheel its motor's limit, a spinning one mu N (the
+    # push lifts the front wheels' load onto the rear ones: the fronts spin). The model's
+    # tyres (compliant, rolling on less than their radius; Drake's regularized friction)
+    # give 4% less than this rigid-wheel sum.
+    effort = sim.scenario.robots["corobot"].contact.effort_limit
+    assert reading.force < 4 * effort / STALL_PUSH
+    loads = rammer.wheel_loads()
+    tyres = sum(min(effort / STALL_PUSH, MU * n) for n in loads.values())
+    assert reading.force == pytest.approx(tyres, rel=0.1)
+
+
+def test_the_ground_never_presses_a_bumper(ram):
+    sim, _, skid = ram
+    assert all(not r.pressed and r.force == 0.0 for r in skid)
+    # Yet the skidder stands on its skid: its wheels carry less than half its weight (the
+    # skid, stiffer than the tyres, carries all of it: the wheels read 0 N).
+    weight = (dim.TOTAL_BODY_MASS + 4 * dim.WHEEL_MASS) * 9.81
+    assert sum(sim.robot("skidder").wheel_loads().values()) < 0.5 * weight
