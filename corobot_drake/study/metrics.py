@@ -193,6 +193,19 @@ def _ir(run: RobotRun) -> dict[str, float]:
     return run.robot.ir_distances()
 
 
+@metric("sensors", reads_ir=True)
+def _sensors(run: RobotRun) -> dict[str, Value]:
+    """Final reading of every sensor of every kind, by kind and name: one column per number
+    or text of its summary JSON (`Robot.sensor_readings`), `<kind>.<sensor>.<field>` (e.g.
+    `ir_sensors.rear.raw`, m; a yes or no as 1 or 0); lists and empty values left out. A
+    metric of your own reads one sensor by name: `run.robot.reading("rear")`."""
+    return {f"{kind}.{name}.{field}": int(value) if isinstance(value, bool) else value
+            for kind, named in run.robot.sensor_readings(summary=True).items()
+            for name, reading in named.items()
+            for field, value in reading.items()
+            if isinstance(value, int | float | str)}
+
+
 @metric("wheel_loads", "N")
 def _wheel_loads(run: RobotRun) -> dict[str, float]:
     """Final load on each wheel (N, vertical contact force), by wheel name."""

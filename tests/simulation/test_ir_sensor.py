@@ -10,6 +10,7 @@ from corobot_drake.config.scenario import CENIC_PLANT, ScenarioError, load_scena
 from corobot_drake.model import dimensions as dim
 from corobot_drake.model.ir_models import SharpGP2D12
 from corobot_drake.sensors.ir_sensor import SCAN_INDEX, counter_normal
+from corobot_drake.study.metrics import METRICS, RobotRun
 from lab.bench import NO_CAMERA
 
 MM = 1e-3
@@ -55,6 +56,14 @@ def test_default_scene_at_t0_rear_sees_the_box_front_sees_nothing():
     assert front.normalized == pytest.approx(1.0)
     assert robot.ir_distances() == {"front": front.raw, "rear": rear.raw}
     assert sim.summary()["robots"]["corobot"]["ir"] == {"front": front.raw, "rear": rear.raw}
+    # Read by name as a sensor of any kind, and as JSON (the summary's, the study metric's).
+    assert robot.reading("rear") == rear and robot.reading("front", kind="ir") == front
+    assert robot.sensor_json("rear") == {"raw": rear.raw, "range": rear.range,
+                                         "normalized": rear.normalized, "time": 0.0}
+    assert sim.summary()["robots"]["corobot"]["sensors"]["ir_sensors"]["rear"] == (
+        robot.sensor_json("rear"))
+    sensors = METRICS["sensors"](RobotRun(sim, robot, robot.pose(), robot.heading()))
+    assert sensors["ir_sensors.rear.raw"] == rear.raw
     # The exported ports agree with the API; hit points lie on the box face or are nan.
     assert port(sim, "rear", "reading") == pytest.approx([rear.raw, RANGE, rear.normalized, 0.0])
     hits = port(sim, "rear", "hit_points").reshape(-1, 3)
