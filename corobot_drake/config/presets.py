@@ -3,7 +3,10 @@
 Each is YAML text for `load_scenario(..., overrides=[...])`.
 """
 
+import json
+
 from corobot_drake.config import scenario as sc
+from corobot_drake.sensors.registry import KINDS
 
 IR_RATE_HZ = 20.0
 """Hz: the IR scan rate `sensor_overrides` sets (the Corobot's: 20 Hz)."""
@@ -24,5 +27,14 @@ def sensor_overrides(robot: str = "corobot", ir: bool = False, camera: bool = Fa
 
 
 def physics_only_overrides(robot: str = "corobot") -> list[str]:
-    """No camera, no IR: the physics and the drive alone."""
-    return sensor_overrides(robot, ir=False, camera=False)
+    """No sensor of any kind (each of the robot's default sensors turned off by its kind's
+    `SensorKind.off`; a kind whose sensors must stay is left as it is): the physics and the
+    drive alone."""
+    out = []
+    for kind in KINDS:
+        if kind.off is None or not kind.defaults():
+            continue
+        off = ", ".join(f"{field}: {json.dumps(value)}" for field, value in kind.off.items())
+        sensors = ", ".join(f"{name}: {{{off}}}" for name in kind.defaults())
+        out.append(f"robots: {{{robot}: {{{kind.field}: {{{sensors}}}}}}}")
+    return out

@@ -52,6 +52,7 @@ import math
 import os
 import warnings
 from pathlib import Path
+from typing import ClassVar
 
 import numpy as np
 from pydrake.common.value import AbstractValue
@@ -644,6 +645,7 @@ class CameraKind(SensorKind):
     forward, +x right, +y down); another camera's carry its name (`camera_names`)."""
 
     field = "cameras"
+    off: ClassVar[dict] = {"rgb": False}
     config_type = CameraConfig
     reading_type = CameraImage
     topic = "camera"

@@ -74,6 +74,10 @@ class SensorKind:
     """`package/msg/Name` of its ROS 2 message (None: not on ROS 2)."""
     ros2_qos: ClassVar[str] = "sensor"
     """The QoS profile name of its ROS 2 topic (`ros2.interfaces`)."""
+    off: ClassVar[dict | None] = {"enabled": False}
+    """The config fields that turn a sensor of the kind off (no systems built), for a run that
+    reads no sensor (the tools' physics-only runs, a study whose metrics read none); None: it
+    stays on (its own geometry is part of the robot's physics)."""
     foxglove_schema: ClassVar[str | dict | None] = None
     """The foxglove-sdk message class name (`foxglove.messages.<name>`), or a JSON schema (a
     dict with a `title`) for a message Foxglove has no schema for; None: not recorded."""

@@ -40,7 +40,8 @@ class RobotRun:
 
 
 READS_IR: set[str] = set()
-"""The metrics that read the IR sensors: a study's runs scan only when one is asked for."""
+"""The metrics that read the sensors (`reads_ir`, named after the first): a study's runs
+scan (IR, and every other kind but the cameras) only when one is asked for."""
 UNITS: dict[str, str] = {}
 """Each registered metric's unit (its values', per key for a mapping): the plots' axes."""
 NEEDS_SECONDS: dict[str, float] = {}

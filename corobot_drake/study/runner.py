@@ -14,6 +14,7 @@ from pathlib import Path
 
 from corobot_drake.config.scenario import load_scenario, one_line
 from corobot_drake.config.validate import LayerChecks
+from corobot_drake.sensors.registry import KINDS
 from corobot_drake.simulation import Simulation, diagram_key, quiet_drake_warnings
 from corobot_drake.study.metrics import measure, reads_ir
 from corobot_drake.study.programs import PROGRAMS
@@ -36,9 +37,9 @@ def run_scenario(study: Study, scenario_file: Path, run: Run, base=None, user=No
     """The run's scenario: the file, the study's overrides (`base`, their `study_scenario`, if
     given: a worker reads them once), then the run's parameters and seed, the study's
     programs, then the run's parameters through a list index (checked as a scenario is); the
-    cameras off unless the study asks for them, the IR sensors off unless a metric reads them
-    (`metrics.reads_ir`, of the study's `user` metrics too: nothing else in a scripted run
-    does, and their scans cost a few per cent of a run)."""
+    cameras off unless the study asks for them, every other sensor off (`SensorKind.off`)
+    unless a metric reads the sensors (`metrics.reads_ir`, of the study's `user` metrics too:
+    nothing else in a scripted run does, and their scans cost a few per cent of a run)."""
     # yaml_load_typed merges a layer into a deep copy of `base`: the run never changes it.
     if base is None:
         base = study_scenario(study, scenario_file)
@@ -55,14 +56,15 @@ def run_scenario(study: Study, scenario_file: Path, run: Run, base=None, user=No
     if indexed:
         # The values come from the study's grid, not from a line of YAML.
         LayerChecks.of_object("study grid").validate(scenario)
-    if not study.cameras:
-        for robot in scenario.robots.values():
-            for camera in robot.cameras.values():
-                camera.rgb = False
-    if not reads_ir(study.metrics, user):
-        for robot in scenario.robots.values():
-            for sensor in robot.ir_sensors.values():
-                sensor.enabled = False
+    reads = reads_ir(study.metrics, user)
+    for robot in scenario.robots.values():
+        for kind in KINDS:
+            # The cameras render as the study says; the other kinds, for a metric that reads.
+            if kind.off is None or (study.cameras if kind.field == "cameras" else reads):
+                continue
+            for sensor in getattr(robot, kind.field).values():
+                for field, value in kind.off.items():
+                    setattr(sensor, field, value)
     return scenario
 
 
