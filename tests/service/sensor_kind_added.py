@@ -5,12 +5,14 @@ and a frame of its own added before the plant is finalized) appended to
 `sensors.registry.KINDS` before the scenario is imported, as one line in registry.py adds a
 kind; then what every front end of one short run makes of it, printed as JSON: the scenario's
 schema and loader (good and bad input), the station's plant, the Python `Robot`, the HTTP
-routes, the dashboard's snapshot and the summary.
+routes, the dashboard's snapshot and the summary, and the wires: the MCAP file (as live
+Foxglove gets it) and the ROS 2 bag (as the live node's topics), read back.
 
 Nothing here touches a front end: they find the kind through the registry alone.
 """
 
 import dataclasses as dc
+import functools
 import json
 import sys
 import tempfile
@@ -78,14 +80,33 @@ class LightSensor(LeafSystem):
         discrete_state.get_mutable_vector().SetFromVector([t, brightening(t)])
 
 
+ILLUMINANCE_SCHEMA = {"title": "toy.Illuminance", "type": "object", "properties": {
+    "timestamp": {"type": "object"}, "frame_id": {"type": "string"},
+    "illuminance": {"type": "number", "description": "lx"}}}
+"""Its Foxglove message: JSON (Foxglove has no schema for it)."""
+
+
 class LightSensorKind(SensorKind):
     """Light sensors: `robots.<robot>.light_sensors.<name>` (none by default); a frame
-    `light_<name>` of their own on their link."""
+    `light_<name>` of their own on their link; topic `light/<name>` (JSON on Foxglove,
+    sensor_msgs/Illuminance on ROS 2)."""
 
     field = "light_sensors"
     config_type = LightSensorConfig
     reading_type = Illuminance
     topic = "light"
+    foxglove_schema = ILLUMINANCE_SCHEMA
+    ros2_type = "sensor_msgs/msg/Illuminance"
+
+    def foxglove_message(self, reading: Illuminance, frame: str) -> dict:
+        ns = round(reading.time * 1e9)
+        return {"timestamp": {"sec": ns // 10**9, "nsec": ns % 10**9}, "frame_id": frame,
+                "illuminance": reading.illuminance}
+
+    def ros2_message(self, messages, reading: Illuminance, frame: str):
+        return messages.msg("sensor_msgs/msg/Illuminance")(
+            header=messages.header(reading.time, frame), illuminance=reading.illuminance,
+            variance=0.0)
 
     def check(self, config: LightSensorConfig) -> list[tuple[str, str]]:
         if not config.high > config.low:
@@ -112,7 +133,11 @@ from fastapi.testclient import TestClient  # noqa: E402
 from step_runner import StepRunner  # noqa: E402
 
 from corobot_drake.config import scenario as sc  # noqa: E402
+from corobot_drake.recording.mcap_log import McapLog  # noqa: E402
 from corobot_drake.resources import DEFAULT_SCENARIO  # noqa: E402
+from corobot_drake.ros2.bag import BagSink  # noqa: E402
+from corobot_drake.ros2.bus import Bus  # noqa: E402
+from corobot_drake.ros2.publishers import add_ros2_topics  # noqa: E402
 from corobot_drake.serving import snapshots  # noqa: E402
 from corobot_drake.serving.webapp import create_app  # noqa: E402
 from corobot_drake.simulation import Simulation, quiet_drake_warnings  # noqa: E402
@@ -144,6 +169,53 @@ def loader_errors(folder: Path) -> dict:
     return out
 
 
+def read_mcap(path: Path) -> dict:
+    """What the MCAP file carries of the light sensors: {topic: [[log time ns, schema,
+    frame, lx], ...]}, and `/tf`'s mounts of their frames (the last): {frame: [parent, xyz]}."""
+    from google.protobuf import descriptor_pb2, descriptor_pool, message_factory
+    from mcap.reader import make_reader
+
+    out: dict = {"/tf": {}}
+    with open(path, "rb") as f:
+        for schema, channel, m in make_reader(f).iter_messages(log_time_order=True):
+            if channel.topic.startswith("/light/"):
+                message = json.loads(m.data)
+                out.setdefault(channel.topic, []).append(
+                    [m.log_time, schema.name, message["frame_id"], message["illuminance"]])
+            elif channel.topic == "/tf":
+                pool = descriptor_pool.DescriptorPool()
+                for fd in descriptor_pb2.FileDescriptorSet.FromString(schema.data).file:
+                    pool.Add(fd)
+                tf = message_factory.GetMessageClass(
+                    pool.FindMessageTypeByName(schema.name)).FromString(m.data)
+                out["/tf"] = {x.child_frame_id: [x.parent_frame_id, [
+                    x.translation.x, x.translation.y, x.translation.z]]
+                    for x in tf.transforms if x.child_frame_id.startswith("light_")}
+    return out
+
+
+def read_bag(path: Path) -> dict:
+    """What the ROS 2 bag carries of the light sensors: {topic: [[t ns, type, frame, lx],
+    ...]}, and `/tf_static`'s mounts of their frames: {frame: [parent, xyz]}."""
+    from rosbags.rosbag2 import Reader
+
+    from corobot_drake.ros2.bus import typestore
+
+    store, out = typestore(), {"/tf_static": {}}
+    with Reader(path) as reader:
+        for connection, t_ns, data in reader.messages():
+            msg = store.deserialize_cdr(data, connection.msgtype)
+            if connection.topic.startswith("/light/"):
+                out.setdefault(connection.topic, []).append(
+                    [t_ns, connection.msgtype, msg.header.frame_id, msg.illuminance])
+            elif connection.topic == "/tf_static":
+                out["/tf_static"] = {x.child_frame_id: [x.header.frame_id, [
+                    x.transform.translation.x, x.transform.translation.y,
+                    x.transform.translation.z]]
+                    for x in msg.transforms if x.child_frame_id.startswith("light_")}
+    return out
+
+
 def main() -> None:
     quiet_drake_warnings()
     hints = typing.get_type_hints(sc.Robot)
@@ -154,8 +226,14 @@ def main() -> None:
         "robots: {corobot: {light_sensors: {top: {}, side: {rate_hz: 20}}}}"])
     scenario.robots["corobot"].cameras["front"].rgb = False
     out["loaded"] = {n: c.rate_hz for n, c in scenario.robots["corobot"].light_sensors.items()}
-    sim = Simulation(scenario)
-    sim.advance_to(LOOK)
+    folder = Path(tempfile.mkdtemp())
+    bag = BagSink(folder / "bag")
+    with McapLog(folder / "run.mcap") as log:
+        sim = Simulation(scenario, foxglove=log.context,
+                         extras=[functools.partial(add_ros2_topics, Bus([bag]))])
+        sim.advance_to(LOOK)
+    bag.close()
+    out.update(mcap=read_mcap(folder / "run.mcap"), bag=read_bag(folder / "bag"))
     robot = sim.robot("corobot")
     plant = sim.station.plant
     out["frame"] = plant.HasFrameNamed("light_top", plant.GetModelInstanceByName("corobot"))

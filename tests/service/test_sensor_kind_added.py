@@ -56,3 +56,25 @@ def test_every_front_end_carries_the_added_kinds_readings(added):
     for front_end in ("summary", "snapshot", "http_all"):
         assert added[front_end] == {"top": added["reading"], "side": added["reading"]}, front_end
     assert added["http"] == added["reading"]
+
+
+def test_the_added_kinds_readings_are_on_its_topics_in_the_mcap_and_the_ros2_bag(added):
+    """One publisher per sensor, whatever its kind: each light sensor's readings are on its
+    own topic (`light/<name>`) in the MCAP file (its JSON schema) and the bag
+    (sensor_msgs/Illuminance), each sample once, logged at its time in its frame: the
+    looks up to 0.25 s publish the samples before them (`top`'s at 10 Hz, `side`'s at 20 Hz;
+    a look at t sees [t - period, t)). /tf and /tf_static mount both frames on base_link at
+    the sensors' X_PB."""
+    for name, rate, count in (("top", 10.0, 2), ("side", 20.0, 5)):
+        times = [k / rate for k in range(count)]
+        for wire, schema in (("mcap", "toy.Illuminance"), ("bag", "sensor_msgs/msg/Illuminance")):
+            got = added[wire][f"/light/{name}"]
+            assert [(t, s, f) for t, s, f, _ in got] == [
+                (round(t * 1e9), schema, f"light_{name}") for t in times], wire
+            assert [lx for *_, lx in got] == pytest.approx([100.0 + 10.0 * t for t in times],
+                                                           abs=1e-9), wire
+    for wire, tf in (("mcap", "/tf"), ("bag", "/tf_static")):
+        for name in ("top", "side"):
+            parent, xyz = added[wire][tf][f"light_{name}"]
+            assert parent == "base_link"
+            assert xyz == pytest.approx([0.05, 0.0, 0.3], abs=1e-12), (wire, name)
