@@ -151,6 +151,10 @@ def _lidar(name: str, yaml: str, field: str, words: str) -> Case:
     return _robot(name, f"{{lidars: {{top: {yaml}}}}}", f"lidars.top.{field}", words)
 
 
+def _bumper(name: str, yaml: str, field: str, words: str) -> Case:
+    return _robot(name, f"{{bumpers: {{bump: {yaml}}}}}", f"bumpers.bump.{field}", words)
+
+
 def _file(name: str, data: bytes, field: str, words: str, line: int | None = 1) -> Case:
     return Case(name, field, words, data=data, line=line)
 
@@ -456,6 +460,18 @@ OVERRIDES = [
     _lidar("lidar dropout 2", "{dropout: 2}", "dropout", "[0, 1]"),
     _lidar("lidar on no link", "{X_PB: {base_frame: mast}}", "X_PB.base_frame",
            "'mast' is not a link"),
+    # the bumper
+    _bumper("bumper rate 0", "{rate_hz: 0}", "rate_hz", "(0, 1000] Hz"),
+    _bumper("bumper rate 1e6", "{rate_hz: 1e6}", "rate_hz", "got 1e+06"),
+    _bumper("bumper threshold NaN", "{force_threshold: .nan}", "force_threshold",
+            "NaN is not allowed"),
+    _bumper("bumper threshold negative", "{force_threshold: -1}", "force_threshold",
+            "[0, 10000] N"),
+    _bumper("bumper box negative", "{size: [0.02, -1, 0.04]}", "size[1]", "[0.001, 2] m"),
+    _bumper("bumper box inf", "{size: [0.02, .inf, 0.04]}", "size[1]", "got inf"),
+    _bumper("bumper box of two", "{size: [0.02, 0.2]}", "size", "needs 3 numbers"),
+    _bumper("bumper on no link", "{X_PB: {base_frame: bonnet}}", "X_PB.base_frame",
+            "'bonnet' is not a link"),
     _override("robot name with ?", "robots: {'a?b': {pose: {translation: [2, 0, 0]}}}",
               "robots.a?b", "a URL path segment"),
     # directives Drake's parser would crash on, or take a NaN pose from
