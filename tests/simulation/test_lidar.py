@@ -119,3 +119,17 @@ def test_meshcat_draws_the_rays_and_hits_once_a_scan():
         assert meshcat.HasPath(path), path
     sim.advance(0.55)
     assert viz.draws == 6  # the scans at 0 (at initialization), 0.1, ... 0.5
+
+
+def test_under_cenic_the_scans_fall_on_the_steps_and_change_nothing_of_the_motion():
+    """The default scene is a continuous plant stepped by CENIC: the scans are taken on its
+    steps (none splits one), so the robot drives the same with a lidar as without, to the bit,
+    and each scan is at a step's time, every 0.1 s."""
+    lidar = "robots: {corobot: {lidars: {top: {}}}}"
+    poses = []
+    for overrides in ((TURN,), (TURN, lidar)):
+        sim = make_sim(*overrides)
+        sim.advance(0.55)
+        poses.append(sim.body_pose(sim.station.plant.GetBodyByName("chassis")))
+    assert poses[0] == poses[1]
+    assert sim.robot().reading("top").time == 0.5
