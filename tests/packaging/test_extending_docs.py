@@ -1,0 +1,72 @@
+"""docs/extending.md's Python blocks run, and its excerpts are the files' own lines.
+
+A block whose first line is a comment naming a file (`# corobot_drake/sensors/bumper.py`) is
+an excerpt: each stretch of its lines between `...` lines (`...,` in a tuple) must stand in that file as it is,
+in order, and the block runs in a copy of that module's namespace (its definitions compile
+and execute with the module's imports). Every other block is an example, run in order in one
+namespace, from the repository's root, as a reader would paste them."""
+
+import importlib
+import re
+
+import pytest
+
+from conftest import REPO
+
+DOC = REPO / "docs" / "extending.md"
+BLOCK = re.compile(r"^```python\n(.*?)^```$", re.MULTILINE | re.DOTALL)
+SOURCE = re.compile(r"^# (?P<path>[\w/]+\.py)$")
+ELISION = re.compile(r"^\s*\.\.\.,?$")
+"""A line that stands for lines left out (`...,` among the items of a tuple)."""
+
+
+def blocks() -> list[str]:
+    return BLOCK.findall(DOC.read_text())
+
+
+def excerpt_of(block: str) -> str | None:
+    """The file a block is an excerpt of (relative to the repository), or None."""
+    match = SOURCE.match(block.splitlines()[0])
+    return match["path"] if match else None
+
+
+def stretches(block: str) -> list[str]:
+    """The runs of lines between elisions (the first, naming the file, left out)."""
+    runs, run = [], []
+    for line in block.splitlines()[1:]:
+        if ELISION.match(line):
+            runs.append(run)
+            run = []
+        else:
+            run.append(line)
+    runs.append(run)
+    return ["\n".join(r).strip("\n") for r in runs if "".join(r).strip()]
+
+
+EXCERPTS = [(i, b) for i, b in enumerate(blocks()) if excerpt_of(b)]
+
+
+def test_the_guide_has_excerpts_and_examples():
+    assert len(EXCERPTS) >= 8
+    assert len(blocks()) - len(EXCERPTS) >= 3
+
+
+@pytest.mark.parametrize(("index", "block"), EXCERPTS, ids=[f"block{i}" for i, _ in EXCERPTS])
+def test_an_excerpt_is_the_files_own_text_and_runs(index, block):
+    path = excerpt_of(block)
+    source = (REPO / path).read_text()
+    at = 0
+    for stretch in stretches(block):
+        found = source.find(stretch, at)
+        assert found >= 0, f"block {index}: not in {path} (after offset {at}):\n{stretch}"
+        at = found + len(stretch)
+    module = importlib.import_module(path.removesuffix(".py").replace("/", "."))
+    exec(compile(block, f"{DOC.name} block {index}", "exec"), dict(vars(module)))
+
+
+def test_the_examples_run_in_order(monkeypatch):
+    monkeypatch.chdir(REPO)
+    namespace = {"__name__": "extending_md"}
+    for index, block in enumerate(blocks()):
+        if not excerpt_of(block):
+            exec(compile(block, f"{DOC.name} block {index}", "exec"), namespace)
