@@ -231,7 +231,9 @@ class Ros2Node:
         arguments = {name: getattr(goal, name) for name in ifc.goal_fields(action.command)}
         try:
             started = self._call(partial(calls.start_operation, robot, action.call, arguments))
-        except (ValueError, SimulationStoppedError, TimeoutError) as e:
+        except SimulationStoppedError:
+            return self._abort_at_stop(goal_handle, Result)
+        except (ValueError, TimeoutError) as e:
             goal_handle.abort()
             return Result(success=False, reason=str(e) or type(e).__name__)
         ended = self.runner.watch(partial(calls.ended_command, robot, started.seq))

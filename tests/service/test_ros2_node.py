@@ -453,6 +453,9 @@ def test_a_namesake_is_warned_about_and_a_goal_running_at_the_stop_is_aborted():
         _, handle, _ = action(probe, DriveDistance, "/drive_distance", distance=5.0, power=0.3)
         result = handle.get_result_async()
         sim.send_signal(signal.SIGINT)
-        stopped = probe.wait_future(result)
+        try:
+            stopped = probe.wait_future(result)
+        except AssertionError:
+            raise AssertionError(f"no result; the simulation said {lines}") from None
         assert (stopped.status, stopped.result.reason) == (6, NODE_STOPPED)  # ABORTED
         assert not stopped.result.success
