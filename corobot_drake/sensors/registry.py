@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from corobot_drake.sensors.bumper import BumperKind
 from corobot_drake.sensors.camera import CameraKind
+from corobot_drake.sensors.imu import ImuKind
 from corobot_drake.sensors.ir_sensor import IrSensorKind
 from corobot_drake.sensors.kind import BuiltSensor, SensorKind
 from corobot_drake.sensors.lidar import LidarKind
@@ -19,6 +20,7 @@ KINDS: tuple[SensorKind, ...] = (
     IrSensorKind(),
     CameraKind(),
     LidarKind(),
+    ImuKind(),
     BumperKind(),
 )
 """The registered kinds, in the order the scenario's maps and the front ends list them."""
