@@ -155,6 +155,10 @@ def _bumper(name: str, yaml: str, field: str, words: str) -> Case:
     return _robot(name, f"{{bumpers: {{bump: {yaml}}}}}", f"bumpers.bump.{field}", words)
 
 
+def _imu(name: str, yaml: str, field: str, words: str) -> Case:
+    return _robot(name, f"{{imus: {{imu: {yaml}}}}}", f"imus.imu.{field}", words)
+
+
 def _file(name: str, data: bytes, field: str, words: str, line: int | None = 1) -> Case:
     return Case(name, field, words, data=data, line=line)
 
@@ -472,6 +476,20 @@ OVERRIDES = [
     _bumper("bumper box of two", "{size: [0.02, 0.2]}", "size", "needs 3 numbers"),
     _bumper("bumper on no link", "{X_PB: {base_frame: bonnet}}", "X_PB.base_frame",
             "'bonnet' is not a link"),
+    # the IMU
+    _imu("imu rate 0", "{rate_hz: 0}", "rate_hz", "(0, 1000] Hz"),
+    _imu("imu rate 1e6", "{rate_hz: 1e6}", "rate_hz", "got 1e+06"),
+    _imu("imu gyro noise NaN", "{gyro_noise_density: .nan}", "gyro_noise_density",
+         "NaN is not allowed"),
+    _imu("imu gyro noise negative", "{gyro_noise_density: -1e-4}", "gyro_noise_density",
+         "[0, 1] rad/s/sqrt(Hz)"),
+    _imu("imu gyro walk inf", "{gyro_random_walk: .inf}", "gyro_random_walk", "got inf"),
+    _imu("imu accel noise negative", "{accel_noise_density: -1}", "accel_noise_density",
+         "[0, 10] m/s^2/sqrt(Hz)"),
+    _imu("imu accel walk NaN", "{accel_random_walk: .nan}", "accel_random_walk",
+         "NaN is not allowed"),
+    _imu("imu on no link", "{X_PB: {base_frame: mast}}", "X_PB.base_frame",
+         "'mast' is not a link"),
     _override("robot name with ?", "robots: {'a?b': {pose: {translation: [2, 0, 0]}}}",
               "robots.a?b", "a URL path segment"),
     # directives Drake's parser would crash on, or take a NaN pose from
