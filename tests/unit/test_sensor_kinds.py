@@ -151,7 +151,7 @@ def test_add_sensors_adds_every_kind_and_leaves_out_those_turned_off():
     robot.ir_sensors["rear"].enabled = False
     built = add_sensors(site, robot)
     assert {kind: list(sensors) for kind, sensors in built.items()} == {
-        "ir_sensors": ["front"], "cameras": ["front"]}
+        **{k.field: [] for k in KINDS}, "ir_sensors": ["front"], "cameras": ["front"]}
 
 
 def test_each_built_sensor_reads_its_kind_reading():
