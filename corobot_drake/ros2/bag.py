@@ -120,26 +120,30 @@ class BagSink:
         self.path = Path(path)
         self.report = report or (lambda line: print(line, file=sys.stderr, flush=True))
         self.failed = False
-        self._writer = Writer(self.path, version=BAG_VERSION, storage_plugin=StoragePlugin.MCAP)
-        self._writer.open()
-        # The MCAP writer's state at each chunk it finishes (written out: flushed), which a
-        # failed write falls back to (`_salvage`).
-        self._storage = self._writer.storage
-        self._kept: list[_Kept] = []
-        close_chunk = self._storage.close_chunk
-
-        def chunk_closed():
-            close_chunk()
-            self._keep()
-
-        self._storage.close_chunk = chunk_closed
-        self._keep()
         self._connections: dict = {}
         self.messages = 0
         self._queue: queue.Queue = queue.Queue(QUEUE_SIZE)
         self._error: BaseException | None = None
         self._thread = threading.Thread(target=self._drain, name="corobot-rosbag", daemon=True)
         self._thread.start()
+        self._writer = Writer(self.path, version=BAG_VERSION, storage_plugin=StoragePlugin.MCAP)
+        # The MCAP writer's state at each chunk it finishes (written out: flushed), which a
+        # failed write falls back to (`_salvage`).
+        self._storage = None
+        self._kept: list[_Kept] = []
+        try:
+            self._writer.open()
+            self._storage = self._writer.storage
+            close_chunk = self._storage.close_chunk
+
+            def chunk_closed():
+                close_chunk()
+                self._keep()
+
+            self._storage.close_chunk = chunk_closed
+            self._keep()
+        except OSError as e:  # a disk full from the start
+            self._fail(e)
 
     def _keep(self) -> None:
         storage = self._storage
@@ -149,6 +153,8 @@ class BagSink:
                                 storage.message_end_time))
 
     def declare(self, topic: str, msgtype: str, qos: Qos) -> None:
+        if self.failed:
+            return
         self._connections[topic] = self._writer.add_connection(
             topic, msgtype, typestore=typestore(), serialization_format="cdr",
             offered_qos_profiles=[_qos(qos)])
@@ -205,6 +211,8 @@ class BagSink:
         from rosbags.rosbag2.storage_mcap import PendingChunk
 
         writer, storage = self._writer, self._storage
+        if storage is None:  # not even its directory and file were made
+            return None
         with contextlib.suppress(OSError):
             storage.bio.close()  # what its buffer held cannot be written
         ids = list(storage.channel_stats)

@@ -90,7 +90,7 @@ class Ros2Front(contextlib.ExitStack):
         print(f"ROS 2: node /{self.node.node.get_name()}, ROS_DOMAIN_ID {domain}, discovery "
               f"{self.node.discovery} (python -m corobot_drake.ros2 list)", file=sys.stderr,
               flush=True)
-        if self.node.discovery != "LOCALHOST":
+        if self.node.discovery in ("SUBNET", "SYSTEM_DEFAULT"):  # (OFF: static peers only)
             print(f"warning: ROS 2 discovery {self.node.discovery}: any ROS 2 node on the "
                   "network with this domain id can read the topics and drive the robot",
                   file=sys.stderr, flush=True)
