@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 import pytest
+from pydrake.common.yaml import yaml_dump_typed, yaml_load_typed
 from pydrake.geometry import (
     AddCompliantHydroelasticProperties,
     AddContactMaterial,
@@ -169,6 +170,7 @@ def test_the_system_samples_at_its_rate_only(settled, step):
     """At 50 Hz: one sample at initialization, then one per 20 ms (with a continuous plant's
     10 ms step, on every second step), whatever the steps between."""
     bumper, simulator = standalone(BumperConfig(**TOP), settled, step)
+    assert bumper.events == ((0.01, 0.0) if step else (0.02, 0.02))  # what publishers look on
     simulator.Initialize()
     context = simulator.get_context()
     first = bumper.GetOutputPort("reading").Eval(context)
@@ -206,6 +208,16 @@ def test_default_bumper_is_ahead_of_the_front_tyres_and_clear_of_the_ground():
     assert back > dim.HALF_WHEELBASE + dim.WHEEL_RADIUS  # the tyres' reach, 0.1524 m
     assert z - height / 2 > 0.04  # m above the ground
     assert y == 0.0 and width == pytest.approx(2 * dim.HALF_TRACK + dim.WHEEL_WIDTH)
+
+
+def test_the_config_reads_back_from_its_yaml():
+    """A scenario's sensors are dumped (a saved scene, the diagram's cache key) and loaded."""
+    config = BumperConfig(size=[0.03, 0.2, 0.05], force_threshold=2.5, rate_hz=100.0)
+    text = yaml_dump_typed(config)
+    again = yaml_load_typed(schema=BumperConfig, data=text)
+    assert (again.size, again.force_threshold, again.rate_hz) == ([0.03, 0.2, 0.05], 2.5, 100.0)
+    assert again.X_PB.GetDeterministicValue().IsExactlyEqualTo(
+        config.X_PB.GetDeterministicValue())
 
 
 def test_wire_formats():
