@@ -213,6 +213,30 @@ def test_the_bias_walk_grows_as_the_square_root_of_time():
     assert ratio.mean() == pytest.approx(2.0, rel=SIGMAS * math.sqrt(2 / (2 * 6 * runs)))
 
 
+
+def test_ticks_faster_than_the_steps_walk_the_bias_for_every_tick():
+    """A 1000 Hz IMU on 10 ms plant steps samples once a step, covering 10 ticks: its bias
+    moves by walk x sqrt(10 / 1000) per sample (300 samples x 6 axes: relative standard
+    error of the std 1 / sqrt(2 x 1800)), so it still walks as walk x sqrt(t)."""
+    config = ImuConfig(rate_hz=1000.0, gyro_noise_density=0.0, accel_noise_density=0.0,
+                       gyro_random_walk=1e-3, accel_random_walk=1e-3)
+    step, samples = 0.01, 300
+    system = ImuSensor(config, 0, RigidTransform(), GRAVITY_W, key=5, step=step)
+    simulator = Simulator(system)
+    context = simulator.get_mutable_context()
+    system.GetInputPort("body_poses").FixValue(context, [RigidTransform()])
+    system.GetInputPort("body_spatial_velocities").FixValue(context, [SpatialVelocity.Zero()])
+    biases, times = [], []
+    for k in range(1, samples + 1):
+        simulator.AdvanceTo((k + 0.5) * step)
+        biases.append(system.GetOutputPort("bias").Eval(context).copy())
+        times.append(system.GetOutputPort("sample_time").Eval(context)[0])
+    np.testing.assert_allclose(times, np.arange(1, samples + 1) * step, atol=1e-9)
+    increments = np.diff(np.asarray(biases), axis=0)
+    expected = config.gyro_random_walk * math.sqrt(step)  # 10 ticks of 1 ms
+    count = increments.size
+    assert increments.std() == pytest.approx(expected, rel=SIGMAS / math.sqrt(2 * count))
+
 def test_noise_is_a_pure_function_of_key_and_sample():
     np.testing.assert_array_equal(sample_noise(7, 3), sample_noise(7, 3))
     np.testing.assert_array_equal(  # Philox keyed by 7, sample 3 in the counter's 2nd word
