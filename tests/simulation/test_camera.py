@@ -147,6 +147,14 @@ def test_frames_are_lit_not_black():
     g = ground.mean(axis=(0, 1))
     assert np.all(g > 0.4 * GROUND_RGB * 255), g
     assert g[1] > g[0] > g[2]
+    # The frame is the camera's reading, read by name; `front` is the front IR sensor's too.
+    robot = sim.robot()
+    reading = robot.reading("front", kind="cameras")
+    np.testing.assert_array_equal(reading.data, robot.camera_image())
+    assert reading.time == robot.camera_image_time() and reading.width == image.shape[1]
+    with pytest.raises(KeyError, match=r"sensors 'front' of several kinds \(ir_sensors, "
+                                       r"cameras\); say which"):
+        robot.reading("front")
 
     sim = make_sim("robots: {corobot: {pose: {rotation: !Rpy {deg: [0, 0, 180]}}}}", camera=True)
     sim.advance(0.2)
