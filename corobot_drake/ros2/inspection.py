@@ -346,6 +346,10 @@ def main(argv: list[str] | None = None, out=None) -> int:
     if problem is None and args.command != "list":
         problem = topic_problem(args.topic)
         problem = problem and f"{args.command}: {args.topic}: not a topic name ({problem})"
+        if not problem:  # as rclpy resolves it (`odom`: /odom), for the lines that name it
+            from rclpy.expand_topic_name import expand_topic_name
+
+            args.topic = expand_topic_name(args.topic, INSPECT_NODE, "/")
     if problem:
         print(f"error: {problem}", file=sys.stderr)
         return 2
