@@ -11,7 +11,17 @@ Foxglove/MCAP channels and the ROS 2 topics and bags. No front end names a kind.
 
 A sensor is mounted on a link of its robot by its config's `X_PB` (Drake's schema
 `Transform`, `base_frame` a link name; `config.poses.mount_frame` resolves it), and publishes
-in its frame (`SensorKind.frame_name`), which /tf_static places at that mount.
+in its frame (`SensorKind.frame_name`), which /tf_static places at that mount. The loader
+checks every sensor's mount (a link of its robot), then its kind's `check`.
+
+Sensor names are unique within a kind's map; kinds may share one (the Corobot's IR sensor and
+camera are both `front`), so a front end addresses a sensor by kind field and name
+(`/robots/<robot>/sensors/<field>/<name>`), and `Robot.reading(name, kind=...)` needs the kind
+only for a shared name.
+
+A kind's module is imported by the registry, which the scenario's `Robot` is made from: at
+import it must not import `config.scenario` (nor anything that does), nor an extra's package
+(foxglove, rclpy, ...: import those inside the methods that need them).
 """
 
 from __future__ import annotations
