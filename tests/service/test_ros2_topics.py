@@ -302,6 +302,7 @@ def test_discovery_stays_on_this_machine_unless_asked():
 
 def test_a_bad_ros_environment_or_topic_is_one_line(monkeypatch, capsys):
     """Refused before any DDS starts (in a private network all the same, should one)."""
+    pytest.importorskip("corobot_interfaces.msg", reason="python -m corobot_drake.ros2.build")
     from corobot_drake.ros2 import inspection
     from ros2_probe import private_network
 
