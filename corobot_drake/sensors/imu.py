@@ -16,9 +16,9 @@ the chassis', by default). Each sample reads, in S:
 Why not the plant's `body_spatial_accelerations` output: on a continuous plant (the
 project's default, stepped by CENIC) it is the forward dynamics of the compliant contact model
 at the current state, not what CENIC's implicit step does: on the default scene, in a steady
-0.3 m/s, 1 rad/s turn it read 5 m/s^2 and 40 rad/s^2 where the robot's is 0.28 m/s^2 and 0
-(on SAP's discrete plant it is the last step's (v_n+1 - v_n) / h, which the differences here
-match at a rate equal to the step). The poses and velocities are right on both plants.
+0.3 m/s, 1 rad/s turn it read 5 m/s^2 and 40 rad/s^2 where the robot's is 0.28 m/s^2 and 0.
+On SAP's discrete plant it is a step's (v_n+1 - v_n) / h, the numbers these differences give
+at a rate equal to the step. The poses and velocities are right on both plants.
 
 Noise, per axis (densities as a datasheet or Kalibr states them): white noise of standard
 deviation density x sqrt(rate) on each sample, and a bias that walks by walk x sqrt(1 / rate)
