@@ -3,8 +3,9 @@ but the ground, reporting the contact force.
 
 The bumper is a box of its own (`BumperConfig.size`), fixed to a link by its `X_PB`: the
 bumper frame S at the box's centre, +x out of its face. By default it spans the Corobot's
-front, 5 mm ahead of the front tyres (which stick out 44 mm past the chassis) and 5 cm above
-the ground, as wide as the outer faces of the wheels. It adds no mass.
+front, 5 mm ahead of the front tyres (which stick out 44 mm past the chassis), as wide as the
+outer faces of the wheels, from 1.5 to 4 cm above the ground: under the front camera's view
+and the IR sensors' beams. It adds no mass.
 
 Its geometry is added before the plant is finalized (`BumperKind.add_geometry`): a collision
 box (compliant hydroelastic rubber, low friction, so that it meets the compliant world
@@ -59,13 +60,16 @@ from corobot_drake.topics import nanoseconds
 
 CLEARANCE = 0.005
 """m: the gap between the front tyres' reach and the default bumper's back face."""
-SIZE = (0.02, 2 * (dim.HALF_TRACK + dim.WHEEL_WIDTH / 2), 0.04)
+GROUND_CLEARANCE = 0.015
+"""m: the default bumper's bottom above the ground."""
+SIZE = (0.02, 2 * (dim.HALF_TRACK + dim.WHEEL_WIDTH / 2), 0.025)
 """m: the default box (thickness along S's x, width along y, height along z): 2 cm thick,
-0.2794 m wide (the outer faces of the wheels), 4 cm high."""
+0.2794 m wide (the outer faces of the wheels), 2.5 cm high."""
 FRONT = (dim.HALF_WHEELBASE + dim.WHEEL_RADIUS + CLEARANCE + SIZE[0] / 2, 0.0,
-         dim.CHASSIS.center[2])
-"""m: the default bumper's centre in the chassis frame, (0.1674, 0, 0.06985): ahead of the
-front tyres (x = 0.1524), at the chassis box's height (its bottom 0.0499 above the ground)."""
+         GROUND_CLEARANCE + SIZE[2] / 2)
+"""m: the default bumper's centre in the chassis frame, (0.1674, 0, 0.0275): ahead of the
+front tyres (x = 0.1524), low: its top (0.04 m) is under the front camera's view (its lower
+edge passes 0.0412 m above the ground over the bumper's face) and the IR sensors' beams."""
 
 
 @dc.dataclass

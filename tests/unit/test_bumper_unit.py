@@ -198,16 +198,19 @@ def test_before_its_first_sample_it_reads_nothing(settled):
     assert math.isnan(reading.time)
 
 
-def test_default_bumper_is_ahead_of_the_front_tyres_and_clear_of_the_ground():
+def test_default_bumper_is_ahead_of_the_front_tyres_and_out_of_the_cameras_view():
     config = BumperConfig()
-    X = config.X_PB.GetDeterministicValue()
     thickness, width, height = config.size
-    _, y, z = X.translation()
-    back = X.translation()[0] - thickness / 2
+    x, y, z = config.X_PB.GetDeterministicValue().translation()
     assert config.X_PB.base_frame == "chassis"
-    assert back > dim.HALF_WHEELBASE + dim.WHEEL_RADIUS  # the tyres' reach, 0.1524 m
-    assert z - height / 2 > 0.04  # m above the ground
+    assert x - thickness / 2 > dim.HALF_WHEELBASE + dim.WHEEL_RADIUS  # the tyres' reach
+    assert z - height / 2 > 0.01  # m: clear of the ground
     assert y == 0.0 and width == pytest.approx(2 * dim.HALF_TRACK + dim.WHEEL_WIDTH)
+    # The front camera's lowest ray (level, half its vertical field of view down) passes
+    # over the bumper's top front edge: the camera's frames are those of a Corobot without.
+    cx, _, cz = dim.CAMERA.position
+    lowest = cz - (x + thickness / 2 - cx) * math.tan(math.radians(dim.CAMERA_FOV_Y_DEG / 2))
+    assert z + height / 2 < lowest
 
 
 def test_the_config_reads_back_from_its_yaml():
