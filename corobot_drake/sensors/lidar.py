@@ -36,6 +36,7 @@ from pydrake.common.schema import Transform
 from pydrake.common.value import AbstractValue
 from pydrake.geometry import Meshcat, QueryObject, Rgba, Role
 from pydrake.math import RigidTransform
+from pydrake.perception import BaseField, Fields, PointCloud
 from pydrake.systems.framework import EventStatus, LeafSystem
 
 from corobot_drake.config.poses import mount, mount_frame
@@ -368,8 +369,6 @@ class LidarMeshcatVisualizer(LeafSystem):
         self._draw(context)
 
     def _draw(self, context) -> None:
-        from pydrake.perception import BaseField, Fields, PointCloud
-
         x = self._scan.Eval(context)
         key = (x[SCAN_INDEX], x[SCAN_TIME])
         if key == self._last:

@@ -133,3 +133,17 @@ def test_under_cenic_the_scans_fall_on_the_steps_and_change_nothing_of_the_motio
         poses.append(sim.body_pose(sim.station.plant.GetBodyByName("chassis")))
     assert poses[0] == poses[1]
     assert sim.robot().reading("top").time == 0.5
+
+
+def test_another_robot_is_seen_and_a_lidar_on_top_sees_over_it():
+    """Two Corobots in the default scene, `corobot_2` 1.5 m ahead facing the same way: a lidar
+    at the platform's height (0.18 m) reads corobot_2's platform, its rear face at
+    1.5 - 0.10795 m, straight ahead; corobot_2's lidar on top (the default mount, above every
+    part of a Corobot) reads the giant box behind both, 1.5 + 0.7366 m back, over corobot."""
+    sim = make_sim("robots: {corobot: {lidars: {low: {X_PB: {translation: [0, 0, 0.18]}}}}, "
+                   "corobot_2: {pose: {translation: [1.5, 0, 0]}, lidars: {top: {}}}}")
+    sim.advance(0.15)
+    ahead = sim.robot("corobot").reading("low").ranges[180]
+    behind = sim.robot("corobot_2").reading("top").ranges[0]  # bearing -pi
+    assert ahead == pytest.approx(1.5 - 0.10795, abs=1e-4)  # the robots settle ~0.5 mm
+    assert behind == pytest.approx(1.5 + 0.7366, abs=1e-4)
