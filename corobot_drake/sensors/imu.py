@@ -385,6 +385,19 @@ class ImuKind(SensorKind):
         system.SetNoiseKey(system.GetMyMutableContextFromRoot(root_context), noise_key(
             random_seed, sensor.robot, sensor.name, config.noise_seed))
 
+    def summary_json(self, reading: Imu) -> dict:
+        """The vectors' components as numbers of their own (`linear_acceleration_z`, ...: a
+        study's sensors metric makes a column of each number) and the time; the covariances,
+        fixed by the config, left out."""
+        out = {}
+        for name, axes in (("orientation", "xyzw"), ("angular_velocity", "xyz"),
+                           ("linear_acceleration", "xyz")):
+            vector = getattr(reading, name)
+            if vector is not None:
+                out.update({f"{name}_{a}": v for a, v in zip(axes, vector, strict=True)})
+        out["time"] = reading.time
+        return {key: v if math.isfinite(v) else None for key, v in out.items()}
+
     def looks(self, sensor: BuiltSensor) -> tuple[float, float]:
         return sensor.system.events  # a sample and a look at one time: the look first
 

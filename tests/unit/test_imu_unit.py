@@ -334,6 +334,13 @@ def test_the_messages_carry_the_reading_in_ros_field_names():
     as_json = IMU.to_json(r)
     assert as_json["orientation"] is None
     assert as_json["linear_acceleration"] == list(r.linear_acceleration)
+    summary = IMU.summary_json(r)  # a number each: a study's sensors metric columns
+    assert summary == {"angular_velocity_x": r.angular_velocity[0],
+                       "angular_velocity_y": r.angular_velocity[1],
+                       "angular_velocity_z": r.angular_velocity[2],
+                       "linear_acceleration_x": r.linear_acceleration[0],
+                       "linear_acceleration_y": r.linear_acceleration[1],
+                       "linear_acceleration_z": r.linear_acceleration[2], "time": 0.005}
     fox = IMU.foxglove_message(r, "imu_imu")
     assert set(fox) == set(IMU.foxglove_schema["properties"])
     assert fox["angular_velocity"]["z"] == r.angular_velocity[2]
