@@ -51,18 +51,17 @@ from corobot_drake.topics import nanoseconds
 
 @dc.dataclass
 class ImuConfig:
-    """One IMU on a robot. The default noise figures are those of a tactical-grade MEMS
-    IMU (the Analog Devices ADIS16448, as Kalibr's calibration of it states them)."""
+    """One IMU on a robot. The default noise figures are those of a MEMS IMU, the Analog
+    Devices ADIS16448 of the EuRoC MAV dataset's VI-Sensor (its `imu0/sensor.yaml`)."""
 
     X_PB: Transform = dc.field(default_factory=lambda: mount(dim.CHASSIS.center, (0, 0, 0)))
     """The sensor frame S in `base_frame` (default `chassis`, at the chassis box's centre,
     axes the chassis': +x forward, +z up)."""
     rate_hz: float = bounded(100.0, RATE)
-    """Samples per second (periodic discrete updates, independent of the physics step)."""
-    gyro_noise_density: float = bounded(
-        1.7e-4, Range(0.0, 1.0, unit="rad/s/sqrt(Hz)"))
+    """Samples per second (each taken on the first physics step at or after its time)."""
+    gyro_noise_density: float = bounded(1.6968e-4, Range(0.0, 1.0, unit="rad/s/sqrt(Hz)"))
     """rad/s/sqrt(Hz): the gyroscope's white noise (per sample: x sqrt(rate_hz)); 0: none."""
-    gyro_random_walk: float = bounded(1.9e-5, Range(0.0, 1.0, unit="rad/s^2/sqrt(Hz)"))
+    gyro_random_walk: float = bounded(1.9393e-5, Range(0.0, 1.0, unit="rad/s^2/sqrt(Hz)"))
     """rad/s^2/sqrt(Hz): the gyroscope's bias random walk; 0: no bias."""
     accel_noise_density: float = bounded(2.0e-3, Range(0.0, 10.0, unit="m/s^2/sqrt(Hz)"))
     """m/s^2/sqrt(Hz): the accelerometer's white noise (per sample: x sqrt(rate_hz))."""
