@@ -2,6 +2,7 @@
 bases (`recording.looks.RobotStateLooks`) and the one sensor publisher (`SensorPublisher`,
 on the IR and camera kinds' schedules) alone."""
 
+import dataclasses as dc
 import math
 import types
 
@@ -168,3 +169,48 @@ def test_an_ir_sensor_s_publisher_hands_on_a_scan_once_at_the_look_after_it(step
     assert (scan.time, scan.range, scan.max_range) == (scanned, 0.3, config.maximum_range)
     assert scan.field_of_view == pytest.approx(math.radians(config.dispersion_cone_angle))
     assert scan.ends.shape == (system.num_rays, 3)
+
+
+class _Sample(LeafSystem):
+    """A kind's sensor whose `reading` port (abstract) is its reading: a `_Value` taken at
+    input `taken` (s)."""
+
+    def __init__(self):
+        super().__init__()
+        self.DeclareVectorInputPort("taken", 1)
+        self.DeclareAbstractOutputPort(
+            "reading", lambda: Value(_Value(math.nan, 0.0)),
+            lambda c, v: v.set_value(_Value(self.get_input_port().Eval(c)[0], 2.5)))
+
+
+@dc.dataclass(frozen=True)
+class _Value:
+    time: float
+    value: float
+
+
+def test_a_kind_s_publisher_by_default_reads_its_reading_port_at_its_rate():
+    """A kind that overrides none of the publisher's hooks: the publisher's one input is its
+    `reading` port, it looks every 1 / rate s from 0, and hands on the reading once, at the
+    first look after its time."""
+    from pydrake.systems.analysis import Simulator
+
+    from corobot_drake.sensors.kind import SensorKind
+
+    sample = _Sample()
+    sensor = BuiltSensor(SensorKind(), "r", "s", None, sample, sample.get_output_port(), 10.0)
+    handed = []  # (look time, reading)
+    publisher = SensorPublisher(sensor, lambda r: handed.append(
+        (simulator.get_context().get_time(), r)))
+    assert [publisher.get_input_port(i).get_name()
+            for i in range(publisher.num_input_ports())] == ["reading"]
+    builder = DiagramBuilder()
+    builder.AddSystem(sample)
+    builder.AddSystem(publisher)
+    publisher.connect(builder)
+    builder.ExportInput(sample.get_input_port(), "taken")
+    diagram = builder.Build()
+    simulator = Simulator(diagram)
+    diagram.get_input_port().FixValue(simulator.get_mutable_context(), [0.1])
+    simulator.AdvanceTo(0.55)
+    assert [(pytest.approx(t, abs=1e-12), r) for t, r in handed] == [(0.2, _Value(0.1, 2.5))]
