@@ -490,6 +490,10 @@ OVERRIDES = [
          "NaN is not allowed"),
     _imu("imu on no link", "{X_PB: {base_frame: mast}}", "X_PB.base_frame",
          "'mast' is not a link"),
+    _override("a list as a key", "world: {bodies: {b: {shape: !Box {[0.1, 4.2, 0.5]}}}}",
+              "world.bodies.b.shape", "a key must be a name, got a list"),
+    _override("a mapping as a name", "robots: {? {a: 1} : {}}", "robots",
+              "a key must be a name, got a mapping"),
     _override("robot name with ?", "robots: {'a?b': {pose: {translation: [2, 0, 0]}}}",
               "robots.a?b", "a URL path segment"),
     # directives Drake's parser would crash on, or take a NaN pose from

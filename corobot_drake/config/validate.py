@@ -297,11 +297,17 @@ class _SchemaWalk:
             self.lines[f"{path}[{i}]"] = item.start_mark.line + 1
             self.check(item, item_type, f"{path}[{i}]")
 
+    def _key(self, key, path):
+        # `{[1, 2]: x}` and `{? {a: 1}: x}` are YAML, and no field or name.
+        if not isinstance(key, yaml.ScalarNode):
+            self.fail(key, path, f"a key must be a name, got {_describe(key)}")
+
     def _names(self, node, value_type, path):
         if not isinstance(node, yaml.MappingNode):
             self.fail(node, path, f"expected a mapping of names, got {_describe(node)}")
         seen = set()
         for key, value in node.value:
+            self._key(key, path)
             sub = f"{path}.{key.value}"
             if key.value in seen:
                 self.fail(key, sub, "duplicate name")
@@ -316,6 +322,7 @@ class _SchemaWalk:
             self.fail(node, path, f"expected a mapping for {_type_name(tp)}, got {_describe(node)}")
         seen = set()
         for key, value in node.value:
+            self._key(key, path)
             name = key.value
             sub = f"{path}.{name}" if path else name
             if name in seen:
