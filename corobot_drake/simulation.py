@@ -449,15 +449,14 @@ class Robot:
         """The latest reading of the sensor `name` as JSON (`SensorKind.to_json`: what HTTP and
         the summary show)."""
         sensor = self._sensor(name, kind)
-        return sensor.kind.to_json(sensor.read(self._sim.context))
+        return sensor.kind.read_json(sensor, self._sim.context)
 
     def sensor_readings(self, summary: bool = False) -> dict[str, dict[str, dict]]:
         """Every sensor's latest reading as JSON, {kind field: {name: JSON}}: as HTTP shows it
         (`SensorKind.to_json`), or with `summary` as the run's summary holds it
         (`SensorKind.summary_json`)."""
         context = self._sim.context
-        return {field: {name: (s.kind.summary_json if summary else s.kind.to_json)(
-                            s.read(context)) for name, s in sensors.items()}
+        return {field: {name: s.kind.read_json(s, context, summary) for name, s in sensors.items()}
                 for field, sensors in self._parts.sensors.items()}
 
     def ir(self, name: str) -> IrReading:

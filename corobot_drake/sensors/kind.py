@@ -148,6 +148,14 @@ class SensorKind:
         """The sensor's frame (the frame its readings are in), relative to its robot's."""
         return f"{self.topic}_{sensor}"
 
+    def read_json(self, sensor: BuiltSensor, root_context, summary: bool = False) -> dict:
+        """The sensor's latest reading as JSON (`to_json`; with `summary`, `summary_json`),
+        from the diagram's root context: what the HTTP snapshot (at 30 Hz) and the summary
+        ask. A kind whose reading costs to make (a camera's frame is rendered when it is
+        read) overrides it to give the JSON without the costly part."""
+        reading = self.read(sensor, root_context)
+        return self.summary_json(reading) if summary else self.to_json(reading)
+
     def summary_json(self, reading) -> dict:
         """The reading as the run's summary holds it (`Robot.summary()["sensors"]`): by
         default `to_json`; a kind with bulky readings keeps a summary-sized part."""

@@ -152,6 +152,8 @@ def test_frames_are_lit_not_black():
     reading = robot.reading("front", kind="cameras")
     np.testing.assert_array_equal(reading.data, robot.camera_image())
     assert reading.time == robot.camera_image_time() and reading.width == image.shape[1]
+    assert robot.sensor_json("front", "camera") == {  # from the frame's time alone
+        "width": 320, "height": 240, "encoding": "rgba8", "time": reading.time}
     with pytest.raises(KeyError, match=r"sensors 'front' of several kinds \(ir_sensors, "
                                        r"cameras\); say which"):
         robot.reading("front")
