@@ -206,7 +206,7 @@ class Lidar(LeafSystem):
         X_BS = config.X_PB.GetDeterministicValue() if X_BS is None else X_BS
         self._X_BS = X_BS.GetAsMatrix34()
         angles = config.angle_min + self.increment * np.arange(n)
-        # The rays in B, and the scan plane's normal (S's +z) in B.
+        # The rays in B: a scan poses them with the body's rotation alone.
         self._d_B = np.column_stack([np.cos(angles), np.sin(angles), np.zeros(n)]) \
             @ self._X_BS[:, :3].T
         self._caster: RayCaster | None = None

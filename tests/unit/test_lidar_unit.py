@@ -3,12 +3,20 @@ boxes, cylinders and spheres (a robot that is one welded `chassis` box, world ge
 anchored around it), the REP 117 ranges, the noise's statistics and replay, the dropouts, and
 its kind's wire messages."""
 
+import gc
 import math
 
 import numpy as np
 import pytest
 from pydrake.common.value import AbstractValue
-from pydrake.geometry import Box, Cylinder, ProximityProperties, Sphere
+from pydrake.geometry import (
+    Box,
+    Cylinder,
+    ProximityProperties,
+    QueryObject,
+    SceneGraphInspector,
+    Sphere,
+)
 from pydrake.math import RigidTransform
 from pydrake.multibody.plant import AddMultibodyPlantSceneGraph
 from pydrake.multibody.tree import SpatialInertia
@@ -205,6 +213,18 @@ def test_the_leaf_system_scans_at_its_rate_and_keeps_its_state_in_the_context():
     assert (state[SCAN_INDEX], state[SCAN_TIME]) == (2.0, 0.1)  # scans at 0, 0.05, 0.1
     np.testing.assert_array_equal(state[RANGES_START:], first[RANGES_START:])  # a still scene
     assert lidar.GetOutputPort("reading").Eval(context).time == 0.1
+
+
+def test_a_lidar_keeps_no_view_of_a_context_that_is_gone():
+    """As the IR sensors: once its Simulator is gone, no QueryObject or inspector of that
+    Context stays alive through the lidar (its caster keeps a copy of the geometry version)."""
+    sensor, simulator = scan(site_with(wall(1.0)), config())
+    simulator.AdvanceTo(0.15)
+    del simulator
+    gc.collect()
+    assert [type(o).__name__ for o in gc.get_objects()
+            if isinstance(o, (QueryObject, SceneGraphInspector))] == []
+    assert sensor.system._caster is not None  # the caster itself lives on
 
 
 def test_too_near_reads_minus_inf_and_the_robot_never_sees_itself():
