@@ -43,6 +43,7 @@ from pydrake.geometry import (
     Box,
     HalfSpace,
     ProximityProperties,
+    QueryObject,
     Rgba,
 )
 from pydrake.math import RigidTransform
@@ -187,6 +188,7 @@ class Bumper(LeafSystem):
 
         name: Bumper
         input_ports:
+        - query_object
         - contact_results
         - body_poses
         output_ports:
@@ -196,10 +198,12 @@ class Bumper(LeafSystem):
         - force_vector
         - sample_state
 
-    Inputs: `contact_results` (abstract ContactResults, the plant's), `body_poses` (abstract
-    list of RigidTransform X_WB by BodyIndex, the plant's; read only while something
-    touches). Outputs: `reading` (abstract `BumperState`), `pressed` (0 or 1), `force` (N),
-    `force_vector` (3, N, in S), `sample_state` (the discrete state, `STATE_SIZE`).
+    Inputs: `query_object` (abstract QueryObject, SceneGraph's), `contact_results` (abstract
+    ContactResults, the plant's; read only while something but the ground is near the box,
+    `near_anything`), `body_poses` (abstract list of RigidTransform X_WB by BodyIndex, the
+    plant's; read only while something touches). Outputs: `reading` (abstract
+    `BumperState`), `pressed` (0 or 1), `force` (N), `force_vector` (3, N, in S),
+    `sample_state` (the discrete state, `STATE_SIZE`).
 
     Samples at initialization and every 1/`rate_hz` s from then on. With `step` (a
     continuous plant's physics step, s) each sample is taken on the plant's steps instead,
@@ -220,6 +224,8 @@ class Bumper(LeafSystem):
         self._threshold = float(config.force_threshold)
         self.rate = float(config.rate_hz)
         self._step = float(step)
+        self._query = self.DeclareAbstractInputPort("query_object",
+                                                    AbstractValue.Make(QueryObject()))
         self._contacts = self.DeclareAbstractInputPort("contact_results",
                                                        AbstractValue.Make(ContactResults()))
         self._poses = self.DeclareAbstractInputPort("body_poses",
@@ -256,6 +262,17 @@ class Bumper(LeafSystem):
         """The reading of a state vector (`STATE_SIZE`)."""
         fx, fy, fz = (float(v) for v in x[FORCE_VECTOR])
         return BumperState(bool(x[PRESSED] > 0.5), float(x[FORCE]), (fx, fy, fz), float(x[TIME]))
+
+    def near_anything(self, query_object) -> bool:
+        """Whether anything but the ground may touch the box: SceneGraph's broad phase pairs
+        it with something (their bounding boxes overlap). On a continuous plant the contact
+        results are computed afresh when asked (every tyre's contact surface): a sample
+        asks for them only then."""
+        g, ground = self._geometry, self._ground
+        for a, b in query_object.FindCollisionCandidates():
+            if (a == g and b not in ground) or (b == g and a not in ground):
+                return True
+        return False
 
     def force_in_world(self, results) -> tuple[float, float, float] | None:
         """N: the sum of the contact forces on the bumper's box from every geometry but the
@@ -306,7 +323,9 @@ class Bumper(LeafSystem):
         return EventStatus.Succeeded()
 
     def _take(self, context, x, index: int) -> None:
-        f_W = self.force_in_world(self._contacts.Eval(context))
+        f_W = None
+        if self.near_anything(self._query.Eval(context)):
+            f_W = self.force_in_world(self._contacts.Eval(context))
         f_S = (0.0, 0.0, 0.0)
         if f_W is not None:
             R_WS = self._poses.Eval(context)[self._body].rotation() @ self._R_BS
@@ -407,8 +426,8 @@ class BumperKind(SensorKind):
         add_bumper_geometry(plant, model_instance, name, config)
 
     def add(self, site, name: str, config: BumperConfig) -> BuiltSensor | None:
-        """The bumper `name` on the site's robot (`<robot>.bumper.<name>`), fed by the plant's
-        contact results and body poses; its vector outputs exported as
+        """The bumper `name` on the site's robot (`<robot>.bumper.<name>`), fed by SceneGraph's
+        queries and the plant's contact results and body poses; its vector outputs exported as
         `<robot>.bumper.<name>.<port>`."""
         if not config.enabled:
             return None
@@ -418,6 +437,8 @@ class BumperKind(SensorKind):
         sensor = builder.AddNamedSystem(f"{robot}.bumper.{name}", Bumper(
             config, collision, ground_geometries(plant, site.scene_graph), body.index(), X_BS,
             site.continuous_step))
+        builder.Connect(site.scene_graph.get_query_output_port(),
+                        sensor.GetInputPort("query_object"))
         builder.Connect(plant.get_contact_results_output_port(),
                         sensor.GetInputPort("contact_results"))
         builder.Connect(plant.get_body_poses_output_port(), sensor.GetInputPort("body_poses"))

@@ -146,8 +146,8 @@ def test_the_ground_is_the_worlds_half_space(settled):
 
 def standalone(config: BumperConfig, settled, step: float = 0.0):
     """A Bumper alone (the `top` bumper's geometry and mount), its inputs fixed to the settled
-    scene's contact results and body poses: (bumper, its simulator)."""
-    _, context, plant, (top, _) = settled
+    scene's queries, contact results and body poses: (bumper, its simulator)."""
+    diagram, context, plant, (top, _) = settled
     plant_context = plant.GetMyContextFromRoot(context)
     original = top.system
     body = plant.GetBodyByName("chassis", plant.GetModelInstanceByName("bot"))
@@ -155,6 +155,9 @@ def standalone(config: BumperConfig, settled, step: float = 0.0):
                     config.X_PB.GetDeterministicValue(), step)
     simulator = Simulator(bumper)
     own = simulator.get_mutable_context()
+    scene_graph = diagram.GetSubsystemByName("scene_graph")
+    bumper.GetInputPort("query_object").FixValue(own, scene_graph.get_query_output_port().Eval(
+        scene_graph.GetMyContextFromRoot(context)))
     bumper.GetInputPort("contact_results").FixValue(
         own, plant.get_contact_results_output_port().Eval(plant_context))
     bumper.GetInputPort("body_poses").FixValue(
