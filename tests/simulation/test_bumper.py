@@ -21,11 +21,9 @@ MU = 0.5  # the tyres' and the ground's friction (Drake combines two 0.5s as 0.5
 STALL_PUSH = dim.WHEEL_RADIUS  # m: a stalled wheel pushes with its effort limit / this
 
 
-@pytest.fixture(scope="module")
-def ram():
-    """The rammer at full power for DURATION s: (sim, [(t, chassis x, reading) at each
-    physics step], the skidder's readings)."""
-    sim = make_sim(RAM)
+def drive(sim):
+    """The rammer at full power for DURATION s: [(t, chassis x, reading) at each physics
+    step], the skidder's readings."""
     rammer, skidder = sim.robot("corobot"), sim.robot("skidder")
     rammer.set_power(1.0, 1.0)
     trace, skid = [], []
@@ -33,7 +31,14 @@ def ram():
         trace.append((sim.time, rammer.pose().x, rammer.reading("front_bumper")))
         skid.append(skidder.reading("skid"))
         sim.advance(0.01)
-    return sim, trace, skid
+    return trace, skid
+
+
+@pytest.fixture(scope="module")
+def ram():
+    """(sim, *`drive(sim)`)."""
+    sim = make_sim(RAM)
+    return sim, *drive(sim)
 
 
 def test_pressed_exactly_while_the_bumper_is_into_the_box(ram):
@@ -82,3 +87,11 @@ def test_the_ground_never_presses_a_bumper(ram):
     # skid, stiffer than the tyres, carries all of it: the wheels read 0 N).
     weight = (dim.TOTAL_BODY_MASS + 4 * dim.WHEEL_MASS) * 9.81
     assert sum(sim.robot("skidder").wheel_loads().values()) < 0.5 * weight
+
+
+def test_a_reset_replays_the_readings_bit_for_bit(ram):
+    # Its every number is in the Context: the same run again ends where the first did, so the
+    # other tests may come before or after this one.
+    sim, trace, skid = ram
+    sim.reset()
+    assert drive(sim) == (trace, skid)
