@@ -21,6 +21,8 @@ from corobot_drake.ros2.interfaces import Qos
 
 BAG_VERSION = 9
 """rosbag2's metadata version that ROS 2 Jazzy writes."""
+ROS_DISTRO = "jazzy"
+"""The distro metadata.yaml names (the rosbags writer puts its own name there)."""
 
 
 def _qos(kind: Qos):
@@ -185,6 +187,7 @@ class BagSink:
         if not self.failed:
             try:
                 self._writer.close()
+                _name_distro(self.path)
             except OSError as e:
                 self._fail(e)
         self._writer = None
@@ -229,8 +232,18 @@ class BagSink:
                 storage.message_end_time = writer.max_timestamp = kept.end
                 writer.storage = storage
                 writer.close()
+                with contextlib.suppress(OSError):  # (shorter: it fits where the old did)
+                    _name_distro(self.path)
                 return kept
             except OSError:
                 with contextlib.suppress(OSError):
                     storage.bio.close()
         return None
+
+
+def _name_distro(path: Path) -> None:
+    """Names the distro the bag is for in its metadata.yaml (`ros_distro`, as `ros2 bag`
+    writes it), where the rosbags writer names itself."""
+    metadata = path / "metadata.yaml"
+    text = metadata.read_text()
+    metadata.write_text(text.replace("ros_distro: rosbags", f"ros_distro: {ROS_DISTRO}", 1))

@@ -613,11 +613,14 @@ class IrSensorKind(SensorKind):
         return {"": scan, "rays": SceneUpdate(entities=[entity])}
 
     def ros2_message(self, messages, reading: IrScan, frame: str):
-        """sensor_msgs/Range, INFRARED (rad, m)."""
+        """sensor_msgs/Range, INFRARED (rad, m); nothing in range (the reading capped at
+        max_range) is +Inf, as REP 117 asks."""
+        nothing = reading.range >= reading.max_range
         return messages.msg("sensor_msgs/msg/Range")(
             header=messages.header(reading.time, frame), radiation_type=INFRARED,
             field_of_view=float(reading.field_of_view), min_range=float(reading.min_range),
-            max_range=float(reading.max_range), range=reading.range,
+            max_range=float(reading.max_range),
+            range=math.inf if nothing else float(reading.range),
             variance=0.0)  # unknown: the sensor's noise is in volts, through a nonlinear curve
 
     def add_meshcat(self, builder, meshcat, sensor: BuiltSensor) -> None:

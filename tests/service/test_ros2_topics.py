@@ -212,6 +212,10 @@ def test_ir_sensor_publisher_sends_each_scan_once():
     assert t_ns == 50_000_000 and msg.range == pytest.approx(0.3)
     assert msg.max_range == pytest.approx(config.maximum_range)
     assert msg.header.frame_id == "ir_front" and msg.radiation_type == msg.INFRARED
+    scan[SCAN_TIME], scan[DISTANCE] = 0.2, config.maximum_range  # nothing in range
+    stepper.fix("scan_state", scan)
+    stepper.tick(3)
+    assert memory.messages["/ir/front"][-1][1].range == math.inf  # REP 117
 
 
 def test_transform_publisher_odom_to_base_link_to_wheels():
@@ -355,6 +359,7 @@ def test_bag_round_trips(bag):
 
     info = yaml.safe_load((bag / "metadata.yaml").read_text())["rosbag2_bagfile_information"]
     assert (info["version"], info["storage_identifier"]) == (9, "mcap")  # ROS 2 Jazzy's
+    assert info["ros_distro"] == "jazzy"
     assert all(t["topic_metadata"]["type_description_hash"].startswith("RIHS01_")
                for t in info["topics_with_message_count"])
     with Reader(bag) as reader:
