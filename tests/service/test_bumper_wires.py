@@ -1,0 +1,95 @@
+"""The bumper on the wires: one CLI run of the Corobot driving its front bumper into the giant
+box (0.9 cm away at the start) writing MCAP, a rosbag and the summary; every sample is on
+/bumper/front_bumper in both, in frame bumper_front_bumper, the same as the Python `Robot`
+reads, and /tf_static places the frame at the mount."""
+
+import json
+import subprocess
+import sys
+
+import pytest
+from test_recording import read_mcap
+
+from corobot_drake.config.scenario import load_scenario
+from corobot_drake.resources import DEFAULT_SCENARIO
+from corobot_drake.sensors.bumper import FRONT
+from corobot_drake.simulation import Simulation
+
+pytest.importorskip("rosbags", reason="the [ros2] extra (tools/setup installs it)")
+
+RAM = ("robots: {corobot: {pose: {translation: [-0.55, 0, 0], rotation: !Rpy {deg: [0, 0, 180]}},"
+       " bumpers: {front_bumper: {}}, cameras: {front: {rgb: false}},"
+       " commands: [!SetPower {left: 1.0, right: 1.0}]}}")
+DURATION = 0.3  # s: it meets the box between the samples of 0.08 and 0.1 s
+TIMES = [round(0.02 * k, 2) for k in range(15)]
+"""s: the samples of the run (the one due at 0.3 s is taken leaving 0.3: after the run)."""
+TOPIC, FRAME = "/bumper/front_bumper", "bumper_front_bumper"
+
+
+@pytest.fixture(scope="module")
+def run(tmp_path_factory) -> dict:
+    out = tmp_path_factory.mktemp("bumper")
+    subprocess.run([sys.executable, "-m", "corobot_drake", str(DEFAULT_SCENARIO), "--headless",
+                    "--duration", str(DURATION), "--mcap", str(out / "run.mcap"), "--rosbag",
+                    str(out / "bag"), "--summary", str(out / "summary.json"),
+                    "--override", RAM], check=True, capture_output=True, timeout=300)
+    sim = Simulation(load_scenario(DEFAULT_SCENARIO, overrides=[RAM]))
+    sim.advance_to(DURATION)
+    return {"dir": out, "last": sim.robot().reading("front_bumper")}
+
+
+def _bag(path, *names: str) -> dict[str, list]:
+    """{topic: [(log time ns, message), ...]} of the topics `names` of a bag."""
+    from rosbags.rosbag2 import Reader
+
+    from corobot_drake.ros2.bus import typestore
+
+    store = typestore()
+    topics: dict[str, list] = {}
+    with Reader(path) as reader:
+        wanted = [c for c in reader.connections if c.topic in names]
+        for connection, t_ns, data in reader.messages(connections=wanted):
+            topics.setdefault(connection.topic, []).append(
+                (t_ns, store.deserialize_cdr(data, connection.msgtype)))
+    return topics
+
+
+def test_each_sample_is_a_corobot_bumper_in_the_mcap(run):
+    messages = read_mcap(run["dir"] / "run.mcap")[TOPIC]
+    assert [(t, schema) for t, schema, _ in messages] == [(t, "corobot.Bumper") for t in TIMES]
+    pressed = [m["pressed"] for _, _, m in messages]
+    assert pressed == [t >= 0.1 for t in TIMES]  # from the first sample past the box's face
+    for t, _, m in messages:
+        assert m["frame_id"] == FRAME
+        assert m["timestamp"]["sec"] + m["timestamp"]["nsec"] / 1e9 == pytest.approx(t)
+    last = run["last"]
+    assert messages[-1][2]["force"] == pytest.approx(last.force, rel=1e-9)
+    assert messages[-1][2]["force_vector"] == pytest.approx(
+        dict(zip("xyz", last.force_vector, strict=True)), rel=1e-9, abs=1e-9)
+
+
+def test_each_sample_is_a_wrench_stamped_in_the_bag_on_its_frame(run):
+    topics = _bag(run["dir"] / "bag", TOPIC, "/tf_static")
+    messages = topics[TOPIC]
+    assert [t for t, _ in messages] == [round(t * 1e9) for t in TIMES]
+    mcap = read_mcap(run["dir"] / "run.mcap")[TOPIC]
+    for (_, m), (_, _, f) in zip(messages, mcap, strict=True):  # one run: the same samples
+        assert m.header.frame_id == FRAME
+        force = m.wrench.force
+        assert (force.x, force.y, force.z) == tuple(f["force_vector"].values())
+        assert (m.wrench.torque.x, m.wrench.torque.y, m.wrench.torque.z) == (0.0, 0.0, 0.0)
+    (static,) = [m for _, m in topics["/tf_static"]]
+    (mount,) = [x for x in static.transforms if x.child_frame_id == FRAME]
+    assert mount.header.frame_id == "base_link"
+    t = mount.transform.translation
+    assert (t.x, t.y, t.z) == pytest.approx(FRONT, abs=1e-12)
+
+
+def test_the_summary_holds_the_last_sample(run):
+    summary = json.loads((run["dir"] / "summary.json").read_text())["robots"]["corobot"][
+        "sensors"]["bumpers"]["front_bumper"]
+    last = run["last"]
+    assert summary == {"pressed": True, "force": pytest.approx(last.force, rel=1e-9),
+                       "force_vector": pytest.approx(list(last.force_vector), rel=1e-9,
+                                                     abs=1e-9),
+                       "time": pytest.approx(TIMES[-1])}
