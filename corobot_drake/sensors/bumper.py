@@ -18,7 +18,8 @@ box is the sum of the contact forces (hydroelastic surfaces and point pairs) bet
 every geometry but the ground's (the world's half-spaces), expressed in S. It is pressed when
 that force's magnitude exceeds `force_threshold`. On SAP's discrete plant the contact results
 are the forces of the last step; on a continuous plant (CENIC) the compliant law at the
-current state.
+current state, computed afresh when asked: a sample asks for them only when SceneGraph's
+broad phase finds something but the ground near the box (`Bumper.near_anything`).
 
 Wire formats: HTTP JSON (the reading's fields); Foxglove/MCAP as JSON (`BUMPER_SCHEMA`:
 foxglove-sdk has no contact message); ROS 2 as `geometry_msgs/msg/WrenchStamped`: ROS 2 has
