@@ -119,7 +119,8 @@ def _add_ros2_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--ros2", action="store_true",
                    help="run in real time as the ROS 2 node corobot_drake (topics, /cmd_vel, "
                    "actions, services; README: ROS 2); discovery stays on this machine unless "
-                   "ROS_AUTOMATIC_DISCOVERY_RANGE or --ros2-network says otherwise")
+                   "ROS_AUTOMATIC_DISCOVERY_RANGE or --ros2-network says otherwise; ROS's own "
+                   "arguments follow --ros-args (remaps, namespace, -p, --params-file)")
     p.add_argument("--ros2-network", action="store_true",
                    help="--ros2: discovery on the local network (SUBNET): any ROS 2 node there "
                    "with the same ROS_DOMAIN_ID can read the topics and drive the robot")
@@ -130,9 +131,12 @@ def _add_ros2_arguments(p: argparse.ArgumentParser) -> None:
 
 def check_ros2_arguments(args) -> None:
     """--ros2 and --rosbag: the extra installed (one line naming it), the bag's directory new."""
-    if not (args.ros2 or args.rosbag is not None):
+    if not args.ros2:
         if args.ros2_network:
             raise ArgumentError("--ros2-network: only with --ros2")
+        if getattr(args, "ros_args", None):
+            raise ArgumentError("--ros-args: only with --ros2")
+    if not (args.ros2 or args.rosbag is not None):
         return
     from corobot_drake.ros2.run import missing, rosbag_problem
 
@@ -153,7 +157,20 @@ def _ros2_front(args, scenario):
         return contextlib.nullcontext()
     from corobot_drake.ros2.run import Ros2Front
 
-    return Ros2Front(args, list(scenario.robots))
+    try:
+        return Ros2Front(args, list(scenario.robots))
+    except ValueError as e:  # a ROS parameter's value (`ros2.parameters`)
+        raise ArgumentError(f"--ros-args: {e}") from None
+
+
+def split_ros_args(argv: list[str]) -> tuple[list[str], list[str]]:
+    """The command line without ROS's part, and ROS's: what follows `--ros-args` up to a lone
+    `--` (rcl's convention: remaps `-r`, `-p` parameters, `--params-file`, ...), for --ros2."""
+    if "--ros-args" not in argv:
+        return argv, []
+    start = argv.index("--ros-args")
+    end = argv.index("--", start) if "--" in argv[start:] else len(argv)
+    return argv[:start] + argv[end + 1:], argv[start + 1:end]
 
 
 class _HeadlessProgress:
@@ -468,7 +485,9 @@ def _stopped_line(sim: Simulation, duration: float) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     warnings.formatwarning = _one_line_warning  # for a user, not a developer: no source lines
+    argv, ros_args = split_ros_args(sys.argv[1:] if argv is None else list(argv))
     args = _parser().parse_args(argv)
+    args.ros_args = ros_args
     try:
         return _main(args)
     except KeyboardInterrupt:  # before the run started (loading, building): nothing to write
@@ -500,8 +519,12 @@ def _main(args) -> int:
         print(f"error: --{'foxglove' if isinstance(e, RuntimeError) else 'mcap'}: "
               f"{str(e).splitlines()[0]}", file=sys.stderr)
         return 2
-    with sinks, _ros2_front(args, scenario) as ros2:
-        status = _run(args, scenario, duration, sinks.context, ros2)
+    try:
+        with sinks, _ros2_front(args, scenario) as ros2:
+            status = _run(args, scenario, duration, sinks.context, ros2)
+    except ArgumentError as e:  # (only `_ros2_front` raises it)
+        print(f"error: {e}", file=sys.stderr)
+        return 2
     finished = sinks.finished and (ros2 is None or ros2.finished)  # a full disk: one line said
     return status if finished else max(status, 1)
 

@@ -17,7 +17,7 @@ import threading
 from pathlib import Path
 
 from corobot_drake.ros2.bus import typestore
-from corobot_drake.ros2.interfaces import Qos
+from corobot_drake.ros2.interfaces import Qos, offer
 
 BAG_VERSION = 9
 """rosbag2's metadata version that ROS 2 Jazzy writes."""
@@ -26,7 +26,7 @@ ROS_DISTRO = "jazzy"
 
 
 def _qos(kind: Qos):
-    """The rosbags QoS record of one of the node's offers (`node.QOS`)."""
+    """The rosbags QoS record of one of the node's offers (`interfaces.offer`)."""
     from rosbags.interfaces import (
         Qos as BagQos,
     )
@@ -39,11 +39,11 @@ def _qos(kind: Qos):
     )
 
     default = QosTime(0, 0)
-    depth = {Qos.SENSOR: 5, Qos.RELIABLE: 10, Qos.LATCHED: 1}[kind]
+    o = offer(kind)  # the node's default offer: a replay offers what the node does
     return BagQos(
-        history=QosHistory.KEEP_LAST, depth=depth,
-        reliability=QosReliability.BEST_EFFORT if kind is Qos.SENSOR else QosReliability.RELIABLE,
-        durability=(QosDurability.TRANSIENT_LOCAL if kind is Qos.LATCHED
+        history=QosHistory.KEEP_LAST, depth=o.depth,
+        reliability=QosReliability.RELIABLE if o.reliable else QosReliability.BEST_EFFORT,
+        durability=(QosDurability.TRANSIENT_LOCAL if o.transient_local
                     else QosDurability.VOLATILE),
         deadline=default, lifespan=default, liveliness=QosLiveliness.AUTOMATIC,
         liveliness_lease_duration=default, avoid_ros_namespace_conventions=False)

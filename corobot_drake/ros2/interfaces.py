@@ -32,13 +32,33 @@ class Qos(enum.Enum):
     """The QoS a topic is offered with, as ROS users expect it."""
 
     SENSOR = "sensor"
-    """rclpy's `qos_profile_sensor_data`: best effort, keep last 5 (sensor streams)."""
+    """A sensor stream, keep last 5: reliable by default (RViz's, image_view's and rqt's
+    defaults subscribe reliable), best effort (rclpy's `qos_profile_sensor_data`) when the
+    node's `sensor_qos` parameter says so (`offer`)."""
     RELIABLE = "reliable"
     """Reliable, volatile, keep last 10 (state: /tf, /odom, ...; a best-effort subscriber
     matches it too)."""
     LATCHED = "latched"
     """Reliable, transient local, keep last 1 (/tf_static, /robot_description: a late
     subscriber gets the one message)."""
+
+
+@dc.dataclass(frozen=True)
+class Offer:
+    """What a topic's publisher offers, in ROS's terms (the node's rclpy profile and the bag's
+    recorded one are made from this)."""
+
+    reliable: bool
+    transient_local: bool
+    depth: int
+
+
+def offer(qos: Qos, sensor_qos: str = "reliable") -> Offer:
+    """The offer of a topic of `qos`; a sensor stream's reliability is `sensor_qos`'s (the
+    node's parameter: `reliable` or `best_effort`)."""
+    if qos is Qos.SENSOR:
+        return Offer(sensor_qos == "reliable", False, 5)
+    return Offer(True, qos is Qos.LATCHED, 1 if qos is Qos.LATCHED else 10)
 
 
 @dc.dataclass(frozen=True)

@@ -24,17 +24,12 @@ import rclpy
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
 from rclpy.callback_groups import ReentrantCallbackGroup
 from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
-from rclpy.parameter import Parameter
-from rclpy.qos import (
-    DurabilityPolicy,
-    QoSProfile,
-    ReliabilityPolicy,
-    qos_profile_sensor_data,
-)
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
 from corobot_drake import limits as lim
 from corobot_drake.config import scenario as sc
 from corobot_drake.ros2 import interfaces as ifc
+from corobot_drake.ros2 import parameters
 from corobot_drake.ros2.graph import configure_discovery, ros_type
 from corobot_drake.serving import calls
 from corobot_drake.serving.runner import SimulationStoppedError
@@ -68,25 +63,30 @@ GRAPH_CHECK_PERIOD = 2.0
 _log = logging.getLogger(__name__)
 
 
-QOS = {
-    ifc.Qos.SENSOR: qos_profile_sensor_data,
-    ifc.Qos.RELIABLE: QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE),
-    ifc.Qos.LATCHED: QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
-                                durability=DurabilityPolicy.TRANSIENT_LOCAL),
-}
+def qos_profile(qos: ifc.Qos, sensor_qos: str = "reliable") -> QoSProfile:
+    """The rclpy profile of a topic's offer (`interfaces.offer`: the one place it is said)."""
+    o = ifc.offer(qos, sensor_qos)
+    return QoSProfile(
+        depth=o.depth,
+        reliability=ReliabilityPolicy.RELIABLE if o.reliable else ReliabilityPolicy.BEST_EFFORT,
+        durability=(DurabilityPolicy.TRANSIENT_LOCAL if o.transient_local
+                    else DurabilityPolicy.VOLATILE))
+
+
 SERVICE_QOS = QoSProfile(depth=REQUEST_QUEUE, reliability=ReliabilityPolicy.RELIABLE)
 
 
 class LiveSink:
     """A `bus.Bus` sink: publishes each serialized message on the node's publisher."""
 
-    def __init__(self, node):
+    def __init__(self, node, sensor_qos: str = "reliable"):
         self._node = node
+        self._sensor_qos = sensor_qos
         self._publishers: dict = {}
 
     def declare(self, topic: str, msgtype: str, qos: ifc.Qos) -> None:
-        self._publishers[topic] = self._node.create_publisher(ros_type(msgtype), topic,
-                                                              QOS[qos])
+        self._publishers[topic] = self._node.create_publisher(
+            ros_type(msgtype), topic, qos_profile(qos, self._sensor_qos))
 
     def write(self, topic: str, data, t_ns: int) -> None:
         self._publishers[topic].publish(bytes(data))
@@ -104,15 +104,25 @@ class Ros2Node:
     """The node; `sink` for the bus (before the simulation is built), `attach(runner,
     robots)` once the runner exists, `start()`, then `close()`."""
 
-    def __init__(self, network: bool = False, domain_id: int | None = None):
+    def __init__(self, network: bool = False, domain_id: int | None = None,
+                 ros_args: list[str] | tuple = ()):
+        """`ros_args`: what followed `--ros-args` on the command line (remaps, a namespace,
+        `-p` and `--params-file`), as rcl takes them; a parameter's bad value: ParameterError
+        (one line), the node shut down."""
         self.discovery = configure_discovery(network)
         self.context = rclpy.Context()
-        rclpy.init(context=self.context, domain_id=domain_id)
+        args = [ifc.NODE_NAME, "--ros-args", *ros_args] if ros_args else None
+        rclpy.init(context=self.context, domain_id=domain_id, args=args)
         self.node = rclpy.create_node(ifc.NODE_NAME, context=self.context)
-        self.deadman = self.node.declare_parameter("cmd_vel_timeout",
-                                                   ifc.DEADMAN_TIMEOUT).value
-        self.node.add_on_set_parameters_callback(self._on_parameters)
-        self.sink = LiveSink(self.node)
+        try:
+            self.settings = parameters.declare(self.node)
+        except parameters.ParameterError:
+            self.node.destroy_node()
+            rclpy.shutdown(context=self.context)
+            raise
+        self.deadman = float(self.node.get_parameter("cmd_vel_timeout").value)
+        self.node.add_post_set_parameters_callback(self._on_parameters)
+        self.sink = LiveSink(self.node, self.settings.sensor_qos)
         self.runner = None
         self._group = ReentrantCallbackGroup()
         self._twists: dict[str, _Twist] = {}
@@ -125,23 +135,19 @@ class Ros2Node:
         self._goals_changed = threading.Condition()
         self._aborted_at_stop = threading.Event()
         self._namesakes = 1
-        self.node.create_timer(GRAPH_CHECK_PERIOD, self._check_namesakes)
+        self._cmd_vel_topics: list[str] = []
+        self._other_types: set = set()  # (topic, type) reported
+        self.node.create_timer(GRAPH_CHECK_PERIOD, self._check_graph)
 
     @property
     def log(self):
         return self.node.get_logger()
 
-    def _on_parameters(self, parameters):
-        from rcl_interfaces.msg import SetParametersResult
-
-        for p in parameters:
+    def _on_parameters(self, changed) -> None:
+        """A run-time parameter set (`parameters.declare` checked it)."""
+        for p in changed:
             if p.name == "cmd_vel_timeout":
-                if p.type_ not in (Parameter.Type.DOUBLE, Parameter.Type.INTEGER) or not (
-                        math.isfinite(p.value) and p.value >= 0):
-                    return SetParametersResult(successful=False,
-                                               reason="cmd_vel_timeout: a number of s >= 0")
                 self.deadman = float(p.value)
-        return SetParametersResult(successful=True)
 
     # --- commands ---
     def attach(self, runner, robots) -> None:
@@ -149,11 +155,13 @@ class Ros2Node:
         self.runner = runner
         namespaced = len(robots) > 1
         self._robots = len(robots)
+        stamped = self.settings.cmd_vel_stamped
         for robot in robots:
             names = RobotNames(robot, namespaced)
-            self.node.create_subscription(
-                ros_type(ifc.CMD_VEL[1]), names.topic(ifc.CMD_VEL[0]),
-                partial(self._on_twist, robot), 10, callback_group=self._group)
+            subscription = self.node.create_subscription(
+                ros_type(cmd_vel_type(stamped)), names.topic(ifc.CMD_VEL[0]),
+                partial(self._on_twist, robot, stamped), 10, callback_group=self._group)
+            self._cmd_vel_topics.append(subscription.topic_name)
             for action in ifc.ACTIONS:
                 self._servers.append(ActionServer(
                     self.node, ros_type(action.type), names.topic(action.name),
@@ -173,7 +181,9 @@ class Ros2Node:
         """`fn(sim)` in the simulation thread; its result (or exception)."""
         return self.runner.submit(fn).result(timeout)
 
-    def _on_twist(self, robot: str, msg) -> None:
+    def _on_twist(self, robot: str, stamped: bool, msg) -> None:
+        if stamped:
+            msg = msg.twist  # (its header: the sender's time and frame, base_link's)
         future = self.runner.submit(partial(self._issue_twist, robot, msg.linear.x,
                                             msg.angular.z))
         future.add_done_callback(partial(self._report, f"{robot}: cmd_vel"))
@@ -200,6 +210,26 @@ class Ros2Node:
             last = sim.robot(robot).last_command()
             if last is not None and last.seq == twist.seq:
                 sim.robot(robot).all_stop()
+
+    def _check_graph(self) -> None:
+        self._check_namesakes()
+        self._check_cmd_vel_publishers()
+
+    def _check_cmd_vel_publishers(self) -> None:
+        """Reports, once each, a publisher of the other Twist type on a /cmd_vel: DDS never
+        delivers its messages to this node's subscription (the types differ)."""
+        expected = cmd_vel_type(self.settings.cmd_vel_stamped).replace("/msg/", "/")
+        for topic in self._cmd_vel_topics:
+            for info in self.node.get_publishers_info_by_topic(topic):
+                other = info.topic_type.replace("/msg/", "/")
+                if other == expected or (topic, other) in self._other_types:
+                    continue
+                self._other_types.add((topic, other))
+                self.log.warning(
+                    f"{topic}: node {info.node_namespace.rstrip('/')}/{info.node_name} "
+                    f"publishes {other}, this node takes {expected} (parameter "
+                    f"cmd_vel_stamped: {str(self.settings.cmd_vel_stamped).lower()}): its "
+                    "messages do not reach the robot")
 
     def _check_namesakes(self) -> None:
         """Warns (a line on stderr) when another node of this one's name joins the domain:
@@ -353,6 +383,11 @@ class Ros2Node:
         self.node.destroy_node()
         if self.context.ok():
             rclpy.shutdown(context=self.context)
+
+
+def cmd_vel_type(stamped: bool) -> str:
+    """/cmd_vel's type (the `cmd_vel_stamped` parameter)."""
+    return "geometry_msgs/msg/TwistStamped" if stamped else ifc.CMD_VEL[1]
 
 
 def spin_until_closed(executor, closing: threading.Event) -> None:

@@ -65,7 +65,12 @@ class Ros2Front(contextlib.ExitStack):
         if args.ros2:
             from corobot_drake.ros2.node import Ros2Node
 
-            self.node = Ros2Node(network=args.ros2_network)
+            try:
+                self.node = Ros2Node(network=args.ros2_network,
+                                     ros_args=getattr(args, "ros_args", ()))
+            except ValueError:  # a parameter's value (one line): the bag closed too
+                self.close()
+                raise
             self.callback(self.node.close)
             sinks.append(self.node.sink)
         self.bus = Bus(sinks)
