@@ -16,6 +16,7 @@ from pydrake.geometry import (
     HalfSpace,
     Meshcat,
     ProximityProperties,
+    Sphere,
 )
 from pydrake.math import RigidTransform
 from pydrake.multibody.plant import AddMultibodyPlant, CoulombFriction, MultibodyPlantConfig
@@ -52,10 +53,13 @@ def _compliant(props=None):
     return props
 
 
-def small_scene(meshcat=None):
-    """(site of robot `bot`, site of robot `cart`, the diagram's builder parts): `bot` a body
-    welded 0.5 m up with bumper `top` facing up under a free 1 kg box; `cart` a free 1 kg box
-    standing on the ground on bumper `bottom` facing down; the ground a rigid half-space."""
+def small_scene(meshcat=None, point: bool = False):
+    """(diagram, plant, [bumper `top`, bumper `bottom`] as built): robot `bot` a body welded
+    0.5 m up with bumper `top` facing up under a free 1 kg box `load` (compliant
+    hydroelastic; with `point` a ball of 5 cm radius without hydroelastic properties, which
+    touches by point contact: a box would, by one corner, and spin there); robot `cart` a
+    free 1 kg box standing on the ground on bumper `bottom` facing down; the ground a rigid
+    half-space."""
     builder = DiagramBuilder()
     plant, scene_graph = AddMultibodyPlant(MultibodyPlantConfig(
         time_step=0.001, contact_model="hydroelastic_with_fallback"), builder)
@@ -72,8 +76,11 @@ def small_scene(meshcat=None):
     BUMPER.add_geometry(plant, bot, "bot", "top", top)
     load = plant.AddRigidBody("load", plant.AddModelInstance("load"),
                               SpatialInertia.SolidBoxWithMass(LOAD, 0.1, 0.1, 0.1))
-    plant.RegisterCollisionGeometry(load, RigidTransform(), Box(0.1, 0.1, 0.1), "load",
-                                    _compliant())
+    friction_only = ProximityProperties()
+    AddContactMaterial(friction=CoulombFriction(0.5, 0.5), properties=friction_only)
+    plant.RegisterCollisionGeometry(load, RigidTransform(),
+                                    Sphere(0.05) if point else Box(0.1, 0.1, 0.1), "load",
+                                    friction_only if point else _compliant())
     plant.SetDefaultFloatingBaseBodyPose(load, RigidTransform([0.0, 0.0, LOAD_TOP + 0.0505]))
     cart_instance = plant.AddModelInstance("cart")
     cart = plant.AddRigidBody("chassis", cart_instance, SpatialInertia.SolidBoxWithMass(
@@ -116,6 +123,21 @@ def test_a_resting_load_presses_the_bumper_with_its_weight(settled):
     # The last sample at 50 Hz: the one due at SETTLE (a sample due at t is taken when the
     # simulator steps away from t, so right after AdvanceTo(t) it is the one before).
     assert reading.time == pytest.approx(SETTLE - 0.02)
+
+
+def test_a_load_in_point_contact_presses_it_alike():
+    """`hydroelastic_with_fallback` touches a body without hydroelastic properties by point
+    contact: the same weight, from the point pairs (a ball resting on the bumper)."""
+    diagram, plant, (top, _) = small_scene(point=True)
+    simulator = Simulator(diagram)
+    simulator.AdvanceTo(SETTLE)
+    context = simulator.get_context()
+    results = plant.get_contact_results_output_port().Eval(plant.GetMyContextFromRoot(context))
+    assert results.num_point_pair_contacts() > 0
+    reading = top.read(context)
+    assert reading.pressed
+    np.testing.assert_allclose(reading.force_vector, (-LOAD * G, 0.0, 0.0),
+                               atol=WEIGHT_TOLERANCE * LOAD * G)
 
 
 def test_the_ground_does_not_press_a_bumper_it_carries(settled):
