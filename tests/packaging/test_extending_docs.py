@@ -1,10 +1,11 @@
 """docs/extending.md's Python blocks run, and its excerpts are the files' own lines.
 
 A block whose first line is a comment naming a file (`# corobot_drake/sensors/bumper.py`) is
-an excerpt: each stretch of its lines between `...` lines (`...,` in a tuple) must stand in that file as it is,
-in order, and the block runs in a copy of that module's namespace (its definitions compile
-and execute with the module's imports). Every other block is an example, run in order in one
-namespace, from the repository's root, as a reader would paste them."""
+an excerpt: each stretch of its lines between `...` lines (`...,` in a tuple) must stand in
+that file as it is, in order, and the block runs in a copy of that module's namespace (its
+definitions compile and execute with the module's imports). Every other block is an
+example, run in order in one namespace, from the repository's root, as a reader would paste
+them."""
 
 import importlib
 import re
