@@ -197,11 +197,10 @@ class Drive:
     motor's gearbox holds it (`systems.drive.DriveController`); 0 leaves the servo only damping
     and the robot rolls up to ~2 mm into a facet of its tyres' mesh (docs/tuning.md, "At rest")."""
     effective_wheel_radius: float = bounded(dim.WHEEL_RADIUS, Range(
-        0.5 * dim.WHEEL_RADIUS, 1.5 * dim.WHEEL_RADIUS, unit="m", why="within 50% of the wheel's"))
+        0.0, 10.0, low_open=True, unit="m"))
     """m: the rolling radius the dead-reckoning odometry turns encoder ticks into distance with
     (`tools/calibrate_odometry.py` identifies it; default the nominal wheel radius)."""
-    effective_track_width: float = bounded(dim.TRACK, Range(
-        0.5 * dim.TRACK, 4.0 * dim.TRACK, unit="m", why="skid-steer: wider than the wheels' track"))
+    effective_track_width: float = bounded(dim.TRACK, Range(0.0, 40.0, low_open=True, unit="m"))
     """m: the track width the odometry turns the left-right wheel difference into yaw with; a
     skid-steer robot's is wider than its geometric one (default the geometric track)."""
 
@@ -249,6 +248,10 @@ class Robot:
     """One Corobot: where it starts, how it drives, its tyres, its script, and its sensors
     (a map by name per kind, `with_sensor_maps`)."""
 
+    robot: str = "corobot"
+    """Which robot: a shipped one (`robots.ROBOTS`: `corobot`) or a robot file's path
+    (relative to the scenario file; `robots/file.py`). Its drive, tyres and sensors are the
+    defaults of this robot's fields."""
     pose: Transform = dc.field(default_factory=Transform)
     """X_WB: the chassis frame in the world (its origin on the ground midway between the
     axles, +x forward): `{translation: [x, y, 0], rotation: !Rpy {deg: [0, 0, yaw]}}` stands
@@ -261,9 +264,10 @@ class Robot:
     motion: Motion = dc.field(default_factory=Motion)
     velocity: list[float] = bounded(lambda: [0.0] * 6, lim.SPATIAL_VELOCITY, size=6)
     """Initial chassis spatial velocity in the world [wx, wy, wz, vx, vy, vz] (rad/s, m/s)."""
-    wheel_angles: list[float] = bounded(lambda: [0.0] * 4, Range(-1e6, 1e6, unit="rad"), size=4)
-    """Initial axle angles (rad, `dimensions.WHEEL_NAMES` order): the encoders start here."""
-    wheel_speeds: list[float] = bounded(lambda: [0.0] * 4, lim.AXLE_SPEED_RANGE, size=4)
+    wheel_angles: list[float] = bounded(lambda: [0.0] * 4, Range(-1e6, 1e6, unit="rad"))
+    """Initial axle angles (rad), one per wheel in the robot's wheel order
+    (`RobotSpec.wheels`; the Corobot's `dimensions.WHEEL_NAMES`): the encoders start here."""
+    wheel_speeds: list[float] = bounded(lambda: [0.0] * 4, lim.AXLE_SPEED_RANGE)
     """Initial axle speeds (rad/s, same order); the drive's commanded axle speeds start at the
     front wheels' (a saved scene carries on without a jolt)."""
     axle_speed_command: list[float] = dc.field(default_factory=list)
@@ -462,7 +466,7 @@ def load_scenario(filename: str | Path | None = None, *, data: str | None = None
     for i, (source, text, base) in enumerate(layers):
         before = list(scenario.robots)
         try:
-            scenario, checks = load_layer(source, text, Scenario, scenario)
+            scenario, checks = load_layer(source, text, Scenario, scenario, base)
             resolve_paths(scenario, base)
             checks.validate(scenario, final=i == len(layers) - 1)  # what the types cannot say
         except ScenarioError as e:
@@ -507,6 +511,12 @@ def resolve_paths(scenario: Scenario, base: Path) -> None:
     for body in scenario.world.bodies.values():
         if isinstance(body.shape, Mesh):
             body.shape.filename = resolve_path(body.shape.filename, base)
+    for robot in scenario.robots.values():
+        if robot.robot != "corobot":  # a shipped name stays; a robot file's path: absolute
+            from corobot_drake.robots import ROBOTS
+
+            if robot.robot not in ROBOTS:
+                robot.robot = resolve_path(robot.robot, base)
     for directive in scenario.directives:
         if directive.add_model is not None:
             directive.add_model.file = resolve_uri(directive.add_model.file, base)

@@ -26,6 +26,7 @@ import math
 import re
 import types
 import typing
+from pathlib import Path
 from typing import Union
 
 import numpy as np
@@ -53,8 +54,8 @@ from corobot_drake.limits import (
     Range,
     bound_of,
 )
-from corobot_drake.model.sdf import LINKS
 from corobot_drake.resources import resolve_file
+from corobot_drake.robots import ROBOTS, robot_defaults, robot_spec
 from corobot_drake.sensors.registry import KINDS
 
 # --- 1. the YAML against the schema --------------------------------------------------------
@@ -656,18 +657,40 @@ class LayerChecks:
         if name in s.world.bodies:
             self.fail(path, "a world body already has this name")
         self._world_pose(f"{path}.pose", robot.pose)
+        self._robot_kind(path, robot)
         for kind in KINDS:
             for sensor, config in getattr(robot, kind.field).items():
                 self._sensor(f"{path}.{kind.field}.{sensor}", kind, sensor, config, s)
         self._resume_fields(path, robot)
+
+    def _robot_kind(self, path: str, robot: sc.Robot) -> None:
+        """The robot file its `robot:` names, loaded (its own problems name its own lines),
+        and the drive's effective radius and track near the robot's own."""
+        if robot.robot not in ROBOTS and not Path(robot.robot).is_file():
+            self.fail(f"{path}.robot", f"{robot.robot!r} is neither a shipped robot "
+                      f"({', '.join(ROBOTS)}) nor a robot file")
+        spec = robot_spec(robot.robot)
+        d = robot.drive
+        if not 0.5 * spec.wheel_radius <= d.effective_wheel_radius <= 1.5 * spec.wheel_radius:
+            self.fail(f"{path}.drive.effective_wheel_radius", f"must be within 50% of the "
+                      f"wheels' radius {spec.wheel_radius:.6g} m; got {d.effective_wheel_radius:g}")
+        if not 0.5 * spec.track <= d.effective_track_width <= 4.0 * spec.track:
+            self.fail(f"{path}.drive.effective_track_width", f"must be from 0.5 to 4 times the "
+                      f"wheels' track {spec.track:.6g} m (a skid steer's is wider); got "
+                      f"{d.effective_track_width:g}")
 
     def _resume_fields(self, path: str, robot: sc.Robot) -> None:
         """The fields a saved scene writes to resume a drive: sizes that a bound cannot state
         (empty, or a full vector)."""
         if len(robot.axle_speed_command) not in (0, 2):
             self.fail(f"{path}.axle_speed_command", "needs [] or 2 numbers [left, right]")
-        if len(robot.wheel_hold_angles) not in (0, 4):
-            self.fail(f"{path}.wheel_hold_angles", "needs [] or 4 angles (rad)")
+        n = len(robot_spec(robot.robot).wheels)
+        for field in ("wheel_angles", "wheel_speeds"):
+            if len(getattr(robot, field)) != n:
+                self.fail(f"{path}.{field}", f"needs {n} numbers (one per wheel), got "
+                          f"{len(getattr(robot, field))}")
+        if len(robot.wheel_hold_angles) not in (0, n):
+            self.fail(f"{path}.wheel_hold_angles", f"needs [] or {n} angles (rad)")
         if len(robot.odometry) not in (0, 3, 5):
             self.fail(f"{path}.odometry", "needs [], [x, y, yaw] or [x, y, yaw, left ticks, "
                       "right ticks]")
@@ -733,11 +756,12 @@ class LayerChecks:
         scenario, or empty (the world)."""
         frame = X_PB.base_frame or ""
         model, _, link = frame.rpartition("::")
-        if not (frame in ("", "world") or (not model and link in LINKS)
-                or (model in s.robots and link in LINKS)
+        links = robot_spec(s.robots[path.split(".")[1]].robot).links
+        if not (frame in ("", "world") or (not model and link in links)
+                or (model in s.robots and link in robot_spec(s.robots[model].robot).links)
                 or (model in s.world.bodies and link == model)):
             self.fail(f"{path}.base_frame",
-                      f"{frame!r} is not a link of the robot ({', '.join(LINKS)}), a scoped "
+                      f"{frame!r} is not a link of the robot ({', '.join(links)}), a scoped "
                       "model::link of this scenario, or empty (the world)")
         self._transform(path, X_PB)
 
@@ -876,13 +900,15 @@ def _value_content(value):
     return (type(value), *(_value_content(getattr(value, name)) for name in names))
 
 
-def load_layer(source: str, text: str, schema, defaults=None):
+def load_layer(source: str, text: str, schema, defaults=None, base: Path | None = None):
     """One YAML layer checked against `schema` (errors with file and line), then loaded over
     `defaults` (a schema instance; None: the schema's defaults). Returns the value and the
-    layer's `LayerChecks`, whose `fail` names a field's line for the checks of meaning."""
+    layer's `LayerChecks`, whose `fail` names a field's line for the checks of meaning.
+    `base`: the directory a scenario layer's relative robot files are relative to."""
     checks = LayerChecks(source, text, schema)
     if schema is sc.Scenario:
-        defaults = _with_new_sensors(checks.robots_node, defaults or sc.Scenario())
+        defaults = _with_new_robots(checks, defaults or sc.Scenario(), base or Path.cwd())
+        defaults = _with_new_sensors(checks.robots_node, defaults)
     try:
         value = yaml_load_typed(schema=schema, data=text, defaults=defaults,
                                 retain_map_defaults=True)
@@ -897,6 +923,34 @@ def _field_node(node, name: str):
     """The value node of field `name` in a mapping node (None if it has none)."""
     return next((v for k, v in node.value if k.value == name), None) if isinstance(
         node, yaml.MappingNode) else None
+
+
+def _with_new_robots(checks: LayerChecks, defaults: sc.Scenario, base: Path) -> sc.Scenario:
+    """`defaults`, or a copy of it holding each robot this layer adds with a `robot:` of its
+    own as that robot starts (`robots.robot_defaults`: its robot file's drive, tyres and
+    sensors), so that the layer's fields apply over the robot's own defaults; a robot file
+    that is wrong stops the load with its own one line."""
+    new = []
+    for key, fields in getattr(checks.robots_node, "value", ()):
+        node = _field_node(fields, "robot")
+        if not isinstance(node, yaml.ScalarNode):
+            continue
+        value = node.value if node.value in ROBOTS else sc.resolve_path(node.value, base)
+        if key.value in defaults.robots:
+            if value != defaults.robots[key.value].robot:
+                checks.fail(f"robots.{key.value}.robot", "a robot's kind is set where it is "
+                            "added (a later layer cannot change it)")
+            continue
+        if value not in ROBOTS and not Path(value).is_file():
+            checks.fail(f"robots.{key.value}.robot", f"{node.value!r} is neither a shipped "
+                        f"robot ({', '.join(ROBOTS)}) nor a robot file")
+        new.append((key.value, value))
+    if not new:
+        return defaults
+    defaults = copy.deepcopy(defaults)
+    for name, value in new:
+        defaults.robots[name] = robot_defaults(value)
+    return defaults
 
 
 def _with_new_sensors(robots_node, defaults: sc.Scenario) -> sc.Scenario:

@@ -1,0 +1,187 @@
+"""What a robot file and its model say, measured once: `RobotSpec`.
+
+`measure` parses the model into a scratch plant with Drake's parser, stands the base link's
+origin on the ground, and reads what every module needs from the model's own shapes: the
+wheels (their joints, sides, radius, centres), the track and wheelbase, the casters (other
+collision shapes touching the ground), the mass, the links a sensor may ride on. A robot
+file the model contradicts fails with one line at the robot file's field
+(`RobotFileError`, a `ScenarioError`).
+"""
+
+from __future__ import annotations
+
+import dataclasses as dc
+import math
+from pathlib import Path
+
+import numpy as np
+
+from corobot_drake.model.sdf import WheelContact
+
+AGREEMENT = 0.02
+"""A stated radius, track or wheelbase must be within 2% (or 1 mm) of the measured one."""
+GROUND_TOLERANCE = 0.002
+"""m: a shape whose lowest point at the start pose is within 2 mm of the ground touches it
+(a wheel must; any other is a caster)."""
+TRACTION_MARGIN = 1.07
+"""The default torque limit over the wheels' traction limit mu m g r / n (the Corobot's
+0.3 N m over its 0.28 N m): never the limit on flat ground, too little to climb a box."""
+MAX_MODEL_BYTES = 8 << 20
+"""A model file's largest size (8 MiB; the Corobot's is 9 kB)."""
+MAX_MESH_BYTES = 32 << 20
+"""A mesh's largest size (32 MiB): a larger collision mesh would take long to measure and
+to give a contact surface."""
+
+LEFT, RIGHT = 1, -1
+"""A wheel's side: +1 left, -1 right (the sign of its centre's y in the base frame)."""
+
+
+@dc.dataclass(frozen=True)
+class Wheel:
+    """One driven wheel: its revolute joint, side, child link and measured geometry."""
+
+    joint: str
+    side: int
+    """LEFT (+1) or RIGHT (-1)."""
+    link: str
+    radius: float
+    """m, of its collision shape."""
+    width: float
+    """m along the axle (0 for a sphere)."""
+    center: tuple[float, float, float]
+    """m, in the base frame at the start pose."""
+    mass: float
+    """kg of its link."""
+
+    @property
+    def short(self) -> str:
+        """The joint's name without a trailing `_joint` or `_axle` (`front_left`)."""
+        for suffix in ("_joint", "_axle"):
+            if self.joint.endswith(suffix):
+                return self.joint[: -len(suffix)]
+        return self.joint
+
+
+@dc.dataclass(frozen=True)
+class RobotSpec:
+    """A robot as its robot file and model describe it: what the station, the systems and the
+    front ends read instead of any one robot's constants.
+
+    `wheels` are in the model's joint order, which is the order of the drive's actuators,
+    its desired state, the wheel state, the per-wheel telemetry and `wheel_angles`."""
+
+    kind: str
+    """The shipped name (`corobot`) or the robot file's stem."""
+    file: Path
+    """The robot file."""
+    model_file: Path
+    """The model file, resolved."""
+    model_name: str
+    """The model's own name (the scenario's robot name replaces it in the plant)."""
+    base: str
+    wheels: tuple[Wheel, ...]
+    wheel_radius: float
+    track: float
+    wheelbase: float
+    mass: float
+    """kg, the whole robot."""
+    com: tuple[float, float, float]
+    """m, the robot's centre of mass in the base frame at the start pose."""
+    links: tuple[str, ...]
+    """The model's links and frames a sensor can be mounted on (`X_PB.base_frame`)."""
+    casters: tuple[str, ...]
+    """The collision geometries (`link/geometry`) that touch the ground besides the wheels."""
+    caster_friction: float
+    drive: object
+    """The scenario `Drive` this robot starts with (`config.scenario.Drive`)."""
+    contact: WheelContact
+    """Its tyres and motors (the scenario's `contact:` starts from it)."""
+    encoder_ticks_per_revolution: int
+    sensors: dict = dc.field(default_factory=dict, compare=False)
+    """{kind field: {name: config}}: the robot file's own sensors."""
+    generated: bool = False
+    """The model is the project's generated Corobot (`model/sdf.py`), built with the
+    scenario's tyres and look (the file is its output at the defaults)."""
+
+    @property
+    def wheel_names(self) -> tuple[str, ...]:
+        """The wheels' short names (`Wheel.short`), in `wheels` order."""
+        return tuple(w.short for w in self.wheels)
+
+    @property
+    def wheel_joints(self) -> tuple[str, ...]:
+        return tuple(w.joint for w in self.wheels)
+
+    @property
+    def sides(self) -> tuple[int, ...]:
+        """Each wheel's side (LEFT +1, RIGHT -1), in `wheels` order."""
+        return tuple(w.side for w in self.wheels)
+
+    @property
+    def encoded(self) -> tuple[int, int]:
+        """The indices of the wheels whose encoders the odometry reads: the first left and
+        the first right wheel (the Corobot's front pair)."""
+        return self.sides.index(LEFT), self.sides.index(RIGHT)
+
+    @property
+    def half_track(self) -> float:
+        return self.track / 2
+
+    @property
+    def spin_yaw_per_rim_speed(self) -> float:
+        """rad/s of yaw per m/s of rim speed (left back, right forward) on the spot: a skid
+        steer's wheels slip sideways as much as lengthways, so the yaw rate is
+        b / (a^2 + b^2) of its half track b and half wheelbase a (a = 0: differential
+        drive, 1 / b)."""
+        a, b = self.wheelbase / 2, self.track / 2
+        return b / (a**2 + b**2)
+
+    def top_speed(self) -> float:
+        """m/s of the rims at power 1."""
+        return self.drive.motor_torque_scaling * self.wheel_radius
+
+    def wheel_center(self, index: int) -> tuple[float, float, float]:
+        return self.wheels[index].center
+
+
+def default_contact(radius: float, mass: float, wheels: int, tyres, drive) -> WheelContact:
+    """The project's tyre (`WheelContact`, the Corobot's) scaled to a wheel of `radius` on a
+    robot of `mass` with `wheels` driven wheels; the robot file's `tyres` and `drive` fields
+    (torque limit, servo damping) override."""
+    base = WheelContact()
+    friction = tyres.friction if tyres.friction is not None else base.friction
+    scale = radius / 0.060325  # the Corobot's wheel
+    hint = tyres.resolution_hint or min(0.02, max(0.001, base.resolution_hint * scale))
+    load = mass * 9.81 / wheels  # N on each wheel at rest
+    return WheelContact(
+        friction=friction,
+        hydroelastic_modulus=tyres.hydroelastic_modulus or base.hydroelastic_modulus,
+        resolution_hint=hint,
+        hunt_crossley_dissipation=(tyres.hunt_crossley_dissipation
+                                   if tyres.hunt_crossley_dissipation is not None
+                                   else base.hunt_crossley_dissipation),
+        effort_limit=drive.torque_limit or TRACTION_MARGIN * friction * load * radius,
+        servo_damping=drive.servo_damping or base.servo_damping * mass / 4.03,
+    )
+
+
+def lowest_point(shape, X_BG) -> float:
+    """m: the lowest z, in frame B, of `shape` posed at X_BG (its support along -z)."""
+    from pydrake.geometry import Box, Capsule, Convex, Cylinder, Ellipsoid, Mesh, Sphere
+
+    d = X_BG.rotation().matrix().T @ np.array([0.0, 0.0, -1.0])  # -z in the shape's frame
+    if isinstance(shape, Sphere):
+        reach = shape.radius()
+    elif isinstance(shape, Box):
+        reach = float(np.abs(d) @ (np.asarray(shape.size()) / 2))
+    elif isinstance(shape, Cylinder):
+        reach = shape.radius() * math.hypot(d[0], d[1]) + shape.length() / 2 * abs(d[2])
+    elif isinstance(shape, Capsule):
+        reach = shape.radius() + shape.length() / 2 * abs(d[2])
+    elif isinstance(shape, Ellipsoid):
+        reach = float(np.linalg.norm(np.array([shape.a(), shape.b(), shape.c()]) * d))
+    elif isinstance(shape, Mesh | Convex):
+        reach = float(np.max(shape.GetConvexHull().vertices().T @ d))
+    else:  # a half-space or a point cloud: never a robot's part touching the ground
+        return math.inf
+    return float(X_BG.translation()[2]) - reach

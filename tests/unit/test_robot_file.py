@@ -1,0 +1,141 @@
+"""The robot file and its RobotSpec: the Corobot's is exactly today's Corobot, a user's URDF
+robot loads and names its figures, and a wrong robot file is one line at its field."""
+
+import textwrap
+
+import pytest
+from pydrake.common.yaml import yaml_dump_typed
+
+from corobot_drake.config import scenario as sc
+from corobot_drake.config.scenario import ScenarioError, load_scenario
+from corobot_drake.model import dimensions as dim
+from corobot_drake.model.sdf import WheelContact
+from corobot_drake.robots import LEFT, RIGHT, robot_spec
+from corobot_drake.robots.load import load_spec
+
+CYL = '<cylinder radius="{r}" length="0.02"/>'
+URDF = """<?xml version="1.0"?>
+<robot name="twowheel">
+  <link name="base_link">
+    <inertial><origin xyz="0 0 0.08"/><mass value="1.0"/>
+      <inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial>
+    <collision><origin xyz="0 0 0.08"/><geometry><box size="0.14 0.12 0.06"/></geometry></collision>
+    <collision name="caster"><origin xyz="-0.06 0 0.01"/>
+      <geometry><sphere radius="0.01"/></geometry></collision>
+  </link>
+  {wheels}
+</robot>
+"""
+WHEEL = """
+  <link name="{side}_wheel">
+    <inertial><mass value="0.05"/>
+      <inertia ixx="1e-5" iyy="2e-5" izz="1e-5" ixy="0" ixz="0" iyz="0"/></inertial>
+    <collision><origin rpy="1.5707963267948966 0 0"/><geometry>{shape}</geometry></collision>
+  </link>
+  <joint name="{side}_joint" type="{type}">
+    <parent link="base_link"/><child link="{side}_wheel"/>
+    <origin xyz="0 {y} {z}"/><axis xyz="0 1 0"/>
+  </joint>"""
+
+
+def _robot(tmp_path, yaml: str = "", radius=0.033, z=0.033, joint_type="continuous"):
+    wheels = "".join(WHEEL.format(side=s, y=y, z=z, type=joint_type,
+                                  shape=CYL.format(r=radius))
+                     for s, y in (("left", 0.08), ("right", -0.08)))
+    (tmp_path / "twowheel.urdf").write_text(URDF.format(wheels=wheels))
+    path = tmp_path / "robot.yaml"
+    path.write_text(yaml or textwrap.dedent("""\
+        model: twowheel.urdf
+        base: base_link
+        wheels: {left: [left_joint], right: [right_joint]}
+        drive: {top_speed: 0.22}
+        """))
+    return path
+
+
+def test_the_corobots_spec_is_its_dimensions_to_the_bit():
+    spec = robot_spec("corobot")
+    assert spec.wheel_radius == dim.WHEEL_RADIUS
+    assert spec.track == dim.TRACK and spec.half_track == dim.HALF_TRACK
+    assert spec.wheelbase / 2 == dim.HALF_WHEELBASE
+    assert spec.spin_yaw_per_rim_speed == dim.HALF_TRACK / (
+        dim.HALF_WHEELBASE**2 + dim.HALF_TRACK**2)
+    assert spec.wheel_names == dim.WHEEL_NAMES
+    assert spec.sides == (LEFT, RIGHT, LEFT, RIGHT)
+    assert spec.encoded == (0, 1)
+    assert spec.mass == pytest.approx(dim.TOTAL_BODY_MASS + 4 * dim.WHEEL_MASS)
+    assert spec.casters == ()
+    assert spec.generated and spec.base == "chassis"
+    assert spec.contact == WheelContact()
+    assert spec.drive == sc.Drive()
+    assert spec.encoder_ticks_per_revolution == dim.ENCODER_TICKS_PER_REVOLUTION
+
+
+def test_the_corobots_robot_file_holds_the_scenarios_default_sensors():
+    spec, robot = robot_spec("corobot"), sc.Robot()
+    from corobot_drake.robots.file import RobotFile
+
+    mine, theirs = RobotFile(), RobotFile()
+    for field, configs in spec.sensors.items():
+        setattr(mine, field, configs)
+        setattr(theirs, field, getattr(robot, field))
+    assert yaml_dump_typed(mine) == yaml_dump_typed(theirs)
+
+
+def test_a_urdf_robot_is_measured_from_its_shapes(tmp_path):
+    spec = load_spec(_robot(tmp_path))
+    assert spec.wheel_names == ("left", "right") and spec.sides == (LEFT, RIGHT)
+    assert spec.wheel_radius == pytest.approx(0.033)
+    assert spec.track == pytest.approx(0.16)
+    assert spec.wheelbase == 0.0
+    assert spec.spin_yaw_per_rim_speed == pytest.approx(1 / 0.08)
+    assert spec.mass == pytest.approx(1.1)
+    assert spec.casters == ("base_link/caster",) or spec.casters[0].startswith("base_link/")
+    assert spec.drive.motor_torque_scaling == pytest.approx(0.22 / 0.033)
+    assert spec.drive.effective_track_width == pytest.approx(0.16)
+
+
+def test_a_scenario_names_a_robot_file_and_starts_from_its_figures(tmp_path):
+    _robot(tmp_path)
+    scenario = load_scenario(data=f"robots: {{a: {{robot: {tmp_path}/robot.yaml}}, b: {{"
+                             "pose: {translation: [1, 0, 0]}}}")
+    a, b = scenario.robots["a"], scenario.robots["b"]
+    assert a.robot == str(tmp_path / "robot.yaml") and b.robot == "corobot"
+    assert a.wheel_angles == [0.0, 0.0] and len(b.wheel_angles) == 4
+    assert a.drive.motor_torque_scaling == pytest.approx(0.22 / 0.033)
+    assert a.ir_sensors == {} and set(b.ir_sensors) == {"front", "rear"}
+
+
+@pytest.mark.parametrize(("yaml", "field", "words"), [
+    ("base: base_link\nwheels: {left: [left_joint], right: [right_joint]}\n", "model",
+     "names the robot's"),
+    ("model: twowheel.urdf\nbase: nowhere\nwheels: {left: [left_joint], right: [right_joint]}"
+     "\ndrive: {top_speed: 0.2}\n", "base", "no link 'nowhere'"),
+    ("model: twowheel.urdf\nbase: base_link\nwheels: {left: [left_joint], right: [rite]}\n"
+     "drive: {top_speed: 0.2}\n", "wheels.right[0]", "no joint 'rite'"),
+    ("model: twowheel.urdf\nbase: base_link\nwheels: {left: [left_joint]}\n"
+     "drive: {top_speed: 0.2}\n", "wheels.right", "each side"),
+    ("model: twowheel.urdf\nbase: base_link\nwheels: {left: [left_joint], right: [right_joint],"
+     " radius: 0.05}\ndrive: {top_speed: 0.2}\n", "wheels.radius", "measure"),
+    ("model: twowheel.urdf\nbase: base_link\nwheels: {left: [left_joint], right: [right_joint]}"
+     "\n", "drive", "top_speed"),
+    ("model: twowheel.urdf\nbase: base_link\nwheels: {left: [left_joint], right: [right_joint]}"
+     "\ndrive: {top_speed: 0.2}\nlidars: {scan: {X_PB: {base_frame: mast}}}\n",
+     "lidars.scan.X_PB.base_frame", "not a link"),
+])
+def test_a_wrong_robot_file_is_one_line_at_its_field(tmp_path, yaml, field, words):
+    path = _robot(tmp_path, yaml)
+    with pytest.raises(ScenarioError) as e:
+        load_spec(path)
+    assert e.value.field == field and words in e.value.message, str(e.value)
+    assert str(e.value).startswith(f"{path}:") and "\n" not in str(e.value)
+
+
+def test_a_wheel_off_the_ground_is_named(tmp_path):
+    with pytest.raises(ScenarioError, match=r"wheels.left\[0\]: .*does not touch the ground"):
+        load_spec(_robot(tmp_path, z=0.05))
+
+
+def test_a_fixed_wheel_joint_is_named(tmp_path):
+    with pytest.raises(ScenarioError, match=r"wheels.left\[0\]: .*weld joint"):
+        load_spec(_robot(tmp_path, joint_type="fixed"))
