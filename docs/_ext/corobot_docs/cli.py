@@ -1,0 +1,120 @@
+"""Every command's `--help`, as its argparse parser prints it, caught in this process.
+
+Each program's `main()` is called with `ArgumentParser.parse_args` replaced by a catch: the
+parser it built is kept, and nothing else of the program runs (as
+tests/packaging/test_tools_help.py does). Subcommands get their own help below their parent's.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import importlib
+import importlib.util
+import os
+import sys
+import warnings
+from pathlib import Path
+
+from corobot_docs.markdown import fenced
+
+REPO = Path(__file__).resolve().parents[3]
+MODULES = (
+    ("python -m corobot_drake", "corobot_drake.cli"),
+    ("python -m corobot_drake.study", "corobot_drake.study.__main__"),
+    ("python -m corobot_drake.ros2", "corobot_drake.ros2.inspection"),
+    ("python -m corobot_drake.ros2.build", "corobot_drake.ros2.build"),
+)
+"""(command, the module whose `main()` parses its arguments)."""
+WIDTH = "100"
+"""Columns argparse wraps the help to (it reads $COLUMNS): the same on every machine."""
+
+
+class _CaughtError(Exception):
+    def __init__(self, parser):
+        super().__init__()
+        self.parser = parser
+
+
+def _catch(self, *args, **kwargs):
+    raise _CaughtError(self)
+
+
+@contextlib.contextmanager
+def _catching(prog: str):
+    saved = (os.environ.get("COLUMNS"), sys.argv, warnings.formatwarning,
+             argparse.ArgumentParser.parse_args, argparse.ArgumentParser.parse_known_args)
+    os.environ["COLUMNS"] = WIDTH
+    sys.argv = [prog]
+    argparse.ArgumentParser.parse_args = _catch
+    argparse.ArgumentParser.parse_known_args = _catch
+    try:
+        yield
+    finally:
+        columns, sys.argv, warnings.formatwarning, argparse.ArgumentParser.parse_args, \
+            argparse.ArgumentParser.parse_known_args = saved
+        if columns is None:
+            os.environ.pop("COLUMNS", None)
+        else:
+            os.environ["COLUMNS"] = columns
+
+
+def parser_of(main, prog: str) -> argparse.ArgumentParser:
+    """The parser `main()` builds, caught at its parse_args."""
+    with _catching(prog):
+        try:
+            main()
+        except _CaughtError as caught:
+            return caught.parser
+    raise RuntimeError(f"{prog}: main() returned without parsing its arguments")
+
+
+def _tool_main(path: Path):
+    spec = importlib.util.spec_from_file_location(f"docs_tool_{path.stem}", path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module  # dataclasses look their module up
+    spec.loader.exec_module(module)
+    return module.main
+
+
+def _helps(parser: argparse.ArgumentParser, command: str):
+    """(command, help text) of the parser and of each of its subcommands."""
+    with _width():
+        yield command, parser.format_help()
+        for action in parser._actions:
+            if isinstance(action, argparse._SubParsersAction):
+                for name, sub in action.choices.items():
+                    yield from _helps(sub, f"{command} {name}")
+
+
+@contextlib.contextmanager
+def _width():
+    saved = os.environ.get("COLUMNS")
+    os.environ["COLUMNS"] = WIDTH
+    try:
+        yield
+    finally:
+        if saved is None:
+            os.environ.pop("COLUMNS", None)
+        else:
+            os.environ["COLUMNS"] = saved
+
+
+def programs():
+    """(command, its main()) of the package's commands and every tool."""
+    for command, module in MODULES:
+        yield command, importlib.import_module(module).main
+    for path in sorted((REPO / "tools").glob("*.py")):
+        yield f"python tools/{path.name}", _tool_main(path)
+
+
+def page() -> str:
+    out = ["Each command's `--help`, caught from its own parser at each build "
+           "(`docs/_ext/corobot_docs/cli.py`)."]
+    for command, main in programs():
+        parser = parser_of(main, command)
+        parser.prog = command
+        for name, text in _helps(parser, command):
+            level = "##" if name == command else "###"
+            out.append(f"{level} `{name}`\n\n{fenced(text)}")
+    return "\n\n".join(out) + "\n"

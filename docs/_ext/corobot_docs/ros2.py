@@ -1,0 +1,88 @@
+"""The ROS 2 interface from the node's own tables: every module-level table of
+`ros2.interfaces` (a tuple of its dataclasses: topics, actions, services, ...), the subscribed
+topics it declares, and each sensor kind's topics (`SensorKind.ros2_channels`)."""
+
+from __future__ import annotations
+
+import dataclasses as dc
+import enum
+
+from corobot_docs.markdown import cell, docs_below, table
+
+
+def _text(value) -> str:
+    if isinstance(value, enum.Enum):
+        return f"`{value.value}`"
+    if isinstance(value, type):
+        return f"`{value.__name__}`"
+    if isinstance(value, bool):
+        return "yes" if value else ""
+    if isinstance(value, str) and value and " " not in value:
+        return f"`{value}`"
+    return cell(str(value))
+
+
+def _tables(module):
+    """(name, rows) of each module-level tuple of dataclass instances, in source order."""
+    for name, value in vars(module).items():
+        if name.isupper() and isinstance(value, tuple) and value \
+                and all(dc.is_dataclass(v) and not isinstance(v, type) for v in value):
+            yield name, value
+
+
+def _dataclass_table(rows) -> str:
+    fields = [f.name for f in dc.fields(rows[0])]
+    return table(fields, [[_text(getattr(r, f)) for f in fields] for r in rows])
+
+
+def _sensor_topics() -> str:
+    from corobot_drake.sensors.registry import KINDS
+
+    rows = []
+    for kind in KINDS:
+        for sub, (ros_type, qos) in kind.ros2_channels().items():
+            topic = kind.topic_name("<sensor>") + (f"/{sub}" if sub else "")
+            rows.append([f"`{kind.field}`", f"`{topic}`", f"`{ros_type}`", f"`{qos}`",
+                         f"`{kind.frame_name('<sensor>')}`"])
+    return table(("sensors", "topic", "type", "QoS", "frame"), rows)
+
+
+def _pairs(module) -> list[list[str]]:
+    """Module-level (topic, ROS type) pairs (the subscribed topics) with their docstrings."""
+    rows = []
+    for name, value in vars(module).items():
+        if name.isupper() and isinstance(value, tuple) and len(value) == 2 \
+                and all(isinstance(v, str) for v in value) and "/" in value[1]:
+            rows.append([f"`{value[0]}`", f"`{value[1]}`", cell(_doc_of(module, name))])
+    return rows
+
+
+def page() -> str:
+    from corobot_drake.ros2 import interfaces
+
+    out = [f"The node `{interfaces.NODE_NAME}`'s interface, generated at each build from "
+           "`corobot_drake/ros2/interfaces.py` (`docs/_ext/corobot_docs/ros2.py`). Names are "
+           "relative: with several robots each robot's are under its name, except the shared "
+           "ones."]
+    for name, rows in _tables(interfaces):
+        doc = cell(_doc_of(interfaces, name))
+        out.append(f"## {name.replace('_', ' ').capitalize()}\n\n"
+                   + (f"{doc}\n\n" if doc else "") + _dataclass_table(rows))
+    out.append("## Sensor topics\n\nOne per sensor, by kind (`sensors.registry.KINDS`); QoS "
+               "names are `Qos`'s.\n\n" + _sensor_topics())
+    pairs = _pairs(interfaces)
+    if pairs:
+        out.append("## Other topics\n\n" + table(("topic", "type", "what"), pairs))
+    qos = [[f"`{q.value}`", cell(_doc_of_member(interfaces.Qos, q.name))]
+           for q in interfaces.Qos] if hasattr(interfaces, "Qos") else []
+    if qos:
+        out.append("## QoS profiles\n\n" + table(("QoS", "what"), qos))
+    return "\n\n".join(out) + "\n"
+
+
+def _doc_of(module, name: str) -> str:
+    return docs_below(module).get(name, "")
+
+
+def _doc_of_member(cls, name: str) -> str:
+    return docs_below(cls).get(name, "")

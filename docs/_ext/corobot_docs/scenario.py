@@ -1,0 +1,271 @@
+"""The scenario's schema as Markdown: one table per struct, from `config.scenario.Scenario` down.
+
+Read from the code at build time: the dataclasses' fields (types, defaults), their bounds
+(`limits.bounded` metadata; `config.bounds.DRAKE_BOUNDS` for Drake's config structs), their
+attribute docstrings (the string below each field, read with `ast`) and Drake's own field
+docs. Each sensor kind's config comes in through `Robot`'s per-kind maps
+(`sensors.registry.KINDS`).
+"""
+
+from __future__ import annotations
+
+import dataclasses as dc
+import inspect
+import math
+import re
+import textwrap
+import types
+import typing
+
+from corobot_docs.markdown import cell, docs_below, table
+
+UNITS = ("m", "s", "kg", "Pa", "rad", "deg", "Hz", "N", "N m", "rad/s", "m/s", "rad/s^2",
+         "m/s^2", "1/s", "s/m", "pixels", "ticks")
+"""Units a field's docstring may open with (`kg; ignored when fixed`) when its range has none."""
+
+
+KEYS = {"robots": "<robot>", "bodies": "<body>"}
+"""The placeholder of a map's key in a field's path (a sensor's: `<name>`)."""
+
+
+@dc.dataclass
+class Section:
+    cls: type
+    paths: list[str]
+    default: object
+    """An instance whose values are this struct's defaults where it is used first."""
+
+
+def page() -> str:
+    from corobot_drake.config import scenario as sc
+    from corobot_drake.sensors.registry import KINDS
+
+    sections = _walk(sc.Scenario)
+    out = [_intro(KINDS)]
+    for s in sections.values():
+        out.append(_section(s, sections))
+    return "\n\n".join(out) + "\n"
+
+
+def _intro(kinds) -> str:
+    sensors = ", ".join(f"`{k.field}` ({', '.join(k.defaults()) or 'none by default'})"
+                        for k in kinds)
+    return textwrap.dedent(f"""\
+        A scenario is a YAML file read into `config.scenario.Scenario` (Drake's
+        `yaml_load_typed`); every field below may be left out, taking its default. A value
+        outside its range stops the loader with one line naming the file, the line and the
+        field. The robot's sensors are maps by name, one per kind of sensor: {sensors}; a
+        sensor the defaults lack starts as the defaults in its kind's table.
+
+        Generated from the code at each build (`docs/_ext/corobot_docs/scenario.py`).""")
+
+
+# --- the walk ---------------------------------------------------------------------------
+
+
+def _struct_fields(cls) -> list[tuple[str, object]] | None:
+    """(name, type) of a dataclass's or Drake config struct's fields; None for anything else."""
+    if dc.is_dataclass(cls):
+        hints = typing.get_type_hints(cls)
+        return [(f.name, hints[f.name]) for f in dc.fields(cls)]
+    if isinstance(cls, type) and hasattr(cls, "__fields__"):
+        return [(f.name, f.type) for f in cls.__fields__]
+    return None
+
+
+def _expanded(cls) -> bool:
+    """Whether `cls` gets a table: the project's dataclasses and the Drake structs the
+    scenario bounds (others, such as Transform, are Drake's, referred to by name)."""
+    from corobot_drake.config.bounds import DRAKE_BOUNDS
+
+    return dc.is_dataclass(cls) or cls in DRAKE_BOUNDS
+
+
+def _walk(root) -> dict[type, Section]:
+    sections: dict[type, Section] = {}
+
+    def visit(cls, path, default):
+        if cls in sections:
+            sections[cls].paths.append(path)
+            return
+        sections[cls] = Section(cls, [path], default)
+        for name, tp in _struct_fields(cls):
+            value = getattr(default, name, None)
+            for inner, inner_path, inner_default in _inner_structs(tp, f"{path}.{name}", value):
+                visit(inner, inner_path, inner_default)
+
+    visit(root, "", root())
+    return sections
+
+
+def _inner_structs(tp, path, value):
+    """(struct type, its path, its default instance) of the expandable structs in `tp`."""
+    origin, args = typing.get_origin(tp), typing.get_args(tp)
+    if origin is dict:
+        key = KEYS.get(path.rsplit(".", 1)[-1], "<name>")
+        yield from _inner_structs(args[1], f"{path}.{key}", _dict_default(path, args[1]))
+    elif origin is list:
+        yield from _inner_structs(args[0], f"{path}[]", None)
+    elif origin in (typing.Union, types.UnionType):
+        for a in args:
+            yield from _inner_structs(a, f"{path} !{a.__name__}", value
+                                      if isinstance(value, a) else None)
+    elif _struct_fields(tp) is not None and _expanded(tp):
+        yield tp, path, value if isinstance(value, tp) else tp()
+
+
+def _dict_default(path: str, tp):
+    """The config a new entry of a map starts as (a sensor kind's `new_sensor`)."""
+    from corobot_drake.sensors.registry import KINDS
+
+    for k in KINDS:
+        if path.endswith(f".{k.field}") and k.config_type is tp:
+            return k.new_sensor("name")
+    return tp() if _struct_fields(tp) is not None else None
+
+
+# --- one table --------------------------------------------------------------------------
+
+
+def _section(s: Section, sections) -> str:
+    where = ", ".join(f"`{p.lstrip('.')}`" for p in s.paths[:4])
+    where = f"At {where}." if where != "``" else "The file's top level."
+    if s.cls.__module__.startswith("pydrake"):
+        where += f" Drake's `{s.cls.__module__}.{s.cls.__qualname__}`."
+    doc = _class_doc(s.cls)
+    head = [f"## {_title(s.cls)}", "", where + (f" {doc}" if doc else "")]
+    rows = [_row(s, name, tp, sections) for name, tp in _struct_fields(s.cls)]
+    return "\n".join(head) + "\n\n" + table(
+        ("field", "type", "default", "unit", "allowed", "what"), rows)
+
+
+def _title(cls) -> str:
+    return cls.__qualname__ if cls.__module__.startswith("pydrake") else cls.__name__
+
+
+def _class_doc(cls) -> str:
+    doc = inspect.getdoc(cls) or ""
+    if cls.__module__.startswith("pydrake") or doc.startswith(cls.__name__ + "("):
+        doc = doc.split("\n\n")[0] if not doc.startswith(cls.__name__ + "(") else ""
+    return cell(doc.split("\n\n")[0])
+
+
+def _row(s: Section, name: str, tp, sections) -> list[str]:
+    bound, size = _bound(s.cls, name)
+    doc = _field_doc(s.cls, name)
+    unit = _unit(bound, doc)
+    return [f"`{name}`", _type_text(tp, sections), _default_text(getattr(s.default, name, None)),
+            unit, _allowed(bound, size, tp), cell(doc)]
+
+
+def _bound(cls, name):
+    from corobot_drake.config.bounds import DRAKE_BOUNDS
+
+    if dc.is_dataclass(cls):
+        f = {f.name: f for f in dc.fields(cls)}[name]
+        return f.metadata.get("bound"), f.metadata.get("size")
+    return DRAKE_BOUNDS.get(cls, {}).get(name), None
+
+
+def _unit(bound, doc: str) -> str:
+    bounds = bound if isinstance(bound, tuple) else (bound,)
+    units = [getattr(b, "unit", "") for b in bounds if getattr(b, "unit", "")]
+    if units:
+        return ", ".join(dict.fromkeys(units))
+    m = re.match(r"([\w/^ ]{1,8})[:;] ", doc)
+    return m.group(1) if m and m.group(1) in UNITS else ""
+
+
+def _allowed(bound, size, tp) -> str:
+    from corobot_drake.limits import DRAKE_INT, FINITE, OneOf, Range
+
+    def one(b):
+        if isinstance(b, Range):
+            return b.text()
+        if isinstance(b, OneOf):
+            return "one of " + ", ".join(f"`{n}`" for n in b.names) + (
+                f" ({b.why})" if b.why else "")
+        return ""
+
+    if isinstance(bound, tuple):
+        text = "; ".join(f"[{i}] {one(b)}" for i, b in enumerate(bound))
+    elif bound is not None:
+        text = one(bound) + (" each" if typing.get_origin(tp) is list else "")
+    elif _scalar(tp) is float:
+        text = FINITE.text()
+    elif _scalar(tp) is int:
+        text = DRAKE_INT.text()
+    else:
+        text = ""
+    if size is not None:
+        text = f"{size} numbers" + (f", {text}" if text else "")
+    return cell(text)
+
+
+def _scalar(tp):
+    args = [a for a in typing.get_args(tp) if a is not type(None)]
+    return args[0] if typing.get_origin(tp) in (typing.Union, types.UnionType) \
+        and len(args) == 1 else tp
+
+
+def _type_text(tp, sections) -> str:
+    origin, args = typing.get_origin(tp), typing.get_args(tp)
+    if origin is dict:
+        return f"map of {_type_text(args[1], sections)}"
+    if origin is list:
+        return f"list of {_type_text(args[0], sections)}"
+    if origin in (typing.Union, types.UnionType):
+        return " or ".join(_type_text(a, sections) for a in args)
+    if tp is type(None):
+        return "null"
+    if tp in sections:
+        return f"[{tp.__name__}](#{_slug(_title(tp))})"
+    return f"`{getattr(tp, '__name__', str(tp))}`"
+
+
+def _slug(title: str) -> str:
+    """The heading's anchor as MyST makes it (GitHub's slugs)."""
+    slug = re.sub(r"[^\w\- ]", "", title.strip().lower().replace("`", ""))
+    return slug.replace(" ", "-")
+
+
+def _default_text(value) -> str:
+    if value is None:
+        return "null"
+    if isinstance(value, bool):
+        return f"`{str(value).lower()}`"
+    if isinstance(value, float):
+        return "`.inf`" if value == math.inf else f"`{value:g}`"
+    if isinstance(value, int | str):
+        return f"`{value}`" if value != "" else '`""`'
+    if isinstance(value, dict):
+        return cell(", ".join(f"`{k}`" for k in value)) or "none"
+    if isinstance(value, list):
+        return f"`{[round(v, 6) if isinstance(v, float) else v for v in value]}`" \
+            if all(isinstance(v, int | float) for v in value) else ("none" if not value else
+                                                                    "(see the type)")
+    return "(see the type)"
+
+
+# --- docstrings -------------------------------------------------------------------------
+
+
+def _field_doc(cls, name: str) -> str:
+    if dc.is_dataclass(cls):
+        doc = docs_below(cls).get(name, "")
+        if not doc:
+            doc = _command_arg_doc(cls, name)
+        return doc
+    doc = getattr(getattr(cls, name, None), "__doc__", None) or ""
+    if doc.startswith("(self)"):
+        return ""
+    return doc.split("\n\n")[0]
+
+
+def _command_arg_doc(cls, name: str) -> str:
+    from corobot_drake.commands import COMMANDS
+
+    spec = COMMANDS.get(cls.__name__)
+    if spec is None or spec.dataclass is not cls:
+        return ""
+    return next((a.doc for a in spec.args if a.name == name), "")
