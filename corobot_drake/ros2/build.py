@@ -1,5 +1,6 @@
 """`python -m corobot_drake.ros2.build`: builds the ROS 2 interface packages that no wheel
-ships (tf2_msgs, corobot_interfaces; `ros_packages/`) into this virtual environment.
+ships (tf2_msgs, simulation_interfaces, corobot_interfaces; `ros_packages/`) into this
+virtual environment.
 
 Plain CMake + Ninja with the `[ros2]` extra's ament_cmake and rosidl generators, no colcon.
 Two snags of the wheels are dealt with first: their exported CMake files name the builder's
@@ -24,7 +25,7 @@ import tempfile
 from pathlib import Path
 
 INTERFACES_DIR = Path(__file__).resolve().parent / "ros_packages"
-PACKAGES = ("tf2_msgs", "corobot_interfaces")
+PACKAGES = ("tf2_msgs", "simulation_interfaces", "corobot_interfaces")
 """Built in this order (none depends on another)."""
 STAMP = "corobot_drake_build.stamp"
 """Beside a built package's share/<package>/package.xml: the hash of what it was built from."""
