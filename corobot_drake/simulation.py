@@ -248,6 +248,9 @@ class Robot:
             joint.set_angular_rate(plant_context, 0.0)
         controller = parts.drive_controller
         controller.Halt(controller.GetMyMutableContextFromRoot(root))
+        odometry = self._sim._dead_reckoning(self.name)  # reset there, as a driver's would be
+        odometry.Teleport(odometry.GetMyMutableContextFromRoot(root), pose.x, pose.y,
+                          math.radians(pose.yaw_deg))
         return True
 
     def obstacle_at(self, X_WB: RigidTransform) -> Problem | None:

@@ -26,6 +26,7 @@ from rclpy.callback_groups import ReentrantCallbackGroup
 from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
+from corobot_drake import commands
 from corobot_drake import limits as lim
 from corobot_drake.config import scenario as sc
 from corobot_drake.ros2 import interfaces as ifc
@@ -38,7 +39,11 @@ from corobot_drake.topics import RobotNames
 ANSWER_TIMEOUT = 10.0
 """s (wall clock) a service or a goal waits for the simulation thread to take its command."""
 FEEDBACK_PERIOD = 0.1
-"""s (wall clock) between an action's feedback messages."""
+"""s of simulated time between an action's feedback messages (at any rate the simulation
+runs)."""
+WAKE_PERIOD = 0.02
+"""s (wall clock) a running goal waits between its looks at the simulation (its end, a
+cancel, its next feedback)."""
 SERVICE_SETTLE_TIMEOUT = 30.0
 """s (wall clock) /set_pose waits for the robot to settle at its new pose."""
 
@@ -166,7 +171,7 @@ class Ros2Node:
                 self._servers.append(ActionServer(
                     self.node, ros_type(action.type), names.topic(action.name),
                     execute_callback=partial(self._execute, robot, action),
-                    goal_callback=lambda goal: GoalResponse.ACCEPT,
+                    goal_callback=partial(self._check_goal, robot, action),
                     cancel_callback=lambda goal: CancelResponse.ACCEPT,
                     callback_group=self._group, goal_service_qos_profile=SERVICE_QOS,
                     result_service_qos_profile=SERVICE_QOS,
@@ -244,6 +249,17 @@ class Ros2Node:
         self._namesakes = max(namesakes, 1)
 
     # --- actions ---
+    def _check_goal(self, robot: str, action: ifc.Action, goal) -> GoalResponse:
+        """A goal whose command would be refused (a field out of its range) is rejected as it
+        is sent, the reason logged (a GoalResponse carries none)."""
+        arguments = {name: getattr(goal, name) for name in ifc.goal_fields(action.command)}
+        try:
+            commands.make(action.call, **arguments)
+        except (ValueError, TypeError) as e:
+            self.log.warning(f"{robot}: {action.name} goal rejected: {e}")
+            return GoalResponse.REJECT
+        return GoalResponse.ACCEPT
+
     def _execute(self, robot: str, action: ifc.Action, goal_handle):
         """A goal, counted while it runs (`close` waits for them to be aborted)."""
         with self._goals_changed:
@@ -268,9 +284,10 @@ class Ros2Node:
             return Result(success=False, reason=str(e) or type(e).__name__)
         ended = self.runner.watch(partial(calls.ended_command, robot, started.seq))
         Feedback = ros_type(action.type).Feedback
+        next_feedback = started.start_time + FEEDBACK_PERIOD
         while True:
             try:
-                result = ended.result(FEEDBACK_PERIOD)
+                result = ended.result(WAKE_PERIOD)
                 break
             except concurrent.futures.TimeoutError:
                 pass
@@ -283,10 +300,12 @@ class Ros2Node:
             if goal_handle.is_cancel_requested:
                 return self._cancel(robot, started.seq, goal_handle, ended, Result)
             try:
-                left = self._call(partial(remaining, robot, action.command))
+                t, left = self._call(partial(remaining_at, robot, action.command,
+                                             next_feedback))
             except (SimulationStoppedError, TimeoutError):
                 continue  # the next look at `ended` says why
             if left is not None:
+                next_feedback = t + FEEDBACK_PERIOD
                 goal_handle.publish_feedback(Feedback(**{action.feedback: left}))
         if result.succeeded:
             goal_handle.succeed()
@@ -418,6 +437,14 @@ def remaining(robot: str, command: type, sim) -> float | None:
                 return math.copysign(max(0.0, abs(c.distance) - done), c.distance)
             return c.degrees
     return None
+
+
+def remaining_at(robot: str, command: type, due: float, sim) -> tuple[float, float | None]:
+    """In the simulation thread: (now, `remaining`) once simulated time has reached `due` s,
+    else (now, None)."""
+    if sim.time < due - 1e-9:
+        return sim.time, None
+    return sim.time, remaining(robot, command, sim)
 
 
 def stop_if_running(robot: str, seq: int, sim) -> None:

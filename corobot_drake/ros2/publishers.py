@@ -34,7 +34,9 @@ from corobot_drake.ros2.messages import Messages
 CLOCK_PERIOD = 0.01
 """s: /clock at 100 Hz (the plant's default step: a look adds no Simulator stop)."""
 ODOM_FRAME = "odom"
-"""The fixed frame /odom's poses are in: the world's origin and axes (ground truth)."""
+"""The fixed frame /odom's poses are in: where the odometry started, which is the world's
+origin and axes (the dead reckoning integrates from the true start pose, and a teleport puts
+it at the true pose)."""
 WORLD_FRAME = "world"
 """With several robots, /tf_static joins each robot's odom to this one frame."""
 
@@ -83,23 +85,29 @@ class StaticPublisher(LeafSystem):
 
 
 class TransformPublisher(LeafSystem):
-    """/tf: each robot's odom -> base_link (its chassis pose in the world: ground truth) and
-    base_link -> its wheels' frames, every `period` s, in one tf2_msgs/TFMessage.
+    """/tf: each robot's odom -> base_link (its dead reckoning, or with `ground_truth` its
+    chassis pose in the world) and base_link -> its wheels' frames, every `period` s, in one
+    tf2_msgs/TFMessage.
 
     .. pydrake_system::
 
         name: TransformPublisher
         input_ports:
         - body_poses
+        - <robot>_odometry (one per robot; not with ground_truth)
 
-    Input `body_poses` (the plant's: abstract list of X_WB by body index). `robots`: for each
-    robot, (its `RobotNames`, chassis body index, [(wheel body index, wheel frame)])."""
+    Input `body_poses` (the plant's: abstract list of X_WB by body index); `<robot>_odometry`
+    (3: the robot's dead-reckoned x, y m, yaw rad). `robots`: for each robot, (its
+    `RobotNames`, chassis body index, [(wheel body index, wheel frame)])."""
 
-    def __init__(self, bus, robots: list, period: float = STATE_PERIOD):
+    def __init__(self, bus, robots: list, period: float = STATE_PERIOD,
+                 ground_truth: bool = False):
         super().__init__()
         self._m = Messages(bus.store)
         self._robots = [(names.frame(ODOM_FRAME), names.body_frame("chassis"), int(chassis),
-                         [(int(i), frame) for i, frame in wheels])
+                         [(int(i), frame) for i, frame in wheels],
+                         None if ground_truth else self.DeclareVectorInputPort(
+                             f"{names.robot}_odometry", 3))
                         for names, chassis, wheels in robots]
         self._poses = self.DeclareAbstractInputPort("body_poses",
                                                     AbstractValue.Make([RigidTransform()]))
@@ -109,9 +117,10 @@ class TransformPublisher(LeafSystem):
     def _publish(self, context):
         t, X_W = context.get_time(), self._poses.Eval(context)
         transforms = []
-        for odom, base, chassis, wheels in self._robots:
+        for odom, base, chassis, wheels, odometry in self._robots:
             X_WB = X_W[chassis]
-            transforms.append(self._m.transform(t, odom, base, X_WB))
+            X_OB = X_WB if odometry is None else _planar(odometry.Eval(context))
+            transforms.append(self._m.transform(t, odom, base, X_OB))
             transforms += [self._m.transform(t, base, frame, X_WB.InvertAndCompose(X_W[i]))
                            for i, frame in wheels]
         self._channel.publish(tp.nanoseconds(t), self._m.tf(transforms))
@@ -131,20 +140,23 @@ class RobotStatePublisher(RobotStateLooks):
         - odometry
 
     Inputs: `recording.looks.RobotStateLooks`' and `odometry` (3: the dead-reckoned x, y m,
-    yaw rad). /odom: the chassis pose in odom and its velocity in base_link; /wheel_odom: the
-    dead reckoning, its twist from the front axles' measured speeds through the drive's
-    effective wheel radius and track width (`drive`: the robot's `config.scenario.Drive`)."""
+    yaw rad). /wheel_odom: the dead reckoning, its twist from the front axles' measured speeds
+    through the drive's effective wheel radius and track width (`drive`: the robot's
+    `config.scenario.Drive`), with its error model's covariances; /ground_truth: the chassis
+    pose in the world and its velocity in base_link; /odom: the first (or with
+    `ground_truth`, the second, in odom)."""
 
     def __init__(self, bus, names: tp.RobotNames, chassis_index: int, drive,
-                 period: float = STATE_PERIOD):
+                 period: float = STATE_PERIOD, ground_truth: bool = False):
         super().__init__(chassis_index)
         self._m = Messages(bus.store)
         self._odom, self._base = names.frame(ODOM_FRAME), names.body_frame("chassis")
         self._radius, self._track = drive.effective_wheel_radius, drive.effective_track_width
+        self._ground_truth = ground_truth
         self._odometry = self.DeclareVectorInputPort("odometry", 3)
         self._joint_names = [f"{w}_axle" for w in dim.WHEEL_NAMES]
         self._channels = {name: _channel(bus, names, ifc.TOPIC[name]) for name in (
-            "odom", "wheel_odom", "joint_states", "drive_state")}
+            "odom", "wheel_odom", "ground_truth", "joint_states", "drive_state")}
         self.DeclarePeriodicPublishEvent(period, 0.0, self._publish)
 
     def _publish(self, context):
@@ -154,9 +166,12 @@ class RobotStatePublisher(RobotStateLooks):
         self._channels["joint_states"].publish(ns, m.joint_state(t, self._joint_names, angles,
                                                                  rates))
         X_WB, linear, angular = self.chassis(context)
-        self._channels["odom"].publish(ns, m.odometry(t, self._odom, self._base, X_WB, linear,
-                                                      angular))
-        self._channels["wheel_odom"].publish(ns, self.wheel_odometry(context))
+        wheel = self.wheel_odometry(context)
+        self._channels["ground_truth"].publish(ns, m.odometry(t, WORLD_FRAME, self._base, X_WB,
+                                                              linear, angular))
+        self._channels["odom"].publish(ns, m.odometry(
+            t, self._odom, self._base, X_WB, linear, angular) if self._ground_truth else wheel)
+        self._channels["wheel_odom"].publish(ns, wheel)
         self._channels["drive_state"].publish(ns, m.drive_state(t, self._odom,
                                                                 self.drive_state(context)))
 
@@ -167,15 +182,16 @@ class RobotStatePublisher(RobotStateLooks):
         left, right = self.wheel_state(context)[1][:2]  # front axles
         forward = 0.5 * self._radius * (left + right)
         yaw_rate = self._radius * (right - left) / self._track
-        X = RigidTransform(_yaw_rotation(yaw), [x, y, 0.0])
-        return self._m.odometry(t, self._odom, self._base, X, (forward, 0.0, 0.0),
-                                (0.0, 0.0, yaw_rate), estimated=True)
+        return self._m.odometry(t, self._odom, self._base, _planar((x, y, yaw)),
+                                (forward, 0.0, 0.0), (0.0, 0.0, yaw_rate), estimated=True)
 
 
-def _yaw_rotation(yaw: float):
+def _planar(pose) -> RigidTransform:
+    """X_OB of a planar pose (x, y m, yaw rad): base_link on the ground, level."""
     from pydrake.math import RotationMatrix
 
-    return RotationMatrix.MakeZRotation(float(yaw))
+    x, y, yaw = pose
+    return RigidTransform(RotationMatrix.MakeZRotation(float(yaw)), [float(x), float(y), 0.0])
 
 
 class TelemetryPublisher(LeafSystem):
@@ -246,22 +262,27 @@ class RosSensorSink:
 # --- wiring -------------------------------------------------------------------------------
 
 
-def add_ros2_topics(bus, builder, plant, scene_graph, robots: dict, scenario) -> None:
+def add_ros2_topics(bus, builder, plant, scene_graph, robots: dict, scenario,
+                    settings=None) -> None:
     """Adds the publishers of every topic (`interfaces.TOPICS`) for a station's plant and
-    robots ({name: station.RobotParts}, built from `scenario`), on `bus`."""
+    robots ({name: station.RobotParts}, built from `scenario`), on `bus`; `settings`: the
+    node's read-only parameters (`parameters.Settings`; default: their defaults)."""
+    from corobot_drake.ros2.parameters import Settings
     from corobot_drake.ros2.urdf import corobot_urdf
 
+    ground_truth = (settings or Settings()).odom_source == "ground_truth"
     namespaced = len(robots) > 1
-    mounts, descriptions, tf_robots = [], {}, []
+    mounts, descriptions, tf_robots, odometries = [], {}, [], []
     builder.AddNamedSystem("ros2_clock", ClockPublisher(bus))
     for name, parts in robots.items():
         names = tp.RobotNames(name, namespaced)
         spec = scenario.robots[name]
         state = builder.AddNamedSystem(f"{name}.ros2_state", RobotStatePublisher(
-            bus, names, parts.chassis.index(), spec.drive))
+            bus, names, parts.chassis.index(), spec.drive, ground_truth=ground_truth))
         RobotStateLooks.connect(builder, plant, name, state)
-        builder.Connect(builder.GetSubsystemByName(f"{name}.dead_reckoning").GetOutputPort(
-            "pose"), state.GetInputPort("odometry"))
+        odometry = builder.GetSubsystemByName(f"{name}.dead_reckoning").GetOutputPort("pose")
+        builder.Connect(odometry, state.GetInputPort("odometry"))
+        odometries.append((name, odometry))
         _add_telemetry(builder, bus, names)
         tf_robots.append((names, parts.chassis.index(),
                           [(j.child_body().index(), names.body_frame(j.child_body().name()))
@@ -270,8 +291,11 @@ def add_ros2_topics(bus, builder, plant, scene_graph, robots: dict, scenario) ->
         if namespaced:  # one tree: every robot's odom is the world's origin
             mounts.append((WORLD_FRAME, names.frame(ODOM_FRAME), RigidTransform()))
         descriptions[names] = corobot_urdf(spec, name)
-    tf = builder.AddNamedSystem("ros2_tf", TransformPublisher(bus, tf_robots))
-    builder.Connect(plant.get_body_poses_output_port(), tf.get_input_port())
+    tf = builder.AddNamedSystem("ros2_tf", TransformPublisher(bus, tf_robots,
+                                                              ground_truth=ground_truth))
+    builder.Connect(plant.get_body_poses_output_port(), tf.GetInputPort("body_poses"))
+    for name, odometry in odometries if not ground_truth else ():
+        builder.Connect(odometry, tf.GetInputPort(f"{name}_odometry"))
     builder.AddNamedSystem("ros2_static", StaticPublisher(bus, mounts, descriptions))
 
 

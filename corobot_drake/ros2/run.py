@@ -29,7 +29,7 @@ def missing(flag: str, live: bool) -> str | None:
         except ImportError:
             return f"{flag} needs the [ros2] extra: {EXTRA_HINT}"
     if live:
-        for package in ("tf2_msgs", "corobot_interfaces"):
+        for package in ("tf2_msgs", "simulation_interfaces", "corobot_interfaces"):
             try:
                 __import__(f"{package}.msg")
             except ImportError:
@@ -74,7 +74,8 @@ class Ros2Front(contextlib.ExitStack):
             self.callback(self.node.close)
             sinks.append(self.node.sink)
         self.bus = Bus(sinks)
-        self.extras = [partial(add_ros2_topics, self.bus)]
+        settings = self.node.settings if self.node is not None else None  # a bag: defaults
+        self.extras = [partial(add_ros2_topics, self.bus, settings=settings)]
 
     @property
     def finished(self) -> bool:

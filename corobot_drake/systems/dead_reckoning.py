@@ -118,6 +118,12 @@ class PoseIntegrator(LeafSystem):
         """See `DeadReckoning.State`; `context` is this system's."""
         return list(self._folded(context)[:_TAKEN])
 
+    def Teleport(self, context, x: float, y: float, yaw: float) -> None:
+        """See `DeadReckoning.Teleport`; `context` is this system's."""
+        folded = list(self._folded(context))
+        folded[:_LEFT] = x, y, yaw
+        context.SetDiscreteState(np.array(folded, dtype=float))
+
     def _initialize(self, context, discrete_state):
         start = context.get_numeric_parameter(self._start).get_value()
         given = round(start[_GIVEN])
@@ -205,3 +211,10 @@ class DeadReckoning(Diagram):
         """[x, y, yaw (rad, unwrapped), left ticks, right ticks]: what `SetStart` takes to
         carry on from here. `context` is this system's."""
         return self._integrator.State(self.GetSubsystemContext(self._integrator, context))
+
+    def Teleport(self, context, x: float, y: float, yaw: float) -> None:
+        """Puts the dead reckoning at the pose a teleport put the robot (x, y m, yaw rad), the
+        encoder samples taken so far folded in first: it integrates on from there, as a
+        driver's odometry reset does. `context` is this system's."""
+        self._integrator.Teleport(
+            self.GetMutableSubsystemContext(self._integrator, context), x, y, yaw)

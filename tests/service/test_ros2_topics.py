@@ -35,6 +35,7 @@ from corobot_drake.resources import make_parser
 from corobot_drake.ros2 import interfaces as ifc
 from corobot_drake.ros2.bus import Bus
 from corobot_drake.ros2.graph import configure_discovery, ros_type
+from corobot_drake.ros2.messages import WHEEL_ODOM_POSE_STDDEV
 from corobot_drake.ros2.publishers import (
     ClockPublisher,
     RobotStatePublisher,
@@ -148,10 +149,10 @@ def test_clock_publishes_every_10_ms():
     assert [t for t, _ in memory.messages["/clock"]] == [round(s * 1e9) for s in stamps]
 
 
-def test_robot_state_publisher_odom_and_wheel_odom():
-    memory = Memory()
-    drive = sc.Drive()
-    system = RobotStatePublisher(Bus([memory]), tp.RobotNames("bot", True), 1, drive)
+def robot_state_publisher(memory, ground_truth: bool = False):
+    """A namespaced robot's RobotStatePublisher with its inputs fixed, stepped once."""
+    system = RobotStatePublisher(Bus([memory]), tp.RobotNames("bot", True), 1, sc.Drive(),
+                                 ground_truth=ground_truth)
     stepper = Stepper(system, 0.02)
     X_WB = RigidTransform(RollPitchYaw(0, 0, 0.5), [1.0, 2.0, 0.0])
     V = SpatialVelocity([0, 0, 0.3], [0.4 * math.cos(0.5), 0.4 * math.sin(0.5), 0])
@@ -163,19 +164,41 @@ def test_robot_state_publisher_odom_and_wheel_odom():
         for w in dim.WHEEL_NAMES}, (1.0, 2.0, 0.0), 0.5))
     stepper.fix("odometry", [0.9, 2.1, 0.4])
     stepper.tick()
-    (_, odom), = memory.messages["/bot/odom"]
-    assert (odom.header.frame_id, odom.child_frame_id) == ("bot/odom", "bot/base_link")
-    p = odom.pose.pose.position
+
+
+def test_robot_state_publisher_odom_wheel_odom_and_ground_truth():
+    """/odom is the wheel odometry (the dead reckoning, its covariances the error model's),
+    as /wheel_odom; /ground_truth the true pose in world."""
+    memory = Memory()
+    robot_state_publisher(memory)
+    (_, truth), = memory.messages["/bot/ground_truth"]
+    assert (truth.header.frame_id, truth.child_frame_id) == ("world", "bot/base_link")
+    p = truth.pose.pose.position
     assert (p.x, p.y) == pytest.approx((1.0, 2.0))
-    assert odom.twist.twist.linear.x == pytest.approx(0.4)  # in base_link: all forward
-    assert odom.twist.twist.linear.y == pytest.approx(0.0, abs=1e-12)
-    assert odom.twist.twist.angular.z == pytest.approx(0.3)
+    assert truth.twist.twist.linear.x == pytest.approx(0.4)  # in base_link: all forward
+    assert truth.twist.twist.linear.y == pytest.approx(0.0, abs=1e-12)
+    assert truth.twist.twist.angular.z == pytest.approx(0.3)
+    assert not truth.pose.covariance.any()  # exact
     (_, wheel), = memory.messages["/bot/wheel_odom"]
+    assert (wheel.header.frame_id, wheel.child_frame_id) == ("bot/odom", "bot/base_link")
     assert wheel.pose.pose.position.x == pytest.approx(0.9)
+    drive = sc.Drive()
     r, track = drive.effective_wheel_radius, drive.effective_track_width
     assert wheel.twist.twist.linear.x == pytest.approx(r * 3.0)  # front axles 2 and 4 rad/s
     assert wheel.twist.twist.angular.z == pytest.approx(r * 2.0 / track)
-    assert wheel.pose.covariance[0] > 0 and odom.pose.covariance[0] == 0
+    x, y, yaw = WHEEL_ODOM_POSE_STDDEV
+    assert [wheel.pose.covariance[i] for i in (0, 7, 35)] == pytest.approx([x**2, y**2, yaw**2])
+    (_, odom), = memory.messages["/bot/odom"]
+    assert odom.pose == wheel.pose and odom.twist == wheel.twist
+    ground = Memory()
+    robot_state_publisher(ground, ground_truth=True)  # odom_source: ground_truth
+    (_, odom), = ground.messages["/bot/odom"]
+    assert odom.header.frame_id == "bot/odom" and odom.pose.pose.position.x == 1.0
+
+
+def test_robot_state_publisher_joint_states_and_drive_state():
+    memory = Memory()
+    robot_state_publisher(memory)
     (_, joints), = memory.messages["/bot/joint_states"]
     assert list(joints.name) == [f"{w}_axle" for w in dim.WHEEL_NAMES]
     assert list(joints.velocity) == [2.0, 4.0, 2.0, 4.0]
@@ -221,19 +244,27 @@ def test_ir_sensor_publisher_sends_each_scan_once():
 def test_transform_publisher_odom_to_base_link_to_wheels():
     memory = Memory()
     names = tp.RobotNames("corobot")
-    system = TransformPublisher(Bus([memory]), [(names, 1, [(2, "front_left_wheel")])])
-    stepper = Stepper(system, 0.02)
-    X_WB = RigidTransform(RollPitchYaw(0, 0, math.pi / 2), [1.0, 0.0, 0.0])
-    X_WW = RigidTransform(RollPitchYaw(0, 0.7, math.pi / 2), [1.0, 0.1, 0.06])  # the wheel
-    stepper.fix("body_poses", [RigidTransform(), X_WB, X_WW])
-    stepper.tick(2)
-    assert [t for t, _ in memory.messages["/tf"]] == [0, 20_000_000]
-    (_, tf) = memory.messages["/tf"][-1]
-    base, wheel = tf.transforms
-    assert (base.header.frame_id, base.child_frame_id) == ("odom", "base_link")
-    assert (wheel.header.frame_id, wheel.child_frame_id) == ("base_link", "front_left_wheel")
-    w = wheel.transform.translation  # in base_link (facing world +y): 0.1 m ahead of it
-    assert (w.x, w.y, w.z) == pytest.approx((0.1, 0.0, 0.06), abs=1e-12)
+    for ground_truth in (False, True):
+        memory = Memory()
+        system = TransformPublisher(Bus([memory]), [(names, 1, [(2, "front_left_wheel")])],
+                                    ground_truth=ground_truth)
+        stepper = Stepper(system, 0.02)
+        X_WB = RigidTransform(RollPitchYaw(0, 0, math.pi / 2), [1.0, 0.0, 0.0])
+        X_WW = RigidTransform(RollPitchYaw(0, 0.7, math.pi / 2), [1.0, 0.1, 0.06])  # the wheel
+        stepper.fix("body_poses", [RigidTransform(), X_WB, X_WW])
+        if not ground_truth:  # odom -> base_link is the dead reckoning's
+            stepper.fix("corobot_odometry", [0.9, 0.2, 1.5])
+        stepper.tick(2)
+        assert [t for t, _ in memory.messages["/tf"]] == [0, 20_000_000]
+        (_, tf) = memory.messages["/tf"][-1]
+        base, wheel = tf.transforms
+        assert (base.header.frame_id, base.child_frame_id) == ("odom", "base_link")
+        b = base.transform.translation
+        assert (b.x, b.y, b.z) == ((1.0, 0.0, 0.0) if ground_truth else (0.9, 0.2, 0.0))
+        assert (wheel.header.frame_id, wheel.child_frame_id) == ("base_link",
+                                                                 "front_left_wheel")
+        w = wheel.transform.translation  # in base_link (facing world +y): 0.1 m ahead of it
+        assert (w.x, w.y, w.z) == pytest.approx((0.1, 0.0, 0.06), abs=1e-12)
 
 
 def test_static_publisher_publishes_once_latched():

@@ -76,6 +76,21 @@ def test_odometry_given_a_start_carries_on_from_it():
         s.system.SetStart(context, [1.0, 2.0, 3.0, 4.0])
 
 
+def test_odometry_teleported_integrates_on_from_the_new_pose():
+    """A teleport puts the dead reckoning at the new pose; the counts rolled before it are
+    folded in first (not motion after it), the counts after it are motion from there."""
+    s = odometry(start=(0.0, 0.0, 0.0))
+    s.tick()
+    s.fix("encoder_ticks", [700.0, 700.0])  # a revolution before the teleport
+    s.tick()
+    s.system.Teleport(s.system.GetMyMutableContextFromRoot(s.context), 5.0, -1.0, math.pi / 2)
+    assert s.output("pose") == pytest.approx([5.0, -1.0, math.pi / 2], abs=1e-15)
+    s.fix("encoder_ticks", [1300.0, 1300.0])  # a revolution after it: along +y
+    s.tick()
+    d = 2 * math.pi * 0.06
+    assert s.output("pose") == pytest.approx([5.0, -1.0 + d, math.pi / 2], abs=1e-12)
+
+
 def test_odometry_turns_by_the_wheel_difference_over_the_track():
     s = odometry(start=(0.0, 0.0, 0.0))
     s.tick()
