@@ -44,7 +44,11 @@ import math
 from corobot_drake.model.dimensions import WHEEL_NAMES
 
 WHEEL_SHORT = tuple("".join(word[0] for word in name.split("_")) for name in WHEEL_NAMES)
-"""The wheels' short names in run-log columns: fl, fr, rl, rr."""
+"""The Corobot's wheels' short names in run-log columns: fl, fr, rl, rr."""
+CODED = ("front_left", "front_right")
+"""The Corobot's wheels with an encoder (left, right)."""
+ALL, ENCODED = "all", "encoded"
+"""`Signal.wheels`: one value per wheel, or per wheel with an encoder."""
 
 POSITION_CHANGE = 1e-4
 """m: a position (x, y, z) change that counts (0.1 mm; a robot at rest creeps by nm)."""
@@ -107,11 +111,32 @@ class Signal:
     costly: bool = False
     """Evaluating it costs the plant's contact results or velocities: the run log and the
     recording sample it every `runlog.HELD_PERIOD` and hold it."""
+    wheels: str = ""
+    """Its keys are the robot's wheels: `ALL` (one value per wheel, wheel order) or
+    `ENCODED` (the wheels with an encoder: the first left and first right); declared with
+    the Corobot's, each robot's are `for_robot`'s."""
 
     @property
     def per_wheel(self) -> bool:
-        """One value per wheel (`WHEEL_NAMES` order)."""
-        return self.keys == WHEEL_NAMES
+        """One value per wheel (the robot's wheel order)."""
+        return self.wheels == ALL and bool(self.keys)
+
+    def for_robot(self, wheel_names: tuple[str, ...], encoded: tuple[str, str]) -> "Signal":
+        """This signal for a robot whose wheels are `wheel_names` (wheel order) and whose
+        encoders are on `encoded` (left, right): its keys and run-log columns by that robot's
+        wheels (itself when they are the Corobot's)."""
+        if not self.wheels or (wheel_names, encoded) == (WHEEL_NAMES, CODED):
+            return self
+        rename = dict(zip(CODED, encoded, strict=True))
+        keys = self.keys
+        if self.keys:
+            keys = tuple(wheel_names) if self.wheels == ALL else tuple(encoded)
+        if self.per_wheel:  # one column per wheel: <prefix>_<short>
+            prefix = self.log[0][0].rsplit("_", 1)[0]
+            log = _per_wheel(prefix, wheel_names)
+        else:
+            log = tuple((column, rename.get(key, key)) for column, key in self.log)
+        return dc.replace(self, keys=keys, log=log)
 
     @property
     def field(self) -> str:
@@ -157,9 +182,17 @@ class Signal:
         return {key: convert(x) for key, x in zip(self.keys, vector, strict=True)}
 
 
-def _per_wheel(prefix: str) -> tuple[tuple[str, str], ...]:
-    return tuple((f"{prefix}_{short}", wheel) for short, wheel in zip(WHEEL_SHORT, WHEEL_NAMES,
-                                                                        strict=True))
+def wheel_short(wheel_names: tuple[str, ...]) -> tuple[str, ...]:
+    """The wheels' short names in run-log columns: each name's words' initials (the
+    Corobot's fl, fr, rl, rr), or the names themselves when two initials are alike."""
+    short = tuple("".join(word[:1] for word in name.split("_")) for name in wheel_names)
+    return short if len(set(short)) == len(short) else tuple(wheel_names)
+
+
+def _per_wheel(prefix: str, wheel_names: tuple[str, ...] = WHEEL_NAMES
+               ) -> tuple[tuple[str, str], ...]:
+    return tuple((f"{prefix}_{short}", wheel) for short, wheel in zip(
+        wheel_short(wheel_names), wheel_names, strict=True))
 
 
 def _same(*names: str) -> tuple[tuple[str, str], ...]:
@@ -169,19 +202,19 @@ def _same(*names: str) -> tuple[tuple[str, str], ...]:
 TELEMETRY = (
     Signal("wheel_loads", "N", "the vertical (world +z) component of the wheel's contact "
            "forces; at rest the four sum to the robot's weight",
-           port="wheel_loads", keys=WHEEL_NAMES, system="wheel_contacts",
+           port="wheel_loads", keys=WHEEL_NAMES, wheels=ALL, system="wheel_contacts",
            fields={"load": LOAD_CHANGE}, summary="wheel_loads_N[]",
            http=("drive.wheels.*.load",), log=_per_wheel("load"), topic="wheel_loads",
            costly=True),
     Signal("wheel_slip_ratio", "", "longitudinal, dimensionless: + traction (turns faster "
            "than it travels), - braking",
-           port="wheel_slip_ratio", keys=WHEEL_NAMES, system="wheel_contacts",
+           port="wheel_slip_ratio", keys=WHEEL_NAMES, wheels=ALL, system="wheel_contacts",
            fields={"slip_ratio": SLIP_RATIO_CHANGE}, summary="slip.ratio[]",
            http=("drive.wheels.*.slip_ratio",), log=_per_wheel("slip_ratio"),
            topic="wheel_slip", costly=True),
     Signal("wheel_slip_angle", "deg", "between where the wheel points and where it goes, + "
            "moving to the left of the heading",
-           port="wheel_slip_angle", keys=WHEEL_NAMES, system="wheel_contacts",
+           port="wheel_slip_angle", keys=WHEEL_NAMES, wheels=ALL, system="wheel_contacts",
            fields={"slip_angle_deg": SLIP_ANGLE_CHANGE}, summary="slip.angle_deg[]",
            http=("drive.wheels.*.slip_angle_deg",), log=_per_wheel("slip_angle"),
            topic="wheel_slip", costly=True),
@@ -200,11 +233,11 @@ STATE = (
     Signal("commanded_power", "", "the drive's commanded power per wheel (its side's), in "
            "[-1, 1]", reader="commanded_power", fields={"commanded_power": 0.0},
            summary="commanded_power", http=("drive.wheels.*.commanded_power",),
-           log=(("left_power", "front_left"), ("right_power", "front_right")),
+           log=(("left_power", "front_left"), ("right_power", "front_right")), wheels=ALL,
            mcap={"drive_state": "wheels.*.commanded_power"},
            ros2={"drive_state": "wheels.#.commanded_power"}),
     Signal("encoders", "ticks", "the front wheels' encoder counts, 600 per revolution",
-           port="encoder_ticks", keys=("front_left", "front_right"), integer=True,
+           port="encoder_ticks", keys=CODED, wheels=ENCODED, integer=True,
            fields={"encoder_ticks": 0.0}, summary="encoders",
            http=("drive.wheels.*.encoder_ticks", "encoders"),
            log=(("left_ticks", "front_left"), ("right_ticks", "front_right")), log_format="d",
@@ -236,7 +269,7 @@ STATE = (
            mcap={"drive_state": "position[]", "odom": "pose.position"},
            ros2={"drive_state": "position", "odom": "pose.pose.position"}),
     Signal("axle_speeds", "rad/s", "each axle's measured speed", port="axle_speed",
-           keys=WHEEL_NAMES, fields={"axle_speed": SPEED_CHANGE}, summary="wheels",
+           keys=WHEEL_NAMES, wheels=ALL, fields={"axle_speed": SPEED_CHANGE}, summary="wheels",
            http=("drive.wheels.*.axle_speed",),
            mcap={"drive_state": "wheels.*.axle_speed", "joint_states": "joints.#.velocity"},
            ros2={"drive_state": "wheels.#.axle_speed", "joint_states": "velocity.#"}),
@@ -250,7 +283,24 @@ STATE = (
 """The robot's state, in the run log's order (its columns are the table's, in order)."""
 
 SIGNALS = {s.name: s for s in (*STATE, *TELEMETRY)}
-"""Every signal by name, in the run log's order."""
+"""Every signal by name, in the run log's order (the Corobot's: `robot_signals` any robot's)."""
+
+
+@functools.cache
+def robot_signals(wheel_names: tuple[str, ...] = WHEEL_NAMES,
+                  encoded: tuple[str, str] = CODED) -> dict[str, Signal]:
+    """`SIGNALS` for a robot whose wheels are `wheel_names` (wheel order, `RobotSpec.
+    wheel_names`) with encoders on `encoded` (its first left and right wheel): each per-wheel
+    signal keyed by that robot's wheels (`Signal.for_robot`). The Corobot's is `SIGNALS`."""
+    if (tuple(wheel_names), tuple(encoded)) == (WHEEL_NAMES, CODED):
+        return SIGNALS
+    return {name: s.for_robot(tuple(wheel_names), tuple(encoded)) for name, s in SIGNALS.items()}
+
+
+def spec_signals(spec) -> dict[str, Signal]:
+    """`robot_signals` of a `robots.RobotSpec`."""
+    left, right = spec.encoded
+    return robot_signals(spec.wheel_names, (spec.wheel_names[left], spec.wheel_names[right]))
 
 TOPIC_DOCS = {
     "wheel_loads": "Each wheel's load: systems.contact.WheelContacts.",

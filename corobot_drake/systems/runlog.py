@@ -15,7 +15,8 @@ simulation's contact telemetry, which no real logger has:
   (600) per wheel revolution, floor(600 q / 2 pi) of the integrated wheel angle q (forward
   rolling counts up): the odometry's encoders (`odometry.add_wheel_encoders`).
 - x, y: chassis position in the world, m. yaw: chassis heading about world z, rad, in (-pi, pi].
-- load_*, slip_ratio_*, slip_angle_*: per wheel (fl front left, fr, rl, rr), N,
+- load_*, slip_ratio_*, slip_angle_*: per wheel (the Corobot's fl front left, fr, rl, rr;
+  any robot's `signals.wheel_short`, in its wheel order: its `Layout`), N,
   dimensionless (+ traction), deg (+ to the left): `contact.WheelContacts`, sampled every
   `HELD_PERIOD` (0.1 s) and held (a row shows the latest sample before it). On a continuous
   plant they are made when the log is read (`ContactSamples`), from the plant's state sampled
@@ -27,6 +28,8 @@ The run's largest tilt from upright (`max_tilt_deg`) is read from the same sampl
 state, so nothing samples the chassis a second time while the simulation runs.
 """
 
+import dataclasses as dc
+import functools
 import math
 from pathlib import Path
 
@@ -59,35 +62,91 @@ columns is sampled from its port."""
 for _spec in signals.SIGNALS.values():
     if _spec.log and _spec.name not in MADE_WHEN_READ and not _spec.system:
         raise ValueError(f"signal {_spec.name!r} has run-log columns but no system to sample")
-SAMPLED = tuple((s.port, s.log_columns) for s in signals.SIGNALS.values()
-                if s.log and s.name not in MADE_WHEN_READ)
+
+
+@dc.dataclass(frozen=True)
+class Layout:
+    """One robot's run-log columns, from its signals (`signals.robot_signals`: the per-wheel
+    columns are its wheels'). The module's constants are the Corobot's (`LAYOUT`)."""
+
+    signals: dict = dc.field(hash=False, compare=False)
+    """{name: `signals.Signal`}, the robot's, in the table's order."""
+    sampled: tuple
+    """(robot port, its columns) of the signals sampled from their ports, in the table's
+    order."""
+    held: tuple
+    """The sampled ports held (`HELD_PERIOD`): costly to evaluate every sample."""
+    held_columns: tuple
+    """The run-log columns of the `held` ports."""
+    columns: tuple
+    """The run log's columns: time, then each signal's (`signals.Signal.log`), in the
+    table's order."""
+    formats: tuple
+    """The CSV format of each column."""
+    raw_columns: tuple
+    """What the sink records every `LOG_PERIOD` s (`RAW_COLUMNS`)."""
+
+    def sink_columns(self, held_when_read: bool) -> tuple[str, ...]:
+        """The sink's columns: `raw_columns`, less the `held_columns` when they are made
+        when the log is read (`ContactSamples`)."""
+        return tuple(c for c in self.raw_columns
+                     if not (held_when_read and c in self.held_columns))
+
+
+@functools.cache
+def layout(wheel_names: tuple[str, ...] = signals.WHEEL_NAMES,
+           encoded: tuple[str, str] = signals.CODED) -> Layout:
+    """The run-log `Layout` of a robot whose wheels are `wheel_names` with encoders on
+    `encoded` (`signals.robot_signals`); the defaults: the Corobot's."""
+    table = signals.robot_signals(wheel_names, encoded)
+    sampled = tuple((s.port, s.log_columns) for s in table.values()
+                    if s.log and s.name not in MADE_WHEN_READ)
+    held = tuple(s.port for s in table.values()
+                 if s.log and s.name not in MADE_WHEN_READ and s.costly)
+    return Layout(
+        signals=table, sampled=sampled, held=held,
+        held_columns=tuple(c for port, columns in sampled if port in held for c in columns),
+        columns=("time", *(c for s in table.values() for c in s.log_columns)),
+        formats=(".6f", *(s.log_format for s in table.values() for _ in s.log)),
+        raw_columns=(*DriveStatus.get_fields(), "left_ticks", "right_ticks", *CHASSIS_STATE,
+                     *(c for _, columns in sampled for c in columns)))
+
+
+def spec_layout(spec) -> Layout:
+    """The run-log `Layout` of a `robots.RobotSpec`."""
+    left, right = spec.encoded
+    return layout(spec.wheel_names, (spec.wheel_names[left], spec.wheel_names[right]))
+
+
+LAYOUT = layout()
+"""The Corobot's run-log layout."""
+SAMPLED = LAYOUT.sampled
 """(robot port, its columns) of the signals sampled from their ports, in the table's order."""
-HELD = tuple(s.port for s in signals.SIGNALS.values()
-             if s.log and s.name not in MADE_WHEN_READ and s.costly)
+HELD = LAYOUT.held
 """The sampled ports held (`HELD_PERIOD`): costly to evaluate every sample."""
-HELD_COLUMNS = tuple(c for port, columns in SAMPLED if port in HELD for c in columns)
+HELD_COLUMNS = LAYOUT.held_columns
 """The run-log columns of the `HELD` ports."""
-COLUMNS = ("time", *(c for s in signals.SIGNALS.values() for c in s.log_columns))
+COLUMNS = LAYOUT.columns
 """The run log's columns: time, then each signal's (`signals.Signal.log`), in the table's
 order."""
-FORMATS = (".6f", *(s.log_format for s in signals.SIGNALS.values() for _ in s.log))
+FORMATS = LAYOUT.formats
 """The CSV format of each column."""
 
-RAW_COLUMNS = (*DriveStatus.get_fields(), "left_ticks", "right_ticks", *CHASSIS_STATE,
-               *(c for _, columns in SAMPLED for c in columns))
+RAW_COLUMNS = LAYOUT.raw_columns
 """What the sink records every `LOG_PERIOD` s (after its time): the drive's status, the front
 encoders' counts, the chassis' state (`odometry.CHASSIS_STATE`) and the sampled ports (the
 held ones through their holds), all straight from C++ systems' ports (no Python call per
 sample). `rows_of` makes the `COLUMNS` from them when the log is read: the heading, the tip
 margin and whole ticks are functions of one sample each, so they cost nothing while the
 simulation runs. With `ContactSamples` (a continuous plant) the sink records the columns up to
-the `HELD_COLUMNS` (`raw_columns`)."""
+the `HELD_COLUMNS` (`raw_columns`). The chassis' columns are at the same places in every
+robot's."""
 
 
-def raw_columns(held_when_read: bool) -> tuple[str, ...]:
+def raw_columns(held_when_read: bool, layout: Layout = LAYOUT) -> tuple[str, ...]:
     """The sink's columns: `RAW_COLUMNS`, less the `HELD_COLUMNS` when they are made when the
     log is read (`ContactSamples`)."""
-    return tuple(c for c in RAW_COLUMNS if not (held_when_read and c in HELD_COLUMNS))
+    return layout.sink_columns(held_when_read)
 
 
 CONTACT_STATES = "run_log_contact_states"
@@ -96,15 +155,16 @@ CONTACT_STATES = "run_log_contact_states"
 
 
 def add_run_log(builder, name: str, chassis_state_port, drive_status_port, encoder_ticks_port,
-                sampled_ports: dict, held_when_read: bool = False):
+                sampled_ports: dict, held_when_read: bool = False, layout: Layout = LAYOUT):
     """Adds `<name>.run_log_row` (a Multiplexer of `raw_columns`: `drive_status_port`,
     `encoder_ticks_port`, `chassis_state_port` and the `sampled_ports`, {`SAMPLED` port name:
     output port}, the `HELD` ones each through a hold `<name>.run_log_<port>`) and its sink
     `<name>.run_log`; returns the sink. With `held_when_read` (a continuous plant, whose
     station has `add_contact_states`) the `HELD` ports are not sampled: their columns are made
-    when the log is read (`ContactSamples`)."""
-    sampled = [(port, columns) for port, columns in SAMPLED
-               if not (held_when_read and port in HELD)]
+    when the log is read (`ContactSamples`). `layout`: the robot's (the Corobot's)."""
+    held = layout.held
+    sampled = [(port, columns) for port, columns in layout.sampled
+               if not (held_when_read and port in held)]
     sizes = [len(DriveStatus.get_fields()), 2, len(CHASSIS_STATE),
              *(len(columns) for _, columns in sampled)]
     row = builder.AddNamedSystem(f"{name}.run_log_row", Multiplexer(sizes))
@@ -112,7 +172,7 @@ def add_run_log(builder, name: str, chassis_state_port, drive_status_port, encod
         builder.Connect(port, row.get_input_port(k))
     for k, (port_name, columns) in enumerate(sampled, start=3):
         source = sampled_ports[port_name]
-        if port_name in HELD:
+        if port_name in held:
             hold = builder.AddNamedSystem(f"{name}.run_log_{port_name}",
                                           ZeroOrderHold(HELD_PERIOD, len(columns)))
             builder.Connect(source, hold.get_input_port())
@@ -154,7 +214,9 @@ class ContactSamples:
     columns of the last sample moved out of the sink are kept here (`moved_out`): what rows
     after it show until the next sample."""
 
-    def __init__(self, diagram, plant, robots):
+    def __init__(self, diagram, plant, robots, layouts: dict | None = None):
+        """`robots`: their names; `layouts`: {name: its `Layout`} (default the Corobot's)."""
+        layouts = {name: (layouts or {}).get(name, LAYOUT) for name in robots}
         self.sink = diagram.GetSubsystemByName(CONTACT_STATES)
         self._diagram, self._plant = diagram, plant
         self._holds = [diagram.GetSubsystemByName(held_velocity_name(name)) for name in robots]
@@ -163,7 +225,8 @@ class ContactSamples:
         self._scratch = None
         self._made: dict[str, list] = {name: [] for name in robots}
         """Each robot's columns of the sink's first samples, made so far."""
-        self._before = dict.fromkeys(robots, np.zeros(len(HELD_COLUMNS)))
+        self._sizes = {name: len(layouts[name].held_columns) for name in robots}
+        self._before = {name: np.zeros(self._sizes[name]) for name in robots}
         """Each robot's columns of rows before the sink's first sample: the holds' initial
         values, or the last sample moved out."""
 
@@ -214,19 +277,20 @@ class ContactSamples:
     def clear(self) -> None:
         """The sink was cleared for a run from the start."""
         self._made = {name: [] for name in self._made}
-        self._before = dict.fromkeys(self._made, np.zeros(len(HELD_COLUMNS)))
+        self._before = {name: np.zeros(self._sizes[name]) for name in self._made}
 
 
-def rows_of(times: np.ndarray, raw: np.ndarray, tip_margin, held=None) -> np.ndarray:
-    """Run-log rows (`COLUMNS`) from the sink's sample `times` [n] and `raw` samples [n,
-    `raw_columns`]; `tip_margin`: the robot's `stability.TipMargin` (its `margin_of_up`);
+def rows_of(times: np.ndarray, raw: np.ndarray, tip_margin, held=None,
+            layout: Layout = LAYOUT) -> np.ndarray:
+    """Run-log rows (`layout.columns`) from the sink's sample `times` [n] and `raw` samples
+    [n, `raw_columns`]; `tip_margin`: the robot's `stability.TipMargin` (its `margin_of_up`);
     `held`: [n, `HELD_COLUMNS`] when the sink has none (`ContactSamples.columns`)."""
-    column = {c: raw[:, i] for i, c in enumerate(raw_columns(held is not None))}
+    column = {c: raw[:, i] for i, c in enumerate(layout.sink_columns(held is not None))}
     if held is not None:
-        column.update((c, held[:, i]) for i, c in enumerate(HELD_COLUMNS))
-    made = _made_when_read(column, tip_margin)
+        column.update((c, held[:, i]) for i, c in enumerate(layout.held_columns))
+    made = _made_when_read(column, tip_margin, layout.signals["encoders"].keys)
     out = [times]
-    for spec in signals.SIGNALS.values():
+    for spec in layout.signals.values():
         values = made.get(spec.name)
         out += [values[key] if values is not None else column[c] for c, key in spec.log]
     return np.column_stack(out)
@@ -244,15 +308,17 @@ def _margins(R: np.ndarray, tip_margin) -> np.ndarray:
     return tip_margin.margin_of_up(R[:, 2, 0], R[:, 2, 1], R[:, 2, 2])
 
 
-def _made_when_read(column: dict, tip_margin) -> dict:
-    """{signal name: {key: column}} of the `MADE_WHEN_READ` signals, from the raw columns."""
+def _made_when_read(column: dict, tip_margin, encoded=signals.CODED) -> dict:
+    """{signal name: {key: column}} of the `MADE_WHEN_READ` signals, from the raw columns
+    (`encoded`: the wheels with an encoder, left and right, whose keys the per-side columns
+    have)."""
     R = rotation_rows(np.column_stack([column[c] for c in CHASSIS_STATE[:4]]))
     left, right = column["power_left"], column["power_right"]
+    left_wheel, right_wheel = encoded
     return {
-        "commanded_power": {"front_left": left, "rear_left": left, "front_right": right,
-                            "rear_right": right},
-        "encoders": {"front_left": np.rint(column["left_ticks"]),
-                     "front_right": np.rint(column["right_ticks"])},
+        "commanded_power": {left_wheel: left, right_wheel: right},
+        "encoders": {left_wheel: np.rint(column["left_ticks"]),
+                     right_wheel: np.rint(column["right_ticks"])},
         "pose": {"x": column["x"], "y": column["y"],
                  "yaw": np.arctan2(R[:, 1, 0], R[:, 0, 0])},  # as `odometry.heading_of`
         "tip_margin": {"": _margins(R, tip_margin)},
@@ -272,29 +338,29 @@ def max_tilt_deg(raw: np.ndarray) -> float:
 
 
 def log_rows(sink, root_context, tip_margin, contact_samples=None,
-             name: str = "") -> np.ndarray:
-    """The log so far as an array with the `COLUMNS` (one row per sample; `rows_of`), its
-    `HELD_COLUMNS` from `contact_samples` (a `ContactSamples`, robot `name`) when the sink has
-    none."""
+             name: str = "", layout: Layout = LAYOUT) -> np.ndarray:
+    """The log so far as an array with the `layout.columns` (one row per sample; `rows_of`),
+    its `HELD_COLUMNS` from `contact_samples` (a `ContactSamples`, robot `name`) when the sink
+    has none."""
     log = sink.FindLog(root_context)
     if not log.num_samples():
-        return np.zeros((0, len(COLUMNS)))
-    if (contact_samples is None) != (log.data().shape[0] == len(RAW_COLUMNS)):
+        return np.zeros((0, len(layout.columns)))
+    if (contact_samples is None) != (log.data().shape[0] == len(layout.raw_columns)):
         raise ValueError(f"run log {sink.get_name()}: its held columns are "
                          f"{'made when read' if contact_samples is None else 'sampled'}: "
                          f"{'pass' if contact_samples is None else 'pass no'} ContactSamples")
     times = log.sample_times()
     held = (None if contact_samples is None
             else contact_samples.columns(name, root_context, times))
-    return rows_of(times, log.data().T, tip_margin, held)
+    return rows_of(times, log.data().T, tip_margin, held, layout)
 
 
-def write_csv(rows: np.ndarray, path: str | Path) -> None:
+def write_csv(rows: np.ndarray, path: str | Path, layout: Layout = LAYOUT) -> None:
     """Writes run-log rows (from `log_rows`) as CSV with a header line (each column in its
-    `FORMATS`)."""
+    `FORMATS`; `layout`: the robot's)."""
     formats = [(lambda v: str(int(v))) if f == "d" else (lambda v, f=f: format(v, f))
-               for f in FORMATS]
+               for f in layout.formats]
     with open(path, "w") as out:
-        out.write(",".join(COLUMNS) + "\n")
+        out.write(",".join(layout.columns) + "\n")
         for row in rows:
             out.write(",".join(f(v) for f, v in zip(formats, row, strict=True)) + "\n")
