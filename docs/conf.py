@@ -33,6 +33,9 @@ suppress_warnings = ["ref.python"]
 """Only "more than one target found": a signature's `type` also names the attributes called
 `type` (`commands.Arg.type`, `Ros2.type`); a missing target is not warned of unless nitpicky."""
 
+smartquotes = False
+"""Text as written (the ranges' words are the loader's, character for character)."""
+
 html_theme = "furo"
 html_title = "corobot-drake"
 html_static_path = []

@@ -1,0 +1,154 @@
+"""The docs site (docs/, Sphinx + MyST) builds with warnings as errors, loads nothing from the
+network, checks its internal links, and its generated reference holds what the code declares:
+every scenario field with its range, every command's --help, every HTTP path, every ROS 2
+topic, action and service.
+
+One build of the whole site per module (~10 s of CPU here; the generated pages are made in the
+build's process: docs/_ext/corobot_docs)."""
+
+import dataclasses as dc
+import html
+import re
+import subprocess
+import sys
+
+import pytest
+
+from conftest import REPO
+
+DOCS = REPO / "docs"
+
+
+def sphinx(source, out, *extra):
+    """`sphinx -W --keep-going -b html` (quiet) of `source` into `out`: the finished process."""
+    return subprocess.run([sys.executable, "-m", "sphinx", "-W", "--keep-going", "-q", "-b",
+                           "html", *extra, str(source), str(out)],
+                          capture_output=True, text=True, cwd=REPO, timeout=600)
+
+
+@pytest.fixture(scope="module")
+def site(tmp_path_factory):
+    out = tmp_path_factory.mktemp("site")
+    build = sphinx(DOCS, out, "-d", str(out / ".doctrees"))
+    return out, build
+
+
+def text(site, page: str, section: str | None = None) -> str:
+    """A built page's text (or its section whose anchor is `section`, up to the next):
+    tags removed, entities decoded, whitespace collapsed."""
+    raw = (site[0] / page).read_text()
+    if section is not None:
+        raw = raw.split(f'<section id="{section}">', 1)[1].split("<section id=", 1)[0]
+    raw = re.sub(r"<(script|style)\b.*?</\1>", "", raw, flags=re.S)
+    return re.sub(r"\s+", " ", html.unescape(re.sub(r"<[^>]+>", " ", raw)))
+
+
+def test_the_site_builds_with_warnings_as_errors(site):
+    _, build = site
+    assert build.returncode == 0, build.stderr[-3000:]
+    assert build.stderr.strip() == ""
+
+
+def test_no_page_loads_anything_from_the_network(site):
+    """Offline: no script, stylesheet, image or font from http(s) (links to other sites are
+    fine: they are not loaded)."""
+    out, _ = site
+    remote = re.compile(r"""<(?:script|img|iframe|source)\b[^>]*\bsrc=["']?(?:https?:)?//"""
+                        r"""|<link\b[^>]*\bhref=["']?(?:https?:)?//"""
+                        r"""|url\(\s*["']?(?:https?:)?//|@import\s+["']?(?:https?:)?//""")
+    found = [f"{p.relative_to(out)}: {m.group(0)}"
+             for p in sorted(out.rglob("*")) if p.suffix in (".html", ".css", ".js")
+             for m in remote.finditer(p.read_text(errors="replace"))]
+    assert found == []
+    assert (out / "index.html").exists() and (out / "reference" / "scenario.html").exists()
+
+
+def test_a_broken_internal_link_fails_the_build(tmp_path):
+    """The site's configuration (-c docs) on two pages, one linking to a heading the other
+    lacks: Sphinx reports it, so the site's build fails on a broken link."""
+    source = tmp_path / "src"
+    source.mkdir()
+    (source / "index.md").write_text("# Home\n\n```{toctree}\nother\n```\n\n"
+                                     "[there](other.md#a-heading) and [gone](other.md#nowhere)\n")
+    (source / "other.md").write_text("# Other\n\n## A heading\n\ntext\n")
+    build = sphinx(source, tmp_path / "out", "-c", str(DOCS))
+    assert build.returncode != 0
+    problems = [line for line in build.stderr.splitlines() if "WARNING" in line]
+    assert len(problems) == 1 and "nowhere" in problems[0], build.stderr
+
+
+def test_the_scenario_reference_has_every_sensor_field_with_its_range(site):
+    """Every field of every registered sensor kind's config, with its range in words
+    (`Range.text`), as the loader states it."""
+    from corobot_drake.limits import OneOf, Range
+    from corobot_drake.sensors.registry import KINDS
+
+    for kind in KINDS:
+        if not dc.is_dataclass(kind.config_type):
+            continue  # Drake's CameraConfig: its bounds are checked below
+        section = text(site, "reference/scenario.html", kind.config_type.__name__.lower())
+        for f in dc.fields(kind.config_type):
+            assert f" {f.name} " in section, f"{kind.field}: {f.name}"
+            bound = f.metadata.get("bound")
+            if isinstance(bound, Range):
+                assert bound.text() in section, f"{kind.field}.{f.name}: {bound.text()}"
+            elif isinstance(bound, OneOf):
+                assert all(n in section for n in bound.names)
+
+
+def test_the_scenario_reference_has_drakes_structs_with_their_bounds(site):
+    from corobot_drake.config.bounds import DRAKE_BOUNDS
+    from corobot_drake.limits import Range
+
+    for cls, bounds in DRAKE_BOUNDS.items():
+        anchor = re.sub(r"[^a-z0-9]+", "-", cls.__qualname__.lower())  # docutils' ids
+        section = text(site, "reference/scenario.html", anchor)
+        for name, bound in bounds.items():
+            assert f" {name} " in section
+            if isinstance(bound, Range):
+                assert bound.text() in section, f"{cls.__qualname__}.{name}"
+
+
+def test_every_command_has_its_help(site):
+    page = text(site, "reference/cli.html")
+    commands = ["python -m corobot_drake", "python -m corobot_drake.study",
+                "python -m corobot_drake.ros2", "python -m corobot_drake.ros2.build"]
+    commands += [f"python tools/{p.name}" for p in sorted((REPO / "tools").glob("*.py"))]
+    for command in commands:
+        assert f"usage: {command} " in page, command
+    assert "--headless" in page and "--workers" in page
+
+
+def test_the_http_reference_has_every_path_and_method(site, monkeypatch):
+    monkeypatch.syspath_prepend(str(DOCS / "_ext"))
+    from corobot_docs.http import openapi
+
+    page = text(site, "reference/http.html")
+    for path, operations in openapi()["paths"].items():
+        for method in operations:
+            assert f"{method.upper()} {path}" in page, f"{method} {path}"
+
+
+def test_the_ros2_reference_has_every_topic_action_and_service(site):
+    from corobot_drake.ros2 import interfaces
+    from corobot_drake.sensors.registry import KINDS
+
+    page = text(site, "reference/ros2.html")
+    names = [t.name for t in interfaces.TOPICS] + [a.name for a in interfaces.ACTIONS] \
+        + [s.name for s in interfaces.SERVICES]
+    names += [kind.topic_name("<sensor>") + (f"/{sub}" if sub else "")
+              for kind in KINDS for sub in kind.ros2_channels()]
+    assert [n for n in names if f" {n} " not in page] == []
+
+
+def test_the_python_reference_documents_the_api(site):
+    """autodoc's entries (their anchors: the objects' full names), each kind's reading too."""
+    from corobot_drake.sensors.registry import KINDS
+
+    page = (site[0] / "reference" / "python.html").read_text()
+    names = ["corobot_drake.simulation.Simulation", "corobot_drake.simulation.Robot",
+             "corobot_drake.simulation.Robot.drive_distance",
+             "corobot_drake.commands.SetVelocity", "corobot_drake.serving.client.CorobotClient",
+             "corobot_drake.config.scenario.load_scenario"]
+    names += [f"{k.reading_type.__module__}.{k.reading_type.__qualname__}" for k in KINDS]
+    assert [n for n in names if f'id="{n}"' not in page] == []
