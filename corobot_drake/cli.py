@@ -124,6 +124,12 @@ def _add_ros2_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--ros2-network", action="store_true",
                    help="--ros2: discovery on the local network (SUBNET): any ROS 2 node there "
                    "with the same ROS_DOMAIN_ID can read the topics and drive the robot")
+    p.add_argument("--rate", metavar="X", default=1.0,
+                   help="--ros2: simulated s per wall-clock s (e.g. 0.5, 4), or `max`: as fast "
+                   "as it can; /clock is the only time, Meshcat and --serve follow it")
+    p.add_argument("--paused", action="store_true",
+                   help="--ros2: start paused (play, step and reset with the ROS 2 Simulation "
+                   "Interfaces: README: ROS 2)")
     p.add_argument("--rosbag", metavar="DIR",
                    help="write the ROS 2 topics as a rosbag2 directory (MCAP, CDR) that `ros2 "
                    "bag play` replays; headless at simulation speed, no ROS needed")
@@ -131,7 +137,11 @@ def _add_ros2_arguments(p: argparse.ArgumentParser) -> None:
 
 def check_ros2_arguments(args) -> None:
     """--ros2 and --rosbag: the extra installed (one line naming it), the bag's directory new."""
+    args.rate = ros2_rate(args.rate)
     if not args.ros2:
+        for flag, given in (("--rate", args.rate != 1.0), ("--paused", args.paused)):
+            if given:
+                raise ArgumentError(f"{flag}: only with --ros2")
         if args.ros2_network:
             raise ArgumentError("--ros2-network: only with --ros2")
         if getattr(args, "ros_args", None):
@@ -149,6 +159,24 @@ def check_ros2_arguments(args) -> None:
         if problem:
             raise ArgumentError(problem if problem.startswith("--rosbag")
                                 else f"--rosbag: {args.rosbag}: {problem}")
+
+
+ROS2_RATE = Range(0.0, 1000.0, low_open=True, why="simulated s per wall-clock s; or max")
+
+
+def ros2_rate(text) -> float:
+    """--rate: a number in `ROS2_RATE`, or `max` (`serving.runner.MAX_RATE`: as fast as it
+    can); ArgumentError naming the flag otherwise."""
+    if isinstance(text, float):
+        return text
+    if text.strip().lower() == "max":
+        return math.inf
+    try:
+        value = float(text)
+    except ValueError:
+        raise ArgumentError(f"--rate: expected a number or max, got {text!r}") from None
+    _check("--rate", value, ROS2_RATE)
+    return value
 
 
 def _ros2_front(args, scenario):
@@ -542,20 +570,22 @@ def _run(args, scenario, duration: float, foxglove, ros2=None) -> int:
 
         if args.camera_rate is None:
             serve_camera_rate(scenario)
-        return serve(lambda meshcat: Simulation(scenario, meshcat, foxglove=foxglove,
-                                                extras=extras),
+        return serve(lambda meshcat, scenario=scenario: Simulation(
+                         scenario, meshcat, foxglove=foxglove, extras=extras),
                      host=args.host, port=args.port, meshcat=not args.headless,
                      label=args.scenario, token=args.token,
-                     attach=ros2.attach if args.ros2 else None)
+                     attach=ros2.attach if args.ros2 else None,
+                     rate=args.rate, paused=args.paused)
     if args.ros2:
         from corobot_drake.ros2.run import run_live
 
         try:
-            return run_live(ros2, lambda meshcat: Simulation(
+            return run_live(ros2, lambda meshcat, scenario=scenario: Simulation(
                 scenario, meshcat, save_camera=args.save_camera, record=args.record is not None,
                 foxglove=foxglove, run_log_window=run_log_window(args), extras=extras),
                 meshcat=not args.headless, duration=duration,
-                run_log_window=run_log_window(args), finish=lambda sim: _finish(sim, args))
+                run_log_window=run_log_window(args), finish=lambda sim: _finish(sim, args),
+                rate=args.rate, paused=args.paused)
         except (ValueError, RendererUnavailableError) as e:
             print(f"error: {args.scenario}: (top level): {e}", file=sys.stderr)
             return 2

@@ -90,6 +90,8 @@ class LiveSink:
         self._publishers: dict = {}
 
     def declare(self, topic: str, msgtype: str, qos: ifc.Qos) -> None:
+        if topic in self._publishers:  # a simulation rebuilt (a spawn): the same topics
+            return
         self._publishers[topic] = self._node.create_publisher(
             ros_type(msgtype), topic, qos_profile(qos, self._sensor_qos))
 
@@ -181,6 +183,10 @@ class Ros2Node:
                                          partial(getattr(self, f"_{service.name}"), robot),
                                          qos_profile=SERVICE_QOS, callback_group=self._group)
         runner.hooks.append(self._check_deadman)
+        from corobot_drake.ros2.simulation_services import SimulationServices
+
+        self.simulation = SimulationServices(self, runner)
+        """The ROS 2 Simulation Interfaces: play, pause, step, reset, entities, spawning."""
 
     def _call(self, fn, timeout: float = ANSWER_TIMEOUT):
         """`fn(sim)` in the simulation thread; its result (or exception)."""
@@ -373,7 +379,10 @@ class Ros2Node:
         # per core, left a 2-core machine with two goals running nothing to serve /cmd_vel,
         # the parameters or any other service: a thread per blocking callback a robot can
         # have at once, and some for the rest.
-        threads = BLOCKING_CALLBACKS_PER_ROBOT * self._robots + OTHER_CALLBACK_THREADS
+        from corobot_drake.ros2.simulation_services import BLOCKING_CALLBACKS
+
+        threads = (BLOCKING_CALLBACKS_PER_ROBOT * self._robots + OTHER_CALLBACK_THREADS
+                   + BLOCKING_CALLBACKS)
         self._executor = MultiThreadedExecutor(num_threads=threads, context=self.context)
         self._executor.add_node(self.node)
         self._thread = threading.Thread(target=self._spin, name="corobot-ros2", daemon=True)

@@ -103,9 +103,11 @@ class Ros2Front(contextlib.ExitStack):
 
 
 def run_live(front: Ros2Front, make_sim, meshcat: bool, duration: float,
-             run_log_window: float | None, finish):
-    """Runs the simulation (`make_sim(meshcat or None)`, built in its thread) in real time with
-    the node attached, until `duration` simulated s have passed or Ctrl-C; then returns
+             run_log_window: float | None, finish, rate: float = 1.0, paused: bool = False):
+    """Runs the simulation (`make_sim(meshcat or None)`, built in its thread; `make_sim(meshcat,
+    scenario=...)` rebuilds it for a spawn) at `rate` x real time (`runner.MAX_RATE`: as fast
+    as it can; `paused`: from a pause) with the node attached, until `duration` simulated s
+    have passed (a reset starts them again) or Ctrl-C; then returns
     `finish(sim)`, called in the simulation thread (Meshcat, which a replay is written from,
     answers only the thread that made it). What building it raised is raised; a PhysicsError
 once `finish` has written the run so far."""
@@ -113,7 +115,8 @@ once `finish` has written the run so far."""
     from corobot_drake.serving.serve import sim_runner
     from corobot_drake.simulation import PhysicsError
 
-    runner = sim_runner(make_sim, meshcat, run_log_window=run_log_window)
+    runner = sim_runner(make_sim, meshcat, rate=rate, run_log_window=run_log_window,
+                        paused=paused)
     front.attach(runner)
     sys.setswitchinterval(SWITCH_INTERVAL)
     runner.start()

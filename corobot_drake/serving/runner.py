@@ -1,8 +1,9 @@
 """The simulation, run live: the `Runner` protocol the HTTP routes depend on, and `SimRunner`,
 which owns the Drake Context in a thread of its own.
 
-Threads: `SimRunner`'s thread builds the simulation, advances it in real time and is the only
-one that touches the Context. Other threads `submit()` a function, which the runner calls
+Threads: `SimRunner`'s thread builds the simulation, advances it in real time (x `rate`, or as
+fast as it can), or holds it `paused` and takes the physics steps asked of it (`step`), and is
+the only one that touches the Context. Other threads `submit()` a function, which the runner calls
 between steps, or `watch()` one, which it calls after every step until it answers; results
 come back in `concurrent.futures.Future`s. Every `snapshot_period` s of simulated time, and
 after each submitted call, the runner publishes a `snapshot` (`snapshots.snapshot`, replaced
@@ -86,19 +87,51 @@ def _resolve(future: concurrent.futures.Future, value: Any = None,
         pass
 
 
+MAX_RATE = math.inf
+"""`rate`: as fast as the machine can (no wait between the loop's turns)."""
+
+
+class StepJob:
+    """Physics steps asked of a paused runner (`SimRunner.step`): `future` gets the number of
+    steps taken once they are all taken, or fewer when `cancel()`ed; `progress(done, left)`,
+    if given, is called in the simulation thread after each advance."""
+
+    def __init__(self, steps: int, progress: Callable[[int, int], None] | None = None):
+        self.steps = steps
+        self.done = 0
+        self.progress = progress
+        self.future: concurrent.futures.Future[int] = concurrent.futures.Future()
+        self.start: float | None = None
+        """s: the simulated time the first step starts from."""
+        self._cancelled = threading.Event()
+
+    def cancel(self) -> None:
+        """Stops after the advance under way (any thread)."""
+        self._cancelled.set()
+
+    @property
+    def cancelled(self) -> bool:
+        return self._cancelled.is_set()
+
+
 class SimRunner:
-    """Runs a simulation in real time (x `rate`) in a thread of its own; implements `Runner`.
-    See the module docstring."""
+    """Runs a simulation in real time (x `rate`; `MAX_RATE`: as fast as it can) in a thread of
+    its own, or holds it `paused`; implements `Runner`. See the module docstring."""
 
     def __init__(self, sim, *, rate: float = 1.0, tick: float = 1.0 / 120.0,
                  max_step: float = 0.05, max_lag: float = 0.5,
-                 snapshot_period: float = 1.0 / 30.0):
+                 snapshot_period: float = 1.0 / 30.0, paused: bool = False):
         """`sim`: a Simulation, or a function that builds one; `start()` then builds it in the
         simulation thread, so that everything bound to a thread (the renderer's OpenGL
-        context) belongs to the thread that steps the simulation."""
+        context) belongs to the thread that steps the simulation. `paused`: start paused."""
         self._factory = sim if callable(sim) else None
         self.sim = None if callable(sim) else sim
         self.rate = rate
+        self._paused = paused
+        self._jobs: list[StepJob] = []
+        """Step requests, oldest first; the first is under way (simulation thread only)."""
+        self._anchor = (math.nan, math.nan)
+        """(wall-clock s, simulated s) the pacing counts from; NaN: from the next turn."""
         self.tick = tick
         self.max_step = max_step
         self.max_lag = max_lag
@@ -110,6 +143,9 @@ class SimRunner:
         self.meshcat_url: str | None = None
         self.hooks: list[Callable[[Any], None]] = []
         """Called with the simulation between steps, in its thread (e.g. Meshcat teleop)."""
+        self.rebuild: Callable[[Any], Any] | None = None
+        """Builds a Simulation of a given scenario as this one was built (its Meshcat, its
+        front ends' systems), for `replace`; None when the maker of the runner gives none."""
         self.on_publish: list[Callable[[dict], None]] = []
         """Called in the simulation thread with each new snapshot (the transport sends it)."""
         self.error: BaseException | None = None
@@ -162,6 +198,29 @@ class SimRunner:
 
     def watch(self, fn: Callable[[Any], T | None]) -> concurrent.futures.Future[T]:
         return self._put(fn, watch=True)
+
+    @property
+    def paused(self) -> bool:
+        """Whether the simulation holds still (but for the steps asked of it)."""
+        return self._paused
+
+    def pause(self, paused: bool = True) -> None:
+        """Pauses (or plays) from the loop's next turn; playing paces from where it is."""
+        self._anchor = (math.nan, math.nan)
+        self._paused = paused
+
+    def step(self, job: StepJob) -> StepJob:
+        """Queues `job` (taken once the runner is paused and the jobs before it are done)."""
+        queued = self.submit(lambda sim: self._jobs.append(job))
+        queued.add_done_callback(
+            lambda f: f.exception() is not None and _resolve(job.future, error=f.exception()))
+        return job
+
+    def replace(self, sim) -> None:
+        """In the simulation thread: runs `sim` from now on (built by `rebuild`, with the same
+        robots); the one it replaces is dropped here, in this thread."""
+        self.sim = sim
+        self._publish()
 
     def call(self, fn: Callable[[Any], T], timeout: float = 10.0) -> T:
         """`submit(fn)` and wait for its result."""
@@ -228,32 +287,87 @@ class SimRunner:
                 self._fail_pending(SimulationStoppedError("the simulation stopped"))
 
     def _loop(self) -> None:
-        sim, clock = self.sim, time.perf_counter
-        self.started_wall = wall0 = clock()
-        self.started_sim = t0 = sim.time
-        next_snapshot = sim.time
+        clock = time.perf_counter
+        self.started_wall = clock()
+        self.started_sim = self.sim.time
+        seen = (None, math.nan)  # (the simulation, its time) as the last turn left them
+        next_snapshot = self.sim.time
         while not self._stop.is_set():
             self._drain()
+            sim = self.sim  # (a request may have replaced it, or reset it)
+            if seen != (sim, sim.time):  # a reset or a teleport in time: pace from here
+                self._anchor = (math.nan, math.nan)
+                next_snapshot = min(next_snapshot, sim.time)
+                for job in self._jobs[:1]:  # a job under way counts its steps on from here
+                    if job.start is not None:
+                        job.start = sim.time - job.done * sim.physics_step
             for hook in self.hooks:
                 hook(sim)
             now = clock()
-            target = t0 + self.rate * (now - wall0)
-            if target - sim.time > self.max_lag:
-                self.slips += 1
-                wall0, t0 = now, sim.time
-                target = sim.time
-            stop = sim.stop_time(min(target, sim.time + self.max_step))
+            job = self._job(sim)
+            stop = self._job_stop(sim, job) if job else self._paced_stop(sim, now)
             if stop > sim.time + 1e-9:
                 sim.advance_to(stop)
                 self.steps += 1
                 self._check_watches()
+            if job:
+                self._job_advanced(sim, job)
             if sim.time >= next_snapshot - 1e-9:
                 self._publish()
                 next_snapshot = sim.time + self.snapshot_period
+            seen = (sim, sim.time)
             self._window.append((clock(), sim.time))
             if len(self._window) > 240:
                 del self._window[:40]
-            self._idle(self.tick - (clock() - now))
+            if not (job or (self.rate == MAX_RATE and not self._paused)):
+                self._idle(self.tick - (clock() - now))
+
+    def _paced_stop(self, sim, now: float) -> float:
+        """Where this turn stops when no steps are asked: here when paused; else where the
+        clock (x `rate`) is, at most `max_step` on."""
+        if self._paused:
+            return sim.time
+        if self.rate == MAX_RATE:
+            return sim.stop_time(sim.time + self.max_step)
+        wall0, t0 = self._anchor
+        if math.isnan(wall0):
+            wall0, t0 = self._anchor = (now, sim.time)
+        target = t0 + self.rate * (now - wall0)
+        if target - sim.time > self.max_lag:
+            self.slips += 1
+            self._anchor = (now, sim.time)
+            target = sim.time
+        return sim.stop_time(min(target, sim.time + self.max_step))
+
+    def _job(self, sim) -> StepJob | None:
+        """The step job to work on this turn (paused only), those cancelled answered."""
+        while self._paused and self._jobs:
+            job = self._jobs[0]
+            if not (job.cancelled or job.future.cancelled() or job.done >= job.steps):
+                if job.start is None:
+                    job.start = sim.time
+                return job
+            self._jobs.pop(0)
+            _resolve(job.future, job.done)
+        return None
+
+    def _job_stop(self, sim, job: StepJob) -> float:
+        """The next stop of `job`: one physics step for a job that reports its progress,
+        else as many as fit in `max_step` (at least one), each ending on the physics' grid
+        from where the job started."""
+        h = sim.physics_step
+        most = 1 if job.progress is not None else max(1, int(self.max_step / h + 1e-9))
+        n = min(job.steps - job.done, most)
+        return sim.on_step(job.start + (job.done + n) * h)
+
+    def _job_advanced(self, sim, job: StepJob) -> None:
+        h = sim.physics_step
+        job.done = min(job.steps, round((sim.time - job.start) / h))
+        if job.progress is not None:
+            job.progress(job.done, job.steps - job.done)
+        if job.done >= job.steps:
+            self._jobs.pop(0)
+            _resolve(job.future, job.done)
 
     def _idle(self, seconds: float) -> None:
         """Waits up to `seconds` for a request, and serves it."""
@@ -319,6 +433,9 @@ class SimRunner:
             except queue.Empty:
                 break
             _resolve(future, error=error)
+        jobs, self._jobs = self._jobs, []
+        for job in jobs:
+            _resolve(job.future, error=error)
         watches, self._watches = self._watches, []
         for _, future in watches:
             _resolve(future, error=error)

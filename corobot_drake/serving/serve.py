@@ -52,13 +52,14 @@ third of the simulation's time budget."""
 
 def serve(make_sim, host: str = "127.0.0.1", port: int = 50000, meshcat: bool = False,
           log_level: str = "warning", label: str = "", token: str | None = None,
-          rate: float = 1.0, attach=None) -> int:
+          rate: float = 1.0, attach=None, paused: bool = False) -> int:
     """Builds the simulation (`make_sim(meshcat)`, in the simulation thread, with a Meshcat
     made there too when `meshcat`: Meshcat must be used from the thread that made it) and
     serves it until Ctrl-C. The HTTP server runs in a child process (see the module
     docstring), behind `security.Access.for_host(host, token)` (off loopback a token is
     needed: `token`, or one made and printed). `rate`: simulated s per wall-clock s (a rate
-    the machine cannot keep runs as fast as it can; tools/bench_memory.py). Returns the exit
+    the machine cannot keep runs as fast as it can; tools/bench_memory.py; `runner.MAX_RATE`
+    asks for that; `paused`: start paused, for the ROS 2 node to play). Returns the exit
     status: 2 when the port, the token or the simulation cannot be had. `attach(runner)`, if
     given, is called with the runner before it starts (another front end taking commands
     through it: the ROS 2 node, `ros2.run.Ros2Front.attach`)."""
@@ -85,7 +86,7 @@ def serve(make_sim, host: str = "127.0.0.1", port: int = 50000, meshcat: bool = 
     if value is None:
         return 2
     sys.setswitchinterval(SWITCH_INTERVAL)
-    runner = sim_runner(make_sim, meshcat, rate)
+    runner = sim_runner(make_sim, meshcat, rate, paused=paused)
     if attach is not None:
         attach(runner)
     if not _started(runner, http, label):
@@ -213,10 +214,16 @@ def _announce(shown: str, host: str, port: int, access, runner) -> None:
 
 
 def sim_runner(make_sim, meshcat: bool, rate: float = 1.0,
-               run_log_window: float | None = SERVE_RUN_LOG_WINDOW):
+               run_log_window: float | None = SERVE_RUN_LOG_WINDOW, paused: bool = False):
     """A `SimRunner` (not started) whose simulation thread makes the Meshcat (if `meshcat`),
-    the simulation (`make_sim(meshcat or None)`) and the Meshcat teleop."""
+    the simulation (`make_sim(meshcat or None)`) and the Meshcat teleop. When `make_sim`
+    takes a `scenario=` keyword, the runner can `rebuild` the simulation of another scenario
+    (ROS 2's SpawnEntity) in the same Meshcat."""
+    import inspect
+
     from corobot_drake.serving.runner import SimRunner
+
+    rebuilds = "scenario" in inspect.signature(make_sim).parameters
 
     def build():
         viewer = None
@@ -231,11 +238,21 @@ def sim_runner(make_sim, meshcat: bool, rate: float = 1.0,
             from corobot_drake.serving.teleop import MeshcatTeleop
 
             teleop = MeshcatTeleop(viewer, sim)
-            runner.hooks.append(lambda s: teleop.poll())
+            # Bound to this simulation: after a rebuild (a spawn) the buttons rest.
+            runner.hooks.append(lambda s, first=sim: teleop.poll() if s is first else None)
+        if rebuilds:
+            runner.rebuild = lambda scenario: _rebuilt(make_sim, viewer, scenario,
+                                                       run_log_window)
         return sim
 
-    runner = SimRunner(build, rate=rate)
+    runner = SimRunner(build, rate=rate, paused=paused)
     return runner
+
+
+def _rebuilt(make_sim, viewer, scenario, run_log_window: float | None):
+    sim = make_sim(viewer, scenario=scenario)
+    sim.run_log_window = run_log_window
+    return sim
 
 
 def http_main(conn, access, port: int, log_level: str, niceness: int,

@@ -1,0 +1,398 @@
+"""The ROS 2 Simulation Interfaces: the `simulation_interfaces` package built from its public
+definitions (its type hashes rosidl's own), the runner's pause and steps alone, and the node's
+services and action from another process in a private network (`ros2_probe`), as a ROS RL
+loop drives them: step, observe, step again; reset; the same trajectory every time."""
+
+import ctypes
+import hashlib
+import json
+import math
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("rclpy", reason="the [ros2] extra (tools/setup installs it)")
+pytest.importorskip("simulation_interfaces.msg", reason="python -m corobot_drake.ros2.build")
+
+from corobot_drake.ros2 import simulation_services as ss
+from corobot_drake.ros2.build import INTERFACES_DIR
+from corobot_drake.serving.runner import MAX_RATE, SimRunner, StepJob
+
+SOURCES = INTERFACES_DIR / "simulation_interfaces"
+UPSTREAM_DIGEST = "3379e49d8eae325ad4c4df5a8b37a307956bb1b1685e166c49bf225160112379"
+"""sha256 over the msg/srv/action files (sorted path, then bytes) of ros-simulation/
+simulation_interfaces at tag 2.1.0 (commit 172a1b1c1b3c): the sources are its, unchanged."""
+DEPENDENCIES = ("builtin_interfaces", "std_msgs", "geometry_msgs", "action_msgs",
+                "service_msgs", "unique_identifier_msgs")
+
+
+# --- the package -----------------------------------------------------------------------------
+
+
+def _interface_files() -> list[Path]:
+    return sorted(p for d in ("msg", "srv", "action") for p in (SOURCES / d).glob("*"))
+
+
+def test_sources_are_the_upstream_release():
+    digest = hashlib.sha256()
+    for path in _interface_files():
+        digest.update(str(path.relative_to(SOURCES)).encode())
+        digest.update(path.read_bytes())
+    assert digest.hexdigest() == UPSTREAM_DIGEST
+    assert len(_interface_files()) == 15 + 22 + 1
+
+
+def official_hashes(tmp_path: Path) -> dict[str, str]:
+    """Every type's RIHS01 hash as rosidl computes it from the interface files: its adapter
+    (.msg/.srv/.action to .idl) and its type-description generator, the installed
+    dependencies' descriptions included."""
+    from rosidl_adapter import convert_to_idl
+    from rosidl_generator_type_description import generate_type_hash
+
+    share = Path(sys.prefix) / "share"
+    idl_dir = tmp_path / "idl"
+    tuples = [f"{idl_dir}:{convert_to_idl(SOURCES, 'simulation_interfaces', p.relative_to(SOURCES), idl_dir).relative_to(idl_dir)}"  # noqa: E501
+              for p in _interface_files()]
+    arguments = tmp_path / "arguments.json"
+    arguments.write_text(json.dumps({
+        "package_name": "simulation_interfaces", "output_dir": str(tmp_path / "json"),
+        "idl_tuples": tuples, "include_paths": [f"{d}:{share / d}" for d in DEPENDENCIES]}))
+    hashes = {}
+    for path in generate_type_hash(str(arguments)):
+        for entry in json.loads(Path(path).read_text())["type_hashes"]:
+            hashes[entry["type_name"]] = entry["hash_string"]
+    return hashes
+
+
+class _TypeHash(ctypes.Structure):
+    _fields_ = [("version", ctypes.c_uint8), ("value", ctypes.c_uint8 * 32)]
+
+
+def runtime_hash(cls, kind: str) -> str:
+    """The RIHS01 hash the built package's C type support reports for a message, service or
+    action class (its `get_type_hash_func`: the field after three pointers in a message's
+    type support struct, after eight in a service's, after five in an action's)."""
+    type(cls).__import_type_support__()
+    capsule = ctypes.py_object(cls._TYPE_SUPPORT)
+    get_pointer = ctypes.pythonapi.PyCapsule_GetPointer
+    get_pointer.restype, get_pointer.argtypes = ctypes.c_void_p, [ctypes.py_object,
+                                                                  ctypes.c_char_p]
+    name = ctypes.pythonapi.PyCapsule_GetName
+    name.restype, name.argtypes = ctypes.c_char_p, [ctypes.py_object]
+    support = get_pointer(capsule, name(capsule))
+    slot = {"msg": 3, "srv": 8, "action": 5}[kind]
+    function = ctypes.cast(support + slot * ctypes.sizeof(ctypes.c_void_p),
+                           ctypes.POINTER(ctypes.c_void_p))[0]
+    get = ctypes.CFUNCTYPE(ctypes.POINTER(_TypeHash), ctypes.c_void_p)(function)
+    h = get(support).contents
+    assert h.version == 1
+    return "RIHS01_" + bytes(h.value).hex()
+
+
+def test_built_type_hashes_are_the_official_ones(tmp_path):
+    import importlib
+
+    official = official_hashes(tmp_path)
+    checked = 0
+    for path in _interface_files():
+        kind = path.parent.name
+        cls = getattr(importlib.import_module(f"simulation_interfaces.{kind}"), path.stem)
+        name = f"simulation_interfaces/{kind}/{path.stem}"
+        assert runtime_hash(cls, kind) == official[name], name
+        checked += 1
+        if kind == "srv":  # a request and a response are messages of their own
+            for part in ("Request", "Response"):
+                assert runtime_hash(getattr(cls, part), "msg") == official[f"{name}_{part}"]
+    assert checked == 38
+
+
+# --- the runner alone ------------------------------------------------------------------------
+
+
+class _Clock:
+    """A Simulation as the runner sees it: time, a 10 ms physics step, advance_to."""
+
+    physics_step = 0.01
+
+    def __init__(self):
+        self.time, self.stops, self.robots = 0.0, [], {}
+
+    def stop_time(self, t):
+        return t
+
+    def on_step(self, t):
+        k = round(t / self.physics_step)
+        return k * self.physics_step if abs(t / self.physics_step - k) < 1e-6 else t
+
+    def advance_to(self, t):
+        self.stops.append(t)
+        self.time = t
+
+
+@pytest.fixture
+def runner(monkeypatch):
+    monkeypatch.setattr("corobot_drake.serving.runner.snapshot", lambda sim: {"time": sim.time})
+    made = []
+
+    def make(**kwargs):
+        r = SimRunner(_Clock(), **kwargs).start()
+        made.append(r)
+        return r
+    yield make
+    for r in made:
+        r.stop()
+
+
+def test_paused_runner_takes_exactly_the_steps_asked(runner):
+    r = runner(paused=True)
+    time.sleep(0.05)
+    assert r.sim.time == 0.0  # paused from the start: no time passes
+    job = r.step(StepJob(12))
+    assert job.future.result(5) == 12
+    assert r.sim.time == 12 * 0.01  # on the physics' grid: k h exactly
+    seen = []
+    job = r.step(StepJob(3, progress=lambda done, left: seen.append((done, left))))
+    assert job.future.result(5) == 3 and seen == [(1, 2), (2, 1), (3, 0)]  # one step each
+    time.sleep(0.05)
+    assert r.sim.time == 15 * 0.01  # and stays paused
+
+
+def test_a_cancelled_job_ends_early_and_a_reset_repaces(runner):
+    r = runner(paused=True)
+    job = r.step(StepJob(10**6, progress=lambda done, left: done >= 5 and job.cancel()))
+    assert 5 <= job.future.result(5) < 10**6
+    r.call(lambda sim: setattr(sim, "time", 0.0))  # a reset: back in time
+    r.pause(False)  # real time, paced from the reset
+    time.sleep(0.2)
+    assert 0.1 < r.sim.time < 0.4
+
+
+def test_max_rate_runs_as_fast_as_it_can(runner):
+    r = runner(rate=MAX_RATE)
+    time.sleep(0.2)
+    assert r.sim.time > 2.0  # 10x real time at least (nothing to compute)
+
+
+# --- the node --------------------------------------------------------------------------------
+
+from ros2_probe import ONE_GRAPH_AT_A_TIME, ros2_simulation  # noqa: E402
+
+QUIET = "robots: {corobot: {commands: [], cameras: {front: {rgb: false}}}}"
+"""The default scene without its camera's frames (rendering is not what is tested)."""
+ACTIONS = [(0.3, 0.0), (0.3, 0.8), (0.0, -0.8), (-0.2, 0.0)]
+"""The RL loop's actions (linear m/s, angular rad/s), each held for `STEPS_PER_ACTION`."""
+STEPS_PER_ACTION = 10
+COMMAND_ARRIVAL = 0.3
+"""s (wall clock) for a /cmd_vel to reach the paused simulation (~1-7 ms on loopback): a
+command taken after the next step would make the trajectories differ, and the test fail."""
+
+
+@pytest.fixture(scope="module")
+def sim_ros():
+    from geometry_msgs.msg import Twist
+    from simulation_interfaces.srv import GetSimulationState, StepSimulation
+
+    with ros2_simulation(["--headless", "--paused", "--override", QUIET],
+                         serve=False) as (_, probe):
+        probe.call("/get_simulation_state", GetSimulationState, GetSimulationState.Request())
+        # A refused step (0) discovers the step service both ways without stepping.
+        probe.call("/step_simulation", StepSimulation, StepSimulation.Request(steps=0))
+        cmd_vel = probe.publisher("/cmd_vel", Twist)
+        deadline = time.monotonic() + 60
+        while cmd_vel.get_subscription_count() == 0 and time.monotonic() < deadline:
+            time.sleep(0.05)
+        yield probe
+
+
+def _call(probe, service, srv, /, retry=None, **fields):
+    return probe.call(f"/{service}", srv, srv.Request(**fields), retry=retry)
+
+
+def _pose(probe, entity="corobot"):
+    from simulation_interfaces.srv import GetEntityState
+
+    response = _call(probe, "get_entity_state", GetEntityState, retry=10.0, entity=entity)
+    assert response.result.result == response.result.RESULT_OK, response.result.error_message
+    s = response.state
+    p, q = s.pose.position, s.pose.orientation
+    return (s.header.stamp.sec + 1e-9 * s.header.stamp.nanosec,
+            (p.x, p.y, p.z, q.w, q.x, q.y, q.z, s.twist.linear.x, s.twist.angular.z))
+
+
+def _episode(probe) -> list:
+    """Reset, then each action: /cmd_vel, wait for it to arrive, step, observe."""
+    from geometry_msgs.msg import Twist
+    from simulation_interfaces.srv import ResetSimulation, StepSimulation
+
+    reset = _call(probe, "reset_simulation", ResetSimulation, retry=10.0)
+    assert reset.result.result == reset.result.RESULT_OK, reset.result.error_message
+    observations = [_pose(probe)]
+    for linear, angular in ACTIONS:
+        twist = Twist()
+        twist.linear.x, twist.angular.z = linear, angular
+        probe.publisher("/cmd_vel", Twist).publish(twist)
+        time.sleep(COMMAND_ARRIVAL)
+        step = _call(probe, "step_simulation", StepSimulation, steps=STEPS_PER_ACTION)
+        assert step.result.result == step.result.RESULT_OK, step.result.error_message
+        observations.append(_pose(probe))
+    return observations
+
+
+@ONE_GRAPH_AT_A_TIME
+def test_rl_loop_gets_the_same_trajectory_after_every_reset(sim_ros):
+    from simulation_interfaces.msg import SimulationState
+    from simulation_interfaces.srv import GetSimulationState
+
+    probe = sim_ros
+    state = _call(probe, "get_simulation_state", GetSimulationState, retry=10.0)
+    assert state.state.state == SimulationState.STATE_PAUSED  # --paused
+    first = _episode(probe)
+    times = [t for t, _ in first]
+    h = 0.01  # the default physics step
+    assert times == [pytest.approx(k * STEPS_PER_ACTION * h, abs=1e-9)
+                     for k in range(len(ACTIONS) + 1)]
+    x0, x1 = first[0][1][0], first[1][1][0]
+    assert x1 - x0 > 0.005  # the first action (0.3 m/s) moved it forwards
+    assert _episode(probe) == first  # bit for bit
+    assert _episode(probe) == first
+
+
+@ONE_GRAPH_AT_A_TIME
+def test_play_pause_stop_and_the_action(sim_ros):
+    from rclpy.action import ActionClient  # noqa: F401 (the probe's)
+    from simulation_interfaces.action import SimulateSteps
+    from simulation_interfaces.msg import SimulationState
+    from simulation_interfaces.srv import SetSimulationState
+
+    probe = sim_ros
+
+    def set_state(state):
+        return _call(probe, "set_simulation_state", SetSimulationState, retry=10.0,
+                     state=SimulationState(state=state)).result
+
+    assert set_state(SimulationState.STATE_PLAYING).result == 1
+    t0, _ = _pose(probe)
+    time.sleep(0.5)
+    t1, _ = _pose(probe)
+    assert 0.2 < t1 - t0 < 1.5  # real time, about
+    assert set_state(SimulationState.STATE_PAUSED).result == 1
+    t2, _ = _pose(probe)
+    time.sleep(0.3)
+    assert _pose(probe)[0] == t2
+    again = set_state(SimulationState.STATE_PAUSED)
+    assert again.result == SetSimulationState.Response.ALREADY_IN_TARGET_STATE
+    assert set_state(SimulationState.STATE_STOPPED).result == 1
+    assert _pose(probe)[0] == 0.0  # stopped: back at the start, paused
+    # the action: N steps with feedback after each, then paused
+    client = probe.action_client(SimulateSteps, "/simulate_steps")
+    feedback = []
+    handle = probe.wait_future(client.send_goal_async(
+        SimulateSteps.Goal(steps=7), feedback_callback=lambda m: feedback.append(
+            (m.feedback.completed_steps, m.feedback.remaining_steps))))
+    assert handle.accepted
+    done = probe.wait_future(handle.get_result_async())
+    assert done.result.result.result == 1
+    assert feedback[-1] == (7, 0) and len(feedback) >= 2
+    assert _pose(probe)[0] == pytest.approx(0.07, abs=1e-9)
+    # cancelled: stops, paused, fewer steps
+    handle = probe.wait_future(client.send_goal_async(SimulateSteps.Goal(steps=100_000)))
+    time.sleep(0.3)
+    probe.wait_future(handle.cancel_goal_async())
+    probe.wait_future(handle.get_result_async())
+    t = _pose(probe)[0]
+    assert 0.07 < t < 1000.0
+    time.sleep(0.2)
+    assert _pose(probe)[0] == t
+    # a goal of 0 or 10^12 steps is rejected when sent
+    for steps in (0, 10**12):
+        assert not probe.wait_future(client.send_goal_async(SimulateSteps.Goal(
+            steps=steps))).accepted
+
+
+@ONE_GRAPH_AT_A_TIME
+def test_bad_requests_get_their_codes_and_one_line(sim_ros):
+    from geometry_msgs.msg import Pose, PoseStamped
+    from simulation_interfaces.msg import EntityState, Resource
+    from simulation_interfaces.srv import (
+        DeleteEntity,
+        GetEntityState,
+        GetSimulatorFeatures,
+        SetEntityState,
+        SpawnEntity,
+        StepSimulation,
+    )
+
+    probe = sim_ros
+    R = ss.result().__class__
+
+    def check(response, code, words):
+        r = response.result
+        assert r.result == code and words in r.error_message and "\n" not in r.error_message, r
+
+    for steps in (0, 10**12):
+        check(_call(probe, "step_simulation", StepSimulation, retry=10.0, steps=steps),
+              R.RESULT_OPERATION_FAILED, "steps: must be in [1, 1000000]")
+    check(_call(probe, "get_entity_state", GetEntityState, retry=10.0, entity="nobody"),
+          R.RESULT_NOT_FOUND, "no entity named 'nobody'")
+    nan = Pose()
+    nan.position.x = math.nan
+    half = Pose()
+    half.orientation.w = 0.5
+    for pose, words in ((nan, "state.pose.position.x: must be a finite"),
+                        (half, "state.pose.orientation: must be a unit quaternion")):
+        check(_call(probe, "set_entity_state", SetEntityState, retry=10.0, entity="corobot",
+                    state=EntityState(pose=pose), set_pose=True),
+              SetEntityState.Response.INVALID_POSE, words)
+    box = Resource(resource_string="shape: !Box {size: [0.2, 0.2, 0.2]}")
+    at = PoseStamped()
+    at.pose.position.x, at.pose.position.z, at.pose.orientation.w = 1.0, 0.1, 1.0
+    S = SpawnEntity.Response
+    for fields, code, words in (
+            ({"name": "giant_box", "entity_resource": box}, S.NAME_NOT_UNIQUE, "is taken"),
+            ({"name": "9 lives", "entity_resource": box}, S.NAME_INVALID, "is not a name"),
+            ({"name": "b", "entity_resource": Resource()}, S.NO_RESOURCE, "both uri"),
+            ({"name": "b", "entity_resource": Resource(uri="/x/robot.usd")},
+             S.UNSUPPORTED_FORMAT, "spawn formats are yaml"),
+            ({"name": "b", "entity_resource": Resource(resource_string="shape: !Cone {}")},
+             S.RESOURCE_PARSE_ERROR, "entity_resource.resource_string: ")):
+        check(_call(probe, "spawn_entity", SpawnEntity, retry=10.0, initial_pose=at, **fields),
+              code, words)
+    check(_call(probe, "delete_entity", DeleteEntity, retry=10.0, entity="nobody"),
+          R.RESULT_NOT_FOUND, "no entity named")
+    # still serving
+    features = _call(probe, "get_simulator_features", GetSimulatorFeatures, retry=10.0)
+    assert features.features.spawn_formats == ["yaml"]
+
+
+@ONE_GRAPH_AT_A_TIME
+def test_spawn_then_delete_then_reset(sim_ros):
+    from geometry_msgs.msg import PoseStamped
+    from simulation_interfaces.srv import (
+        DeleteEntity,
+        GetEntities,
+        GetSpawnables,
+        ResetSimulation,
+        SpawnEntity,
+        StepSimulation,
+    )
+
+    probe = sim_ros
+    spawnables = _call(probe, "get_spawnables", GetSpawnables, retry=10.0).spawnables
+    at = PoseStamped()
+    at.pose.position.x, at.pose.position.z, at.pose.orientation.w = 1.0, 0.15, 1.0
+    spawned = _call(probe, "spawn_entity", SpawnEntity, name="crate", initial_pose=at,
+                    entity_resource=spawnables[0].entity_resource)
+    assert spawned.result.result == 1, spawned.result.error_message
+    assert spawned.entity_name == "crate"
+    entities = _call(probe, "get_entities", GetEntities, retry=10.0).entities
+    assert "crate" in entities and "corobot" in entities and "giant_box" in entities
+    _call(probe, "step_simulation", StepSimulation, steps=20)
+    _, crate = _pose(probe, "crate")
+    assert crate[0] == pytest.approx(1.0, abs=1e-3) and crate[2] < 0.15  # fell onto the ground
+    deleted = _call(probe, "delete_entity", DeleteEntity, entity="crate")
+    assert deleted.result.result == 1, deleted.result.error_message
+    assert "crate" not in _call(probe, "get_entities", GetEntities, retry=10.0).entities
+    reset = _call(probe, "reset_simulation", ResetSimulation, retry=10.0)
+    assert reset.result.result == 1 and _pose(probe)[0] == 0.0
