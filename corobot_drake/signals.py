@@ -423,11 +423,11 @@ def topic_name(topic: str, key: str) -> str:
     return topic.replace("*", key)
 
 
-def own_topics() -> dict[str, tuple[Signal, ...]]:
+def own_topics(table: dict | None = None) -> dict[str, tuple[Signal, ...]]:
     """{topic: the signals carried in it}, of every signal with a message of its own, in
-    the table's order."""
+    the table's order (`table`: a robot's, `robot_signals`; default `SIGNALS`)."""
     out: dict[str, list] = {}
-    for signal in SIGNALS.values():
+    for signal in (table or SIGNALS).values():
         if signal.topic:
             out.setdefault(signal.topic, []).append(signal)
     for topic, carried in out.items():

@@ -11,6 +11,7 @@ No Foxglove or ROS import here: each front end brings its own wire format.
 """
 
 import dataclasses as dc
+import functools
 
 from corobot_drake import signals
 
@@ -24,6 +25,9 @@ class RobotNames:
 
     robot: str
     namespaced: bool = False
+    base: str = "chassis"
+    """The robot's base link (`RobotSpec.base`; the Corobot's `chassis`): its frame is
+    `base_link`."""
 
     def topic(self, name: str) -> str:
         return f"/{self.robot}/{name}" if self.namespaced else f"/{name}"
@@ -32,8 +36,12 @@ class RobotNames:
         return f"{self.robot}/{name}" if self.namespaced else name
 
     def body_frame(self, body_name: str) -> str:
-        """The frame of one of the robot's links (`chassis` is `base_link`)."""
-        return self.frame(CHASSIS_FRAME if body_name == "chassis" else body_name)
+        """The frame of one of the robot's links (its base link is `base_link`)."""
+        return self.frame(CHASSIS_FRAME if body_name == self.base else body_name)
+
+    def base_frame(self) -> str:
+        """The frame of the robot's base link: `base_link`."""
+        return self.frame(CHASSIS_FRAME)
 
 
 def nanoseconds(t: float) -> int:
@@ -59,7 +67,7 @@ class TelemetryTopic:
     signals: tuple
     """The `signals.Signal`s it carries, each at its `own_place`."""
     per_wheel: bool
-    """Whether its signals have one value per wheel (`dimensions.WHEEL_NAMES` order; then
+    """Whether its signals have one value per wheel (the robot's wheel order; then
     `wheels: {<wheel>: {<field>: value}}`) or not (then `<field>: value`, or a keyed
     signal's `<key>: value`)."""
     costly: bool
@@ -108,4 +116,23 @@ def _telemetry_topic(name: str, carried: tuple) -> TelemetryTopic:
 
 TELEMETRY_TOPICS = tuple(_telemetry_topic(name, carried)
                          for name, carried in signals.own_topics().items())
-"""The topics of the signals with a message of their own (the contact telemetry, ...)."""
+"""The topics of the signals with a message of their own (the contact telemetry, ...): the
+Corobot's (`telemetry_topics`: any robot's)."""
+
+
+@functools.cache
+def _topics_of(wheel_names: tuple[str, ...], encoded: tuple[str, str]) -> tuple:
+    table = signals.robot_signals(wheel_names, encoded)
+    if table is signals.SIGNALS:
+        return TELEMETRY_TOPICS
+    return tuple(_telemetry_topic(name, carried)
+                 for name, carried in signals.own_topics(table).items())
+
+
+def telemetry_topics(spec=None) -> tuple:
+    """`TELEMETRY_TOPICS` of a robot (`robots.RobotSpec`; None: the Corobot's): its
+    per-wheel signals by its wheels."""
+    if spec is None:
+        return TELEMETRY_TOPICS
+    left, right = spec.encoded
+    return _topics_of(spec.wheel_names, (spec.wheel_names[left], spec.wheel_names[right]))

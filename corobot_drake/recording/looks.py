@@ -57,19 +57,21 @@ class RobotStateLooks(LeafSystem):
         - drive_state
 
     Inputs: `body_poses` and `body_spatial_velocities` (the plant's, abstract lists by body
-    index; the chassis is `chassis_index`), `wheel_state` (8: the four axles' angles, rad,
-    then rates, rad/s, `dimensions.WHEEL_NAMES` order), `drive_state` (abstract
-    `odometry.DriveState`). A subclass declares its publish events (and any further
-    inputs)."""
+    index; the chassis is `chassis_index`), `wheel_state` (2 n: the n axles' angles, rad,
+    then rates, rad/s, in the robot's wheel order, whose joints are `wheel_joints`; the
+    Corobot's by default), `drive_state` (abstract `odometry.DriveState`). A subclass declares
+    its publish events (and any further inputs)."""
 
-    def __init__(self, chassis_index: int):
+    def __init__(self, chassis_index: int, wheel_joints: tuple[str, ...] | None = None):
         super().__init__()
         self._chassis = int(chassis_index)
+        self.wheel_joints = tuple(wheel_joints or (f"{w}_axle" for w in dim.WHEEL_NAMES))
+        """The wheels' joint names, wheel order (/joint_states names them so)."""
         self._poses = self.DeclareAbstractInputPort("body_poses",
                                                     AbstractValue.Make([RigidTransform()]))
         self._velocities = self.DeclareAbstractInputPort(
             "body_spatial_velocities", AbstractValue.Make([SpatialVelocity()]))
-        self._wheels = self.DeclareVectorInputPort("wheel_state", 2 * len(dim.WHEEL_NAMES))
+        self._wheels = self.DeclareVectorInputPort("wheel_state", 2 * len(self.wheel_joints))
         self._drive = self.DeclareAbstractInputPort("drive_state", Value(object()))
 
     def chassis(self, context) -> tuple[RigidTransform, np.ndarray, np.ndarray]:
@@ -81,9 +83,9 @@ class RobotStateLooks(LeafSystem):
         return X_WB, R_BW @ V_WB.translational(), R_BW @ V_WB.rotational()
 
     def wheel_state(self, context) -> tuple[np.ndarray, np.ndarray]:
-        """The axles' angles (rad) and rates (rad/s), `dimensions.WHEEL_NAMES` order."""
+        """The axles' angles (rad) and rates (rad/s), wheel order."""
         x = self._wheels.Eval(context)
-        n = len(dim.WHEEL_NAMES)
+        n = len(self.wheel_joints)
         return x[:n], x[n:]
 
     def drive_state(self, context):

@@ -47,7 +47,6 @@ from pydrake.systems.framework import LeafSystem
 
 from corobot_drake import topics as ros_names
 from corobot_drake.config.poses import mount_frame
-from corobot_drake.model import dimensions as dim
 from corobot_drake.recording import topics as tp
 from corobot_drake.recording.looks import (
     STATE_PERIOD,
@@ -58,6 +57,7 @@ from corobot_drake.recording.looks import (
     connect_signal_topics,
     in_window,
 )
+from corobot_drake.robots import robot_spec
 
 SCENE_PERIOD = 1.0
 """s: /scene (the shapes) again every second, for viewers that connect late."""
@@ -136,11 +136,11 @@ class RobotStatePublisher(RobotStateLooks):
     foxglove.Log line for each command that started or ended since the previous look."""
 
     def __init__(self, context, names: ros_names.RobotNames, chassis_index: int,
-                 period: float = STATE_PERIOD):
-        super().__init__(chassis_index)
+                 period: float = STATE_PERIOD, wheel_joints: tuple[str, ...] | None = None):
+        super().__init__(chassis_index, wheel_joints)
         self._names, self._period = names, period
         self._log = self.DeclareAbstractInputPort("command_log", Value(()))
-        self._joint_names = [names.frame(f"{w}_axle") for w in dim.WHEEL_NAMES]
+        self._joint_names = [names.frame(joint) for joint in self.wheel_joints]
         self._joint_channel = JointStatesChannel(names.topic("joint_states"), context=context)
         self._odom_channel = OdometryChannel(names.topic("odom"), context=context)
         self._drive_channel = tp.json_channel(names.topic("drive_state"),
@@ -168,7 +168,7 @@ class RobotStatePublisher(RobotStateLooks):
         twist in the child frame)."""
         X_WB, linear, angular = self.chassis(context)
         return Odometry(timestamp=tp.stamp(context.get_time()), frame_id="world",
-                        body_frame_id=self._names.body_frame("chassis"), pose=tp.pose_of(X_WB),
+                        body_frame_id=self._names.base_frame(), pose=tp.pose_of(X_WB),
                         linear_velocity=tp.vector3(linear), angular_velocity=tp.vector3(angular))
 
     def command_events(self, context) -> list[tuple[float, str, LogLevel]]:
@@ -199,7 +199,7 @@ class TelemetryPublisher(LeafSystem):
         - tip_margin
 
     Inputs: the robot's ports of its signals (`signals.Signal.port`: the contact telemetry's,
-    `contact.WheelContacts`: 4 each, N, 1, deg, in `dimensions.WHEEL_NAMES` order;
+    `contact.WheelContacts`: one per wheel each, N, 1, deg, in the robot's wheel order;
     `stability.TipMargin`: 1, deg), those of the costly topics
     held: sampled every `costly_period` s from 0 (`_add_telemetry`'s ZeroOrderHolds). A look
     every `period` s publishes the others' values, stamped with its time; a look every
@@ -207,9 +207,10 @@ class TelemetryPublisher(LeafSystem):
     before; at 0 nothing is sampled yet)."""
 
     def __init__(self, context, names: ros_names.RobotNames, period: float = STATE_PERIOD,
-                 costly_period: float = TELEMETRY_PERIOD):
+                 costly_period: float = TELEMETRY_PERIOD, topics: tuple | None = None):
+        """`topics`: the robot's (`topics.telemetry_topics`; default the Corobot's)."""
         super().__init__()
-        for topic in ros_names.TELEMETRY_TOPICS:
+        for topic in topics or ros_names.TELEMETRY_TOPICS:
             ports = [self.DeclareVectorInputPort(spec.port, spec.size) for spec in topic.signals]
             channel = tp.json_channel(names.topic(topic.name), topic.schema(), context)
             # The looks on the holds' own schedule (period, offset 0): a look and a sample at
@@ -277,7 +278,7 @@ def _body_frames(plant, robots: dict, namespaced: bool) -> dict:
         body = plant.get_body(BodyIndex(i))
         parts = robot_of.get(int(body.model_instance()))
         if parts is not None:
-            names = ros_names.RobotNames(parts.name, namespaced)
+            names = ros_names.RobotNames(parts.name, namespaced, parts.chassis.name())
             parent = None if body.index() == parts.chassis.index() else int(parts.chassis.index())
             frames[i] = (names.body_frame(body.name()), parent)
         else:
@@ -380,13 +381,15 @@ def add_foxglove_topics(builder, plant, scene_graph, robots: dict, scenario, con
     frames = _body_frames(plant, robots, namespaced)
     mounts = []
     for name, parts in robots.items():
-        names = ros_names.RobotNames(name, namespaced)
+        names = ros_names.RobotNames(name, namespaced, parts.chassis.name())
         state = builder.AddNamedSystem(f"{name}.foxglove_state", RobotStatePublisher(
-            context, names, parts.chassis.index()))
+            context, names, parts.chassis.index(),
+            wheel_joints=tuple(j.name() for j in parts.wheel_joints)))
         RobotStateLooks.connect(builder, plant, name, state)
         builder.Connect(parts.command_source.GetOutputPort("command_log"),
                         state.GetInputPort("command_log"))
-        _add_telemetry(builder, context, names)
+        _add_telemetry(builder, context, names, ros_names.telemetry_topics(
+            robot_spec(scenario.robots[name].robot)))
         for sensors in parts.sensors.values():
             for sensor in sensors.values():
                 mounts.append(_add_sensor(builder, plant, frames, context, names, parts,
@@ -398,12 +401,12 @@ def add_foxglove_topics(builder, plant, scene_graph, robots: dict, scenario, con
         context, _scene_entities(plant, scene_graph, frames)))
 
 
-def _add_telemetry(builder, context, names: ros_names.RobotNames) -> None:
-    """Adds `<robot>.foxglove_telemetry`, fed by the robot's signals' ports, the costly
-    topics' through holds `<robot>.foxglove_<port>` (`looks.connect_signal_topics`)."""
+def _add_telemetry(builder, context, names: ros_names.RobotNames, topics: tuple) -> None:
+    """Adds `<robot>.foxglove_telemetry` of its `topics`, fed by the robot's signals' ports,
+    the costly topics' through holds `<robot>.foxglove_<port>` (`looks.connect_signal_topics`)."""
     publisher = builder.AddNamedSystem(f"{names.robot}.foxglove_telemetry",
-                                       TelemetryPublisher(context, names))
-    connect_signal_topics(builder, names.robot, publisher, ros_names.TELEMETRY_TOPICS, "foxglove_")
+                                       TelemetryPublisher(context, names, topics=topics))
+    connect_signal_topics(builder, names.robot, publisher, topics, "foxglove_")
 
 
 def _mount(plant, frames: dict, child: str, mount) -> tuple:

@@ -9,7 +9,6 @@ import numpy as np
 from pydrake.math import RigidTransform, RotationMatrix
 
 from corobot_drake import topics as tp
-from corobot_drake.model.dimensions import WHEEL_NAMES
 from corobot_drake.ros2.bus import typestore
 from corobot_drake.signals import put_value
 
@@ -128,7 +127,8 @@ class Messages:
     def telemetry(self, msgtype: str, topic: tp.TelemetryTopic, t: float, frame: str,
                   values: list):
         """One of corobot_interfaces' messages of signals' own (`interfaces.telemetry_definition`)
-        from its signals' port values (each a vector: 4 by wheel, or one per key)."""
+        from its signals' port values (each a vector: one per wheel, wheel order, or one per
+        key)."""
         fields: dict = {}
         for spec, vector in zip(topic.signals, values, strict=True):
             if spec.per_wheel:
@@ -136,5 +136,5 @@ class Messages:
             else:
                 put_value(fields, spec.own_place, spec.value_of(vector))
         if topic.per_wheel:
-            fields["wheel_names"] = list(WHEEL_NAMES)
+            fields["wheel_names"] = list(topic.signals[0].keys)  # the robot's wheels
         return self.T[msgtype](header=self.header(t, frame), **fields)

@@ -19,7 +19,6 @@ from pydrake.systems.framework import LeafSystem
 
 from corobot_drake import topics as tp
 from corobot_drake.config.poses import mount_frame
-from corobot_drake.model import dimensions as dim
 from corobot_drake.recording.looks import (
     STATE_PERIOD,
     TELEMETRY_PERIOD,
@@ -104,7 +103,7 @@ class TransformPublisher(LeafSystem):
                  ground_truth: bool = False):
         super().__init__()
         self._m = Messages(bus.store)
-        self._robots = [(names.frame(ODOM_FRAME), names.body_frame("chassis"), int(chassis),
+        self._robots = [(names.frame(ODOM_FRAME), names.base_frame(), int(chassis),
                          [(int(i), frame) for i, frame in wheels],
                          None if ground_truth else self.DeclareVectorInputPort(
                              f"{names.robot}_odometry", 3))
@@ -147,14 +146,16 @@ class RobotStatePublisher(RobotStateLooks):
     `ground_truth`, the second, in odom)."""
 
     def __init__(self, bus, names: tp.RobotNames, chassis_index: int, drive,
-                 period: float = STATE_PERIOD, ground_truth: bool = False):
-        super().__init__(chassis_index)
+                 period: float = STATE_PERIOD, ground_truth: bool = False,
+                 wheel_joints: tuple[str, ...] | None = None):
+        """`wheel_joints`: the robot's wheels' joint names (the Corobot's by default)."""
+        super().__init__(chassis_index, wheel_joints)
         self._m = Messages(bus.store)
-        self._odom, self._base = names.frame(ODOM_FRAME), names.body_frame("chassis")
+        self._odom, self._base = names.frame(ODOM_FRAME), names.base_frame()
         self._radius, self._track = drive.effective_wheel_radius, drive.effective_track_width
         self._ground_truth = ground_truth
         self._odometry = self.DeclareVectorInputPort("odometry", 3)
-        self._joint_names = [f"{w}_axle" for w in dim.WHEEL_NAMES]
+        self._joint_names = list(self.wheel_joints)
         self._channels = {name: _channel(bus, names, ifc.TOPIC[name]) for name in (
             "odom", "wheel_odom", "ground_truth", "joint_states", "drive_state")}
         self.DeclarePeriodicPublishEvent(period, 0.0, self._publish)
@@ -213,10 +214,11 @@ class TelemetryPublisher(LeafSystem):
     time), the others' looked at every `period` s."""
 
     def __init__(self, bus, names: tp.RobotNames, period: float = STATE_PERIOD,
-                 costly_period: float = TELEMETRY_PERIOD):
+                 costly_period: float = TELEMETRY_PERIOD, topics: tuple | None = None):
+        """`topics`: the robot's (`topics.telemetry_topics`; default the Corobot's)."""
         super().__init__()
-        m, frame = Messages(bus.store), names.body_frame("chassis")
-        for topic in tp.TELEMETRY_TOPICS:
+        m, frame = Messages(bus.store), names.base_frame()
+        for topic in topics or tp.TELEMETRY_TOPICS:
             ports = [self.DeclareVectorInputPort(s.port, s.size) for s in topic.signals]
             spec = ifc.TOPIC[topic.name]
             channel = _channel(bus, names, spec)
@@ -267,30 +269,32 @@ def add_ros2_topics(bus, builder, plant, scene_graph, robots: dict, scenario,
     """Adds the publishers of every topic (`interfaces.TOPICS`) for a station's plant and
     robots ({name: station.RobotParts}, built from `scenario`), on `bus`; `settings`: the
     node's read-only parameters (`parameters.Settings`; default: their defaults)."""
+    from corobot_drake.robots import robot_spec
     from corobot_drake.ros2.parameters import Settings
-    from corobot_drake.ros2.urdf import corobot_urdf
+    from corobot_drake.ros2.urdf import robot_urdf
 
     ground_truth = (settings or Settings()).odom_source == "ground_truth"
     namespaced = len(robots) > 1
     mounts, descriptions, tf_robots, odometries = [], {}, [], []
     builder.AddNamedSystem("ros2_clock", ClockPublisher(bus))
     for name, parts in robots.items():
-        names = tp.RobotNames(name, namespaced)
-        spec = scenario.robots[name]
+        names = tp.RobotNames(name, namespaced, parts.chassis.name())
+        robot = robot_spec(scenario.robots[name].robot)
         state = builder.AddNamedSystem(f"{name}.ros2_state", RobotStatePublisher(
-            bus, names, parts.chassis.index(), spec.drive, ground_truth=ground_truth))
+            bus, names, parts.chassis.index(), scenario.robots[name].drive,
+            ground_truth=ground_truth, wheel_joints=tuple(j.name() for j in parts.wheel_joints)))
         RobotStateLooks.connect(builder, plant, name, state)
         odometry = builder.GetSubsystemByName(f"{name}.dead_reckoning").GetOutputPort("pose")
         builder.Connect(odometry, state.GetInputPort("odometry"))
         odometries.append((name, odometry))
-        _add_telemetry(builder, bus, names)
+        _add_telemetry(builder, bus, names, tp.telemetry_topics(robot))
         tf_robots.append((names, parts.chassis.index(),
                           [(j.child_body().index(), names.body_frame(j.child_body().name()))
                            for j in parts.wheel_joints]))
         mounts += _robot_mounts(builder, bus, plant, names, parts)
         if namespaced:  # one tree: every robot's odom is the world's origin
             mounts.append((WORLD_FRAME, names.frame(ODOM_FRAME), RigidTransform()))
-        descriptions[names] = corobot_urdf(spec, name)
+        descriptions[names] = robot_urdf(robot, name)
     tf = builder.AddNamedSystem("ros2_tf", TransformPublisher(bus, tf_robots,
                                                               ground_truth=ground_truth))
     builder.Connect(plant.get_body_poses_output_port(), tf.GetInputPort("body_poses"))
@@ -329,9 +333,9 @@ def _mount(plant, parts, names: tp.RobotNames, child: str, X_PB) -> tuple:
     return names.body_frame(body.name()), child, X_BS
 
 
-def _add_telemetry(builder, bus, names: tp.RobotNames) -> None:
-    """Adds `<robot>.ros2_telemetry`, fed by the robot's signals' ports, the costly topics'
-    through holds `<robot>.ros2_<port>` (`recording.looks.connect_signal_topics`)."""
+def _add_telemetry(builder, bus, names: tp.RobotNames, topics: tuple) -> None:
+    """Adds `<robot>.ros2_telemetry` of its `topics`, fed by the robot's signals' ports, the
+    costly topics' through holds `<robot>.ros2_<port>` (`recording.looks.connect_signal_topics`)."""
     publisher = builder.AddNamedSystem(f"{names.robot}.ros2_telemetry",
-                                       TelemetryPublisher(bus, names))
-    connect_signal_topics(builder, names.robot, publisher, tp.TELEMETRY_TOPICS, "ros2_")
+                                       TelemetryPublisher(bus, names, topics=topics))
+    connect_signal_topics(builder, names.robot, publisher, topics, "ros2_")
