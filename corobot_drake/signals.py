@@ -131,7 +131,7 @@ class Signal:
         keys = self.keys
         if self.keys:
             keys = tuple(wheel_names) if self.wheels == ALL else tuple(encoded)
-        if self.per_wheel:  # one column per wheel: <prefix>_<short>
+        if self.per_wheel and self.log:  # one column per wheel: <prefix>_<short>
             prefix = self.log[0][0].rsplit("_", 1)[0]
             log = _per_wheel(prefix, wheel_names)
         else:

@@ -43,17 +43,18 @@ from corobot_drake.readings import (
     IrReading,
     OdometryPose,
 )
+from corobot_drake.robots import robot_spec
 from corobot_drake.sensors.kind import BuiltSensor, SensorKind
 from corobot_drake.sensors.registry import KINDS
 from corobot_drake.station import RobotParts, Station, build_station
 from corobot_drake.systems.drive import CommandRecord, DriveStatus
 from corobot_drake.systems.odometry import DriveState
 from corobot_drake.systems.runlog import (
-    COLUMNS,
     RUN_LOG_CHUNK,
     ContactSamples,
     log_rows,
     max_tilt_deg,
+    spec_layout,
     tip_margins,
     write_csv,
 )
@@ -143,6 +144,8 @@ class Robot:
         self._sim = sim
         self._parts = parts
         self.name = parts.name
+        self._layout = spec_layout(robot_spec(sim.scenario.robots[parts.name].robot))
+        """Its run log's columns and its signals (`runlog.Layout`: keyed by its wheels)."""
 
     # --- commands -------------------------------------------------------------------------
     @_one_thread
@@ -354,7 +357,7 @@ class Robot:
     def signal(self, name: str):
         """The value now of the signal `name` (`signals.SIGNALS`): read from its port, or by
         its `reader`; a float, or a dict of floats by key (wheel, field or sensor name)."""
-        spec = signals.SIGNALS[name]
+        spec = self._layout.signals[name]
         if spec.reader:
             value = getattr(self, spec.reader)()
             return dc.asdict(value) if dc.is_dataclass(value) else value
@@ -394,7 +397,7 @@ class Robot:
         sim = self._sim
         # From the samples' chassis alone: the contact telemetry need not be made.
         raw = sim._run_log_sink(self.name).FindLog(sim.context).data().T
-        margins = [chunk[:, COLUMNS.index("tip_margin")]
+        margins = [chunk[:, self._layout.columns.index("tip_margin")]
                    for chunk in sim._run_log_chunks[self.name]]
         margins.append(tip_margins(raw, self._tip_margin()))
         return float(min(min(m.min(initial=math.inf) for m in margins), self.tip_margin_deg()))
@@ -487,12 +490,12 @@ class Robot:
         return {name: self.ir(name).raw for name in self._parts.ir_sensors}
 
     def run_log(self):
-        """The run log so far (numpy rows; columns `runlog.COLUMNS`: time, left_power,
+        """The run log so far (numpy rows; columns its `runlog.Layout`'s: time, left_power,
         right_power, left_ticks, right_ticks, x, y, yaw), sampled every `runlog.LOG_PERIOD` s;
         with `Simulation.run_log_window`, only its last part."""
         sim = self._sim
         rows = log_rows(sim._run_log_sink(self.name), sim.context, self._tip_margin(),
-                        sim._contact_samples, self.name)
+                        sim._contact_samples, self.name, self._layout)
         chunks = sim._run_log_chunks[self.name]
         return np.concatenate([*chunks, rows]) if chunks else rows
 
@@ -502,7 +505,7 @@ class Robot:
     def write_log(self, path: str | Path) -> None:
         """Writes the run log as CSV (columns in docs/tuning.md; read by
         `corobot_drake.tuning.sysid`)."""
-        write_csv(self.run_log(), path)
+        write_csv(self.run_log(), path, self._layout)
 
     # --- cameras --------------------------------------------------------------------------
     @property
@@ -685,8 +688,10 @@ class Simulation:
         self._max_tilt_moved_out = dict.fromkeys(self.robots, 0.0)
         """Each robot's largest tilt (deg) over the samples moved out of its sink (kept
         whatever the window)."""
-        self._contact_samples = (ContactSamples(self.station.diagram, self.station.plant,
-                                                self.robots) if self.continuous_step else None)
+        self._contact_samples = (ContactSamples(
+            self.station.diagram, self.station.plant, self.robots,
+            {name: robot._layout for name, robot in self.robots.items()})
+            if self.continuous_step else None)
         """On a continuous plant, what makes the robots' run-log contact telemetry when it
         is read (with the chunks, what was moved out of the Context)."""
         self._start()
@@ -916,7 +921,7 @@ class Simulation:
                 continue
             moved = True
             chunks.append(log_rows(sink, self.context, self.robots[name]._tip_margin(),
-                                   self._contact_samples, name))
+                                   self._contact_samples, name, self.robots[name]._layout))
             self._max_tilt_moved_out[name] = max(self._max_tilt_moved_out[name],
                                                  max_tilt_deg(log.data().T))
             log.Clear()

@@ -48,6 +48,7 @@ from corobot_drake.config.mesh_files import mesh_source
 from corobot_drake.model import dimensions as dim
 from corobot_drake.model.sdf import corobot_sdf
 from corobot_drake.resources import make_parser
+from corobot_drake.robots import robot_spec
 from corobot_drake.sensors.registry import add_geometry, add_sensors
 from corobot_drake.sensors.site import SensorSite
 from corobot_drake.systems.contact import add_wheel_contacts
@@ -55,7 +56,7 @@ from corobot_drake.systems.dead_reckoning import DeadReckoning
 from corobot_drake.systems.drive import CommandSource, DriveController
 from corobot_drake.systems.motion import MotionCommands
 from corobot_drake.systems.odometry import add_chassis_poses, add_chassis_states, add_odometry
-from corobot_drake.systems.runlog import SAMPLED, add_contact_states, add_run_log
+from corobot_drake.systems.runlog import add_contact_states, add_run_log, spec_layout
 from corobot_drake.systems.servo import add_servo_sign, servo_velocity_sign
 from corobot_drake.systems.stability import add_tip_margin
 
@@ -377,7 +378,8 @@ def _build_station(scenario: sc.Scenario, meshcat, save_camera, extras, mouse_dr
         extra(builder, plant, scene_graph, robots, scenario)
     continuous = sc.continuous_step(scenario.plant_config, scenario.simulator_config) > 0
     for name in robots:
-        _add_signal_outputs(builder, name, continuous)
+        _add_signal_outputs(builder, name, continuous,
+                            spec_layout(robot_spec(scenario.robots[name].robot)))
     if continuous:
         add_contact_states(builder, plant, robots)
     builder.ExportOutput(plant.get_body_poses_output_port(), "body_poses")
@@ -462,11 +464,12 @@ def signal_output(builder, robot: str, spec: signals.Signal):
     return builder.GetSubsystemByName(f"{robot}.{spec.system}").GetOutputPort(spec.port)
 
 
-def _add_signal_outputs(builder, name: str, continuous: bool) -> None:
+def _add_signal_outputs(builder, name: str, continuous: bool, layout) -> None:
     """Exports each signal's port from its system as `<name>.<port>` (`signals.SIGNALS`
     with a `system`; once every system is in, the front ends' extras too), and adds the run
-    log (`runlog.add_run_log`), which samples those of `runlog.SAMPLED` (on a `continuous`
-    plant, the held ones are made when it is read: `runlog.ContactSamples`)."""
+    log (`runlog.add_run_log`), which samples those of its `layout.sampled` (the robot's
+    `runlog.Layout`; on a `continuous` plant, the held ones are made when it is read:
+    `runlog.ContactSamples`)."""
     by_port = {}
     for spec in signals.SIGNALS.values():
         if spec.system:
@@ -477,7 +480,8 @@ def _add_signal_outputs(builder, name: str, continuous: bool) -> None:
                 builder.GetSubsystemByName(f"{name}.drive_controller").GetOutputPort(
                     "drive_status"),
                 builder.GetSubsystemByName(f"{name}.encoder_ticks").get_output_port(),
-                {port: by_port[port] for port, _ in SAMPLED}, held_when_read=continuous)
+                {port: by_port[port] for port, _ in layout.sampled}, held_when_read=continuous,
+                layout=layout)
 
 
 MESHCAT_DRAG_STIFFNESS = 100.0
