@@ -634,7 +634,8 @@ FEATURES_INFO = (
     "corobot_drake: a step is one physics step (10 ms by default); entities are the robots "
     "and the world's bodies, states in the world frame; spawn and delete take world bodies "
     "(YAML as a scenario's world.bodies entry) and rebuild the simulation, which goes on from "
-    "where it was; a reset returns to the scenario's start (bit for bit its first run)")
+    "where it was; robots are not spawned (a scenario's robots); a reset returns to the "
+    "scenario's start (bit for bit its first run)")
 STATE_NAMES = {0: "STATE_STOPPED", 1: "STATE_PLAYING", 2: "STATE_PAUSED", 3: "STATE_QUITTING",
                4: "STATE_NO_WORLD", 5: "STATE_LOADING_WORLD"}
 SPAWNABLE_BODIES = {
@@ -672,16 +673,47 @@ def resource_text(resource) -> tuple[str, str]:
     Srv = _t("srv", "SpawnEntity").Response
     if resource.uri:
         uri = resource.uri.removeprefix("file://")
+        if is_robot(uri, None):
+            raise RefusedError(Srv().result.RESULT_FEATURE_UNSUPPORTED, ROBOT_UNSUPPORTED.format(
+                f"entity_resource.uri: {resource.uri!r}"))
         if Path(uri).suffix.lower() not in (".yaml", ".yml"):
             raise RefusedError(Srv.UNSUPPORTED_FORMAT,
                                f"entity_resource.uri: {resource.uri!r}: spawn formats are "
                                f"{', '.join(SPAWN_FORMATS)} (a world body's YAML)")
         try:
-            return "entity_resource.uri", Path(uri).read_text()
+            field, text = "entity_resource.uri", Path(uri).read_text()
         except (OSError, UnicodeDecodeError) as e:
             raise RefusedError(Srv.RESOURCE_PARSE_ERROR,
                                f"entity_resource.uri: {resource.uri!r}: {e}") from None
-    if not resource.resource_string.strip():
+    elif not resource.resource_string.strip():
         raise RefusedError(Srv.NO_RESOURCE, "entity_resource: both uri and resource_string "
                            "are empty")
-    return "entity_resource.resource_string", resource.resource_string
+    else:
+        field, text = "entity_resource.resource_string", resource.resource_string
+    if is_robot(None, text):
+        raise RefusedError(Srv().result.RESULT_FEATURE_UNSUPPORTED,
+                           ROBOT_UNSUPPORTED.format(f"{field}: a robot file"))
+    return field, text
+
+
+ROBOT_UNSUPPORTED = ("{}: spawning a robot is not supported (its topics and frames would move "
+                     "under namespaces while running): name it in the scenario's robots "
+                     "(robots.<name>.robot) and start the node with it")
+
+
+def is_robot(uri: str | None, text: str | None) -> bool:
+    """Whether a resource is a robot: a shipped robot's name or file, or a robot file's text
+    (a mapping with `model` and `wheels`)."""
+    import yaml
+
+    from corobot_drake.robots import ROBOTS
+
+    if uri is not None:
+        from pathlib import Path
+
+        return uri in ROBOTS or Path(uri).resolve() in {p.resolve() for p in ROBOTS.values()}
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError:  # (a world body's shape tags, !Box ...: not a robot file's)
+        return False
+    return isinstance(data, dict) and {"model", "wheels"} <= set(data)

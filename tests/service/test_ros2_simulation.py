@@ -356,7 +356,12 @@ def test_bad_requests_get_their_codes_and_one_line(sim_ros):
             ({"name": "b", "entity_resource": Resource(uri="/x/robot.usd")},
              S.UNSUPPORTED_FORMAT, "spawn formats are yaml"),
             ({"name": "b", "entity_resource": Resource(resource_string="shape: !Cone {}")},
-             S.RESOURCE_PARSE_ERROR, "entity_resource.resource_string: ")):
+             S.RESOURCE_PARSE_ERROR, "entity_resource.resource_string: "),
+            ({"name": "b", "entity_resource": Resource(uri="burger")},
+             R.RESULT_FEATURE_UNSUPPORTED, "spawning a robot is not supported"),
+            ({"name": "b", "entity_resource": Resource(
+                resource_string="model: burger.sdf\nwheels: {left: [l], right: [r]}")},
+             R.RESULT_FEATURE_UNSUPPORTED, "a robot file: spawning a robot is not supported")):
         check(_call(probe, "spawn_entity", SpawnEntity, retry=10.0, initial_pose=at, **fields),
               code, words)
     check(_call(probe, "delete_entity", DeleteEntity, retry=10.0, entity="nobody"),
@@ -364,6 +369,7 @@ def test_bad_requests_get_their_codes_and_one_line(sim_ros):
     # still serving
     features = _call(probe, "get_simulator_features", GetSimulatorFeatures, retry=10.0)
     assert features.features.spawn_formats == ["yaml"]
+    assert "robots are not spawned" in features.features.custom_info
 
 
 @ONE_GRAPH_AT_A_TIME
