@@ -144,7 +144,9 @@ class Robot:
         self._sim = sim
         self._parts = parts
         self.name = parts.name
-        self._layout = spec_layout(robot_spec(sim.scenario.robots[parts.name].robot))
+        self.spec = robot_spec(sim.scenario.robots[parts.name].robot)
+        """What the robot is (`robots.RobotSpec`): its wheels, radius, track, drive, links."""
+        self._layout = spec_layout(self.spec)
         """Its run log's columns and its signals (`runlog.Layout`: keyed by its wheels)."""
 
     # --- commands -------------------------------------------------------------------------
