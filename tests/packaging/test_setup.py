@@ -1,0 +1,118 @@
+"""tools/setup says what it does: its apt step waits for a held apt lock (a bounded wait, then
+one line naming the holder) instead of failing at once as apt-get does (status 100), and its
+pip and ROS 2 steps turn their tools' output into progress lines.
+
+The script is sourced (it then only defines its functions) and each function runs on its own:
+the lock is a POSIX lock (as apt's) on a file of the test's, held by a child process."""
+
+import subprocess
+import sys
+import time
+
+import pytest
+
+from conftest import REPO
+
+SETUP = REPO / "tools" / "setup"
+HOLDER = """
+import fcntl, sys, time
+lock = open(sys.argv[1], "w")
+fcntl.lockf(lock, fcntl.LOCK_EX)
+print("held", flush=True)
+time.sleep(float(sys.argv[2]))
+"""
+
+
+def run_function(call: str, env: dict | None = None, stdin: str = "", timeout: float = 60):
+    """`call` in a bash that sourced tools/setup: the finished process."""
+    return subprocess.run(["bash", "-c", f'source "{SETUP}"; {call}'], input=stdin,
+                          capture_output=True, text=True, env=env, timeout=timeout, cwd=REPO)
+
+
+@pytest.fixture
+def held_lock(tmp_path):
+    """(the lock file, a function starting a holder for s seconds: its Popen)."""
+    path = tmp_path / "lock-frontend"
+    path.touch()
+    holders = []
+
+    def hold(seconds: float):
+        p = subprocess.Popen([sys.executable, "-c", HOLDER, str(path), str(seconds)],
+                             stdout=subprocess.PIPE, text=True)
+        holders.append(p)
+        assert p.stdout.readline().strip() == "held"
+        return p
+
+    yield path, hold
+    for p in holders:
+        p.kill()
+        p.wait()
+
+
+def test_sourcing_runs_nothing():
+    done = run_function("echo sourced")
+    assert (done.returncode, done.stdout, done.stderr) == (0, "sourced\n", "")
+
+
+def test_the_apt_step_waits_for_a_held_lock_and_goes_on(held_lock):
+    path, hold = held_lock
+    holder = hold(3.0)
+    start = time.monotonic()
+    done = run_function("wait_for_apt; echo free",
+                        env={"PATH": "/usr/bin:/bin", "APT_LOCKS": f"/nonexistent {path}",
+                             "APT_LOCK_WAIT": "60"})
+    waited = time.monotonic() - start
+    assert done.returncode == 0, done.stderr
+    assert done.stdout == "free\n"
+    lines = done.stderr.splitlines()
+    assert f"held by process {holder.pid}" in lines[0] and "up to 60 s" in lines[0]
+    assert lines[1].startswith("  apt's lock is free after") and len(lines) == 2
+    assert 1.0 < waited < 20.0  # the holder's 3 s less its start, plus a 2 s poll at most
+
+
+def test_the_apt_step_gives_up_after_its_bound_with_one_line(held_lock):
+    path, hold = held_lock
+    holder = hold(60.0)
+    start = time.monotonic()
+    done = run_function("wait_for_apt; echo not reached",
+                        env={"PATH": "/usr/bin:/bin", "APT_LOCKS": str(path),
+                             "APT_LOCK_WAIT": "2"})
+    assert time.monotonic() - start < 15.0
+    assert done.returncode == 1 and done.stdout == ""
+    errors = [line for line in done.stderr.splitlines() if line.startswith("error:")]
+    assert len(errors) == 1
+    assert f"process {holder.pid} holds its lock" in errors[0] and "after 2 s" in errors[0]
+    assert "run tools/setup again" in errors[0]
+
+
+def test_a_free_lock_is_not_waited_for(tmp_path):
+    (tmp_path / "lock").touch()
+    done = run_function("wait_for_apt; echo free",
+                        env={"PATH": "/usr/bin:/bin", "APT_LOCKS": str(tmp_path / "lock")})
+    assert (done.returncode, done.stdout, done.stderr) == (0, "free\n", "")
+
+
+PIP_OUTPUT = """\
+Obtaining file:///work/main
+Collecting drake<2,>=1.58
+  Downloading drake-1.58.0-cp312-abi3-manylinux_2_34_x86_64.whl (300 MB)
+Requirement already satisfied: numpy>=1.24 in ./.venv/lib/python3.13/site-packages
+Collecting ray<3,>=2.40
+Installing collected packages: ray, drake, corobot_drake
+Successfully installed corobot_drake-0.1.0 drake-1.58.0 ray-2.50.0
+"""
+
+
+def test_pips_output_becomes_a_line_per_package(tmp_path):
+    log = tmp_path / "pip.log"
+    done = run_function(f'pip_progress "{log}"', stdin=PIP_OUTPUT)
+    assert done.stdout.splitlines() == ["  1: drake<2,>=1.58", "  2: ray<3,>=2.40",
+                                        "  installing 3 packages ...", "  installed 3 packages"]
+    assert log.read_text() == PIP_OUTPUT
+
+
+def test_the_ros2_build_lines_get_their_time():
+    done = run_function("printf 'building tf2_msgs into /x ...\\n' | with_elapsed")
+    assert done.stderr == "  [0 s] building tf2_msgs into /x ...\n"
+    done = run_function("with_elapsed < /dev/null")
+    assert done.stderr == "  built already, from the same sources\n"
