@@ -31,6 +31,8 @@ DEFAULT_ROBOT = "corobot"
 
 ROBOTS: dict[str, Path] = {
     "corobot": MODELS_DIR / "corobot" / "robot.yaml",
+    "burger": MODELS_DIR / "burger" / "robot.yaml",  # TurtleBot3 Burger class
+    "pioneer": MODELS_DIR / "pioneer" / "robot.yaml",  # Pioneer 3-AT class
 }
 """The shipped robots: name -> robot file. A scenario's `robot:` names one of them or a
 robot file."""
