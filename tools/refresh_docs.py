@@ -15,7 +15,8 @@ lab/refresh/ (lab/docs_blocks.py reads the markers).
 
     python tools/refresh_docs.py                 # every block: deterministic ones first,
                                                  # pictures, timings last (--list: each cost)
-    python tools/refresh_docs.py --only NAME ...  # some blocks
+    python tools/refresh_docs.py --only NAME ...  # some blocks (a NAME may be a pattern:
+                                                 # --only 'gallery-*')
     python tools/refresh_docs.py --list          # the blocks, their commands and costs
     python tools/refresh_docs.py --check         # the cheap deterministic blocks: exit 1 on drift
 
@@ -25,6 +26,7 @@ the machine's load average while they were measured, and only a refresh rewrites
 """
 
 import argparse
+import fnmatch
 import json
 import sys
 
@@ -37,7 +39,8 @@ from lab.refresh.specs import blocks
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0],
                                 formatter_class=argparse.ArgumentDefaultsHelpFormatter)
-    p.add_argument("--only", nargs="+", metavar="NAME", help="these blocks only (None: all)")
+    p.add_argument("--only", nargs="+", metavar="NAME",
+                   help="these blocks only, by name or shell pattern (None: all)")
     p.add_argument("--list", action="store_true", help="list the blocks, their commands, costs")
     p.add_argument("--check", action="store_true",
                    help="re-render deterministic blocks (without --only: the cheap ones) and "
@@ -56,11 +59,11 @@ def main(argv=None) -> int:
     if problems:
         return 2
     if args.only:
-        unknown = set(args.only) - {s.name for s in specs}
+        unknown = {p for p in args.only if not any(fnmatch.fnmatchcase(s.name, p) for s in specs)}
         if unknown:
             print(f"error: no block {', '.join(sorted(unknown))} (see --list)", file=sys.stderr)
             return 2
-        specs = [s for s in specs if s.name in args.only]
+        specs = [s for s in specs if any(fnmatch.fnmatchcase(s.name, p) for p in args.only)]
     if args.list:
         list_blocks(specs)
         return 0
