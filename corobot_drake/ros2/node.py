@@ -81,6 +81,16 @@ def qos_profile(qos: ifc.Qos, sensor_qos: str = "reliable") -> QoSProfile:
 SERVICE_QOS = QoSProfile(depth=REQUEST_QUEUE, reliability=ReliabilityPolicy.RELIABLE)
 
 
+GLOBAL_TOPICS = frozenset(f"/{t.name}" for t in ifc.TOPICS if t.shared)
+"""/clock, /tf and /tf_static: global whatever the node's namespace, as ROS tools expect."""
+
+
+def relative(name: str) -> str:
+    """A robot's topic, service or action relative to the node's namespace (`--ros-args -r
+    __ns:=/sim` puts it under /sim; none: at the root, as before); the global topics stay."""
+    return name if name in GLOBAL_TOPICS else name.lstrip("/")
+
+
 class LiveSink:
     """A `bus.Bus` sink: publishes each serialized message on the node's publisher."""
 
@@ -93,7 +103,7 @@ class LiveSink:
         if topic in self._publishers:  # a simulation rebuilt (a spawn): the same topics
             return
         self._publishers[topic] = self._node.create_publisher(
-            ros_type(msgtype), topic, qos_profile(qos, self._sensor_qos))
+            ros_type(msgtype), relative(topic), qos_profile(qos, self._sensor_qos))
 
     def write(self, topic: str, data, t_ns: int) -> None:
         self._publishers[topic].publish(bytes(data))
@@ -166,12 +176,12 @@ class Ros2Node:
         for robot in robots:
             names = RobotNames(robot, namespaced)
             subscription = self.node.create_subscription(
-                ros_type(cmd_vel_type(stamped)), names.topic(ifc.CMD_VEL[0]),
+                ros_type(cmd_vel_type(stamped)), relative(names.topic(ifc.CMD_VEL[0])),
                 partial(self._on_twist, robot, stamped), 10, callback_group=self._group)
             self._cmd_vel_topics.append(subscription.topic_name)
             for action in ifc.ACTIONS:
                 self._servers.append(ActionServer(
-                    self.node, ros_type(action.type), names.topic(action.name),
+                    self.node, ros_type(action.type), relative(names.topic(action.name)),
                     execute_callback=partial(self._execute, robot, action),
                     goal_callback=partial(self._check_goal, robot, action),
                     cancel_callback=lambda goal: CancelResponse.ACCEPT,
@@ -179,7 +189,8 @@ class Ros2Node:
                     result_service_qos_profile=SERVICE_QOS,
                     cancel_service_qos_profile=SERVICE_QOS))
             for service in ifc.SERVICES:
-                self.node.create_service(ros_type(service.type), names.topic(service.name),
+                self.node.create_service(ros_type(service.type),
+                                         relative(names.topic(service.name)),
                                          partial(getattr(self, f"_{service.name}"), robot),
                                          qos_profile=SERVICE_QOS, callback_group=self._group)
         runner.hooks.append(self._check_deadman)

@@ -77,17 +77,17 @@ class ParameterError(ValueError):
 
 def descriptor(param: Param):
     """rcl_interfaces/ParameterDescriptor of `param` (a number takes an integer too)."""
-    from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor
+    from rcl_interfaces.msg import ParameterDescriptor
 
-    description = param.what + (f" ({param.unit})" if param.unit else "")
-    if param.choices:
-        description += f"; one of {', '.join(param.choices)}"
-    d = ParameterDescriptor(name=param.name, description=description,
+    d = ParameterDescriptor(name=param.name, description=param.what,
                             read_only=param.read_only)
-    d.dynamic_typing = True  # typed by `problem` (an int is a number of s too): one line
+    # Typed and bounded by `problem` (an int is a number of s too), refusing in its one line:
+    # a floating_point_range would have rclpy refuse first, in its own words.
+    d.dynamic_typing = True
     if param.low is not None:
-        d.floating_point_range = [FloatingPointRange(from_value=float(param.low),
-                                                     to_value=float(param.high), step=0.0)]
+        d.additional_constraints = f"a number of {param.unit} in [{param.low:g}, {param.high:g}]"
+    elif param.choices:
+        d.additional_constraints = f"one of {', '.join(param.choices)}"
     return d
 
 

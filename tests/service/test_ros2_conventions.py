@@ -1,0 +1,124 @@
+"""`--ros2` as a ROS 2 stack expects a node to be, from a separate process (`ros2_probe`, a
+private network): `--ros-args` (a namespace remap, `-p` parameters), the parameters' ranges
+and their one-line refusals, /cmd_vel as TwistStamped and a publisher of the other type
+reported, sensor topics that a reliable subscriber (RViz's default) receives. One headless
+simulation, its cameras off, without the HTTP services."""
+
+import os
+import subprocess
+import sys
+import threading
+
+import pytest
+
+pytest.importorskip("rclpy", reason="the [ros2] extra (tools/setup installs it)")
+pytest.importorskip("corobot_interfaces.msg", reason="python -m corobot_drake.ros2.build")
+
+from geometry_msgs.msg import Twist, TwistStamped
+from nav_msgs.msg import Odometry
+from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
+from rcl_interfaces.srv import DescribeParameters, GetParameters, SetParameters
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from sensor_msgs.msg import Range
+
+from ros2_probe import ONE_GRAPH_AT_A_TIME, WAIT, Probe, private_network, ros2_simulation
+
+pytestmark = ONE_GRAPH_AT_A_TIME
+
+NS = "/sim"
+RELIABLE = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
+QUIET = "robots: {corobot: {commands: [], cameras: {front: {rgb: false}}}}"
+
+
+@pytest.fixture(scope="module")
+def sim():
+    args = ["--headless", "--override", QUIET, "--ros-args", "-r", f"__ns:={NS}",
+            "-p", "cmd_vel_stamped:=true", "-p", "cmd_vel_timeout:=2", "--"]
+    with ros2_simulation(args, serve=False) as (process, probe):
+        lines, seen = [], threading.Condition()
+
+        def read():
+            for line in process.stderr:
+                with seen:
+                    lines.append(line.rstrip("\n"))
+                    seen.notify_all()
+
+        threading.Thread(target=read, daemon=True).start()
+        probe.subscribe(f"{NS}/odom", Odometry, RELIABLE)
+        probe.subscribe(f"{NS}/ir/front", Range, RELIABLE)  # RViz's default: reliable
+        probe.wait_for(f"{NS}/odom")  # discovered
+        yield probe, lines, seen
+
+
+def parameter(probe, name: str):
+    answer = probe.call(f"{NS}/corobot_drake/get_parameters", GetParameters,
+                        GetParameters.Request(names=[name]))
+    return answer.values[0]
+
+
+def set_parameter(probe, name: str, value: ParameterValue):
+    answer = probe.call(f"{NS}/corobot_drake/set_parameters", SetParameters,
+                        SetParameters.Request(parameters=[Parameter(name=name, value=value)]))
+    return answer.results[0]
+
+
+def test_ros_args_remap_the_namespace_and_set_parameters_checked_in_one_line(sim):
+    probe, _, _ = sim
+    timeout = parameter(probe, "cmd_vel_timeout")  # `-p cmd_vel_timeout:=2`: an integer
+    assert (timeout.type, timeout.integer_value) == (ParameterType.PARAMETER_INTEGER, 2)
+    assert parameter(probe, "cmd_vel_stamped").bool_value is True
+    refused = set_parameter(probe, "cmd_vel_timeout", ParameterValue(
+        type=ParameterType.PARAMETER_DOUBLE, double_value=-1.0))
+    assert not refused.successful
+    assert refused.reason == "cmd_vel_timeout: -1.0 is not a number of s in [0, 3600]"
+    described = probe.call(f"{NS}/corobot_drake/describe_parameters", DescribeParameters,
+                           DescribeParameters.Request(names=["cmd_vel_timeout"]))
+    assert described.descriptors[0].additional_constraints == "a number of s in [0, 3600]"
+    taken = set_parameter(probe, "cmd_vel_timeout", ParameterValue(
+        type=ParameterType.PARAMETER_INTEGER, integer_value=1))
+    assert taken.successful, taken.reason
+    read_only = set_parameter(probe, "sensor_qos", ParameterValue(
+        type=ParameterType.PARAMETER_STRING, string_value="best_effort"))
+    assert not read_only.successful  # read as the node starts
+
+
+def test_sensor_topics_reach_a_reliable_subscriber(sim):
+    probe, _, _ = sim
+    assert probe.wait_for(f"{NS}/ir/front").radiation_type == Range.INFRARED
+
+
+def test_twist_stamped_drives_and_a_twist_publisher_is_reported_once(sim):
+    probe, lines, seen = sim
+    stamped = probe.publisher(f"{NS}/cmd_vel", TwistStamped)
+    command = TwistStamped()
+    command.header.frame_id = "base_link"
+    command.twist.linear.x = 0.3
+    for _ in range(500):  # at most 10 s of /odom (50 Hz)
+        stamped.publish(command)
+        odom = probe.wait_for(f"{NS}/odom", start=probe.count(f"{NS}/odom"))
+        if odom.twist.twist.linear.x > 0.1:
+            break
+    else:
+        raise AssertionError("a TwistStamped on /cmd_vel did not move the robot")
+    other = Probe(int(os.environ["ROS_DOMAIN_ID"]), name="plain_teleop")  # a node of its own:
+    try:  # one DDS participant cannot offer both types on one topic
+        other.publisher(f"{NS}/cmd_vel", Twist).publish(Twist())  # the other type
+        wanted = "publishes geometry_msgs/Twist, this node takes geometry_msgs/TwistStamped"
+        with seen:
+            assert seen.wait_for(lambda: any(wanted in line for line in lines), WAIT), lines
+        probe.wait_for(f"{NS}/odom", start=probe.count(f"{NS}/odom") + 250)  # 2 more looks
+    finally:
+        other.close()
+    with seen:
+        assert sum(wanted in line for line in lines) == 1  # once, not at every look
+
+
+def test_a_bad_parameter_at_start_is_one_line_and_exit_2():
+    with private_network():
+        run = subprocess.run(
+            [sys.executable, "-m", "corobot_drake", "--headless", "--ros2", "--duration", "1",
+             "--ros-args", "-p", "odom_source:=gps"], capture_output=True, text=True,
+            timeout=120)
+    assert run.returncode == 2
+    assert run.stderr.strip().splitlines() == [
+        "error: --ros-args: odom_source: 'gps' is not one of wheel, ground_truth"]
