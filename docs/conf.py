@@ -28,7 +28,7 @@ myst_enable_extensions = ["colon_fence"]
 
 autodoc_member_order = "bysource"
 autodoc_typehints = "description"
-autodoc_default_options = {"members": True, "show-inheritance": True}
+autodoc_default_options = {"show-inheritance": True}
 suppress_warnings = ["ref.python"]
 """Only "more than one target found": a signature's `type` also names the attributes called
 `type` (`commands.Arg.type`, `Ros2.type`); a missing target is not warned of unless nitpicky."""
