@@ -4,6 +4,7 @@ then the schemas' fields."""
 
 from __future__ import annotations
 
+import json
 import types
 
 from corobot_docs.markdown import cell, table
@@ -94,7 +95,7 @@ def _schema(name: str, schema: dict) -> str:
         return head + f"\n\n{_type(schema)}."
     required = set(schema.get("required", []))
     rows = [[f"`{field}`", _type(s), "yes" if field in required else "no",
-             f"`{s['default']}`" if "default" in s else "", _range(s),
+             f"`{json.dumps(s['default'])}`" if "default" in s else "", _range(s),
              cell(s.get("description", ""))] for field, s in props.items()]
     return head + "\n\n" + table(("field", "type", "required", "default", "allowed", "what"),
                                  rows)
