@@ -209,6 +209,8 @@ class SimulationServices:
         self._original = None
         """The scenario the node started with, once a spawn or a delete has rebuilt the
         simulation from another (a reset rebuilds it from this one); None before."""
+        self._models: set[str] = set()
+        """The directive models spawned since the start (deleted as they came)."""
         self._lock = threading.Lock()  # the state's transitions, one at a time
         ros = node.node
         for name, srv in SERVICES.items():
@@ -324,6 +326,7 @@ class SimulationServices:
         if self._original is not None:
             self._runner.replace(self._runner.rebuild(self._original))
             self._original = None
+            self._models.clear()
         else:
             sim.reset()
         self._node._twists.clear()  # the deadman's: the robots' commands are reset
@@ -558,6 +561,10 @@ class SimulationServices:
             X = pose_transform(request.initial_pose.pose, "initial_pose.pose")
         except ValueError as e:
             raise RefusedError(Srv.INVALID_POSE, str(e)) from None
+        uri = request.entity_resource.uri
+        if uri and not is_robot(uri.removeprefix("file://"), None) and (
+                model_format(uri) is not None):
+            return self._spawn_model(sim, name, uri, X)
         field, text = resource_text(request.entity_resource)
         rpy = RollPitchYaw(X.rotation()).vector()
         pose = (f"pose: {{translation: [{', '.join(repr(float(v)) for v in X.translation())}], "
@@ -571,19 +578,49 @@ class SimulationServices:
                 raise RefusedError(Srv.INVALID_POSE, f"initial_pose: {e.field}: {e.message}"
                                    ) from None
             raise RefusedError(Srv.RESOURCE_PARSE_ERROR, f"{field}: {e}") from None
-        self._rebuild(sim, scenario, Srv.INVALID_POSE)
+        self._rebuild(sim, scenario, Srv.RESOURCE_PARSE_ERROR, Srv.INVALID_POSE)
         return name
 
-    def _rebuild(self, sim, scenario, code: int) -> None:
+    def _spawn_model(self, sim, name: str, uri: str, X) -> str:
+        """A model file's model (`MODEL_FORMATS`) added as a directive: free, its base body
+        at `X`; welded there when none of its bodies has mass (a wall, a maze). Returns the
+        entity's name, `name::base`."""
+        from pathlib import Path
+
+        from pydrake.common.schema import Transform
+        from pydrake.multibody.parsing import AddModel, AddWeld, ModelDirective
+
+        base, massless = model_base(uri)
+        if not uri.startswith(("package://", "file://")):  # a directive's file is a URI
+            uri = Path(uri).resolve().as_uri()
+        add = AddModel(name=name, file=uri)
+        directives = [ModelDirective(add_model=add)]
+        if massless:
+            directives.append(ModelDirective(add_weld=AddWeld(
+                parent="world", child=f"{name}::{base}", X_PC=Transform(X))))
+        else:
+            add.default_free_body_pose = {base: Transform(X)}
+            directives[0] = ModelDirective(add_model=add)
+        scenario = sim.saved_scenario()
+        scenario.directives = [*scenario.directives, *directives]
+        Srv = _t("srv", "SpawnEntity").Response
+        self._rebuild(sim, scenario, Srv.RESOURCE_PARSE_ERROR, Srv.INVALID_POSE)
+        self._models.add(name)
+        return f"{name}::{base}"
+
+    def _rebuild(self, sim, scenario, code: int, pose_code: int | None = None) -> None:
         """In the simulation thread: the runner's simulation replaced by one built from
         `scenario` (the one the node started with kept for a reset); RefusedError `code`
-        saying why it could not be built."""
+        saying why it could not be built (`pose_code` when it is a start pose's overlap)."""
         from corobot_drake.config import scenario as sc
 
         try:
             new = self._runner.rebuild(scenario)
         except (sc.ScenarioError, ValueError) as e:
-            raise RefusedError(code, str(e)) from None
+            overlap = isinstance(e, sc.ScenarioError) and (
+                e.field.endswith("pose") or " inside " in e.message)
+            raise RefusedError(pose_code if overlap and pose_code is not None else code,
+                               str(e)) from None
         if self._original is None:
             self._original = sim.scenario
         self._runner.replace(new)
@@ -601,20 +638,30 @@ class SimulationServices:
     def _delete(self, name: str, sim) -> None:
         Result = _t("msg", "Result")
         entity_body(sim, name)  # NOT_FOUND
-        if name not in sim.scenario.world.bodies:
-            what = "a robot" if name in sim.robots else "a body of a directive's model"
-            raise RefusedError(Result.RESULT_FEATURE_UNSUPPORTED,
-                               f"entity: {name!r} is {what}: only world bodies are deleted")
+        model = name.split("::")[0] if "::" in name else None
         scenario = sim.saved_scenario()
-        del scenario.world.bodies[name]
+        if name in scenario.world.bodies:
+            del scenario.world.bodies[name]
+        elif model in self._models:  # a spawned model: its directives go, every body
+            scenario.directives = [
+                d for d in scenario.directives
+                if not (d.add_model is not None and d.add_model.name == model)
+                and not (d.add_weld is not None and d.add_weld.child.startswith(f"{model}::"))]
+        else:
+            what = "a robot" if name in sim.robots else "a body of the scenario's directives"
+            raise RefusedError(Result.RESULT_FEATURE_UNSUPPORTED,
+                               f"entity: {name!r} is {what}: world bodies and spawned models "
+                               "are deleted")
         self._rebuild(sim, scenario, Result.RESULT_OPERATION_FAILED)
+        self._models.discard(model)
 
     def _get_spawnables(self, request, response):
-        Spawnable = _t("msg", "Spawnable")
+        Spawnable, Resource = _t("msg", "Spawnable"), _t("msg", "Resource")
         response.spawnables = [
-            Spawnable(entity_resource=_t("msg", "Resource")(resource_string=text),
-                      description=description)
-            for description, text in SPAWNABLE_BODIES.items()]
+            *(Spawnable(entity_resource=Resource(resource_string=text), description=description)
+              for description, text in SPAWNABLE_BODIES.items()),
+            *(Spawnable(entity_resource=Resource(uri=uri), description=description)
+              for uri, description in SPAWNABLE_MODELS.items())]
         response.result = result(message="" if not request.sources else
                                  f"sources: not searched here: {', '.join(request.sources)}")
         return response
@@ -627,13 +674,62 @@ def _xyz(v) -> list[float]:
 NAME = re.compile(r"[A-Za-z][A-Za-z0-9_]{0,63}")
 """An entity's name: a ROS name's token (its topics and frames could take it)."""
 NAMESPACE = re.compile(r"/?[A-Za-z][A-Za-z0-9_]*(/[A-Za-z][A-Za-z0-9_]*)*")
-SPAWN_FORMATS = ("yaml",)
-"""A world body as a scenario's `world.bodies` entry (its shape: a box, sphere, cylinder,
-capsule, ellipsoid, or a mesh file), by `resource_string` or a `.yaml` file's `uri`."""
+SPAWN_FORMATS = ("yaml", "sdf", "urdf", "mjcf")
+"""yaml: a world body as a scenario's `world.bodies` entry (its shape: a box, sphere, cylinder,
+capsule, ellipsoid, or a mesh file), by `resource_string` or a `.yaml` file's `uri`; the
+others: a model file's `uri` (a path or `package://`), added as the scenario's directives add
+one (`MODEL_FORMATS`)."""
+MODEL_FORMATS = {".sdf": "sdf", ".urdf": "urdf", ".xml": "mjcf"}
+
+
+def model_format(uri: str) -> str | None:
+    from pathlib import Path
+
+    return MODEL_FORMATS.get(Path(uri.split("?")[0]).suffix.lower())
+
+
+def model_base(uri: str) -> tuple[str, bool]:
+    """(the name of the first body of the one model a model file holds, whether none of its
+    bodies has mass), read into a scratch plant; RefusedError RESOURCE_PARSE_ERROR naming
+    what is wrong (a file that is missing, too large, does not parse, holds no model or
+    several, or welds its base to the world)."""
+    from pathlib import Path
+
+    from pydrake.multibody.plant import MultibodyPlant
+
+    from corobot_drake.config.directives import MAX_MODEL_BYTES
+    from corobot_drake.config.scenario import one_line
+    from corobot_drake.resources import make_parser, resolve_file
+
+    Srv = _t("srv", "SpawnEntity").Response
+    field = f"entity_resource.uri: {uri!r}"
+    try:
+        path = Path(resolve_file(uri.removeprefix("file://")))
+        size = path.stat().st_size
+    except (OSError, RuntimeError) as e:
+        raise RefusedError(Srv.RESOURCE_PARSE_ERROR, f"{field}: {one_line(e)}") from None
+    if not path.is_file() or size > MAX_MODEL_BYTES:
+        raise RefusedError(Srv.RESOURCE_PARSE_ERROR, f"{field}: not a regular file of at most "
+                           f"{MAX_MODEL_BYTES} bytes")
+    plant = MultibodyPlant(0.0)
+    try:
+        models = make_parser(plant).AddModels(str(path))
+        plant.Finalize()
+    except (RuntimeError, ValueError) as e:
+        raise RefusedError(Srv.RESOURCE_PARSE_ERROR, f"{field}: {one_line(e)}") from None
+    if len(models) != 1 or not plant.GetBodyIndices(models[0]):
+        raise RefusedError(Srv.RESOURCE_PARSE_ERROR, f"{field}: holds {len(models)} models: "
+                           "spawn a file of one model with a body")
+    bodies = [plant.get_body(i) for i in plant.GetBodyIndices(models[0])]
+    if not bodies[0].is_floating_base_body():
+        raise RefusedError(Srv.RESOURCE_PARSE_ERROR, f"{field}: welds its base "
+                           f"{bodies[0].name()!r} to the world: remove that joint")
+    return bodies[0].name(), all(b.default_mass() == 0 for b in bodies)
 FEATURES_INFO = (
     "corobot_drake: a step is one physics step (10 ms by default); entities are the robots "
     "and the world's bodies, states in the world frame; spawn and delete take world bodies "
-    "(YAML as a scenario's world.bodies entry) and rebuild the simulation, which goes on from "
+    "(YAML as a scenario's world.bodies entry) and model files (SDFormat, URDF, MJCF: free, "
+    "or fixed when massless) and rebuild the simulation, which goes on from "
     "where it was; robots are not spawned (a scenario's robots); a reset returns to the "
     "scenario's start (bit for bit its first run)")
 STATE_NAMES = {0: "STATE_STOPPED", 1: "STATE_PLAYING", 2: "STATE_PAUSED", 3: "STATE_QUITTING",
@@ -647,11 +743,17 @@ SPAWNABLE_BODIES = {
 }
 
 
+SPAWNABLE_MODELS: dict[str, str] = {}
+"""Shipped model files that spawn (uri -> description): none yet. The maze's walls
+(`maze.sdf`) are rigid boxes with SDFormat's default 1 kg: free, they would sink through the
+ground (the loader refuses them); its scenario welds them."""
+
+
 def spawn_name(sim, name: str, allow_renaming: bool) -> str:
     """The new entity's name: `name`, or with `allow_renaming` the first free `name_N`
     (`body_N` for an empty one); RefusedError NAME_INVALID / NAME_NOT_UNIQUE otherwise."""
     Srv = _t("srv", "SpawnEntity").Response
-    taken = set(entity_names(sim))
+    taken = {*entity_names(sim), *sim.station.models}
     if name and not NAME.fullmatch(name):
         raise RefusedError(Srv.NAME_INVALID, f"name: {name!r} is not a name (a letter, then "
                            "letters, digits or _, at most 64)")
@@ -679,7 +781,7 @@ def resource_text(resource) -> tuple[str, str]:
         if Path(uri).suffix.lower() not in (".yaml", ".yml"):
             raise RefusedError(Srv.UNSUPPORTED_FORMAT,
                                f"entity_resource.uri: {resource.uri!r}: spawn formats are "
-                               f"{', '.join(SPAWN_FORMATS)} (a world body's YAML)")
+                               "yaml (a world body), sdf, urdf and mjcf (.xml: a model file)")
         try:
             field, text = "entity_resource.uri", Path(uri).read_text()
         except (OSError, UnicodeDecodeError) as e:

@@ -175,6 +175,26 @@ def test_max_rate_runs_as_fast_as_it_can(runner):
     assert r.sim.time > 2.0  # 10x real time at least (nothing to compute)
 
 
+def test_rate_paces_the_simulated_time(runner):
+    r = runner(rate=4.0)
+    time.sleep(0.5)
+    assert 1.5 < r.sim.time < 2.5  # 4 x 0.5 s (the thread's start and the sleep's slack)
+
+
+@pytest.mark.parametrize(("argv", "line"), [
+    (["--ros2", "--rate", "0"], "error: --rate: must be in (0, 1000]"),
+    (["--ros2", "--rate", "fast"], "error: --rate: expected a number or max, got 'fast'"),
+    (["--rate", "2"], "error: --rate: only with --ros2"),
+    (["--paused"], "error: --paused: only with --ros2"),
+])
+def test_rate_and_paused_flags_are_checked_in_one_line(argv, line, capsys):
+    from corobot_drake import cli
+
+    assert cli.main(["--headless", *argv]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(line) and err.count("\n") == 1, err
+
+
 # --- the node --------------------------------------------------------------------------------
 
 from ros2_probe import ONE_GRAPH_AT_A_TIME, ros2_simulation  # noqa: E402
@@ -357,6 +377,8 @@ def test_bad_requests_get_their_codes_and_one_line(sim_ros):
              S.UNSUPPORTED_FORMAT, "spawn formats are yaml"),
             ({"name": "b", "entity_resource": Resource(resource_string="shape: !Cone {}")},
              S.RESOURCE_PARSE_ERROR, "entity_resource.resource_string: "),
+            ({"name": "b", "entity_resource": Resource(uri="/nowhere/x.sdf")},
+             S.RESOURCE_PARSE_ERROR, "entity_resource.uri: '/nowhere/x.sdf': "),
             ({"name": "b", "entity_resource": Resource(uri="burger")},
              R.RESULT_FEATURE_UNSUPPORTED, "spawning a robot is not supported"),
             ({"name": "b", "entity_resource": Resource(
@@ -368,7 +390,7 @@ def test_bad_requests_get_their_codes_and_one_line(sim_ros):
           R.RESULT_NOT_FOUND, "no entity named")
     # still serving
     features = _call(probe, "get_simulator_features", GetSimulatorFeatures, retry=10.0)
-    assert features.features.spawn_formats == ["yaml"]
+    assert features.features.spawn_formats == ["yaml", "sdf", "urdf", "mjcf"]
     assert "robots are not spawned" in features.features.custom_info
 
 
@@ -402,3 +424,63 @@ def test_spawn_then_delete_then_reset(sim_ros):
     assert "crate" not in _call(probe, "get_entities", GetEntities, retry=10.0).entities
     reset = _call(probe, "reset_simulation", ResetSimulation, retry=10.0)
     assert reset.result.result == 1 and _pose(probe)[0] == 0.0
+
+
+CRATE_SDF = """<?xml version="1.0"?>
+<sdf version="1.9"><model name="crate"><link name="body">
+  <inertial><mass>2.0</mass><inertia><ixx>0.01</ixx><iyy>0.01</iyy><izz>0.01</izz></inertia>
+  </inertial>
+  <collision name="c"><geometry><box><size>0.2 0.2 0.2</size></box></geometry></collision>
+  <visual name="v"><geometry><box><size>0.2 0.2 0.2</size></box></geometry></visual>
+</link></model></sdf>
+"""
+
+
+WALL_URDF = """<?xml version="1.0"?>
+<robot name="wall"><link name="slab">
+  <collision><geometry><box size="2.0 0.1 0.5"/></geometry></collision>
+  <visual><geometry><box size="2.0 0.1 0.5"/></geometry></visual>
+</link></robot>
+"""
+
+
+@ONE_GRAPH_AT_A_TIME
+def test_model_files_spawn_free_or_fixed(sim_ros, tmp_path):
+    from geometry_msgs.msg import PoseStamped
+    from simulation_interfaces.msg import EntityCategory, Resource
+    from simulation_interfaces.srv import (
+        DeleteEntity,
+        GetEntities,
+        GetEntityInfo,
+        SpawnEntity,
+        StepSimulation,
+    )
+
+    probe = sim_ros
+    crate = tmp_path / "crate.sdf"
+    crate.write_text(CRATE_SDF)
+    at = PoseStamped()
+    at.pose.position.x, at.pose.position.y, at.pose.position.z = 1.5, 1.0, 0.3
+    at.pose.orientation.w = 1.0
+    spawned = _call(probe, "spawn_entity", SpawnEntity, name="crate", initial_pose=at,
+                    entity_resource=Resource(uri=str(crate)))
+    assert spawned.result.result == 1, spawned.result.error_message
+    assert spawned.entity_name == "crate::body"
+    _call(probe, "step_simulation", StepSimulation, steps=30)
+    _, state = _pose(probe, "crate::body")
+    assert state[:2] == pytest.approx((1.5, 1.0), abs=1e-3) and 0.09 < state[2] < 0.11  # landed
+    deleted = _call(probe, "delete_entity", DeleteEntity, entity="crate::body")
+    assert deleted.result.result == 1, deleted.result.error_message
+    # a model without mass (a URDF link without inertial): fixed where it is put
+    wall = tmp_path / "wall.urdf"
+    wall.write_text(WALL_URDF)
+    at.pose.position.x, at.pose.position.z = 20.0, 0.25
+    spawned = _call(probe, "spawn_entity", SpawnEntity, name="wall", initial_pose=at,
+                    entity_resource=Resource(uri=f"file://{wall}"))
+    assert spawned.result.result == 1, spawned.result.error_message
+    info = _call(probe, "get_entity_info", GetEntityInfo, retry=10.0, entity=spawned.entity_name)
+    assert info.info.category.category == EntityCategory.CATEGORY_STATIC_OBJECT
+    entities = _call(probe, "get_entities", GetEntities, retry=10.0).entities
+    assert "wall::slab" in entities and "crate::body" not in entities
+    _call(probe, "step_simulation", StepSimulation, steps=10)
+    assert _pose(probe, "wall::slab")[1][:3] == pytest.approx((20.0, 1.0, 0.25), abs=1e-12)
