@@ -223,6 +223,7 @@ def sim_ros():
         deadline = time.monotonic() + 60
         while cmd_vel.get_subscription_count() == 0 and time.monotonic() < deadline:
             time.sleep(0.05)
+        probe.fresh = _episode(probe, reset=False)  # the first run, as the node started it
         yield probe
 
 
@@ -241,13 +242,14 @@ def _pose(probe, entity="corobot"):
             (p.x, p.y, p.z, q.w, q.x, q.y, q.z, s.twist.linear.x, s.twist.angular.z))
 
 
-def _episode(probe) -> list:
+def _episode(probe, reset: bool = True) -> list:
     """Reset, then each action: /cmd_vel, wait for it to arrive, step, observe."""
     from geometry_msgs.msg import Twist
     from simulation_interfaces.srv import ResetSimulation, StepSimulation
 
-    reset = _call(probe, "reset_simulation", ResetSimulation, retry=10.0)
-    assert reset.result.result == reset.result.RESULT_OK, reset.result.error_message
+    if reset:
+        done = _call(probe, "reset_simulation", ResetSimulation, retry=10.0)
+        assert done.result.result == done.result.RESULT_OK, done.result.error_message
     observations = [_pose(probe)]
     for linear, angular in ACTIONS:
         twist = Twist()
@@ -275,7 +277,7 @@ def test_rl_loop_gets_the_same_trajectory_after_every_reset(sim_ros):
                      for k in range(len(ACTIONS) + 1)]
     x0, x1 = first[0][1][0], first[1][1][0]
     assert x1 - x0 > 0.005  # the first action (0.3 m/s) moved it forwards
-    assert _episode(probe) == first  # bit for bit
+    assert first == probe.fresh  # the run after a reset is the first run, bit for bit
     assert _episode(probe) == first
 
 
@@ -484,3 +486,40 @@ def test_model_files_spawn_free_or_fixed(sim_ros, tmp_path):
     assert "wall::slab" in entities and "crate::body" not in entities
     _call(probe, "step_simulation", StepSimulation, steps=10)
     assert _pose(probe, "wall::slab")[1][:3] == pytest.approx((20.0, 1.0, 0.25), abs=1e-12)
+
+
+@ONE_GRAPH_AT_A_TIME
+def test_set_entity_state_teleports_a_robot_and_moves_a_body(sim_ros):
+    from geometry_msgs.msg import Pose
+    from simulation_interfaces.msg import EntityState
+    from simulation_interfaces.srv import ResetSimulation, SetEntityState, StepSimulation
+
+    probe = sim_ros
+    _call(probe, "reset_simulation", ResetSimulation, retry=10.0)
+    pose = Pose()
+    yaw = math.radians(30)
+    pose.position.x, pose.position.y = 0.5, 0.3
+    pose.orientation.w, pose.orientation.z = math.cos(yaw / 2), math.sin(yaw / 2)
+    moved = _call(probe, "set_entity_state", SetEntityState, entity="corobot",
+                  state=EntityState(pose=pose), set_pose=True)
+    assert moved.result.result == 1, moved.result.error_message  # paused: at once
+    _call(probe, "step_simulation", StepSimulation, steps=40)  # settles (0.25 s)
+    _, (x, y, _, w, _, _, z, *_) = _pose(probe)
+    assert (x, y) == pytest.approx((0.5, 0.3), abs=0.01)
+    assert 2 * math.atan2(z, w) == pytest.approx(yaw, abs=0.01)
+    box = Pose()  # the giant box, lifted and spun: at once, exactly
+    box.position.x, box.position.z, box.orientation.w = -3.0, 2.0, 1.0
+    state = EntityState(pose=box)
+    state.twist.angular.z = 1.0
+    moved = _call(probe, "set_entity_state", SetEntityState, entity="giant_box", state=state,
+                  set_pose=True, set_twist=True)
+    assert moved.result.result == 1, moved.result.error_message
+    _, (bx, by, bz, *_, spin) = _pose(probe, "giant_box")
+    assert (bx, by, bz, spin) == (-3.0, 0.0, 2.0, 1.0)
+    tilted = Pose()
+    tilted.orientation.w, tilted.orientation.x = 0.0, 1.0  # upside down: it stands on the ground
+    refused = _call(probe, "set_entity_state", SetEntityState, entity="corobot",
+                    state=EntityState(pose=tilted), set_pose=True)
+    assert refused.result.result == SetEntityState.Response.INVALID_POSE
+    assert "only a yaw" in refused.result.error_message
+    _call(probe, "reset_simulation", ResetSimulation, retry=10.0)
