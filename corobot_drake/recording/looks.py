@@ -119,11 +119,15 @@ class SensorPublisher(LeafSystem):
     Everything comes from the sensor's kind (`sensors.kind.SensorKind`): its inputs are the
     ports the kind names (`wire_ports`: vector or abstract as they are), its looks are on
     the kind's schedule (`looks`), and a look at t hands on the reading (`wire_reading`,
-    asked only then) that came out (`out_time`; NaN: none yet) in [t - period, t)."""
+    asked only then) that came out (`out_time`; NaN: none yet) in [t - period, t), if the
+    sink wants it: a sink with `watched()` False (a live ROS 2 topic nobody subscribes to)
+    is handed nothing, and the reading is not made (a camera's frame is not rendered for
+    it)."""
 
     def __init__(self, sensor, sink):
         super().__init__()
         self._sensor, self._kind, self._sink = sensor, sensor.kind, sink
+        self._watched = getattr(sink, "watched", lambda: True)
         self._inputs = {}
         for name, port in self._kind.wire_ports(sensor).items():
             if port.get_data_type() == PortDataType.kVectorValued:
@@ -143,7 +147,7 @@ class SensorPublisher(LeafSystem):
             return self._inputs[name].Eval(context)
 
         out = self._kind.out_time(self._sensor, inputs)
-        if in_window(out, context.get_time(), self._period):  # False: NaN, nothing yet
+        if in_window(out, context.get_time(), self._period) and self._watched():  # (NaN: none)
             self._sink(self._kind.wire_reading(self._sensor, inputs))
 
 

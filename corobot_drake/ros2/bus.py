@@ -1,7 +1,9 @@
 """Where the ROS 2 publishers' messages go: each is serialized once (CDR, by the `rosbags` type
 store, no ROS needed) and handed to every sink: the live node's publishers (`node.LiveSink`),
 a rosbag2 writer (`bag.BagSink`). A sink has `declare(topic, type, qos)` and `write(topic,
-data, t_ns)`; the bus declares every topic to every sink before the first write.
+data, t_ns)`, and may have `watched(topic)` (False: nobody would see a message on it now, a
+live topic without a subscriber; without it, always True: a bag records everything); the bus
+declares every topic to every sink before the first write.
 """
 
 from __future__ import annotations
@@ -31,6 +33,12 @@ class Channel:
     def __init__(self, bus: Bus, topic: str, msgtype: str):
         self._bus, self.topic, self.msgtype = bus, topic, msgtype
         self._serialize = bus.store.serialize_cdr
+
+    def watched(self) -> bool:
+        """Whether a message published now would reach anyone (a sink records it, or a live
+        topic has a subscriber)."""
+        return any(getattr(sink, "watched", None) is None or sink.watched(self.topic)
+                   for sink in self._bus.sinks)
 
     def publish(self, t_ns: int, message) -> None:
         sinks = self._bus.sinks

@@ -108,6 +108,10 @@ class LiveSink:
     def write(self, topic: str, data, t_ns: int) -> None:
         self._publishers[topic].publish(bytes(data))
 
+    def watched(self, topic: str) -> bool:
+        """Whether `topic` has a subscriber now (the graph as Fast DDS last saw it)."""
+        return self._publishers[topic].get_subscription_count() > 0
+
 
 @dc.dataclass
 class _Twist:

@@ -56,8 +56,9 @@ class ClockPublisher(LeafSystem):
         self.DeclarePeriodicPublishEvent(period, 0.0, self._publish)
 
     def _publish(self, context):
-        t = context.get_time()
-        self._channel.publish(tp.nanoseconds(t), self._m.clock(t))
+        if self._channel.watched():
+            t = context.get_time()
+            self._channel.publish(tp.nanoseconds(t), self._m.clock(t))
 
 
 class StaticPublisher(LeafSystem):
@@ -114,6 +115,8 @@ class TransformPublisher(LeafSystem):
         self.DeclarePeriodicPublishEvent(period, 0.0, self._publish)
 
     def _publish(self, context):
+        if not self._channel.watched():
+            return
         t, X_W = context.get_time(), self._poses.Eval(context)
         transforms = []
         for odom, base, chassis, wheels, odometry in self._robots:
@@ -161,20 +164,27 @@ class RobotStatePublisher(RobotStateLooks):
         self.DeclarePeriodicPublishEvent(period, 0.0, self._publish)
 
     def _publish(self, context):
+        """Each topic someone watches (`bus.Channel.watched`: a bag, or a subscriber)."""
         t = context.get_time()
-        ns, m = tp.nanoseconds(t), self._m
-        angles, rates = self.wheel_state(context)
-        self._channels["joint_states"].publish(ns, m.joint_state(t, self._joint_names, angles,
-                                                                 rates))
-        X_WB, linear, angular = self.chassis(context)
-        wheel = self.wheel_odometry(context)
-        self._channels["ground_truth"].publish(ns, m.odometry(t, WORLD_FRAME, self._base, X_WB,
-                                                              linear, angular))
-        self._channels["odom"].publish(ns, m.odometry(
-            t, self._odom, self._base, X_WB, linear, angular) if self._ground_truth else wheel)
-        self._channels["wheel_odom"].publish(ns, wheel)
-        self._channels["drive_state"].publish(ns, m.drive_state(t, self._odom,
-                                                                self.drive_state(context)))
+        ns, m, c = tp.nanoseconds(t), self._m, self._channels
+        watched = {name for name, channel in c.items() if channel.watched()}
+        if "joint_states" in watched:
+            angles, rates = self.wheel_state(context)
+            c["joint_states"].publish(ns, m.joint_state(t, self._joint_names, angles, rates))
+        if watched & {"ground_truth", "odom"}:
+            X_WB, linear, angular = self.chassis(context)
+        if "ground_truth" in watched:
+            c["ground_truth"].publish(ns, m.odometry(t, WORLD_FRAME, self._base, X_WB, linear,
+                                                     angular))
+        if watched & {"odom", "wheel_odom"}:
+            wheel = self.wheel_odometry(context)
+        if "odom" in watched:
+            c["odom"].publish(ns, m.odometry(t, self._odom, self._base, X_WB, linear, angular)
+                              if self._ground_truth else wheel)
+        if "wheel_odom" in watched:
+            c["wheel_odom"].publish(ns, wheel)
+        if "drive_state" in watched:
+            c["drive_state"].publish(ns, m.drive_state(t, self._odom, self.drive_state(context)))
 
     def wheel_odometry(self, context):
         """The dead reckoning as nav_msgs/Odometry, with its nominal covariances."""
@@ -227,8 +237,8 @@ class TelemetryPublisher(LeafSystem):
             def publish(context, topic=topic, ports=ports, channel=channel, age=age,
                         msgtype=spec.type):
                 t = context.get_time() - age
-                if t < -TOLERANCE:
-                    return  # nothing sampled yet
+                if t < -TOLERANCE or not channel.watched():
+                    return  # nothing sampled yet, or nobody to see it
                 channel.publish(tp.nanoseconds(t), m.telemetry(
                     msgtype, topic, t, frame, [port.Eval(context) for port in ports]))
 
@@ -249,6 +259,12 @@ class RosSensorSink:
             sub: bus.channel(names.topic(f"{topic}/{sub}" if sub else topic), msgtype,
                              ifc.Qos(qos))
             for sub, (msgtype, qos) in self._kind.ros2_channels().items()}
+
+    def watched(self) -> bool:
+        """Whether any of its topics reaches anyone (`bus.Channel.watched`): else the
+        `SensorPublisher` neither makes the reading nor hands it on (a camera nobody watches
+        renders nothing for ROS 2)."""
+        return any(channel.watched() for channel in self._channels.values())
 
     def __call__(self, reading) -> None:
         messages = self._kind.ros2_message(self._m, reading, self._frame)

@@ -241,6 +241,53 @@ def test_ir_sensor_publisher_sends_each_scan_once():
     assert memory.messages["/ir/front"][-1][1].range == math.inf  # REP 117
 
 
+class Unwatched(Memory):
+    """A live topic's sink with nobody subscribed (`node.LiveSink.watched`), until `watch`."""
+
+    def __init__(self):
+        super().__init__()
+        self.watching = False
+
+    def watched(self, topic):
+        return self.watching
+
+
+def test_a_sensor_nobody_watches_makes_no_reading():
+    """A sensor's publisher hands nothing on while no sink watches its topics, and does not
+    make the reading (a camera's frame would render for it); once one does, the next scan
+    goes out."""
+    from corobot_drake.recording.looks import SensorPublisher
+    from corobot_drake.ros2.publishers import RosSensorSink
+    from corobot_drake.sensors.ir_sensor import IrSensor, IrSensorKind
+    from corobot_drake.sensors.kind import BuiltSensor
+
+    sink = Unwatched()
+    config = IrSensorConfig(scan_rate_hz=20.0)
+    ir = IrSensor(config, None, [])
+    made = []
+
+    class Kind(IrSensorKind):
+        def wire_reading(self, sensor, inputs):
+            made.append(sensor.name)
+            return super().wire_reading(sensor, inputs)
+
+    sensor = BuiltSensor(Kind(), "corobot", "front", config, ir, ir.GetOutputPort("reading"),
+                         config.scan_rate_hz)
+    system = SensorPublisher(sensor, RosSensorSink(Bus([sink]), tp.RobotNames("corobot"),
+                                                   sensor))
+    stepper = Stepper(system, 0.05)
+    scan = np.zeros(scan_state_layout(ir.num_rays)[0])
+    scan[SCAN_TIME], scan[DISTANCE] = 0.0, 0.3
+    stepper.fix("scan_state", scan)
+    stepper.tick(3)
+    assert sink.messages["/ir/front"] == [] and made == []
+    sink.watching = True
+    scan[SCAN_TIME] = 0.15
+    stepper.fix("scan_state", scan)
+    stepper.tick(2)
+    assert len(sink.messages["/ir/front"]) == 1 and made == ["front"]
+
+
 def test_transform_publisher_odom_to_base_link_to_wheels():
     memory = Memory()
     names = tp.RobotNames("corobot")
