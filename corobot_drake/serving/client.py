@@ -269,7 +269,8 @@ class RemoteRobot:
 
     def encoders(self) -> dict[str, int]:
         e = self._client._get(f"{self._base}/encoders")
-        return {"front_left": e["front_left"], "front_right": e["front_right"]}
+        return {w: ticks for w, ticks in e.items()
+                if w not in ("time_stamp", "ticks_per_revolution")}
 
     def heading(self) -> float:
         return float(self._client._get(f"{self._base}/compass")["heading"])
@@ -336,7 +337,7 @@ class RemoteRobot:
         state = self.drive_state()
         return {"pose": state["pose"], "velocity": state["velocity"],
                 "wheels": {w: s["axle_speed"] for w, s in state["wheels"].items()},
-                "encoders": {w: state["wheels"][w]["encoder_ticks"]
-                             for w in ("front_left", "front_right")},
+                "encoders": {w: s["encoder_ticks"] for w, s in state["wheels"].items()
+                             if s.get("encoder_ticks") is not None},
                 "heading": state["heading"],
                 "position": state["position"]}

@@ -85,9 +85,12 @@ def _with_signals(base: type[BaseModel], name: str, prefix: str) -> type[BaseMod
 
 
 class _Wheel(BaseModel):
+    side: str = Field(description="left or right")
     commanded_power: float = Field(description="in [-1, 1]")
     axle_speed: float = Field(description="measured, rad/s")
-    encoder_ticks: int | None = Field(None, description="front wheels only")
+    encoder_ticks: int | None = Field(
+        None, description="the wheels with an encoder only: the first of each side (the "
+                          "Corobot's front wheels)")
     load: float | None = Field(None, description="N: the wheel's vertical contact force")
     slip_ratio: float | None = Field(
         None, description="(rim speed - ground speed) / the faster: + traction, - braking")
@@ -114,7 +117,8 @@ class CommandStatus(BaseModel):
 
 
 class _DriveState(BaseModel):
-    """Four-wheel drive state (MRDS DriveDifferentialFourWheelState in SI units)."""
+    """Drive state (MRDS DriveDifferentialFourWheelState in SI units, for the robot's
+    wheels)."""
 
     time_stamp: float = Field(description="simulation time, s")
     is_enabled: bool
@@ -123,7 +127,8 @@ class _DriveState(BaseModel):
     wheel_radius: float
     encoder_ticks_per_revolution: int
     wheels: dict[str, Wheel] = Field(
-        description="front_left, front_right, rear_left, rear_right")
+        description="by wheel name, in the robot's wheel order (the Corobot's front_left, "
+                    "front_right, rear_left, rear_right)")
     position: Position
     heading: float = Field(description="rad, counter-clockwise from +x")
     heading_deg: float
@@ -157,10 +162,14 @@ class AnalogSensorState(BaseModel):
 
 
 class EncoderState(BaseModel):
+    """The ticks of the wheels with an encoder, by wheel name (left, then right; the
+    Corobot's front_left and front_right)."""
+
+    model_config = ConfigDict(extra="allow")
     time_stamp: float
     ticks_per_revolution: int
-    front_left: int | None
-    front_right: int | None
+    front_left: int | None = None
+    front_right: int | None = None
 
 
 class Accepted(BaseModel):

@@ -13,7 +13,6 @@ from typing import Any
 
 from corobot_drake import commands, signals
 from corobot_drake.config.sensors import FRONT_CAMERA
-from corobot_drake.model import dimensions as dim
 from corobot_drake.readings import IrReading
 
 
@@ -65,10 +64,11 @@ class RobotInfo:
 
     @property
     def capabilities(self) -> dict[str, bool]:
-        """The HTTP contract's `capabilities`: every robot has the whole drive API and the IR
-        API (with the sensors its scenario gives it); the camera depends on the scenario."""
+        """The HTTP contract's `capabilities`: every robot has the whole drive API; the IR API
+        and the camera are offered to a robot that has them (its scenario and robot file)."""
         completing = {spec.method: True for spec in commands.ISSUABLE if spec.completing}
-        return {**completing, "drive_state": True, "ir": True, "camera": self.has_camera}
+        return {**completing, "drive_state": True, "ir": bool(self.ir_services),
+                "camera": self.has_camera}
 
 
 def command_json(record) -> dict:
@@ -80,35 +80,38 @@ def command_json(record) -> dict:
 
 
 def drive_state(robot, time: float) -> dict:
-    """The drive contract's four-wheel state (MRDS DriveDifferentialFourWheelState in SI
-    units) without its signals: the drive's fixed figures, whether it is enabled and the
-    latest command; `robot_snapshot` puts the signals in (`signals.Signal.http`: the wheels'
-    power, axle speed, ticks and contact telemetry, position, heading, pose, velocity and
-    tip margin)."""
+    """The drive contract's state (MRDS DriveDifferentialFourWheelState in SI units, for
+    the robot's wheels, each with its `side`) without its signals: the drive's fixed figures,
+    whether it is enabled and the latest command; `robot_snapshot` puts the signals in
+    (`signals.Signal.http`: the wheels' power, axle speed, ticks and contact telemetry,
+    position, heading, pose, velocity and tip margin)."""
     native = robot.drive_state()
     last = robot.last_command()
+    spec = robot.spec
     return {
         "time_stamp": time,
         "is_enabled": bool(native.is_enabled),
         "power_scaling_factor": float(native.power_scaling_factor),
         "distance_between_wheels": float(native.distance_between_wheels),
-        "wheel_radius": dim.WHEEL_RADIUS,
-        "encoder_ticks_per_revolution": dim.ENCODER_TICKS_PER_REVOLUTION,
-        "wheels": {name: {} for name in dim.WHEEL_NAMES},
+        "wheel_radius": spec.wheel_radius,
+        "encoder_ticks_per_revolution": spec.encoder_ticks_per_revolution,
+        "wheels": {w.short: {"side": "left" if w.side > 0 else "right"} for w in spec.wheels},
         "command": command_json(last) if last is not None else None,
     }
 
 
 def two_wheel_view(state: dict) -> dict:
-    """The generic differential-drive view of `drive_state`: left = front left, right =
-    front right."""
+    """The generic differential-drive view of `drive_state`: left and right are each side's
+    wheel with an encoder (the Corobot's front left and front right)."""
     w = state["wheels"]
+    left, right = (next(wheel for wheel in w.values() if wheel["side"] == side
+                        and wheel.get("encoder_ticks") is not None) for side in ("left", "right"))
     return {
         "time_stamp": state["time_stamp"],
         "is_enabled": state["is_enabled"],
         "distance_between_wheels": state["distance_between_wheels"],
-        "left": w["front_left"],
-        "right": w["front_right"],
+        "left": left,
+        "right": right,
         "position": state["position"],
         "heading": state["heading"],
         "command": state["command"],
@@ -132,12 +135,12 @@ def robot_snapshot(robot, time: float) -> dict:
     state = {
         "drive": drive_state(robot, time),
         "ir": {f"{name}_ir": analog_sensor(robot.ir(name)) for name in robot.ir_names},
-        "encoders": {**stamp, "ticks_per_revolution": dim.ENCODER_TICKS_PER_REVOLUTION},
+        "encoders": {**stamp, "ticks_per_revolution": robot.spec.encoder_ticks_per_revolution},
         "compass": dict(stamp),
         "gps": dict(stamp),
         "sensors": robot.sensor_readings(),
     }
-    for spec in signals.SIGNALS.values():
+    for spec in signals.SIGNALS.values():  # the names: each robot's keys are its own
         if spec.http:
             value = robot.signal(spec.name)
             for place in spec.http:

@@ -148,12 +148,13 @@ function showDrive(d) {
   $("pos-y").textContent = fmt(d.position.y);
   $("heading").textContent = fmt(d.heading_deg, 1);
   $("speed").textContent = fmt(d.velocity.forward, 3);
-  $("enc-fl").textContent = d.wheels.front_left.encoder_ticks;
-  $("enc-fr").textContent = d.wheels.front_right.encoder_ticks;
-  $("axle-l").textContent = fmt(d.wheels.front_left.axle_speed, 2);
-  $("axle-r").textContent = fmt(d.wheels.front_right.axle_speed, 2);
-  $("power-l").textContent = fmt(d.wheels.front_left.commanded_power, 2);
-  $("power-r").textContent = fmt(d.wheels.front_right.commanded_power, 2);
+  const left = sideWheel(d, "left"), right = sideWheel(d, "right");
+  $("enc-fl").textContent = left.encoder_ticks;
+  $("enc-fr").textContent = right.encoder_ticks;
+  $("axle-l").textContent = fmt(left.axle_speed, 2);
+  $("axle-r").textContent = fmt(right.axle_speed, 2);
+  $("power-l").textContent = fmt(left.commanded_power, 2);
+  $("power-r").textContent = fmt(right.commanded_power, 2);
   state.enabled = d.is_enabled;
   const en = $("enabled");
   en.textContent = d.is_enabled ? "enabled" : "disabled";
@@ -166,15 +167,40 @@ function showDrive(d) {
   showContact(d);
 }
 
-// Per wheel: load (N), slip ratio (+ traction), slip angle (deg, + left); the tip margin.
-const WHEELS = { fl: "front_left", fr: "front_right", rl: "rear_left", rr: "rear_right" };
+// A side's wheel with an encoder (the first of the side: the Corobot's front wheel).
+function sideWheel(d, side) {
+  const wheels = Object.values(d.wheels).filter((w) => w.side === side);
+  return wheels.find((w) => w.encoder_ticks !== null && w.encoder_ticks !== undefined) || wheels[0];
+}
+
+// The wheels' short names, as the run log's columns have them (signals.wheel_short): each
+// name's words' initials (fl, fr, rl, rr), or the names when two are alike.
+function wheelShort(names) {
+  const short = names.map((n) => n.split("_").map((w) => w[0]).join(""));
+  return new Set(short).size === short.length ? short : names;
+}
+
+// Per wheel, the robot's own (a row each): load (N), slip ratio (+ traction), slip angle
+// (deg, + left); the tip margin.
 function showContact(d) {
-  for (const [id, name] of Object.entries(WHEELS)) {
-    const w = d.wheels[name];
-    $(`load-${id}`).textContent = fmt(w.load, 2);
-    $(`slip-${id}`).textContent = fmt(w.slip_ratio, 3);
-    $(`angle-${id}`).textContent = fmt(w.slip_angle_deg, 1);
+  const table = $("contact");
+  const names = Object.keys(d.wheels), short = wheelShort(names);
+  if (table.dataset.wheels !== names.join(",")) {
+    while (table.rows.length > 1) table.deleteRow(1);
+    names.forEach((name, k) => {
+      const row = table.insertRow();
+      row.title = name;
+      row.insertCell().outerHTML = `<th>${short[k].toUpperCase()}</th>`;
+      for (const field of ["load", "slip", "angle"]) row.insertCell().id = `${field}-${short[k]}`;
+    });
+    table.dataset.wheels = names.join(",");
   }
+  names.forEach((name, k) => {
+    const w = d.wheels[name];
+    $(`load-${short[k]}`).textContent = fmt(w.load, 2);
+    $(`slip-${short[k]}`).textContent = fmt(w.slip_ratio, 3);
+    $(`angle-${short[k]}`).textContent = fmt(w.slip_angle_deg, 1);
+  });
   $("tip-margin").textContent = fmt(d.tip_margin_deg, 1);
 }
 
@@ -310,6 +336,8 @@ async function selectRobot(name) {
   $("completing").hidden = !(info.capabilities.drive_distance && info.capabilities.rotate_degrees);
   const hasCamera = state.services.some((s) => s.name === "camera");
   $("webcam-link").href = hasCamera ? withToken(`${base()}/camera/page`) : "#";
+  $("webcam-link").hidden = !hasCamera;  // nothing offered for a part the robot lacks
+  $("camera-panel").hidden = !hasCamera;
   clearTimeout(state.cameraTimer);
   if (hasCamera) nextFrame();
   subscribe();
