@@ -340,10 +340,13 @@ class SimRunner:
         return sim.stop_time(min(target, sim.time + self.max_step))
 
     def _job(self, sim) -> StepJob | None:
-        """The step job to work on this turn (paused only), those cancelled answered."""
-        while self._paused and self._jobs:
+        """The step job to work on this turn (paused only), those cancelled answered (also
+        while playing: a cancel is answered at once)."""
+        while self._jobs:
             job = self._jobs[0]
             if not (job.cancelled or job.future.cancelled() or job.done >= job.steps):
+                if not self._paused:
+                    return None
                 if job.start is None:
                     job.start = sim.time
                 return job

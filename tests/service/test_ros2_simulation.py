@@ -159,6 +159,7 @@ def test_paused_runner_takes_exactly_the_steps_asked(runner):
     assert r.sim.time == 15 * 0.01  # and stays paused
 
 
+@pytest.mark.realtime  # paced by the wall clock
 def test_a_cancelled_job_ends_early_and_a_reset_repaces(runner):
     r = runner(paused=True)
     job = r.step(StepJob(10**6, progress=lambda done, left: done >= 5 and job.cancel()))
@@ -167,14 +168,21 @@ def test_a_cancelled_job_ends_early_and_a_reset_repaces(runner):
     r.pause(False)  # real time, paced from the reset
     time.sleep(0.2)
     assert 0.1 < r.sim.time < 0.4
+    waiting = r.step(StepJob(5))  # steps are taken paused only: cancelled, answered at once
+    time.sleep(0.05)
+    assert not waiting.future.done()
+    waiting.cancel()
+    assert waiting.future.result(1) == 0
 
 
+@pytest.mark.realtime  # paced by the wall clock
 def test_max_rate_runs_as_fast_as_it_can(runner):
     r = runner(rate=MAX_RATE)
     time.sleep(0.2)
     assert r.sim.time > 2.0  # 10x real time at least (nothing to compute)
 
 
+@pytest.mark.realtime  # paced by the wall clock
 def test_rate_paces_the_simulated_time(runner):
     r = runner(rate=4.0)
     time.sleep(0.5)
