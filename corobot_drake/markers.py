@@ -6,6 +6,7 @@ A station hook (`station.build_station`'s `extras`): `Simulation` attaches it wh
 Meshcat, as `functools.partial(add_meshcat_markers, meshcat, record=...)`.
 """
 
+from corobot_drake.robots import robot_spec
 from corobot_drake.systems.slip_markers import add_slip_markers
 
 
@@ -14,8 +15,10 @@ def add_meshcat_markers(meshcat, builder, plant, scene_graph, robots: dict, scen
     """Adds every robot's markers ({name: station.RobotParts}) drawing in `meshcat`;
     `record`: whether it records (`systems.slip_markers.SlipMarkers`)."""
     for name, parts in robots.items():
+        spec = robot_spec(scenario.robots[name].robot)
         add_slip_markers(builder, meshcat, name, parts.chassis_pose,
-                         builder.GetSubsystemByName(f"{name}.wheel_contacts"), record)
+                         builder.GetSubsystemByName(f"{name}.wheel_contacts"), record,
+                         None if spec.generated else spec)  # the Corobot's: its figures
         for sensors in parts.sensors.values():
             for sensor in sensors.values():
                 sensor.kind.add_meshcat(builder, meshcat, sensor)

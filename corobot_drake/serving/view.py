@@ -54,13 +54,15 @@ def shape_radius(shape) -> float:
 
 def scene_points(sim) -> np.ndarray:
     """World points (N, 3) whose bounding box holds the robots and every other proximity
-    shape but half-spaces, now."""
+    shape but half-spaces, now (the Corobot by its platform's footprint and height)."""
     station = sim.station
     inspector = station.scene_graph.model_inspector()
     query = station.diagram.GetOutputPort("query_object").Eval(sim.context)
     robot_ids = set()
     points = []
-    for parts in station.robots.values():
+    for name, parts in station.robots.items():
+        if not sim.robot(name).spec.generated:
+            continue  # any other robot: its own shapes, below, as every body's
         robot_ids |= model_instance_geometry_ids(station.plant, parts.model_instance)
         X_WB = sim.body_pose(parts.chassis)
         half = np.array([dim.PLATFORM.size[0], dim.PLATFORM.size[1], 0.0]) / 2

@@ -54,27 +54,32 @@ class SlipMarkers(LeafSystem):
         - wheel_slip_angle
 
     Inputs: `chassis_pose` (abstract RigidTransform X_WC), `wheel_slip_ratio` and
-    `wheel_slip_angle` (4 each, deg, `dimensions.WHEEL_NAMES` order, from
+    `wheel_slip_angle` (one per wheel each, deg, the robot's wheel order, from
     `contact.WheelContacts`). Draws `<path>/<wheel>` (spheres) every `MARKER_PERIOD` s from
     time 0; no state (the balls are drawn from the inputs alone). `record`: whether `meshcat`
     is recording (None: no; True: recording and showing live; False: recording only), as
-    `Simulation` starts it (`recording.meshcat_html.start_recording`).
+    `Simulation` starts it (`recording.meshcat_html.start_recording`). `spec`: the robot's
+    `robots.RobotSpec` (None: the Corobot's wheels).
     """
 
-    def __init__(self, meshcat: Meshcat, path: str, record: bool | None = None):
+    def __init__(self, meshcat: Meshcat, path: str, record: bool | None = None, spec=None):
         super().__init__()
         self._meshcat = meshcat
         self.path = path
         self._record = record
+        if spec is None:
+            wheels = [(n, dim.wheel_center(n), dim.WHEEL_WIDTH) for n in dim.WHEEL_NAMES]
+        else:
+            wheels = [(w.short, w.center, w.width) for w in spec.wheels]
+        self._names = [name for name, _, _ in wheels]
         self._pose = self.DeclareAbstractInputPort("chassis_pose",
                                                    AbstractValue.Make(RigidTransform()))
-        self._ratio = self.DeclareVectorInputPort("wheel_slip_ratio", 4)
-        self._angle = self.DeclareVectorInputPort("wheel_slip_angle", 4)
+        self._ratio = self.DeclareVectorInputPort("wheel_slip_ratio", len(wheels))
+        self._angle = self.DeclareVectorInputPort("wheel_slip_angle", len(wheels))
         self.DeclarePeriodicPublishEvent(MARKER_PERIOD, 0.0, self._draw)
-        outward = dim.WHEEL_WIDTH / 2 + MARKER_GAP
         self._X_CM = {}  # each ball in the chassis frame: outside its wheel's hub
-        for name in dim.WHEEL_NAMES:
-            x, y, z = dim.wheel_center(name)
+        for name, (x, y, z), width in wheels:
+            outward = width / 2 + MARKER_GAP
             self._X_CM[name] = RigidTransform([x, y + math.copysign(outward, y), z])
             meshcat.SetObject(f"{path}/{name}", Sphere(MARKER_RADIUS), Rgba(0.0, 0.8, 0.0, 1.0))
 
@@ -83,7 +88,7 @@ class SlipMarkers(LeafSystem):
         t = context.get_time()
         ratios, angles = self._ratio.Eval(context), self._angle.Eval(context)
         animation = self._meshcat.get_mutable_recording() if self._record is not None else None
-        for k, name in enumerate(dim.WHEEL_NAMES):
+        for k, name in enumerate(self._names):
             path = f"{self.path}/{name}"
             self._meshcat.SetTransform(path, X_WC @ self._X_CM[name], t)
             rgba = severity_rgba(slip_severity(ratios[k], angles[k]))
@@ -95,11 +100,11 @@ class SlipMarkers(LeafSystem):
 
 
 def add_slip_markers(builder, meshcat: Meshcat, name: str, chassis_pose_port, wheel_contacts,
-                     record: bool | None = None):
+                     record: bool | None = None, spec=None):
     """Adds `<name>.slip_markers` (drawing under `/slip/<name>`) fed by `chassis_pose_port`
-    and `wheel_contacts`' slip ports; returns it. `record`: see `SlipMarkers`."""
+    and `wheel_contacts`' slip ports; returns it. `record`, `spec`: see `SlipMarkers`."""
     system = builder.AddNamedSystem(f"{name}.slip_markers",
-                                    SlipMarkers(meshcat, f"/slip/{name}", record))
+                                    SlipMarkers(meshcat, f"/slip/{name}", record, spec))
     builder.Connect(chassis_pose_port, system.GetInputPort("chassis_pose"))
     for port in ("wheel_slip_ratio", "wheel_slip_angle"):
         builder.Connect(wheel_contacts.GetOutputPort(port), system.GetInputPort(port))
