@@ -128,6 +128,7 @@ class SensorPublisher(LeafSystem):
         super().__init__()
         self._sensor, self._kind, self._sink = sensor, sensor.kind, sink
         self._watched = getattr(sink, "watched", lambda: True)
+        self._kind.add_reader(sensor, self._watched)
         self._inputs = {}
         for name, port in self._kind.wire_ports(sensor).items():
             if port.get_data_type() == PortDataType.kVectorValued:

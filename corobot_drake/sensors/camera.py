@@ -485,6 +485,8 @@ class Camera:
     """s: how often a reader of the frames looks for a new one (`frame_look_period`)."""
     saver: CameraFrameSaver | None = None
     """Writes the frames as PNG, with a save directory."""
+    worker: RenderWorker | None = None
+    """Renders the frames ahead, from their captures (None: they render when read)."""
 
 
 def save_directory(root: str | Path, robot: str, camera: str) -> Path:
@@ -540,6 +542,7 @@ def add_camera(site: SensorSite, name: str, config: CameraConfig,
             and site.renderers.get(config.renderer_name) == "RenderEngineGl"):
         camera = _add_async(builder, scene_graph, prefix, config, frame_id, X_AB, step)
         image, delay = camera.GetOutputPort("color_image"), config.output_delay
+        worker = None  # (Drake's own thread renders each frame)
     else:
         delay, worker = held_delay, None
         if on_a_worker and site.renderers.get(config.renderer_name) == "RenderEngineGl":
@@ -554,13 +557,15 @@ def add_camera(site: SensorSite, name: str, config: CameraConfig,
     image_time = camera.GetOutputPort("image_time")
     builder.ExportOutput(image, f"{prefix}.rgb_image")
     builder.ExportOutput(image_time, f"{prefix}.image_time")
-    built = Camera(name, config, camera, image, image_time, delay, look)
+    built = Camera(name, config, camera, image, image_time, delay, look, worker=worker)
     if site.save_dir is not None:
         built.saver = builder.AddNamedSystem(f"{prefix}.saver", CameraFrameSaver(
             save_directory(site.save_dir, site.robot, name), config.width, config.height,
             config.fps, save_rate or config.fps, config.capture_offset, look, delay))
         builder.Connect(image, built.saver.GetInputPort("rgb_image"))
         builder.Connect(image_time, built.saver.GetInputPort("image_time"))
+        if built.worker is not None:
+            built.worker.readers.append(lambda: True)  # it saves every frame
     return built
 
 
@@ -747,6 +752,13 @@ class CameraKind(SensorKind):
 
     def wire_reading(self, sensor: BuiltSensor, inputs) -> CameraFrame:
         return CameraFrame(float(inputs("image_time")[0]), inputs("rgb_image"), sensor.config)
+
+    def add_reader(self, sensor: BuiltSensor, wanted) -> None:
+        """The render worker renders frames ahead only while some reader wants them
+        (`RenderWorker.readers`): a ROS 2 image topic nobody subscribes to costs no render."""
+        worker = sensor.extra["camera"].worker
+        if worker is not None:
+            worker.readers.append(wanted)
 
     def foxglove_message(self, reading: CameraFrame, frame: str) -> dict:
         """foxglove.CompressedImage (JPEG) and foxglove.CameraCalibration."""

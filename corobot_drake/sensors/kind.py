@@ -226,6 +226,12 @@ class SensorKind:
         its own, whose time is its `reading_time`."""
         return inputs("reading")
 
+    def add_reader(self, sensor: BuiltSensor, wanted) -> None:
+        """A publisher of the sensor's readings joins its readers; `wanted()` says whether it
+        would take a reading now. By default nothing: a kind whose readings cost work ahead of
+        being read (a camera's frames, rendered on a worker from their capture) does that work
+        only while some reader wants them."""
+
 
 def _jsonable(value):
     if isinstance(value, float):

@@ -100,6 +100,10 @@ class RenderWorker:
         reads it is cleared by the hold's next update) it is not rendered again."""
         self.renders = 0
         """Frames rendered so far (on the worker's thread)."""
+        self.readers: list[Callable[[], bool]] = []
+        """Who reads every frame, each saying whether it wants frames now (a ROS 2 topic:
+        while it has a subscriber). With readers and none wanting, `submit` renders nothing
+        ahead (a frame read anyway, `take`, renders then); with none, every frame is."""
 
     def wait_ready(self) -> None:
         """Waits until the copy is built (raising what building it raised)."""
@@ -111,7 +115,9 @@ class RenderWorker:
 
     def submit(self, key, state) -> None:
         """Starts rendering the frame `key` (hashable: its capture) at the plant's
-        `state`."""
+        `state`, unless its `readers` want none now."""
+        if self.readers and not any(wanted() for wanted in self.readers):
+            return
         self._pending[key] = self._executor.submit(self._render, np.array(state, dtype=float))
         while len(self._pending) > IN_FLIGHT:
             self._pending.popitem(last=False)[1].cancel()  # nobody took it: render no more

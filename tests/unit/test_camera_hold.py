@@ -127,3 +127,30 @@ def test_a_render_worker_cancels_renders_nobody_took_and_renders_them_when_taken
     worker.take(11, [11, 0.0])  # a later frame read: the one before it is not rendered
     assert 10 not in rendered
     worker.close()
+
+
+def test_a_render_worker_renders_ahead_only_while_a_reader_wants_frames():
+    """With readers and none wanting frames (a ROS 2 image topic without a subscriber), a
+    submitted frame is not rendered, and one taken anyway renders then; once a reader wants
+    them, each submitted frame renders ahead again."""
+    from corobot_drake.sensors.render_worker import RenderWorker
+
+    rendered = []
+
+    class Scene:
+        def render(self, state):
+            rendered.append(int(state[0]))
+            return image(int(state[0]))
+
+    worker = RenderWorker(Scene, num_states=2)
+    worker.wait_ready()
+    wanted = [False]
+    worker.readers.append(lambda: wanted[0])
+    worker.submit(1, [1, 0.0])
+    assert not worker._pending
+    assert (worker.take(1, [1, 0.0]).data == 1).all() and rendered == [1]  # when taken
+    wanted[0] = True
+    worker.submit(2, [2, 0.0])
+    worker._pending[2].result()  # rendered ahead, before anyone takes it
+    assert rendered == [1, 2]
+    worker.close()
