@@ -111,11 +111,32 @@ def build_package(root: Path, name: str, quiet: bool = True) -> None:
             [tools["cmake"], "--build", build, "--target", "install"],
         )
         for step in steps:
-            done = subprocess.run(step, env=env, capture_output=quiet, text=True)
-            if done.returncode != 0:
-                raise BuildError(f"{name}: {Path(step[0]).name} failed:\n"
-                                 f"{_last_lines(done.stdout, done.stderr)}")
+            status, output = run_step(step, env, quiet, name)
+            if status != 0:
+                raise BuildError(f"{name}: {Path(step[0]).name} failed:\n{_last_lines(output)}")
     _stamp(root, name).write_text(source_hash(INTERFACES_DIR / name))
+
+
+NINJA_PROGRESS = re.compile(r"\[(\d+)/(\d+)\]")
+"""Ninja's `[done/total]` at the start of each line it prints (on a pipe, one per step)."""
+
+
+def run_step(command: list[str], env: dict, quiet: bool, name: str) -> tuple[int, str]:
+    """Runs one step of a package's build: (its status, its output). Quiet, the output is
+    kept, and Ninja's progress becomes one line each quarter (a package of many interfaces
+    builds for minutes); otherwise it is shown as it comes."""
+    if not quiet:
+        return subprocess.run(command, env=env).returncode, ""
+    lines, quarters = [], 0
+    with subprocess.Popen(command, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                          text=True) as p:
+        for line in p.stdout:
+            lines.append(line)
+            m = NINJA_PROGRESS.match(line)
+            if m and 4 * int(m[1]) >= (quarters + 1) * int(m[2]) and quarters < 4:
+                quarters = 4 * int(m[1]) // int(m[2])
+                print(f"{name}: {m[1]} of {m[2]} build steps", file=sys.stderr, flush=True)
+    return p.returncode, "".join(lines)
 
 
 def _last_lines(*texts, n: int = 25) -> str:
