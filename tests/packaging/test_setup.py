@@ -116,3 +116,17 @@ def test_the_ros2_build_lines_get_their_time():
     assert done.stderr == "  [0 s] building tf2_msgs into /x ...\n"
     done = run_function("with_elapsed < /dev/null")
     assert done.stderr == "  built already, from the same sources\n"
+
+
+def test_the_ros2_build_says_each_quarter_of_a_package(capsys):
+    from corobot_drake.ros2.build import run_step
+
+    ninja = "for i in $(seq 1 10); do echo \"[$i/10] Building $i\"; done; echo note >&2"
+    status, output = run_step(["bash", "-c", ninja], {"PATH": "/usr/bin:/bin"}, True, "pkg")
+    assert status == 0 and output.splitlines()[-1] == "note" and "[10/10] Building 10" in output
+    assert capsys.readouterr().err.splitlines() == [
+        "pkg: 3 of 10 build steps", "pkg: 5 of 10 build steps", "pkg: 8 of 10 build steps",
+        "pkg: 10 of 10 build steps"]
+    status, output = run_step(["bash", "-c", "echo why; exit 3"], {"PATH": "/usr/bin:/bin"},
+                              True, "pkg")
+    assert (status, output) == (3, "why\n")
