@@ -222,8 +222,9 @@ def sim_ros():
     from geometry_msgs.msg import Twist
     from simulation_interfaces.srv import GetSimulationState, StepSimulation
 
-    with ros2_simulation(["--headless", "--paused", "--override", QUIET],
-                         serve=False) as (_, probe):
+    from corobot_drake.serving.client import CorobotClient
+
+    with ros2_simulation(["--headless", "--paused", "--override", QUIET]) as (server, probe):
         probe.call("/get_simulation_state", GetSimulationState, GetSimulationState.Request())
         # A refused step (0) discovers the step service both ways without stepping.
         probe.call("/step_simulation", StepSimulation, StepSimulation.Request(steps=0))
@@ -232,7 +233,9 @@ def sim_ros():
         while cmd_vel.get_subscription_count() == 0 and time.monotonic() < deadline:
             time.sleep(0.05)
         probe.fresh = _episode(probe, reset=False)  # the first run, as the node started it
+        probe.http = CorobotClient(server.url)  # --serve beside it: the same clock
         yield probe
+        probe.http.close()
 
 
 def _call(probe, service, srv, /, retry=None, **fields):
@@ -286,6 +289,7 @@ def test_rl_loop_gets_the_same_trajectory_after_every_reset(sim_ros):
     x0, x1 = first[0][1][0], first[1][1][0]
     assert x1 - x0 > 0.005  # the first action (0.3 m/s) moved it forwards
     assert first == probe.fresh  # the run after a reset is the first run, bit for bit
+    assert probe.http.time == times[-1]  # the HTTP server's time is the steps' (paused)
     assert _episode(probe) == first
 
 
