@@ -37,10 +37,9 @@ from corobot_drake.arguments import (
     output_file,
 )
 from corobot_drake.limits import DRAKE_INT
-from corobot_drake.model import dimensions as dim
 from corobot_drake.resources import DEFAULT_SCENARIO
 from corobot_drake.tuning import odometry_calibration as oc
-from corobot_drake.tuning.sysid import DriveField, write_drive_fields
+from corobot_drake.tuning.sysid import DriveField, scenario_robot, write_drive_fields
 
 
 def _parser() -> ToolParser:
@@ -49,11 +48,13 @@ def _parser() -> ToolParser:
     p.add_argument("--simulate", action="store_true",
                    help="drive UMBmark's squares in --scenario and fit their log")
     p.add_argument("--scenario", default=str(DEFAULT_SCENARIO),
-                   help="scenario to simulate in")
-    p.add_argument("--robot", default="corobot", help="robot")
+                   help="scenario to simulate in; its --robot is the robot a LOG is from")
+    p.add_argument("--robot", default=None,
+                   help="robot of --scenario (None: its only robot): its nominal radius and "
+                   "track, its encoders")
     p.add_argument("--ticks-per-revolution", type=bounded(TICKS_PER_REVOLUTION, int),
-                   default=dim.ENCODER_TICKS_PER_REVOLUTION,
-                   help="encoder counts per wheel revolution")
+                   default=None,
+                   help="encoder counts per wheel revolution (None: the robot's)")
     p.add_argument("--out", type=output_directory, default=None,
                    help="directory for the squares' log and the plots (None: a new temporary "
                    "directory)")
@@ -98,7 +99,7 @@ def _simulated_log(args) -> oc.PoseLog:
     path = args.out / "odometry_squares_log.csv"
     sim.robot(args.robot).write_log(path)
     print(f"simulated UMBmark squares ({sim.time:.1f} s) -> {path}", flush=True)
-    return oc.read_pose_log(path)
+    return oc.read_pose_log(path, args.ticks_per_revolution)
 
 
 def _write(args, fit: oc.OdometryFit, source: str) -> None:
@@ -118,10 +119,10 @@ def _drive_test(args, fit: oc.OdometryFit) -> None:
                                            fit.effective_track_width, args.seed,
                                            progress=update)
     log = run["log"]
-    nominal = oc.end_error(log, dim.WHEEL_RADIUS, dim.TRACK)
+    nominal = oc.end_error(log, *args.nominal)
     offline = oc.end_error(log, fit.effective_wheel_radius, fit.effective_track_width)
     calibrated = run["error"]
-    radius_only = oc.end_error(log, dim.WHEEL_RADIUS, fit.effective_track_width)
+    radius_only = oc.end_error(log, args.nominal[0], fit.effective_track_width)
     print(f"drive test (3 loops, seed {args.seed}, {run['sim_time']:.1f} s): dead-reckoned end "
           f"position error {nominal * 1000:.1f} mm uncalibrated, {calibrated * 1000:.1f} mm "
           f"calibrated (Robot.odometry(); {offline * 1000:.1f} mm from the log), ratio "
@@ -129,7 +130,7 @@ def _drive_test(args, fit: oc.OdometryFit) -> None:
           f"{run['yaw_error_deg']:+.2f} deg")
     print(f"with the calibrated track but the nominal radius: {radius_only * 1000:.1f} mm")
     plot = Path(args.plot).with_name(Path(args.plot).stem + "_drive_test.png")
-    oc.plot_paths(log, (dim.WHEEL_RADIUS, dim.TRACK),
+    oc.plot_paths(log, args.nominal,
                   (fit.effective_wheel_radius, fit.effective_track_width), plot,
                   f"drive test, 3 loops, seed {args.seed}: odometry before and after calibration")
     print(f"plot: {plot}")
@@ -141,6 +142,10 @@ def main(argv=None) -> int:
     args = p.parse_args(argv)
     if (args.log is None) == (not args.simulate):
         p.error("give a LOG or --simulate (not both)")
+    args.robot, spec = scenario_robot(args.scenario, args.robot)  # wrong: one line
+    args.nominal = (spec.wheel_radius, spec.track)
+    if args.ticks_per_revolution is None:
+        args.ticks_per_revolution = spec.encoder_ticks_per_revolution
     if args.simulate:
         _make_out(args)
         log = _simulated_log(args)
@@ -149,8 +154,8 @@ def main(argv=None) -> int:
     fit = oc.fit_odometry(log)  # a bad log or scenario: one_line_errors' one line
     if args.plot is None:  # made once the log is good: no empty directory for a bad one
         _make_out(args)
-    print(fit.describe())
-    nominal = (dim.WHEEL_RADIUS, dim.TRACK)
+    print(fit.describe(args.nominal))
+    nominal = args.nominal
     fitted = (fit.effective_wheel_radius, fit.effective_track_width)
     print(f"end position error on this log: {oc.end_error(log, *nominal) * 1000:.1f} mm "
           f"nominal, {oc.end_error(log, *fitted) * 1000:.1f} mm calibrated")

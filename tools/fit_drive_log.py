@@ -29,6 +29,7 @@ from corobot_drake.arguments import (
 )
 from corobot_drake.config.scenario import Drive
 from corobot_drake.limits import bound_of
+from corobot_drake.resources import DEFAULT_SCENARIO
 from corobot_drake.tuning import drive_tuning, sysid
 
 
@@ -66,14 +67,22 @@ def main(argv=None) -> int:
                    help="with --simulate: end the log backing into the giant box")
     p.add_argument("--plot", type=output_file, default="out/fit_drive_log.png",
                    help="PNG of the fit")
-    p.add_argument("--ticks-per-revolution", type=bounded(TICKS_PER_REVOLUTION, int), default=600,
-                   help="encoder counts")
+    p.add_argument("--ticks-per-revolution", type=bounded(TICKS_PER_REVOLUTION, int),
+                   default=None, help="encoder counts (None: the robot's)")
     p.add_argument("--write", metavar="SCENARIO", type=existing_file,
                    help="put the fitted motor_torque_scaling and slew_rate in this scenario file")
-    p.add_argument("--robot", default="corobot", help="robot to --write")
+    p.add_argument("--scenario", type=existing_file, default=None,
+                   help="the scenario whose --robot the log is from and --simulate drives "
+                   "(None: --write's, else the shipped default scene)")
+    p.add_argument("--robot", default=None,
+                   help="robot of --scenario to --write (None: its only robot)")
     args = p.parse_args(argv)
     if args.log is None and args.simulate is None:
         p.error("give a LOG or --simulate SCALING SLEW")
+    args.scenario = args.scenario or args.write or str(DEFAULT_SCENARIO)
+    args.robot, spec = sysid.scenario_robot(args.scenario, args.robot)  # wrong: one line
+    if args.ticks_per_revolution is None:
+        args.ticks_per_revolution = spec.encoder_ticks_per_revolution
     for value, field in zip(args.simulate or (), ("motor_torque_scaling", "slew_rate"),
                             strict=False):
         problem = bound_of(next(f for f in dc.fields(Drive) if f.name == field)).problem(value)
@@ -85,7 +94,8 @@ def main(argv=None) -> int:
         print(f"simulating a log at motor_torque_scaling {scaling:g}, slew {slew:g} rad/s^2"
               f"{', ending in a stall against the giant box' if args.stall else ''} -> {path}",
               flush=True)
-        drive_tuning.simulate_log(path, scaling, slew, excitation=drive_tuning.STALL_EXCITATION
+        drive_tuning.simulate_log(path, scaling, slew, args.scenario, args.robot,
+                                  excitation=drive_tuning.STALL_EXCITATION
                                   if args.stall else drive_tuning.EXCITATION)
     log, fit, dropped = _fit(path, args.ticks_per_revolution)  # a bad log: one line
     for d in dropped:

@@ -31,6 +31,7 @@ from corobot_drake.config.scenario import ScenarioError, load_scenario
 from corobot_drake.limits import AXLE_SPEED, Range
 from corobot_drake.model import dimensions as dim
 from corobot_drake.resources import DEFAULT_SCENARIO
+from corobot_drake.robots import robot_spec
 from corobot_drake.simulation import quiet_drake_warnings
 from corobot_drake.tuning.drive_tuning import (
     measure_top_speed,
@@ -49,10 +50,12 @@ def _parser() -> ToolParser:
     p.add_argument("--scenario", help="scenario file (None: the shipped default scene, which "
                    "--write never changes: name the file to write)")
     p.add_argument("--robot", help="robot name (None: the scenario's only robot)")
-    p.add_argument("--scaling", type=bounded(AXLE_SPEED), default=dim.MOTOR_TORQUE_SCALING_UNTUNED,
-                   help="starting MotorTorqueScaling (20 is the untuned value)")
-    p.add_argument("--target", type=bounded(TOP_SPEED), default=dim.TARGET_TOP_SPEED,
-                   help="top speed wanted, m/s (0.6096 = 2 ft/s)")
+    p.add_argument("--scaling", type=bounded(AXLE_SPEED), default=None,
+                   help="starting MotorTorqueScaling (None: the Corobot's untuned 20; another "
+                   "robot's --target over its wheel radius, rolling without slip)")
+    p.add_argument("--target", type=bounded(TOP_SPEED), default=None,
+                   help="top speed wanted, m/s (None: the Corobot's 0.6096 = 2 ft/s; another "
+                   "robot's top speed at power 1, as its robot file states it)")
     p.add_argument("--tolerance", type=bounded(Range(0.0, 0.5, low_open=True)), default=0.005,
                    help="relative")
     p.add_argument("--max-iterations", type=bounded(Range(1, 100), int), default=8,
@@ -77,7 +80,8 @@ def _parser() -> ToolParser:
 
 
 def _robot_name(args) -> str | None:
-    """The robot to tune, or None after printing why there is none."""
+    """The robot to tune, or None after printing why there is none; the --target and
+    --scaling left out are that robot's (`_defaults`)."""
     try:
         scenario = load_scenario(args.scenario)
     except ScenarioError as e:
@@ -89,7 +93,21 @@ def _robot_name(args) -> str | None:
         print(f"error: {args.scenario}: name a robot with --robot (robots: {', '.join(names)})",
               file=sys.stderr)
         return None
+    _defaults(args, robot_spec(scenario.robots[robot_name].robot))
     return robot_name
+
+
+def _defaults(args, spec) -> None:
+    """The --target and --scaling left out: the Corobot's documented ones (its 2 ft/s and its
+    untuned 20); another robot's top speed at power 1 (its robot file's `drive.top_speed`)
+    and the scaling that gives it rolling without slip."""
+    if spec.generated:
+        target, scaling = dim.TARGET_TOP_SPEED, dim.MOTOR_TORQUE_SCALING_UNTUNED
+    else:
+        target = spec.top_speed()
+        scaling = (args.target or target) / spec.wheel_radius
+    args.target = args.target or target
+    args.scaling = args.scaling or scaling
 
 
 def _tune(args, robot_name: str):

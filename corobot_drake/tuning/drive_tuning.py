@@ -123,11 +123,12 @@ def plot_top_speed(curves, target: float, settle: float, path: Path) -> None:
 
 
 def simulate_log(path: Path, scaling: float, slew: float, scenario=DEFAULT_SCENARIO,
-                 excitation=EXCITATION) -> None:
-    """Runs `excitation` in the simulator at the given drive parameters and writes its log."""
+                 robot: str | None = None, excitation=EXCITATION) -> None:
+    """Runs `excitation` on `robot` (None: the scenario's first) in the simulator at the
+    given drive parameters and writes its log."""
     quiet_drake_warnings()
     robots = load_scenario(scenario).robots
-    name = next(iter(robots))
+    name = robot or next(iter(robots))
     sim = Simulation(load_scenario(scenario, overrides=[
         f"robots: {{{name}: {{drive: {{motor_torque_scaling: {scaling!r}, "
         f"slew_rate: {slew!r}}}}}}}"]))

@@ -54,9 +54,11 @@ def read_pose_log(path, ticks_per_revolution: int = dim.ENCODER_TICKS_PER_REVOLU
                    np.column_stack([a[:, 3:5], np.unwrap(a[:, 5])]), str(path))
 
 
-def pose_log_of(rows: np.ndarray) -> PoseLog:
-    """A PoseLog from run-log rows (`Robot.run_log()`, columns `runlog.COLUMNS`)."""
-    ticks = rows[:, 3:5] * (2 * math.pi / dim.ENCODER_TICKS_PER_REVOLUTION)
+def pose_log_of(rows: np.ndarray,
+                ticks_per_revolution: int = dim.ENCODER_TICKS_PER_REVOLUTION) -> PoseLog:
+    """A PoseLog from run-log rows (`Robot.run_log()`, columns `runlog.COLUMNS`) of a robot
+    whose encoders count `ticks_per_revolution` (the Corobot's 600)."""
+    ticks = rows[:, 3:5] * (2 * math.pi / ticks_per_revolution)
     return PoseLog(rows[:, 0], ticks, np.column_stack([rows[:, 5:7], np.unwrap(rows[:, 7])]))
 
 
@@ -85,11 +87,12 @@ class OdometryFit:
     turn_rms: float
     """rad: RMS of a window's true minus modelled turn."""
 
-    def describe(self) -> str:
+    def describe(self, nominal: tuple[float, float] = (dim.WHEEL_RADIUS, dim.TRACK)) -> str:
+        """The fit beside the robot's `nominal` (wheel radius, track) m (the Corobot's)."""
         return (f"effective_wheel_radius: {self.effective_wheel_radius:.6f} m "
-                f"(nominal {dim.WHEEL_RADIUS:.6f})\n"
+                f"(nominal {nominal[0]:.6f})\n"
                 f"effective_track_width: {self.effective_track_width:.5f} m "
-                f"(geometric {dim.TRACK:.5f})\n"
+                f"(geometric {nominal[1]:.5f})\n"
                 f"residuals over {self.windows} windows of {WINDOW} s: distance "
                 f"{self.distance_rms * 1000:.2f} mm RMS, turn "
                 f"{math.degrees(self.turn_rms):.3f} deg RMS")
@@ -172,7 +175,8 @@ def drive_test_odometry_error(scenario_path, robot: str, radius: float, track_wi
     odometry, pose = r.odometry(), r.pose()
     return {"error": math.hypot(odometry.x - pose.x, odometry.y - pose.y),
             "yaw_error_deg": math.degrees(math.remainder(odometry.yaw - pose.yaw, 2 * math.pi)),
-            "log": pose_log_of(r.run_log()), "sim_time": sim.time}
+            "log": pose_log_of(r.run_log(), r.spec.encoder_ticks_per_revolution),
+            "sim_time": sim.time}
 
 
 def plot_paths(log: PoseLog, nominal: tuple[float, float], fitted: tuple[float, float],

@@ -98,6 +98,21 @@ def read_columns(path: str | Path, required: tuple[str, ...]) -> np.ndarray:
     return np.array(data)
 
 
+def scenario_robot(scenario_path, robot: str | None = None):
+    """(name, `robots.RobotSpec`) of the robot `robot` of a scenario file, or of its only
+    robot; ScenarioError (one line) when there is no such robot or it is not named among
+    several."""
+    from corobot_drake.robots import robot_spec
+
+    robots = load_scenario(scenario_path).robots
+    if robot is None and len(robots) == 1:
+        robot = next(iter(robots))
+    if robot not in robots:
+        raise ScenarioError(str(scenario_path), "robots", f"name a robot with --robot "
+                            f"(robots: {', '.join(robots)})")
+    return robot, robot_spec(robots[robot].robot)
+
+
 def read_log(path: str | Path, ticks_per_revolution: int = dim.ENCODER_TICKS_PER_REVOLUTION
              ) -> DriveLog:
     """Reads and checks a run-log CSV; raises LogError naming the line of the first problem.
