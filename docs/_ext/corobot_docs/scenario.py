@@ -152,7 +152,7 @@ def _class_doc(cls) -> str:
 
 def _row(s: Section, name: str, tp, sections) -> list[str]:
     bound, size = _bound(s.cls, name)
-    doc = _field_doc(s.cls, name)
+    doc = _field_doc(s.cls, name) or _sensor_map_doc(s.cls, name)
     unit = _unit(bound, doc)
     return [f"`{name}`", _type_text(tp, sections), _default_text(getattr(s.default, name, None)),
             unit, _allowed(bound, size, tp), cell(doc)]
@@ -188,7 +188,8 @@ def _allowed(bound, size, tp) -> str:
         return ""
 
     if isinstance(bound, tuple):
-        text = "; ".join(f"[{i}] {one(b)}" for i, b in enumerate(bound))
+        text = "; ".join(f"{_indices(first, last)} {one(b)}"
+                         for first, last, b in _runs(bound))
     elif bound is not None:
         text = one(bound) + (" each" if typing.get_origin(tp) is list else "")
     elif _scalar(tp) is float:
@@ -200,6 +201,21 @@ def _allowed(bound, size, tp) -> str:
     if size is not None:
         text = f"{size} numbers" + (f", {text}" if text else "")
     return cell(text)
+
+
+def _runs(bounds: tuple):
+    """(first index, last index, bound) of each run of equal bounds of a list's elements."""
+    runs = []
+    for i, b in enumerate(bounds):
+        if runs and runs[-1][2] == b:
+            runs[-1][1] = i
+        else:
+            runs.append([i, i, b])
+    return runs
+
+
+def _indices(first: int, last: int) -> str:
+    return f"[{first}]" if first == last else f"[{first}-{last}]"
 
 
 def _scalar(tp):
@@ -260,6 +276,20 @@ def _field_doc(cls, name: str) -> str:
     if doc.startswith("(self)"):
         return ""
     return doc.split("\n\n")[0]
+
+
+def _sensor_map_doc(cls, name: str) -> str:
+    """What a robot's map of a kind of sensor is (`sensors.registry.KINDS`)."""
+    from corobot_drake.sensors.registry import KINDS
+
+    kind = next((k for k in KINDS if k.field == name and cls.__name__ == "Robot"), None)
+    if kind is None:
+        return ""
+    doc = f"The robot's sensors of this kind, by name (`{name}: {{<name>: {{...}}}}`)"
+    if kind.defaults():
+        off = ", ".join(f"{k}: {str(v).lower()}" for k, v in (kind.off or {}).items())
+        doc += f"; a default one is removed by `{{{off}}}`" if off else ""
+    return doc + "."
 
 
 def _command_arg_doc(cls, name: str) -> str:
