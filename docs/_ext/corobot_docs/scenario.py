@@ -131,7 +131,8 @@ def _section(s: Section, sections) -> str:
     where = ", ".join(f"`{p.lstrip('.')}`" for p in s.paths[:4])
     where = f"At {where}." if where != "``" else "The file's top level."
     if s.cls.__module__.startswith("pydrake"):
-        where += f" Drake's `{s.cls.__module__}.{s.cls.__qualname__}`."
+        where += (f" Drake's [`{s.cls.__module__}.{s.cls.__qualname__}`]"
+                  f"({_drake_url(s.cls)}).")
     doc = _class_doc(s.cls)
     head = [f"## {_title(s.cls)}", "", where + (f" {doc}" if doc else "")]
     rows = [_row(s, name, tp, sections) for name, tp in _struct_fields(s.cls)]
@@ -236,7 +237,15 @@ def _type_text(tp, sections) -> str:
         return "null"
     if tp in sections:
         return f"[{tp.__name__}](#{_slug(_title(tp))})"
+    if getattr(tp, "__module__", "").startswith("pydrake"):
+        return f"[`{tp.__qualname__}`]({_drake_url(tp)})"
     return f"`{getattr(tp, '__name__', str(tp))}`"
+
+
+def _drake_url(tp) -> str:
+    """Drake's documentation of one of its Python classes."""
+    return (f"https://drake.mit.edu/pydrake/{tp.__module__}.html"
+            f"#{tp.__module__}.{tp.__qualname__}")
 
 
 def _slug(title: str) -> str:
