@@ -38,11 +38,18 @@ class Ros2:
     namespace)."""
 
     kind: str
-    """`topic`, `service` or `action`."""
+    """`topic` (subscribed), `service` or `action`."""
     name: str
     """`/cmd_vel`, `/drive_distance`, ..."""
     type: str
-    """The interface type, `geometry_msgs/msg/Twist`, ..."""
+    """The interface type, `geometry_msgs/msg/Twist`, ... An action's goal is the command's
+    arguments, field for field; a std_srvs Trigger issues the command as it is, a SetBool
+    with its one flag; `corobot_interfaces/srv/SetPose` is SetPose's own (yaw in rad)."""
+    feedback: str = ""
+    """An action's feedback field: what is left of the command, in its first argument's unit
+    (`MotionCommands.remaining_command`)."""
+    what: str = ""
+    """What it does, for the interface tables (the command's summary when empty)."""
 
 
 @dc.dataclass(frozen=True)
@@ -136,7 +143,10 @@ def _range(field: dc.Field) -> Range | None:
 
 # --- the commands -----------------------------------------------------------------------------
 
-CMD_VEL = Ros2("topic", "/cmd_vel", "geometry_msgs/msg/Twist")
+CMD_VEL = Ros2("topic", "/cmd_vel", "geometry_msgs/msg/Twist", what=(
+    "issued as SetVelocity (`linear.x` m/s, `angular.z` rad/s); TwistStamped with the node's "
+    "parameter `cmd_vel_stamped`, a publisher of the other type reported once in the log; "
+    "the robot stops when none has come for 0.5 s (parameter `cmd_vel_timeout`, 0: never)"))
 
 
 @command(method="set_power", summary="Power per side in [-1, 1]", http_request="PowerRequest",
@@ -204,7 +214,8 @@ COMPLETING_POWER_OVER_HTTP = 0.2
 
 @command(method="drive_distance", completing=True, scenario_only=("start", "recent_progress"),
          summary="Drive straight |distance| m (negative: backwards); completes",
-         ros2=Ros2("action", "/drive_distance", "corobot_msgs/action/DriveDistance"),
+         ros2=Ros2("action", "/drive_distance", "corobot_interfaces/action/DriveDistance",
+                   feedback="remaining"),
          docs={"distance": "negative: backwards", "power": "power"},
          optional=("power",), http_defaults={"power": COMPLETING_POWER_OVER_HTTP})
 class DriveDistance:
@@ -226,7 +237,8 @@ class DriveDistance:
 
 @command(method="rotate_degrees", completing=True, scenario_only=("start", "recent_progress"),
          summary="Turn in place (positive: left, counter-clockwise); completes",
-         ros2=Ros2("action", "/rotate_degrees", "corobot_msgs/action/RotateDegrees"),
+         ros2=Ros2("action", "/rotate_degrees", "corobot_interfaces/action/RotateDegrees",
+                   feedback="remaining_degrees"),
          docs={"degrees": "positive turns left (CCW)", "power": "power"},
          optional=("power",), http_defaults={"power": COMPLETING_POWER_OVER_HTTP})
 class RotateDegrees:
@@ -249,7 +261,8 @@ class RotateDegrees:
 
 @command(method="set_pose", completing=True,
          summary="Teleport the robot to (x, y, yaw) on the ground; completes when settled",
-         ros2=Ros2("service", "/set_pose", "corobot_msgs/srv/SetPose"),
+         ros2=Ros2("service", "/set_pose", "corobot_interfaces/srv/SetPose", what=(
+             "teleport to `x`, `y` (m), `yaw` (rad); answers once settled, or `blocked`")),
          optional=("yaw_deg",), docs={"x": "world x", "y": "world y", "yaw_deg": "heading"})
 class SetPose:
     """Teleport the robot to (x, y) m facing `yaw_deg`: on the ground, at rest, wheels stopped."""

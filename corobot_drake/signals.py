@@ -11,9 +11,10 @@ attributes) where
 - `*` in a segment stands for each key (`drive.wheels.*.load`, `ir.*_ir.raw`), and a `#`
   segment for its index in the value's key order (`velocity.#`: a list or an array);
 - a trailing `[]` holds the values as a list in key order (`slip.ratio[]`);
-- a suffix `|deg` holds it in degrees, `|f32` as a 32-bit float (sensor_msgs/Range), `|pose`
-  in a geometry Pose (position and orientation quaternion: read as x, y, z, roll, pitch,
-  yaw); the last two are read only (published formats, built by their publishers).
+- a suffix `|deg` holds it in degrees, `|f32` as a 32-bit float, `|range` as sensor_msgs/
+  Range's (a 32-bit float, +Inf when nothing is in range, REP 117: read as its max_range),
+  `|pose` in a geometry Pose (position and orientation quaternion: read as x, y, z, roll,
+  pitch, yaw); the last three are read only (published formats, built by their publishers).
 
 The places of each front end:
 
@@ -67,6 +68,7 @@ reads -0.07 to +0.03 deg against `contact.SLIP_SPEED_FLOOR`; a spin reads 39.5).
 
 DEG = "|deg"
 F32 = "|f32"
+RANGE = "|range"
 POSE = "|pose"
 """A place's suffixes (module docstring)."""
 
@@ -249,9 +251,9 @@ STATE = (
                                   "pitch": ANGLE_CHANGE, "yaw": ANGLE_CHANGE},
            summary="pose", http=("drive.pose",), log=_same("x", "y", "yaw"),
            log_format=".6f", mcap={"odom": "pose" + POSE},
-           ros2={"odom": "pose.pose" + POSE}),
+           ros2={"ground_truth": "pose.pose" + POSE}),
     Signal("velocity", "m/s, rad/s", "the chassis' forward and leftward speed and yaw rate "
-           "(in its heading's frame; /odom's twist is in base_link)",
+           "(in its heading's frame; ROS 2's /ground_truth twist is in base_link)",
            reader="velocity", fields={"forward": SPEED_CHANGE, "lateral": SPEED_CHANGE,
                                       "yaw_rate": SPEED_CHANGE},
            summary="velocity", http=("drive.velocity",)),
@@ -267,7 +269,7 @@ STATE = (
            fields={"x": POSITION_CHANGE, "y": POSITION_CHANGE, "z": POSITION_CHANGE},
            summary="position[]", http=("drive.position", "gps"),
            mcap={"drive_state": "position[]", "odom": "pose.position"},
-           ros2={"drive_state": "position", "odom": "pose.pose.position"}),
+           ros2={"drive_state": "position", "ground_truth": "pose.pose.position"}),
     Signal("axle_speeds", "rad/s", "each axle's measured speed", port="axle_speed",
            keys=WHEEL_NAMES, wheels=ALL, fields={"axle_speed": SPEED_CHANGE}, summary="wheels",
            http=("drive.wheels.*.axle_speed",),
@@ -275,10 +277,10 @@ STATE = (
            ros2={"drive_state": "wheels.#.axle_speed", "joint_states": "velocity.#"}),
     Signal("odometry", "m, rad", "dead reckoning from the encoders: x, y, yaw",
            port="odometry", keys=("x", "y", "yaw"), summary="odometry", http=("drive.odometry",),
-           ros2={"wheel_odom": "pose.pose" + POSE}),
+           ros2={"wheel_odom": "pose.pose" + POSE, "odom": "pose.pose" + POSE}),
     Signal("ir_distances", "m", "each IR sensor's latest raw reading, by sensor",
            reader="ir_distances", summary="ir", http=("ir.*_ir.raw",),
-           mcap={"ir/*": "range"}, ros2={"ir/*": "range" + F32}),
+           mcap={"ir/*": "range"}, ros2={"ir/*": "range" + RANGE}),
 )
 """The robot's state, in the run log's order (its columns are the table's, in order)."""
 
@@ -374,7 +376,7 @@ def _put_at(tree: dict, parts, value) -> None:
 
 def put_value(tree: dict, place: str, value) -> None:
     """Writes a signal's `value` (a float or a dict by key) at its `place` in `tree` (module
-    docstring; not `|pose` or `|f32`)."""
+    docstring; not `|pose`, `|f32` or `|range`)."""
     parts, scale, as_list, keyed = _writer(place)
     if not isinstance(value, dict):
         _put_at(tree, parts, scale(value) if scale else value)
@@ -393,6 +395,9 @@ def read_value(tree, place: str, keys: tuple[str, ...] | None):
     path, conversion = _split(place)
     if conversion == "pose":
         return _pose_fields(get(tree, path), keys)
+    if conversion == "range":  # one Range message: +Inf is its max_range
+        value = get(tree, path)
+        return get(tree, "max_range") if math.isinf(value) else value
     unscale = (lambda v: math.radians(v)) if conversion == "deg" else (lambda v: v)
     if keys is None:
         return unscale(get(tree, path))

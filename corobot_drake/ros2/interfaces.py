@@ -5,9 +5,14 @@ Derived from the project's existing declarations rather than re-declared: the to
 Foxglove recording's (`recording.topics`: names, frames, the telemetry's fields) in ROS's
 standard types; the actions' goals are the scenario commands' fields (`config.scenario`), issued
 through the HTTP server's calls (`serving.calls`); corobot_interfaces' telemetry messages are
-written from `recording.topics.TELEMETRY_TOPICS` (`telemetry_definition`; a test keeps the
-files in `ros_packages/corobot_interfaces/msg/` in step, and `python -m
-corobot_drake.ros2.interfaces` rewrites them).
+written from `recording.topics.TELEMETRY_TOPICS` (`telemetry_definition`), its actions from
+the command table (`action_definition`; a test keeps the files in
+`ros_packages/corobot_interfaces/` in step, and `python -m corobot_drake.ros2.interfaces`
+rewrites them).
+
+The commands' interfaces (`CMD_VEL`, `ACTIONS`, `SERVICES`, the README's rows:
+`command_rows`) are the command table's ROS 2 column (`commands.Ros2`), not a list of
+their own.
 
 No ROS import here: the table is read by the bag writer too (no ROS at run time).
 """
@@ -19,8 +24,8 @@ import enum
 import sys
 from pathlib import Path
 
+from corobot_drake import commands
 from corobot_drake import topics as tp
-from corobot_drake.config import scenario as sc
 from corobot_drake.model.dimensions import WHEEL_NAMES
 
 INTERFACES_DIR = Path(__file__).resolve().parent / "ros_packages"
@@ -107,8 +112,14 @@ TOPICS = (
 TOPIC = {t.name: t for t in TOPICS}
 
 
-CMD_VEL = ("cmd_vel", "geometry_msgs/msg/Twist")
-"""Subscribed: issued as `config.scenario.SetVelocity` (linear.x m/s, angular.z rad/s)."""
+def _ros2_commands(kind: str) -> list[commands.CommandSpec]:
+    """The commands whose ROS 2 interface (the command table's `ros2` column) is a `kind`."""
+    return [s for s in commands.COMMANDS.values() if s.ros2 is not None and s.ros2.kind == kind]
+
+
+(_CMD_VEL,) = _ros2_commands("topic")
+CMD_VEL = (_CMD_VEL.ros2.name.lstrip("/"), _CMD_VEL.ros2.type)
+"""Subscribed: issued as `commands.SetVelocity` (linear.x m/s, angular.z rad/s)."""
 DEADMAN_TIMEOUT = 0.5
 """s of simulated time without a Twist after which the robot stops (ROS parameter
 `cmd_vel_timeout`; 0 turns the deadman off)."""
@@ -126,12 +137,9 @@ class Action:
     """The feedback field: what is left of the command (`MotionCommands.remaining_command`)."""
 
 
-ACTIONS = (
-    Action("drive_distance", f"{PACKAGE}/action/DriveDistance", sc.DriveDistance,
-           "drive_distance", "remaining"),
-    Action("rotate_degrees", f"{PACKAGE}/action/RotateDegrees", sc.RotateDegrees,
-           "rotate_degrees", "remaining_degrees"),
-)
+ACTIONS = tuple(Action(s.ros2.name.lstrip("/"), s.ros2.type, s.dataclass, s.method,
+                       s.ros2.feedback) for s in _ros2_commands("action"))
+"""The command table's actions (`commands.Ros2`), each a completing command."""
 
 
 def goal_fields(command: type) -> tuple[str, ...]:
@@ -147,11 +155,26 @@ class Service:
     """The `Robot` method (through `serving.calls`) it issues."""
 
 
-SERVICES = (
-    Service("all_stop", "std_srvs/srv/Trigger", "all_stop"),
-    Service("enable_drive", "std_srvs/srv/SetBool", "enable"),
-    Service("set_pose", f"{PACKAGE}/srv/SetPose", "set_pose"),
-)
+SERVICES = tuple(Service(s.ros2.name.lstrip("/"), s.ros2.type, s.method)
+                 for s in _ros2_commands("service"))
+"""The command table's services (`commands.Ros2`): the node serves each by its type."""
+
+def command_rows() -> list[str]:
+    """The README's rows (name, type, QoS, what) of the command table's ROS 2 interfaces."""
+    rows = []
+    for spec in (s for s in commands.COMMANDS.values() if s.ros2 is not None):
+        ros2 = spec.ros2
+        what = ros2.what or spec.summary
+        if ros2.kind == "action":
+            goal = ", ".join(f"`{a.name}`" + (f" {a.unit}" if a.unit else "") for a in spec.args)
+            unit = spec.args[0].unit
+            what = (f"goal {goal}; feedback `{ros2.feedback}`{f' {unit}' if unit else ''}; "
+                    "result `success`, `reason`")
+        kind = "(subscribed)" if ros2.kind == "topic" else f"({ros2.kind})"
+        qos = "reliable" if ros2.kind == "topic" else ""
+        rows.append(f"| `{ros2.name}` {kind} | {ros2.type} | {qos} | {what} |")
+    return rows
+
 
 CANCELED = "canceled"
 """An action's result reason when its goal was cancelled (the robot was stopped)."""
@@ -175,6 +198,29 @@ def telemetry_files() -> dict[Path, str]:
             telemetry_definition(t) for t in tp.TELEMETRY_TOPICS}
 
 
+def action_definition(action: Action) -> str:
+    """The .action text of one of the command table's actions: the goal is the command's
+    arguments (their ranges the command's), the result how it ended, the feedback what is
+    left of it."""
+    spec = commands.spec_of(action.command)
+    lines = [f"# {spec.summary} (corobot_drake's {spec.name})."]
+    for arg in spec.args:
+        kind = "bool" if arg.type is bool else "float64"
+        lines.append(f"{kind} {arg.name}  # {arg.doc}; {arg.range.text()}" if arg.range
+                     else f"{kind} {arg.name}  # {arg.doc}")
+    unit = spec.args[0].unit
+    lines += ["---", "bool success",
+              "string reason  # why it failed: stalled, disabled, superseded, canceled, ...",
+              "---", f"float64 {action.feedback}  # {unit} still to go"]
+    return "\n".join(lines) + "\n"
+
+
+def action_files() -> dict[Path, str]:
+    """{path: text} of the action files, written from the command table."""
+    return {INTERFACES_DIR / PACKAGE / "action" / f"{a.type.split('/')[-1]}.action":
+            action_definition(a) for a in ACTIONS}
+
+
 def message_definitions() -> dict[str, str]:
     """{`package/msg/Name`: .msg text} of the messages built here (tf2_msgs and
     corobot_interfaces), for a type store that lacks them (`rosbags`); the messages of
@@ -189,6 +235,6 @@ def message_definitions() -> dict[str, str]:
 
 
 if __name__ == "__main__":
-    for path, text in telemetry_files().items():
+    for path, text in {**telemetry_files(), **action_files()}.items():
         path.write_text(text)
         print(path, file=sys.stderr)

@@ -195,7 +195,7 @@ class Ros2Node:
             for service in ifc.SERVICES:
                 self.node.create_service(ros_type(service.type),
                                          relative(names.topic(service.name)),
-                                         partial(getattr(self, f"_{service.name}"), robot),
+                                         partial(self._service_handler(service), robot),
                                          qos_profile=SERVICE_QOS, callback_group=self._group)
         runner.hooks.append(self._check_deadman)
         from corobot_drake.ros2.simulation_services import SimulationServices
@@ -351,13 +351,26 @@ class Ros2Node:
         return Result(success=False, reason=ifc.CANCELED)
 
     # --- services ---
-    def _all_stop(self, robot: str, request, response):
-        return self._simple(robot, "all_stop", {}, response, "stopping")
+    def _service_handler(self, service: ifc.Service):
+        """What serves a command table's service, by its type: a Trigger issues the command,
+        a SetBool the command with `data` as its one flag, SetPose a teleport."""
+        spec = commands.by_method(service.call)
+        if service.type == "std_srvs/srv/Trigger":
+            return partial(self._trigger, spec)
+        if service.type == "std_srvs/srv/SetBool":
+            return partial(self._set_bool, spec)
+        if service.type == f"{ifc.PACKAGE}/srv/SetPose":
+            return self._set_pose
+        raise ValueError(f"{service.name}: the node serves no {service.type}")
 
-    def _enable_drive(self, robot: str, request, response):
-        enabled = bool(request.data)
-        return self._simple(robot, "enable", {"enabled": enabled}, response,
-                            "enabled" if enabled else "disabled")
+    def _trigger(self, spec, robot: str, request, response):
+        return self._simple(robot, spec.method, {}, response, spec.name)
+
+    def _set_bool(self, spec, robot: str, request, response):
+        (flag,) = spec.args
+        value = bool(request.data)
+        return self._simple(robot, spec.method, {flag.name: value}, response,
+                            f"{spec.name} {flag.name}={str(value).lower()}")
 
     def _simple(self, robot: str, command: str, arguments: dict, response, what: str):
         try:
@@ -365,7 +378,7 @@ class Ros2Node:
         except (ValueError, SimulationStoppedError, TimeoutError) as e:
             response.success, response.message = False, str(e) or type(e).__name__
             return response
-        response.success, response.message = True, f"{what} (seq {seq}, t = {t:.3f} s)"
+        response.success, response.message = True, f"{what} issued (seq {seq}, t = {t:.3f} s)"
         return response
 
     def _set_pose(self, robot: str, request, response):

@@ -292,7 +292,7 @@ def test_services_act(ros):
     response = probe.call("/all_stop", Trigger, Trigger.Request())
     assert response.success, response.message
     # The answer means accepted: the command source logs the AllStop at its next update.
-    seq = int(re.fullmatch(r"stopping \(seq (\d+), t = [\d.]+ s\)", response.message)[1])
+    seq = int(re.fullmatch(r"AllStop issued \(seq (\d+), t = [\d.]+ s\)", response.message)[1])
     deadline = time.monotonic() + 30
     while not [r for r in robot.command_log() if r["seq"] == seq]:
         assert time.monotonic() < deadline, "the AllStop was never logged"

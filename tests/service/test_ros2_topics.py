@@ -77,8 +77,8 @@ def _sections(path: Path) -> list[list[str]]:
 # --- the interfaces against their sources ---
 
 
-def test_telemetry_messages_are_written_from_the_recordings_table():
-    for path, text in ifc.telemetry_files().items():
+def test_telemetry_messages_and_actions_are_written_from_their_tables():
+    for path, text in {**ifc.telemetry_files(), **ifc.action_files()}.items():
         assert path.read_text() == text, f"run python -m corobot_drake.ros2.interfaces ({path})"
 
 
@@ -91,6 +91,24 @@ def test_actions_are_the_scenario_commands():
     request, response = _sections(ifc.INTERFACES_DIR / ifc.PACKAGE / "srv" / "SetPose.srv")
     assert request == [f.name.removesuffix("_deg") for f in dc.fields(sc.SetPose)]
     assert response == ["success", "reason"]
+
+
+def test_the_commands_interfaces_are_the_command_tables_ros2_column():
+    """One mapping: the node's topic, actions and services, and the README's rows of them,
+    are what `commands.COMMANDS` declares (no list of their own)."""
+    from corobot_drake import commands
+
+    declared = {(s.ros2.kind, s.ros2.name, s.ros2.type) for s in commands.COMMANDS.values()
+                if s.ros2 is not None}
+    served = ({("topic", f"/{ifc.CMD_VEL[0]}", ifc.CMD_VEL[1])}
+              | {("action", f"/{a.name}", a.type) for a in ifc.ACTIONS}
+              | {("service", f"/{s.name}", s.type) for s in ifc.SERVICES})
+    assert served == declared
+    assert all(t.startswith(("corobot_interfaces/", "std_srvs/", "geometry_msgs/"))
+               for _, _, t in declared)
+    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text()
+    missing = [row for row in ifc.command_rows() if row not in readme]
+    assert not missing, f"README.md's ROS 2 table lacks {missing}"
 
 
 def test_drive_state_message_has_the_drive_states_fields():

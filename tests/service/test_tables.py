@@ -260,7 +260,7 @@ def _row(rows: np.ndarray, t: float) -> dict:
 
 def _same(read, expected, place: str, what: str) -> None:
     """`read` is `expected` exactly, or within `CONVERTED` where the front end converts it."""
-    if place.endswith("|f32"):
+    if place.endswith(("|f32", "|range")):
         expected = pytest.approx(expected, rel=FLOAT32, abs=0)
     elif "|" in place:
         expected = pytest.approx(expected, abs=CONVERTED)
