@@ -45,10 +45,10 @@ from pydrake.systems.primitives import MatrixGain
 from corobot_drake import signals
 from corobot_drake.config import scenario as sc
 from corobot_drake.config.mesh_files import mesh_source
-from corobot_drake.model import dimensions as dim
 from corobot_drake.model.sdf import corobot_sdf
 from corobot_drake.resources import make_parser
-from corobot_drake.robots import robot_spec
+from corobot_drake.robots import RobotSpec, robot_spec
+from corobot_drake.robots.build import add_robot_model
 from corobot_drake.sensors.registry import add_geometry, add_sensors
 from corobot_drake.sensors.site import SensorSite
 from corobot_drake.systems.contact import add_wheel_contacts
@@ -229,7 +229,9 @@ class RobotParts:
     name: str
     model_instance: object
     chassis: object
+    """The robot's base body (the Corobot's `chassis`): the body its pose places."""
     wheel_joints: list
+    """Its wheels' revolute joints, in wheel order (`spec.wheels`)."""
     command_source: CommandSource
     drive_controller: DriveController
     motion: MotionCommands | None = None
@@ -239,6 +241,8 @@ class RobotParts:
     sensors: dict = dc.field(default_factory=dict)
     """{kind field (`sensors.registry.KINDS`): {name: `kind.BuiltSensor`}}: what
     `sensors.registry.add_sensors` returns (sensors turned off left out)."""
+    spec: RobotSpec | None = None
+    """What the robot is (`robots.RobotSpec`): its wheels, radius, track, drive, links."""
 
     def all_sensors(self) -> dict:
         """{sensor name: `kind.BuiltSensor`} of every kind (names are unique in a robot)."""
@@ -285,12 +289,20 @@ class Station:
             worker.close()
 
 
-def _add_robot(plant: MultibodyPlant, name: str, robot: sc.Robot):
-    sdf = corobot_sdf(name, robot.contact, robot.visual)
-    (instance,) = make_parser(plant).AddModelsFromString(sdf, "sdf")
-    chassis = plant.GetBodyByName("chassis", instance)
+def _add_robot(plant: MultibodyPlant, scene_graph, name: str, robot: sc.Robot):
+    """One robot from its RobotSpec: the model (the Corobot's generated with the scenario's
+    tyres and look; any other parsed from its file and given the tyres, the casters'
+    friction and one velocity servo per wheel: `robots.build`), named `name`, its base at the
+    scenario's pose. Returns (instance, base body, wheel joints in wheel order)."""
+    spec = robot_spec(robot.robot)
+    if spec.generated:
+        sdf = corobot_sdf(name, robot.contact, robot.visual)
+        (instance,) = make_parser(plant).AddModelsFromString(sdf, "sdf")
+    else:
+        instance = add_robot_model(plant, scene_graph, name, spec, robot.contact)
+    chassis = plant.GetBodyByName(spec.base, instance)
     plant.SetDefaultFloatingBaseBodyPose(chassis, robot.pose.GetDeterministicValue())
-    joints = [plant.GetJointByName(f"{w}_axle", instance) for w in dim.WHEEL_NAMES]
+    joints = [plant.GetJointByName(j, instance) for j in spec.wheel_joints]
     return instance, chassis, joints
 
 
@@ -322,7 +334,8 @@ def add_scene(builder, scenario: sc.Scenario, plant_config=None):
     bodies = _add_world(plant, scenario.world)
     models = _add_directives(plant, scene_graph, scenario.directives,
                              scenario.world.model_friction)
-    added = {name: _add_robot(plant, name, robot) for name, robot in scenario.robots.items()}
+    added = {name: _add_robot(plant, scene_graph, name, robot)
+             for name, robot in scenario.robots.items()}
     for name, robot in scenario.robots.items():
         add_geometry(plant, added[name][0], name, robot)
     plant.Finalize()
@@ -406,21 +419,25 @@ def _add_drive(builder, plant, scenario: sc.Scenario, name: str, added, chassis_
     """One robot's command source, motion commands, drive controller and wheel servos, its
     odometry and its monitors (contact telemetry, tip margin)."""
     robot = scenario.robots[name]
+    spec = robot_spec(robot.robot)
     instance, chassis, joints = added
     source = builder.AddNamedSystem(
         f"{name}.commands", CommandSource(robot.commands, robot.drive.control_period))
-    controller = builder.AddNamedSystem(f"{name}.drive_controller", DriveController(robot.drive))
+    controller = builder.AddNamedSystem(f"{name}.drive_controller", DriveController(
+        robot.drive, spec.sides, spec.wheel_radius))
     selector = builder.AddNamedSystem(f"{name}.wheel_state", MatrixGain(
         plant.MakeStateSelectorMatrix([j.index() for j in joints])))
     builder.Connect(plant.get_state_output_port(), selector.get_input_port())
     builder.Connect(selector.get_output_port(), controller.GetInputPort("wheel_state"))
-    motion = builder.AddNamedSystem(f"{name}.motion", MotionCommands(robot.drive, robot.motion))
+    motion = builder.AddNamedSystem(f"{name}.motion", MotionCommands(
+        robot.drive, robot.motion, spec.wheel_radius, spec.spin_yaw_per_rim_speed))
     odometry = add_odometry(
         builder, name, chassis_pose, selector.get_output_port(),
         controller.GetOutputPort("drive_status"), controller.GetOutputPort("axle_speed"),
-        robot.drive.motor_torque_scaling)
+        robot.drive.motor_torque_scaling, spec)
     dead_reckoning = builder.AddNamedSystem(
-        f"{name}.dead_reckoning", DeadReckoning(robot.drive, robot.drive.control_period))
+        f"{name}.dead_reckoning", DeadReckoning(robot.drive, robot.drive.control_period,
+                                                spec.encoder_ticks_per_revolution))
     builder.Connect(odometry.encoder_ticks, dead_reckoning.GetInputPort("encoder_ticks"))
     builder.Connect(chassis_pose, dead_reckoning.GetInputPort("chassis_pose"))
     builder.ExportOutput(dead_reckoning.GetOutputPort("pose"), f"{name}.odometry")
@@ -438,25 +455,25 @@ def _add_drive(builder, plant, scenario: sc.Scenario, name: str, added, chassis_
     _connect_servos(builder, plant, instance, name, controller.GetOutputPort("desired_state"),
                     servo_velocity_sign(scenario.simulator_config))
     _add_telemetry(builder, plant, name, added, chassis_pose, selector.get_output_port(),
-                   sc.continuous_step(scenario.plant_config, scenario.simulator_config))
+                   sc.continuous_step(scenario.plant_config, scenario.simulator_config), spec)
     for port in ("drive_status", "axle_speed_command", "axle_speed"):
         builder.ExportOutput(controller.GetOutputPort(port), f"{name}.{port}")
     builder.ExportOutput(plant.get_state_output_port(instance), f"{name}.state")
     return RobotParts(name, instance, chassis, joints, source, controller, motion=motion,
-                      chassis_pose=chassis_pose)
+                      chassis_pose=chassis_pose, spec=spec)
 
 
 def _add_telemetry(builder, plant, name: str, added, chassis_pose, wheel_state,
-                   continuous_step: float) -> None:
+                   continuous_step: float, spec: RobotSpec) -> None:
     """The wheels' contact telemetry (`<name>.wheel_contacts`; on a continuous plant, step
     `continuous_step` > 0, its loads from the robot's momentum over each step) and the tip
     margin (`<name>.tip_margin`)."""
     instance, chassis, joints = added
     add_wheel_contacts(builder, name, plant, [j.child_body() for j in joints], chassis_pose,
-                       wheel_state, chassis, continuous_step)
+                       wheel_state, chassis, continuous_step, spec.wheel_radius)
     add_tip_margin(builder, name, plant, instance, chassis,
-                   {w: j.child_body() for w, j in zip(dim.WHEEL_NAMES, joints, strict=True)},
-                   chassis_pose)
+                   {w: j.child_body() for w, j in zip(spec.wheel_names, joints, strict=True)},
+                   chassis_pose, spec.wheel_radius, spec.caster_points)
 
 
 def signal_output(builder, robot: str, spec: signals.Signal):

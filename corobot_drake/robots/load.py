@@ -209,6 +209,12 @@ def _base(robot_file: RobotFile, plant, instance, checks):
     base = plant.GetBodyByName(robot_file.base, instance)
     if any(b.index() == base.index() for b in plant.GetBodiesWeldedTo(plant.world_body())):
         checks.fail("base", f"{robot_file.base!r} is fixed to the world; a robot's links move")
+    roots = [b.name() for b in bodies
+             if not any(plant.get_joint(j).child_body().index() == b.index()
+                        for j in plant.GetJointIndices(instance))]
+    if robot_file.base not in roots:
+        checks.fail("base", f"{robot_file.base!r} is not the model's root link (its root: "
+                    f"{', '.join(roots)}); the base is the link the robot's free joint moves")
     return base
 
 
@@ -302,19 +308,24 @@ def load_spec(path: str | Path, kind: str | None = None) -> sp.RobotSpec:
     mass, com = _mass(plant, instance, base, checks)
     wheel_bodies = {plant.GetJointByName(n, instance).child_body().index() for n in sides}
     inspector = scene_graph.model_inspector()
+    touching = [(body, gid, X_BG) for body, gid, _, X_BG, low in geometries
+                if body.index() not in wheel_bodies and low <= sp.GROUND_TOLERANCE]
     casters = tuple(f"{body.name()}/{inspector.GetName(gid).split('::')[-1]}"
-                    for body, gid, _, _, low in geometries
-                    if body.index() not in wheel_bodies and low <= sp.GROUND_TOLERANCE)
+                    for body, gid, _ in touching)
+    caster_points = tuple((float(X_BG.translation()[0]), float(X_BG.translation()[1]))
+                          for _, _, X_BG in touching)
     links = _links(plant, instance)
     drive = _drive(robot_file, radius, track, checks)
     contact = sp.default_contact(radius, mass, len(wheels), robot_file.tyres, robot_file.drive)
     from corobot_drake.robots import GENERATED_MODELS
 
     return sp.RobotSpec(
-        kind=kind or path.stem, file=path, model_file=model,
+        kind=kind or (path.parent.name if path.stem == "robot" else path.stem), file=path,
+        model_file=model,
         model_name=plant.GetModelInstanceName(instance), base=robot_file.base, wheels=wheels,
         wheel_radius=radius, track=track, wheelbase=wheelbase, mass=mass, com=com,
-        links=links, casters=casters, caster_friction=robot_file.casters.friction,
+        links=links, casters=casters, caster_points=caster_points,
+        caster_friction=robot_file.casters.friction,
         drive=drive, contact=contact,
         encoder_ticks_per_revolution=robot_file.drive.encoder_ticks_per_revolution,
         sensors=_sensors(robot_file, links, checks), generated=model in GENERATED_MODELS)

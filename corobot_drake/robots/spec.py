@@ -91,6 +91,8 @@ class RobotSpec:
     """The model's links and frames a sensor can be mounted on (`X_PB.base_frame`)."""
     casters: tuple[str, ...]
     """The collision geometries (`link/geometry`) that touch the ground besides the wheels."""
+    caster_points: tuple[tuple[float, float], ...]
+    """m: each caster's (x, y) in the base frame (its shape's origin), `casters` order."""
     caster_friction: float
     drive: object
     """The scenario `Drive` this robot starts with (`config.scenario.Drive`)."""

@@ -141,12 +141,13 @@ class WheelContacts(LeafSystem):
 
     Inputs: `contact_results` (abstract ContactResults of the plant), `chassis_pose` (abstract
     RigidTransform X_WC, from `odometry.ChassisPoses`), `body_spatial_velocities` (the
-    plant's, indexed by BodyIndex), `wheel_state` [q, v] of the four axles (rad, rad/s); with
+    plant's, indexed by BodyIndex), `wheel_state` [q, v] of the n axles (rad, rad/s); with
     `momentum` (a continuous plant), `chassis_velocity` (6: the chassis' angular velocity,
     rad/s, and its origin's, m/s, world) now and `held_chassis_velocity` at the last physics
     step before now.
-    Outputs (4 each, `dimensions.WHEEL_NAMES` order: front left, front right, rear left, rear
-    right): `wheel_loads` (N), `wheel_slip_ratio` (longitudinal, dimensionless, + traction),
+    Outputs (n each, the robot's wheel order, `RobotSpec.wheels`; the Corobot's front left,
+    front right, rear left, rear right): `wheel_loads` (N), `wheel_slip_ratio` (longitudinal,
+    dimensionless, + traction),
     `wheel_slip_angle` (deg, + moving to the left of the heading). Only `wheel_loads` reads
     the contact results; the slip's two ports share one computation (a cache entry). No state
     on a discrete plant: the outputs are functions of the plant's latest step. With
@@ -154,9 +155,12 @@ class WheelContacts(LeafSystem):
     velocity is a step's (until then, the contact law's loads).
     """
 
-    def __init__(self, plant, wheels, momentum: RobotMomentum | None = None):
+    def __init__(self, plant, wheels, momentum: RobotMomentum | None = None,
+                 wheel_radius: float = dim.WHEEL_RADIUS):
         super().__init__()
         self._wheels = [int(w.index()) for w in wheels]
+        n = self._n = len(wheels)
+        self._radius = wheel_radius
         self._wheel_of_body = {i: k for k, i in enumerate(self._wheels)}
         self._wheel_of_geometry = {g: k for k, w in enumerate(wheels)
                                    for g in plant.GetCollisionGeometriesForBody(w)}
@@ -167,7 +171,7 @@ class WheelContacts(LeafSystem):
                                                    AbstractValue.Make(RigidTransform()))
         self._velocities = self.DeclareAbstractInputPort(
             "body_spatial_velocities", AbstractValue.Make([SpatialVelocity()]))
-        self._wheel_state = self.DeclareVectorInputPort("wheel_state", 8)
+        self._wheel_state = self.DeclareVectorInputPort("wheel_state", 2 * n)
         loads_depend_on = {self.input_port_ticket(self._contacts.get_index())}
         if momentum is not None:
             self._velocity = self.DeclareVectorInputPort("chassis_velocity", 6)
@@ -175,16 +179,16 @@ class WheelContacts(LeafSystem):
             self._momentum_from = self.DeclareDiscreteState(1)
             self.DeclareInitializationDiscreteUpdateEvent(self._start_momentum)
             loads_depend_on = {self.all_input_ports_ticket(), self.xd_ticket()}
-        self.DeclareVectorOutputPort("wheel_loads", 4, self._calc_loads, loads_depend_on)
+        self.DeclareVectorOutputPort("wheel_loads", n, self._calc_loads, loads_depend_on)
         self._slip = self.DeclareCacheEntry(
-            "slip", ValueProducer(allocate=lambda: Value([0.0] * 8),
+            "slip", ValueProducer(allocate=lambda: Value([0.0] * (2 * n)),
                                   calc=lambda c, v: v.set_value(self._calc_slip(c))),
             {self.input_port_ticket(port.get_index())
              for port in (self._pose, self._velocities, self._wheel_state)})
-        self.DeclareVectorOutputPort("wheel_slip_ratio", 4, lambda c, o: o.SetFromVector(
-            self._slip.Eval(c)[:4]), {self._slip.ticket()})
-        self.DeclareVectorOutputPort("wheel_slip_angle", 4, lambda c, o: o.SetFromVector(
-            self._slip.Eval(c)[4:]), {self._slip.ticket()})
+        self.DeclareVectorOutputPort("wheel_slip_ratio", n, lambda c, o: o.SetFromVector(
+            self._slip.Eval(c)[:n]), {self._slip.ticket()})
+        self.DeclareVectorOutputPort("wheel_slip_angle", n, lambda c, o: o.SetFromVector(
+            self._slip.Eval(c)[n:]), {self._slip.ticket()})
 
     def _start_momentum(self, context, discrete_state):
         # The hold samples at the grid's times: the first at or after the start.
@@ -212,7 +216,7 @@ class WheelContacts(LeafSystem):
         results = self._contacts.Eval(context)
         robot_geometries = self._momentum.geometries if self._momentum else frozenset()
         robot_bodies = self._momentum.bodies if self._momentum else frozenset()
-        loads, total = [0.0] * 4, 0.0
+        loads, total = [0.0] * self._n, 0.0
         for i in range(results.num_hydroelastic_contacts()):
             info = results.hydroelastic_contact_info(i)
             surface = info.contact_surface()
@@ -238,17 +242,17 @@ class WheelContacts(LeafSystem):
         output.SetFromVector(np.array(self.loads(context)))
 
     def _calc_slip(self, context) -> list[float]:
-        """[slip ratios (4), slip angles (4), deg] from the wheels' speeds. Plain floats: on
+        """[slip ratios (n), slip angles (n), deg] from the wheels' speeds. Plain floats: on
         four wheels numpy's per-call overhead costs more than the sums, every step."""
         R = self._pose.Eval(context).rotation().matrix().tolist()
         (fx, lx), (fy, ly), (fz, lz) = (row[:2] for row in R)  # heading and left, world
         velocities = self._velocities.Eval(context)
-        axles = self._wheel_state.Eval(context)[4:].tolist()
+        axles = self._wheel_state.Eval(context)[self._n:].tolist()
         ratios, angles = [], []
         for i, omega in zip(self._wheels, axles, strict=True):
             vx, vy, vz = velocities[i].translational().tolist()
             ground, lateral = fx * vx + fy * vy + fz * vz, lx * vx + ly * vy + lz * vz  # m/s
-            ratios.append(slip_ratio(omega * dim.WHEEL_RADIUS, ground))
+            ratios.append(slip_ratio(omega * self._radius, ground))
             angles.append(slip_angle_deg(ground, lateral))
         return ratios + angles
 
@@ -286,7 +290,8 @@ def add_chassis_velocities(builder, name: str, plant, chassis, step: float):
 
 
 def add_wheel_contacts(builder, name: str, plant, wheels, chassis_pose_port, wheel_state_port,
-                       chassis, continuous_step: float = 0.0):
+                       chassis, continuous_step: float = 0.0,
+                       wheel_radius: float = dim.WHEEL_RADIUS):
     """Adds `<name>.wheel_contacts` fed by the plant, `chassis_pose_port` and
     `wheel_state_port`; on a continuous plant (its step `continuous_step` > 0,
     `scenario.continuous_step`), its loads from the robot's momentum balance (its `chassis`
@@ -294,7 +299,7 @@ def add_wheel_contacts(builder, name: str, plant, wheels, chassis_pose_port, whe
     momentum = (RobotMomentum.of_robot(plant, chassis.model_instance(), chassis,
                                        continuous_step) if continuous_step > 0 else None)
     system = builder.AddNamedSystem(f"{name}.wheel_contacts",
-                                    WheelContacts(plant, wheels, momentum))
+                                    WheelContacts(plant, wheels, momentum, wheel_radius))
     for port_name, port in (("contact_results", plant.get_contact_results_output_port()),
                             ("chassis_pose", chassis_pose_port),
                             ("body_spatial_velocities",

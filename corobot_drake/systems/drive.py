@@ -460,14 +460,16 @@ class DriveController(LeafSystem):
         - drive_status
         - axle_speed
 
-    Input `request` (DriveRequest, abstract); input `wheel_state` [q, v] of the four axles in
-    `dimensions.WHEEL_NAMES` order (rad, rad/s).
+    Input `request` (DriveRequest, abstract); input `wheel_state` [q, v] of the robot's n
+    wheels' axles in its wheel order (`RobotSpec.wheels`; the Corobot's
+    `dimensions.WHEEL_NAMES`), rad, rad/s.
     Output `desired_state` [q_d, v_d] for the plant's desired-state input (actuator order;
     q_d = 0: the servo has kp = 0 and only v_d matters). v_d is the slewed axle speed of the
     wheel's side, and for a wheel at rest on a side commanded to 0 the hold's correction.
-    Output `axle_speed_command` [left, right] rad/s after the slew limit; rear follows front.
+    Output `axle_speed_command` [left, right] rad/s after the slew limit; every wheel of a
+    side follows it.
     Output `drive_status` (5, `DriveStatus`: read it by name).
-    Output `axle_speed` [front_left, front_right, rear_left, rear_right] measured, rad/s.
+    Output `axle_speed` (n) measured, rad/s, wheel order.
     Discrete state, updated every `drive.control_period` s: the seq of the last request acted
     on and the hold's `Tracking`, the `DriveStatus`, the slewed axle speeds (and the desired
     state made from them) and the wheels' hold angles.
@@ -489,13 +491,20 @@ class DriveController(LeafSystem):
     seq until a new one comes (`Tracking.IDLE`): a steady drive costs no per-step work.
     """
 
-    def __init__(self, drive: Drive):
+    def __init__(self, drive: Drive, sides: tuple[int, ...] = (1, -1, 1, -1),
+                 wheel_radius: float = dim.WHEEL_RADIUS):
+        """`sides`: each wheel's side, +1 left or -1 right, in wheel order (the Corobot's by
+        default: `RobotSpec.sides`); `wheel_radius` (m) turns rim speeds to axle speeds."""
         super().__init__()
         self._drive = drive
+        self._left = tuple(s > 0 for s in sides)
+        n = self._n = len(sides)
+        self._radius = wheel_radius
+        self._zeros = (0.0,) * n
         self._step = drive.slew_rate * drive.control_period
         """rad/s: the most the axle speed moves per update."""
         self._request_port = self.DeclareAbstractInputPort("request", Value(DriveRequest()))
-        self._wheel_state_port = self.DeclareVectorInputPort("wheel_state", 8)
+        self._wheel_state_port = self.DeclareVectorInputPort("wheel_state", 2 * n)
         # Each output is a state group of its own, so the ports are Drake's state output
         # ports (no Python call when the plant reads its desired state every step).
         enabled = DriveStatus.Zero()
@@ -503,14 +512,14 @@ class DriveController(LeafSystem):
         self._mode = self.DeclareDiscreteState(2)  # [seq, Tracking]
         self._status = self.DeclareDiscreteState(enabled[:])
         self._axle = self.DeclareDiscreteState(2)
-        self._desired = self.DeclareDiscreteState(8)
-        self._hold_angle = self.DeclareDiscreteState(4)
+        self._desired = self.DeclareDiscreteState(2 * n)
+        self._hold_angle = self.DeclareDiscreteState(n)
         self.DeclarePeriodicDiscreteUpdateEvent(drive.control_period, 0.0, self._update)
         self.DeclareStateOutputPort("desired_state", self._desired)
         self.DeclareStateOutputPort("axle_speed_command", self._axle)
         self.DeclareStateOutputPort("drive_status", self._status)
         self.DeclareVectorOutputPort(
-            "axle_speed", 4, lambda c, o: o.SetFromVector(self._wheel_state_port.Eval(c)[4:]),
+            "axle_speed", n, lambda c, o: o.SetFromVector(self._wheel_state_port.Eval(c)[n:]),
             {self.input_port_ticket(self._wheel_state_port.get_index())})
 
     def target_for(self, command, enabled: bool) -> tuple[float, float, float, float] | None:
@@ -523,7 +532,7 @@ class DriveController(LeafSystem):
             return pl, pr, pl * d.motor_torque_scaling, pr * d.motor_torque_scaling
         if isinstance(command, SetSpeed | SetVelocity):
             if isinstance(command, SetSpeed):
-                al, ar = (_clip(v / dim.WHEEL_RADIUS, d.max_axle_speed)
+                al, ar = (_clip(v / self._radius, d.max_axle_speed)
                           for v in (command.left, command.right))
             else:
                 al, ar = self._velocity_axle_speeds(command)
@@ -540,7 +549,7 @@ class DriveController(LeafSystem):
         speed, so the robot keeps the commanded path's curvature at a lower speed."""
         rims = skid_steer_rim_speeds(command.linear, command.angular,
                                      velocity_track_width(self._drive))
-        left, right = (v / dim.WHEEL_RADIUS for v in rims)
+        left, right = (v / self._radius for v in rims)
         scale = min(1.0, self._drive.max_axle_speed / max(abs(left), abs(right), 1e-300))
         return left * scale, right * scale
 
@@ -609,10 +618,11 @@ class DriveController(LeafSystem):
         gain = self._drive.hold_gain
         # Plain floats: on four numbers numpy's per-call overhead costs more than the sums.
         wheel_state = self._wheel_state_port.EvalBasicVector(context).get_value().tolist()
-        q, v = wheel_state[:4], wheel_state[4:]
+        n = self._n
+        q, v = wheel_state[:n], wheel_state[n:]
         held = (q if untracked
                 else context.get_discrete_state(self._hold_angle).get_value().tolist())
-        sides = [left, right, left, right]
+        sides = [left if is_left else right for is_left in self._left]
         hold = [h if side == 0.0 and abs(w) < HOLD_SPEED and abs(a - h) <= HOLD_SLACK else a
                 for side, w, a, h in zip(sides, v, q, held, strict=True)]
         if untracked or hold != held:
@@ -621,7 +631,7 @@ class DriveController(LeafSystem):
         correction = [min(max(gain * (h - a), -limit), limit) for h, a in zip(hold, q, strict=True)]
         if not any(correction):
             desired = context.get_discrete_state(self._desired)
-            if all(desired[4 + k] == side for k, side in enumerate(sides)):
+            if all(desired[n + k] == side for k, side in enumerate(sides)):
                 return None
         return correction
 
@@ -630,10 +640,10 @@ class DriveController(LeafSystem):
         the hold's v_d `correction`, rad/s per wheel) into `state` (a Context or
         DiscreteValues)."""
         state.set_value(self._axle, np.array([left, right]))
-        v_d = [left, right, left, right]
+        v_d = [left if is_left else right for is_left in self._left]
         if correction is not None:
             v_d = [v + c for v, c in zip(v_d, correction, strict=True)]
-        state.set_value(self._desired, np.array([0.0, 0.0, 0.0, 0.0, *v_d]))
+        state.set_value(self._desired, np.array([*self._zeros, *v_d]))
 
     def speeds(self, root_context) -> tuple[list[float], list[float]]:
         """(targets, commanded): the axle speeds [left, right] (rad/s) the drive slews towards
@@ -643,12 +653,12 @@ class DriveController(LeafSystem):
             _TARGETS]], [float(v) for v in context.get_discrete_state(self._axle).get_value()])
 
     def hold_angles(self, root_context) -> list[float]:
-        """rad, per wheel (`dimensions.WHEEL_NAMES` order): where the hold keeps each wheel
+        """rad, per wheel (wheel order): where the hold keeps each wheel
         while it rests (a wheel not held: its angle at the last update; while both sides
         turn, when they are not tracked, its angle now)."""
         context = self.GetMyContextFromRoot(root_context)
         if context.get_discrete_state(self._mode).GetAtIndex(1) != Tracking.TRACKING:
-            return self._wheel_state_port.Eval(context)[:4].tolist()
+            return self._wheel_state_port.Eval(context)[:self._n].tolist()
         return [float(a) for a in context.get_discrete_state(self._hold_angle).get_value()]
 
     def SetHoldAngles(self, context, angles) -> None:

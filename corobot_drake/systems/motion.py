@@ -173,9 +173,13 @@ class MotionCommands(LeafSystem):
     ended). Abstract state `MotionState`, updated every `drive.control_period` s.
     """
 
-    def __init__(self, drive: Drive, motion: Motion):
+    def __init__(self, drive: Drive, motion: Motion, wheel_radius: float = dim.WHEEL_RADIUS,
+                 spin_yaw_per_rim_speed: float = SPIN_YAW_PER_RIM_SPEED):
+        """`wheel_radius` (m) and `spin_yaw_per_rim_speed` (1/m): the robot's
+        (`RobotSpec`; the Corobot's by default)."""
         super().__init__()
         self._drive, self._motion = drive, motion
+        self._radius, self._spin = wheel_radius, spin_yaw_per_rim_speed
         self._period = drive.control_period
         self._seed_samples = max(1, round(SEED_WINDOW / self._period))
         """Progress samples the seed profile keeps (one per update)."""
@@ -351,8 +355,8 @@ class MotionCommands(LeafSystem):
             return self._set_power(s.replace(active=a), request, axle, axle, now)
         speed = (progress - previous) / self._period  # m/s towards the goal
         v = self._servo(remaining, speed, DRIVE_TOLERANCE, DRIVE_STILL_SPEED,
-                        BRAKE_FRACTION * self._drive.slew_rate * dim.WHEEL_RADIUS, DRIVE_GAIN,
-                        DRIVE_CREEP, cruise * dim.WHEEL_RADIUS)
+                        BRAKE_FRACTION * self._drive.slew_rate * self._radius, DRIVE_GAIN,
+                        DRIVE_CREEP, cruise * self._radius)
         a, settled = _count_still(a, v is None, self._still_frames)
         if settled:
             return self._finish(s, request, a.seq, "succeeded", "", now)
@@ -361,7 +365,7 @@ class MotionCommands(LeafSystem):
                                  abs(remaining) > self._motion.stall_distance)
         if a is None:
             return s
-        axle = a.sign * v / dim.WHEEL_RADIUS
+        axle = a.sign * v / self._radius
         correction = 0.0
         if v != 0.0:
             correction = max(-HEADING_CORRECTION_LIMIT, min(
@@ -390,7 +394,7 @@ class MotionCommands(LeafSystem):
             axle = a.sign * a.scale * cruise
             return self._set_power(s.replace(active=a), request, -axle, axle, now)
         rate = delta / self._period
-        to_axle = 1.0 / (SPIN_YAW_PER_RIM_SPEED * dim.WHEEL_RADIUS)  # axle rad/s per yaw rad/s
+        to_axle = 1.0 / (self._spin * self._radius)  # axle rad/s per yaw rad/s
         w = self._servo(remaining, rate, TURN_TOLERANCE, TURN_STILL_RATE,
                         BRAKE_FRACTION * self._drive.slew_rate / to_axle, TURN_GAIN, TURN_CREEP,
                         cruise / to_axle)

@@ -34,15 +34,17 @@ ENCODED_WHEELS = ("front_left", "front_right")
 """Wheels with an encoder (indices 0 and 1 in `dimensions.WHEEL_NAMES`)."""
 
 
-def add_wheel_encoders(builder, name: str, wheel_state_port):
-    """Adds `<name>.encoders` (RotaryEncoders, radians quantized to 600 ticks/rev) and
-    `<name>.encoder_ticks` (gain to ticks) fed by `wheel_state_port` ([q, v] of the four
-    axles); returns the ticks output port (front_left, front_right)."""
-    ticks = dim.ENCODER_TICKS_PER_REVOLUTION
+def add_wheel_encoders(builder, name: str, wheel_state_port, wheels: int = 4,
+                       encoded: tuple[int, int] = (0, 1),
+                       ticks: int = dim.ENCODER_TICKS_PER_REVOLUTION):
+    """Adds `<name>.encoders` (RotaryEncoders, radians quantized to `ticks` per revolution)
+    and `<name>.encoder_ticks` (gain to ticks) fed by `wheel_state_port` ([q, v] of the
+    `wheels` axles); returns the ticks output port of the `encoded` wheels [left, right]
+    (`RobotSpec.encoded`; the Corobot's front_left and front_right)."""
     encoders = builder.AddNamedSystem(f"{name}.encoders", RotaryEncoders(
-        8, [dim.WHEEL_NAMES.index(w) for w in ENCODED_WHEELS], [ticks] * len(ENCODED_WHEELS)))
+        2 * wheels, list(encoded), [ticks] * len(encoded)))
     to_ticks = builder.AddNamedSystem(f"{name}.encoder_ticks",
-                                      Gain(ticks / (2 * math.pi), len(ENCODED_WHEELS)))
+                                      Gain(ticks / (2 * math.pi), len(encoded)))
     builder.Connect(wheel_state_port, encoders.get_input_port())
     builder.Connect(encoders.get_output_port(), to_ticks.get_input_port())
     return to_ticks.get_output_port()
@@ -95,17 +97,23 @@ def rotation_rows(quaternions: np.ndarray) -> np.ndarray:
 
 
 def add_odometry(builder, name: str, chassis_pose_port, wheel_state_port, drive_status_port,
-                 axle_speed_port, power_scaling_factor: float) -> OdometryPorts:
+                 axle_speed_port, power_scaling_factor: float, spec=None) -> OdometryPorts:
     """Adds one robot's encoders, `<name>.compass` and `<name>.gps` (fed by
     `chassis_pose_port`) and `<name>.drive_state` (DriveStateReporter); returns their output
-    ports."""
-    ticks = add_wheel_encoders(builder, name, wheel_state_port)
+    ports. `spec`: the robot's `RobotSpec` (None: the Corobot's)."""
+    if spec is None:
+        from corobot_drake.robots import robot_spec
+
+        spec = robot_spec()
+    ticks = add_wheel_encoders(builder, name, wheel_state_port, len(spec.wheels), spec.encoded,
+                               spec.encoder_ticks_per_revolution)
     compass = builder.AddNamedSystem(f"{name}.compass", Compass())
     gps = builder.AddNamedSystem(f"{name}.gps", Gps())
     for system in (compass, gps):
         builder.Connect(chassis_pose_port, system.GetInputPort("chassis_pose"))
     reporter = builder.AddNamedSystem(f"{name}.drive_state",
-                                      DriveStateReporter(power_scaling_factor))
+                                      DriveStateReporter(power_scaling_factor, spec.wheel_names,
+                                                         spec.sides, spec.encoded, spec.track))
     for port_name, port in (("drive_status", drive_status_port), ("axle_speed", axle_speed_port),
                             ("encoder_ticks", ticks),
                             ("position", gps.GetOutputPort("position")),
@@ -249,10 +257,14 @@ class DriveState:
     position: tuple[float, float, float]
     heading: float
 
+    encoded: tuple[str, str] = ("front_left", "front_right")
+    """The wheels [left, right] with an encoder: the differential-drive view's."""
+
     def two_wheel(self) -> TwoWheelDriveState:
+        left, right = self.encoded
         return TwoWheelDriveState(self.time_stamp, self.is_enabled,
-                                  self.distance_between_wheels, self.wheels["front_left"],
-                                  self.wheels["front_right"])
+                                  self.distance_between_wheels, self.wheels[left],
+                                  self.wheels[right])
 
     def as_dict(self) -> dict:
         return dc.asdict(self)
@@ -274,17 +286,25 @@ class DriveStateReporter(LeafSystem):
         - drive_state
 
     Inputs: `drive_status` (5, `drive.DriveStatus`, from the DriveController), `axle_speed`
-    (4, rad/s, `dimensions.WHEEL_NAMES` order), `encoder_ticks` (2, front left and front
+    (n, rad/s, wheel order: the Corobot's `dimensions.WHEEL_NAMES`), `encoder_ticks` (2, the
+    encoded left and right wheels: the Corobot's front left and front
     right, rounded to whole ticks here), `position` (3, m, world frame), `heading` (1, rad).
     Output `drive_state` (abstract DriveState; its time stamp is the context time, s).
     `power_scaling_factor` is the drive's MotorTorqueScaling.
     """
 
-    def __init__(self, power_scaling_factor: float):
+    def __init__(self, power_scaling_factor: float, wheel_names=dim.WHEEL_NAMES,
+                 sides=(1, -1, 1, -1), encoded: tuple[int, int] = (0, 1),
+                 track: float = dim.TRACK):
+        """`wheel_names`, `sides` (+1 left, -1 right) and the `encoded` wheels' indices in
+        wheel order, and the `track` (m): the robot's (`RobotSpec`; the Corobot's)."""
         super().__init__()
         self._scaling = power_scaling_factor
+        self._names, self._track = tuple(wheel_names), track
+        self._left = tuple(s > 0 for s in sides)
+        self._encoded = {k: j for j, k in enumerate(encoded)}
         self._ports = {name: self.DeclareVectorInputPort(name, size) for name, size in (
-            ("drive_status", len(DriveStatus.get_fields())), ("axle_speed", 4),
+            ("drive_status", len(DriveStatus.get_fields())), ("axle_speed", len(sides)),
             ("encoder_ticks", 2), ("position", 3), ("heading", 1))}
         # Its time and inputs only: every subsystem's state changes at every step.
         self.DeclareAbstractOutputPort("drive_state", self._default, self._calc,
@@ -292,8 +312,12 @@ class DriveStateReporter(LeafSystem):
 
     def _default(self):
         wheel = WheelState(0.0, 0.0)
-        return Value(DriveState(0.0, True, dim.TRACK, self._scaling,
-                                dict.fromkeys(dim.WHEEL_NAMES, wheel), (0.0, 0.0, 0.0), 0.0))
+        return Value(DriveState(0.0, True, self._track, self._scaling,
+                                dict.fromkeys(self._names, wheel), (0.0, 0.0, 0.0), 0.0,
+                                self._encoded_names()))
+
+    def _encoded_names(self) -> tuple[str, str]:
+        return tuple(self._names[k] for k in self._encoded)
 
     def _calc(self, context, output):
         axle, ticks, position, heading = (
@@ -301,11 +325,11 @@ class DriveStateReporter(LeafSystem):
                 "axle_speed", "encoder_ticks", "position", "heading"))
         status = DriveStatus(self._ports["drive_status"].Eval(context))
         wheels = {}
-        for i, name in enumerate(dim.WHEEL_NAMES):
-            power = float(status.power_left if name.endswith("left") else status.power_right)
-            encoder = (round(ticks[ENCODED_WHEELS.index(name)])
-                       if name in ENCODED_WHEELS else None)
-            wheels[name] = WheelState(power, float(axle[i]), encoder)
+        for i, name in enumerate(self._names):
+            power = float(status.power_left if self._left[i] else status.power_right)
+            j = self._encoded.get(i)
+            wheels[name] = WheelState(power, float(axle[i]),
+                                      None if j is None else round(ticks[j]))
         output.set_value(DriveState(
-            context.get_time(), bool(status.enabled), dim.TRACK, self._scaling, wheels,
-            tuple(float(v) for v in position), float(heading[0])))
+            context.get_time(), bool(status.enabled), self._track, self._scaling, wheels,
+            tuple(float(v) for v in position), float(heading[0]), self._encoded_names()))

@@ -53,15 +53,17 @@ class TipMargin(LeafSystem):
     places the support and the CoM, and the margin is a few sums in C.
     """
 
-    def __init__(self, com_C, wheel_centers_C: dict, wheel_radius: float = dim.WHEEL_RADIUS):
-        """`wheel_centers_C`: {wheel name: centre}, `dimensions.WHEEL_NAMES`."""
+    def __init__(self, com_C, wheel_centers_C: dict, wheel_radius: float = dim.WHEEL_RADIUS,
+                 casters_C=()):
+        """`wheel_centers_C`: {wheel name: centre}; `casters_C`: the (x, y) of each caster's
+        contact (m, C): the support's edges are the outermost of both."""
         super().__init__()
         self._com_C = [float(x) for x in com_C]
         c = {name: [float(x) for x in p] for name, p in wheel_centers_C.items()}
-        self._front = (c["front_left"][0] + c["front_right"][0]) / 2  # edges' x and y, m
-        self._rear = (c["rear_left"][0] + c["rear_right"][0]) / 2
-        self._left = (c["front_left"][1] + c["rear_left"][1]) / 2
-        self._right = (c["front_right"][1] + c["rear_right"][1]) / 2
+        xs = [p[0] for p in c.values()] + [float(p[0]) for p in casters_C]
+        ys = [p[1] for p in c.values()] + [float(p[1]) for p in casters_C]
+        self._front, self._rear = max(xs), min(xs)  # edges' x and y, m
+        self._left, self._right = max(ys), min(ys)
         self._axle_z = sum(p[2] for p in c.values()) / len(c)
         self._radius = wheel_radius
         self._pose = self.DeclareAbstractInputPort("chassis_pose",
@@ -70,9 +72,11 @@ class TipMargin(LeafSystem):
             0, self.margin(c)), {self.input_port_ticket(self._pose.get_index())})
 
     @classmethod
-    def of_robot(cls, plant, model_instance, chassis, wheels: dict):
+    def of_robot(cls, plant, model_instance, chassis, wheels: dict, wheel_radius: float =
+                 dim.WHEEL_RADIUS, casters_C=()):
         """The TipMargin of the robot `model_instance` of the finalized `plant` (its bodies'
-        default masses and the default poses of `chassis` and the `wheels`, {name: body})."""
+        default masses and the default poses of `chassis` and the `wheels`, {name: body});
+        `casters_C` as the constructor's."""
         context = plant.CreateDefaultContext()
         # The chassis at the world origin: the figures in C are then exact whatever pose the
         # scenario starts it at (a reset to another start gives the same bits).
@@ -80,7 +84,7 @@ class TipMargin(LeafSystem):
         com_C = plant.CalcCenterOfMassPositionInWorld(context, [model_instance])
         centers = {name: plant.EvalBodyPoseInWorld(context, body).translation()
                    for name, body in wheels.items()}
-        return cls(com_C, centers)
+        return cls(com_C, centers, wheel_radius, casters_C)
 
     def com(self, context) -> np.ndarray:
         """The robot's centre of mass in the world, m."""
@@ -113,10 +117,10 @@ class TipMargin(LeafSystem):
 
 
 def add_tip_margin(builder, name: str, plant, model_instance, chassis, wheels: dict,
-                   chassis_pose_port):
+                   chassis_pose_port, wheel_radius: float = dim.WHEEL_RADIUS, casters_C=()):
     """Adds `<name>.tip_margin` (`TipMargin.of_robot`) fed by `chassis_pose_port`; returns
     it."""
     system = builder.AddNamedSystem(f"{name}.tip_margin", TipMargin.of_robot(
-        plant, model_instance, chassis, wheels))
+        plant, model_instance, chassis, wheels, wheel_radius, casters_C))
     builder.Connect(chassis_pose_port, system.get_input_port())
     return system

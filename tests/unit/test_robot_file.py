@@ -1,10 +1,9 @@
 """The robot file and its RobotSpec: the Corobot's is exactly today's Corobot, a user's URDF
 robot loads and names its figures, and a wrong robot file is one line at its field."""
 
-import textwrap
-
 import pytest
 from pydrake.common.yaml import yaml_dump_typed
+from robot_samples import two_wheel_robot as _robot
 
 from corobot_drake.config import scenario as sc
 from corobot_drake.config.scenario import ScenarioError, load_scenario
@@ -12,45 +11,6 @@ from corobot_drake.model import dimensions as dim
 from corobot_drake.model.sdf import WheelContact
 from corobot_drake.robots import LEFT, RIGHT, robot_spec
 from corobot_drake.robots.load import load_spec
-
-CYL = '<cylinder radius="{r}" length="0.02"/>'
-URDF = """<?xml version="1.0"?>
-<robot name="twowheel">
-  <link name="base_link">
-    <inertial><origin xyz="0 0 0.08"/><mass value="1.0"/>
-      <inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial>
-    <collision><origin xyz="0 0 0.08"/><geometry><box size="0.14 0.12 0.06"/></geometry></collision>
-    <collision name="caster"><origin xyz="-0.06 0 0.01"/>
-      <geometry><sphere radius="0.01"/></geometry></collision>
-  </link>
-  {wheels}
-</robot>
-"""
-WHEEL = """
-  <link name="{side}_wheel">
-    <inertial><mass value="0.05"/>
-      <inertia ixx="1e-5" iyy="2e-5" izz="1e-5" ixy="0" ixz="0" iyz="0"/></inertial>
-    <collision><origin rpy="1.5707963267948966 0 0"/><geometry>{shape}</geometry></collision>
-  </link>
-  <joint name="{side}_joint" type="{type}">
-    <parent link="base_link"/><child link="{side}_wheel"/>
-    <origin xyz="0 {y} {z}"/><axis xyz="0 1 0"/>
-  </joint>"""
-
-
-def _robot(tmp_path, yaml: str = "", radius=0.033, z=0.033, joint_type="continuous"):
-    wheels = "".join(WHEEL.format(side=s, y=y, z=z, type=joint_type,
-                                  shape=CYL.format(r=radius))
-                     for s, y in (("left", 0.08), ("right", -0.08)))
-    (tmp_path / "twowheel.urdf").write_text(URDF.format(wheels=wheels))
-    path = tmp_path / "robot.yaml"
-    path.write_text(yaml or textwrap.dedent("""\
-        model: twowheel.urdf
-        base: base_link
-        wheels: {left: [left_joint], right: [right_joint]}
-        drive: {top_speed: 0.22}
-        """))
-    return path
 
 
 def test_the_corobots_spec_is_its_dimensions_to_the_bit():
