@@ -9,6 +9,7 @@ import dataclasses as dc
 import math
 import reprlib
 from numbers import Real
+from pathlib import Path
 
 import numpy as np
 
@@ -48,8 +49,43 @@ CONFIG_BOUNDS = {
 
 ROBOT_REACH = math.hypot(dim.HALF_WHEELBASE + dim.WHEEL_RADIUS,
                          max(dim.PLATFORM.size[1] / 2, dim.HALF_TRACK + dim.WHEEL_WIDTH / 2))
-"""m: the farthest the robot's footprint reaches from its chassis origin (a tyre's outer
+"""m: the farthest the Corobot's footprint reaches from its chassis origin (a tyre's outer
 corner)."""
+
+
+def robot_path(robot: str) -> str:
+    """A shipped robot's name, or a robot file's absolute path (as the loader makes it)."""
+    from corobot_drake.robots import ROBOTS
+
+    return robot if robot in ROBOTS else str(Path(robot).resolve())
+
+
+def robot_reach(spec) -> float:
+    """m: the farthest a robot's footprint reaches from its base origin: the Corobot's
+    `ROBOT_REACH`; another's, its tyres' outer corners (a body wider than its wheels: the
+    reset refuses a start inside a box in one line)."""
+    if spec.generated:
+        return ROBOT_REACH
+    return max(math.hypot(abs(w.center[0]) + w.radius, abs(w.center[1]) + w.width / 2)
+               for w in spec.wheels)
+
+
+def _robot(config):
+    """The config's robot's `RobotSpec`; ValueError when it is no robot or lacks the front
+    camera `camera` asks for."""
+    from corobot_drake.config.scenario import ScenarioError
+    from corobot_drake.robots import robot_spec
+
+    if not isinstance(config.robot, str) or not config.robot:
+        raise ValueError("GoToGoalConfig.robot: must be a shipped robot's name or a robot "
+                         f"file's path; got {reprlib.repr(config.robot)}")
+    try:
+        spec = robot_spec(robot_path(config.robot))
+    except ScenarioError as e:
+        raise ValueError(f"GoToGoalConfig.robot: {e}") from None
+    if config.camera and not spec.generated and "front" not in spec.sensors.get("cameras", {}):
+        raise ValueError(f"GoToGoalConfig.camera: the robot {spec.kind!r} has no front camera")
+    return spec
 
 
 def make_config(config, overrides: dict):
@@ -97,6 +133,7 @@ def check_config(config) -> None:
     if not isinstance(config.camera, bool):
         raise ValueError("GoToGoalConfig.camera: must be True or False; got "
                          f"{reprlib.repr(config.camera)}")
+    reach = robot_reach(_robot(config))
     low, high = config.goal_distance
     if low > high:
         raise ValueError(f"GoToGoalConfig.goal_distance: must be (low, high) with low <= high; "
@@ -105,15 +142,16 @@ def check_config(config) -> None:
             config.time_limit / config.control_period > MAX_STEPS):
         raise ValueError(f"GoToGoalConfig.time_limit: must be from one to {MAX_STEPS} control "
                          f"periods ({config.control_period:g} s); got {config.time_limit:g} s")
-    _check_reachable(config)
+    _check_reachable(config, reach)
 
 
-def _check_reachable(config) -> None:
-    """Every start clear of the giant box; from every start, a goal as clear of it as
-    `goal_clearance` asks (else `draw_layout` would look for one forever)."""
+def _check_reachable(config, reach: float = ROBOT_REACH) -> None:
+    """Every start clear of the giant box (the robot reaches `reach` m from its origin);
+    from every start, a goal as clear of it as `goal_clearance` asks (else `draw_layout`
+    would look for one forever)."""
     nearest = _start_gap(config.start_spread)  # the start square's nearest approach
-    if nearest <= ROBOT_REACH:
-        most = _start_gap(0.0) - ROBOT_REACH
+    if nearest <= reach:
+        most = _start_gap(0.0) - reach
         raise ValueError(f"GoToGoalConfig.start_spread: must be under {most:.3f} m (a start "
                          f"further out may be inside the giant box); got "
                          f"{config.start_spread:g}")

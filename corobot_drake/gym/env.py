@@ -1,4 +1,5 @@
-"""`GoToGoalEnv`: drive the Corobot from a start pose to a goal point among boxes (Gymnasium).
+"""`GoToGoalEnv`: drive a robot (the Corobot, or any: `GoToGoalConfig.robot`) from a start
+pose to a goal point among boxes (Gymnasium).
 
 A thin env over `Simulation`: the diagram is built once, in the constructor, and every
 `reset` puts the episode's layout (`layout.draw_layout`) into the same diagram with
@@ -27,10 +28,11 @@ from gymnasium import spaces
 from corobot_drake.config import scenario as sc
 from corobot_drake.config.poses import ground_pose
 from corobot_drake.config.sensors import FRONT_CAMERA
-from corobot_drake.gym.checks import check_action, check_options, make_config
+from corobot_drake.gym.checks import check_action, check_options, make_config, robot_path
 from corobot_drake.gym.layout import Layout, draw_layout
 from corobot_drake.model import dimensions as dim
 from corobot_drake.resources import DEFAULT_SCENARIO
+from corobot_drake.robots import robot_defaults, robot_spec
 from corobot_drake.sensors.ir_sensor import scan_state_layout
 from corobot_drake.simulation import Simulation, diagram_key, quiet_drake_warnings
 
@@ -88,7 +90,12 @@ class GoToGoalConfig:
     success_reward: float = 10.0
     flip_penalty: float = 10.0
     camera: bool = False
-    """Add the front camera's 240 x 320 RGB image to the observation (a Dict)."""
+    """Add the front camera's 240 x 320 RGB image to the observation (a Dict); a robot
+    with a `front` camera only."""
+    robot: str = "corobot"
+    """The robot that drives: a shipped one (`robots.ROBOTS`: corobot, burger, pioneer) or a
+    robot file's path. Its IR sensors' rays are the observation's (the Corobot's front then
+    rear; none for a robot without IR sensors)."""
 
 
 RENDER_MODES = ("rgb_array", "human")
@@ -102,13 +109,22 @@ IR_SENSORS = ("front", "rear")
 """The sensors whose rays the observation holds, in this order."""
 
 
+def robot_name(config: GoToGoalConfig) -> str:
+    """The robot's name in the env's scenario: `corobot`, or its robot file's kind."""
+    return ROBOT if config.robot == ROBOT else robot_spec(robot_path(config.robot)).kind
+
+
 def base_scenario(config: GoToGoalConfig) -> sc.Scenario:
-    """The default scene with the task's boxes, held (see the module docstring); the camera
-    only with `config.camera` (then one frame per step, rendered synchronously)."""
+    """The default scene with the task's boxes, held (see the module docstring), and the
+    config's robot in place of the Corobot (as its robot file has it); the camera only with
+    `config.camera` (then one frame per step, rendered synchronously)."""
     scenario = sc.load_scenario(DEFAULT_SCENARIO)
-    robot = scenario.robots[ROBOT]
-    camera = robot.cameras[FRONT_CAMERA]
-    camera.rgb = config.camera
+    if config.robot != ROBOT:
+        scenario.robots = {robot_name(config): robot_defaults(robot_path(config.robot))}
+    robot = scenario.robots[robot_name(config)]
+    camera = robot.cameras.get(FRONT_CAMERA)
+    if camera is not None:
+        camera.rgb = config.camera
     if config.camera:
         camera.fps = 1.0 / config.control_period
         camera.output_delay = 0.0
@@ -151,17 +167,19 @@ class GoToGoalEnv(gym.Env):
         self.scenario = base_scenario(self.config)
         self.sim = Simulation(self.scenario, meshcat=_meshcat(self.render_mode))
         self._key = diagram_key(self.scenario)
-        self.robot = self.sim.robot(ROBOT)
-        self._ports = _Ports(self.sim, self.scenario)
+        self._name = robot_name(self.config)
+        self.robot = self.sim.robot(self._name)
+        self._ports = _Ports(self.sim, self.scenario, self._name)
         self._lock_boxes()
         n_rays = self._ports.num_rays
-        rng = dim.IR_MAXIMUM_RANGE
+        rng = self._ports.ray_range
         low = np.array([0.0] * n_rays + [0.0, -math.pi, -MAX_SPEED, -MAX_YAW_RATE], np.float32)
         high = np.array([rng] * n_rays + [MAX_GOAL_DISTANCE, math.pi, MAX_SPEED, MAX_YAW_RATE],
                         np.float32)
         state = spaces.Box(low, high, dtype=np.float32)
         if self.config.camera:
-            image = spaces.Box(0, 255, (dim.CAMERA_HEIGHT, dim.CAMERA_WIDTH, 3), np.uint8)
+            camera = self.scenario.robots[self._name].cameras[FRONT_CAMERA]
+            image = spaces.Box(0, 255, (camera.height, camera.width, 3), np.uint8)
             self.observation_space = spaces.Dict({"state": state, "image": image})
         else:
             self.observation_space = state
@@ -204,7 +222,7 @@ class GoToGoalEnv(gym.Env):
 
     def _apply_layout(self, layout: Layout) -> None:
         x, y, yaw = layout.start
-        self.scenario.robots[ROBOT].pose = ground_pose(x, y, math.degrees(yaw))
+        self.scenario.robots[self._name].pose = ground_pose(x, y, math.degrees(yaw))
         # the episode's seed: the IR noise of a sharp_gp2d12 model draws from it
         self.scenario.random_seed = int(self.np_random.integers(2**31))
         half = self.config.box_size / 2 + HOVER
@@ -285,7 +303,7 @@ class GoToGoalEnv(gym.Env):
         if commanded < 0.15:
             return False
         v = self.robot.velocity()
-        return abs(v.forward) + abs(v.yaw_rate) * dim.HALF_TRACK < 0.2 * commanded
+        return abs(v.forward) + abs(v.yaw_rate) * self.robot.spec.half_track < 0.2 * commanded
 
     def _tilt_deg(self) -> float:
         pose = self.robot.pose()
@@ -368,19 +386,25 @@ class _Ports:
     """What the env reads from the diagram besides the Robot API: the IR rays (each sensor's
     `scan_state`), the drive's commanded axle speeds, and the plant's contacts with boxes."""
 
-    def __init__(self, sim: Simulation, scenario: sc.Scenario):
+    def __init__(self, sim: Simulation, scenario: sc.Scenario, robot: str = ROBOT):
         diagram, plant = sim.station.diagram, sim.station.plant
         self._plant = plant
+        self._radius = sim.robot(robot).spec.wheel_radius
         self._scans = []
         self.ray_names = []
-        for name in IR_SENSORS:
-            n = 2 * scenario.robots[ROBOT].ir_sensors[name].samples
+        sensors = scenario.robots[robot].ir_sensors
+        names = IR_SENSORS if robot == ROBOT else [n for n, s in sensors.items() if s.enabled]
+        for name in names:
+            n = 2 * sensors[name].samples
             _, origin, ends, _ = scan_state_layout(n)
-            self._scans.append((diagram.GetOutputPort(f"{ROBOT}.{name}.scan_state"), origin,
+            self._scans.append((diagram.GetOutputPort(f"{robot}.{name}.scan_state"), origin,
                                 ends))
             self.ray_names += [f"ir_{name}_{i}" for i in range(n)]
         self.num_rays = len(self.ray_names)
-        self._axle = diagram.GetOutputPort(f"{ROBOT}.axle_speed_command")
+        self.ray_range = (dim.IR_MAXIMUM_RANGE if robot == ROBOT else
+                          max((sensors[n].maximum_range for n in names), default=0.0))
+        """m: the rays' longest reach (the observation's bound)."""
+        self._axle = diagram.GetOutputPort(f"{robot}.axle_speed_command")
         self._boxes = {g for body in sim.station.bodies.values()
                        for g in plant.GetCollisionGeometriesForBody(body)}
 
@@ -390,11 +414,11 @@ class _Ports:
         for port, origin, ends in self._scans:
             x = port.Eval(context)
             out.append(np.linalg.norm(x[ends].reshape(-1, 3) - x[origin], axis=1))
-        return np.concatenate(out)
+        return np.concatenate(out) if out else np.zeros(0)
 
     def commanded_rim_speed(self, context) -> float:
         """m/s: the mean magnitude of the two sides' commanded axle speeds times R."""
-        return float(np.mean(np.abs(self._axle.Eval(context)))) * dim.WHEEL_RADIUS
+        return float(np.mean(np.abs(self._axle.Eval(context)))) * self._radius
 
     def touching_boxes(self, context) -> bool:
         """Any contact with a box or the giant box (only the robot can touch them: they are
