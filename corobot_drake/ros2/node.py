@@ -29,8 +29,8 @@ from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from corobot_drake import commands
 from corobot_drake import limits as lim
 from corobot_drake.config import scenario as sc
+from corobot_drake.ros2 import diagnostics, parameters
 from corobot_drake.ros2 import interfaces as ifc
-from corobot_drake.ros2 import parameters
 from corobot_drake.ros2.graph import configure_discovery, ros_type
 from corobot_drake.serving import calls
 from corobot_drake.serving.runner import SimulationStoppedError
@@ -156,6 +156,7 @@ class Ros2Node:
         self._goals_changed = threading.Condition()
         self._aborted_at_stop = threading.Event()
         self._namesakes = 1
+        self._slips = 0  # the runner's, at the last /diagnostics
         self._cmd_vel_topics: list[str] = []
         self._other_types: set = set()  # (topic, type) reported
         self.node.create_timer(GRAPH_CHECK_PERIOD, self._check_graph)
@@ -198,6 +199,10 @@ class Ros2Node:
                                          partial(self._service_handler(service), robot),
                                          qos_profile=SERVICE_QOS, callback_group=self._group)
         runner.hooks.append(self._check_deadman)
+        self._diagnostics = self.node.create_publisher(
+            ros_type("diagnostic_msgs/msg/DiagnosticArray"), "/diagnostics", 10)
+        self.node.create_timer(diagnostics.PERIOD, partial(self._publish_diagnostics, robots),
+                               callback_group=self._group)
         from corobot_drake.ros2.simulation_services import SimulationServices
 
         self.simulation = SimulationServices(self, runner)
@@ -256,6 +261,17 @@ class Ros2Node:
                     f"publishes {other}, this node takes {expected} (parameter "
                     f"cmd_vel_stamped: {str(self.settings.cmd_vel_stamped).lower()}): its "
                     "messages do not reach the robot")
+
+    def _publish_diagnostics(self, robots: list[str]) -> None:
+        """/diagnostics (`diagnostics`): the runner's real-time figures and each robot's."""
+        try:
+            values = self._call(partial(diagnostics.sample, list(robots)))
+        except (SimulationStoppedError, TimeoutError):
+            return  # stopping, or too busy to answer: the next look reports
+        stats = self.runner.stats()
+        items = diagnostics.statuses(stats, values, self._slips)
+        self._slips = int(stats.get("slips") or 0)
+        self._diagnostics.publish(diagnostics.message(values["time"], items))
 
     def _check_namesakes(self) -> None:
         """Warns (a line on stderr) when another node of this one's name joins the domain:

@@ -14,6 +14,7 @@ import pytest
 pytest.importorskip("rclpy", reason="the [ros2] extra (tools/setup installs it)")
 pytest.importorskip("corobot_interfaces.msg", reason="python -m corobot_drake.ros2.build")
 
+from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import Twist, TwistStamped
 from nav_msgs.msg import Odometry
 from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
@@ -46,6 +47,7 @@ def sim():
         threading.Thread(target=read, daemon=True).start()
         probe.subscribe(f"{NS}/odom", Odometry, RELIABLE)
         probe.subscribe(f"{NS}/ir/front", Range, RELIABLE)  # RViz's default: reliable
+        probe.subscribe("/diagnostics", DiagnosticArray, RELIABLE)
         probe.wait_for(f"{NS}/odom")  # discovered
         yield probe, lines, seen
 
@@ -85,6 +87,21 @@ def test_ros_args_remap_the_namespace_and_set_parameters_checked_in_one_line(sim
 def test_sensor_topics_reach_a_reliable_subscriber(sim):
     probe, _, _ = sim
     assert probe.wait_for(f"{NS}/ir/front").radiation_type == Range.INFRARED
+
+
+def test_diagnostics_report_the_real_time_factor_and_each_robots_state(sim):
+    probe, _, _ = sim
+    array = probe.wait_for("/diagnostics", lambda m: any(
+        s.name == "corobot_drake: simulation" and s.message.startswith("real-time factor")
+        for s in m.status))
+    status = {s.name: {v.key: v.value for v in s.values} for s in array.status}
+    assert 0.3 < float(status["corobot_drake: simulation"]["realtime_factor"]) < 1.5  # 1x
+    assert int(status["corobot_drake: simulation"]["slips"]) >= 0
+    assert status["corobot_drake: corobot drive"] == {"stalls": "0"}
+    assert set(status["corobot_drake: corobot wheel slip"]) == {
+        "front_left", "front_right", "rear_left", "rear_right"}
+    assert 20 < float(status["corobot_drake: corobot tip margin"]["tip_margin_deg"]) < 90
+    assert array.header.stamp.sec + array.header.stamp.nanosec > 0  # simulation time
 
 
 def test_twist_stamped_drives_and_a_twist_publisher_is_reported_once(sim):
