@@ -6,6 +6,7 @@ import shlex
 from types import SimpleNamespace
 
 from lab.refresh import renders as r
+from lab.refresh.gallery import gallery_specs
 from lab.refresh.measures import measure_command
 from lab.refresh.runner import (
     DETERMINISTIC,
@@ -23,7 +24,8 @@ from lab.refresh.text import picture
 def blocks() -> list[Spec]:
     """Every generated block of the docs, in the order a full refresh runs them."""
     c = _shared_commands()
-    specs = [*_model_and_command_specs(c), *_front_end_specs(c), *_performance_specs(c)]
+    specs = [*_model_and_command_specs(c), *_front_end_specs(c), *_performance_specs(c),
+             *gallery_specs()]
     return sorted(specs, key=lambda s: ORDER[s.kind])
 
 

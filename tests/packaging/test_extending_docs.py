@@ -5,7 +5,8 @@ an excerpt: each stretch of its lines between `...` lines (`...,` in a tuple) mu
 that file as it is, in order, and the block runs in a copy of that module's namespace (its
 definitions compile and execute with the module's imports). Every other block is an
 example, run in order in one namespace, from the repository's root, as a reader would paste
-them."""
+them. A YAML or XML block that opens with a file's path (the robot chapter's robot file and
+URDF, which its examples load) is an excerpt of that file in the same way."""
 
 import importlib
 import re
@@ -19,6 +20,10 @@ BLOCK = re.compile(r"^```python\n(.*?)^```$", re.MULTILINE | re.DOTALL)
 SOURCE = re.compile(r"^# (?P<path>[\w/]+\.py)$")
 ELISION = re.compile(r"^\s*\.\.\.,?$")
 """A line that stands for lines left out (`...,` among the items of a tuple)."""
+FILE_BLOCK = re.compile(r"^```(?:yaml|xml)\n(.*?)^```$", re.MULTILINE | re.DOTALL)
+FILE_SOURCE = re.compile(r"^(?:# |<!-- )(?P<path>[\w/.]+\.(?:yaml|urdf|sdf))(?: -->)?$")
+"""A YAML or XML block whose first line names a file (`# examples/my_robot/robot.yaml`,
+`<!-- examples/my_robot/my_robot.urdf -->`) is an excerpt of that file."""
 
 
 def blocks() -> list[str]:
@@ -63,6 +68,23 @@ def test_an_excerpt_is_the_files_own_text_and_runs(index, block):
         at = found + len(stretch)
     module = importlib.import_module(path.removesuffix(".py").replace("/", "."))
     exec(compile(block, f"{DOC.name} block {index}", "exec"), dict(vars(module)))
+
+
+FILE_EXCERPTS = [(i, b) for i, b in enumerate(FILE_BLOCK.findall(DOC.read_text()))
+                 if FILE_SOURCE.match(b.splitlines()[0])]
+
+
+def test_a_robot_file_or_model_excerpt_is_the_files_own_text():
+    """The robot chapter's robot file and URDF, which its examples load, are as shown."""
+    assert len(FILE_EXCERPTS) >= 3
+    for index, block in FILE_EXCERPTS:
+        path = FILE_SOURCE.match(block.splitlines()[0])["path"]
+        source = (REPO / path).read_text()
+        at = 0
+        for stretch in stretches(block):
+            found = source.find(stretch, at)
+            assert found >= 0, f"block {index}: not in {path} (after offset {at}):\n{stretch}"
+            at = found + len(stretch)
 
 
 def test_the_examples_run_in_order(monkeypatch):
