@@ -1,8 +1,8 @@
 """`--ros2` as a ROS 2 stack expects a node to be, from a separate process (`ros2_probe`, a
-private network): `--ros-args` (a namespace remap, `-p` parameters), the parameters' ranges
+private network): `--ros-args` (a namespace remap, a params file, `-p`), the parameters' ranges
 and their one-line refusals, /cmd_vel as TwistStamped and a publisher of the other type
-reported, sensor topics that a reliable subscriber (RViz's default) receives. One headless
-simulation, its cameras off, without the HTTP services."""
+reported, sensor topics that a reliable subscriber (RViz's default) receives, /diagnostics.
+One headless simulation, its cameras off, without the HTTP services."""
 
 import os
 import subprocess
@@ -32,9 +32,11 @@ QUIET = "robots: {corobot: {commands: [], cameras: {front: {rgb: false}}}}"
 
 
 @pytest.fixture(scope="module")
-def sim():
+def sim(tmp_path_factory):
+    params = tmp_path_factory.mktemp("ros") / "params.yaml"  # as a launch file passes them
+    params.write_text("/**:\n  ros__parameters:\n    cmd_vel_stamped: true\n")
     args = ["--headless", "--override", QUIET, "--ros-args", "-r", f"__ns:={NS}",
-            "-p", "cmd_vel_stamped:=true", "-p", "cmd_vel_timeout:=2", "--"]
+            "--params-file", str(params), "-p", "cmd_vel_timeout:=2", "--"]
     with ros2_simulation(args, serve=False) as (process, probe):
         lines, seen = [], threading.Condition()
 
@@ -68,7 +70,7 @@ def test_ros_args_remap_the_namespace_and_set_parameters_checked_in_one_line(sim
     probe, _, _ = sim
     timeout = parameter(probe, "cmd_vel_timeout")  # `-p cmd_vel_timeout:=2`: an integer
     assert (timeout.type, timeout.integer_value) == (ParameterType.PARAMETER_INTEGER, 2)
-    assert parameter(probe, "cmd_vel_stamped").bool_value is True
+    assert parameter(probe, "cmd_vel_stamped").bool_value is True  # the params file's
     refused = set_parameter(probe, "cmd_vel_timeout", ParameterValue(
         type=ParameterType.PARAMETER_DOUBLE, double_value=-1.0))
     assert not refused.successful
