@@ -83,7 +83,9 @@ class SensorKind:
     ros2_type: ClassVar[str | None] = None
     """`package/msg/Name` of its ROS 2 message (None: not on ROS 2)."""
     ros2_qos: ClassVar[str] = "sensor"
-    """The QoS profile name of its ROS 2 topic (`ros2.interfaces`)."""
+    """What its ROS 2 topic is, for its QoS (`ros2.interfaces.Qos`, whose `offer` is the one
+    place the profiles are said): `sensor`, a stream (reliable unless the node's `sensor_qos`
+    parameter says best_effort), or `reliable`, events none of which may be dropped."""
     off: ClassVar[dict | None] = {"enabled": False}
     """The config fields that turn a sensor of the kind off (no systems built), for a run that
     reads no sensor (the tools' physics-only runs, a study whose metrics read none); None: it
