@@ -47,6 +47,11 @@ class Case:
     path: str | None = None
     line: int | None = 1
     """The line the error must name (None: a file that cannot be read names none)."""
+    files: tuple = ()
+    """(name, bytes or a size) of files written beside the scenario file (a robot file and its
+    model); a size makes a sparse file of that many bytes (a huge mesh, on no disk)."""
+    blame: str | None = None
+    """The file beside the scenario that the error must name (a robot file), if not it."""
 
 
 @dc.dataclass
@@ -165,6 +170,101 @@ def _file(name: str, data: bytes, field: str, words: str, line: int | None = 1) 
 
 TOP = "(top level)"
 STEP = "plant_config.time_step"
+
+# --- robot files: a scenario naming a bad robot file, blamed at the robot file's line ------
+
+_LINK = ('<link name="{name}"><inertial><origin xyz="{com}"/><mass value="{mass}"/>'
+         '<inertia ixx="{i}" iyy="{i}" izz="{i}" ixy="0" ixz="0" iyz="0"/></inertial>'
+         '{shape}</link>')
+_TYRE = ('<collision><origin rpy="1.5707963267948966 0 0"/><geometry>'
+         '<cylinder radius="{r}" length="0.02"/></geometry></collision>')
+_CASTER = ('<collision name="caster"><origin xyz="-0.06 0 0.01"/><geometry>'
+           '<sphere radius="0.01"/></geometry></collision>')
+_JOINT = ('<joint name="{name}_joint" type="{type}"><parent link="base_link"/>'
+          '<child link="{name}"/><origin xyz="{x} {y} {z}"/><axis xyz="0 1 0"/></joint>')
+
+
+def _urdf(wheels=(("left", 0.0, 0.08, 0.033), ("right", 0.0, -0.08, 0.033)),
+          joint: str = "continuous", base_mass: float = 1.0, base_inertia: float = 0.01,
+          extra: str = "") -> bytes:
+    """A small robot's URDF: a base with a rear ball caster, `wheels` (name, x, y, radius)
+    standing on the ground on `joint` joints."""
+    links = [_LINK.format(name="base_link", com="-0.03 0 0.06", mass=base_mass,
+                          i=base_inertia, shape=_CASTER + extra)]
+    for name, x, y, r in wheels:
+        links.append(_LINK.format(name=name, com="0 0 0", mass=0.05, i=2e-5,
+                                  shape=_TYRE.format(r=r)))
+        links.append(_JOINT.format(name=name, type=joint, x=x, y=y, z=r))
+    return f'<?xml version="1.0"?>\n<robot name="small">{"".join(links)}</robot>\n'.encode()
+
+
+_ROBOT_YAML = ("model: small.urdf\nbase: base_link\n"
+               "wheels: {left: [left_joint], right: [right_joint]}\ndrive: {top_speed: 0.2}\n")
+
+
+def _robot_file(name: str, field: str, words: str, line: int, robot_yaml: str = _ROBOT_YAML,
+                urdf: bytes | None = None, files: tuple = ()) -> Case:
+    """A scenario whose robot `r` is the robot file `robot_yaml` (beside it, with the model
+    `urdf` as small.urdf and `files`): the error names the robot file's `field` at `line`."""
+    return Case(f"robot file: {name}", field, words, line=line,
+                data=b"robots:\n  r: {robot: robot.yaml}\n", blame="robot.yaml",
+                files=(("robot.yaml", robot_yaml.encode()), ("small.urdf", urdf or _urdf()),
+                       *files))
+
+
+def _with(line: str, replacement: str) -> str:
+    """`_ROBOT_YAML` with its line starting `line` replaced."""
+    return "".join(replacement + "\n" if row.startswith(line) else row + "\n"
+                   for row in _ROBOT_YAML.splitlines())
+
+
+_SELF_SDF = (b'<?xml version="1.0"?>\n<sdf version="1.9"><model name="selfie"><link name="b"/>'
+             b"<include><uri>self.sdf</uri><name>again</name></include></model></sdf>\n")
+
+ROBOT_FILES = [
+    _robot_file("model does not parse", "model", "Drake's parser cannot read", 1,
+                urdf=b'<robot name="x"><link name="a">\n'),
+    _robot_file("model missing", "model", "cannot read the file", 1,
+                _with("model:", "model: gone.urdf")),
+    _robot_file("model not a model", "model", "a model is a URDF", 1,
+                _with("model:", "model: small.txt")),
+    _robot_file("base not a link", "base", "no link 'chassis'", 2,
+                _with("base:", "base: chassis")),
+    _robot_file("wheel joint missing", "wheels.right[0]", "no joint 'rite_joint'", 3,
+                _with("wheels:", "wheels: {left: [left_joint], right: [rite_joint]}")),
+    _robot_file("wheel joint not revolute", "wheels.left[0]", "a weld joint", 3,
+                urdf=_urdf(joint="fixed")),
+    _robot_file("wheels on one side", "wheels.right", "at least one wheel joint on each", 3,
+                _with("wheels:", "wheels: {left: [left_joint]}")),
+    _robot_file("wheel off the ground", "wheels.left[0]", "does not touch the ground", 3,
+                urdf=_urdf((("left", 0.0, 0.08, 0.033), ("right", 0.0, -0.08, 0.033)))
+                .replace(b'xyz="0.0 0.08 0.033"', b'xyz="0.0 0.08 0.05"')),
+    _robot_file("unequal radii on a side", "wheels.left", "one radius", 3,
+                _with("wheels:", "wheels: {left: [left_joint, back_left_joint], "
+                      "right: [right_joint]}"),
+                urdf=_urdf((("left", 0.05, 0.08, 0.033), ("back_left", -0.05, 0.08, 0.04),
+                            ("right", 0.0, -0.08, 0.033)))),
+    _robot_file("stated radius disagrees", "wheels.radius", "measure", 3,
+                _with("wheels:", "wheels: {left: [left_joint], right: [right_joint], "
+                      "radius: 0.05}")),
+    _robot_file("no mass", "model", "no mass", 1, urdf=_urdf(base_mass=0.0, base_inertia=0.0)),
+    _robot_file("degenerate inertia", "model", "degenerate inertia", 1,
+                urdf=_urdf(base_inertia=-1.0)),
+    _robot_file("sensor on an unknown link", "lidars.scan.X_PB.base_frame", "not a link", 5,
+                _ROBOT_YAML + "lidars: {scan: {X_PB: {base_frame: mast}}}\n"),
+    _robot_file("no drive speed", "drive", "needs one of top_speed", 4,
+                _with("drive:", "drive: {slew_rate: 10}")),
+    _robot_file("model includes itself", "model", "includes itself", 1,
+                _with("model:", "model: self.sdf"), files=(("self.sdf", _SELF_SDF),)),
+    _robot_file("huge mesh", "model", "a robot's mesh may be at most", 1,
+                urdf=_urdf(extra='<visual><geometry><mesh filename="huge.obj"/></geometry>'
+                                 "</visual>"),
+                files=(("huge.obj", 40 << 20),)),
+    _robot_file("unknown field", "wheels.lefty", "", 3,
+                _with("wheels:", "wheels: {lefty: [left_joint], right: [right_joint]}")),
+    Case("robot file: missing", "robots.r.robot", "neither a shipped robot", line=2,
+         data=b"robots:\n  r: {robot: nowhere.yaml}\n"),
+]
 
 FILES = [
     _file("non-UTF-8", b"robots:\n  corobot:\n    \xff\xfe: 1\n", TOP, "not UTF-8", 3),
@@ -507,7 +607,7 @@ OVERRIDES = [
               "add_model_instance: {name: m}}]", "directives[0]", "exactly one of"),
 ]
 
-HAND_WRITTEN = FILES + READS + OVERRIDES
+HAND_WRITTEN = FILES + READS + OVERRIDES + ROBOT_FILES
 """Every hand-written bad input."""
 
 
@@ -705,10 +805,16 @@ def prepare(case: Case, directory: Path) -> tuple[str, Path | None]:
     of a case, its file written (or its FIFO made) under `directory`."""
     if case.text is not None:
         return "--override", None
+    for name, content in case.files:
+        if isinstance(content, int):
+            with open(directory / name, "wb") as f:
+                f.truncate(content)
+        else:
+            (directory / name).write_bytes(content)
     if case.data is not None:
         path = directory / "bad.yaml"
         path.write_bytes(case.data)
-        return str(path), path
+        return (str((directory / case.blame).resolve()) if case.blame else str(path)), path
     fifo = directory / "fifo"
     if "{fifo}" in case.path and not fifo.exists():
         os.mkfifo(fifo)

@@ -5,6 +5,7 @@ Every problem is one `ScenarioError` line naming the robot file, the line and th
 
 from __future__ import annotations
 
+import logging
 import math
 import os
 from pathlib import Path
@@ -14,6 +15,7 @@ import numpy as np
 from corobot_drake.config import scenario as sc
 from corobot_drake.robots import spec as sp
 from corobot_drake.robots.file import RobotFile
+from corobot_drake.robots.model_files import model_problem
 from corobot_drake.sensors.registry import KINDS
 
 MODEL_SUFFIXES = (".urdf", ".sdf", ".xml")
@@ -51,6 +53,9 @@ def model_path(robot_file: RobotFile, path: Path, checks) -> Path:
                       max_bytes=sp.MAX_MODEL_BYTES)
     except sc.ScenarioError as e:
         checks.fail("model", f"{robot_file.model}: {e.message}")
+    problem = model_problem(model)
+    if problem:
+        checks.fail("model", f"{robot_file.model}: {problem}")
     return model
 
 
@@ -62,13 +67,47 @@ def _parse(model: Path, checks):
     from corobot_drake.resources import make_parser
 
     plant, scene_graph = AddMultibodyPlantSceneGraph(DiagramBuilder(), 0.0)
-    try:
-        instances = make_parser(plant).AddModels(str(model))
-    except Exception as e:  # Drake's parser says what is wrong, file and line
-        checks.fail("model", f"Drake's parser cannot read {model.name}: {sc.one_line(e)}")
+    with _DrakeWarnings() as warnings:
+        try:
+            instances = make_parser(plant).AddModels(str(model))
+        except Exception as e:  # Drake's parser says what is wrong, file and line
+            checks.fail("model", f"Drake's parser cannot read {model.name}: {sc.one_line(e)}")
+    for warning in warnings.messages:
+        if "inertia" in warning.lower():  # Drake replaced it: refuse what the file says
+            lines = warning.splitlines()
+            where = lines[0].split(": warning:")[0]
+            checks.fail("model", f"{where}: a degenerate inertia (not physical: "
+                        f"{lines[-1].strip().rstrip('.')})")
     if len(instances) != 1:
         checks.fail("model", f"{model.name} holds {len(instances)} models; a robot is one")
     return plant, scene_graph, instances[0]
+
+
+class _DrakeWarnings(logging.Handler):
+    """Collects the warnings Drake logs (its `drake` Python logger) while in a `with`."""
+
+    def __init__(self):
+        super().__init__(logging.WARNING)
+        self.messages: list[str] = []
+
+    def emit(self, record):
+        self.messages.append(record.getMessage())
+
+    def __enter__(self):
+        logger = logging.getLogger("drake")
+        # Every warning reaches this handler alone (one line, not two): the logger's own
+        # filters (`simulation.quiet_drake_warnings`) and level are set aside meanwhile.
+        self._saved = logger.propagate, logger.level, list(logger.filters)
+        logger.propagate, logger.filters = False, []
+        logger.setLevel(logging.WARNING)
+        logger.addHandler(self)
+        return self
+
+    def __exit__(self, *exc):
+        logger = logging.getLogger("drake")
+        logger.removeHandler(self)
+        logger.propagate, level, logger.filters = self._saved
+        logger.setLevel(level)
 
 
 def _wheel_joints(robot_file: RobotFile, plant, instance, checks) -> dict:

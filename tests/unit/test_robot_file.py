@@ -99,3 +99,24 @@ def test_a_wheel_off_the_ground_is_named(tmp_path):
 def test_a_fixed_wheel_joint_is_named(tmp_path):
     with pytest.raises(ScenarioError, match=r"wheels.left\[0\]: .*weld joint"):
         load_spec(_robot(tmp_path, joint_type="fixed"))
+
+
+def test_robot_check_says_what_it_understood_and_writes_the_urdf(tmp_path, capsys):
+    from corobot_drake.robot import main
+
+    urdf = tmp_path / "out.urdf"
+    assert main(["check", str(_robot(tmp_path)), "--urdf", str(urdf)]) == 0
+    out = capsys.readouterr().out
+    assert "differential drive: 1 left, 1 right wheel(s)" in out
+    assert "wheel radius 0.0330 m, track 0.1600 m" in out
+    assert "casters: base_link/caster" in out and "top speed 0.220 m/s" in out
+    assert '<joint name="left_joint"' in urdf.read_text()
+
+
+def test_robot_check_of_a_bad_robot_file_is_one_line_and_exit_2(tmp_path, capsys):
+    from corobot_drake.robot import main
+
+    path = _robot(tmp_path, z=0.05)
+    assert main(["check", str(path), "--no-urdf"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith(f"error: {path}:3: wheels.left[0]: ")
