@@ -540,3 +540,20 @@ def test_a_full_disk_finishes_the_bag_with_what_was_written(tmp_path):
                             "before, up to t = ")
     assert "Traceback" not in run.stderr
     assert counted == read > 0
+
+
+def test_sensor_topics_are_offered_reliable_unless_best_effort_is_asked():
+    """One offer table (`interfaces.offer`) makes the node's profiles and the bag's: a sensor
+    stream reliable (RViz's default subscription matches it) or, with the node's sensor_qos
+    parameter, best effort; state reliable; latched topics transient local."""
+    from rclpy.qos import DurabilityPolicy, ReliabilityPolicy
+
+    from corobot_drake.ros2.bag import _qos
+    from corobot_drake.ros2.node import qos_profile
+
+    assert qos_profile(ifc.Qos.SENSOR).reliability == ReliabilityPolicy.RELIABLE
+    assert (qos_profile(ifc.Qos.SENSOR, "best_effort").reliability
+            == ReliabilityPolicy.BEST_EFFORT)
+    assert qos_profile(ifc.Qos.LATCHED).durability == DurabilityPolicy.TRANSIENT_LOCAL
+    assert qos_profile(ifc.Qos.SENSOR).depth == _qos(ifc.Qos.SENSOR).depth == 5
+    assert _qos(ifc.Qos.SENSOR).reliability.name == "RELIABLE"  # a replay offers the same
