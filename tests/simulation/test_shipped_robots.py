@@ -60,3 +60,32 @@ def test_the_pioneers_front_sonar_sees_the_pillar_ahead_and_the_side_ones_nothin
         assert pioneer.ir(name).raw == 5.0
     assert math.isclose(pioneer.ir("sonar_left_10").raw, pioneer.ir("sonar_right_10").raw,
                         abs_tol=2e-3)  # the pillar is on the axis: both see it alike
+
+
+def test_the_pioneer_backs_over_the_5_cm_kerb_and_lands_level():
+    """The yard's kerb (x from -1.65 to -1.35 m, 5 cm high) is within the P3-AT's 215 mm
+    tyres' reach: backing over it at power 0.6 the robot pitches (measured 11.6 deg at most)
+    and comes down level beyond it, still on course."""
+    sim = Simulation.from_file(SCENARIOS_DIR / "pioneer.yaml", overrides=[
+        "robots: {pioneer: {pose: {translation: [-1.0, 0, 0], "
+        "rotation: !Rpy {deg: [0, 0, 180]}}}}"])
+    pioneer = sim.robot()
+    pioneer.set_power(0.6, 0.6)
+    sim.advance(3.0)
+    pose = pioneer.pose()
+    assert pose.x + 0.13 + 0.1075 < -1.65  # its front tyres are past the kerb's far face
+    assert abs(pose.z) < 2e-3 and abs(pose.pitch) < 1e-2 and abs(pose.y) < 0.01
+    assert 5.0 < pioneer.max_tilt_deg() < 20.0
+
+
+def test_the_burger_pushes_against_the_arena_wall_without_climbing_it():
+    """Its 1.4 N m motors are far above its tyres' traction (0.5 x 3.1 N x 0.033 m): at the
+    wall they slip; the robot stays upright with its body's face at the wall's."""
+    sim = Simulation.from_file(SCENARIOS_DIR / "burger.yaml", overrides=[
+        "robots: {burger: {pose: {translation: [1.0, -0.4, 0]}}}"])
+    burger = sim.robot()
+    burger.set_power(1.0, 1.0)
+    sim.advance(4.0)  # at the wall after 2.1 s, pushing for 1.9 s
+    pose = burger.pose()
+    assert pose.x - 0.032 + 0.069 == pytest.approx(1.5, abs=2e-3)  # the body's front face
+    assert burger.max_tilt_deg() < 2.0 and abs(pose.z) < 1e-3
