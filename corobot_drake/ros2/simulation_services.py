@@ -394,9 +394,13 @@ class SimulationServices:
                 return Action.Result(result=result(Action.Result().result.RESULT_OPERATION_FAILED,
                                                    str(e)))
         if job.done < steps:
+            said = f"cancelled after {job.done} of {steps} steps"
+            if not goal_handle.is_cancel_requested:  # the node stopping
+                goal_handle.abort()
+                return Action.Result(result=result(Action.Result().result.RESULT_OPERATION_FAILED,
+                                                   f"{said}: the node stopped"))
             goal_handle.canceled()
-            return Action.Result(result=result(message=f"cancelled after {job.done} of {steps} "
-                                               "steps"))
+            return Action.Result(result=result(message=said))
         goal_handle.succeed()
         return Action.Result(result=result())
 
@@ -459,6 +463,7 @@ class SimulationServices:
             response.result = result(Srv().result.RESULT_OPERATION_FAILED,
                                      f"state.pose: the robot cannot stand there: {start.reason}")
             return response
+        self._stopped = False  # (no longer the scenario's start: paused)
         response.result = result()
         return response
 
@@ -609,6 +614,10 @@ class SimulationServices:
         return f"{name}::{base}"
 
     def _rebuild(self, sim, scenario, code: int, pose_code: int | None = None) -> None:
+        self._stopped = False  # (no longer the scenario's start: paused)
+        self._replace(sim, scenario, code, pose_code)
+
+    def _replace(self, sim, scenario, code: int, pose_code: int | None) -> None:
         """In the simulation thread: the runner's simulation replaced by one built from
         `scenario` (the one the node started with kept for a reset); RefusedError `code`
         saying why it could not be built (`pose_code` when it is a start pose's overlap)."""
