@@ -8,7 +8,7 @@ scenario's world bodies and directives left out, the robot's sensors off) from i
   2 u / track (rolling without slip), and a skid steer's b u / (a^2 + b^2) (every wheel
   slipping as isotropic friction has it; half wheelbase a, half track b; the same as the
   first for a differential drive, a = 0);
-- DriveDistance 1 m and RotateDegrees 90 deg at power 0.5, in both motion profiles: the
+- DriveDistance 1 m and RotateDegrees 90 deg at power 0.5 and 1, in both motion profiles: the
   landing error 1 s after the command ends (the robot at rest), as `lab.landing` measures it;
 - the physics-only real-time factor (`realtime_factor`): lab.bench's figure of eight, 8 s,
   building excluded (a timing: the machine's load changes it).
@@ -40,7 +40,9 @@ SAMPLE = 0.01
 """s between the poses the steady figures are read from."""
 SETTLE = 1.0
 """s at rest after a DriveDistance or RotateDegrees before its landing is measured."""
-DISTANCE, DEGREES, POWER = 1.0, 90.0, 0.5
+DISTANCE, DEGREES = 1.0, 90.0
+POWERS = (0.5, 1.0)
+"""The powers DriveDistance and RotateDegrees are measured at."""
 EIGHT = (SetPower(1.0, 0.6), Wait(3.0), SetPower(0.6, 1.0), Wait(3.0), SetPower(-1.0, 1.0))
 """lab.bench's figure of eight."""
 RTF_SECONDS = 8.0
@@ -125,10 +127,10 @@ def figures(robot: str) -> dict:
         "top_speed_spec": spec_and_rim_speed(robot)[1],
         "top_speed": steady(robot, 1.0)[0],
         "spin": spin(robot),
-        "landing": {profile: {
-            "drive_mm": landing(robot, profile, DriveDistance(distance=DISTANCE, power=POWER)),
-            "rotate_deg": landing(robot, profile, RotateDegrees(degrees=DEGREES, power=POWER)),
-        } for profile in PROFILES},
+        "landing": {profile: {f"{power:g}": {
+            "drive_mm": landing(robot, profile, DriveDistance(distance=DISTANCE, power=power)),
+            "rotate_deg": landing(robot, profile, RotateDegrees(degrees=DEGREES, power=power)),
+        } for power in POWERS} for profile in PROFILES},
     }
 
 
@@ -153,10 +155,11 @@ def table(results: dict[str, dict]) -> str:
               f"{f['spin']['steps'][s]['slipping']:.3f}")
              for s in (f"{x:g}" for x in SPIN_STEPS)]
     for profile in PROFILES:
-        rows += [(f"DriveDistance {DISTANCE:g} m at {POWER:g}, {profile} (mm)",
-                  lambda f, p=profile: f"{f['landing'][p]['drive_mm']:+.1f}"),
-                 (f"RotateDegrees {DEGREES:g} at {POWER:g}, {profile} (deg)",
-                  lambda f, p=profile: f"{f['landing'][p]['rotate_deg']:+.2f}")]
+        for power in (f"{x:g}" for x in POWERS):
+            rows += [(f"DriveDistance {DISTANCE:g} m at {power}, {profile} (mm)",
+                      lambda f, p=profile, w=power: f"{f['landing'][p][w]['drive_mm']:+.1f}"),
+                     (f"RotateDegrees {DEGREES:g} at {power}, {profile} (deg)",
+                      lambda f, p=profile, w=power: f"{f['landing'][p][w]['rotate_deg']:+.2f}")]
     lines = ["| figure | " + " | ".join(names) + " |", "|---" * (len(names) + 1) + "|"]
     lines += [f"| {label} | " + " | ".join(cell(results[n]) for n in names) + " |"
               for label, cell in rows]
