@@ -113,8 +113,12 @@ def test_the_commands_interfaces_are_the_command_tables_ros2_column():
 
 def test_drive_state_message_has_the_drive_states_fields():
     msg = ifc.INTERFACES_DIR / ifc.PACKAGE / "msg"
+    # The header holds the time; which wheels have an encoder (`encoded`) is each wheel's
+    # has_encoder on the wire.
     assert set(_fields(msg / "DriveState.msg")) == {
-        "header", *(f.name for f in dc.fields(DriveState) if f.name != "time_stamp")}
+        "header", *(f.name for f in dc.fields(DriveState)
+                    if f.name not in ("time_stamp", "encoded"))}
+    assert "has_encoder" in _fields(msg / "WheelState.msg")
     assert {f.name for f in dc.fields(WheelState)} <= set(_fields(msg / "WheelState.msg"))
 
 
