@@ -13,10 +13,10 @@ MARKER = re.compile(r"^<!-- reference: (\w+) -->$", re.MULTILINE)
 
 
 def _generators():
-    from corobot_docs import cli, http, python, ros2, scenario
+    from corobot_docs import benchmarks, cli, http, python, ros2, scenario
 
     return {"scenario": scenario.page, "cli": cli.page, "http": http.page, "ros2": ros2.page,
-            "sensor_readings": python.sensor_readings}
+            "sensor_readings": python.sensor_readings, "benchmarks": benchmarks.page}
 
 
 def _fill(app, docname: str, source: list[str]) -> None:
