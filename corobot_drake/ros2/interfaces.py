@@ -90,7 +90,8 @@ TOPICS = (
     Topic("tf_static", "tf2_msgs/msg/TFMessage", Qos.LATCHED,
           "each sensor's frames at its mount (its kind's `ros2_frames`)", shared=True),
     Topic("robot_description", "std_msgs/msg/String", Qos.LATCHED,
-          "the robot's URDF (`ros2.urdf`), for RViz and robot_state_publisher"),
+          "the robot's URDF (`ros2.urdf`: the Corobot's from its figures, another robot's "
+          "from its own model), for RViz and robot_state_publisher"),
     Topic("odom", "nav_msgs/msg/Odometry", Qos.RELIABLE,
           "the wheel odometry (parameter odom_source: wheel, with its covariance) or the "
           "ground truth (ground_truth): pose in odom, twist in base_link, at 50 Hz"),
@@ -100,7 +101,8 @@ TOPICS = (
           "the simulation's true pose in world (odom's origin and axes), twist in base_link, "
           "at 50 Hz"),
     Topic("joint_states", "sensor_msgs/msg/JointState", Qos.RELIABLE,
-          "the four wheel axles: angle (rad), rate (rad/s), at 50 Hz"),
+          "the robot's wheel joints (the Corobot's four `<wheel>_axle`): angle (rad), rate "
+          "(rad/s), at 50 Hz"),
     Topic("drive_state", f"{PACKAGE}/msg/DriveState", Qos.RELIABLE,
           "enabled, power, axle speed, encoder ticks per wheel, GPS and compass, at 50 Hz"),
     *(Topic(t.name, _telemetry_type(t), Qos.RELIABLE,
