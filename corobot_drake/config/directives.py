@@ -20,7 +20,7 @@ from pydrake.geometry import Convex, HalfSpace, Mesh, SceneGraph, Sphere
 from pydrake.multibody.parsing import ModelDirectives, ProcessModelDirectives
 from pydrake.multibody.plant import MultibodyPlant
 
-from corobot_drake.config import scenario as sc
+from corobot_drake.config import schema as sc
 from corobot_drake.config.mesh_files import MESH_EXTENSIONS, MeshFileError, check_mesh_file
 from corobot_drake.limits import MESH_SCALE
 from corobot_drake.resources import make_parser, package_map

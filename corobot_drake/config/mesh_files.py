@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from corobot_drake.config.scenario import MESH_EXTENSIONS, ScenarioError, read_bytes
+from corobot_drake.config.schema import MESH_EXTENSIONS, ScenarioError, read_bytes
 from corobot_drake.limits import SHAPE_SIZE
 
 MAX_MESH_BYTES = 16 << 20

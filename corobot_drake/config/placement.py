@@ -32,7 +32,9 @@ from pydrake.geometry import (
 )
 from pydrake.math import RigidTransform, RollPitchYaw
 
+from corobot_drake.config import schema as sc
 from corobot_drake.model import dimensions as dim
+from corobot_drake.robots import robot_spec
 
 GRAVITY = 9.81
 """m/s^2: Drake's default gravity."""
@@ -58,9 +60,12 @@ class Problem:
     """What it overlaps."""
 
 
-def robot_shapes() -> list[tuple[str, object, RigidTransform]]:
-    """The Corobot's collision shapes (name, shape, pose in the chassis frame), as
-    `model/sdf.py` builds them from `dimensions`."""
+def robot_shapes(spec=None) -> list[tuple[str, object, RigidTransform]]:
+    """A robot's collision shapes (name, shape, pose in its base frame): `spec`'s
+    (`robots.RobotSpec.shapes`, measured from its model), or the Corobot's, as `model/sdf.py`
+    builds them from `dimensions` (None, or the spec of its generated model)."""
+    if spec is not None and not spec.generated:
+        return list(spec.shapes)
     shapes = [(name, Box(*part.size), RigidTransform(part.center))
               for name, part in (("chassis", dim.CHASSIS), ("platform", dim.PLATFORM))]
     for wheel in dim.WHEEL_NAMES:  # cylinders along the axle, +y
@@ -71,8 +76,6 @@ def robot_shapes() -> list[tuple[str, object, RigidTransform]]:
 
 def body_shape(shape):
     """Drake's shape of a world body's scenario shape."""
-    from corobot_drake.config import scenario as sc  # it imports the loader, which imports this
-
     kind = type(shape)
     if kind is sc.Box:
         return Box(*shape.size)
@@ -97,8 +100,6 @@ def static_sink(body, max_sink: float) -> tuple[float, float, float]:
     `max_sink` of that. A hydroelastic pressure field grows from 0 at the surface to the modulus E
     at the body's inner-most point, its half-thickness h in: a flat face of area A sinks
     d = m g h / (E A); a round one (a sphere's cap) d = sqrt(m g / (pi E))."""
-    from corobot_drake.config import scenario as sc  # it imports the loader, which imports this
-
     weight, shape, E = body.mass * GRAVITY, body.shape, body.hydroelastic_modulus
     if isinstance(shape, sc.Box | sc.Mesh):
         extents = sorted(_extents(shape))
@@ -112,7 +113,6 @@ def static_sink(body, max_sink: float) -> tuple[float, float, float]:
 
 
 def _extents(shape) -> list[float]:
-    from corobot_drake.config import scenario as sc
     from corobot_drake.config.mesh_files import check_mesh_file
     from corobot_drake.resources import resolve_file
 
@@ -167,7 +167,7 @@ def _problems(scenario, models) -> list[Problem]:
             RigidTransform())], "fixed body" if shape.anchored else "free body")
     for name, robot in scenario.robots.items():
         add(f"robot {name!r}", f"robots.{name}.pose", robot.pose.GetDeterministicValue(),
-            robot_shapes(), "robot")
+            robot_shapes(robot_spec(robot.robot)), "robot")
     context = scene_graph.CreateDefaultContext()
     scene_graph.get_source_pose_port(source).FixValue(context, _frame_poses(poses))
     query = scene_graph.get_query_output_port().Eval(context)

@@ -37,7 +37,7 @@ from pydrake.common.yaml import yaml_dump_typed, yaml_load_typed
 from pydrake.geometry import Rgba
 
 from corobot_drake.config import placement
-from corobot_drake.config import scenario as sc
+from corobot_drake.config import schema as sc
 from corobot_drake.config.bounds import DRAKE_BOUNDS
 from corobot_drake.config.directives import DirectiveError, check_directives
 from corobot_drake.config.mesh_files import MeshFileError, check_mesh_file, scale_problem

@@ -73,7 +73,7 @@ def robot_defaults(robot: str):
     file's drive, tyres and sensors (for the Corobot, `config.scenario.Robot()`)."""
     import copy
 
-    from corobot_drake.config import scenario as sc
+    from corobot_drake.config import schema as sc
 
     if robot == DEFAULT_ROBOT:
         return sc.Robot()

@@ -12,7 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
-from corobot_drake.config import scenario as sc
+from corobot_drake.config import schema as sc
+from corobot_drake.config.validate import load_layer
 from corobot_drake.robots import spec as sp
 from corobot_drake.robots.file import RobotFile
 from corobot_drake.robots.model_files import model_problem
@@ -25,8 +26,6 @@ MODEL_SUFFIXES = (".urdf", ".sdf", ".xml")
 def load_robot_file(path: str | Path):
     """(RobotFile, its `LayerChecks`): the file's fields checked against the schema and their
     bounds (one line per problem)."""
-    from corobot_drake.config.validate import load_layer
-
     text = sc.read_text(path, kind="a robot file is a YAML file")
     robot_file, checks = load_layer(str(path), text, RobotFile)
     checks.validate(robot_file)
@@ -363,7 +362,11 @@ def load_spec(path: str | Path, kind: str | None = None) -> sp.RobotSpec:
         model_file=model,
         model_name=plant.GetModelInstanceName(instance), base=robot_file.base, wheels=wheels,
         wheel_radius=radius, track=track, wheelbase=wheelbase, mass=mass, com=com,
-        links=links, casters=casters, caster_points=caster_points,
+        # Clones: a shape the inspector returns keeps the scratch scene graph alive.
+        links=links, shapes=tuple((f"{body.name()}/{inspector.GetName(gid).split('::')[-1]}",
+                                   shape.Clone(), X_BG) for body, gid, shape, X_BG, _
+                                  in geometries),
+        casters=casters, caster_points=caster_points,
         caster_friction=robot_file.casters.friction,
         drive=drive, contact=contact,
         encoder_ticks_per_revolution=robot_file.drive.encoder_ticks_per_revolution,

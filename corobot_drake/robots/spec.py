@@ -89,6 +89,9 @@ class RobotSpec:
     """m, the robot's centre of mass in the base frame at the start pose."""
     links: tuple[str, ...]
     """The model's links and frames a sensor can be mounted on (`X_PB.base_frame`)."""
+    shapes: tuple = dc.field(compare=False)
+    """(name `link/geometry`, Drake shape, pose in the base frame at the start pose) of every
+    collision shape: what `config/placement.py` checks the start poses with."""
     casters: tuple[str, ...]
     """The collision geometries (`link/geometry`) that touch the ground besides the wheels."""
     caster_points: tuple[tuple[float, float], ...]
