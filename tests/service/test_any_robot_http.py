@@ -3,7 +3,7 @@
 skid-steer wheels, eight sonars as IR sensors), side by side in one simulation the test
 advances itself. Each robot's drive state is by its own wheels, each with its side; the
 two-wheel view and the encoders are its wheels with an encoder; what it lacks is not
-offered."""
+offered; the commands (SetPose, DriveDistance, RotateDegrees, SetVelocity) drive each."""
 
 import pytest
 from fastapi.testclient import TestClient
@@ -75,3 +75,37 @@ def test_what_a_robot_lacks_is_not_offered(http):
     sonars = {s["name"] for s in pioneer["services"] if s["name"].endswith("_ir")}
     assert sonars == {f"sonar_{side}_{deg}_ir" for side in ("left", "right")
                       for deg in (10, 30, 50, 90)}
+
+
+def _finish(sim, http, answer, limit: float = 10.0) -> dict:
+    """Advances the simulation until the operation `answer` (a 202) ends; its state."""
+    assert answer.status_code == 202, answer.text
+    url, end = answer.json()["status_url"], sim.time + limit
+    while (op := http.get(url).json())["status"] == "running" and sim.time < end:
+        sim.advance(0.1)
+    return op
+
+
+@pytest.mark.parametrize("robot", ["burger", "pioneer"])
+def test_the_commands_drive_each_robot(sim, http, robot):
+    base = f"/robots/{robot}/drive"
+    y0 = 0.0 if robot == "burger" else -1.5
+    op = _finish(sim, http, http.post(f"{base}/set_pose", json={
+        "x": 0.0, "y": y0, "yaw_deg": 0.0, "wait": False}))
+    assert op["status"] == "succeeded", op
+    sim.advance(0.3)  # settles on its wheels
+    x0 = http.get(base).json()["position"]["x"]
+    op = _finish(sim, http, http.post(f"{base}/drive_distance",
+                                      json={"distance": 0.2, "power": 0.5, "wait": False}))
+    assert op["status"] == "succeeded", op
+    d = http.get(base).json()
+    # The landings R2's figures measure are a few mm at most: 1 cm.
+    assert d["position"]["x"] - x0 == pytest.approx(0.2, abs=0.01)
+    op = _finish(sim, http, http.post(f"{base}/rotate_degrees",
+                                      json={"degrees": 45, "power": 0.5, "wait": False}))
+    assert op["status"] == "succeeded", op
+    assert http.get(base).json()["heading_deg"] == pytest.approx(45, abs=2)  # as the Corobot's
+    assert http.post(f"{base}/set_velocity", json={"linear": 0.1, "angular": 0.0}).is_success
+    sim.advance(1.0)
+    assert http.get(base).json()["velocity"]["forward"] == pytest.approx(0.1, abs=0.015)
+    assert http.post(f"{base}/all_stop", json={}).is_success
