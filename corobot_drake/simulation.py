@@ -292,7 +292,9 @@ class Simulation:
                 joint.set_angular_rate(plant_context, speed)
             controller = parts.drive_controller
             controller_context = controller.GetMyMutableContextFromRoot(self.context)
-            command = spec.axle_speed_command or spec.wheel_speeds[:2]
+            left, right = parts.spec.encoded  # the Corobot's front wheels
+            command = spec.axle_speed_command or [spec.wheel_speeds[left],
+                                                  spec.wheel_speeds[right]]
             if any(command):
                 controller.SetAxleSpeeds(controller_context, *command)
             controller.SetHoldAngles(controller_context,

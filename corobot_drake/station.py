@@ -299,7 +299,8 @@ def _add_robot(plant: MultibodyPlant, scene_graph, name: str, robot: sc.Robot):
         sdf = corobot_sdf(name, robot.contact, robot.visual)
         (instance,) = make_parser(plant).AddModelsFromString(sdf, "sdf")
     else:
-        instance = add_robot_model(plant, scene_graph, name, spec, robot.contact)
+        instance = add_robot_model(plant, scene_graph, name, spec, robot.contact,
+                                   robot.visual)
     chassis = plant.GetBodyByName(spec.base, instance)
     plant.SetDefaultFloatingBaseBodyPose(chassis, robot.pose.GetDeterministicValue())
     joints = [plant.GetJointByName(j, instance) for j in spec.wheel_joints]

@@ -268,7 +268,8 @@ class Robot:
     (`RobotSpec.wheels`; the Corobot's `dimensions.WHEEL_NAMES`): the encoders start here."""
     wheel_speeds: list[float] = bounded(lambda: [0.0] * 4, lim.AXLE_SPEED_RANGE)
     """Initial axle speeds (rad/s, same order); the drive's commanded axle speeds start at the
-    front wheels' (a saved scene carries on without a jolt)."""
+    encoded wheels' (the first left and right, `RobotSpec.encoded`; the Corobot's front ones: a
+    saved scene carries on without a jolt)."""
     axle_speed_command: list[float] = dc.field(default_factory=list)
     """The drive's initial commanded (slewed) axle speeds [left, right], rad/s; empty: the
     front wheels' `wheel_speeds`. A saved scene records them (they differ from the wheels'

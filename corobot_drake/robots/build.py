@@ -11,11 +11,13 @@ contact and motors: `add_robot_model`.
   model's own actuators are removed (the wheels are driven by the drive alone).
 """
 
+import numpy as np
 from pydrake.geometry import (
     AddCompliantHydroelasticProperties,
     AddContactMaterial,
     CollisionFilterDeclaration,
     ProximityProperties,
+    Role,
     RoleAssign,
 )
 from pydrake.multibody.plant import CoulombFriction, MultibodyPlant
@@ -27,12 +29,15 @@ from corobot_drake.robots.spec import RobotSpec
 
 
 def add_robot_model(plant: MultibodyPlant, scene_graph, name: str, spec: RobotSpec,
-                    contact: WheelContact):
+                    contact: WheelContact, visual: str = "meshes"):
     """Parses `spec`'s model into `plant` (not finalized) as the model instance `name`, with
-    tyres, casters, self-collision filter and wheel servos (module docstring); returns the
-    instance."""
+    tyres, casters, self-collision filter and wheel servos (module docstring); `visual`
+    `boxes` draws its collision shapes instead of its visuals (`config.schema.Robot.visual`).
+    Returns the instance."""
     (instance,) = make_parser(plant).AddModels(str(spec.model_file))
     plant.RenameModelInstance(instance, name)
+    if visual == "boxes":
+        _collision_looks(plant, scene_graph, instance)
     wheels = [plant.GetJointByName(j, instance) for j in spec.wheel_joints]
     _tyres(plant, scene_graph, [j.child_body() for j in wheels], contact)
     _casters(plant, scene_graph, instance, spec)
@@ -48,6 +53,27 @@ def add_robot_model(plant: MultibodyPlant, scene_graph, name: str, spec: RobotSp
         actuator = plant.AddJointActuator(f"{joint.name()}_motor", joint, contact.effort_limit)
         actuator.set_controller_gains(PdControllerGains(p=0.0, d=contact.servo_damping))
     return instance
+
+
+COLLISION_LOOK = (0.55, 0.1, 0.1, 1.0)
+"""RGBA of a robot's collision shapes drawn as its look (`visual: boxes`)."""
+
+
+def _collision_looks(plant, scene_graph, instance) -> None:
+    """The model's own visuals removed and its collision shapes drawn instead (for Meshcat
+    and the cameras alike: the physics view)."""
+    inspector = scene_graph.model_inspector()
+    for index in plant.GetBodyIndices(instance):
+        body = plant.get_body(index)
+        for gid in plant.GetVisualGeometriesForBody(body):  # kept, but drawn by no one
+            for role in (Role.kIllustration, Role.kPerception):
+                if inspector.GetProperties(gid, role) is not None:
+                    scene_graph.RemoveRole(plant.get_source_id(), gid, role)
+        for k, gid in enumerate(plant.GetCollisionGeometriesForBody(body)):
+            plant.RegisterVisualGeometry(body, inspector.GetPoseInFrame(gid),
+                                         inspector.GetShape(gid).Clone(),
+                                         f"{body.name()}_look_{k}",
+                                         np.asarray(COLLISION_LOOK))
 
 
 def _replace(plant, scene_graph, gid, props: ProximityProperties) -> None:

@@ -57,3 +57,21 @@ def test_a_differential_drive_spins_on_the_spot_at_its_analytic_rate(tmp_path):
     assert compass.Eval(context)[0] == pytest.approx(rate * 0.89, rel=0.05)
     x, y, _ = state.position
     assert math.hypot(x, y) < 0.01
+
+
+def test_visual_boxes_draws_a_user_robots_collision_shapes_instead_of_its_visuals(tmp_path):
+    path = two_wheel_robot(tmp_path)
+    looks = {}
+    for visual in ("meshes", "boxes"):
+        scenario = load_scenario(data=f"robots: {{u: {{robot: {path}, visual: {visual}}}}}")
+        station = build_station(scenario)
+        plant, inspector = station.plant, station.scene_graph.model_inspector()
+        bodies = plant.GetBodyIndices(station.robots["u"].model_instance)
+        looks[visual] = sorted(
+            inspector.GetName(g) for b in bodies
+            for g in plant.GetVisualGeometriesForBody(plant.get_body(b))
+            if inspector.GetIllustrationProperties(g) is not None)
+    assert looks["meshes"] == []  # the sample URDF has no visuals of its own
+    # One look per collision shape: the base's box and caster, each wheel's tyre.
+    assert looks["boxes"] == ["u::base_link_look_0", "u::base_link_look_1",
+                              "u::left_wheel_look_0", "u::right_wheel_look_0"]
