@@ -967,6 +967,10 @@ def _with_new_sensors(robots_node, defaults: sc.Scenario) -> sc.Scenario:
         return defaults
     defaults = copy.deepcopy(defaults)
     for robot, kind, sensor in new:
-        getattr(defaults.robots.setdefault(robot, sc.Robot()), kind.field)[sensor] = (
-            kind.new_sensor(sensor))
+        entry = defaults.robots.setdefault(robot, sc.Robot())
+        config = kind.new_sensor(sensor)
+        base = robot_spec(entry.robot).base
+        if config.X_PB.base_frame == "chassis" and base != "chassis":
+            config.X_PB.base_frame = base  # the Corobot's mount, on this robot's base link
+        getattr(entry, kind.field)[sensor] = config
     return defaults

@@ -120,3 +120,9 @@ def test_robot_check_of_a_bad_robot_file_is_one_line_and_exit_2(tmp_path, capsys
     assert main(["check", str(path), "--no-urdf"]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and err.startswith(f"error: {path}:3: wheels.left[0]: ")
+
+
+def test_a_sensor_a_scenario_adds_to_a_robot_rides_on_its_base_link(tmp_path):
+    path = _robot(tmp_path)
+    scenario = load_scenario(data=f"robots: {{u: {{robot: {path}, ir_sensors: {{side: {{}}}}}}}}")
+    assert scenario.robots["u"].ir_sensors["side"].X_PB.base_frame == "base_link"
