@@ -1,4 +1,10 @@
-"""The Corobot's dimensions, masses and sensor mounts: the single source of truth.
+"""The Corobot's dimensions, masses and sensor mounts: what its model is generated from.
+
+The Corobot is one robot of several (`corobot_drake/robots`): `model/sdf.py` builds its model
+from these figures and its robot file (`models/corobot/robot.yaml`) states them exactly
+(a test keeps the two in step); the station, the systems and the front ends read any robot's
+figures from its `RobotSpec`, the Corobot's included. Only the Corobot's own defaults (its
+sensors' mounts, the chapter's world) still come from here.
 
 Every figure is SI (metres, kilograms). The original robot was specified in inches; the
 conversion happens here, once. Positions are in the robot body frame ``chassis``: origin on
