@@ -15,6 +15,7 @@ result code with one line naming what is wrong.
 
 from __future__ import annotations
 
+import contextlib
 import math
 import re
 import threading
@@ -251,17 +252,18 @@ class SimulationServices:
     # --- features, state ---
     def _get_simulator_features(self, request, response):
         F = _t("msg", "SimulatorFeatures")
+        rebuilds = self._can_rebuild()
         response.features.features = [
             F.SPAWNING, F.DELETING, F.ENTITY_CATEGORIES, F.SPAWNING_RESOURCE_STRING,
             F.ENTITY_STATE_GETTING, F.ENTITY_STATE_SETTING, F.ENTITY_INFO_GETTING,
             F.SPAWNABLES, F.SIMULATION_RESET, F.SIMULATION_STATE_GETTING,
             F.SIMULATION_STATE_SETTING, F.SIMULATION_STATE_PAUSE, F.STEP_SIMULATION_SINGLE,
             F.STEP_SIMULATION_MULTIPLE, F.STEP_SIMULATION_ACTION]
-        if not self._can_rebuild():
+        if not rebuilds:
             response.features.features = [f for f in response.features.features
                                           if f not in (F.SPAWNING, F.DELETING,
                                                        F.SPAWNING_RESOURCE_STRING)]
-        response.features.spawn_formats = list(SPAWN_FORMATS) if self._can_rebuild() else []
+        response.features.spawn_formats = list(SPAWN_FORMATS) if rebuilds else []
         response.features.custom_info = FEATURES_INFO
         return response
 
@@ -529,6 +531,10 @@ class SimulationServices:
 
     # --- spawning, deleting ---
     def _can_rebuild(self) -> bool:
+        """Whether the runner can rebuild the simulation: known once it is built (the node
+        serves while it is built), so this waits for that."""
+        with contextlib.suppress(SimulationStoppedError, TimeoutError):
+            self._call(lambda sim: None)
         return getattr(self._runner, "rebuild", None) is not None
 
     def _spawn_entity(self, request, response):

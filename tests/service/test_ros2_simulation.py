@@ -438,6 +438,8 @@ def test_spawn_then_delete_then_reset(sim_ros):
     assert "crate" not in _call(probe, "get_entities", GetEntities, retry=10.0).entities
     reset = _call(probe, "reset_simulation", ResetSimulation, retry=10.0)
     assert reset.result.result == 1 and _pose(probe)[0] == 0.0
+    # the simulation rebuilt from the scenario the node started with: its first run again
+    assert _episode(probe, reset=False) == probe.fresh
 
 
 CRATE_SDF = """<?xml version="1.0"?>
