@@ -14,6 +14,7 @@ from __future__ import annotations
 import copy
 import dataclasses as dc
 import functools
+import json
 import math
 import os
 import random
@@ -667,7 +668,9 @@ def yaml_value(value) -> str:
         return "{" + ", ".join(f"{yaml_value(k)}: {yaml_value(v)}" for k, v in value.items()) + "}"
     if value is None:
         return "null"
-    return '"' + str(value).replace("\\", "\\\\").replace('"', '\\"') + '"'
+    # JSON's string is YAML's double-quoted one, its control characters escaped: a raw line
+    # break would split a one-line --override into two.
+    return json.dumps(str(value))
 
 
 def override_at(path: str, value, original: list | None = None) -> str:
