@@ -32,6 +32,11 @@ MAX_MESH_BYTES = 32 << 20
 """A mesh's largest size (32 MiB): a larger collision mesh would take long to measure and
 to give a contact surface."""
 
+REFERENCE_WHEEL_RADIUS = 0.060325
+"""m: the Corobot's wheel, which the project's tyre (`WheelContact`'s defaults) was tuned on."""
+REFERENCE_MASS = 4.03
+"""kg: the Corobot's, whose wheels' servo damping is `WheelContact`'s default."""
+
 LEFT, RIGHT = 1, -1
 """A wheel's side: +1 left, -1 right (the sign of its centre's y in the base frame)."""
 
@@ -155,7 +160,7 @@ def default_contact(radius: float, mass: float, wheels: int, tyres, drive) -> Wh
     (torque limit, servo damping) override."""
     base = WheelContact()
     friction = tyres.friction if tyres.friction is not None else base.friction
-    scale = radius / 0.060325  # the Corobot's wheel
+    scale = radius / REFERENCE_WHEEL_RADIUS
     hint = tyres.resolution_hint or min(0.02, max(0.001, base.resolution_hint * scale))
     load = mass * 9.81 / wheels  # N on each wheel at rest
     return WheelContact(
@@ -166,7 +171,9 @@ def default_contact(radius: float, mass: float, wheels: int, tyres, drive) -> Wh
                                    if tyres.hunt_crossley_dissipation is not None
                                    else base.hunt_crossley_dissipation),
         effort_limit=drive.torque_limit or TRACTION_MARGIN * friction * load * radius,
-        servo_damping=drive.servo_damping or base.servo_damping * mass / 4.03,
+        # Scaled with the mass only: a first guess (the servo's time constant also goes
+        # with r^2 / wheels); a robot file tunes it with `drive.servo_damping`.
+        servo_damping=drive.servo_damping or base.servo_damping * mass / REFERENCE_MASS,
     )
 
 
