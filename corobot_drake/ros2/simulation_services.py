@@ -1,7 +1,7 @@
 """The ROS 2 Simulation Interfaces (package `simulation_interfaces` 2.1.0, the simulator-agnostic
 control surface Gazebo and Isaac Sim serve) served by the node: play, pause, stop, step
 (`StepSimulation`, the `SimulateSteps` action), reset, the entities' states, spawning and
-deleting world bodies, and what can be spawned.
+deleting world bodies and model files' models, and what can be spawned.
 
 A *step* is one physics step (`Simulation.physics_step`: 10 ms by default). Entities are the
 robots (category ROBOT) and the world's bodies beside them (`Simulation.bodies`: `world.bodies`

@@ -138,6 +138,9 @@ def test_the_ros2_reference_has_every_topic_action_and_service(site):
         + [s.name for s in interfaces.SERVICES]
     names += [kind.topic_name("<sensor>") + (f"/{sub}" if sub else "")
               for kind in KINDS for sub in kind.ros2_channels()]
+    from corobot_drake.ros2 import simulation_services
+
+    names += [*simulation_services.SERVICES, simulation_services.ACTION[0]]
     assert [n for n in names if f" {n} " not in page] == []
 
 

@@ -77,7 +77,19 @@ def page() -> str:
            for q in interfaces.Qos] if hasattr(interfaces, "Qos") else []
     if qos:
         out.append("## QoS profiles\n\n" + table(("QoS", "what"), qos))
+    out.append(_simulation_interfaces())
     return "\n\n".join(out) + "\n"
+
+
+def _simulation_interfaces() -> str:
+    """The ROS 2 Simulation Interfaces the node serves (`ros2.simulation_services`)."""
+    from corobot_drake.ros2 import simulation_services as ss
+
+    rows = [[f"`{name}`", "service", f"`{ss.PACKAGE}/srv/{srv}`"]
+            for name, srv in ss.SERVICES.items()]
+    rows.append([f"`{ss.ACTION[0]}`", "action", f"`{ss.PACKAGE}/action/{ss.ACTION[1]}`"])
+    return ("## Simulation Interfaces\n\n" + cell(ss.__doc__.split("\n\n")[0]) + " "
+            + cell(ss.FEATURES_INFO) + "\n\n" + table(("name", "kind", "type"), rows))
 
 
 def _doc_of(module, name: str) -> str:
