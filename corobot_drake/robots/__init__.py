@@ -21,7 +21,6 @@ Each spec is measured once per file (cached by path and modification time).
 
 from __future__ import annotations
 
-import functools
 from pathlib import Path
 
 from corobot_drake.resources import MODELS_DIR
@@ -52,20 +51,33 @@ def robot_file_path(robot: str) -> Path:
 def robot_spec(robot: str = DEFAULT_ROBOT) -> RobotSpec:
     """The RobotSpec of a scenario's `robot:` (a shipped name or a robot file's path);
     ScenarioError (one line naming the robot file's field) when it is wrong."""
-    path = robot_file_path(robot).resolve()
-    try:
-        stamp = path.stat().st_mtime_ns
-    except OSError:
-        stamp = None
-    kind = robot if robot in ROBOTS else None
-    return _measured(path, stamp, kind)
-
-
-@functools.lru_cache(maxsize=32)
-def _measured(path: Path, stamp, kind) -> RobotSpec:
     from corobot_drake.robots.load import load_spec
 
-    return load_spec(path, kind)
+    path = robot_file_path(robot).resolve()
+    kind = robot if robot in ROBOTS else None
+    cached = _MEASURED.get((path, kind))
+    if cached is not None and cached[0] == _stamps(path, cached[1].model_file):
+        return cached[1]
+    spec = load_spec(path, kind)
+    if len(_MEASURED) >= 32:
+        _MEASURED.pop(next(iter(_MEASURED)))
+    _MEASURED[path, kind] = (_stamps(path, spec.model_file), spec)
+    return spec
+
+
+_MEASURED: dict = {}
+"""(robot file, kind) -> (its and its model's modification times, RobotSpec): each robot
+measured once, again when either file changes (the oldest of 32 goes first)."""
+
+
+def _stamps(*paths: Path) -> tuple:
+    stamps = []
+    for path in paths:
+        try:
+            stamps.append(path.stat().st_mtime_ns)
+        except OSError:
+            stamps.append(None)
+    return tuple(stamps)
 
 
 def robot_defaults(robot: str):

@@ -126,3 +126,16 @@ def test_a_sensor_a_scenario_adds_to_a_robot_rides_on_its_base_link(tmp_path):
     path = _robot(tmp_path)
     scenario = load_scenario(data=f"robots: {{u: {{robot: {path}, ir_sensors: {{side: {{}}}}}}}}")
     assert scenario.robots["u"].ir_sensors["side"].X_PB.base_frame == "base_link"
+
+
+def test_a_robot_is_measured_again_when_its_model_changes(tmp_path):
+    import os
+
+    path = _robot(tmp_path)
+    assert robot_spec(str(path)).wheel_radius == pytest.approx(0.033)
+    assert robot_spec(str(path)) is robot_spec(str(path))  # measured once
+    model = tmp_path / "twowheel.urdf"
+    stat = model.stat()
+    _robot(tmp_path, radius=0.04, z=0.04)  # rewrites the model (and the robot file, the same)
+    os.utime(model, ns=(stat.st_atime_ns, stat.st_mtime_ns + 1_000_000))
+    assert robot_spec(str(path)).wheel_radius == pytest.approx(0.04)
