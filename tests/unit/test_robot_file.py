@@ -139,3 +139,10 @@ def test_a_robot_is_measured_again_when_its_model_changes(tmp_path):
     _robot(tmp_path, radius=0.04, z=0.04)  # rewrites the model (and the robot file, the same)
     os.utime(model, ns=(stat.st_atime_ns, stat.st_mtime_ns + 1_000_000))
     assert robot_spec(str(path)).wheel_radius == pytest.approx(0.04)
+
+
+def test_the_shipped_corobot_robot_file_is_its_generators_output():
+    from corobot_drake.resources import MODELS_DIR
+    from corobot_drake.robots.corobot import robot_file_text
+
+    assert (MODELS_DIR / "corobot" / "robot.yaml").read_text() == robot_file_text()
