@@ -244,17 +244,20 @@ def with_sensor_maps(cls):
 @dc.dataclass
 @with_sensor_maps
 class Robot:
-    """One Corobot: where it starts, how it drives, its tyres, its script, and its sensors
-    (a map by name per kind, `with_sensor_maps`)."""
+    """One robot: which (`robot`: the Corobot by default), where it starts, how it drives,
+    its tyres, its script, and its sensors (a map by name per kind, `with_sensor_maps`). The
+    defaults are the Corobot's; a robot of another kind starts from its robot file's
+    (`robots.robot_defaults`)."""
 
     robot: str = "corobot"
-    """Which robot: a shipped one (`robots.ROBOTS`: `corobot`) or a robot file's path
+    """Which robot: a shipped one (`robots.ROBOTS`: `corobot`, `burger`, `pioneer`) or a
+    robot file's path
     (relative to the scenario file; `robots/file.py`). Its drive, tyres and sensors are the
     defaults of this robot's fields."""
     pose: Transform = dc.field(default_factory=Transform)
-    """X_WB: the chassis frame in the world (its origin on the ground midway between the
-    axles, +x forward): `{translation: [x, y, 0], rotation: !Rpy {deg: [0, 0, yaw]}}` stands
-    it on the ground facing `yaw`."""
+    """X_WB: the robot's base link in the world (the Corobot's `chassis`: its origin on the
+    ground midway between the axles, +x forward): `{translation: [x, y, 0], rotation:
+    !Rpy {deg: [0, 0, yaw]}}` stands it on the ground facing `yaw`."""
     drive: Drive = dc.field(default_factory=Drive)
     contact: WheelContact = dc.field(default_factory=WheelContact)
     visual: str = bounded("meshes", OneOf(VISUALS))
@@ -272,16 +275,17 @@ class Robot:
     saved scene carries on without a jolt)."""
     axle_speed_command: list[float] = dc.field(default_factory=list)
     """The drive's initial commanded (slewed) axle speeds [left, right], rad/s; empty: the
-    front wheels' `wheel_speeds`. A saved scene records them (they differ from the wheels'
+    encoded wheels' `wheel_speeds`. A saved scene records them (they differ from the wheels'
     while the drive accelerates or brakes)."""
     wheel_hold_angles: list[float] = bounded(list, Range(-1e6, 1e6, unit="rad"))
-    """The angles (rad, `dimensions.WHEEL_NAMES` order) the drive holds the wheels at while
+    """The angles (rad, wheel order as `wheel_angles`) the drive holds the wheels at while
     they rest (`systems.drive.DriveController`); empty: their `wheel_angles`. A saved scene
     records them (a held wheel the ground has pushed is pulled back to its hold angle)."""
     odometry: list[float] = bounded(list, (lim.POSITION, lim.POSITION, lim.HEADING,
                                            lim.ENCODER_COUNT, lim.ENCODER_COUNT))
     """The dead-reckoned odometry's start (`systems.dead_reckoning`): [x, y, yaw] (m, m, rad),
-    then optionally the front wheels' encoder counts [left, right] it last integrated
+    then optionally the encoded wheels' counts [left, right] (the Corobot's front ones) it
+    last integrated
     (default: the counts at the start); empty: the true start pose. A saved scene records all
     five (the odometry has drifted from the true pose, and carries on from its last update)."""
 
