@@ -2,7 +2,9 @@
 
 One function, `build_station`, in the style of Drake's hardware_sim and the manipulation
 station: every robot's systems are named `<robot>.<system>` and its ports are exported as
-`<robot>.<port>`. It builds in phases (the plant, with each sensor's own geometry; each
+`<robot>.<port>`. Each robot is built from its `robots.RobotSpec` (its model, wheels, drive
+and tyres: the Corobot's generated model, any other parsed from its robot file's model by
+`robots.build`). It builds in phases (the plant, with each sensor's own geometry; each
 robot's drive, telemetry and sensors, every sensor through its kind in `sensors.registry`;
 then the hooks; then Meshcat's own visualizers), and knows no front end: the Meshcat
 markers, the Foxglove and MCAP topics and the ROS 2 topics attach through its `extras` hooks,
