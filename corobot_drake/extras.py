@@ -1,9 +1,11 @@
 """The optional front ends and the pip extras that carry them.
 
-The core (`pip install corobot-drake`) runs a scenario headless or in Meshcat; each front end
-needs its extra. A front end used without it stops with one line naming the extra (`--ros2`
-checks its own, with the interfaces `tools/setup` builds: `ros2/run.py`); so does a tool of
-`tools/` (its imports of an extra's modules in a `try:` whose handler calls `exit_without`).
+The core (`pip install .` in a clone of the repository, or in an sdist `python -m build`
+made; corobot-drake is not on PyPI) runs a scenario headless or in Meshcat; each front end
+needs its extra (`pip install '.[serve]'`; `tools/setup` installs them all). A front end used
+without it stops with one line naming the extra and how to install it (`install_hint`;
+`--ros2` checks its own, with the interfaces `tools/setup` builds: `ros2/run.py`); so does a
+tool of `tools/` (its imports of an extra's modules in a `try:` whose handler calls `exit_without`).
 `tests/packaging/test_wheel.py` holds this table to pyproject's optional dependencies.
 """
 
@@ -22,6 +24,14 @@ EXTRAS = {
 """{extra: the top-level modules it brings}."""
 
 
+def install_hint(*extras: str) -> str:
+    """How to add `extras` to an installed corobot-drake, in one line: pip from the clone or
+    the unpacked sdist (a `pip install 'corobot-drake[...]'` would ask PyPI, where the project
+    is not)."""
+    return (f"pip install '.[{','.join(extras)}]' in corobot-drake's clone or unpacked sdist "
+            "(it is not on PyPI; tools/setup installs every extra)")
+
+
 class MissingExtraError(ImportError):
     """A front end was used without its extra; the message is the one line to show."""
 
@@ -35,8 +45,7 @@ def require(extra: str, what: str) -> None:
     """Raises MissingExtraError ("`what` needs the [extra] extra: pip install ...") unless every
     module of `extra` is importable."""
     if missing_modules(extra):
-        raise MissingExtraError(f"{what} needs the [{extra}] extra: "
-                           f"pip install 'corobot-drake[{extra}]'")
+        raise MissingExtraError(f"{what} needs the [{extra}] extra: {install_hint(extra)}")
 
 
 def exit_without(what: str, *extras: str) -> NoReturn:
@@ -49,5 +58,5 @@ def exit_without(what: str, *extras: str) -> NoReturn:
         raise  # (called from the handler: the ImportError it handles)
     names = " and ".join(f"[{extra}]" for extra in missing)
     print(f"error: {what} needs the {names} extra{'s' if len(missing) > 1 else ''}: "
-          f"pip install 'corobot-drake[{','.join(missing)}]'", file=sys.stderr)
+          f"{install_hint(*missing)}", file=sys.stderr)
     raise SystemExit(2)

@@ -132,7 +132,7 @@ def main() -> int:
     args = parser.parse_args()
     if importlib.util.find_spec("trimesh") is None:
         print("error: tools/make_meshes.py needs trimesh, a development dependency: "
-              "pip install 'corobot-drake[dev]' (or run tools/setup)", file=sys.stderr)
+              "pip install '.[dev]' in corobot-drake's clone (or run tools/setup)", file=sys.stderr)
         return 2
 
     built = meshes.build_meshes()

@@ -24,6 +24,8 @@ import sysconfig
 import tempfile
 from pathlib import Path
 
+from corobot_drake.extras import install_hint
+
 INTERFACES_DIR = Path(__file__).resolve().parent / "ros_packages"
 PACKAGES = ("tf2_msgs", "simulation_interfaces", "corobot_interfaces")
 """Built in this order (none depends on another)."""
@@ -155,8 +157,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         root = prefix()
         if not (root / "share" / "rosidl_default_generators").is_dir():
-            raise BuildError("the [ros2] extra is not installed: pip install "
-                             "'corobot-drake[ros2]'")
+            raise BuildError(f"the [ros2] extra is not installed: {install_hint('ros2')}")
         fix_exported_cmake(root)
         for name in PACKAGES:
             if not args.force and up_to_date(root, name):

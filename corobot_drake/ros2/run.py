@@ -13,7 +13,9 @@ import sys
 from functools import partial
 from pathlib import Path
 
-EXTRA_HINT = "pip install 'corobot-drake[ros2]'"
+from corobot_drake.extras import install_hint
+
+EXTRA_HINT = install_hint("ros2")
 INTERFACES_HINT = "python -m corobot_drake.ros2.build (tools/setup runs it)"
 
 

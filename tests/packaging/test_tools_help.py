@@ -177,7 +177,8 @@ def test_a_tool_without_its_extra_says_which_in_one_line():
                          capture_output=True, text=True, timeout=600)
     assert run.returncode == 0, run.stderr
     needs = re.compile(r"error: tools/(\w+)\.py needs the \[(\w+)\]( and \[(\w+)\] extras| extra)"
-                       r": pip install 'corobot-drake\[[\w,]+\]'\n")
+                       r": pip install '\.\[[\w,]+\]' in corobot-drake's clone or unpacked "
+                       r"sdist \(it is not on PyPI; tools/setup installs every extra\)\n")
     wrong, said = [], set()
     for tool, (status, out, err) in json.loads(run.stdout).items():
         name = Path(tool).stem

@@ -246,7 +246,8 @@ def test_the_installed_wheel_runs_from_any_directory(tmp_path):
     served = subprocess.run([python, "-m", "corobot_drake", "--serve"], cwd=elsewhere, env=env,
                             capture_output=True, text=True, timeout=120)
     assert (served.returncode, served.stderr) == (
-        2, "error: --serve needs the [serve] extra: pip install 'corobot-drake[serve]'\n")
+        2, "error: --serve needs the [serve] extra: pip install '.[serve]' in corobot-drake's "
+           "clone or unpacked sdist (it is not on PyPI; tools/setup installs every extra)\n")
     gym = subprocess.run([python, "-c", "import corobot_drake.gym"], cwd=elsewhere, env=env,
                          capture_output=True, text=True, timeout=120)
     assert "corobot_drake.gym needs the [gym] extra" in gym.stderr.splitlines()[-1]

@@ -375,8 +375,9 @@ def test_foxglove_without_the_extra_is_one_line_on_any_port(port, monkeypatch, c
     """Port 0 (a free one) asks for the [record] extra like any other port."""
     monkeypatch.setitem(sys.modules, "foxglove", None)  # as if not installed
     assert main(["--headless", "--foxglove", port]) == 2
-    assert capsys.readouterr().err == ("error: --foxglove needs the [record] extra: pip install "
-                                       "'corobot-drake[record]'\n")
+    assert capsys.readouterr().err == (
+        "error: --foxglove needs the [record] extra: pip install '.[record]' in corobot-drake's "
+        "clone or unpacked sdist (it is not on PyPI; tools/setup installs every extra)\n")
 
 
 def test_the_closing_line_says_the_time_simulated_not_the_end_time(capsys):

@@ -488,8 +488,9 @@ def test_bag_round_trips(bag):
 def test_ros2_without_the_extra_is_one_line(monkeypatch, capsys):
     monkeypatch.setitem(sys.modules, "rclpy", None)  # as if not installed
     assert cli.main(["--ros2", "--headless"]) == 2
-    assert capsys.readouterr().err == ("error: --ros2 needs the [ros2] extra: pip install "
-                                       "'corobot-drake[ros2]'\n")
+    assert capsys.readouterr().err == (
+        "error: --ros2 needs the [ros2] extra: pip install '.[ros2]' in corobot-drake's clone "
+        "or unpacked sdist (it is not on PyPI; tools/setup installs every extra)\n")
 
 
 def test_rosbag_into_an_existing_directory_is_one_line(tmp_path, capsys):
