@@ -477,7 +477,7 @@ def test_unknown_path_is_404_pointing_at_the_directory(http):
 def test_malformed_flood_and_pollers_are_answered_and_the_simulation_runs_on(http, server, caps):
     """1000 malformed requests and 20 clients polling state at once: every bad request gets
     a 4xx, every poll a 200, the server survives and the simulation goes on advancing. (The
-    real-time factor it keeps under this load is a benchmark: docs/services.md's
+    real-time factor it keeps under this load is a benchmark: docs/costs.md's
     `server-flood` block.)"""
     reset(http, caps)
     http.post(f"{ROBOT}/drive/set_power", json={"left": 0.3, "right": -0.3})  # spin in place
