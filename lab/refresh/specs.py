@@ -101,9 +101,9 @@ def _model_and_command_specs(c: SimpleNamespace) -> list[Spec]:
         Spec("resume-landing", "docs/commands.md",
              (Command("python tools/resume_landing.py"),), r.render_resume_landing,
              DETERMINISTIC, 300),
-        Spec("landing-errors", "docs/commands.md", (c.landing,), r.render_landing_errors,
+        Spec("landing-errors", "docs/landings.md", (c.landing,), r.render_landing_errors,
              DETERMINISTIC, 90),
-        Spec("drive-test-drift", "docs/commands.md", tuple(
+        Spec("drive-test-drift", "docs/landings.md", tuple(
             Command(f"python tools/drive_test.py --loops 3 --seeds 20 --workers 1 --profile {p} "
                     f"--out out/drive_test_{p}")
             for p in ("closed_loop", "seed")), r.render_drive_drift, DETERMINISTIC, 820),
