@@ -41,9 +41,9 @@ ANSWER_TIMEOUT = 10.0
 FEEDBACK_PERIOD = 0.1
 """s of simulated time between an action's feedback messages (at any rate the simulation
 runs)."""
-WAKE_PERIOD = 0.02
-"""s (wall clock) a running goal waits between its looks at the simulation (its end, a
-cancel, its next feedback)."""
+WAKE_PERIOD = 0.1
+"""s (wall clock) a running goal waits at most for its end or its next feedback before it
+looks for a cancel or the node's stop."""
 SERVICE_SETTLE_TIMEOUT = 30.0
 """s (wall clock) /set_pose waits for the robot to settle at its new pose."""
 
@@ -320,35 +320,48 @@ class Ros2Node:
             goal_handle.abort()
             return Result(success=False, reason=str(e) or type(e).__name__)
         ended = self.runner.watch(partial(calls.ended_command, robot, started.seq))
-        Feedback = ros_type(action.type).Feedback
-        next_feedback = started.start_time + FEEDBACK_PERIOD
-        while True:
-            try:
-                result = ended.result(WAKE_PERIOD)
-                break
-            except concurrent.futures.TimeoutError:
-                pass
-            except SimulationStoppedError:
-                return self._abort_at_stop(goal_handle, Result)
-            if self._closing.is_set():
-                with contextlib.suppress(SimulationStoppedError, TimeoutError):
-                    self._call(partial(stop_if_running, robot, started.seq), RESULT_GRACE)
-                return self._abort_at_stop(goal_handle, Result)
-            if goal_handle.is_cancel_requested:
-                return self._cancel(robot, started.seq, goal_handle, ended, Result)
-            try:
-                t, left = self._call(partial(remaining_at, robot, action.command,
-                                             next_feedback))
-            except (SimulationStoppedError, TimeoutError):
-                continue  # the next look at `ended` says why
-            if left is not None:
-                next_feedback = t + FEEDBACK_PERIOD
-                goal_handle.publish_feedback(Feedback(**{action.feedback: left}))
+        feedback = self._feedback_watch(robot, action, started.start_time + FEEDBACK_PERIOD)
+        try:
+            while True:
+                concurrent.futures.wait((ended, feedback), WAKE_PERIOD,
+                                        concurrent.futures.FIRST_COMPLETED)
+                if ended.done():
+                    try:
+                        result = ended.result()
+                        break
+                    except SimulationStoppedError:
+                        return self._abort_at_stop(goal_handle, Result)
+                if self._closing.is_set():
+                    with contextlib.suppress(SimulationStoppedError, TimeoutError):
+                        self._call(partial(stop_if_running, robot, started.seq), RESULT_GRACE)
+                    return self._abort_at_stop(goal_handle, Result)
+                if goal_handle.is_cancel_requested:
+                    return self._cancel(robot, started.seq, goal_handle, ended, Result)
+                if feedback.done():
+                    feedback = self._feed_back(robot, action, goal_handle, feedback)
+        finally:
+            feedback.cancel()  # (stops watching)
         if result.succeeded:
             goal_handle.succeed()
         else:
             goal_handle.abort()
         return Result(success=result.succeeded, reason=result.reason)
+
+    def _feedback_watch(self, robot: str, action: ifc.Action, due: float):
+        """A future of (time, what is left) once simulated time reaches `due` s."""
+        return self.runner.watch(partial(remaining_at, robot, action.command, due))
+
+    def _feed_back(self, robot: str, action: ifc.Action, goal_handle, done):
+        """Publishes the feedback `done` (a `_feedback_watch`) brought; the next one's
+        watch, `FEEDBACK_PERIOD` s of simulated time later."""
+        try:
+            t, left = done.result()
+        except SimulationStoppedError:
+            return concurrent.futures.Future()  # none more: the goal's end says why
+        if left is not None:
+            goal_handle.publish_feedback(ros_type(action.type).Feedback(
+                **{action.feedback: left}))
+        return self._feedback_watch(robot, action, t + FEEDBACK_PERIOD)
 
     def _abort_at_stop(self, goal_handle, Result):
         """A goal the node's stop (or the simulation's) ends: aborted, saying so (`close`
@@ -492,11 +505,11 @@ def remaining(robot: str, command: type, sim) -> float | None:
     return None
 
 
-def remaining_at(robot: str, command: type, due: float, sim) -> tuple[float, float | None]:
-    """In the simulation thread: (now, `remaining`) once simulated time has reached `due` s,
-    else (now, None)."""
+def remaining_at(robot: str, command: type, due: float, sim) -> tuple | None:
+    """In the simulation thread (a watch): (now, `remaining`) once simulated time has reached
+    `due` s, else None."""
     if sim.time < due - 1e-9:
-        return sim.time, None
+        return None
     return sim.time, remaining(robot, command, sim)
 
 
