@@ -141,3 +141,26 @@ def test_a_bad_parameter_at_start_is_one_line_and_exit_2():
     assert run.returncode == 2
     assert run.stderr.strip().splitlines() == [
         "error: --ros-args: odom_source: 'gps' is not one of wheel, ground_truth"]
+
+
+def test_action_feedback_comes_every_tenth_of_a_simulated_second_at_any_rate():
+    """At 4x real time a drive's feedback still comes every 0.1 s of simulated time (paced
+    on the wall clock, it came every 0.4 s of it)."""
+    from corobot_interfaces.action import DriveDistance
+    from rosgraph_msgs.msg import Clock
+
+    with ros2_simulation(["--headless", "--override", QUIET, "--rate", "4"],
+                         serve=False) as (_, probe):
+        probe.subscribe("/clock", Clock, RELIABLE)
+        probe.wait_for("/clock")
+        client = probe.action_client(DriveDistance, "/drive_distance")
+        feedback = []
+        start = probe.wait_for("/clock", start=probe.count("/clock")).clock
+        handle = probe.wait_future(client.send_goal_async(
+            DriveDistance.Goal(distance=0.5, power=0.5),
+            feedback_callback=lambda f: feedback.append(f.feedback.remaining)))
+        assert probe.wait_future(handle.get_result_async()).result.success
+        end = probe.wait_for("/clock", start=probe.count("/clock")).clock
+    simulated = (end.sec - start.sec) + 1e-9 * (end.nanosec - start.nanosec)
+    # every 0.1 s of the drive; its start and end lie within the span measured
+    assert 0.6 * simulated / 0.1 < len(feedback) <= simulated / 0.1 + 1, (simulated, feedback)
