@@ -1,17 +1,20 @@
 """The tutorials' code runs as written.
 
-Every fenced code block of a tutorial page marked as Python (```` ```python ````) or as shell
-commands (```` ```sh ````) runs here:
+Every fenced code block of a tutorial page (and of the README) marked as Python
+(```` ```python ````) or as shell commands (```` ```sh ````) runs here:
 
 - A page's Python blocks run in order in one namespace, as a reader pastes them one after the
   other, in a scratch folder where `scenarios/` is the repository's.
-- In a shell block, each `python -m corobot_drake ...` command (a line; a trailing backslash
-  joins the next) runs in this process through `corobot_drake.cli.main` and must exit 0, in the
-  same scratch folder. A command without `--headless` (Meshcat in a browser) gets it, and one
-  without `--duration` (until Ctrl-C) gets `--duration 1`: the same run, ended. A
-  `--serve` command is started as a server for the page's Python blocks instead (below).
-  Comments and other lines (curl, cat, the tools, whose figures
-  `tools/refresh_docs.py` and their own tests hold) are not run.
+- In a shell block, each `python -m corobot_drake ...` command (also `.venv/bin/python -m
+  ...`; a line, a trailing backslash joining the next) runs in this process through
+  `corobot_drake.cli.main` and must exit 0, in the same scratch folder. A command without
+  `--headless` (Meshcat in a browser) gets it, and one without `--duration` (until Ctrl-C)
+  gets `--duration 1`: the same run, ended. A `--serve` command is started as a server for
+  the page's Python blocks instead (below). Comments and other lines (curl, cat, the tools,
+  whose figures `tools/refresh_docs.py` and their own tests hold) are not run.
+- To keep the suite cheap, a run is cut to `MAX_SECONDS` of simulated time: a longer
+  `--duration`, and a longer literal `advance(S)` in a Python block, are cut to it (the
+  code is otherwise as written: the same calls, the same outputs, a shorter run).
 - A block right after a line `<!-- no-test: REASON -->` (the last non-blank line above its
   fence) is not run; the reason must be said (a display, a server left running until Ctrl-C,
   hours of training), and the page shows nothing of the comment.
@@ -32,17 +35,20 @@ import pytest
 
 from conftest import REPO
 
-PAGES = ("commands", "services", "sensors", "recording", "studies", "gym", "looks", "tuning")
+PAGES = ("README.md", *(f"docs/{p}.md" for p in (
+    "commands", "services", "sensors", "recording", "studies", "gym", "looks", "tuning")))
+MAX_SECONDS = 2.0
+"""s of simulated time a run here lasts at most."""
 FENCE = re.compile(r"^(?P<indent> *)```(?P<lang>python|sh)\n(?P<body>.*?)^(?P=indent)```$",
                    re.MULTILINE | re.DOTALL)
 """A fenced block, also one indented under a list item."""
 NO_TEST = re.compile(r"^<!-- no-test: (?P<reason>\S.*?) -->$")
-CLI = "python -m corobot_drake "
+CLI = re.compile(r"^(?:\.venv/bin/)?python -m corobot_drake ")
 
 
 def blocks(page: str) -> list[tuple[str, str, int, str | None]]:
     """(language, code, line, no-test reason or None) of each Python or shell block."""
-    text = (REPO / "docs" / f"{page}.md").read_text()
+    text = (REPO / page).read_text()
     out = []
     for m in FENCE.finditer(text):
         above = [ln for ln in text[:m.start()].splitlines() if ln.strip()]
@@ -56,7 +62,22 @@ def cli_commands(code: str) -> list[list[str]]:
     """The `python -m corobot_drake` commands of a shell block, as argument lists."""
     joined = re.sub(r"\\\n\s*", " ", code)
     return [shlex.split(line.strip(), comments=True)[3:] for line in joined.splitlines()
-            if line.strip().startswith(CLI)]
+            if CLI.match(line.strip())]
+
+
+def cut(argv: list[str]) -> list[str]:
+    """A command as the test runs it: headless, ended, at most MAX_SECONDS long."""
+    argv = [*argv, *(["--headless"] if "--headless" not in argv else []),
+            *(["--duration", "1"] if "--duration" not in argv else [])]
+    at = argv.index("--duration") + 1
+    argv[at] = str(min(float(argv[at]), MAX_SECONDS))
+    return argv
+
+
+def shortened(code: str) -> str:
+    """A Python block with each literal `advance(S)` longer than MAX_SECONDS cut to it."""
+    return re.sub(r"\.advance\((\d+(?:\.\d*)?)\)",
+                  lambda m: f".advance({min(float(m[1]), MAX_SECONDS)!r})", code)
 
 
 @pytest.fixture
@@ -72,7 +93,7 @@ def test_the_tutorials_have_code_and_every_skip_says_why():
     assert sum(len(b) for b in found.values()) >= 25
     for page, page_blocks in found.items():
         for _, _, line, reason in page_blocks:
-            assert reason is None or len(reason) > 10, f"{page}.md:{line}: say why: {reason!r}"
+            assert reason is None or len(reason) > 10, f"{page}:{line}: say why: {reason!r}"
     shells = [b for page_blocks in found.values() for b in page_blocks if b[0] == "sh"]
     assert sum(len(cli_commands(code)) for _, code, _, skip in shells if skip is None) >= 5
 
@@ -95,12 +116,12 @@ def test_a_pages_python_blocks_run_in_order(page, scratch):
         if serve:
             args = [a for a in serve if a != "--serve"]
             url = stack.enter_context(ServerProcess(args)).url
-        namespace = {"__name__": f"docs_{page}"}
+        namespace = {"__name__": "docs_" + re.sub(r"\W", "_", page)}
         for lang, code, line, reason in blocks(page):
             if lang == "python" and reason is None:
                 if url:
                     code = code.replace("http://127.0.0.1:50000", url)
-                exec(compile(code, f"docs/{page}.md:{line}", "exec"), namespace)
+                exec(compile(shortened(code), f"{page}:{line}", "exec"), namespace)
 
 
 @pytest.mark.parametrize("page", PAGES)
@@ -113,12 +134,11 @@ def test_a_pages_commands_run(page, scratch, capsys):
         for argv in cli_commands(code):
             if "--serve" in argv:  # runs until Ctrl-C: served for the page's Python blocks
                 continue
-            argv = [*argv, *(["--headless"] if "--headless" not in argv else []),
-                    *(["--duration", "1"] if "--duration" not in argv else [])]
+            argv = cut(argv)
             try:
                 status = main(argv)
             except SystemExit as exit_:
                 status = exit_.code
             out = capsys.readouterr()
-            assert status == 0, f"docs/{page}.md:{line}: {shlex.join(argv)}\n{out.err[-2000:]}"
+            assert status == 0, f"{page}:{line}: {shlex.join(argv)}\n{out.err[-2000:]}"
     assert os.getcwd() == str(scratch)
