@@ -118,7 +118,7 @@ def test_a_camera_s_publisher_hands_on_a_frame_once_at_the_look_after_it_comes_o
     frame = _Frame()
     camera = types.SimpleNamespace(image=frame.GetOutputPort("rgb_image"),
                                    image_time=frame.GetOutputPort("image_time"), delay=0.03,
-                                   look=0.01)
+                                   look=0.01, worker=None)  # frames render when read
     sensor = BuiltSensor(CameraKind(), "r", "front", default_camera_config(), frame,
                          camera.image, 30.0, extra={"camera": camera})
     handed = []  # (look time, capture time, first byte)
