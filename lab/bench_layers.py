@@ -36,7 +36,6 @@ import time
 import numpy as np
 from pydrake.common.value import Value
 from pydrake.common.yaml import yaml_dump_typed
-from pydrake.multibody.plant import AddMultibodyPlant
 from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder, EventStatus, LeafSystem
 from pydrake.systems.primitives import (
@@ -49,16 +48,21 @@ from pydrake.systems.primitives import (
 from pydrake.trajectories import PiecewisePolynomial
 
 from corobot_drake.config import scenario as sc
-from corobot_drake.model import dimensions as dim
 from corobot_drake.resources import DEFAULT_SCENARIO
+from corobot_drake.robots import robot_spec
 from corobot_drake.simulation import apply_simulator_config
-from corobot_drake.station import _add_robot, _add_world
+from corobot_drake.station import add_scene
 from corobot_drake.systems.contact import add_wheel_contacts
 from corobot_drake.systems.dead_reckoning import DeadReckoning
 from corobot_drake.systems.drive import CommandSource, DriveController, DriveRequest
 from corobot_drake.systems.motion import MotionCommands
 from corobot_drake.systems.odometry import add_chassis_poses, add_chassis_states, add_odometry
-from corobot_drake.systems.runlog import HELD_PERIOD, SAMPLED, add_contact_states, add_run_log
+from corobot_drake.systems.runlog import (
+    HELD_PERIOD,
+    add_contact_states,
+    add_run_log,
+    spec_layout,
+)
 from corobot_drake.systems.servo import add_servo_sign, servo_velocity_sign
 from corobot_drake.systems.stability import add_tip_margin
 from lab import bench
@@ -164,11 +168,10 @@ def build_layers(scenario: sc.Scenario, layers: int, seconds: float = 10.0,
     `idle_updates` Python updates per physics step that change nothing, as the `FLOORS` row
     `floor` has them (`_Idle`, `_Quiet`)."""
     builder = DiagramBuilder()
-    plant, _ = AddMultibodyPlant(scenario.plant_config, builder)
-    _add_world(plant, scenario.world)
+    plant, _, _, _, added = add_scene(builder, scenario)  # the station's scene, finalized
     name, robot = next(iter(scenario.robots.items()))
-    instance, chassis, joints = _add_robot(plant, name, robot)
-    plant.Finalize()
+    instance, chassis, joints = added[name]
+    spec = robot_spec(robot.robot)
     fixed = {}
     if layers == 1:
         times, values = station_desired_state(scenario, seconds)
@@ -192,7 +195,8 @@ def build_layers(scenario: sc.Scenario, layers: int, seconds: float = 10.0,
             for period in (step, HELD_PERIOD):
                 builder.Connect(zero, builder.AddSystem(ZeroOrderHold(period, 1)).get_input_port())
     else:
-        controller = builder.AddSystem(DriveController(robot.drive))
+        controller = builder.AddSystem(DriveController(robot.drive, spec.sides,
+                                                       spec.wheel_radius))
         selector = builder.AddSystem(MatrixGain(plant.MakeStateSelectorMatrix(
             [j.index() for j in joints])))
         builder.Connect(plant.get_state_output_port(), selector.get_input_port())
@@ -204,8 +208,8 @@ def build_layers(scenario: sc.Scenario, layers: int, seconds: float = 10.0,
             builder.Connect(desired_state, fix.get_input_port())
             desired_state = fix.get_output_port()
         builder.Connect(desired_state, plant.get_desired_state_input_port(instance))
-        _add_robot_layers(builder, plant, name, robot, chassis, joints, selector, controller,
-                          layers, fixed,
+        _add_robot_layers(builder, plant, name, robot, spec, chassis, joints, selector,
+                          controller, layers, fixed,
                           sc.continuous_step(scenario.plant_config, scenario.simulator_config))
     period = sc.physics_step(scenario.plant_config, scenario.simulator_config)
     for _ in range(idle_updates):
@@ -279,10 +283,10 @@ def _record_desired_state(scenario: sc.Scenario, seconds: float):
     return times, np.column_stack(values)
 
 
-def _add_robot_layers(builder, plant, name, robot, chassis, joints, selector, controller,
+def _add_robot_layers(builder, plant, name, robot, spec, chassis, joints, selector, controller,
                       layers, fixed, continuous_step: float) -> None:
-    """Layers 3 and up of `LAYERS`, wired as `station.build_station` wires them
-    (`continuous_step`: `scenario.continuous_step`)."""
+    """Layers 3 and up of `LAYERS`, wired as `station.build_station` wires them, for the
+    robot's `spec` (`robots.RobotSpec`; `continuous_step`: `scenario.continuous_step`)."""
     if layers < 3:
         fixed["request"] = controller.GetInputPort("request")
         return
@@ -291,33 +295,37 @@ def _add_robot_layers(builder, plant, name, robot, chassis, joints, selector, co
     odometry = add_odometry(builder, name, pose, selector.get_output_port(),
                             controller.GetOutputPort("drive_status"),
                             controller.GetOutputPort("axle_speed"),
-                            robot.drive.motor_torque_scaling)
+                            robot.drive.motor_torque_scaling, spec)
     if layers < 4:
         fixed["request"] = controller.GetInputPort("request")
         return
     source = builder.AddSystem(CommandSource(robot.commands, robot.drive.control_period))
-    motion = builder.AddSystem(MotionCommands(robot.drive, robot.motion))
+    motion = builder.AddSystem(MotionCommands(robot.drive, robot.motion, spec.wheel_radius,
+                                              spec.spin_yaw_per_rim_speed))
     builder.Connect(source.GetOutputPort("request"), motion.GetInputPort("request"))
     builder.Connect(odometry.position, motion.GetInputPort("position"))
     builder.Connect(odometry.heading, motion.GetInputPort("heading"))
     builder.Connect(motion.GetOutputPort("drive_request"), controller.GetInputPort("request"))
     builder.Connect(motion.GetOutputPort("command_status"), source.GetInputPort("command_status"))
     if layers >= 5:
-        dead_reckoning = builder.AddSystem(DeadReckoning(robot.drive, robot.drive.control_period))
+        dead_reckoning = builder.AddSystem(DeadReckoning(
+            robot.drive, robot.drive.control_period, spec.encoder_ticks_per_revolution))
         builder.Connect(odometry.encoder_ticks, dead_reckoning.GetInputPort("encoder_ticks"))
         builder.Connect(pose, dead_reckoning.GetInputPort("chassis_pose"))
     if layers >= 6:
         contacts = add_wheel_contacts(builder, name, plant, [j.child_body() for j in joints],
                                       pose, selector.get_output_port(), chassis,
-                                      continuous_step)
+                                      continuous_step, spec.wheel_radius)
         add_tip_margin(
             builder, name, plant, chassis.model_instance(), chassis,
-            {w: j.child_body() for w, j in zip(dim.WHEEL_NAMES, joints, strict=True)}, pose)
+            {w: j.child_body() for w, j in zip(spec.wheel_names, joints, strict=True)}, pose,
+            spec.wheel_radius, spec.caster_points)
     if layers >= 7:
+        layout = spec_layout(spec)
         add_run_log(builder, name, state, controller.GetOutputPort("drive_status"),
                     odometry.encoder_ticks,
-                    {port: contacts.GetOutputPort(port) for port, _ in SAMPLED},
-                    held_when_read=bool(continuous_step))
+                    {port: contacts.GetOutputPort(port) for port, _ in layout.sampled},
+                    held_when_read=bool(continuous_step), layout=layout)
         if continuous_step:
             add_contact_states(builder, plant, [name])
 
