@@ -660,7 +660,7 @@ class LayerChecks:
         self._robot_kind(path, robot)
         for kind in KINDS:
             for sensor, config in getattr(robot, kind.field).items():
-                self._sensor(f"{path}.{kind.field}.{sensor}", kind, sensor, config, s)
+                self._sensor(f"{path}.{kind.field}.{sensor}", kind, sensor, config, robot, s)
         self._resume_fields(path, robot)
 
     def _robot_kind(self, path: str, robot: sc.Robot) -> None:
@@ -751,12 +751,12 @@ class LayerChecks:
                       f"a pose in the world has no base_frame (got {X.base_frame!r})")
         self._transform(path, X)
 
-    def _mount(self, path: str, X_PB, s: sc.Scenario) -> None:
-        """A sensor's X_PB: its base_frame a link of its robot, a scoped `model::link` of the
-        scenario, or empty (the world)."""
+    def _mount(self, path: str, X_PB, robot: sc.Robot, s: sc.Scenario) -> None:
+        """A sensor's X_PB: its base_frame a link of its `robot`, a scoped `model::link` of
+        the scenario, or empty (the world)."""
         frame = X_PB.base_frame or ""
         model, _, link = frame.rpartition("::")
-        links = robot_spec(s.robots[path.split(".")[1]].robot).links
+        links = robot_spec(robot.robot).links  # (a robot's name may hold dots: not from path)
         if not (frame in ("", "world") or (not model and link in links)
                 or (model in s.robots and link in robot_spec(s.robots[model].robot).links)
                 or (model in s.world.bodies and link == model)):
@@ -767,16 +767,17 @@ class LayerChecks:
 
     # -- sensors ----------------------------------------------------------------------------
 
-    def _sensor(self, path: str, kind, name: str, config, s: sc.Scenario) -> None:
-        """A sensor of any kind (`registry.KINDS`): its name, its mount (every config has an
-        `X_PB` on a link of its robot), then, unless it is turned off, its kind's own checks
-        (`SensorKind.check`)."""
+    def _sensor(self, path: str, kind, name: str, config, robot: sc.Robot,
+                s: sc.Scenario) -> None:
+        """A sensor of any kind (`registry.KINDS`) of `robot`: its name, its mount (every
+        config has an `X_PB` on a link of its robot), then, unless it is turned off, its
+        kind's own checks (`SensorKind.check`)."""
         if not SENSOR_NAME.fullmatch(name):
             # It appears in port names, Meshcat paths, topics and URLs
             # (/robots/<robot>/<sensor>).
             self.fail(path, "a sensor name must be letters, digits, '_', '-' or '~'; got "
                       f"{name!r}")
-        self._mount(f"{path}.X_PB", config.X_PB, s)
+        self._mount(f"{path}.X_PB", config.X_PB, robot, s)
         if not kind.enabled(config):
             return
         for field, problem in kind.check(config):
