@@ -49,14 +49,13 @@ semantics): right after ``AdvanceTo(t)`` the latest reading is the previous scan
 
 from __future__ import annotations
 
-import copy
 import dataclasses as dc
 import math
 import zlib
 
 import numpy as np
 from pydrake.common.value import Value
-from pydrake.geometry import Meshcat, Rgba, Role, Sphere
+from pydrake.geometry import Meshcat, Rgba, Sphere
 from pydrake.math import RigidTransform
 from pydrake.systems.framework import BasicVector, EventStatus, LeafSystem
 
@@ -66,6 +65,7 @@ from corobot_drake.model.ir_models import SharpGP2D12
 from corobot_drake.readings import IrReading
 from corobot_drake.sensors.kind import BuiltSensor, SensorKind
 from corobot_drake.sensors.raycast import (
+    CasterCache,
     RayCaster,
     RayFan,
     cross_of_rays_in_sensor_frame,
@@ -180,8 +180,7 @@ class IrSensor(LeafSystem):
         self._fan = RayFan.cross_of_rays(X_BS, config.samples, config.dispersion_cone_angle)
         self.num_rays = n = 2 * config.samples
         self.period = 1.0 / config.scan_rate_hz
-        self._caster: RayCaster | None = None
-        self._caster_version = None
+        self._casters = CasterCache(self._exclude)
 
         self._query_port = self.DeclareAbstractInputPort(
             "query_object", self._query_model_value())
@@ -277,14 +276,7 @@ class IrSensor(LeafSystem):
     def caster(self, query_object) -> RayCaster:
         """The RayCaster for the QueryObject's geometry, built on first use and rebuilt only
         when the proximity geometry changes (the robot's own geometry excluded)."""
-        inspector = query_object.inspector()
-        version = inspector.geometry_version()
-        if self._caster is None or not version.IsSameAs(self._caster_version, Role.kProximity):
-            self._caster = RayCaster(inspector, exclude=self._exclude)
-            # A copy: the version itself is a view that keeps the inspector's Python wrapper
-            # (and the Context it came from) referenced after that Context is gone.
-            self._caster_version = copy.copy(version)
-        return self._caster
+        return self._casters.caster(query_object)
 
     def _cast(self, query_object):
         """(origin, directions, distances) as plain floats (the scan's hot path)."""

@@ -27,14 +27,13 @@ frame `lidar_<name>`, sensor_msgs/LaserScan on ROS 2 and Foxglove's LaserScan in
 Meshcat draws each scan's rays and hits under `/lidar/<robot>/<name>`.
 """
 
-import copy
 import dataclasses as dc
 import math
 
 import numpy as np
 from pydrake.common.schema import Transform
 from pydrake.common.value import AbstractValue
-from pydrake.geometry import Meshcat, QueryObject, Rgba, Role
+from pydrake.geometry import Meshcat, QueryObject, Rgba
 from pydrake.math import RigidTransform
 from pydrake.perception import BaseField, Fields, PointCloud
 from pydrake.systems.framework import EventStatus, LeafSystem
@@ -44,7 +43,7 @@ from corobot_drake.limits import RATE, Range, bounded
 from corobot_drake.model import dimensions as dim
 from corobot_drake.sensors.ir_sensor import noise_key
 from corobot_drake.sensors.kind import BuiltSensor, SensorKind
-from corobot_drake.sensors.raycast import RayCaster, model_instance_geometry_ids
+from corobot_drake.sensors.raycast import CasterCache, RayCaster, model_instance_geometry_ids
 from corobot_drake.sensors.ticks import tick_in_step
 from corobot_drake.topics import nanoseconds
 
@@ -209,8 +208,7 @@ class Lidar(LeafSystem):
         # The rays in B: a scan poses them with the body's rotation alone.
         self._d_B = np.column_stack([np.cos(angles), np.sin(angles), np.zeros(n)]) \
             @ self._X_BS[:, :3].T
-        self._caster: RayCaster | None = None
-        self._caster_version = None
+        self._casters = CasterCache(self._exclude)
 
         self._query_port = self.DeclareAbstractInputPort(
             "query_object", AbstractValue.Make(QueryObject()))
@@ -269,13 +267,7 @@ class Lidar(LeafSystem):
     def caster(self, query_object) -> RayCaster:
         """The RayCaster for the QueryObject's geometry (its robot's own excluded), built on
         first use and rebuilt only when the proximity geometry changes."""
-        inspector = query_object.inspector()
-        version = inspector.geometry_version()
-        if self._caster is None or not version.IsSameAs(self._caster_version, Role.kProximity):
-            self._caster = RayCaster(inspector, exclude=self._exclude)
-            # A copy: the version is a view that would keep the Context it came from alive.
-            self._caster_version = copy.copy(version)
-        return self._caster
+        return self._casters.caster(query_object)
 
     def true_ranges(self, query_object) -> tuple[np.ndarray, np.ndarray]:
         """(X_WS 3x4, the exact distance of each ray's first hit, m; inf when none within

@@ -38,6 +38,7 @@ against a batch caster on the same kernels, ``tests/reference_raycast.py``.)
 
 from __future__ import annotations
 
+import copy
 import logging
 import math
 from collections.abc import Callable, Iterable, Sequence
@@ -625,6 +626,27 @@ class RayCaster:
             for i, v in enumerate(t.tolist()):
                 if v < best[i]:
                     best[i] = v
+
+
+class CasterCache:
+    """A sensor's RayCaster for a QueryObject's proximity geometry (`exclude`d geometry left
+    out), built on first use and rebuilt only when that geometry changes: a cache of what the
+    scene graph holds, not state of the sensor's."""
+
+    def __init__(self, exclude: Iterable[GeometryId] = ()):
+        self.exclude = frozenset(exclude)
+        self.current: RayCaster | None = None
+        self._version = None
+
+    def caster(self, query_object: QueryObject) -> RayCaster:
+        inspector = query_object.inspector()
+        version = inspector.geometry_version()
+        if self.current is None or not version.IsSameAs(self._version, Role.kProximity):
+            self.current = RayCaster(inspector, exclude=self.exclude)
+            # A copy: the version itself is a view that keeps the inspector's Python wrapper
+            # (and the Context it came from) referenced after that Context is gone.
+            self._version = copy.copy(version)
+        return self.current
 
 
 def _half_space_fan(R, p, origin, axis, half_angle: float, directions, max_range: float,

@@ -224,7 +224,7 @@ def test_a_lidar_keeps_no_view_of_a_context_that_is_gone():
     gc.collect()
     assert [type(o).__name__ for o in gc.get_objects()
             if isinstance(o, (QueryObject, SceneGraphInspector))] == []
-    assert sensor.system._caster is not None  # the caster itself lives on
+    assert sensor.system._casters.current is not None  # the caster itself lives on
 
 
 def test_too_near_reads_minus_inf_and_the_robot_never_sees_itself():
