@@ -112,13 +112,13 @@ def _parser() -> argparse.ArgumentParser:
     return p
 
 
-# --- ROS 2 (corobot_drake/ros2/; README: ROS 2) ------------------------------------------------
+# --- ROS 2 (corobot_drake/ros2/; docs/ros2.md) ---------------------------------------------------
 
 
 def _add_ros2_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--ros2", action="store_true",
                    help="run in real time as the ROS 2 node corobot_drake (topics, /cmd_vel, "
-                   "actions, services; README: ROS 2); discovery stays on this machine unless "
+                   "actions, services; docs/ros2.md); discovery stays on this machine unless "
                    "ROS_AUTOMATIC_DISCOVERY_RANGE or --ros2-network says otherwise; ROS's own "
                    "arguments follow --ros-args (remaps, namespace, -p, --params-file)")
     p.add_argument("--ros2-network", action="store_true",
@@ -129,7 +129,7 @@ def _add_ros2_arguments(p: argparse.ArgumentParser) -> None:
                    "as it can; /clock is the only time, Meshcat and --serve follow it")
     p.add_argument("--paused", action="store_true",
                    help="--ros2: start paused (play, step and reset with the ROS 2 Simulation "
-                   "Interfaces: README: ROS 2)")
+                   "Interfaces: docs/ros2.md)")
     p.add_argument("--rosbag", metavar="DIR",
                    help="write the ROS 2 topics as a rosbag2 directory (MCAP, CDR) that `ros2 "
                    "bag play` replays; headless at simulation speed, no ROS needed")

@@ -10,7 +10,7 @@ the command table (`action_definition`; a test keeps the files in
 `ros_packages/corobot_interfaces/` in step, and `python -m corobot_drake.ros2.interfaces`
 rewrites them).
 
-The commands' interfaces (`CMD_VEL`, `ACTIONS`, `SERVICES`, the README's rows:
+The commands' interfaces (`CMD_VEL`, `ACTIONS`, `SERVICES`, docs/ros2.md's rows:
 `command_rows`) are the command table's ROS 2 column (`commands.Ros2`), not a list of
 their own.
 
@@ -162,7 +162,7 @@ SERVICES = tuple(Service(s.ros2.name.lstrip("/"), s.ros2.type, s.method)
 """The command table's services (`commands.Ros2`): the node serves each by its type."""
 
 def command_rows() -> list[str]:
-    """The README's rows (name, type, QoS, what) of the command table's ROS 2 interfaces."""
+    """docs/ros2.md's rows (name, type, QoS, what) of the command table's ROS 2 interfaces."""
     rows = []
     for spec in (s for s in commands.COMMANDS.values() if s.ros2 is not None):
         ros2 = spec.ros2

@@ -65,7 +65,7 @@ def _shared_commands() -> SimpleNamespace:
 
 
 def _model_and_command_specs(c: SimpleNamespace) -> list[Spec]:
-    """The model, tuning, commands and README's pictures."""
+    """The model, tuning, commands and the pictures of docs/usage.md (once the README's)."""
     return [
         Spec("looks-triangles", "docs/looks.md", (c.meshes,), r.render_looks_triangles,
              DETERMINISTIC, 3),
@@ -107,7 +107,7 @@ def _model_and_command_specs(c: SimpleNamespace) -> list[Spec]:
             Command(f"python tools/drive_test.py --loops 3 --seeds 20 --workers 1 --profile {p} "
                     f"--out out/drive_test_{p}")
             for p in ("closed_loop", "seed")), r.render_drive_drift, DETERMINISTIC, 820),
-        *(Spec(name, "README.md", (Command(cmd),), picture(alt, f"docs/images/{png}", cmd),
+        *(Spec(name, "docs/usage.md", (Command(cmd),), picture(alt, f"images/{png}", cmd),
                PICTURE, seconds) for name, alt, png, cmd, seconds in c.pictures),
     ]
 
@@ -131,7 +131,7 @@ def _front_end_specs(c: SimpleNamespace) -> list[Spec]:
         Spec("bench-ir", "docs/costs.md", (c.bench_ir,), r.render_bench_ir, TIMING, 50),
         Spec("bench-recording", "docs/costs.md",
              (Command("python tools/bench_recording.py"),), r.render_table_with_load, TIMING, 300),
-        Spec("bench-ros2", "README.md", (Command("python tools/bench_ros2.py"),),
+        Spec("bench-ros2", "docs/ros2.md", (Command("python tools/bench_ros2.py"),),
              r.render_tables_with_load, TIMING, 400),
         Spec("gym-evaluation", "docs/gym.md",
              (Command("python tools/train_policy.py --evaluate"),), r.render_gym_evaluation,
@@ -147,7 +147,7 @@ def _front_end_specs(c: SimpleNamespace) -> list[Spec]:
 
 
 def _performance_specs(c: SimpleNamespace) -> list[Spec]:
-    """docs/performance.md's and the README's costs."""
+    """docs/performance.md's costs, and the hostile inputs' (docs/usage.md)."""
     return [
         Spec("unit-costs", "docs/performance.md", (c.bench_ir, c.bench_raycast, c.bench_camera),
              r.render_unit_costs, TIMING, 150),
@@ -163,7 +163,7 @@ def _performance_specs(c: SimpleNamespace) -> list[Spec]:
              r.render_tire_grip, DETERMINISTIC, 2500),
         Spec("default-column-runs", "docs/performance.md", (c.default_column,),
              r.render_default_runs, TIMING, 110),
-        Spec("readme-hostile-inputs", "README.md",
+        Spec("readme-hostile-inputs", "docs/usage.md",
              (Command("python tools/hostile_inputs.py", ok=(0, 1)),), r.render_hostile_inputs,
              TIMING, 90),
         Spec("bench-robots", "docs/performance.md",

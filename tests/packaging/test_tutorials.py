@@ -36,7 +36,8 @@ import pytest
 from conftest import REPO
 
 PAGES = ("README.md", *(f"docs/{p}.md" for p in (
-    "commands", "services", "sensors", "recording", "studies", "gym", "looks", "tuning")))
+    "install", "usage", "commands", "services", "sensors", "recording", "ros2", "studies", "gym",
+    "looks", "tuning")))
 MAX_SECONDS = 2.0
 """s of simulated time a run here lasts at most."""
 FENCE = re.compile(r"^(?P<indent> *)```(?P<lang>python|sh)\n(?P<body>.*?)^(?P=indent)```$",

@@ -94,7 +94,7 @@ def test_actions_are_the_scenario_commands():
 
 
 def test_the_commands_interfaces_are_the_command_tables_ros2_column():
-    """One mapping: the node's topic, actions and services, and the README's rows of them,
+    """One mapping: the node's topic, actions and services, and docs/ros2.md's rows of them,
     are what `commands.COMMANDS` declares (no list of their own)."""
     from corobot_drake import commands
 
@@ -106,9 +106,9 @@ def test_the_commands_interfaces_are_the_command_tables_ros2_column():
     assert served == declared
     assert all(t.startswith(("corobot_interfaces/", "std_srvs/", "geometry_msgs/"))
                for _, _, t in declared)
-    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text()
-    missing = [row for row in ifc.command_rows() if row not in readme]
-    assert not missing, f"README.md's ROS 2 table lacks {missing}"
+    page = (Path(__file__).resolve().parents[2] / "docs" / "ros2.md").read_text()
+    missing = [row for row in ifc.command_rows() if row not in page]
+    assert not missing, f"docs/ros2.md's interface table lacks {missing}"
 
 
 def test_drive_state_message_has_the_drive_states_fields():
