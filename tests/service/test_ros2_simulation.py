@@ -8,6 +8,7 @@ import hashlib
 import json
 import math
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -205,7 +206,7 @@ def test_rate_and_paused_flags_are_checked_in_one_line(argv, line, capsys):
 
 # --- the node --------------------------------------------------------------------------------
 
-from ros2_probe import ONE_GRAPH_AT_A_TIME, ros2_simulation  # noqa: E402
+from ros2_probe import ONE_GRAPH_AT_A_TIME, WAIT, ros2_simulation  # noqa: E402
 
 QUIET = "robots: {corobot: {commands: [], cameras: {front: {rgb: false}}}}"
 """The default scene without its camera's frames (rendering is not what is tested)."""
@@ -322,12 +323,21 @@ def test_play_pause_stop_and_the_action(sim_ros):
     # the action: N steps with feedback after each, then paused
     client = probe.action_client(SimulateSteps, "/simulate_steps")
     feedback = []
-    handle = probe.wait_future(client.send_goal_async(
-        SimulateSteps.Goal(steps=7), feedback_callback=lambda m: feedback.append(
-            (m.feedback.completed_steps, m.feedback.remaining_steps))))
+    last = threading.Event()
+
+    def fed_back(m):
+        feedback.append((m.feedback.completed_steps, m.feedback.remaining_steps))
+        if m.feedback.remaining_steps == 0:
+            last.set()
+
+    handle = probe.wait_future(client.send_goal_async(SimulateSteps.Goal(steps=7),
+                                                      feedback_callback=fed_back))
     assert handle.accepted
     done = probe.wait_future(handle.get_result_async())
     assert done.result.result.result == 1
+    # The last feedback goes out before the result, but on a topic of its own, and the
+    # probe's executor threads may hand it on after the result: wait for it, never sleep.
+    assert last.wait(WAIT), f"no feedback with no step left: {feedback}"
     assert feedback[-1] == (7, 0) and len(feedback) >= 2
     assert _pose(probe)[0] == pytest.approx(0.07, abs=1e-9)
     # cancelled: stops, paused, fewer steps
