@@ -59,16 +59,31 @@ def _shm_segments() -> set[str]:
 
 
 def _mapped_files() -> set[str]:
-    """Every file some other live process maps (a DDS segment in use is mapped by its owner;
-    this process's Fast DDS keeps its own mapped after its participants are gone)."""
-    mapped = set()
-    for maps in Path("/proc").glob("[0-9]*/maps"):
-        if maps.parent.name == str(os.getpid()):
+    """Every /dev/shm file some other live process maps or holds open, with its companions
+    (a DDS segment in use is mapped by its owner; its `<segment>_el` liveness lock is only
+    held open, and its `sem.<segment>_mutex` neither: deleted under a live participant, the
+    next process to open the port takes it for a zombie's and makes it afresh, and the
+    participant hears nothing more; this process's Fast DDS keeps its own mapped after its
+    participants are gone)."""
+    used = set()
+    for process in Path("/proc").glob("[0-9]*"):
+        if process.name == str(os.getpid()):
             continue
         with contextlib.suppress(OSError):
-            mapped |= {line.split(None, 5)[5].strip() for line in maps.read_text().splitlines()
-                       if len(line.split(None, 5)) == 6 and "/dev/shm/" in line}
-    return mapped
+            used |= {line.split(None, 5)[5].strip()
+                     for line in (process / "maps").read_text().splitlines()
+                     if len(line.split(None, 5)) == 6 and "/dev/shm/" in line}
+        with contextlib.suppress(OSError):
+            for fd in (process / "fd").iterdir():
+                with contextlib.suppress(OSError):
+                    target = os.readlink(fd)
+                    if target.startswith("/dev/shm/"):
+                        used.add(target)
+    companions = set()
+    for path in used:
+        name = path.removeprefix("/dev/shm/").removesuffix("_el")
+        companions |= {f"/dev/shm/{name}", f"/dev/shm/{name}_el", f"/dev/shm/sem.{name}_mutex"}
+    return used | companions
 
 
 @contextlib.contextmanager
