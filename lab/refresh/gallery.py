@@ -41,6 +41,9 @@ PICTURES = (
      "--scenario scenarios/burger.yaml --eye 1.3,-3.2,2.6 --target=0,0,0"),
     ("gallery-scenario-pioneer", "scenarios/pioneer.yaml", "gallery_scenario_pioneer.png",
      "--scenario scenarios/pioneer.yaml --eye 0.2,-3.8,2.4 --target=1.3,0,0.3"),
+    ("gallery-scenario-robo-magellan", "scenarios/robo_magellan.yaml",
+     "gallery_scenario_robo_magellan.png",
+     "--scenario scenarios/robo_magellan.yaml --eye=-1.6,-1.2,1.3 --target=2.5,0,0.1"),
     ("gallery-scenario-three-robots", "scenarios/three_robots.yaml",
      "gallery_scenario_three_robots.png",
      "--scenario scenarios/three_robots.yaml --robot corobot --eye=-0.9,-2.4,1.2 "
