@@ -61,9 +61,8 @@ def _shm_segments() -> set[str]:
 def _mapped_files() -> set[str]:
     """Every /dev/shm file some other live process maps or holds open, with its companions
     (a DDS segment in use is mapped by its owner; its `<segment>_el` liveness lock is only
-    held open, and its `sem.<segment>_mutex` neither: deleted under a live participant, the
-    next process to open the port takes it for a zombie's and makes it afresh, and the
-    participant hears nothing more; this process's Fast DDS keeps its own mapped after its
+    held open, and its `sem.<segment>_mutex` neither: a live participant's files, which a
+    test ending beside it must leave; this process's Fast DDS keeps its own mapped after its
     participants are gone)."""
     used = set()
     for process in Path("/proc").glob("[0-9]*"):
