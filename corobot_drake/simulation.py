@@ -78,8 +78,9 @@ class Robot(RobotCommands, RobotDrive, RobotTelemetry, RobotSensors, IrSensors, 
         self.name = parts.name
         self.spec = robot_spec(sim.scenario.robots[parts.name].robot)
         """What the robot is (`robots.RobotSpec`): its wheels, radius, track, drive, links."""
-        self._layout = spec_layout(self.spec)
-        """Its run log's columns and its signals (`runlog.Layout`: keyed by its wheels)."""
+        self._layout = spec_layout(self.spec, parts.sensors)
+        """Its run log's columns and its signals (`runlog.Layout`: keyed by its wheels; its
+        sensors' columns last)."""
 
     def _plant_context(self):
         return self._sim.station.plant.GetMyContextFromRoot(self._sim.context)

@@ -395,7 +395,8 @@ def _build_station(scenario: sc.Scenario, meshcat, save_camera, extras, mouse_dr
     continuous = sc.continuous_step(scenario.plant_config, scenario.simulator_config) > 0
     for name in robots:
         _add_signal_outputs(builder, name, continuous,
-                            spec_layout(robot_spec(scenario.robots[name].robot)))
+                            spec_layout(robot_spec(scenario.robots[name].robot),
+                                        robots[name].sensors), robots[name].sensors)
     if continuous:
         add_contact_states(builder, plant, robots)
     builder.ExportOutput(plant.get_body_poses_output_port(), "body_poses")
@@ -484,12 +485,12 @@ def signal_output(builder, robot: str, spec: signals.Signal):
     return builder.GetSubsystemByName(f"{robot}.{spec.system}").GetOutputPort(spec.port)
 
 
-def _add_signal_outputs(builder, name: str, continuous: bool, layout) -> None:
+def _add_signal_outputs(builder, name: str, continuous: bool, layout, sensors) -> None:
     """Exports each signal's port from its system as `<name>.<port>` (`signals.SIGNALS`
     with a `system`; once every system is in, the front ends' extras too), and adds the run
     log (`runlog.add_run_log`), which samples those of its `layout.sampled` (the robot's
     `runlog.Layout`; on a `continuous` plant, the held ones are made when it is read:
-    `runlog.ContactSamples`)."""
+    `runlog.ContactSamples`), then its `sensors`' columns (`SensorKind.log_columns`)."""
     by_port = {}
     for spec in signals.SIGNALS.values():
         if spec.system:
@@ -501,7 +502,7 @@ def _add_signal_outputs(builder, name: str, continuous: bool, layout) -> None:
                     "drive_status"),
                 builder.GetSubsystemByName(f"{name}.encoder_ticks").get_output_port(),
                 {port: by_port[port] for port, _ in layout.sampled}, held_when_read=continuous,
-                layout=layout)
+                layout=layout, sensors=sensors)
 
 
 MESHCAT_DRAG_STIFFNESS = 100.0

@@ -426,6 +426,14 @@ class BumperKind(SensorKind):
                      config: BumperConfig) -> None:
         add_bumper_geometry(plant, model_instance, name, config)
 
+    def log_columns(self, sensor: str) -> tuple[str, ...]:
+        """`bumper_<sensor>_pressed` (1 pressed, else 0) and `bumper_<sensor>_force` (N), of
+        the latest sample."""
+        return (f"bumper_{sensor}_pressed", f"bumper_{sensor}_force")
+
+    def log_port(self, sensor: BuiltSensor):
+        return sensor.system.GetOutputPort("sample_state"), (PRESSED, FORCE)
+
     def add(self, site, name: str, config: BumperConfig) -> BuiltSensor | None:
         """The bumper `name` on the site's robot (`<robot>.bumper.<name>`), fed by SceneGraph's
         queries and the plant's contact results and body poses; its vector outputs exported as

@@ -155,12 +155,14 @@ class ImuSensor(LeafSystem):
         - orientation
         - sample_time
         - bias
+        - sample_state
 
     Inputs: the plant's `body_poses` and `body_spatial_velocities` (abstract lists, one per
     body; the sensor reads its body's). Outputs: `reading` (abstract `Imu`);
     `angular_velocity` (rad/s) and `linear_acceleration` (m/s^2) in S; `orientation` [x, y, z,
     w] (S in the world, whether or not the reading carries it); `sample_time` (s);
-    `bias` [gyro (rad/s) 3, accelerometer (m/s^2) 3], the biases in the latest sample.
+    `bias` [gyro (rad/s) 3, accelerometer (m/s^2) 3], the biases in the latest sample;
+    `sample_state`, the whole state (`STATE_SIZE`: what the run log picks its columns from).
 
     A sample at initialization (index 0), then every 1 / `rate_hz` s (tick k at k / rate_hz,
     index k); with `step` (the plant's physics step, s) each sample is taken on the plant's
@@ -227,6 +229,7 @@ class ImuSensor(LeafSystem):
                 name, part.stop - part.start,
                 lambda c, out, part=part: out.SetFromVector(self._x(c)[part]),
                 prerequisites_of_calc=state)
+        self.DeclareStateOutputPort("sample_state", self._state)
 
     # -- reading the state ------------------------------------------------------------------
 
@@ -358,6 +361,15 @@ class ImuKind(SensorKind):
 
     def new_sensor(self, name: str) -> ImuConfig:
         return ImuConfig()
+
+    def log_columns(self, sensor: str) -> tuple[str, ...]:
+        """`imu_<sensor>_wx`, `_wy`, `_wz` (rad/s) and `_ax`, `_ay`, `_az` (m/s^2): the latest
+        sample's angular velocity and linear acceleration in the sensor's frame, as read."""
+        return tuple(f"imu_{sensor}_{c}" for c in ("wx", "wy", "wz", "ax", "ay", "az"))
+
+    def log_port(self, sensor: BuiltSensor):
+        return sensor.system.GetOutputPort("sample_state"), (*range(GYRO.start, GYRO.stop),
+                                                             *range(ACCEL.start, ACCEL.stop))
 
     def add(self, site, name: str, config: ImuConfig) -> BuiltSensor | None:
         """The IMU `name` on the site's robot (`<robot>.imu.<name>`), fed by the plant's body

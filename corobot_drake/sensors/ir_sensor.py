@@ -553,6 +553,13 @@ class IrSensorKind(SensorKind):
     def new_sensor(self, name: str) -> IrSensorConfig:
         return IrSensorConfig()
 
+    def log_columns(self, sensor: str) -> tuple[str, ...]:
+        """`ir_<sensor>`: m, the latest scan's distance (the reading's, noise and all)."""
+        return (f"ir_{sensor}",)
+
+    def log_port(self, sensor: BuiltSensor):
+        return sensor.system.GetOutputPort("scan_state"), (DISTANCE,)
+
     def add(self, site: SensorSite, name: str, config: IrSensorConfig) -> BuiltSensor | None:
         sensor = add_ir_sensor(site, name, config)
         if sensor is None:

@@ -138,6 +138,17 @@ class SensorKind:
         `random_seed` and its `config` (a study varies the seed between runs of one built
         diagram); default nothing (a kind without noise, or keyed when built)."""
 
+    def log_columns(self, sensor: str) -> tuple[str, ...]:
+        """The run-log columns of sensor `sensor` (`systems.runlog`), after the robot's own,
+        each a number in the units its kind's docstring says; default none."""
+        return ()
+
+    def log_port(self, sensor: BuiltSensor):
+        """(vector output port, its rows) the sensor's `log_columns` are sampled from, one
+        row a column (None when it has none): a port that costs no Python call per sample (a
+        state output port), whose rows a C++ gain picks every `runlog.LOG_PERIOD` s."""
+        return None
+
     def add_meshcat(self, builder, meshcat, sensor: BuiltSensor) -> None:
         """What Meshcat draws of the sensor (its rays, a pressed bumper); default nothing."""
 

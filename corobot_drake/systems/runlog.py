@@ -8,7 +8,8 @@ in the Context, like the rest of the run. `write_csv` writes it in the CSV forma
 simulation's contact telemetry, which no real logger has:
 
     time,left_power,right_power,left_ticks,right_ticks,x,y,yaw,
-    load_fl,load_fr,load_rl,load_rr,slip_ratio_fl,...,slip_angle_fl,...,tip_margin
+    load_fl,load_fr,load_rl,load_rr,slip_ratio_fl,...,slip_angle_fl,...,tip_margin,
+    ir_front,ir_rear,... (its sensors')
 
 - time: s. left_power, right_power: the drive's commanded power per side in [-1, 1].
 - left_ticks, right_ticks: front-left / front-right encoder counts, `ENCODER_TICKS_PER_REVOLUTION`
@@ -24,6 +25,13 @@ simulation's contact telemetry, which no real logger has:
   `stability.TipMargin` of the row's chassis pose (computed when the log is read, as the yaw
   is).
 
+Then the columns of each of the robot's sensors, kind by kind (`SensorKind.log_columns`;
+`Layout.sensor_columns`), sampled every row from the rows of its `SensorKind.log_port` (a
+state output port) that a C++ `MatrixGain` picks: no Python call per sample. The Corobot's
+IR sensors give `ir_front`, `ir_rear` (m, the latest scan's distance); a bumper
+`bumper_<name>_pressed` (1 or 0) and `bumper_<name>_force` (N); an IMU `imu_<name>_wx`, `_wy`,
+`_wz` (rad/s) and `_ax`, `_ay`, `_az` (m/s^2), in its frame.
+
 The run's largest tilt from upright (`max_tilt_deg`) is read from the same samples' chassis
 state, so nothing samples the chassis a second time while the simulation runs.
 """
@@ -34,7 +42,7 @@ import math
 from pathlib import Path
 
 import numpy as np
-from pydrake.systems.primitives import LogVectorOutput, Multiplexer, ZeroOrderHold
+from pydrake.systems.primitives import LogVectorOutput, MatrixGain, Multiplexer, ZeroOrderHold
 
 from corobot_drake import signals
 from corobot_drake.systems.contact import held_velocity_name
@@ -85,6 +93,9 @@ class Layout:
     """The CSV format of each column."""
     raw_columns: tuple
     """What the sink records every `LOG_PERIOD` s (`RAW_COLUMNS`)."""
+    sensor_columns: tuple = ()
+    """The robot's sensors' columns (`sensor_log`), after the signals' in `columns` and
+    last in `raw_columns`."""
 
     def sink_columns(self, held_when_read: bool) -> tuple[str, ...]:
         """The sink's columns: `raw_columns`, less the `held_columns` when they are made
@@ -95,9 +106,11 @@ class Layout:
 
 @functools.cache
 def layout(wheel_names: tuple[str, ...] = signals.WHEEL_NAMES,
-           encoded: tuple[str, str] = signals.CODED) -> Layout:
+           encoded: tuple[str, str] = signals.CODED,
+           sensor_columns: tuple[str, ...] = ()) -> Layout:
     """The run-log `Layout` of a robot whose wheels are `wheel_names` with encoders on
-    `encoded` (`signals.robot_signals`); the defaults: the Corobot's."""
+    `encoded` (`signals.robot_signals`) and whose sensors log `sensor_columns` (`sensor_log`);
+    the defaults: the Corobot's without sensors."""
     table = signals.robot_signals(wheel_names, encoded)
     sampled = tuple((s.port, s.log_columns) for s in table.values()
                     if s.log and s.name not in MADE_WHEN_READ)
@@ -106,16 +119,29 @@ def layout(wheel_names: tuple[str, ...] = signals.WHEEL_NAMES,
     return Layout(
         signals=table, sampled=sampled, held=held,
         held_columns=tuple(c for port, columns in sampled if port in held for c in columns),
-        columns=("time", *(c for s in table.values() for c in s.log_columns)),
-        formats=(".6f", *(s.log_format for s in table.values() for _ in s.log)),
+        columns=("time", *(c for s in table.values() for c in s.log_columns),
+                 *sensor_columns),
+        formats=(".6f", *(s.log_format for s in table.values() for _ in s.log),
+                 *(".6f" for _ in sensor_columns)),
         raw_columns=(*DriveStatus.get_fields(), "left_ticks", "right_ticks", *CHASSIS_STATE,
-                     *(c for _, columns in sampled for c in columns)))
+                     *(c for _, columns in sampled for c in columns), *sensor_columns),
+        sensor_columns=tuple(sensor_columns))
 
 
-def spec_layout(spec) -> Layout:
-    """The run-log `Layout` of a `robots.RobotSpec`."""
+def sensor_log(sensors: dict | None) -> list[tuple[tuple[str, ...], object]]:
+    """(columns, `BuiltSensor`) of each sensor with run-log columns
+    (`SensorKind.log_columns`), from {kind field: {name: BuiltSensor}} (a robot's built
+    sensors), kind by kind in their order."""
+    return [(columns, s) for by_name in (sensors or {}).values() for s in by_name.values()
+            if (columns := s.kind.log_columns(s.name))]
+
+
+def spec_layout(spec, sensors: dict | None = None) -> Layout:
+    """The run-log `Layout` of a `robots.RobotSpec` whose built sensors are `sensors`
+    ({kind field: {name: BuiltSensor}}; None: none logged)."""
     left, right = spec.encoded
-    return layout(spec.wheel_names, (spec.wheel_names[left], spec.wheel_names[right]))
+    return layout(spec.wheel_names, (spec.wheel_names[left], spec.wheel_names[right]),
+                  tuple(c for columns, _ in sensor_log(sensors) for c in columns))
 
 
 LAYOUT = layout()
@@ -155,18 +181,26 @@ CONTACT_STATES = "run_log_contact_states"
 
 
 def add_run_log(builder, name: str, chassis_state_port, drive_status_port, encoder_ticks_port,
-                sampled_ports: dict, held_when_read: bool = False, layout: Layout = LAYOUT):
+                sampled_ports: dict, held_when_read: bool = False, layout: Layout = LAYOUT,
+                sensors: dict | None = None):
     """Adds `<name>.run_log_row` (a Multiplexer of `raw_columns`: `drive_status_port`,
     `encoder_ticks_port`, `chassis_state_port` and the `sampled_ports`, {`SAMPLED` port name:
     output port}, the `HELD` ones each through a hold `<name>.run_log_<port>`) and its sink
     `<name>.run_log`; returns the sink. With `held_when_read` (a continuous plant, whose
     station has `add_contact_states`) the `HELD` ports are not sampled: their columns are made
-    when the log is read (`ContactSamples`). `layout`: the robot's (the Corobot's)."""
+    when the log is read (`ContactSamples`). `layout`: the robot's (the Corobot's);
+    `sensors`: its built sensors ({kind field: {name: BuiltSensor}}), whose
+    `layout.sensor_columns` are sampled last, each sensor's rows of its `log_port` picked by a
+    C++ gain `<name>.run_log_<kind field>_<sensor>` (no Python call per sample)."""
     held = layout.held
     sampled = [(port, columns) for port, columns in layout.sampled
                if not (held_when_read and port in held)]
+    logged = sensor_log(sensors)
+    if tuple(c for columns, _ in logged for c in columns) != layout.sensor_columns:
+        raise ValueError(f"run log {name}: the sensors' columns are not the layout's "
+                         f"{layout.sensor_columns}")
     sizes = [len(DriveStatus.get_fields()), 2, len(CHASSIS_STATE),
-             *(len(columns) for _, columns in sampled)]
+             *(len(columns) for _, columns in sampled), *(len(c) for c, _ in logged)]
     row = builder.AddNamedSystem(f"{name}.run_log_row", Multiplexer(sizes))
     for k, port in enumerate((drive_status_port, encoder_ticks_port, chassis_state_port)):
         builder.Connect(port, row.get_input_port(k))
@@ -178,6 +212,14 @@ def add_run_log(builder, name: str, chassis_state_port, drive_status_port, encod
             builder.Connect(source, hold.get_input_port())
             source = hold.get_output_port()
         builder.Connect(source, row.get_input_port(k))
+    for k, (columns, sensor) in enumerate(logged, start=3 + len(sampled)):
+        port, rows = sensor.kind.log_port(sensor)
+        pick = np.zeros((len(columns), port.size()))
+        pick[range(len(columns)), rows] = 1.0
+        gain = builder.AddNamedSystem(f"{name}.run_log_{sensor.kind.field}_{sensor.name}",
+                                      MatrixGain(pick))
+        builder.Connect(port, gain.get_input_port())
+        builder.Connect(gain.get_output_port(), row.get_input_port(k))
     sink = LogVectorOutput(row.get_output_port(), builder, LOG_PERIOD)
     sink.set_name(f"{name}.run_log")
     return sink
@@ -293,6 +335,7 @@ def rows_of(times: np.ndarray, raw: np.ndarray, tip_margin, held=None,
     for spec in layout.signals.values():
         values = made.get(spec.name)
         out += [values[key] if values is not None else column[c] for c, key in spec.log]
+    out += [column[c] for c in layout.sensor_columns]
     return np.column_stack(out)
 
 

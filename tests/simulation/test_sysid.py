@@ -27,7 +27,9 @@ def test_run_log_columns_and_ticks(tmp_path):
     robot.set_power(0.5, -0.25)
     sim.advance(1.0)
     rows = robot.run_log()
-    assert rows.shape[1] == len(runlog.COLUMNS) == 8 + 13  # and the contact telemetry
+    # The contact telemetry, then the IR sensors' columns (the robot's sensors').
+    assert len(runlog.COLUMNS) == 8 + 13
+    assert rows.shape[1] == len(runlog.COLUMNS) + 2
     np.testing.assert_allclose(np.diff(rows[:, 0]), runlog.LOG_PERIOD, atol=1e-9)
     assert rows[-1, 1:3] == pytest.approx([0.5, -0.25])
     # Ticks are floor(600 q / 2 pi) of the front wheels' angles.
@@ -46,10 +48,11 @@ def test_run_log_columns_and_ticks(tmp_path):
     lines = path.read_text().splitlines()
     assert lines[0].startswith("time,left_power,right_power,left_ticks,right_ticks,x,y,yaw,"
                                "load_fl,load_fr,load_rl,load_rr,slip_ratio_fl,")
-    assert lines[0].endswith(",slip_angle_rr,tip_margin")
+    assert lines[0].endswith(",slip_angle_rr,tip_margin,ir_front,ir_rear")
     assert len(lines) == len(rows) + 1
     # The telemetry columns are the robot's ports at the last sample (the read is now).
-    assert rows[-1, -1] == pytest.approx(robot.tip_margin_deg(), abs=0.5)
+    tip_margin = runlog.COLUMNS.index("tip_margin")
+    assert rows[-1, tip_margin] == pytest.approx(robot.tip_margin_deg(), abs=0.5)
 
 
 def test_cli_writes_log(tmp_path):
