@@ -63,7 +63,7 @@ class Illuminance:
 
 class LightSensor(LeafSystem):
     """Samples `brightening` every 1/`rate` s from 0 (discrete state: [time, lx]); output
-    `reading`, an Illuminance."""
+    `reading`, an Illuminance, and `state`, [time, lx] (what the run log samples)."""
 
     def __init__(self, rate: float):
         super().__init__()
@@ -74,6 +74,7 @@ class LightSensor(LeafSystem):
             "reading", lambda: Value(Illuminance(float("nan"), 0.0)),
             lambda c, v: v.set_value(Illuminance(*c.get_discrete_state(state).value())),
             {self.discrete_state_ticket(state)})
+        self.DeclareStateOutputPort("state", state)
 
     def _sample(self, context, discrete_state):
         t = context.get_time()
@@ -108,6 +109,13 @@ class LightSensorKind(SensorKind):
             header=messages.header(reading.time, frame), illuminance=reading.illuminance,
             variance=0.0)
 
+    def log_columns(self, sensor: str) -> tuple[str, ...]:
+        """`light_<sensor>`: lx."""
+        return (f"light_{sensor}",)
+
+    def log_port(self, sensor: BuiltSensor):
+        return sensor.system.GetOutputPort("state"), (1,)
+
     def check(self, config: LightSensorConfig) -> list[tuple[str, str]]:
         if not config.high > config.low:
             return [("high", f"must be more than low ({config.low:g} lx); got {config.high:g}")]
@@ -123,7 +131,7 @@ class LightSensorKind(SensorKind):
             return None
         system = site.builder.AddNamedSystem(f"{site.robot}.light.{name}",
                                              LightSensor(config.rate_hz))
-        return BuiltSensor(self, site.robot, name, config, system, system.get_output_port(),
+        return BuiltSensor(self, site.robot, name, config, system, system.GetOutputPort("reading"),
                            config.rate_hz, config.X_PB)
 
 
@@ -242,6 +250,9 @@ def main() -> None:
     out["reading_type"] = type(robot.reading("side", kind="light")).__name__
     out["expected"] = {"time": 0.2, "illuminance": brightening(0.2)}
     out["summary"] = sim.summary()["robots"]["corobot"]["sensors"]["light_sensors"]
+    robot.write_log(folder / "run.csv")
+    header, *rows = (folder / "run.csv").read_text().splitlines()
+    out["run_log"] = {"columns": header.split(","), "last": rows[-1].split(",")}
     out["snapshot"] = snapshots.robot_snapshot(robot, sim.time)["sensors"]["light_sensors"]
     http = TestClient(create_app(StepRunner(sim)), base_url="http://127.0.0.1")
     out["http"] = http.get("/robots/corobot/sensors/light_sensors/top").json()

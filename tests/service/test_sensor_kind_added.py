@@ -58,6 +58,20 @@ def test_every_front_end_carries_the_added_kinds_readings(added):
     assert added["http"] == added["reading"]
 
 
+def test_the_added_kinds_run_log_columns_follow_the_robots_own_in_the_csv(added):
+    """The kind declares a column per sensor (`light_<name>`, lx, from its state port): the
+    robot's CSV has them after its own columns and the IR sensors', and the row at 0.25 s
+    holds the reading read then (the sample at 0.2 s; the CSV's 6 decimals)."""
+    columns, last = added["run_log"]["columns"], added["run_log"]["last"]
+    assert columns[-4:] == ["ir_front", "ir_rear", "light_top", "light_side"]
+    assert columns.index("tip_margin") == len(columns) - 5
+    row = dict(zip(columns, last, strict=True))
+    assert float(row["time"]) == pytest.approx(0.25, abs=1e-9)
+    for name in ("top", "side"):
+        assert float(row[f"light_{name}"]) == pytest.approx(added["reading"]["illuminance"],
+                                                            abs=1e-6)
+
+
 def test_the_added_kinds_readings_are_on_its_topics_in_the_mcap_and_the_ros2_bag(added):
     """One publisher per sensor, whatever its kind: each light sensor's readings are on its
     own topic (`light/<name>`) in the MCAP file (its JSON schema) and the bag
