@@ -10,6 +10,7 @@ from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import ConstantVectorSource
 
+from corobot_drake.sensors.kind import BuiltSensor
 from corobot_drake.systems.drive import DriveStatus
 from corobot_drake.systems.odometry import CHASSIS_STATE, heading_of, rotation_rows
 from corobot_drake.systems.runlog import (
@@ -18,6 +19,7 @@ from corobot_drake.systems.runlog import (
     RAW_COLUMNS,
     SAMPLED,
     add_run_log,
+    layout,
     log_rows,
     max_tilt_deg,
     rows_of,
@@ -144,6 +146,49 @@ def test_run_log_samples_every_log_period_and_writes_csv(tmp_path):
     assert lines[0] == ",".join(COLUMNS)
     assert lines[-1] == ("0.100000,1,1,600,600,0.500000,0.250000,-1.000000,"
                          "10,11,12,13,20,21,22,23,30,31,32,33,40")
+
+
+class _RangeKind:
+    """A sensor kind's run-log part: two columns, rows 2 and 0 of its state port."""
+
+    field = "rangers"
+
+    def log_columns(self, sensor):
+        return (f"range_{sensor}_near", f"range_{sensor}_far")
+
+    def log_port(self, sensor):
+        return sensor.system.get_output_port(), (2, 0)
+
+
+def test_a_sensors_columns_are_its_state_rows_picked_after_the_robots_own(tmp_path):
+    """A sensor's `log_columns` follow the robot's, each row of its `log_port` picked by the
+    sensor's gain `<robot>.run_log_<field>_<name>`, in the rows and the CSV."""
+    builder = DiagramBuilder()
+    pose = builder.AddSystem(ConstantVectorSource(chassis_state(tilted(0))))
+    status = builder.AddSystem(ConstantVectorSource(drive_status(left=0.5, right=0.5)))
+    ticks = builder.AddSystem(ConstantVectorSource([0.0, 0.0]))
+    telemetry = {name: builder.AddSystem(ConstantVectorSource(np.zeros(len(columns))))
+                 .get_output_port() for name, columns in SAMPLED}
+    state = builder.AddSystem(ConstantVectorSource([0.25, 9.0, 0.5]))
+    sensor = BuiltSensor(_RangeKind(), "robot", "aft", None, state, None, 10.0)
+    sensors = {"rangers": {"aft": sensor}}
+    robot_layout = layout(sensor_columns=("range_aft_near", "range_aft_far"))
+    sink = add_run_log(builder, "robot", pose.get_output_port(), status.get_output_port(),
+                       ticks.get_output_port(), telemetry, layout=robot_layout, sensors=sensors)
+    simulator = Simulator(builder.Build())
+    simulator.AdvanceTo(0.02)
+    rows = log_rows(sink, simulator.get_context(), FlatMargin(), layout=robot_layout)
+    assert robot_layout.columns == (*COLUMNS, "range_aft_near", "range_aft_far")
+    np.testing.assert_array_equal(rows[:, -2:], [[0.5, 0.25]] * 3)
+    path = tmp_path / "log.csv"
+    write_csv(rows, path, robot_layout)
+    header, *lines = path.read_text().splitlines()
+    assert header.endswith(",tip_margin,range_aft_near,range_aft_far")
+    assert lines[-1].endswith(",0.500000,0.250000")
+    with pytest.raises(ValueError, match="not the layout's"):
+        add_run_log(DiagramBuilder(), "robot", pose.get_output_port(),
+                    status.get_output_port(), ticks.get_output_port(), telemetry,
+                    sensors=sensors)
 
 
 def test_held_when_read_the_held_ports_are_not_sampled_but_the_contact_states_are():
