@@ -15,7 +15,6 @@ import dataclasses as dc
 import logging
 import math
 
-import numpy as np
 from pydrake.geometry import (
     Box,
     Capsule,
@@ -30,10 +29,9 @@ from pydrake.geometry import (
     SceneGraph,
     Sphere,
 )
-from pydrake.math import RigidTransform, RollPitchYaw
+from pydrake.math import RigidTransform
 
 from corobot_drake.config import schema as sc
-from corobot_drake.model import dimensions as dim
 from corobot_drake.robots import robot_spec
 
 GRAVITY = 9.81
@@ -61,17 +59,9 @@ class Problem:
 
 
 def robot_shapes(spec=None) -> list[tuple[str, object, RigidTransform]]:
-    """A robot's collision shapes (name, shape, pose in its base frame): `spec`'s
-    (`robots.RobotSpec.shapes`, measured from its model), or the Corobot's, as `model/sdf.py`
-    builds them from `dimensions` (None, or the spec of its generated model)."""
-    if spec is not None and not spec.generated:
-        return list(spec.shapes)
-    shapes = [(name, Box(*part.size), RigidTransform(part.center))
-              for name, part in (("chassis", dim.CHASSIS), ("platform", dim.PLATFORM))]
-    for wheel in dim.WHEEL_NAMES:  # cylinders along the axle, +y
-        shapes.append((f"{wheel} tyre", Cylinder(dim.WHEEL_RADIUS, dim.WHEEL_WIDTH),
-                       RigidTransform(RollPitchYaw(np.pi / 2, 0, 0), dim.wheel_center(wheel))))
-    return shapes
+    """A robot's collision shapes (name, shape, pose in its base frame) as measured from its
+    model (`robots.RobotSpec.shapes`): `spec`'s, or the Corobot's (None)."""
+    return list((spec or robot_spec()).shapes)
 
 
 def body_shape(shape):

@@ -37,9 +37,8 @@ from corobot_drake.commands import (  # noqa: F401 (the scenario's commands, `sc
     Wait,
 )
 from corobot_drake.limits import OneOf, Range, bounded
-from corobot_drake.model import dimensions as dim
 from corobot_drake.model.sdf import VISUALS, WheelContact
-from corobot_drake.robots import ROBOTS
+from corobot_drake.robots import ROBOTS, corobot
 from corobot_drake.sensors.registry import KINDS
 
 # --- shapes -----------------------------------------------------------------------------
@@ -110,11 +109,15 @@ Shape = Union[Box, Sphere, Cylinder, Capsule, Ellipsoid, Mesh]  # noqa: UP007
 # --- world ------------------------------------------------------------------------------
 
 
+GROUND_FRICTION = 0.5
+"""The ground's Coulomb friction (the chapter's world)."""
+
+
 @dc.dataclass
 class Ground:
     """The ground: a rigid hydroelastic half-space at z = 0."""
 
-    friction: float = bounded(dim.GROUND_FRICTION, lim.FRICTION)
+    friction: float = bounded(GROUND_FRICTION, lim.FRICTION)
     color: list[float] = bounded(lambda: [0.45, 0.5, 0.4, 1.0], lim.COLOR, size=4)
 
 
@@ -178,28 +181,34 @@ class World:
 # --- robots -----------------------------------------------------------------------------
 
 
+WHEEL_HOLD_GAIN = 10.0
+"""1/s: the default `Drive.hold_gain` (every robot's: the drive law's, not a robot's figure)."""
+
+
 @dc.dataclass
 class Drive:
-    """Drive parameters of one robot."""
+    """Drive parameters of one robot; the defaults are the Corobot's (its robot file's)."""
 
-    motor_torque_scaling: float = bounded(dim.MOTOR_TORQUE_SCALING, lim.AXLE_SPEED)
+    motor_torque_scaling: float = bounded(corobot.drive("motor_torque_scaling"), lim.AXLE_SPEED)
     """Axle speed (rad/s) at power 1."""
-    slew_rate: float = bounded(dim.SLEW_RATE, Range(0.0, 1e4, low_open=True, unit="rad/s^2"))
+    slew_rate: float = bounded(corobot.drive("slew_rate"),
+                               Range(0.0, 1e4, low_open=True, unit="rad/s^2"))
     """rad/s^2: how fast the commanded axle speed may change."""
-    max_axle_speed: float = bounded(dim.MAX_AXLE_SPEED, lim.AXLE_SPEED)
+    max_axle_speed: float = bounded(corobot.drive("max_axle_speed"), lim.AXLE_SPEED)
     """rad/s: set_speed clamps to +-this."""
-    control_period: float = bounded(dim.CONTROL_PERIOD, lim.PERIOD)
+    control_period: float = bounded(corobot.drive("control_period"), lim.PERIOD)
     """s: the drive controller's update period."""
-    hold_gain: float = bounded(dim.WHEEL_HOLD_GAIN, Range(
+    hold_gain: float = bounded(WHEEL_HOLD_GAIN, Range(
         0.0, 50.0, unit="1/s", why="0: no hold"))
     """1/s: at zero command each resting wheel is held at the angle it stopped at, as a geared
     motor's gearbox holds it (`systems.drive.DriveController`); 0 leaves the servo only damping
     and the robot rolls up to ~2 mm into a facet of its tyres' mesh (docs/tuning.md, "At rest")."""
-    effective_wheel_radius: float = bounded(dim.WHEEL_RADIUS, Range(
+    effective_wheel_radius: float = bounded(corobot.wheels("radius"), Range(
         0.0, 10.0, low_open=True, unit="m"))
     """m: the rolling radius the dead-reckoning odometry turns encoder ticks into distance with
     (`tools/calibrate_odometry.py` identifies it; default the nominal wheel radius)."""
-    effective_track_width: float = bounded(dim.TRACK, Range(0.0, 40.0, low_open=True, unit="m"))
+    effective_track_width: float = bounded(corobot.wheels("track"),
+                                           Range(0.0, 40.0, low_open=True, unit="m"))
     """m: the track width the odometry turns the left-right wheel difference into yaw with; a
     skid-steer robot's is wider than its geometric one (default the geometric track)."""
 
@@ -268,7 +277,7 @@ class Robot:
     """Initial chassis spatial velocity in the world [wx, wy, wz, vx, vy, vz] (rad/s, m/s)."""
     wheel_angles: list[float] = bounded(lambda: [0.0] * 4, Range(-1e6, 1e6, unit="rad"))
     """Initial axle angles (rad), one per wheel in the robot's wheel order
-    (`RobotSpec.wheels`; the Corobot's `dimensions.WHEEL_NAMES`): the encoders start here."""
+    (`RobotSpec.wheels`): the encoders start here."""
     wheel_speeds: list[float] = bounded(lambda: [0.0] * 4, lim.AXLE_SPEED_RANGE)
     """Initial axle speeds (rad/s, same order); the drive's commanded axle speeds start at the
     encoded wheels' (the first left and right, `RobotSpec.encoded`; the Corobot's front ones: a

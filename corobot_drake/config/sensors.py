@@ -15,18 +15,23 @@ of an IR sensor looks along its +x; a camera's is Drake's (+z forward, +x right,
 The values are checked by the loader (`config/validate.py`), once; the systems trust them.
 """
 
+import copy
 import dataclasses as dc
-import math
+import functools
 
 from pydrake.common.schema import Transform
+from pydrake.common.yaml import yaml_load_typed
 from pydrake.systems.sensors import CameraConfig
 
 from corobot_drake.config.poses import mount
 from corobot_drake.limits import RATE, OneOf, Range, bounded
-from corobot_drake.model import dimensions as dim
 from corobot_drake.model.ir_models import MODELS as IR_MODELS
+from corobot_drake.robots import corobot
 
 # --- IR distance sensors (the scenario's `robots.<name>.ir_sensors.<sensor>`) ----------------
+
+_IR = corobot.sensor("ir_sensors", "front")
+"""The Corobot's front IR sensor (its robot file's): an IR sensor's defaults."""
 
 
 @dc.dataclass
@@ -34,15 +39,15 @@ class IrSensorConfig:
     """One IR distance sensor on a robot."""
 
     X_PB: Transform = dc.field(
-        default_factory=lambda: mount(dim.FRONT_IR.position, (0.0, 0.0, 0.0)))
+        default_factory=lambda: mount(*corobot.mount_of("ir_sensors", "front")))
     """The sensor frame S (looking along its +x) in `base_frame` (default `chassis`: origin
     on the ground midway between the axles, +x forward), as the camera's `X_PB`."""
-    samples: int = bounded(dim.IR_SAMPLES, Range(2, 64, why="rays per fan"))
+    samples: int = bounded(_IR["samples"], Range(2, 64, why="rays per fan"))
     """Rays per fan of the cross (one horizontal fan, one vertical), at least 2."""
-    dispersion_cone_angle: float = bounded(dim.IR_DISPERSION_CONE_ANGLE_DEG,
+    dispersion_cone_angle: float = bounded(_IR["dispersion_cone_angle"],
                                            Range(0.0, 180.0, high_open=True, unit="deg"))
     """Degrees: each fan spreads its rays evenly over this angle."""
-    maximum_range: float = bounded(dim.IR_MAXIMUM_RANGE,
+    maximum_range: float = bounded(_IR["maximum_range"],
                                    Range(0.0, 100.0, low_open=True, unit="m"))
     """m: the reading when nothing is hit (0.762 m)."""
     scan_rate_hz: float = bounded(20.0, RATE)
@@ -61,9 +66,9 @@ class IrSensorConfig:
 
 
 def default_ir_sensors() -> dict[str, IrSensorConfig]:
-    """The Corobot's two sensors in their places: `front` looking forward, `rear` back."""
-    return {name: IrSensorConfig(X_PB=mount(m.position, (0.0, 0.0, math.degrees(m.yaw))))
-            for name, m in (("front", dim.FRONT_IR), ("rear", dim.REAR_IR))}
+    """The Corobot's two sensors, as its robot file says: `front` looking forward, `rear`
+    back."""
+    return copy.deepcopy(_corobot_sensors("ir_sensors", IrSensorConfig))
 
 
 # --- the cameras (the scenario's `robots.<name>.cameras.<camera>`, Drake's CameraConfig) -----
@@ -95,27 +100,24 @@ and the output at 0.33000000000000007 never came (its frame was lost)."""
 
 
 def default_camera_config(name: str = FRONT_CAMERA) -> CameraConfig:
-    """The Corobot's camera: 320 x 240, 30 deg vertical fov, 30 Hz, on the chassis at
-    `dimensions.CAMERA`, looking forward; every robot camera renders with one engine
+    """The Corobot's camera, as its robot file says (320 x 240, 30 deg vertical fov, 30 Hz,
+    on the chassis' front face looking forward); every robot camera renders with one engine
     (`RENDERER_NAME`). `name`: its map key (kept in `CameraConfig.name` for a reader of the
     YAML; the key names the camera)."""
-    roll, _, yaw = CAMERA_ROTATION_RPY_DEG
-    return CameraConfig(
-        width=dim.CAMERA_WIDTH,
-        height=dim.CAMERA_HEIGHT,
-        focal=CameraConfig.FovDegrees(y=dim.CAMERA_FOV_Y_DEG),
-        clipping_near=0.01,  # in front of the hollow lens barrel (8 mm) and its glass (0.5 mm)
-        clipping_far=100.0,
-        X_PB=mount(dim.CAMERA.position, (roll, 0.0, yaw + math.degrees(dim.CAMERA.yaw))),
-        renderer_name=RENDERER_NAME,
-        name=name,
-        fps=dim.CAMERA_FPS,
-        capture_offset=CAPTURE_OFFSET,
-        output_delay=dim.CAMERA_OUTPUT_DELAY,
-        rgb=True,
-        depth=False,
-        label=False,
-    )
+    config = copy.deepcopy(_corobot_sensors("cameras", CameraConfig)[FRONT_CAMERA])
+    config.name = name
+    return config
+
+
+@functools.cache
+def _corobot_sensors(field: str, config_type) -> dict:
+    """{name: config} of one kind of sensor in the Corobot's robot file (read once; copy a
+    config before changing it)."""
+    schema = dc.make_dataclass("CorobotSensors", [
+        (field, dict[str, config_type], dc.field(default_factory=dict))])
+    loaded = yaml_load_typed(schema=schema, filename=str(corobot.FILE),
+                             allow_yaml_with_no_schema=True)
+    return getattr(loaded, field)
 
 
 def default_cameras() -> dict[str, CameraConfig]:

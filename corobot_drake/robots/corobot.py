@@ -1,50 +1,55 @@
-"""The Corobot's robot file, written from `model/dimensions.py`: `robot_file_text()`.
+"""The Corobot, the default robot, as its robot file says: the figures a default needs when
+no robot is at hand.
 
-`models/corobot/robot.yaml` is this module's output (a test keeps them equal); regenerate it
-with `python -m corobot_drake.robots.corobot > models/corobot/robot.yaml`. Every figure is
-written exactly (Drake's YAML writes a float's shortest round trip), so the Corobot's
-RobotSpec is `dimensions.py`'s to the bit.
+`models/corobot/robot.yaml` and the model it names (`models/corobot.sdf`) are the one place
+the Corobot's figures live. The scenario schema's defaults (the drive, the IR sensors, the
+camera) are the Corobot's, so they read the file untyped (`figures()`: the schema can't need
+itself); everything else reads the measured `spec()` (`robots.robot_spec`), as it reads any
+robot's. What the model is generated from (its CAD) is `model/`'s alone.
 """
 
-from pydrake.common.yaml import yaml_dump_typed
+from __future__ import annotations
 
-from corobot_drake.model import dimensions as dim
-from corobot_drake.model.sdf import WheelContact
-from corobot_drake.robots.file import RobotDrive, RobotFile, Wheels
-from corobot_drake.sensors.registry import KINDS
+import functools
 
-HEADER = """\
-# The Corobot: the CoroWare robot of the book's chapter, a four-wheel skid steer.
-# Its model is generated from corobot_drake/model/dimensions.py (tools/make_model.py);
-# this file is that module's figures, written exactly (a test keeps them in step).
-"""
+from pydrake.common.yaml import yaml_load
+
+from corobot_drake.resources import MODELS_DIR
+
+FILE = MODELS_DIR / "corobot" / "robot.yaml"
+"""The Corobot's robot file."""
 
 
-def robot_file() -> RobotFile:
-    """The Corobot as a robot file: its generated model, its wheels' exact figures, its
-    drive and motors, and its default sensors (each kind's `defaults`)."""
-    contact = WheelContact()
-    robot = RobotFile(
-        model="../corobot.sdf", base="chassis",
-        wheels=Wheels(left=["front_left_axle", "rear_left_axle"],
-                      right=["front_right_axle", "rear_right_axle"],
-                      radius=dim.WHEEL_RADIUS, track=dim.TRACK,
-                      wheelbase=2 * dim.HALF_WHEELBASE),
-        drive=RobotDrive(motor_torque_scaling=dim.MOTOR_TORQUE_SCALING,
-                         max_axle_speed=dim.MAX_AXLE_SPEED, slew_rate=dim.SLEW_RATE,
-                         torque_limit=contact.effort_limit,
-                         encoder_ticks_per_revolution=dim.ENCODER_TICKS_PER_REVOLUTION,
-                         control_period=dim.CONTROL_PERIOD,
-                         servo_damping=contact.servo_damping))
-    for kind in KINDS:
-        setattr(robot, kind.field, kind.defaults())
-    return robot
+@functools.cache
+def figures() -> dict:
+    """The Corobot's robot file as plain YAML (maps, lists, numbers: each figure exactly as
+    written; a tagged value is a map with its `_tag`)."""
+    return yaml_load(filename=str(FILE))
 
 
-def robot_file_text() -> str:
-    """`models/corobot/robot.yaml`'s text."""
-    return HEADER + yaml_dump_typed(robot_file(), schema=RobotFile)
+def spec():
+    """The Corobot's RobotSpec (measured once from its robot file and model)."""
+    from corobot_drake.robots import robot_spec
+
+    return robot_spec("corobot")
 
 
-if __name__ == "__main__":
-    print(robot_file_text(), end="")
+def drive(field: str):
+    """The robot file's `drive.<field>` (a scenario `Drive` default)."""
+    return figures()["drive"][field]
+
+
+def wheels(field: str) -> float:
+    """The robot file's `wheels.<field>` (radius, track, wheelbase), m."""
+    return figures()["wheels"][field]
+
+
+def sensor(kind_field: str, name: str) -> dict:
+    """The robot file's sensor `name` of a kind (`ir_sensors`, `cameras`, ...), plain YAML."""
+    return figures()[kind_field][name]
+
+
+def mount_of(kind_field: str, name: str) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """(translation m, roll-pitch-yaw deg) of a sensor's `X_PB` in the robot file."""
+    X_PB = sensor(kind_field, name)["X_PB"]
+    return tuple(X_PB["translation"]), tuple(X_PB["rotation"]["deg"])

@@ -142,7 +142,7 @@ def test_a_robot_is_measured_again_when_its_model_changes(tmp_path):
 
 
 def test_the_shipped_corobot_robot_file_is_its_generators_output():
-    from corobot_drake.resources import MODELS_DIR
-    from corobot_drake.robots.corobot import robot_file_text
+    from corobot_drake.model.robot_file import robot_file_text
+    from corobot_drake.robots.corobot import FILE
 
-    assert (MODELS_DIR / "corobot" / "robot.yaml").read_text() == robot_file_text()
+    assert FILE.read_text() == robot_file_text()
