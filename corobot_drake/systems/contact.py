@@ -42,7 +42,7 @@ from pydrake.multibody.plant import ContactResults
 from pydrake.systems.framework import LeafSystem, ValueProducer
 from pydrake.systems.primitives import MatrixGain, ZeroOrderHold
 
-from corobot_drake.model import dimensions as dim
+from corobot_drake.robots import corobot
 
 SLIP_SPEED_FLOOR = 0.01
 """m/s: the least denominator of the slip ratio and angle. Below 1 cm/s (the slowest a
@@ -156,7 +156,7 @@ class WheelContacts(LeafSystem):
     """
 
     def __init__(self, plant, wheels, momentum: RobotMomentum | None = None,
-                 wheel_radius: float = dim.WHEEL_RADIUS):
+                 wheel_radius: float = corobot.wheels("radius")):
         super().__init__()
         self._wheels = [int(w.index()) for w in wheels]
         n = self._n = len(wheels)
@@ -291,7 +291,7 @@ def add_chassis_velocities(builder, name: str, plant, chassis, step: float):
 
 def add_wheel_contacts(builder, name: str, plant, wheels, chassis_pose_port, wheel_state_port,
                        chassis, continuous_step: float = 0.0,
-                       wheel_radius: float = dim.WHEEL_RADIUS):
+                       wheel_radius: float = corobot.wheels("radius")):
     """Adds `<name>.wheel_contacts` fed by the plant, `chassis_pose_port` and
     `wheel_state_port`; on a continuous plant (its step `continuous_step` > 0,
     `scenario.continuous_step`), its loads from the robot's momentum balance (its `chassis`

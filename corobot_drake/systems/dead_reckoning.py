@@ -23,7 +23,7 @@ from pydrake.systems.framework import BasicVector, Diagram, DiagramBuilder, Leaf
 from pydrake.systems.primitives import AffineSystem
 
 from corobot_drake.config.scenario import Drive
-from corobot_drake.model import dimensions as dim
+from corobot_drake.robots import corobot
 from corobot_drake.systems.odometry import heading_of
 
 HISTORY = 8
@@ -90,7 +90,7 @@ class PoseIntegrator(LeafSystem):
     """
 
     def __init__(self, drive: Drive, fold_period: float, length: int = HISTORY,
-                 ticks_per_revolution: int = dim.ENCODER_TICKS_PER_REVOLUTION):
+                 ticks_per_revolution: int = corobot.drive("encoder_ticks_per_revolution")):
         super().__init__()
         self._metres_per_tick = 2 * math.pi * drive.effective_wheel_radius / ticks_per_revolution
         self._track, self._length = drive.effective_track_width, length
@@ -186,7 +186,7 @@ class DeadReckoning(Diagram):
     """
 
     def __init__(self, drive: Drive, period: float,
-                 ticks_per_revolution: int = dim.ENCODER_TICKS_PER_REVOLUTION):
+                 ticks_per_revolution: int = corobot.drive("encoder_ticks_per_revolution")):
         super().__init__()
         builder = DiagramBuilder()
         history = builder.AddNamedSystem("encoder_history", encoder_history(period))

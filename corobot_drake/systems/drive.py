@@ -24,7 +24,7 @@ from corobot_drake.config.scenario import (
     SetVelocity,
     Wait,
 )
-from corobot_drake.model import dimensions as dim
+from corobot_drake.robots import corobot
 from corobot_drake.systems.shared_state import SharedState
 
 
@@ -461,8 +461,7 @@ class DriveController(LeafSystem):
         - axle_speed
 
     Input `request` (DriveRequest, abstract); input `wheel_state` [q, v] of the robot's n
-    wheels' axles in its wheel order (`RobotSpec.wheels`; the Corobot's
-    `dimensions.WHEEL_NAMES`), rad, rad/s.
+    wheels' axles in its wheel order (`RobotSpec.wheels`), rad, rad/s.
     Output `desired_state` [q_d, v_d] for the plant's desired-state input (actuator order;
     q_d = 0: the servo has kp = 0 and only v_d matters). v_d is the slewed axle speed of the
     wheel's side, and for a wheel at rest on a side commanded to 0 the hold's correction.
@@ -492,7 +491,7 @@ class DriveController(LeafSystem):
     """
 
     def __init__(self, drive: Drive, sides: tuple[int, ...] = (1, -1, 1, -1),
-                 wheel_radius: float = dim.WHEEL_RADIUS):
+                 wheel_radius: float = corobot.wheels("radius")):
         """`sides`: each wheel's side, +1 left or -1 right, in wheel order (the Corobot's by
         default: `RobotSpec.sides`); `wheel_radius` (m) turns rim speeds to axle speeds."""
         super().__init__()

@@ -42,7 +42,7 @@ from corobot_drake.config.scenario import (
     SetPose,
     SetPower,
 )
-from corobot_drake.model import dimensions as dim
+from corobot_drake.robots import corobot
 from corobot_drake.systems.drive import CommandStatus, DriveRequest
 from corobot_drake.systems.shared_state import SharedState
 
@@ -84,9 +84,11 @@ TURN_STILL_RATE = 0.01
 """rad/s: at rest below this."""
 STILL_TIME = 0.05
 """s in tolerance and at rest before a closed-loop command succeeds (3 frames of 1/60 s)."""
-SPIN_YAW_PER_RIM_SPEED = dim.HALF_TRACK / (dim.HALF_WHEELBASE**2 + dim.HALF_TRACK**2)
+SPIN_YAW_PER_RIM_SPEED = corobot.wheels("track") / 2 / (
+    (corobot.wheels("wheelbase") / 2) ** 2 + (corobot.wheels("track") / 2) ** 2)
 """1/m: a skid-steer spin's yaw rate per rim speed with isotropic Coulomb friction,
-b / (a^2 + b^2) (DRAKE_NOTES: Drake matches it within 2%)."""
+b / (a^2 + b^2) of the Corobot's half track b and half wheelbase a (its robot file's;
+`RobotSpec.spin_yaw_per_rim_speed` of any robot; DRAKE_NOTES: Drake matches it within 2%)."""
 
 # SetPose.
 POSE_LANDED_DISTANCE = 0.005
@@ -173,7 +175,7 @@ class MotionCommands(LeafSystem):
     ended). Abstract state `MotionState`, updated every `drive.control_period` s.
     """
 
-    def __init__(self, drive: Drive, motion: Motion, wheel_radius: float = dim.WHEEL_RADIUS,
+    def __init__(self, drive: Drive, motion: Motion, wheel_radius: float = corobot.wheels("radius"),
                  spin_yaw_per_rim_speed: float = SPIN_YAW_PER_RIM_SPEED):
         """`wheel_radius` (m) and `spin_yaw_per_rim_speed` (1/m): the robot's
         (`RobotSpec`; the Corobot's by default)."""

@@ -23,7 +23,7 @@ from pydrake.systems.framework import LeafSystem, ValueProducer
 from pydrake.systems.primitives import Gain, MatrixGain
 from pydrake.systems.sensors import RotaryEncoders
 
-from corobot_drake.model import dimensions as dim
+from corobot_drake.robots import corobot
 from corobot_drake.systems.drive import DriveStatus
 
 CHASSIS_STATE = ("qw", "qx", "qy", "qz", "x", "y", "z")
@@ -31,12 +31,13 @@ CHASSIS_STATE = ("qw", "qx", "qy", "qz", "x", "y", "z")
 R_WB (w first, not normalized by every integrator), then the origin in the world, m."""
 
 ENCODED_WHEELS = ("front_left", "front_right")
-"""Wheels with an encoder (indices 0 and 1 in `dimensions.WHEEL_NAMES`)."""
+"""The Corobot's wheels with an encoder (indices 0 and 1 of its wheels,
+`RobotSpec.encoded`)."""
 
 
 def add_wheel_encoders(builder, name: str, wheel_state_port, wheels: int = 4,
                        encoded: tuple[int, int] = (0, 1),
-                       ticks: int = dim.ENCODER_TICKS_PER_REVOLUTION):
+                       ticks: int = corobot.drive("encoder_ticks_per_revolution")):
     """Adds `<name>.encoders` (RotaryEncoders, radians quantized to `ticks` per revolution)
     and `<name>.encoder_ticks` (gain to ticks) fed by `wheel_state_port` ([q, v] of the
     `wheels` axles); returns the ticks output port of the `encoded` wheels [left, right]
@@ -286,19 +287,21 @@ class DriveStateReporter(LeafSystem):
         - drive_state
 
     Inputs: `drive_status` (5, `drive.DriveStatus`, from the DriveController), `axle_speed`
-    (n, rad/s, wheel order: the Corobot's `dimensions.WHEEL_NAMES`), `encoder_ticks` (2, the
+    (n, rad/s, the robot's wheel order, `RobotSpec.wheels`), `encoder_ticks` (2, the
     encoded left and right wheels: the Corobot's front left and front
     right, rounded to whole ticks here), `position` (3, m, world frame), `heading` (1, rad).
     Output `drive_state` (abstract DriveState; its time stamp is the context time, s).
     `power_scaling_factor` is the drive's MotorTorqueScaling.
     """
 
-    def __init__(self, power_scaling_factor: float, wheel_names=dim.WHEEL_NAMES,
+    def __init__(self, power_scaling_factor: float, wheel_names=None,
                  sides=(1, -1, 1, -1), encoded: tuple[int, int] = (0, 1),
-                 track: float = dim.TRACK):
+                 track: float = corobot.wheels("track")):
         """`wheel_names`, `sides` (+1 left, -1 right) and the `encoded` wheels' indices in
         wheel order, and the `track` (m): the robot's (`RobotSpec`; the Corobot's)."""
         super().__init__()
+        if wheel_names is None:
+            wheel_names = corobot.spec().wheel_names
         self._scaling = power_scaling_factor
         self._names, self._track = tuple(wheel_names), track
         self._left = tuple(s > 0 for s in sides)

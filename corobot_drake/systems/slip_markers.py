@@ -20,7 +20,7 @@ from pydrake.geometry import Meshcat, Rgba, Sphere
 from pydrake.math import RigidTransform
 from pydrake.systems.framework import LeafSystem
 
-from corobot_drake.model import dimensions as dim
+from corobot_drake.robots import corobot
 
 MARKER_PERIOD = 0.1
 """s between redraws: 10 Hz is plenty for the eye, and eight Meshcat messages a redraw."""
@@ -68,9 +68,8 @@ class SlipMarkers(LeafSystem):
         self.path = path
         self._record = record
         if spec is None:
-            wheels = [(n, dim.wheel_center(n), dim.WHEEL_WIDTH) for n in dim.WHEEL_NAMES]
-        else:
-            wheels = [(w.short, w.center, w.width) for w in spec.wheels]
+            spec = corobot.spec()
+        wheels = [(w.short, w.center, w.width) for w in spec.wheels]
         self._names = [name for name, _, _ in wheels]
         self._pose = self.DeclareAbstractInputPort("chassis_pose",
                                                    AbstractValue.Make(RigidTransform()))

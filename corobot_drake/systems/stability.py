@@ -27,7 +27,7 @@ from pydrake.common.value import AbstractValue
 from pydrake.math import RigidTransform
 from pydrake.systems.framework import LeafSystem
 
-from corobot_drake.model import dimensions as dim
+from corobot_drake.robots import corobot
 
 
 class TipMargin(LeafSystem):
@@ -53,7 +53,7 @@ class TipMargin(LeafSystem):
     places the support and the CoM, and the margin is a few sums in C.
     """
 
-    def __init__(self, com_C, wheel_centers_C: dict, wheel_radius: float = dim.WHEEL_RADIUS,
+    def __init__(self, com_C, wheel_centers_C: dict, wheel_radius: float = corobot.wheels("radius"),
                  casters_C=()):
         """`wheel_centers_C`: {wheel name: centre}; `casters_C`: the (x, y) of each caster's
         contact (m, C): the support's edges are the outermost of both."""
@@ -73,7 +73,7 @@ class TipMargin(LeafSystem):
 
     @classmethod
     def of_robot(cls, plant, model_instance, chassis, wheels: dict, wheel_radius: float =
-                 dim.WHEEL_RADIUS, casters_C=()):
+                 corobot.wheels("radius"), casters_C=()):
         """The TipMargin of the robot `model_instance` of the finalized `plant` (its bodies'
         default masses and the default poses of `chassis` and the `wheels`, {name: body});
         `casters_C` as the constructor's."""
@@ -117,7 +117,7 @@ class TipMargin(LeafSystem):
 
 
 def add_tip_margin(builder, name: str, plant, model_instance, chassis, wheels: dict,
-                   chassis_pose_port, wheel_radius: float = dim.WHEEL_RADIUS, casters_C=()):
+                   chassis_pose_port, wheel_radius: float = corobot.wheels("radius"), casters_C=()):
     """Adds `<name>.tip_margin` (`TipMargin.of_robot`) fed by `chassis_pose_port`; returns
     it."""
     system = builder.AddNamedSystem(f"{name}.tip_margin", TipMargin.of_robot(
