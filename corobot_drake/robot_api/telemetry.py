@@ -70,10 +70,16 @@ class RobotTelemetry:
         log = sim._run_log_sink(self.name).FindLog(sim.context)
         return max(sim._max_tilt_moved_out[self.name], max_tilt_deg(log.data().T))
 
+    @property
+    def log_columns(self) -> tuple[str, ...]:
+        """The names of the run log's columns (`run_log`'s and the CSV's): time, the signals'
+        (its wheels' among them), then its sensors' (`SensorKind.log_columns`)."""
+        return self._layout.columns
+
     def run_log(self):
-        """The run log so far (numpy rows; columns its `runlog.Layout`'s: time, left_power,
-        right_power, left_ticks, right_ticks, x, y, yaw), sampled every `runlog.LOG_PERIOD` s;
-        with `Simulation.run_log_window`, only its last part."""
+        """The run log so far (numpy rows, columns `log_columns`: time, left_power,
+        right_power, ..., then the sensors'), sampled every `runlog.LOG_PERIOD` s; with
+        `Simulation.run_log_window`, only its last part."""
         sim = self._sim
         rows = log_rows(sim._run_log_sink(self.name), sim.context, self._tip_margin(),
                         sim._contact_samples, self.name, self._layout)

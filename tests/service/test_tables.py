@@ -24,7 +24,7 @@ from corobot_drake.resources import DEFAULT_SCENARIO
 from corobot_drake.serving import snapshots
 from corobot_drake.serving.webapp import create_app
 from corobot_drake.simulation import Simulation, quiet_drake_warnings
-from corobot_drake.systems.runlog import COLUMNS, HELD_PERIOD, MADE_WHEN_READ
+from corobot_drake.systems.runlog import HELD_PERIOD, MADE_WHEN_READ
 
 quiet_drake_warnings()
 
@@ -253,9 +253,9 @@ def _at(messages: list, t: float):
     return message
 
 
-def _row(rows: np.ndarray, t: float) -> dict:
+def _row(rows: np.ndarray, columns: tuple, t: float) -> dict:
     (row,) = rows[np.isclose(rows[:, 0], t, atol=1e-9)]
-    return dict(zip(COLUMNS, row, strict=True))
+    return dict(zip(columns, row, strict=True))
 
 
 def _same(read, expected, place: str, what: str) -> None:
@@ -283,7 +283,7 @@ def _stamp(spec: signals.Signal, topic: str, key: str, t: float, snapshot: dict)
 def _recorded(spec, value, keys, t, snapshot, topics, ros2) -> list:
     """[(front end, place, value read)] of `spec` in the run log, MCAP and ROS 2 at `t`."""
     out = []
-    row = _row(topics["__rows__"], t + (HELD_PERIOD / 2 if spec.costly else 0.0))
+    row = _row(*topics["__rows__"], t + (HELD_PERIOD / 2 if spec.costly else 0.0))
     if spec.log:
         read = {key: row[column] for column, key in spec.log}
         place = "|log" if spec.name in MADE_WHEN_READ else "log"
@@ -315,7 +315,8 @@ def test_every_signal_reads_the_same_in_every_front_end(looked):
     period later, the messages stamped with the look), which a command at the look moves
     from the live value: its recorded places agree with each other."""
     sim, looks, topics, ros2 = looked
-    topics = {**topics, "__rows__": sim.robot(ROBOT).run_log()}
+    robot = sim.robot(ROBOT)
+    topics = {**topics, "__rows__": (robot.run_log(), robot.log_columns)}
     carried = {"summary": set(), "http": set(), "log": set(), "mcap": set(), "ros2": set()}
     for t, (live, summary, snapshot) in looks.items():
         for spec in signals.SIGNALS.values():
@@ -373,7 +374,8 @@ def test_a_signal_added_to_the_table_appears_in_every_front_end():
     live = out.pop("live")
     assert live == pytest.approx(12.6 - 0.5 * 0.3, abs=1e-12)  # the system's value at LOOK
     assert out.pop("change_threshold") == 0.01
-    assert out.pop("csv_header")[-1] == "battery"
+    header = out.pop("csv_header")  # the signals' columns, then the sensors' (the IR's)
+    assert header[header.index("battery"):] == ["battery", "ir_front", "ir_rear"]
     assert out.pop("ros2_type") == "corobot_interfaces/msg/Battery"
     assert out == dict.fromkeys(("summary", "snapshot", "http", "run_log", "mcap", "ros2"),
                                 live)
