@@ -166,7 +166,10 @@ class LaserScan:
 SCAN_INDEX, SCAN_TIME = 0, 1
 POSE = slice(2, 14)
 """X_WS at the scan, its 3x4 matrix row by row."""
-RANGES_START = 14
+NEAREST, NEAREST_BEARING = 14, 15
+"""The scan's nearest measured range (m; inf when no ray measured one) and its bearing in the
+sensor frame (rad; NaN when none): what the run log keeps of a scan."""
+RANGES_START = 16
 
 
 class Lidar(LeafSystem):
@@ -184,7 +187,8 @@ class Lidar(LeafSystem):
 
     Input `query_object` (abstract QueryObject, SceneGraph's). Outputs: `reading` (abstract
     `LaserScan`, the latest scan), `ranges` (m, N: its ranges), `scan_state` (the discrete
-    state: [scan index, scan time (s), X_WS (12), ranges (N)]).
+    state: [scan index, scan time (s), X_WS (12), nearest range (m), its bearing (rad),
+    ranges (N)]).
 
     config: as validated by the loader, trusted here; frame_id: the SceneGraph FrameId of the
     body B it is fixed to; X_BS: the sensor frame in B; exclude: the geometry ids it never
@@ -213,8 +217,8 @@ class Lidar(LeafSystem):
         self._query_port = self.DeclareAbstractInputPort(
             "query_object", AbstractValue.Make(QueryObject()))
         initial = np.zeros(RANGES_START + n)
-        initial[SCAN_TIME] = math.nan
-        initial[RANGES_START:] = math.inf
+        initial[SCAN_TIME] = initial[NEAREST_BEARING] = math.nan
+        initial[NEAREST] = initial[RANGES_START:] = math.inf
         self._state = self.DeclareDiscreteState(initial)
         self.DeclareInitializationDiscreteUpdateEvent(self._initial_scan)
         self._step = float(step)
@@ -316,7 +320,17 @@ class Lidar(LeafSystem):
         x[SCAN_INDEX] = index
         x[SCAN_TIME] = context.get_time()
         x[POSE] = X_WS.ravel()
-        x[RANGES_START:] = self.measured(t, key, index)
+        r = x[RANGES_START:] = self.measured(t, key, index)
+        x[NEAREST], x[NEAREST_BEARING] = self.nearest(r)
+
+    def nearest(self, ranges: np.ndarray) -> tuple[float, float]:
+        """(m, rad): the least measured range of a scan (finite: neither a miss, a dropout nor
+        below range_min) and its ray's bearing; (inf, NaN) when none."""
+        measured = np.where(np.isfinite(ranges), ranges, math.inf)
+        i = int(np.argmin(measured))
+        if not math.isfinite(measured[i]):
+            return math.inf, math.nan
+        return float(measured[i]), float(self.config.angle_min + self.increment * i)
 
 
 # --- Meshcat --------------------------------------------------------------------------------
@@ -395,6 +409,15 @@ class LidarKind(SensorKind):
 
     def check(self, config) -> list[tuple[str, str]]:
         return check_lidar(config)
+
+    def log_columns(self, sensor: str) -> tuple[str, ...]:
+        """`lidar_<sensor>_nearest` (m; inf when nothing is in range) and
+        `lidar_<sensor>_bearing` (rad in the sensor frame; NaN when none): the latest scan's
+        nearest measured range and the bearing of its ray."""
+        return (f"lidar_{sensor}_nearest", f"lidar_{sensor}_bearing")
+
+    def log_port(self, sensor: BuiltSensor):
+        return sensor.system.GetOutputPort("scan_state"), (NEAREST, NEAREST_BEARING)
 
     def add(self, site, name: str, config: LidarConfig) -> BuiltSensor | None:
         """Adds `<robot>.lidar.<name>` mounted by `config.X_PB` on a link of the site's robot,

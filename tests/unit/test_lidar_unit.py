@@ -26,6 +26,8 @@ from pydrake.systems.framework import DiagramBuilder
 from corobot_drake.config.poses import mount
 from corobot_drake.sensors.lidar import (
     DEFAULT_MOUNT,
+    NEAREST,
+    NEAREST_BEARING,
     RANGES_START,
     SCAN_INDEX,
     SCAN_TIME,
@@ -213,6 +215,20 @@ def test_the_leaf_system_scans_at_its_rate_and_keeps_its_state_in_the_context():
     assert (state[SCAN_INDEX], state[SCAN_TIME]) == (2.0, 0.1)  # scans at 0, 0.05, 0.1
     np.testing.assert_array_equal(state[RANGES_START:], first[RANGES_START:])  # a still scene
     assert lidar.GetOutputPort("reading").Eval(context).time == 0.1
+
+
+def test_the_state_keeps_the_nearest_range_and_its_bearing_for_the_run_log():
+    """A wall 1 m ahead: the nearest range is the ray straight ahead's (bearing 0: the 360 rays
+    from -pi put one there), 1 m; with nothing within range_max, (inf, NaN)."""
+    lidar, context = fixed_lidar(config(range_max=5.0), wall(1.0))
+    state = lidar.GetOutputPort("scan_state").Eval(context)
+    assert (state[NEAREST], state[NEAREST_BEARING]) == pytest.approx((1.0, 0.0), abs=EXACT)
+    assert state[NEAREST] == np.nanmin(state[RANGES_START:])
+    lidar, context = fixed_lidar(config(range_max=0.5), wall(1.0))
+    state = lidar.GetOutputPort("scan_state").Eval(context)
+    assert state[NEAREST] == math.inf and math.isnan(state[NEAREST_BEARING])
+    assert lidar.nearest(np.array([-math.inf, math.nan, 2.0, 0.7, math.inf])) == (
+        0.7, pytest.approx(lidar.config.angle_min + 3 * lidar.increment))
 
 
 def test_a_lidar_keeps_no_view_of_a_context_that_is_gone():
