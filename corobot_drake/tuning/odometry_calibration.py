@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from corobot_drake.config import scenario as sc
-from corobot_drake.model import dimensions as dim
+from corobot_drake.robots import corobot
 from corobot_drake.study.programs import DriveTest
 from corobot_drake.systems.dead_reckoning import advance_pose
 from corobot_drake.tuning.sysid import LogError, read_columns
@@ -47,7 +47,11 @@ class PoseLog:
     source: str = ""
 
 
-def read_pose_log(path, ticks_per_revolution: int = dim.ENCODER_TICKS_PER_REVOLUTION) -> PoseLog:
+TICKS = corobot.drive("encoder_ticks_per_revolution")
+"""The Corobot's encoder ticks per revolution (its robot file's): a log's default."""
+
+
+def read_pose_log(path, ticks_per_revolution: int = TICKS) -> PoseLog:
     """Reads a log with the `COLUMNS`; LogError naming the file and line of a problem."""
     a = read_columns(path, COLUMNS)
     return PoseLog(a[:, 0], a[:, 1:3] * (2 * math.pi / ticks_per_revolution),
@@ -55,7 +59,7 @@ def read_pose_log(path, ticks_per_revolution: int = dim.ENCODER_TICKS_PER_REVOLU
 
 
 def pose_log_of(rows: np.ndarray,
-                ticks_per_revolution: int = dim.ENCODER_TICKS_PER_REVOLUTION) -> PoseLog:
+                ticks_per_revolution: int = TICKS) -> PoseLog:
     """A PoseLog from run-log rows (`Robot.run_log()`, columns `runlog.COLUMNS`) of a robot
     whose encoders count `ticks_per_revolution` (the Corobot's 600)."""
     ticks = rows[:, 3:5] * (2 * math.pi / ticks_per_revolution)
@@ -87,7 +91,8 @@ class OdometryFit:
     turn_rms: float
     """rad: RMS of a window's true minus modelled turn."""
 
-    def describe(self, nominal: tuple[float, float] = (dim.WHEEL_RADIUS, dim.TRACK)) -> str:
+    def describe(self, nominal: tuple[float, float] = (
+            corobot.wheels("radius"), corobot.wheels("track"))) -> str:
         """The fit beside the robot's `nominal` (wheel radius, track) m (the Corobot's)."""
         return (f"effective_wheel_radius: {self.effective_wheel_radius:.6f} m "
                 f"(nominal {nominal[0]:.6f})\n"

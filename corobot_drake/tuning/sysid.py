@@ -23,8 +23,8 @@ from pathlib import Path
 import numpy as np
 
 from corobot_drake.config.scenario import ScenarioError, load_scenario, one_line, read_text
-from corobot_drake.model import dimensions as dim
 from corobot_drake.names import unknown_robot
+from corobot_drake.robots import corobot
 
 MAX_LOG_BYTES = 64 << 20
 """The largest log read (64 MiB: an hour of the simulator's 100 Hz run log is 360k lines);
@@ -113,8 +113,8 @@ def scenario_robot(scenario_path, robot: str | None = None):
     return robot, robot_spec(robots[robot].robot)
 
 
-def read_log(path: str | Path, ticks_per_revolution: int = dim.ENCODER_TICKS_PER_REVOLUTION
-             ) -> DriveLog:
+def read_log(path: str | Path, ticks_per_revolution: int = corobot.drive(
+             "encoder_ticks_per_revolution")) -> DriveLog:
     """Reads and checks a run-log CSV; raises LogError naming the line of the first problem.
     The chassis pose (x, y: m) is kept when the log has it (`DriveLog.position`)."""
     a = read_columns(path, REQUIRED)

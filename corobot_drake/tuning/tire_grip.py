@@ -24,9 +24,9 @@ import dataclasses as dc
 import math
 from pathlib import Path
 
-from corobot_drake.model import dimensions as dim
 from corobot_drake.model.sdf import WheelContact
 from corobot_drake.resources import SCENARIOS_DIR
+from corobot_drake.robots import corobot
 from corobot_drake.study import engine, finished
 
 ROBOT = "corobot"
@@ -50,14 +50,16 @@ SPIN_SLACK = 0.05
 def traction_limit() -> float:
     """N m: the axle torque at which a wheel slips on level ground, mu (m g / 4) R (the robot's
     weight shared by the four wheels; the tyre's friction combined with the ground's equal one
-    is the same mu)."""
-    mass = dim.TOTAL_BODY_MASS + 4 * dim.WHEEL_MASS
-    return WheelContact().friction * mass * GRAVITY / 4 * dim.WHEEL_RADIUS
+    is the same mu); the Corobot's, from its robot file and model."""
+    spec = corobot.spec()
+    return WheelContact().friction * spec.mass * GRAVITY / 4 * spec.wheel_radius
 
 
 def predicted_spin_rate(rim_speed: float) -> float:
-    """Yaw rate (rad/s) of a skid-steer spinning in place on isotropic Coulomb friction."""
-    a, b = dim.HALF_WHEELBASE, dim.HALF_TRACK
+    """Yaw rate (rad/s) of a skid-steer spinning in place on isotropic Coulomb friction (the
+    Corobot's half wheelbase a and half track b)."""
+    spec = corobot.spec()
+    a, b = spec.wheelbase / 2, spec.half_track
     return b * rim_speed / (a * a + b * b)
 
 
@@ -159,7 +161,7 @@ def _limit_label(value: float) -> str:
 def markdown(table: list[Limit], picked: Limit | None) -> str:
     """A row per limit: the worst tilt per step and overall, the open-ground figures, verdict."""
     steps = sorted({s for t in table for s in t.tilt_by_step})
-    prediction = predicted_spin_rate(dim.MOTOR_TORQUE_SCALING * dim.WHEEL_RADIUS)
+    prediction = predicted_spin_rate(corobot.spec().top_speed())
     head = (["effort limit (N m)"] + [f"worst tilt {s * 1000:g} ms (deg)" for s in steps]
             + ["worst tilt (deg)", "worst case", "straight speed (m/s)",
                "spin / prediction", "verdict"])
