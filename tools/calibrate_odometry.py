@@ -6,13 +6,13 @@ UMBmark's squares (1 m, counter-clockwise then clockwise, power 0.2) driven in t
 Prints the fit, plots the dead-reckoned path against the true one before (nominal radius and
 track) and after calibration, and with `--write` puts both in the scenario's drive fields
 (`effective_wheel_radius`, `effective_track_width`) with a comment saying where they came from.
-`--drive-test` then runs the book's 3-loop drive test with the calibrated odometry and prints
-the dead-reckoned end position error before and after. The squares' log and the plots go in
+`--drive-test` then runs the book's drive test (`--loops`, 3) with the calibrated odometry and
+prints the dead-reckoned end position error before and after. The squares' log and the plots go in
 `--out` (default: a new temporary directory, printed). The fit is
 `corobot_drake.tuning.odometry_calibration`.
 
 Usage: python tools/calibrate_odometry.py [LOG.csv | --simulate] [--out DIR] [--write SCENARIO]
-       [--drive-test]
+       [--drive-test [--loops N]]
 """
 
 import contextlib
@@ -38,6 +38,7 @@ from corobot_drake.arguments import (
 )
 from corobot_drake.limits import DRAKE_INT
 from corobot_drake.resources import DEFAULT_SCENARIO
+from corobot_drake.study.programs import LOOPS
 from corobot_drake.tuning import odometry_calibration as oc
 from corobot_drake.tuning.sysid import DriveField, scenario_robot, write_drive_fields
 
@@ -63,7 +64,9 @@ def _parser() -> ToolParser:
     p.add_argument("--write", metavar="SCENARIO", type=existing_file,
                    help="put the fit in this scenario file")
     p.add_argument("--drive-test", action="store_true",
-                   help="check on the 3-loop drive test, seed --seed")
+                   help="check on the drive test, seed --seed")
+    p.add_argument("--loops", type=bounded(LOOPS, int), default=3,
+                   help="the drive test's loops")
     p.add_argument("--seed", type=bounded(DRAKE_INT, int), default=1, help="the drive test's seed")
     return p
 
@@ -114,25 +117,26 @@ def _write(args, fit: oc.OdometryFit, source: str) -> None:
 def _drive_test(args, fit: oc.OdometryFit) -> None:
     """The drive test run with the calibrated odometry; the nominal odometry's error is the
     same encoder ticks dead reckoned with the nominal radius and track."""
-    with _progress(150, f"drive test, seed {args.seed}") as update:
+    with _progress(50 * args.loops, f"drive test, seed {args.seed}") as update:
         run = oc.drive_test_odometry_error(args.scenario, args.robot, fit.effective_wheel_radius,
                                            fit.effective_track_width, args.seed,
-                                           progress=update)
+                                           args.loops, progress=update)
     log = run["log"]
     nominal = oc.end_error(log, *args.nominal)
     offline = oc.end_error(log, fit.effective_wheel_radius, fit.effective_track_width)
     calibrated = run["error"]
     radius_only = oc.end_error(log, args.nominal[0], fit.effective_track_width)
-    print(f"drive test (3 loops, seed {args.seed}, {run['sim_time']:.1f} s): dead-reckoned end "
-          f"position error {nominal * 1000:.1f} mm uncalibrated, {calibrated * 1000:.1f} mm "
-          f"calibrated (Robot.odometry(); {offline * 1000:.1f} mm from the log), ratio "
-          f"{calibrated / nominal:.4f} (target <= 0.2); heading error calibrated "
-          f"{run['yaw_error_deg']:+.2f} deg")
+    print(f"drive test ({args.loops} loops, seed {args.seed}, {run['sim_time']:.1f} s): "
+          f"dead-reckoned end position error {nominal * 1000:.1f} mm uncalibrated, "
+          f"{calibrated * 1000:.1f} mm calibrated (Robot.odometry(); {offline * 1000:.1f} mm "
+          f"from the log), ratio {calibrated / nominal:.4f} (target <= 0.2); heading error "
+          f"calibrated {run['yaw_error_deg']:+.2f} deg")
     print(f"with the calibrated track but the nominal radius: {radius_only * 1000:.1f} mm")
     plot = Path(args.plot).with_name(Path(args.plot).stem + "_drive_test.png")
     oc.plot_paths(log, args.nominal,
                   (fit.effective_wheel_radius, fit.effective_track_width), plot,
-                  f"drive test, 3 loops, seed {args.seed}: odometry before and after calibration")
+                  f"drive test, {args.loops} loops, seed {args.seed}: odometry before and after "
+                  "calibration")
     print(f"plot: {plot}")
 
 
