@@ -32,9 +32,11 @@ import dataclasses as dc
 import math
 
 import numpy as np
+from pydrake.common.eigen_geometry import Quaternion
 from pydrake.common.schema import Transform
 from pydrake.common.value import AbstractValue, Value
-from pydrake.math import RigidTransform
+from pydrake.geometry import Rgba
+from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.multibody.math import SpatialVelocity
 from pydrake.systems.framework import EventStatus, LeafSystem
 
@@ -218,6 +220,16 @@ class ImuSensor(LeafSystem):
             *self.events, self._sample_if_due if step > 0 else self._sample)
         self._declare_outputs()
 
+    @property
+    def body(self) -> int:
+        """The index of the plant body S is fixed to."""
+        return self._body
+
+    @property
+    def p_BS(self) -> np.ndarray:
+        """m: S's origin in that body's frame."""
+        return self._p_BS
+
     def _declare_outputs(self) -> None:
         state = {self.discrete_state_ticket(self._state)}
         self.DeclareAbstractOutputPort("reading", lambda: AbstractValue.Make(self._empty()),
@@ -322,6 +334,68 @@ class ImuSensor(LeafSystem):
 
 # --- the kind ------------------------------------------------------------------------------
 
+# --- Meshcat --------------------------------------------------------------------------------
+
+FORCE_SCALE = 0.02
+"""m drawn per m/s^2 of specific force (at rest, gravity's 9.81 m/s^2 up: 0.196 m)."""
+RATE_SCALE = 0.2
+"""m drawn per rad/s of angular velocity."""
+DRAW_PERIOD = 1.0 / 30.0
+"""s: the least time between two drawings (Meshcat shows at most about 30 frames a second)."""
+_FORCE_COLOR = Rgba(0.1, 0.75, 0.2, 1.0)
+_RATE_COLOR = Rgba(0.6, 0.2, 0.9, 1.0)
+
+
+class ImuMeshcat(LeafSystem):
+    """Draws an IMU's latest sample in Meshcat, from the sensor's origin in the world: its
+    specific force (green, `FORCE_SCALE` m per m/s^2: upright at rest, leaning back as the
+    robot speeds up) and its angular velocity (purple, `RATE_SCALE` m per rad/s: up in a left
+    turn), under `path` (`/imu/<robot>/<sensor>`: `specific_force`, `angular_velocity`).
+
+    .. pydrake_system::
+
+        name: ImuMeshcat
+        input_ports:
+        - sample_state
+        - body_poses
+
+    Inputs: the ImuSensor's `sample_state` and the plant's `body_poses`. It looks at every
+    step (one comparison of times) and redraws a new sample at most every `DRAW_PERIOD` s;
+    no event of its own, so a continuous plant's steps are not split.
+    """
+
+    def __init__(self, meshcat, path: str, imu: ImuSensor):
+        super().__init__()
+        self._meshcat, self.path, self._imu = meshcat, path, imu
+        self._sample = self.DeclareVectorInputPort("sample_state", STATE_SIZE)
+        self._poses = self.DeclareAbstractInputPort(
+            "body_poses", AbstractValue.Make([RigidTransform()]))
+        self._drawn = -math.inf
+        self.draws = 0
+        """How many times it has drawn (for tests)."""
+        self.DeclareInitializationPublishEvent(self._draw)
+        self.DeclarePerStepPublishEvent(self._draw_if_due)
+
+    def _draw_if_due(self, context) -> None:
+        if context.get_time() >= self._drawn + DRAW_PERIOD * (1.0 - 1e-9):
+            self._draw(context)
+
+    def _draw(self, context) -> None:
+        x = self._sample.Eval(context)
+        X_WB = self._poses.Eval(context)[self._imu.body]
+        p_WS = X_WB.multiply(self._imu.p_BS)
+        q = x[ORIENTATION]
+        R_WS = RotationMatrix(Quaternion(w=q[3], x=q[0], y=q[1], z=q[2]))
+        for name, vector, scale, color in (
+                ("specific_force", x[ACCEL], FORCE_SCALE, _FORCE_COLOR),
+                ("angular_velocity", x[GYRO], RATE_SCALE, _RATE_COLOR)):
+            end = p_WS + scale * (R_WS @ vector)
+            self._meshcat.SetLineSegments(f"{self.path}/{name}", p_WS.reshape(3, 1),
+                                          end.reshape(3, 1), 3.0, color)
+        self._drawn = context.get_time()
+        self.draws += 1
+
+
 IMU_SCHEMA = {
     "title": "corobot.Imu",
     "description": "One IMU sample, with ROS sensor_msgs/Imu's fields, in the sensor's frame "
@@ -388,13 +462,22 @@ class ImuKind(SensorKind):
             port = sensor.get_output_port(i)
             builder.ExportOutput(port, f"{robot}.imu.{name}.{port.get_name()}")
         return BuiltSensor(self, robot, name, config, sensor, sensor.GetOutputPort("reading"),
-                           sensor.rate, config.X_PB)
+                           sensor.rate, config.X_PB,
+                           {"body_poses": plant.get_body_poses_output_port()})
 
     def set_seed(self, sensor: BuiltSensor, root_context, random_seed: int,
                  config: ImuConfig) -> None:
         system = sensor.system
         system.SetNoiseKey(system.GetMyMutableContextFromRoot(root_context), noise_key(
             random_seed, sensor.robot, sensor.name, config.noise_seed))
+
+    def add_meshcat(self, builder, meshcat, sensor: BuiltSensor) -> None:
+        viz = builder.AddNamedSystem(
+            f"{sensor.robot}.imu.{sensor.name}.meshcat",
+            ImuMeshcat(meshcat, f"/imu/{sensor.robot}/{sensor.name}", sensor.system))
+        builder.Connect(sensor.system.GetOutputPort("sample_state"),
+                        viz.GetInputPort("sample_state"))
+        builder.Connect(sensor.extra["body_poses"], viz.GetInputPort("body_poses"))
 
     def summary_json(self, reading: Imu) -> dict:
         """The vectors' components as numbers of their own (`linear_acceleration_z`, ...: a

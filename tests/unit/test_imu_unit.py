@@ -23,7 +23,15 @@ from conftest import Stepper
 from corobot_drake.config.poses import mount
 from corobot_drake.limits import bound_of
 from corobot_drake.ros2.messages import Messages
-from corobot_drake.sensors.imu import IMU, Imu, ImuConfig, ImuSensor, sample_noise
+from corobot_drake.sensors.imu import (
+    DRAW_PERIOD,
+    FORCE_SCALE,
+    IMU,
+    Imu,
+    ImuConfig,
+    ImuSensor,
+    sample_noise,
+)
 from corobot_drake.sensors.site import SensorSite
 
 G = 9.81  # m/s^2: Drake's default gravity
@@ -345,3 +353,34 @@ def test_the_messages_carry_the_reading_in_ros_field_names():
     assert set(fox) == set(IMU.foxglove_schema["properties"])
     assert fox["angular_velocity"]["z"] == r.angular_velocity[2]
     assert fox["timestamp"] == {"sec": 0, "nsec": 5_000_000}
+
+
+class LineRecorder:
+    """Meshcat's SetLineSegments recorded: {path: (start, end)} of the last call (m, world)."""
+
+    def __init__(self):
+        self.lines = {}
+
+    def SetLineSegments(self, path, starts, ends, width, color):
+        self.lines[path] = (starts[:, 0].copy(), ends[:, 0].copy())
+
+
+def test_meshcat_draws_the_specific_force_and_rate_from_the_sensor_in_the_world():
+    """An IMU rolled 90 deg on a welded chassis, 0.1 m ahead and 0.05 m up: its specific force
+    (gravity's reaction, 9.81 m/s^2 up in the world, +y in its own frame) is drawn from its
+    origin straight up, `FORCE_SCALE` m per m/s^2; no rotation: a zero-length rate line. It
+    redraws at most every `DRAW_PERIOD` s, not at the IMU's 100 Hz."""
+    site = welded_chassis_site()
+    sensor = IMU.add(site, "imu", ideal(X_PB=mount((0.1, 0.0, 0.05), (90, 0, 0))))
+    meshcat = LineRecorder()
+    IMU.add_meshcat(site.builder, meshcat, sensor)
+    diagram = site.builder.Build()
+    simulator = Simulator(diagram)
+    simulator.AdvanceTo(0.5)
+    start, end = meshcat.lines["/imu/bot/imu/specific_force"]
+    np.testing.assert_allclose(start, (0.1, 0.0, 0.05), atol=EXACT)
+    np.testing.assert_allclose(end - start, (0.0, 0.0, FORCE_SCALE * G), atol=1e-9)
+    start, end = meshcat.lines["/imu/bot/imu/angular_velocity"]
+    np.testing.assert_array_equal(start, end)
+    viz = diagram.GetSubsystemByName("bot.imu.imu.meshcat")
+    assert viz.draws == pytest.approx(0.5 / DRAW_PERIOD, abs=2)  # 51 samples; 13-16 drawn
