@@ -14,9 +14,9 @@ from pathlib import Path
 import numpy as np
 
 from corobot_drake import limits
-from corobot_drake.gym.layout import Layout
+from corobot_drake.gym.layout import Layout, giant_box
 from corobot_drake.limits import Range
-from corobot_drake.model import dimensions as dim
+from corobot_drake.robots import corobot
 
 MAX_BOXES = 100
 """The most boxes an env may have: each is a body of the diagram (`base_scenario`)."""
@@ -24,7 +24,7 @@ MAX_STEPS = 1_000_000
 """The most steps an episode may last (`time_limit / control_period`)."""
 
 CONFIG_BOUNDS = {
-    "control_period": Range(dim.CONTROL_PERIOD, 10.0, unit="s",
+    "control_period": Range(corobot.drive("control_period"), 10.0, unit="s",
                             why="at least the drive's control period"),
     "time_limit": Range(0.0, 86_400.0, low_open=True, unit="s"),
     "goal_radius": Range(0.0, 10.0, low_open=True, unit="m"),
@@ -47,12 +47,6 @@ CONFIG_BOUNDS = {
 }
 """Each numeric field of `GoToGoalConfig` (`goal_distance`: each end) and its range."""
 
-ROBOT_REACH = math.hypot(dim.HALF_WHEELBASE + dim.WHEEL_RADIUS,
-                         max(dim.PLATFORM.size[1] / 2, dim.HALF_TRACK + dim.WHEEL_WIDTH / 2))
-"""m: the farthest the Corobot's footprint reaches from its chassis origin (a tyre's outer
-corner)."""
-
-
 def robot_path(robot: str) -> str:
     """A shipped robot's name, or a robot file's absolute path (as the loader makes it)."""
     from corobot_drake.robots import ROBOTS
@@ -62,12 +56,29 @@ def robot_path(robot: str) -> str:
 
 def robot_reach(spec) -> float:
     """m: the farthest a robot's footprint reaches from its base origin: the Corobot's
-    `ROBOT_REACH`; another's, its tyres' outer corners (a body wider than its wheels: the
-    reset refuses a start inside a box in one line)."""
+    the corner of the rectangle round its tyres and boxes; another's, its tyres' outer
+    corners (a body wider than its wheels: the reset refuses a start inside a box in one
+    line)."""
     if spec.generated:
-        return ROBOT_REACH
+        return _footprint_corner(spec)
     return max(math.hypot(abs(w.center[0]) + w.radius, abs(w.center[1]) + w.width / 2)
                for w in spec.wheels)
+
+
+
+def _footprint_corner(spec) -> float:
+    """m: the corner of the rectangle (square to the base frame) round a rectangular robot's
+    tyres (from its stated wheelbase, track and radius, written exactly) and its box-shaped
+    parts, from its base origin."""
+    from pydrake.geometry import Box
+
+    xs = [spec.wheelbase / 2 + spec.wheel_radius]
+    ys = [spec.half_track + max(w.width for w in spec.wheels) / 2]
+    for _, shape, X_BG in spec.shapes:
+        if isinstance(shape, Box):
+            xs.append(abs(X_BG.translation()[0]) + shape.size()[0] / 2)
+            ys.append(abs(X_BG.translation()[1]) + shape.size()[1] / 2)
+    return math.hypot(max(xs), max(ys))
 
 
 def _robot(config):
@@ -145,7 +156,7 @@ def check_config(config) -> None:
     _check_reachable(config, reach)
 
 
-def _check_reachable(config, reach: float = ROBOT_REACH) -> None:
+def _check_reachable(config, reach: float) -> None:
     """Every start clear of the giant box (the robot reaches `reach` m from its origin);
     from every start, a goal as clear of it as `goal_clearance` asks (else `draw_layout`
     would look for one forever)."""
@@ -167,8 +178,8 @@ def _check_reachable(config, reach: float = ROBOT_REACH) -> None:
 def _start_gap(spread: float) -> float:
     """m between the square of starts (+-`spread` around the origin) and the giant box's
     footprint."""
-    half = dim.GIANT_BOX_SIZE / 2
-    cx, cy, _ = dim.GIANT_BOX_CENTER
+    (cx, cy, _), size = giant_box()
+    half = size / 2
     gx = max(0.0, abs(cx) - half - spread)
     gy = max(0.0, abs(cy) - half - spread)
     return math.hypot(gx, gy)

@@ -33,7 +33,7 @@ from pathlib import Path
 import numpy as np
 
 from corobot_drake.gym.env import GoToGoalConfig
-from corobot_drake.model import dimensions as dim
+from corobot_drake.robots import corobot
 from corobot_drake.sensors.raycast import cross_of_rays_in_sensor_frame
 
 HEADINGS = 72
@@ -90,16 +90,22 @@ class DetourParameters:
 PARAMETER_NAMES = tuple(f.name for f in dc.fields(DetourParameters))
 
 
-def _ray_geometry(mount: dim.SensorMount) -> tuple[np.ndarray, np.ndarray]:
-    """(origin (2,), unit directions (n, 2)): each ray of a sensor's cross on the ground
-    plane, in the chassis frame (a pitched ray's length counts by its cosine)."""
-    d_S = cross_of_rays_in_sensor_frame(dim.IR_SAMPLES, dim.IR_DISPERSION_CONE_ANGLE_DEG)
-    c, s = math.cos(mount.yaw), math.sin(mount.yaw)
+def _ray_geometry(name: str) -> tuple[np.ndarray, np.ndarray]:
+    """(origin (2,), unit directions (n, 2)): each ray of the Corobot's IR sensor `name`'s
+    cross on the ground plane, in the chassis frame (a pitched ray's length counts by its
+    cosine), as its robot file mounts it."""
+    ir = corobot.sensor("ir_sensors", name)
+    position, rpy_deg = corobot.mount_of("ir_sensors", name)
+    d_S = cross_of_rays_in_sensor_frame(ir["samples"], ir["dispersion_cone_angle"])
+    yaw = math.radians(rpy_deg[2])
+    c, s = math.cos(yaw), math.sin(yaw)
     planar = np.column_stack([c * d_S[:, 0] - s * d_S[:, 1], s * d_S[:, 0] + c * d_S[:, 1]])
-    return np.array(mount.position[:2]), planar
+    return np.array(position[:2]), planar
 
 
-_RAYS = [_ray_geometry(dim.FRONT_IR), _ray_geometry(dim.REAR_IR)]
+_RAYS = [_ray_geometry("front"), _ray_geometry("rear")]
+IR_RANGE = corobot.sensor("ir_sensors", "front")["maximum_range"]
+"""m: the Corobot's IR sensors' reading when nothing is in range (its robot file's)."""
 NUM_RAYS = sum(len(d) for _, d in _RAYS)
 """IR rays at the observation's start (front then rear)."""
 _ANGLES = np.linspace(-math.pi, math.pi, HEADINGS, endpoint=False)
@@ -269,7 +275,7 @@ class DetourPolicy:
         for origin, directions in _RAYS:
             r = distances[start:start + len(directions)]
             start += len(directions)
-            hit = r < dim.IR_MAXIMUM_RANGE - HIT_MARGIN
+            hit = r < IR_RANGE - HIT_MARGIN
             if hit.any():
                 reach = r[hit, None] + behind[None, :]  # (hits, DEPTH_POINTS)
                 out.append((origin + reach[..., None] * directions[hit, None, :]).reshape(-1, 2))

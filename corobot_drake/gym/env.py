@@ -29,8 +29,7 @@ from corobot_drake.config import scenario as sc
 from corobot_drake.config.poses import ground_pose
 from corobot_drake.config.sensors import FRONT_CAMERA
 from corobot_drake.gym.checks import check_action, check_options, make_config, robot_path
-from corobot_drake.gym.layout import Layout, draw_layout
-from corobot_drake.model import dimensions as dim
+from corobot_drake.gym.layout import Layout, draw_layout, giant_box
 from corobot_drake.resources import DEFAULT_SCENARIO
 from corobot_drake.robots import robot_defaults, robot_spec
 from corobot_drake.sensors.ir_sensor import scan_state_layout
@@ -129,8 +128,9 @@ def base_scenario(config: GoToGoalConfig) -> sc.Scenario:
         camera.fps = 1.0 / config.control_period
         camera.output_delay = 0.0
     giant = scenario.world.bodies["giant_box"]
-    giant.pose = ground_pose(*dim.GIANT_BOX_CENTER[:2])
-    giant.pose.translation = [*dim.GIANT_BOX_CENTER[:2], dim.GIANT_BOX_CENTER[2] + HOVER]
+    centre, _ = giant_box()
+    giant.pose = ground_pose(*centre[:2])
+    giant.pose.translation = [*centre[:2], centre[2] + HOVER]
     for i in range(config.boxes):
         # Parked in a row away from the robot until `reset` places them (a scenario the
         # Simulation checks: no body inside the robot).
@@ -357,7 +357,7 @@ def frame_view(layout: Layout):
     from corobot_drake.sensors import render
 
     middle = (np.array(layout.start[:2]) + np.array(layout.goal)) / 2
-    away = middle - np.array(dim.GIANT_BOX_CENTER[:2])
+    away = middle - np.array(giant_box()[0][:2])
     away /= max(np.linalg.norm(away), 1e-9)
     return render.look_at([*(middle + 1.6 * away), 4.0], [*middle, 0.0])
 
@@ -401,8 +401,7 @@ class _Ports:
                                 ends))
             self.ray_names += [f"ir_{name}_{i}" for i in range(n)]
         self.num_rays = len(self.ray_names)
-        self.ray_range = (dim.IR_MAXIMUM_RANGE if robot == ROBOT else
-                          max((sensors[n].maximum_range for n in names), default=0.0))
+        self.ray_range = max((sensors[n].maximum_range for n in names), default=0.0)
         """m: the rays' longest reach (the observation's bound)."""
         self._axle = diagram.GetOutputPort(f"{robot}.axle_speed_command")
         self._boxes = {g for body in sim.station.bodies.values()

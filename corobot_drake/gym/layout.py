@@ -2,19 +2,21 @@
 
 Everything is drawn from one numpy Generator (the env's `np_random`), so a seed gives one
 layout. World frame, metres and radians. The giant box stands where the default scene has it
-(`dimensions.GIANT_BOX_CENTER`); the task's boxes are `GoToGoalConfig.boxes` cubes, the first
-one usually on the way to the goal, the others anywhere near; a box that finds no free place
-is parked out of the way (`PARKING`), far beyond the IR sensors' range.
+(`giant_box`); the task's boxes are `GoToGoalConfig.boxes` cubes, the first one usually on
+the way to the goal, the others anywhere near; a box that finds no free place is parked out
+of the way (`PARKING`), far beyond the IR sensors' range.
 """
 
 from __future__ import annotations
 
 import dataclasses as dc
+import functools
 import math
 
 import numpy as np
+from pydrake.common.yaml import yaml_load
 
-from corobot_drake.model import dimensions as dim
+from corobot_drake.resources import DEFAULT_SCENARIO
 
 PARKING = (0.0, 50.0)
 """m: where a box that found no place stands (x, y of the first; the next ones 2 m apart in x)."""
@@ -36,10 +38,18 @@ class Layout:
     """x, y (m), yaw (rad) of each box's centre."""
 
 
+@functools.cache
+def giant_box() -> tuple[tuple[float, float, float], float]:
+    """(centre (m, world frame), side m) of the giant box where the default scene has it
+    (`resources.DEFAULT_SCENARIO`'s `world.bodies.giant_box`, read as written)."""
+    body = yaml_load(filename=str(DEFAULT_SCENARIO))["world"]["bodies"]["giant_box"]
+    return tuple(body["pose"]["translation"]), body["shape"]["size"][0]
+
+
 def _giant_box_gap(x: float, y: float) -> float:
     """m from (x, y) to the giant box's footprint (0 inside)."""
-    half = dim.GIANT_BOX_SIZE / 2
-    cx, cy, _ = dim.GIANT_BOX_CENTER
+    (cx, cy, _), size = giant_box()
+    half = size / 2
     dx = max(abs(x - cx) - half, 0.0)
     dy = max(abs(y - cy) - half, 0.0)
     return math.hypot(dx, dy)

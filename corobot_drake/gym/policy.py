@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from corobot_drake.model import dimensions as dim
+from corobot_drake.robots import corobot
 
 SHIPPED = Path(__file__).resolve().parent / "policy.json"
 """The policy `load_policy()` returns (written by `tools/train_policy.py --ship`)."""
@@ -31,7 +31,7 @@ def features(observation) -> np.ndarray:
     """The feature vector of a GoToGoal state observation (or a Dict's `state`)."""
     obs = np.asarray(observation["state"] if isinstance(observation, dict) else observation,
                      dtype=float)
-    proximity = 1.0 - obs[:NUM_RAYS] / dim.IR_MAXIMUM_RANGE
+    proximity = 1.0 - obs[:NUM_RAYS] / corobot.sensor("ir_sensors", "front")["maximum_range"]
     distance, bearing, speed, yaw_rate = obs[NUM_RAYS:NUM_RAYS + 4]
     return np.concatenate([[1.0, np.sin(bearing), np.cos(bearing), min(distance, 1.0)],
                            proximity[:FRONT_RAYS], [proximity[FRONT_RAYS:].max(), speed,
