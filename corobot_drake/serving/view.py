@@ -11,7 +11,6 @@ import math
 import numpy as np
 from pydrake.geometry import Box, Convex, HalfSpace, Mesh, Role
 
-from corobot_drake.model import dimensions as dim
 from corobot_drake.sensors.raycast import model_instance_geometry_ids
 
 VIEW_DIRECTION = np.array([0.6, -1.0, 0.55])
@@ -52,6 +51,14 @@ def shape_radius(shape) -> float:
     return getters.get(type(shape).__name__, lambda s: 0.0)(shape)
 
 
+def _platform(spec) -> tuple[np.ndarray, np.ndarray]:
+    """(size, centre) m of the Corobot's platform box, as its model has it (base frame)."""
+    for name, shape, X_BG in spec.shapes:
+        if name.endswith("/platform"):
+            return np.asarray(shape.size()), X_BG.translation()
+    raise ValueError(f"{spec.kind}: no platform box")
+
+
 def scene_points(sim) -> np.ndarray:
     """World points (N, 3) whose bounding box holds the robots and every other proximity
     shape but half-spaces, now (the Corobot by its platform's footprint and height)."""
@@ -65,9 +72,10 @@ def scene_points(sim) -> np.ndarray:
             continue  # any other robot: its own shapes, below, as every body's
         robot_ids |= model_instance_geometry_ids(station.plant, parts.model_instance)
         X_WB = sim.body_pose(parts.chassis)
-        half = np.array([dim.PLATFORM.size[0], dim.PLATFORM.size[1], 0.0]) / 2
+        size, center = _platform(sim.robot(name).spec)
+        half = np.array([size[0], size[1], 0.0]) / 2
         points += [[X_WB.x - half[0], X_WB.y - half[1], 0.0],
-                   [X_WB.x + half[0], X_WB.y + half[1], dim.PLATFORM.center[2]]]
+                   [X_WB.x + half[0], X_WB.y + half[1], center[2]]]
     for gid in inspector.GetAllGeometryIds(Role.kProximity):
         shape = inspector.GetShape(gid)
         if gid in robot_ids or isinstance(shape, HalfSpace):
