@@ -26,7 +26,7 @@ from pathlib import Path
 
 from corobot_drake import commands
 from corobot_drake import topics as tp
-from corobot_drake.model.dimensions import WHEEL_NAMES
+from corobot_drake.robots import corobot
 
 INTERFACES_DIR = Path(__file__).resolve().parent / "ros_packages"
 PACKAGE = "corobot_interfaces"
@@ -189,7 +189,7 @@ def telemetry_definition(topic: tp.TelemetryTopic) -> str:
     lines = [f"# {topic.description}", "std_msgs/Header header  # stamp: its sample's time"]
     array = "[]" if topic.per_wheel else ""
     if topic.per_wheel:
-        lines.append(f"string[] wheel_names  # {', '.join(WHEEL_NAMES)}")
+        lines.append("string[] wheel_names  # " + ", ".join(corobot.spec().wheel_names))
     lines += [f"float64{array} {field}  # {what}" for field, _, what in topic.fields]
     return "\n".join(lines) + "\n"
 
