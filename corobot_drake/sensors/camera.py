@@ -77,6 +77,7 @@ from corobot_drake.config.sensors import (
     default_cameras,
 )
 from corobot_drake.readings import CameraImage
+from corobot_drake.sensors.follow import FollowFrame, draw_frustum
 from corobot_drake.sensors.kind import BuiltSensor, SensorKind
 from corobot_drake.sensors.render_worker import RenderWorker, build_render_scene
 from corobot_drake.sensors.site import SensorSite
@@ -692,8 +693,24 @@ class CameraKind(SensorKind):
         camera = add_camera(site, name, config)
         if camera is None:
             return None
+        body, X_BS = mount_frame(site.plant, site.model_instance, config.X_PB)
+        X_BC = X_BS.multiply(config.X_BC.GetDeterministicValue())  # the colour camera's
         return BuiltSensor(self, site.robot, name, config, camera.system, camera.image,
-                           config.fps, config.X_PB, {"camera": camera})
+                           config.fps, config.X_PB,
+                           {"camera": camera, "mount": (body.index(), X_BC),
+                            "body_poses": site.plant.get_body_poses_output_port()})
+
+    def add_meshcat(self, builder, meshcat, sensor: BuiltSensor) -> None:
+        """Its view frustum (`follow.draw_frustum`, 0.3 m deep) under
+        `/camera/<robot>/<camera>`, moved with its link."""
+        path = f"/camera/{sensor.robot}/{sensor.name}"
+        color, _ = sensor.config.MakeCameras()
+        intrinsics = color.core().intrinsics()
+        draw_frustum(meshcat, path, intrinsics.fov_x(), intrinsics.fov_y())
+        body, X_BC = sensor.extra["mount"]
+        follow = builder.AddNamedSystem(f"{sensor.robot}.camera.{sensor.name}.meshcat",
+                                        FollowFrame(meshcat, path, body, X_BC))
+        builder.Connect(sensor.extra["body_poses"], follow.get_input_port())
 
     def read(self, sensor: BuiltSensor, root_context) -> CameraImage:
         camera, config = sensor.extra["camera"], sensor.config
