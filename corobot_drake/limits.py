@@ -6,7 +6,7 @@ answers 422 with it (its request models are made of the commands' ranges, `comma
 the scenario loader (`config/validate.py`) checks every field against the bound it declares
 beside it, as dataclass metadata (`bounded`):
 
-    slew_rate: float = bounded(dim.SLEW_RATE, Range(0, 1e4, low_open=True, unit="rad/s^2"))
+    slew_rate: float = bounded(30.0, Range(0, 1e4, low_open=True, unit="rad/s^2"))
 
 and says so in one line:
 

@@ -5,7 +5,9 @@ wheel joints per side, drive, tyres, casters and sensors) measured once into a `
 (`robots/spec.py`): the wheels in actuator order with their sides, radius, track,
 wheelbase, mass, the links a sensor may ride on, the drive and tyres the scenario starts
 from, the sensors. Every module reads a robot's figures from its spec, never from one
-robot's constants (`model/dimensions.py` is only what the Corobot's model is generated from).
+robot's constants; a default with no robot at hand is the Corobot's, read from its robot file
+(`robots/corobot.py`). What the Corobot's model is generated from (its CAD,
+`model/dimensions.py`) only model generation reads.
 
 The scenario names the robot: `robots.<name>.robot: corobot` (the default) names a shipped
 robot of `ROBOTS`, any other value a robot file (relative to the scenario file).
