@@ -33,13 +33,15 @@ from corobot_drake.config.bounds import DRAKE_BOUNDS
 from corobot_drake.config.poses import ground_pose
 from corobot_drake.config.scenario import SetPower, load_scenario
 from corobot_drake.limits import DURATION
-from corobot_drake.model import dimensions as dim
 from corobot_drake.resources import DEFAULT_SCENARIO
+from corobot_drake.robots import corobot
 from corobot_drake.sensors import render
 from corobot_drake.simulation import Simulation, quiet_drake_warnings
 from lab.snapshot import VIEWS, take
 
 PIXELS = DRAKE_BOUNDS[CameraConfig]["width"]
+CAMERA = corobot.sensor("cameras", "front")
+"""The Corobot's camera (its robot file's): the robot-camera view's default size."""
 
 
 def _pair(text: str, n: int, what: str) -> list[float]:
@@ -108,8 +110,8 @@ def main(argv: list[str] | None = None) -> int:
     if args.time > 0:
         sim.advance(args.time)
     small = args.view == "robot-camera"
-    width = args.width or (dim.CAMERA_WIDTH if small else 960)
-    height = args.height or (dim.CAMERA_HEIGHT if small else 600)
+    width = args.width or (CAMERA["width"] if small else 960)
+    height = args.height or (CAMERA["height"] if small else 600)
     image = take(sim, args.view, width, height, name, args.eye, args.target)
 
     import matplotlib.image

@@ -29,11 +29,12 @@ from corobot_drake.arguments import (
 )
 from corobot_drake.config.scenario import ScenarioError, load_scenario
 from corobot_drake.limits import AXLE_SPEED, Range
-from corobot_drake.model import dimensions as dim
 from corobot_drake.resources import DEFAULT_SCENARIO
 from corobot_drake.robots import robot_spec
 from corobot_drake.simulation import quiet_drake_warnings
 from corobot_drake.tuning.drive_tuning import (
+    COROBOT_TOP_SPEED,
+    COROBOT_UNTUNED_SCALING,
     measure_top_speed,
     plot_sweep,
     plot_top_speed,
@@ -102,7 +103,7 @@ def _defaults(args, spec) -> None:
     untuned 20); another robot's top speed at power 1 (its robot file's `drive.top_speed`)
     and the scaling that gives it rolling without slip."""
     if spec.generated:
-        target, scaling = dim.TARGET_TOP_SPEED, dim.MOTOR_TORQUE_SCALING_UNTUNED
+        target, scaling = COROBOT_TOP_SPEED, COROBOT_UNTUNED_SCALING
     else:
         target = spec.top_speed()
         scaling = (args.target or target) / spec.wheel_radius

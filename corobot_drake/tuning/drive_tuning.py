@@ -19,6 +19,13 @@ from corobot_drake.resources import DEFAULT_SCENARIO, SCENARIOS_DIR
 from corobot_drake.simulation import Simulation, quiet_drake_warnings
 from corobot_drake.tuning import sysid
 
+COROBOT_TOP_SPEED = 2 * 12 * 0.0254
+"""m/s: the real Corobot's top speed at full power, 2 ft/s (0.6096): what its robot file's
+MotorTorqueScaling is tuned to give (`tools/tune_motor_torque_scaling.py`)."""
+COROBOT_UNTUNED_SCALING = 20.0
+"""The chapter's untuned MotorTorqueScaling (axle rad/s at power 1, ~1.2 m/s): where the
+Corobot's tuning starts."""
+
 SAMPLE_PERIOD = 0.02
 """s between the speed samples of `measure_top_speed`."""
 EXCITATION = ((1.0, 1.0, 1.5), (0.0, 0.0, 1.0), (0.5, 0.5, 1.0), (-0.6, -0.6, 1.5),
