@@ -14,16 +14,18 @@ from corobot_drake.config import scenario as sc
 from corobot_drake.config.poses import ground_pose, mount_frame, transform_from
 from corobot_drake.config.scenario import ScenarioError, load_scenario
 from corobot_drake.config.sensors import default_ir_sensors
-from corobot_drake.model import dimensions as dim
 
 
 def test_the_default_ir_sensors_are_at_the_spec_mounts():
-    for name, mount in (("front", dim.FRONT_IR), ("rear", dim.REAR_IR)):
+    """The Corobot's IR sensors, 4.25 in ahead of and behind the axles' midpoint at the
+    chassis box's mid-height (2.75 in), the front looking forward, the rear back."""
+    inch = 0.0254
+    for name, x, yaw in (("front", 4.25 * inch, 0.0), ("rear", -4.25 * inch, math.pi)):
         X_PB = default_ir_sensors()[name].X_PB
         assert X_PB.base_frame == "chassis"
-        expected = RigidTransform(RollPitchYaw(0.0, 0.0, mount.yaw), mount.position)
-        np.testing.assert_array_equal(X_PB.GetDeterministicValue().GetAsMatrix34(),
-                                      expected.GetAsMatrix34())
+        expected = RigidTransform(RollPitchYaw(0.0, 0.0, yaw), [x, 0.0, 2.75 * inch])
+        np.testing.assert_allclose(X_PB.GetDeterministicValue().GetAsMatrix34(),
+                                   expected.GetAsMatrix34(), rtol=0, atol=1e-15)
 
 
 def test_ground_pose_stands_a_robot_on_the_ground():

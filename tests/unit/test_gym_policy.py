@@ -9,6 +9,7 @@ import pytest
 
 pytest.importorskip("gymnasium")
 
+from corobot_drake.config.sensors import IrSensorConfig
 from corobot_drake.gym.detour import (
     CELL,
     CostMap,
@@ -16,9 +17,8 @@ from corobot_drake.gym.detour import (
     DetourPolicy,
 )
 from corobot_drake.gym.policy import LinearPolicy, load
-from corobot_drake.model import dimensions as dim
 
-CLEAR = [dim.IR_MAXIMUM_RANGE] * 12
+CLEAR = [IrSensorConfig().maximum_range] * 12
 
 
 def observation(goal_distance, goal_bearing=0.0, front=None, speed=0.0, yaw_rate=0.0):

@@ -18,7 +18,7 @@ from corobot_drake.config.scenario import (
     SetVelocity,
     Wait,
 )
-from corobot_drake.model import dimensions as dim
+from corobot_drake.robots import robot_spec
 from corobot_drake.systems.drive import (
     HOLD_SLACK,
     HOLD_SPEED,
@@ -33,6 +33,7 @@ from corobot_drake.systems.drive import (
 
 DRIVE = Drive()
 K = DRIVE.motor_torque_scaling  # axle rad/s at power 1
+RADIUS = robot_spec("corobot").wheel_radius  # m: the Corobot's wheels
 STEP = DRIVE.slew_rate * DRIVE.control_period  # the most the axle speed moves per update
 EXACT = 1e-12  # the controller adds, clamps and scales doubles: equal to rounding
 
@@ -103,15 +104,15 @@ def test_power_is_clamped_to_one():
 
 def test_set_speed_clamps_to_the_max_axle_speed_and_reports_power():
     s = controller()
-    fast = 2 * DRIVE.max_axle_speed * dim.WHEEL_RADIUS  # m/s: twice what the axle may do
+    fast = 2 * DRIVE.max_axle_speed * RADIUS  # m/s: twice what the axle may do
     slow = 0.2  # m/s
     s.fix("request", DriveRequest(1, SetSpeed(fast, -slow)))
     s.tick()
     st = status(s)
     assert st.target_left == DRIVE.max_axle_speed
-    assert st.target_right == pytest.approx(-slow / dim.WHEEL_RADIUS, rel=EXACT)
+    assert st.target_right == pytest.approx(-slow / RADIUS, rel=EXACT)
     assert st.power_left == 1.0  # 20 rad/s is past full power (K = 10.16): reported 1
-    assert st.power_right == pytest.approx(-slow / dim.WHEEL_RADIUS / K, rel=EXACT)
+    assert st.power_right == pytest.approx(-slow / RADIUS / K, rel=EXACT)
 
 
 def test_set_velocity_maps_through_the_skid_steer_kinematics():
@@ -123,8 +124,8 @@ def test_set_velocity_maps_through_the_skid_steer_kinematics():
     s.fix("request", DriveRequest(1, SetVelocity(0.1, 1.0)))
     s.tick()
     st = status(s)
-    assert st.target_left == pytest.approx(left / dim.WHEEL_RADIUS, rel=EXACT)
-    assert st.target_right == pytest.approx(right / dim.WHEEL_RADIUS, rel=EXACT)
+    assert st.target_left == pytest.approx(left / RADIUS, rel=EXACT)
+    assert st.target_right == pytest.approx(right / RADIUS, rel=EXACT)
 
 
 def test_set_velocity_past_the_max_axle_speed_keeps_the_curvature():

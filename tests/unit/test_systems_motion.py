@@ -15,7 +15,7 @@ from corobot_drake.config.scenario import (
     SetPose,
     SetPower,
 )
-from corobot_drake.model import dimensions as dim
+from corobot_drake.robots import robot_spec
 from corobot_drake.systems.drive import DriveRequest
 from corobot_drake.systems.motion import (
     POSE_SETTLE_TIME,
@@ -272,7 +272,7 @@ def _plant(s: Stepper, x: float, heading: float) -> tuple[float, float]:
     (rim speed = axle speed x wheel radius; yaw rate = the skid-steer spin rate)."""
     command = out(s).command
     left, right = (command.left, command.right) if isinstance(command, SetPower) else (0, 0)
-    rim_left, rim_right = (p * K * dim.WHEEL_RADIUS for p in (left, right))
+    rim_left, rim_right = (p * K * robot_spec("corobot").wheel_radius for p in (left, right))
     x += 0.5 * (rim_left + rim_right) * PERIOD
     heading = wrap(heading + 0.5 * (rim_right - rim_left) * SPIN_YAW_PER_RIM_SPEED * PERIOD)
     at(s, x, heading)

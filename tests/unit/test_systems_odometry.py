@@ -11,7 +11,7 @@ from pydrake.multibody.tree import SpatialInertia, UnitInertia
 from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import ConstantVectorSource
 
-from corobot_drake.model import dimensions as dim
+from corobot_drake.robots import robot_spec
 from corobot_drake.systems.drive import DriveStatus
 from corobot_drake.systems.odometry import (
     ChassisPoses,
@@ -99,7 +99,7 @@ def test_encoders_count_floor_600_ticks_per_revolution(q):
     expected = [math.floor(600 * a / (2 * math.pi)) for a in (q, -q)]
     # Drake quantizes the angle, then a gain turns it into ticks: whole numbers to rounding.
     np.testing.assert_allclose(ticks, expected, atol=1e-9)
-    assert dim.ENCODER_TICKS_PER_REVOLUTION == 600
+    assert robot_spec("corobot").encoder_ticks_per_revolution == 600
 
 
 def test_drive_state_reporter_assembles_the_drive_state():
@@ -115,7 +115,7 @@ def test_drive_state_reporter_assembles_the_drive_state():
         reporter.GetInputPort(name).FixValue(context, value)
     state = reporter.GetOutputPort("drive_state").Eval(context)
     assert (state.time_stamp, state.is_enabled, state.power_scaling_factor) == (2.5, True, 10.16)
-    assert state.distance_between_wheels == dim.TRACK
+    assert state.distance_between_wheels == robot_spec("corobot").track
     assert (state.position, state.heading) == ((0.5, -0.25, 0.06), 1.25)
     wheels = {n: (w.commanded_power, w.axle_speed, w.encoder_ticks)
               for n, w in state.wheels.items()}
