@@ -3,7 +3,8 @@ publishes them (the MCAP/Foxglove recording, the ROS 2 node and its bags).
 
 With one robot the topics and frames are bare (`/odom`, `base_link`), as a ROS robot's; with
 several, each robot's are under its name (`/<robot>/odom`, `<robot>/base_link`), as ROS
-namespaces and tf prefixes put them. The signals with a topic of their own
+namespaces and tf prefixes put them; a robot added while running is under its name too, and
+the ones the run started with keep theirs (`robot_names`). The signals with a topic of their own
 (`signals.Signal.topic`: the contact telemetry, ...) get one `TelemetryTopic` each, a JSON
 message the recording writes and the ROS 2 front end turns into a corobot_interfaces message.
 
@@ -42,6 +43,15 @@ class RobotNames:
     def base_frame(self) -> str:
         """The frame of the robot's base link: `base_link`."""
         return self.frame(CHASSIS_FRAME)
+
+
+def robot_names(robot: str, first: tuple[str, ...] | list[str], base: str = "chassis"
+                ) -> RobotNames:
+    """`robot`'s names in a run that started with the robots `first` (the scenario's): bare
+    for the only robot it started with, under its name otherwise (one of several, or a robot
+    added while running, e.g. by ROS 2's SpawnEntity). A robot's names never change while the
+    run goes on: the robots it started with keep theirs when another is added or deleted."""
+    return RobotNames(robot, list(first) != [robot], base)
 
 
 def nanoseconds(t: float) -> int:

@@ -3,11 +3,14 @@ store, no ROS needed) and handed to every sink: the live node's publishers (`nod
 a rosbag2 writer (`bag.BagSink`). A sink has `declare(topic, type, qos)` and `write(topic,
 data, t_ns)`, and may have `watched(topic)` (False: nobody would see a message on it now, a
 live topic without a subscriber; without it, always True: a bag records everything); the bus
-declares every topic to every sink before the first write.
+declares every topic to every sink before the first write. A sink may also have
+`forget(topic)`: a topic the simulation no longer publishes (a robot deleted while running,
+`Bus.building`); a bag keeps every topic it was given.
 """
 
 from __future__ import annotations
 
+import contextlib
 from functools import cache
 
 from corobot_drake.ros2.interfaces import Qos, message_definitions
@@ -59,6 +62,10 @@ class Bus:
         self.types = self.store.types
         self.sinks = list(sinks)
         self.topics: dict[str, tuple[str, Qos]] = {}
+        self.first_robots: tuple[str, ...] | None = None
+        """The robots of the first simulation built on this bus (the scenario the run started
+        with): they name every robot's topics (`topics.robot_names`), in a rebuilt one too."""
+        self._built: set[str] | None = None
 
     def channel(self, topic: str, msgtype: str, qos: Qos) -> Channel:
         """Declares `topic` (once; again: the same channel's type must agree)."""
@@ -69,4 +76,24 @@ class Bus:
             self.topics[topic] = (msgtype, qos)
             for sink in self.sinks:
                 sink.declare(topic, msgtype, qos)
+        if self._built is not None:
+            self._built.add(topic)
         return Channel(self, topic, msgtype)
+
+    @contextlib.contextmanager
+    def building(self, robots):
+        """Around the making of a simulation's publishers (`robots`: its robots' names): the
+        topics a simulation built before it had and it has not are forgotten by the sinks
+        that forget (`forget`: the node's publishers of a deleted robot's topics go)."""
+        if self.first_robots is None:
+            self.first_robots = tuple(robots)
+        self._built = set()
+        try:
+            yield
+            for topic in self.topics.keys() - self._built:
+                for sink in self.sinks:
+                    forget = getattr(sink, "forget", None)
+                    if forget is not None:
+                        forget(topic)
+        finally:
+            self._built = None

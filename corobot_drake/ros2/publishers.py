@@ -284,17 +284,24 @@ def add_ros2_topics(bus, builder, plant, scene_graph, robots: dict, scenario,
                     settings=None) -> None:
     """Adds the publishers of every topic (`interfaces.TOPICS`) for a station's plant and
     robots ({name: station.RobotParts}, built from `scenario`), on `bus`; `settings`: the
-    node's read-only parameters (`parameters.Settings`; default: their defaults)."""
+    node's read-only parameters (`parameters.Settings`; default: their defaults). Each
+    robot's names are `topics.robot_names`' (of the robots the bus's first simulation had:
+    a robot spawned later is under its name, the first ones keep theirs); a topic the
+    simulation this one replaces had and this one has not is forgotten (`Bus.building`)."""
+    with bus.building(robots):
+        _add_ros2_topics(bus, builder, plant, robots, scenario, settings)
+
+
+def _add_ros2_topics(bus, builder, plant, robots: dict, scenario, settings) -> None:
     from corobot_drake.robots import robot_spec
     from corobot_drake.ros2.parameters import Settings
     from corobot_drake.ros2.urdf import robot_urdf
 
     ground_truth = (settings or Settings()).odom_source == "ground_truth"
-    namespaced = len(robots) > 1
     mounts, descriptions, tf_robots, odometries = [], {}, [], []
     builder.AddNamedSystem("ros2_clock", ClockPublisher(bus))
     for name, parts in robots.items():
-        names = tp.RobotNames(name, namespaced, parts.chassis.name())
+        names = tp.robot_names(name, bus.first_robots, parts.chassis.name())
         robot = robot_spec(scenario.robots[name].robot)
         state = builder.AddNamedSystem(f"{name}.ros2_state", RobotStatePublisher(
             bus, names, parts.chassis.index(), scenario.robots[name].drive,
@@ -308,7 +315,7 @@ def add_ros2_topics(bus, builder, plant, scene_graph, robots: dict, scenario,
                           [(j.child_body().index(), names.body_frame(j.child_body().name()))
                            for j in parts.wheel_joints]))
         mounts += _robot_mounts(builder, bus, plant, names, parts)
-        if namespaced:  # one tree: every robot's odom is the world's origin
+        if len(robots) > 1:  # one tree: every robot's odom is the world's origin
             mounts.append((WORLD_FRAME, names.frame(ODOM_FRAME), RigidTransform()))
         descriptions[names] = robot_urdf(robot, name)
     tf = builder.AddNamedSystem("ros2_tf", TransformPublisher(bus, tf_robots,
