@@ -5,10 +5,13 @@ beside it on a skid, a bumper under its chassis that the ground alone touches.""
 import pytest
 
 from conftest import make_sim
-from corobot_drake.model import dimensions as dim
+from corobot_drake.config.scenario import load_scenario
+from corobot_drake.resources import DEFAULT_SCENARIO
+from corobot_drake.robots import robot_spec
 from corobot_drake.sensors.bumper import BumperConfig, BumperState
 
-BOX_FACE = dim.GIANT_BOX_CENTER[0] + dim.GIANT_BOX_SIZE / 2  # m: its near face's x, -0.7366
+GIANT = load_scenario(DEFAULT_SCENARIO).world.bodies["giant_box"]
+BOX_FACE = GIANT.pose.translation[0] + GIANT.shape.size[0] / 2  # m: its near face's x, -0.7366
 START = -0.45  # m: the rammer starts facing the box 0.11 m from it, at full speed on arrival
 RAM = (f"robots: {{corobot: {{pose: {{translation: [{START}, 0, 0], "
        "rotation: !Rpy {deg: [0, 0, 180]}}, bumpers: {front_bumper: {}}}, "
@@ -18,7 +21,8 @@ RAM = (f"robots: {{corobot: {{pose: {{translation: [{START}, 0, 0], "
 """The skid's box reaches 1.5 mm below the tyres' bottoms: the skidder stands on it."""
 DURATION = 0.8  # s: the rammer reaches the box at 0.35 s and is at rest against it by 0.5
 MU = 0.5  # the tyres' and the ground's friction (Drake combines two 0.5s as 0.5)
-STALL_PUSH = dim.WHEEL_RADIUS  # m: a stalled wheel pushes with its effort limit / this
+STALL_PUSH = robot_spec("corobot").wheel_radius
+"""m: a stalled wheel pushes with its effort limit / this."""
 
 
 def drive(sim):
@@ -85,7 +89,7 @@ def test_the_ground_never_presses_a_bumper(ram):
     assert all(not r.pressed and r.force == 0.0 for r in skid)
     # Yet the skidder stands on its skid: its wheels carry less than half its weight (the
     # skid, stiffer than the tyres, carries all of it: the wheels read 0 N).
-    weight = (dim.TOTAL_BODY_MASS + 4 * dim.WHEEL_MASS) * 9.81
+    weight = robot_spec("corobot").mass * 9.81
     assert sum(sim.robot("skidder").wheel_loads().values()) < 0.5 * weight
 
 

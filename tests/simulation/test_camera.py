@@ -24,9 +24,11 @@ from corobot_drake.config.scenario import (
     load_scenario,
     physics_step,
 )
-from corobot_drake.config.sensors import RENDERER_NAME
-from corobot_drake.model import dimensions as dim
+from corobot_drake.config.sensors import RENDERER_NAME, default_camera_config
 from corobot_drake.simulation import Simulation
+
+CAMERA = default_camera_config()
+"""The Corobot's camera, as its robot file says (320 x 240)."""
 
 pytestmark = pytest.mark.xdist_group("simulation/test_camera.py")
 """The camera tests in file order on one worker (each builds its own GL renderer: on one
@@ -102,7 +104,7 @@ def expected_box_share(sim) -> tuple[float, float]:
     plant = sim.station.plant
     X_WBox = plant.EvalBodyPoseInWorld(plant.GetMyContextFromRoot(sim.context),
                                        sim.station.bodies["giant_box"])
-    half = dim.GIANT_BOX_SIZE / 2
+    half = load_scenario(DEFAULT_SCENARIO).world.bodies["giant_box"].shape.size[0] / 2
     # The face's corners; the ground (z = 0) hides anything of it below z = 0.
     corners_W = [X_WBox @ np.array([half, y, z]) for y, z in
                  ((-half, -half), (half, -half), (half, half), (-half, half))]
@@ -125,7 +127,7 @@ def test_box_fills_the_share_the_geometry_predicts(x, y):
                    "rotation: !Rpy {deg: [0, 0, 180]}}}}", camera=True)
     sim.advance(0.5)  # settle on the tyres; the latest frame is from t = 14/30 s
     image = sim.robot().camera_image()
-    assert image.shape == (dim.CAMERA_HEIGHT, dim.CAMERA_WIDTH, 4)
+    assert image.shape == (CAMERA.height, CAMERA.width, 4)
     assert image.dtype == np.uint8
     share = box_mask(image).mean()
     expected, tolerance = expected_box_share(sim)
@@ -274,7 +276,7 @@ def test_cli_saves_numbered_frames(tmp_path, capsys):
     assert [f.name for f in files] == [f"frame_{i:06d}.png" for i in range(5)]
     assert json.loads(summary.read_text())["robots"]["corobot"]["camera_frames"] == 5
     image = np.asarray(Image.open(files[-1]))
-    assert image.shape == (dim.CAMERA_HEIGHT, dim.CAMERA_WIDTH, 3)
+    assert image.shape == (CAMERA.height, CAMERA.width, 3)
     assert image.mean() > 50
     assert main([str(DEFAULT_SCENARIO), "--headless", "--camera-rate", "0"]) == 2
     assert "--camera-rate" in capsys.readouterr().err
@@ -625,7 +627,7 @@ def test_the_webcam_service_has_no_frame_before_the_first_output():
     sim.advance_to(0.045)
     t, frame_time, image = calls.grab_frame("corobot", sim)
     assert t == pytest.approx(0.045) and frame_time == pytest.approx(0.01)
-    assert image.shape == (dim.CAMERA_HEIGHT, dim.CAMERA_WIDTH, 3) and image.mean() > 50
+    assert image.shape == (CAMERA.height, CAMERA.width, 3) and image.mean() > 50
 
 
 def test_a_robot_with_two_cameras_renders_each_from_its_own_pose(tmp_path):

@@ -7,7 +7,6 @@ from pydrake.multibody.math import SpatialVelocity
 
 from conftest import DEFAULT_SCENARIO, make_sim
 from corobot_drake.config.scenario import ScenarioError, load_scenario
-from corobot_drake.model import dimensions as dim
 
 CRATE_URDF = """<?xml version="1.0"?>
 <robot name="crate">
@@ -56,7 +55,7 @@ def slide(sim, body) -> float:
 
 def expected_slide(mu_model: float) -> float:
     """m: v^2 / (2 mu g) with Drake's combined friction against the ground's."""
-    mu_ground = dim.GROUND_FRICTION
+    mu_ground = load_scenario(DEFAULT_SCENARIO).world.ground.friction
     mu = 2 * mu_model * mu_ground / (mu_model + mu_ground)
     return LAUNCH ** 2 / (2 * mu * 9.81)
 

@@ -9,7 +9,7 @@ import pytest
 
 from conftest import DEFAULT_SCENARIO, REPO, make_sim
 from corobot_drake import cli
-from corobot_drake.model import dimensions as dim
+from corobot_drake.robots import robot_spec
 from corobot_drake.systems import runlog
 from corobot_drake.tuning import drive_tuning, sysid
 from lab import bench
@@ -37,7 +37,8 @@ def test_run_log_columns_and_ticks(tmp_path):
     context = plant.GetMyContextFromRoot(sim.context)
     joints = sim.station.robots["corobot"].wheel_joints
     q = [joints[i].get_angle(context) for i in (0, 1)]
-    ticks = [math.floor(dim.ENCODER_TICKS_PER_REVOLUTION * a / (2 * math.pi)) for a in q]
+    per_turn = robot_spec("corobot").encoder_ticks_per_revolution
+    ticks = [math.floor(per_turn * a / (2 * math.pi)) for a in q]
     assert rows[-1, 3:5] == pytest.approx(ticks, abs=1)
     assert rows[-1, 3] > 0 > rows[-1, 4]
     pose = robot.pose()

@@ -113,14 +113,16 @@ def test_a_held_key_drives_and_its_release_stops(meshcat):
 def test_the_view_frames_the_robot_and_the_box_and_follows(meshcat):
     import numpy as np
 
-    from corobot_drake.model import dimensions as dim
+    from corobot_drake.config.scenario import load_scenario
+    from corobot_drake.resources import DEFAULT_SCENARIO
     from corobot_drake.serving.view import FOLLOW_PERIOD, MESHCAT_FOV_DEG
 
     sim, clock = make_sim(), Clock()
     teleop = MeshcatTeleop(meshcat, sim, clock=clock)
     camera, target = teleop.camera.camera, teleop.camera.target
     # The robot (at the origin) and the giant box's 8 corners lie within the view's cone.
-    corners = [np.array(dim.GIANT_BOX_CENTER) + np.array([x, y, z]) * dim.GIANT_BOX_SIZE / 2
+    giant = load_scenario(DEFAULT_SCENARIO).world.bodies["giant_box"]  # where the scene has it
+    corners = [np.array(giant.pose.translation) + np.array([x, y, z]) * giant.shape.size[0] / 2
                for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)]
     axis = (target - camera) / np.linalg.norm(target - camera)
     for point in (np.zeros(3), *corners):
