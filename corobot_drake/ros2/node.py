@@ -34,7 +34,7 @@ from corobot_drake.ros2 import interfaces as ifc
 from corobot_drake.ros2.graph import configure_discovery, ros_type
 from corobot_drake.serving import calls
 from corobot_drake.serving.runner import SimulationStoppedError
-from corobot_drake.topics import RobotNames
+from corobot_drake.topics import robot_names
 
 ANSWER_TIMEOUT = 10.0
 """s (wall clock) a service or a goal waits for the simulation thread to take its command."""
@@ -49,6 +49,9 @@ SERVICE_SETTLE_TIMEOUT = 30.0
 
 BLOCKING_CALLBACKS_PER_ROBOT = len(ifc.ACTIONS) + 1
 """Callbacks that wait on the simulation, per robot: each action's running goal, /set_pose."""
+SPAWNED_ROBOTS = 8
+"""Robots the node takes beyond the scenario's (SpawnEntity): its executor keeps threads for
+their blocking callbacks too (a thread pool makes a thread only when one is needed)."""
 OTHER_CALLBACK_THREADS = 4
 """Executor threads for the quick callbacks (/cmd_vel, the services, the parameters)."""
 REQUEST_QUEUE = 1000
@@ -92,25 +95,40 @@ def relative(name: str) -> str:
 
 
 class LiveSink:
-    """A `bus.Bus` sink: publishes each serialized message on the node's publisher."""
+    """A `bus.Bus` sink: publishes each serialized message on the node's publisher (made as
+    the topic is declared; destroyed when it is forgotten, made again if it is used again)."""
 
     def __init__(self, node, sensor_qos: str = "reliable"):
         self._node = node
         self._sensor_qos = sensor_qos
+        self._offers: dict = {}  # topic: (type, Qos)
         self._publishers: dict = {}
 
     def declare(self, topic: str, msgtype: str, qos: ifc.Qos) -> None:
-        if topic in self._publishers:  # a simulation rebuilt (a spawn): the same topics
-            return
-        self._publishers[topic] = self._node.create_publisher(
-            ros_type(msgtype), relative(topic), qos_profile(qos, self._sensor_qos))
+        self._offers[topic] = (msgtype, qos)
+        self._publisher(topic)
+
+    def forget(self, topic: str) -> None:
+        """`topic` is no longer published (a robot deleted): its publisher goes, and the topic
+        leaves the ROS graph."""
+        publisher = self._publishers.pop(topic, None)
+        if publisher is not None:
+            self._node.destroy_publisher(publisher)
+
+    def _publisher(self, topic: str):
+        publisher = self._publishers.get(topic)
+        if publisher is None:
+            msgtype, qos = self._offers[topic]
+            publisher = self._publishers[topic] = self._node.create_publisher(
+                ros_type(msgtype), relative(topic), qos_profile(qos, self._sensor_qos))
+        return publisher
 
     def write(self, topic: str, data, t_ns: int) -> None:
-        self._publishers[topic].publish(bytes(data))
+        self._publisher(topic).publish(bytes(data))
 
     def watched(self, topic: str) -> bool:
         """Whether `topic` has a subscriber now (the graph as Fast DDS last saw it)."""
-        return self._publishers[topic].get_subscription_count() > 0
+        return self._publisher(topic).get_subscription_count() > 0
 
 
 @dc.dataclass
@@ -151,13 +169,15 @@ class Ros2Node:
         self._thread: threading.Thread | None = None
         self._closing = threading.Event()
         self._servers: list = []
-        self._robots = 0
+        self._first: tuple[str, ...] = ()  # the scenario's robots: they name the robots
+        self._robot_entities: dict[str, list] = {}  # each robot's subscription, servers
+        self._robots_lock = threading.Lock()
         self._goals = 0  # running (`_execute`)
         self._goals_changed = threading.Condition()
         self._aborted_at_stop = threading.Event()
         self._namesakes = 1
         self._slips = 0  # the runner's, at the last /diagnostics
-        self._cmd_vel_topics: list[str] = []
+        self._cmd_vel_topics: dict[str, str] = {}  # robot: its /cmd_vel's full name
         self._other_types: set = set()  # (topic, type) reported
         self.node.create_timer(GRAPH_CHECK_PERIOD, self._check_graph)
 
@@ -175,38 +195,78 @@ class Ros2Node:
     def attach(self, runner, robots) -> None:
         """Takes commands for `robots` (names, the scenario's order) through `runner`."""
         self.runner = runner
-        namespaced = len(robots) > 1
-        self._robots = len(robots)
-        stamped = self.settings.cmd_vel_stamped
-        for robot in robots:
-            names = RobotNames(robot, namespaced)
-            subscription = self.node.create_subscription(
-                ros_type(cmd_vel_type(stamped)), relative(names.topic(ifc.CMD_VEL[0])),
-                partial(self._on_twist, robot, stamped), 10, callback_group=self._group)
-            self._cmd_vel_topics.append(subscription.topic_name)
-            for action in ifc.ACTIONS:
-                self._servers.append(ActionServer(
-                    self.node, ros_type(action.type), relative(names.topic(action.name)),
-                    execute_callback=partial(self._execute, robot, action),
-                    goal_callback=partial(self._check_goal, robot, action),
-                    cancel_callback=lambda goal: CancelResponse.ACCEPT,
-                    callback_group=self._group, goal_service_qos_profile=SERVICE_QOS,
-                    result_service_qos_profile=SERVICE_QOS,
-                    cancel_service_qos_profile=SERVICE_QOS))
-            for service in ifc.SERVICES:
-                self.node.create_service(ros_type(service.type),
-                                         relative(names.topic(service.name)),
-                                         partial(self._service_handler(service), robot),
-                                         qos_profile=SERVICE_QOS, callback_group=self._group)
+        self._first = tuple(robots)
+        self.set_robots(robots)
         runner.hooks.append(self._check_deadman)
         self._diagnostics = self.node.create_publisher(
             ros_type("diagnostic_msgs/msg/DiagnosticArray"), "/diagnostics", 10)
-        self.node.create_timer(diagnostics.PERIOD, partial(self._publish_diagnostics, robots),
+        self.node.create_timer(diagnostics.PERIOD, self._publish_diagnostics,
                                callback_group=self._group)
         from corobot_drake.ros2.simulation_services import SimulationServices
 
         self.simulation = SimulationServices(self, runner)
         """The ROS 2 Simulation Interfaces: play, pause, step, reset, entities, spawning."""
+
+    @property
+    def robot_capacity(self) -> int:
+        """How many robots the node takes commands for at most (the scenario's, and
+        `SPAWNED_ROBOTS` more)."""
+        return len(self._first) + SPAWNED_ROBOTS
+
+    def set_robots(self, robots) -> None:
+        """Takes commands for `robots` from now on: a robot new to the node gets its
+        /cmd_vel subscription, actions and services (named by `topics.robot_names`), one
+        gone loses them (a spawn, a delete, a reset: the simulation's robots changed)."""
+        with self._robots_lock:
+            for robot in [r for r in self._robot_entities if r not in robots]:
+                self._remove_robot(robot)
+            for robot in robots:
+                if robot not in self._robot_entities:
+                    self._add_robot(robot)
+
+    def _add_robot(self, robot: str) -> None:
+        names = robot_names(robot, self._first)
+        stamped = self.settings.cmd_vel_stamped
+        subscription = self.node.create_subscription(
+            ros_type(cmd_vel_type(stamped)), relative(names.topic(ifc.CMD_VEL[0])),
+            partial(self._on_twist, robot, stamped), 10, callback_group=self._group)
+        self._cmd_vel_topics[robot] = subscription.topic_name
+        entities = [subscription]
+        for action in ifc.ACTIONS:
+            entities.append(ActionServer(
+                self.node, ros_type(action.type), relative(names.topic(action.name)),
+                execute_callback=partial(self._execute, robot, action),
+                goal_callback=partial(self._check_goal, robot, action),
+                cancel_callback=lambda goal: CancelResponse.ACCEPT,
+                callback_group=self._group, goal_service_qos_profile=SERVICE_QOS,
+                result_service_qos_profile=SERVICE_QOS,
+                cancel_service_qos_profile=SERVICE_QOS))
+        for service in ifc.SERVICES:
+            entities.append(self.node.create_service(
+                ros_type(service.type), relative(names.topic(service.name)),
+                partial(self._service_handler(service), robot), qos_profile=SERVICE_QOS,
+                callback_group=self._group))
+        self._robot_entities[robot] = entities
+
+    def _remove_robot(self, robot: str) -> None:
+        """Its subscription, action servers and services destroyed (rclpy defers each while
+        the executor uses it); a goal still running ends as its robot is gone (`_run_goal`)."""
+        subscription, *rest = self._robot_entities.pop(robot)
+        self._cmd_vel_topics.pop(robot, None)
+        self.node.destroy_subscription(subscription)
+        for entity in rest:
+            if isinstance(entity, ActionServer):
+                entity.destroy()
+            else:
+                self.node.destroy_service(entity)
+
+    def forget_commands(self, robot: str | None = None) -> None:
+        """In the simulation thread: the deadman forgets `robot`'s latest /cmd_vel (every
+        robot's: None), as a reset or the robot's deletion ends it."""
+        if robot is None:
+            self._twists.clear()
+        else:
+            self._twists.pop(robot, None)
 
     def _call(self, fn, timeout: float = ANSWER_TIMEOUT):
         """`fn(sim)` in the simulation thread; its result (or exception)."""
@@ -235,9 +295,11 @@ class Ros2Node:
         if not self.deadman:
             return
         for robot, twist in list(self._twists.items()):
-            if sim.time - twist.time <= self.deadman:
+            if robot in sim.robots and sim.time - twist.time <= self.deadman:
                 continue
             del self._twists[robot]
+            if robot not in sim.robots:  # deleted meanwhile
+                continue
             last = sim.robot(robot).last_command()
             if last is not None and last.seq == twist.seq:
                 sim.robot(robot).all_stop()
@@ -250,7 +312,7 @@ class Ros2Node:
         """Reports, once each, a publisher of the other Twist type on a /cmd_vel: DDS never
         delivers its messages to this node's subscription (the types differ)."""
         expected = cmd_vel_type(self.settings.cmd_vel_stamped).replace("/msg/", "/")
-        for topic in self._cmd_vel_topics:
+        for topic in list(self._cmd_vel_topics.values()):
             for info in self.node.get_publishers_info_by_topic(topic):
                 other = info.topic_type.replace("/msg/", "/")
                 if other == expected or (topic, other) in self._other_types:
@@ -262,10 +324,10 @@ class Ros2Node:
                     f"cmd_vel_stamped: {str(self.settings.cmd_vel_stamped).lower()}): its "
                     "messages do not reach the robot")
 
-    def _publish_diagnostics(self, robots: list[str]) -> None:
+    def _publish_diagnostics(self) -> None:
         """/diagnostics (`diagnostics`): the runner's real-time figures and each robot's."""
         try:
-            values = self._call(partial(diagnostics.sample, list(robots)))
+            values = self._call(lambda sim: diagnostics.sample(list(sim.robots), sim))
         except (SimulationStoppedError, TimeoutError):
             return  # stopping, or too busy to answer: the next look reports
         stats = self.runner.stats()
@@ -331,6 +393,9 @@ class Ros2Node:
                         break
                     except SimulationStoppedError:
                         return self._abort_at_stop(goal_handle, Result)
+                    except KeyError as e:  # the robot deleted (DeleteEntity, a reset)
+                        goal_handle.abort()
+                        return Result(success=False, reason=e.args[0])
                 if self._closing.is_set():
                     with contextlib.suppress(SimulationStoppedError, TimeoutError):
                         self._call(partial(stop_if_running, robot, started.seq), RESULT_GRACE)
@@ -356,7 +421,7 @@ class Ros2Node:
         watch, `FEEDBACK_PERIOD` s of simulated time later."""
         try:
             t, left = done.result()
-        except SimulationStoppedError:
+        except (SimulationStoppedError, KeyError):
             return concurrent.futures.Future()  # none more: the goal's end says why
         if left is not None:
             goal_handle.publish_feedback(ros_type(action.type).Feedback(
@@ -438,7 +503,7 @@ class Ros2Node:
         # have at once, and some for the rest.
         from corobot_drake.ros2.simulation_services import BLOCKING_CALLBACKS
 
-        threads = (BLOCKING_CALLBACKS_PER_ROBOT * self._robots + OTHER_CALLBACK_THREADS
+        threads = (BLOCKING_CALLBACKS_PER_ROBOT * self.robot_capacity + OTHER_CALLBACK_THREADS
                    + BLOCKING_CALLBACKS)
         self._executor = MultiThreadedExecutor(num_threads=threads, context=self.context)
         self._executor.add_node(self.node)
@@ -463,7 +528,9 @@ class Ros2Node:
             self._executor.shutdown(timeout_sec=5.0)
         if self._thread is not None:
             self._thread.join(5.0)
-        for server in self._servers:
+        robot_servers = [e for entities in self._robot_entities.values() for e in entities
+                         if isinstance(e, ActionServer)]
+        for server in [*self._servers, *robot_servers]:
             server.destroy()
         self.node.destroy_node()
         if self.context.ok():

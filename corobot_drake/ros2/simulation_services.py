@@ -1,12 +1,18 @@
 """The ROS 2 Simulation Interfaces (package `simulation_interfaces` 2.1.0, the simulator-agnostic
 control surface Gazebo and Isaac Sim serve) served by the node: play, pause, stop, step
 (`StepSimulation`, the `SimulateSteps` action), reset, the entities' states, spawning and
-deleting world bodies and model files' models, and what can be spawned.
+deleting world bodies, model files' models and robots, and what can be spawned.
 
 A *step* is one physics step (`Simulation.physics_step`: 10 ms by default). Entities are the
 robots (category ROBOT) and the world's bodies beside them (`Simulation.bodies`: `world.bodies`
 by name, a directive's model's bodies as `model::body`; OBJECT when free, STATIC_OBJECT when
 welded). Poses and twists are in the `world` frame, at the simulated time of the header.
+A robot spawned from its robot file gets its topics, frames, actions and services under its
+name (`topics.robot_names`: the scenario's robots keep theirs); the node takes its commands
+from then on (`Ros2Node.set_robots`), until it is deleted or a reset ends it.
+
+The services and the action are named relative to the node's namespace, as Gazebo's
+(`--ros-args -r __ns:=/sim` serves `/sim/spawn_entity`; at the root, `/spawn_entity`).
 
 Threads: as the node's own services (`node`), each callback hands its work to the simulation
 thread (`Runner.submit`) and waits; what is refused comes back as `RefusedError`, the interface's
@@ -16,10 +22,12 @@ result code with one line naming what is wrong.
 from __future__ import annotations
 
 import contextlib
+import json
 import math
 import re
 import threading
 from functools import partial
+from pathlib import Path
 
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
 
@@ -295,6 +303,7 @@ class SimulationServices:
             elif target == S.STATE_STOPPED:
                 self._runner.pause(True)
                 self._answer(response, self._reset)
+                self._sync_robots()
                 if response.result.result != response.result.RESULT_OK:
                     return response
                 self._stopped = True
@@ -319,7 +328,9 @@ class SimulationServices:
                                      f"is supported; got {request.scope}")
             return response
         with self._lock:
-            return self._answer(response, self._reset)
+            self._answer(response, self._reset)
+            self._sync_robots()
+            return response
 
     def _reset(self, sim) -> None:
         """In the simulation thread: back to the start of the scenario the node started with
@@ -331,7 +342,13 @@ class SimulationServices:
             self._models.clear()
         else:
             sim.reset()
-        self._node._twists.clear()  # the deadman's: the robots' commands are reset
+        self._node.forget_commands()  # the deadman's: the robots' commands are reset
+
+    def _sync_robots(self) -> None:
+        """The node takes commands for the simulation's robots (after a spawn, a delete or a
+        reset changed them)."""
+        with contextlib.suppress(SimulationStoppedError, TimeoutError):
+            self._node.set_robots(self._call(lambda sim: list(sim.robots)))
 
     # --- stepping ---
     def _step_problem(self, steps) -> RefusedError | None:
@@ -539,8 +556,9 @@ class SimulationServices:
 
     def _spawn_entity(self, request, response):
         """A world body from its YAML (a scenario's `world.bodies` entry: `resource_string`,
-        or a `.yaml` file `uri`) at `initial_pose`; the simulation is rebuilt with it, going
-        on from where it is (`Simulation.saved_scenario`)."""
+        or a `.yaml` file `uri`), a model file's model, or a robot from its robot file (`uri`:
+        a shipped robot's name or the file) at `initial_pose`; the simulation is rebuilt with
+        it, going on from where it is (`Simulation.saved_scenario`)."""
         Result = _t("msg", "Result")
         if not self._can_rebuild():
             response.result = result(Result.RESULT_FEATURE_UNSUPPORTED,
@@ -551,7 +569,9 @@ class SimulationServices:
         def fill(r, name):
             r.entity_name = name
         with self._lock:
-            return self._answer(response, partial(self._spawn, request), fill)
+            self._answer(response, partial(self._spawn, request), fill)
+            self._sync_robots()
+            return response
 
     def _spawn(self, request, sim) -> str:
         from pydrake.math import RollPitchYaw
@@ -559,7 +579,9 @@ class SimulationServices:
         from corobot_drake.config import scenario as sc
 
         Srv = _t("srv", "SpawnEntity").Response
-        name = spawn_name(sim, request.name, request.allow_renaming)
+        robot = robot_resource(request.entity_resource)
+        name = spawn_name(sim, request.name, request.allow_renaming,
+                          "body" if robot is None else Path(robot).stem)
         if request.entity_namespace and not NAMESPACE.fullmatch(request.entity_namespace):
             raise RefusedError(Srv.NAMESPACE_INVALID,
                                f"entity_namespace: {request.entity_namespace!r} is not a ROS "
@@ -572,9 +594,10 @@ class SimulationServices:
             X = pose_transform(request.initial_pose.pose, "initial_pose.pose")
         except ValueError as e:
             raise RefusedError(Srv.INVALID_POSE, str(e)) from None
+        if robot is not None:
+            return self._spawn_robot(sim, name, robot, X, request.entity_namespace)
         uri = request.entity_resource.uri
-        if uri and not is_robot(uri.removeprefix("file://"), None) and (
-                model_format(uri) is not None):
+        if uri and model_format(uri) is not None:
             return self._spawn_model(sim, name, uri, X)
         field, text = resource_text(request.entity_resource)
         rpy = RollPitchYaw(X.rotation()).vector()
@@ -592,12 +615,45 @@ class SimulationServices:
         self._rebuild(sim, scenario, Srv.RESOURCE_PARSE_ERROR, Srv.INVALID_POSE)
         return name
 
+    def _spawn_robot(self, sim, name: str, robot: str, X, namespace: str) -> str:
+        """A robot (`robot`: a scenario's `robots.<name>.robot`) added to the scenario at `X`
+        as a robot starts (on the ground: its x, y and yaw; z is the robot's own), its drive,
+        tyres and sensors its robot file's. Returns its name."""
+        from pydrake.math import RollPitchYaw
+
+        from corobot_drake.config import scenario as sc
+
+        Result, Srv = _t("msg", "Result"), _t("srv", "SpawnEntity").Response
+        if namespace and namespace.strip("/") != name:
+            raise RefusedError(Result.RESULT_FEATURE_UNSUPPORTED,
+                               f"entity_namespace: a robot's topics and frames are under its "
+                               f"name (/{name}/...): leave it empty or give /{name}; got "
+                               f"{namespace!r}")
+        if len(sim.robots) >= self._node.robot_capacity:
+            raise RefusedError(Result.RESULT_OPERATION_FAILED,
+                               f"name: {name!r}: the node takes at most "
+                               f"{self._node.robot_capacity} robots at once; delete one first")
+        rpy = RollPitchYaw(X.rotation())
+        if max(abs(rpy.roll_angle()), abs(rpy.pitch_angle())) > LEVEL_TOLERANCE:
+            raise RefusedError(Srv.INVALID_POSE,
+                               "initial_pose.pose.orientation: a robot stands on the ground: "
+                               f"only a yaw (roll {rpy.roll_angle():.3g} rad, pitch "
+                               f"{rpy.pitch_angle():.3g} rad)")
+        x, y = (float(v) for v in X.translation()[:2])
+        layer = (f"robots:\n  {name}:\n    robot: {json.dumps(robot)}\n    pose: {{translation: "
+                 f"[{x!r}, {y!r}, 0.0], rotation: !Rpy {{deg: [0.0, 0.0, "
+                 f"{math.degrees(rpy.yaw_angle())!r}]}}}}\n")
+        try:
+            scenario = sc.load_scenario(data=layer, defaults=sim.saved_scenario())
+        except sc.ScenarioError as e:
+            raise robot_refusal(e) from None
+        self._rebuild(sim, scenario, Srv.RESOURCE_PARSE_ERROR, Srv.INVALID_POSE)
+        return name
+
     def _spawn_model(self, sim, name: str, uri: str, X) -> str:
         """A model file's model (`MODEL_FORMATS`) added as a directive: free, its base body
         at `X`; welded there when none of its bodies has mass (a wall, a maze). Returns the
         entity's name, `name::base`."""
-        from pathlib import Path
-
         from pydrake.common.schema import Transform
         from pydrake.multibody.parsing import AddModel, AddWeld, ModelDirective
 
@@ -648,7 +704,9 @@ class SimulationServices:
                                      "without one here)")
             return response
         with self._lock:
-            return self._answer(response, partial(self._delete, request.entity))
+            self._answer(response, partial(self._delete, request.entity))
+            self._sync_robots()
+            return response
 
     def _delete(self, name: str, sim) -> None:
         Result = _t("msg", "Result")
@@ -662,17 +720,28 @@ class SimulationServices:
                 d for d in scenario.directives
                 if not (d.add_model is not None and d.add_model.name == model)
                 and not (d.add_weld is not None and d.add_weld.child.startswith(f"{model}::"))]
+        elif name in scenario.robots:
+            if len(scenario.robots) == 1:
+                raise RefusedError(Result.RESULT_OPERATION_FAILED,
+                                   f"entity: {name!r} is the only robot: the simulation keeps "
+                                   "one (spawn another first)")
+            del scenario.robots[name]
         else:
-            what = "a robot" if name in sim.robots else "a body of the scenario's directives"
             raise RefusedError(Result.RESULT_FEATURE_UNSUPPORTED,
-                               f"entity: {name!r} is {what}: world bodies and spawned models "
-                               "are deleted")
+                               f"entity: {name!r} is a body of the scenario's directives: "
+                               "robots, world bodies and spawned models are deleted")
         self._rebuild(sim, scenario, Result.RESULT_OPERATION_FAILED)
         self._models.discard(model)
+        if name in sim.robots:
+            self._node.forget_commands(name)
 
     def _get_spawnables(self, request, response):
+        from corobot_drake.robots import ROBOTS
+
         Spawnable, Resource = _t("msg", "Spawnable"), _t("msg", "Resource")
         response.spawnables = [
+            *(Spawnable(entity_resource=Resource(uri=name), description=robot_description(
+                name, path)) for name, path in ROBOTS.items()),
             *(Spawnable(entity_resource=Resource(resource_string=text), description=description)
               for description, text in SPAWNABLE_BODIES.items()),
             *(Spawnable(entity_resource=Resource(uri=uri), description=description)
@@ -698,8 +767,6 @@ MODEL_FORMATS = {".sdf": "sdf", ".urdf": "urdf", ".xml": "mjcf"}
 
 
 def model_format(uri: str) -> str | None:
-    from pathlib import Path
-
     return MODEL_FORMATS.get(Path(uri.split("?")[0]).suffix.lower())
 
 
@@ -708,8 +775,6 @@ def model_base(uri: str) -> tuple[str, bool]:
     bodies has mass), read into a scratch plant; RefusedError RESOURCE_PARSE_ERROR naming
     what is wrong (a file that is missing, too large, does not parse, holds no model or
     several, or welds its base to the world)."""
-    from pathlib import Path
-
     from pydrake.multibody.plant import MultibodyPlant
 
     from corobot_drake.config.directives import MAX_MODEL_BYTES
@@ -743,10 +808,11 @@ def model_base(uri: str) -> tuple[str, bool]:
 FEATURES_INFO = (
     "corobot_drake: a step is one physics step (10 ms by default); entities are the robots "
     "and the world's bodies, states in the world frame; spawn and delete take world bodies "
-    "(YAML as a scenario's world.bodies entry) and model files (SDFormat, URDF, MJCF: free, "
-    "or fixed when massless) and rebuild the simulation, which goes on from "
-    "where it was; robots are not spawned (a scenario's robots); a reset returns to the "
-    "scenario's start (bit for bit its first run)")
+    "(YAML as a scenario's world.bodies entry), model files (SDFormat, URDF, MJCF: free, "
+    "or fixed when massless) and robots (a robot file's uri, or a shipped robot's name: its "
+    "topics, frames, actions and services under /<name>/, the scenario's robots keeping "
+    "theirs) and rebuild the simulation, which goes on from where it was; a reset returns to "
+    "the scenario's start (bit for bit its first run)")
 STATE_NAMES = {0: "STATE_STOPPED", 1: "STATE_PLAYING", 2: "STATE_PAUSED", 3: "STATE_QUITTING",
                4: "STATE_NO_WORLD", 5: "STATE_LOADING_WORLD"}
 SPAWNABLE_BODIES = {
@@ -764,9 +830,9 @@ SPAWNABLE_MODELS: dict[str, str] = {}
 ground (the loader refuses them); its scenario welds them."""
 
 
-def spawn_name(sim, name: str, allow_renaming: bool) -> str:
+def spawn_name(sim, name: str, allow_renaming: bool, default: str = "body") -> str:
     """The new entity's name: `name`, or with `allow_renaming` the first free `name_N`
-    (`body_N` for an empty one); RefusedError NAME_INVALID / NAME_NOT_UNIQUE otherwise."""
+    (`<default>_N` for an empty one); RefusedError NAME_INVALID / NAME_NOT_UNIQUE otherwise."""
     Srv = _t("srv", "SpawnEntity").Response
     taken = {*entity_names(sim), *sim.station.models}
     if name and not NAME.fullmatch(name):
@@ -778,21 +844,16 @@ def spawn_name(sim, name: str, allow_renaming: bool) -> str:
         raise RefusedError(Srv.NAME_NOT_UNIQUE if name else Srv.NAME_INVALID,
                            f"name: {name!r} is taken" if name else
                            "name: empty (give one, or allow_renaming)")
-    base = name or "body"
+    base = name or default
     return next(f"{base}_{i}" for i in range(1, len(taken) + 2) if f"{base}_{i}" not in taken)
 
 
 def resource_text(resource) -> tuple[str, str]:
     """(the field it came from, the YAML text of a world body) of a `Resource`; RefusedError
     NO_RESOURCE, UNSUPPORTED_FORMAT or RESOURCE_PARSE_ERROR naming what is wrong."""
-    from pathlib import Path
-
     Srv = _t("srv", "SpawnEntity").Response
     if resource.uri:
         uri = resource.uri.removeprefix("file://")
-        if is_robot(uri, None):
-            raise RefusedError(Srv().result.RESULT_FEATURE_UNSUPPORTED, ROBOT_UNSUPPORTED.format(
-                f"entity_resource.uri: {resource.uri!r}"))
         if Path(uri).suffix.lower() not in (".yaml", ".yml"):
             raise RefusedError(Srv.UNSUPPORTED_FORMAT,
                                f"entity_resource.uri: {resource.uri!r}: spawn formats are "
@@ -807,28 +868,65 @@ def resource_text(resource) -> tuple[str, str]:
                            "are empty")
     else:
         field, text = "entity_resource.resource_string", resource.resource_string
-    if is_robot(None, text):
-        raise RefusedError(Srv().result.RESULT_FEATURE_UNSUPPORTED,
-                           ROBOT_UNSUPPORTED.format(f"{field}: a robot file"))
     return field, text
 
 
-ROBOT_UNSUPPORTED = ("{}: spawning a robot is not supported (its topics and frames would move "
-                     "under namespaces while running): name it in the scenario's robots "
-                     "(robots.<name>.robot) and start the node with it")
-
-
-def is_robot(uri: str | None, text: str | None) -> bool:
-    """Whether a resource is a robot: a shipped robot's name or file, or a robot file's text
-    (a mapping with `model` and `wheels`)."""
-    import yaml
-
+def robot_resource(resource) -> str | None:
+    """The robot a `Resource` names, as a scenario's `robots.<name>.robot` says it: a shipped
+    robot's name, or a robot file's absolute path (`uri`: the name, a path or `file://`);
+    None when it is no robot (a world body, a model file). A uri of a bare word is a robot's
+    name (the loader names the robots there are when it is none); RefusedError
+    FEATURE_UNSUPPORTED for a robot file's text (its model is found beside the file)."""
     from corobot_drake.robots import ROBOTS
 
-    if uri is not None:
-        from pathlib import Path
+    Result = _t("msg", "Result")
+    if not resource.uri:
+        if resource.resource_string.strip() and is_robot(resource.resource_string):
+            raise RefusedError(Result.RESULT_FEATURE_UNSUPPORTED,
+                               "entity_resource.resource_string: a robot file: give its uri "
+                               "instead (a path or file://; its model is found beside it) or "
+                               f"a shipped robot's name ({', '.join(ROBOTS)})")
+        return None
+    uri = resource.uri.removeprefix("file://")
+    if uri in ROBOTS or ("/" not in uri and not Path(uri).suffix):
+        return uri
+    path = Path(uri)
+    if path.suffix.lower() not in (".yaml", ".yml"):
+        return None
+    try:
+        text = path.read_text()
+    except (OSError, UnicodeDecodeError):
+        return None  # (a world body's file: `resource_text` says what is wrong)
+    return str(path.resolve()) if is_robot(text) else None
 
-        return uri in ROBOTS or Path(uri).resolve() in {p.resolve() for p in ROBOTS.values()}
+
+def robot_refusal(error) -> RefusedError:
+    """A robot's ScenarioError as SpawnEntity's answer: its start overlapping something
+    INVALID_POSE, the rest RESOURCE_PARSE_ERROR; one line naming the request's field (or the
+    robot file's line and field, the loader's own words)."""
+    Srv = _t("srv", "SpawnEntity").Response
+    if error.source != "<scenario text>":  # the robot file's own line
+        return RefusedError(Srv.RESOURCE_PARSE_ERROR, f"entity_resource.uri: {error}")
+    if error.field.endswith(".pose"):  # it would start inside a robot or a body
+        return RefusedError(Srv.INVALID_POSE, f"initial_pose: {error.message}")
+    return RefusedError(Srv.RESOURCE_PARSE_ERROR, f"entity_resource.uri: {error.message}")
+
+
+def robot_description(name: str, path: Path) -> str:
+    """A shipped robot's GetSpawnables description: its robot file's first sentence."""
+    comment = []
+    for line in path.read_text().splitlines():
+        if not line.startswith("#"):
+            break
+        comment.append(line.lstrip("#").strip())
+    sentence = " ".join(comment).split(". ")[0].rstrip(".")
+    return f"robot {name} (a robot file: {path.parent.name}/{path.name}): {sentence}"
+
+
+def is_robot(text: str) -> bool:
+    """Whether a resource's text is a robot file's (a mapping with `model` and `wheels`)."""
+    import yaml
+
     try:
         data = yaml.safe_load(text)
     except yaml.YAMLError:  # (a world body's shape tags, !Box ...: not a robot file's)

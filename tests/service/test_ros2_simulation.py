@@ -356,7 +356,7 @@ def test_play_pause_stop_and_the_action(sim_ros):
 
 
 @ONE_GRAPH_AT_A_TIME
-def test_bad_requests_get_their_codes_and_one_line(sim_ros):
+def test_bad_requests_get_their_codes_and_one_line(sim_ros, tmp_path):
     from geometry_msgs.msg import Pose, PoseStamped
     from simulation_interfaces.msg import EntityState, Resource
     from simulation_interfaces.srv import (
@@ -403,19 +403,57 @@ def test_bad_requests_get_their_codes_and_one_line(sim_ros):
              S.RESOURCE_PARSE_ERROR, "entity_resource.resource_string: "),
             ({"name": "b", "entity_resource": Resource(uri="/nowhere/x.sdf")},
              S.RESOURCE_PARSE_ERROR, "entity_resource.uri: '/nowhere/x.sdf': "),
-            ({"name": "b", "entity_resource": Resource(uri="burger")},
-             R.RESULT_FEATURE_UNSUPPORTED, "spawning a robot is not supported"),
-            ({"name": "b", "entity_resource": Resource(
-                resource_string="model: burger.sdf\nwheels: {left: [l], right: [r]}")},
-             R.RESULT_FEATURE_UNSUPPORTED, "a robot file: spawning a robot is not supported")):
+            *_bad_robots(tmp_path, Resource)):
         check(_call(probe, "spawn_entity", SpawnEntity, retry=10.0, initial_pose=at, **fields),
               code, words)
+    tilted = PoseStamped()
+    tilted.pose.position.y, tilted.pose.orientation.w = 1.0, 0.0
+    tilted.pose.orientation.x = 1.0  # upside down
+    origin = PoseStamped()
+    origin.pose.orientation.w = 1.0  # where the Corobot is
+    for pose, words in ((tilted, "initial_pose.pose.orientation: a robot stands on the ground"),
+                        (origin, "initial_pose: robot 'b' starts ")):
+        check(_call(probe, "spawn_entity", SpawnEntity, retry=10.0, name="b", initial_pose=pose,
+                    entity_resource=Resource(uri="burger")), S.INVALID_POSE, words)
     check(_call(probe, "delete_entity", DeleteEntity, retry=10.0, entity="nobody"),
           R.RESULT_NOT_FOUND, "no entity named")
+    check(_call(probe, "delete_entity", DeleteEntity, retry=10.0, entity="corobot"),
+          R.RESULT_OPERATION_FAILED, "entity: 'corobot' is the only robot")
     # still serving
     features = _call(probe, "get_simulator_features", GetSimulatorFeatures, retry=10.0)
     assert features.features.spawn_formats == ["yaml", "sdf", "urdf", "mjcf"]
-    assert "robots are not spawned" in features.features.custom_info
+    assert "robots (a robot file's uri" in features.features.custom_info
+
+
+def _bad_robots(tmp_path, Resource) -> list:
+    """SpawnEntity requests of robots that cannot be spawned: (fields, code, words)."""
+    from simulation_interfaces.msg import Result
+    from simulation_interfaces.srv import SpawnEntity
+
+    from corobot_drake.robots import ROBOTS
+
+    S = SpawnEntity.Response
+    broken = tmp_path / "broken.yaml"  # the Burger's robot file with a negative wheel radius
+    broken.write_text(ROBOTS["burger"].read_text().replace("radius: 0.033 ", "radius: -1 "))
+    line = 1 + next(i for i, text in enumerate(broken.read_text().splitlines())
+                    if "radius: -1" in text)
+    burger = Resource(uri="burger")
+    return [
+        ({"name": "b", "entity_resource": Resource(uri="turtlebot")}, S.RESOURCE_PARSE_ERROR,
+         "entity_resource.uri: 'turtlebot' is neither a shipped robot (corobot, burger, "
+         "pioneer) nor a robot file"),
+        ({"name": "b", "entity_resource": Resource(uri=f"file://{broken}")},
+         S.RESOURCE_PARSE_ERROR,
+         f"entity_resource.uri: {broken}:{line}: wheels.radius: must be in (0, 100] m"),
+        ({"name": "corobot", "entity_resource": burger}, S.NAME_NOT_UNIQUE, "is taken"),
+        ({"name": "giant_box", "entity_resource": burger}, S.NAME_NOT_UNIQUE, "is taken"),
+        ({"name": "b", "entity_resource": burger, "entity_namespace": "/elsewhere"},
+         Result.RESULT_FEATURE_UNSUPPORTED, "entity_namespace: a robot's topics and frames are "
+         "under its name (/b/...)"),
+        ({"name": "b", "entity_resource": Resource(
+            resource_string="model: burger.sdf\nwheels: {left: [l], right: [r]}")},
+         Result.RESULT_FEATURE_UNSUPPORTED,
+         "entity_resource.resource_string: a robot file: give its uri instead")]
 
 
 @ONE_GRAPH_AT_A_TIME
@@ -450,6 +488,105 @@ def test_spawn_then_delete_then_reset(sim_ros):
     assert reset.result.result == 1 and _pose(probe)[0] == 0.0
     # the simulation rebuilt from the scenario the node started with: its first run again
     assert _episode(probe, reset=False) == probe.fresh
+
+
+def _graph_has(probe, topic: str, publishers: bool = True) -> bool:
+    """Whether the node publishes `topic` (or, not `publishers`, subscribes to it), as the
+    probe's graph sees it now."""
+    infos = (probe.node.get_publishers_info_by_topic(topic) if publishers
+             else probe.node.get_subscriptions_info_by_topic(topic))
+    return any(i.node_name == "corobot_drake" for i in infos)
+
+
+def _await_graph(probe, topic: str, present: bool, publishers: bool = True) -> None:
+    deadline = time.monotonic() + WAIT
+    while _graph_has(probe, topic, publishers) != present:
+        assert time.monotonic() < deadline, f"{topic}: still {'absent' if present else 'there'}"
+        time.sleep(0.05)
+
+
+def _drive_until_odometry_moves(probe, robot: str) -> tuple:
+    """/<robot>/cmd_vel forwards, 10 steps at a time, until /<robot>/odom has moved 5 cm (a
+    paused node publishes as it steps; its first steps may pass before it has discovered the
+    probe's subscription): (the first odometry, the last)."""
+    from geometry_msgs.msg import Twist
+    from simulation_interfaces.srv import StepSimulation
+
+    forward = Twist()
+    forward.linear.x = 0.2  # m/s: the Burger's top speed is 0.22
+    cmd_vel = probe.publisher(f"/{robot}/cmd_vel", Twist)
+    for _ in range(100):  # at most 10 s of simulated time
+        cmd_vel.publish(forward)
+        time.sleep(0.05)  # (it arrives in ~1-7 ms on loopback)
+        _call(probe, "step_simulation", StepSimulation, steps=10)
+        seen = probe.messages[f"/{robot}/odom"]
+        if seen and seen[-1].pose.pose.position.x - seen[0].pose.pose.position.x > 0.05:
+            return seen[0], seen[-1]
+    raise AssertionError(f"/{robot}/odom did not move: {len(seen)} messages")
+
+
+@ONE_GRAPH_AT_A_TIME
+def test_a_spawned_robot_has_its_topics_under_its_name_until_deleted(sim_ros):
+    from geometry_msgs.msg import PoseStamped
+    from nav_msgs.msg import Odometry
+    from rclpy.qos import QoSProfile, ReliabilityPolicy
+    from simulation_interfaces.msg import EntityCategory, Resource
+    from simulation_interfaces.srv import (
+        DeleteEntity,
+        GetEntities,
+        GetEntityInfo,
+        GetSpawnables,
+        ResetSimulation,
+        SpawnEntity,
+    )
+
+    probe = sim_ros
+    spawnables = _call(probe, "get_spawnables", GetSpawnables, retry=10.0).spawnables
+    robots = [s for s in spawnables if s.description.startswith("robot ")]
+    assert [s.entity_resource.uri for s in robots] == ["corobot", "burger", "pioneer"]
+    assert "TurtleBot3 Burger class" in robots[1].description
+    at = PoseStamped()  # beside the Corobot, facing +x as it does
+    at.pose.position.y, at.pose.orientation.w = 1.0, 1.0
+    before = _pose(probe)
+    spawned = _call(probe, "spawn_entity", SpawnEntity, name="burger", initial_pose=at,
+                    entity_resource=Resource(uri="burger"))
+    assert spawned.result.result == 1, spawned.result.error_message
+    assert spawned.entity_name == "burger"
+    after = _pose(probe)  # the simulation goes on from where it was
+    assert after[0] == before[0] and after[1] == pytest.approx(before[1], abs=1e-9)
+    assert "burger" in _call(probe, "get_entities", GetEntities, retry=10.0).entities
+    info = _call(probe, "get_entity_info", GetEntityInfo, retry=10.0, entity="burger")
+    assert info.info.category.category == EntityCategory.CATEGORY_ROBOT
+    # the Corobot keeps its bare names; the Burger's are under its name
+    _await_graph(probe, "/burger/cmd_vel", True, publishers=False)
+    _await_graph(probe, "/burger/odom", True)
+    assert _graph_has(probe, "/odom") and _graph_has(probe, "/cmd_vel", publishers=False)
+    assert not _graph_has(probe, "/corobot/odom")
+    probe.subscribe("/burger/odom", Odometry,
+                    QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE))
+    first, last = _drive_until_odometry_moves(probe, "burger")
+    assert (first.header.frame_id, first.child_frame_id) == ("burger/odom", "burger/base_link")
+    assert first.pose.pose.position.y == pytest.approx(1.0, abs=0.01)  # from its true start
+    _, (x, y, *_) = _pose(probe, "burger")
+    assert x == pytest.approx(last.pose.pose.position.x, abs=0.02) and x > 0.05
+    assert y == pytest.approx(1.0, abs=0.02)
+    deleted = _call(probe, "delete_entity", DeleteEntity, entity="burger")
+    assert deleted.result.result == 1, deleted.result.error_message
+    assert "burger" not in _call(probe, "get_entities", GetEntities, retry=10.0).entities
+    _await_graph(probe, "/burger/odom", False)
+    _await_graph(probe, "/burger/cmd_vel", False, publishers=False)
+    assert _graph_has(probe, "/odom") and _graph_has(probe, "/cmd_vel", publishers=False)
+    # spawned again, then a reset: back to the scenario's start, the Burger gone
+    again = _call(probe, "spawn_entity", SpawnEntity, name="", allow_renaming=True,
+                  initial_pose=at, entity_resource=Resource(uri="burger"))
+    assert (again.result.result, again.entity_name) == (1, "burger_1"), again.result
+    _await_graph(probe, "/burger_1/odom", True)
+    reset = _call(probe, "reset_simulation", ResetSimulation, retry=10.0)
+    assert reset.result.result == 1 and _pose(probe)[0] == 0.0
+    assert _call(probe, "get_entities", GetEntities, retry=10.0).entities[0] == "corobot"
+    assert "burger_1" not in _call(probe, "get_entities", GetEntities, retry=10.0).entities
+    _await_graph(probe, "/burger_1/odom", False)
+    _await_graph(probe, "/burger_1/cmd_vel", False, publishers=False)
 
 
 CRATE_SDF = """<?xml version="1.0"?>
