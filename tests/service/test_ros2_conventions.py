@@ -86,6 +86,19 @@ def test_ros_args_remap_the_namespace_and_set_parameters_checked_in_one_line(sim
     assert not read_only.successful  # read as the node starts
 
 
+def test_the_simulation_interfaces_follow_the_namespace(sim):
+    """Named relative to the node's namespace, as Gazebo's: `__ns:=/sim` moves them."""
+    from simulation_interfaces.srv import GetSimulationState
+
+    probe, _, _ = sim
+    state = probe.call(f"{NS}/get_simulation_state", GetSimulationState,
+                       GetSimulationState.Request())
+    assert state.result.result == state.result.RESULT_OK
+    services = {name for name, _ in probe.node.get_service_names_and_types()}
+    assert {f"{NS}/spawn_entity", f"{NS}/simulate_steps/_action/send_goal"} <= services
+    assert "/spawn_entity" not in services
+
+
 def test_sensor_topics_reach_a_reliable_subscriber(sim):
     probe, _, _ = sim
     assert probe.wait_for(f"{NS}/ir/front").radiation_type == Range.INFRARED
