@@ -12,9 +12,9 @@ from pydrake.multibody.plant import MultibodyPlant
 
 from conftest import Stepper
 from corobot_drake.config.scenario import CENIC_PLANT, Drive, load_scenario
-from corobot_drake.model import dimensions as dim
 from corobot_drake.model.sdf import corobot_sdf
 from corobot_drake.resources import DEFAULT_SCENARIO, make_parser
+from corobot_drake.robots import robot_spec
 from corobot_drake.simulation import Simulation, quiet_drake_warnings
 from corobot_drake.study.metrics import METRICS, RobotRun
 from corobot_drake.systems import contact
@@ -31,7 +31,9 @@ from corobot_drake.tuning import odometry_calibration as oc
 from lab.bench import physics_only_overrides
 
 PERIOD = 1 / 60
-TICK = 2 * math.pi / dim.ENCODER_TICKS_PER_REVOLUTION  # rad per encoder count
+SPEC = robot_spec("corobot")
+"""The Corobot as its robot file and model say."""
+TICK = 2 * math.pi / SPEC.encoder_ticks_per_revolution  # rad per encoder count
 
 
 def odometry(radius=0.06, track=0.3, start=(1.0, 2.0, 0.5)) -> Stepper:
@@ -119,7 +121,7 @@ def test_odometry_folds_the_samples_as_an_update_every_period_would():
     rng = np.random.default_rng(7)
     counts = np.array([100.0, 100.0])
     x, y, yaw, last = 0.3, -0.2, 3.0, counts.copy()
-    k = 2 * math.pi * 0.06 / dim.ENCODER_TICKS_PER_REVOLUTION
+    k = 2 * math.pi * 0.06 / SPEC.encoder_ticks_per_revolution
     for period in range(5 * HISTORY + 3):
         s.tick()  # takes the counts fixed before it
         assert s.output("pose").tolist() == [x, y, math.remainder(yaw, 2 * math.pi)], period
@@ -162,7 +164,8 @@ def test_calibration_finds_the_radius_and_track_of_a_synthetic_log():
     # Quantization (1 count = 0.6 mm of rim) telescopes over the windows: 0.1% is generous.
     assert fit.effective_wheel_radius == pytest.approx(0.0598, rel=1e-3)
     assert fit.effective_track_width == pytest.approx(0.377, rel=1e-3)
-    assert oc.end_error(log, 0.0598, 0.377) < 0.2 * oc.end_error(log, dim.WHEEL_RADIUS, dim.TRACK)
+    nominal = oc.end_error(log, SPEC.wheel_radius, SPEC.track)
+    assert oc.end_error(log, 0.0598, 0.377) < 0.2 * nominal
 
 
 def test_a_log_that_never_turns_cannot_fit_the_track():
@@ -185,7 +188,7 @@ def test_loads_at_rest_sum_to_the_robots_weight(sim):
     plant = sim.station.plant
     mass = plant.CalcTotalMass(plant.GetMyContextFromRoot(sim.context),
                                [sim.station.robots["corobot"].model_instance])
-    assert mass == pytest.approx(dim.TOTAL_BODY_MASS + 4 * dim.WHEEL_MASS)  # 4.03 kg
+    assert mass == pytest.approx(SPEC.mass)  # 4.03 kg
     loads = robot.wheel_loads()
     # At rest the ground carries the robot: the solver's equilibrium matches to ~1e-7; 0.5%
     # allows the creep of a robot at rest and a coarser step.
@@ -255,7 +258,7 @@ def test_loads_while_driving_fast_sum_to_the_robot_s_weight(plant):
     if plant == "cenic":
         overrides.append(CENIC_PLANT % 0.01)
     sim = Simulation(load_scenario(DEFAULT_SCENARIO, overrides=overrides))
-    weight = (dim.TOTAL_BODY_MASS + 4 * dim.WHEEL_MASS) * 9.81
+    weight = SPEC.mass * 9.81
     sim.advance(1.0)
     sums = []
     for k in range(1, 51):
@@ -266,18 +269,17 @@ def test_loads_while_driving_fast_sum_to_the_robot_s_weight(plant):
 
 
 def com_height() -> float:
-    """The robot's centre of mass above the ground, m, from the dimensions alone: chassis
-    and platform boxes at their centres, the wheels at their axles (0.1204)."""
-    parts = [(dim.CHASSIS.mass, dim.CHASSIS.center[2]), (dim.PLATFORM.mass, dim.PLATFORM.center[2]),
-             *[(dim.WHEEL_MASS, dim.WHEEL_RADIUS)] * 4]
-    return sum(m * z for m, z in parts) / sum(m for m, _ in parts)
+    """The robot's centre of mass above the ground, m, as its model's masses place it (its
+    measured spec: chassis and platform boxes at their centres, the wheels at their axles,
+    0.1204)."""
+    return SPEC.com[2]
 
 
 def pitched_margin_deg(pitch_deg: float) -> float:
     """The tip margin of the rigid robot pitched by `pitch_deg` (either way) about one axle,
     its wheels there on the ground: the angle at that wheel's bottom between the vertical and
     the centre of mass, which sits half a wheelbase in and `com_height() - R` above the axle."""
-    a, up, R = dim.HALF_WHEELBASE, com_height() - dim.WHEEL_RADIUS, dim.WHEEL_RADIUS
+    a, up, R = SPEC.wheelbase / 2, com_height() - SPEC.wheel_radius, SPEC.wheel_radius
     phi = math.radians(abs(pitch_deg))
     return math.degrees(math.atan2(a * math.cos(phi) - up * math.sin(phi),
                                    a * math.sin(phi) + up * math.cos(phi) + R))
@@ -289,7 +291,7 @@ def test_the_tip_margin_at_rest_is_the_pitch_one_of_the_dimensions(sim):
     sim.advance(0.5)
     # Upright on level ground the least margin is about the front (or rear) wheels:
     # atan(half wheelbase / CoM height) = 37.4 deg (the sides': atan(half track / h) = 42.9).
-    expected = math.degrees(math.atan2(dim.HALF_WHEELBASE, com_height()))
+    expected = math.degrees(math.atan2(SPEC.wheelbase / 2, com_height()))
     assert expected == pytest.approx(37.41, abs=0.01)
     # The settled chassis pitches by ~1e-7 rad: 1e-3 deg is that with a wide margin.
     assert robot.tip_margin_deg() == pytest.approx(expected, abs=1e-3)
@@ -309,14 +311,14 @@ def test_a_spin_scrubs_every_wheel_sideways_and_full_power_slips_forward(sim):
     # its heading by atan(a / b) = 39.5 deg, front wheels to the left (+), rear to the right
     # (-), whichever way it turns. Drake spins about the centre within 2% (DRAKE_NOTES), so
     # 1 deg; at rest the angle is under 0.05 deg.
-    expected = math.degrees(math.atan2(dim.HALF_WHEELBASE, dim.HALF_TRACK))
+    expected = math.degrees(math.atan2(SPEC.wheelbase / 2, SPEC.half_track))
     for wheel, angle in angles.items():
         sign = 1.0 if wheel.startswith("front") else -1.0
         assert sign * angle == pytest.approx(expected, abs=1.0)
     # Each side's rim outruns its travel: ground speed b omega against the rim's u, with
     # omega = b u / (a^2 + b^2) (isotropic friction), a ratio of a^2 / (a^2 + b^2) = 0.40
     # on every wheel; 0.03 allows the spin's 2% and the tyres' compliance (measured 0.412).
-    a, b = dim.HALF_WHEELBASE, dim.HALF_TRACK
+    a, b = SPEC.wheelbase / 2, SPEC.half_track
     for ratio in robot.wheel_slip_ratio().values():
         assert ratio == pytest.approx(a**2 / (a**2 + b**2), abs=0.03)
     sim.reset()  # facing +x again, away from the box
@@ -361,7 +363,7 @@ def test_odometry_in_the_simulation_is_calibrated_and_the_nominal_one_overcounts
     odo = robot.odometry()
     assert (odo.x, odo.y, odo.yaw) == (0.0, 0.0, 0.0)  # the start pose
     drive = sim.scenario.robots["corobot"].drive
-    assert drive.effective_wheel_radius < dim.WHEEL_RADIUS  # the shipped calibration
+    assert drive.effective_wheel_radius < SPEC.wheel_radius  # the shipped calibration
     start = robot.pose()
     assert robot.drive_distance(0.5, 0.5).succeeded
     sim.advance(0.3)
@@ -376,7 +378,7 @@ def test_odometry_in_the_simulation_is_calibrated_and_the_nominal_one_overcounts
     assert math.hypot(offline[0] - odo.x, offline[1] - odo.y) < 5e-4
     # The tyres roll on ~0.0598 m, not 0.060325: the nominal odometry over-counts by ~0.8%
     # (0.5% to 1.2% allows the slip of the ramps and the quantization).
-    nominal = oc.dead_reckon(log, dim.WHEEL_RADIUS, dim.TRACK)[-1]
+    nominal = oc.dead_reckon(log, SPEC.wheel_radius, SPEC.track)[-1]
     assert 1.005 < math.hypot(nominal[0] - start.x, nominal[1] - start.y) / travelled < 1.012
     assert robot.summary()["odometry"] == {"x": odo.x, "y": odo.y, "yaw": odo.yaw}
 
@@ -406,7 +408,7 @@ def robot_plant():
     plant = MultibodyPlant(0.0)
     (instance,) = make_parser(plant).AddModelsFromString(corobot_sdf("corobot"), "sdf")
     plant.Finalize()
-    wheels = {w: plant.GetBodyByName(f"{w}_wheel", instance) for w in dim.WHEEL_NAMES}
+    wheels = {w: plant.GetBodyByName(f"{w}_wheel", instance) for w in SPEC.wheel_names}
     return plant, instance, plant.GetBodyByName("chassis", instance), wheels
 
 
@@ -420,7 +422,7 @@ def about_line(point, rpy) -> RigidTransform:
 def test_tip_margin_alone_follows_the_tilt_about_an_edge(robot_plant):
     plant, instance, chassis, wheels = robot_plant
     s = Stepper(TipMargin.of_robot(plant, instance, chassis, wheels), PERIOD)
-    a, b, h = dim.HALF_WHEELBASE, dim.HALF_TRACK, com_height()
+    a, b, h = SPEC.wheelbase / 2, SPEC.half_track, com_height()
 
     def margin(X_WC):
         s.fix("chassis_pose", X_WC)
@@ -431,7 +433,7 @@ def test_tip_margin_alone_follows_the_tilt_about_an_edge(robot_plant):
     X_WC = RigidTransform(RollPitchYaw(0.3, -0.2, 2.0), [3.0, -1.0, 0.5])
     moved = plant.CreateDefaultContext()
     plant.SetFreeBodyPose(moved, chassis, X_WC)
-    for k, w in enumerate(dim.WHEEL_NAMES):
+    for k, w in enumerate(SPEC.wheel_names):
         plant.GetJointByName(f"{w}_axle", instance).set_angle(moved, 0.7 * k + 0.1)
     s.fix("chassis_pose", X_WC)
     assert s.system.com(s.context) == pytest.approx(
@@ -445,9 +447,9 @@ def test_tip_margin_alone_follows_the_tilt_about_an_edge(robot_plant):
     # Pitched about the front axle (front wheels on the ground, nose down) or the rear (nose
     # up): the margin the test above checks in the simulation.
     for pitch in (10.0, 30.0):
-        assert margin(about_line([a, 0, dim.WHEEL_RADIUS], [0, pitch, 0])) == \
+        assert margin(about_line([a, 0, SPEC.wheel_radius], [0, pitch, 0])) == \
             pytest.approx(pitched_margin_deg(pitch), abs=1e-9)
-        assert margin(about_line([-a, 0, dim.WHEEL_RADIUS], [0, -pitch, 0])) == \
+        assert margin(about_line([-a, 0, SPEC.wheel_radius], [0, -pitch, 0])) == \
             pytest.approx(pitched_margin_deg(pitch), abs=1e-9)
     # Rolled about the left tyres' ground line: the tyre's mid-plane bottom stays on it, so the
     # side margin atan(b / h) = 42.9 deg falls by the roll, and goes negative past it.
@@ -475,14 +477,14 @@ def test_slip_markers_alone_colour_each_wheel_by_its_slip():
         return msgpack.unpackb(packed)
 
     # Gripping green, a quarter slip yellowish, locked red, a 40 deg scrub nearly red.
-    colours = {w: sent(f"/slip/r/{w}", "color")["value"] for w in dim.WHEEL_NAMES}
+    colours = {w: sent(f"/slip/r/{w}", "color")["value"] for w in SPEC.wheel_names}
     assert colours == {"front_left": [0.0, 0.8, 0.0, 1.0], "front_right": [0.5, 0.8, 0.0, 1.0],
                        "rear_left": [1.0, 0.0, 0.0, 1.0],
                        "rear_right": pytest.approx([1.0, 0.8 * 2 * 5 / 45, 0.0, 1.0])}
     # Each ball beside its wheel, outside the hub: at the wheel centre, moved outward.
     matrix = sent("/slip/r/front_right", "transform")["matrix"]
-    x, y, z = dim.wheel_center("front_right")
-    expected = X_WC @ np.array([x, y - dim.WHEEL_WIDTH / 2 - 0.015, z])
+    x, y, z = SPEC.wheels[SPEC.wheel_names.index("front_right")].center  # m, chassis frame
+    expected = X_WC @ np.array([x, y - SPEC.wheels[0].width / 2 - 0.015, z])
     assert matrix[12:15] == pytest.approx(expected, abs=1e-12)
 
 
@@ -493,7 +495,7 @@ def test_a_simulation_with_meshcat_draws_the_slip_markers():
     sim = Simulation(load_scenario(DEFAULT_SCENARIO, overrides=physics_only_overrides()),
                      meshcat)
     sim.advance(0.2)
-    assert all(meshcat.HasPath(f"/slip/corobot/{w}") for w in dim.WHEEL_NAMES)
+    assert all(meshcat.HasPath(f"/slip/corobot/{w}") for w in SPEC.wheel_names)
     headless = Simulation(load_scenario(DEFAULT_SCENARIO, overrides=physics_only_overrides()))
     with pytest.raises(RuntimeError):  # not in headless runs' diagram at all
         headless.station.diagram.GetSubsystemByName("corobot.slip_markers")
