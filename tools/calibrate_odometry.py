@@ -2,7 +2,8 @@
 
 From a log with encoder ticks and ground truth (a simulated run log or a real robot's CSV:
 `time, left_ticks, right_ticks, x, y, yaw`, docs/tuning.md), or, with `--simulate`, from
-UMBmark's squares (1 m, counter-clockwise then clockwise, power 0.2) driven in the scenario.
+UMBmark's squares (`--side`, 1 m; counter-clockwise then clockwise, power 0.2) driven in the
+scenario.
 Prints the fit, plots the dead-reckoned path against the true one before (nominal radius and
 track) and after calibration, and with `--write` puts both in the scenario's drive fields
 (`effective_wheel_radius`, `effective_track_width`) with a comment saying where they came from.
@@ -36,11 +37,14 @@ from corobot_drake.arguments import (
     output_directory,
     output_file,
 )
-from corobot_drake.limits import DRAKE_INT
+from corobot_drake.limits import DRAKE_INT, Range
 from corobot_drake.resources import DEFAULT_SCENARIO
 from corobot_drake.study.programs import LOOPS
 from corobot_drake.tuning import odometry_calibration as oc
 from corobot_drake.tuning.sysid import DriveField, scenario_robot, write_drive_fields
+
+SIDE = Range(0.1, 100.0, unit="m")
+"""--side: a square's side, from a short one to the DriveDistance command's longest."""
 
 
 def _parser() -> ToolParser:
@@ -48,6 +52,8 @@ def _parser() -> ToolParser:
     p.add_argument("log", nargs="?", help="log CSV with time, left_ticks, right_ticks, x, y, yaw")
     p.add_argument("--simulate", action="store_true",
                    help="drive UMBmark's squares in --scenario and fit their log")
+    p.add_argument("--side", type=bounded(SIDE), default=oc.SQUARE_SIDE,
+                   help="--simulate: the squares' side, m")
     p.add_argument("--scenario", default=str(DEFAULT_SCENARIO),
                    help="scenario to simulate in; its --robot is the robot a LOG is from")
     p.add_argument("--robot", default=None,
@@ -96,8 +102,8 @@ def _make_out(args) -> None:
 
 
 def _simulated_log(args) -> oc.PoseLog:
-    commands = oc.square_commands()
-    with _progress(110, "UMBmark squares") as update:
+    commands = oc.square_commands(args.side)
+    with _progress(110 * args.side, "UMBmark squares") as update:
         sim = oc.run_script(args.scenario, args.robot, commands, progress=update)
     path = args.out / "odometry_squares_log.csv"
     sim.robot(args.robot).write_log(path)
@@ -163,7 +169,8 @@ def main(argv=None) -> int:
     fitted = (fit.effective_wheel_radius, fit.effective_track_width)
     print(f"end position error on this log: {oc.end_error(log, *nominal) * 1000:.1f} mm "
           f"nominal, {oc.end_error(log, *fitted) * 1000:.1f} mm calibrated")
-    source = ("simulated UMBmark squares, 1 m at power 0.2" if args.simulate
+    source = (f"simulated UMBmark squares, {args.side:g} m at power {oc.CALIBRATION_POWER:g}"
+              if args.simulate
               else f"the log {Path(args.log).name}")
     oc.plot_paths(log, nominal, fitted, args.plot, f"odometry calibration: {source}")
     print(f"plot: {args.plot}")
