@@ -29,9 +29,9 @@ from corobot_drake import cli
 from corobot_drake import topics as tp
 from corobot_drake.config import scenario as sc
 from corobot_drake.config.sensors import IrSensorConfig
-from corobot_drake.model import dimensions as dim
 from corobot_drake.model.sdf import corobot_sdf
 from corobot_drake.resources import make_parser
+from corobot_drake.robots import robot_spec
 from corobot_drake.ros2 import interfaces as ifc
 from corobot_drake.ros2.bus import Bus
 from corobot_drake.ros2.graph import configure_discovery, ros_type
@@ -46,6 +46,9 @@ from corobot_drake.ros2.publishers import (
 from corobot_drake.ros2.urdf import corobot_urdf
 from corobot_drake.sensors.ir_sensor import DISTANCE, SCAN_TIME, scan_state_layout
 from corobot_drake.systems.odometry import DriveState, WheelState
+
+SPEC = robot_spec("corobot")
+"""The Corobot as its robot file and model say."""
 
 
 class Memory:
@@ -146,17 +149,19 @@ def _wheel_frames(text: str, kind: str, base: str) -> dict:
     B = plant.GetBodyByName(base, instance)
     return {w: plant.GetBodyByName(f"{w}_wheel", instance).EvalPoseInWorld(context)
             .translation() - B.EvalPoseInWorld(context).translation()
-            for w in dim.WHEEL_NAMES}
+            for w in SPEC.wheel_names}
 
 
 def test_urdf_has_the_sdfs_wheels_where_the_sdf_has_them():
     urdf = _wheel_frames(corobot_urdf(), "urdf", tp.CHASSIS_FRAME)
     sdf = _wheel_frames(corobot_sdf(), "sdf", "chassis")
-    for wheel in dim.WHEEL_NAMES:
+    for wheel in SPEC.wheel_names:
         np.testing.assert_allclose(urdf[wheel], sdf[wheel], atol=1e-9)
     text = corobot_urdf()
-    for part in (dim.CHASSIS, dim.PLATFORM):
-        assert " ".join(f"{v:.9g}" for v in part.size) in text
+    boxes = [shape for _, shape, _ in SPEC.shapes if type(shape).__name__ == "Box"]
+    assert len(boxes) == 2  # the chassis and the platform
+    for box in boxes:
+        assert " ".join(f"{v:.9g}" for v in box.size()) in text
 
 
 # --- each publisher alone ---
@@ -181,9 +186,9 @@ def robot_state_publisher(memory, ground_truth: bool = False):
     stepper.fix("body_poses", [RigidTransform(), X_WB])
     stepper.fix("body_spatial_velocities", [SpatialVelocity.Zero(), V])
     stepper.fix("wheel_state", [0.1, 0.2, 0.3, 0.4, 2.0, 4.0, 2.0, 4.0])
-    stepper.fix("drive_state", DriveState(0.0, True, dim.TRACK, 10.0, {
+    stepper.fix("drive_state", DriveState(0.0, True, SPEC.track, 10.0, {
         w: WheelState(0.1, 2.0, 7 if w.startswith("front") else None)
-        for w in dim.WHEEL_NAMES}, (1.0, 2.0, 0.0), 0.5))
+        for w in SPEC.wheel_names}, (1.0, 2.0, 0.0), 0.5))
     stepper.fix("odometry", [0.9, 2.1, 0.4])
     stepper.tick()
 
@@ -222,7 +227,7 @@ def test_robot_state_publisher_joint_states_and_drive_state():
     memory = Memory()
     robot_state_publisher(memory)
     (_, joints), = memory.messages["/bot/joint_states"]
-    assert list(joints.name) == [f"{w}_axle" for w in dim.WHEEL_NAMES]
+    assert list(joints.name) == [f"{w}_axle" for w in SPEC.wheel_names]
     assert list(joints.velocity) == [2.0, 4.0, 2.0, 4.0]
     (_, state), = memory.messages["/bot/drive_state"]
     assert [w.has_encoder for w in state.wheels] == [True, True, False, False]
@@ -360,7 +365,7 @@ def test_telemetry_publisher_stamps_the_held_samples():
     assert len(memory.messages["/tip_margin"]) == 6
     (t_ns, loads), = memory.messages["/wheel_loads"]  # the look at 0.1: the sample of 0
     assert t_ns == 0 and list(loads.load) == [9.0, 9.1, 9.2, 9.3]
-    assert list(loads.wheel_names) == list(dim.WHEEL_NAMES)
+    assert list(loads.wheel_names) == list(SPEC.wheel_names)
     (_, slip), = memory.messages["/wheel_slip"]
     assert list(slip.slip_angle_deg) == [2.0] * 4
 

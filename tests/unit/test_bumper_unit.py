@@ -26,7 +26,8 @@ from pydrake.systems.framework import DiagramBuilder
 from pydrake.visualization import ApplyVisualizationConfig
 
 from corobot_drake.config.poses import mount
-from corobot_drake.model import dimensions as dim
+from corobot_drake.config.sensors import default_camera_config
+from corobot_drake.robots import robot_spec
 from corobot_drake.ros2.messages import Messages
 from corobot_drake.sensors.bumper import (
     BUMPER,
@@ -228,13 +229,14 @@ def test_default_bumper_is_ahead_of_the_front_tyres_and_out_of_the_cameras_view(
     thickness, width, height = config.size
     x, y, z = config.X_PB.GetDeterministicValue().translation()
     assert config.X_PB.base_frame == "chassis"
-    assert x - thickness / 2 > dim.HALF_WHEELBASE + dim.WHEEL_RADIUS  # the tyres' reach
+    spec, camera = robot_spec("corobot"), default_camera_config()
+    assert x - thickness / 2 > spec.wheelbase / 2 + spec.wheel_radius  # the tyres' reach
     assert z - height / 2 > 0.01  # m: clear of the ground
-    assert y == 0.0 and width == pytest.approx(2 * dim.HALF_TRACK + dim.WHEEL_WIDTH)
+    assert y == 0.0 and width == pytest.approx(spec.track + spec.wheels[0].width)
     # The front camera's lowest ray (level, half its vertical field of view down) passes
     # over the bumper's top front edge: the camera's frames are those of a Corobot without.
-    cx, _, cz = dim.CAMERA.position
-    lowest = cz - (x + thickness / 2 - cx) * math.tan(math.radians(dim.CAMERA_FOV_Y_DEG / 2))
+    cx, _, cz = camera.X_PB.GetDeterministicValue().translation()
+    lowest = cz - (x + thickness / 2 - cx) * math.tan(math.radians(camera.focal.y / 2))
     assert z + height / 2 < lowest
 
 
