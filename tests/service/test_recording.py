@@ -17,7 +17,6 @@ from mcap.reader import make_reader
 from conftest import SAP, TWO_CAMERAS, make_sim
 from corobot_drake.cli import main
 from corobot_drake.config.scenario import load_scenario
-from corobot_drake.model import dimensions as dim
 from corobot_drake.recording.foxglove_live import FoxgloveLive
 from corobot_drake.recording.mcap_log import McapLog
 from corobot_drake.recording.meshcat_html import RECORDING_FPS
@@ -30,6 +29,7 @@ from corobot_drake.recording.publishers import (
 )
 from corobot_drake.recording.topics import command_event
 from corobot_drake.resources import DEFAULT_SCENARIO
+from corobot_drake.robots import robot_spec
 from corobot_drake.simulation import Simulation
 from corobot_drake.systems.drive import CommandRecord
 from corobot_drake.systems.runlog import COLUMNS
@@ -314,7 +314,9 @@ def test_each_camera_has_its_own_topics_and_frame(tmp_path):
     assert mounts["camera_optical_frame"] == mounts["camera_rear_optical_frame"] == "base_link"
 
 
-ROBOT_WEIGHT = (dim.TOTAL_BODY_MASS + len(dim.WHEEL_NAMES) * dim.WHEEL_MASS) * 9.81
+SPEC = robot_spec("corobot")
+"""The Corobot as its robot file and model say."""
+ROBOT_WEIGHT = SPEC.mass * 9.81
 """N: what the four wheels carry at rest (the plant's gravity, 9.81 m/s^2)."""
 
 
@@ -352,9 +354,9 @@ def test_mcap_telemetry_holds_the_robot_s_loads_slip_and_tip_margin(mcap_run):
     rows = robot.run_log()
     for t, wheels in loads.items():
         (row,) = rows[np.isclose(rows[:, 0], t + TELEMETRY_PERIOD / 2)]
-        assert [wheels[w]["load"] for w in dim.WHEEL_NAMES] == list(
+        assert [wheels[w]["load"] for w in SPEC.wheel_names] == list(
             row[[COLUMNS.index(f"load_{c}") for c in ("fl", "fr", "rl", "rr")]]), t
-        assert [slips[t][w]["slip_angle_deg"] for w in dim.WHEEL_NAMES] == list(
+        assert [slips[t][w]["slip_angle_deg"] for w in SPEC.wheel_names] == list(
             row[[COLUMNS.index(f"slip_angle_{c}") for c in ("fl", "fr", "rl", "rr")]]), t
     # Upright on level ground: atan(half wheelbase / CoM height) = 37.4 deg at the start (to
     # its rounding). Driving on flat ground the chassis pitches a fraction of a degree on its
@@ -404,7 +406,7 @@ def test_telemetry_publisher_alone():
     assert got["/r/wheel_slip"][-1][2]["wheels"]["rear_right"] == {"slip_ratio": -0.2,
                                                                    "slip_angle_deg": 8.0}
     assert {w: v["load"] for w, v in got["/r/wheel_loads"][0][2]["wheels"].items()} == dict(
-        zip(dim.WHEEL_NAMES, [9.0, 10.0, 11.0, 12.0], strict=True))
+        zip(SPEC.wheel_names, [9.0, 10.0, 11.0, 12.0], strict=True))
 
 
 def test_a_reset_run_publishes_the_same_messages(tmp_path):
