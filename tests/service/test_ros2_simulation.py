@@ -498,11 +498,23 @@ def _graph_has(probe, topic: str, publishers: bool = True) -> bool:
     return any(i.node_name == "corobot_drake" for i in infos)
 
 
-def _await_graph(probe, topic: str, present: bool, publishers: bool = True) -> None:
+def _robot_services(probe, robot: str) -> set[str]:
+    """The node's services under /<robot>/ (an action's are `<action>/_action/...`)."""
+    served = probe.node.get_service_names_and_types_by_node("corobot_drake", "/")
+    return {name for name, _ in served if name.startswith(f"/{robot}/")}
+
+
+def _eventually(check, what: str) -> None:
+    """Waits for `check()` (the probe's graph learns of a change within a few ms to s)."""
     deadline = time.monotonic() + WAIT
-    while _graph_has(probe, topic, publishers) != present:
-        assert time.monotonic() < deadline, f"{topic}: still {'absent' if present else 'there'}"
+    while not check():
+        assert time.monotonic() < deadline, what
         time.sleep(0.05)
+
+
+def _await_graph(probe, topic: str, present: bool, publishers: bool = True) -> None:
+    _eventually(lambda: _graph_has(probe, topic, publishers) == present,
+                f"{topic}: still {'absent' if present else 'there'}")
 
 
 def _drive_until_odometry_moves(probe, robot: str) -> tuple:
@@ -562,6 +574,10 @@ def test_a_spawned_robot_has_its_topics_under_its_name_until_deleted(sim_ros):
     _await_graph(probe, "/burger/odom", True)
     assert _graph_has(probe, "/odom") and _graph_has(probe, "/cmd_vel", publishers=False)
     assert not _graph_has(probe, "/corobot/odom")
+    served = {"/burger/set_pose", "/burger/all_stop", "/burger/enable_drive",
+              "/burger/drive_distance/_action/send_goal",
+              "/burger/rotate_degrees/_action/send_goal"}
+    _eventually(lambda: served <= _robot_services(probe, "burger"), "the Burger's services")
     probe.subscribe("/burger/odom", Odometry,
                     QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE))
     first, last = _drive_until_odometry_moves(probe, "burger")
@@ -576,6 +592,7 @@ def test_a_spawned_robot_has_its_topics_under_its_name_until_deleted(sim_ros):
     _await_graph(probe, "/burger/odom", False)
     _await_graph(probe, "/burger/cmd_vel", False, publishers=False)
     assert _graph_has(probe, "/odom") and _graph_has(probe, "/cmd_vel", publishers=False)
+    _eventually(lambda: not _robot_services(probe, "burger"), "the Burger's services left")
     # spawned again, then a reset: back to the scenario's start, the Burger gone
     again = _call(probe, "spawn_entity", SpawnEntity, name="", allow_renaming=True,
                   initial_pose=at, entity_resource=Resource(uri="burger"))
