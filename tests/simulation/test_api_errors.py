@@ -166,13 +166,13 @@ def test_set_pose_and_the_loader_allow_the_same_overlap_with_the_box(below):
     point, half wheelbase + radius behind the chassis origin; the point-pair depth of a
     cylinder in a box is its x overlap to well under 0.1 mm.)"""
     from corobot_drake.config.placement import OVERLAP_TOLERANCE
-    from corobot_drake.model import dimensions as dim
 
     fresh = make_sim()  # the box where the scenario puts it, untouched
     box = fresh.scenario.world.bodies["giant_box"]
     face = box.pose.GetDeterministicValue().translation()[0] + box.shape.size[0] / 2
     depth = OVERLAP_TOLERANCE + (-1e-4 if below else 1e-4)
-    x = float(face + dim.HALF_WHEELBASE + dim.WHEEL_RADIUS - depth)
+    spec = fresh.robot().spec
+    x = float(face + spec.wheelbase / 2 + spec.wheel_radius - depth)
     problem = fresh.robot().obstacle_at(_ground(x))
     override = f"robots: {{corobot: {{pose: {{translation: [{x!r}, 0.0, 0.0]}}}}}}"
     if below:

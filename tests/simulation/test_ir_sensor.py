@@ -7,19 +7,22 @@ import pytest
 
 from conftest import DEFAULT_SCENARIO, SAP, make_sim
 from corobot_drake.config.scenario import CENIC_PLANT, ScenarioError, load_scenario, physics_step
-from corobot_drake.model import dimensions as dim
+from corobot_drake.config.sensors import default_ir_sensors
 from corobot_drake.model.ir_models import SharpGP2D12
 from corobot_drake.sensors.ir_sensor import SCAN_INDEX, counter_normal
 from corobot_drake.study.metrics import METRICS, RobotRun
 from lab.bench import NO_CAMERA
 
 MM = 1e-3
-RANGE = 30 * dim.INCH
+RANGE = 30 * 0.0254
+"""m: 30 in, the Corobot's IR sensors' range."""
 BOX_FACE_X = -0.7366
 """The giant box's near face (world x) in the default scene."""
-REAR_X = dim.REAR_IR.position[0]
-FRONT_X = dim.FRONT_IR.position[0]
-MOUNT_Z = dim.FRONT_IR.position[2]
+IR = default_ir_sensors()
+"""The Corobot's IR sensors, as its robot file mounts them."""
+REAR_X = IR["rear"].X_PB.translation[0]
+FRONT_X = IR["front"].X_PB.translation[0]
+MOUNT_Z = IR["front"].X_PB.translation[2]
 HALF_CONE = math.radians(4.0)
 
 # The camera takes no part here: without it a simulation builds and runs faster.

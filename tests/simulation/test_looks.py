@@ -9,8 +9,13 @@ import pytest
 from pydrake.geometry import Role
 
 from conftest import make_sim
-from corobot_drake.model import dimensions as dim
+from corobot_drake.config.sensors import default_camera_config
+from corobot_drake.robots import robot_spec
 from corobot_drake.sensors import render
+
+SPEC = robot_spec("corobot")
+CAMERA = default_camera_config()
+"""The Corobot's camera, as its robot file says."""
 
 
 def wheel_visual_ids(sim, wheel: str) -> list:
@@ -38,17 +43,17 @@ def wheel_angle(sim, geometry_id) -> float:
 @pytest.mark.parametrize("visual", ["meshes", "boxes"])
 def test_wheels_visibly_turn_by_distance_over_radius(visual):
     sim = make_sim(f"robots: {{corobot: {{visual: {visual}}}}}")
-    ids = {w: wheel_visual_ids(sim, w) for w in dim.WHEEL_NAMES}
+    ids = {w: wheel_visual_ids(sim, w) for w in SPEC.wheel_names}
     assert all(ids.values()), "every wheel body carries visual geometry"
     sim.advance(0.3)  # settle
     robot = sim.robot()
     robot.set_speed(0.3, 0.3)
     start = robot.pose()
-    last = {w: wheel_angle(sim, ids[w][0]) for w in dim.WHEEL_NAMES}
-    turned = dict.fromkeys(dim.WHEEL_NAMES, 0.0)
+    last = {w: wheel_angle(sim, ids[w][0]) for w in SPEC.wheel_names}
+    turned = dict.fromkeys(SPEC.wheel_names, 0.0)
     for _ in range(60):  # 1.5 s in steps far shorter than a half turn (~0.12 rad at 0.3 m/s)
         sim.advance(0.025)
-        for w in dim.WHEEL_NAMES:
+        for w in SPEC.wheel_names:
             now = wheel_angle(sim, ids[w][0])
             turned[w] += math.remainder(now - last[w], 2 * math.pi)
             last[w] = now
@@ -59,10 +64,10 @@ def test_wheels_visibly_turn_by_distance_over_radius(visual):
     end = robot.pose()
     distance = math.hypot(end.x - start.x, end.y - start.y)
     assert distance > 0.3
-    for w in dim.WHEEL_NAMES:
+    for w in SPEC.wheel_names:
         # Forward motion turns the wheel positively about +y (axle to the left); the
         # compliant tyre rolls on a slightly smaller radius (measured ~0.9% more turn).
-        assert turned[w] == pytest.approx(distance / dim.WHEEL_RADIUS, rel=0.02), w
+        assert turned[w] == pytest.approx(distance / SPEC.wheel_radius, rel=0.02), w
 
 
 def test_wheel_visual_follows_the_wheel_body():
@@ -73,7 +78,7 @@ def test_wheel_visual_follows_the_wheel_body():
     plant_context = plant.GetMyContextFromRoot(sim.context)
     query = sim.station.diagram.GetOutputPort("query_object").Eval(sim.context)
     inspector = sim.station.scene_graph.model_inspector()
-    for w in dim.WHEEL_NAMES:
+    for w in SPEC.wheel_names:
         body = plant.GetBodyByName(f"{w}_wheel", sim.robot()._parts.model_instance)
         X_WW = plant.EvalBodyPoseInWorld(plant_context, body)
         for gid in wheel_visual_ids(sim, w):
@@ -176,9 +181,9 @@ def test_chase_view_follows_the_driven_robot():
 def test_robot_camera_view_sees_the_box_ahead():
     sim = make_sim("robots: {corobot: {pose: {rotation: !Rpy {deg: [0, 0, 180]}}}}")
     image = render.render(sim, render.robot_camera_view(render.chassis_pose(sim)),
-                          dim.CAMERA_WIDTH, dim.CAMERA_HEIGHT, dim.CAMERA_FOV_Y_DEG,
+                          CAMERA.width, CAMERA.height, CAMERA.focal.y,
                           name=render.add_renderer(sim, shadows=False))
-    assert image.shape == (dim.CAMERA_HEIGHT, dim.CAMERA_WIDTH, 3)
+    assert image.shape == (CAMERA.height, CAMERA.width, 3)
     # 0.74 m from a 2 m box with a 30 deg fov: the box fills the view; its lit face is brown.
     r, g, b = image.reshape(-1, 3).mean(axis=0)
     assert r > g > b and r > 60

@@ -6,11 +6,15 @@ from pydrake.geometry import Role, StartMeshcat
 
 from conftest import make_sim
 from corobot_drake.config.scenario import ScenarioError, load_scenario
-from corobot_drake.model import dimensions as dim
+from corobot_drake.config.sensors import default_ir_sensors
 from corobot_drake.resources import SCENARIOS_DIR
+from corobot_drake.robots import robot_spec
 from corobot_drake.simulation import Simulation
 
 MAZE = SCENARIOS_DIR / "maze.yaml"
+IR = default_ir_sensors()
+"""The Corobot's IR sensors, as its robot file mounts them."""
+SPEC = robot_spec("corobot")
 EXACT_IR = 1e-6
 """m: the IR reading is an exact ray cast; a flat face square to the sensor is hit first by
 the centre ray, so the reading is the distance to it up to rounding (the robot's yaw after a
@@ -36,16 +40,16 @@ def test_maze_ir_sees_the_directive_models_walls_while_driving():
     robot = sim.robot()
     sim.advance(0.3)  # at rest: a scan every 0.05 s
     # At the start the rear sensor sees the west wall, the front one nothing within range.
-    rear_x = robot.pose().x - dim.FRONT_IR.position[0]  # the rear sensor is as far back
+    rear_x = robot.pose().x - IR["front"].X_PB.translation[0]  # the rear sensor is as far back
     assert robot.ir("rear").raw == pytest.approx(rear_x - box_face(sim, "west", 0, +1),
                                                   abs=EXACT_IR)
-    assert robot.ir("front").raw == dim.IR_MAXIMUM_RANGE
+    assert robot.ir("front").raw == IR["front"].maximum_range
     sim.advance(4.2)  # 3 s at 0.3 m/s, then stopped (for 1 s): ~0.9 m on, the wall in range
-    front_x = robot.pose().x + dim.FRONT_IR.position[0]
+    front_x = robot.pose().x + IR["front"].X_PB.translation[0]
     expected = box_face(sim, "inner_a", 0, -1) - front_x
-    assert 0.3 < expected < dim.IR_MAXIMUM_RANGE  # the drive brought it into range
+    assert 0.3 < expected < IR["front"].maximum_range  # the drive brought it into range
     assert robot.ir("front").raw == pytest.approx(expected, abs=EXACT_IR)
-    assert robot.ir("rear").raw == dim.IR_MAXIMUM_RANGE
+    assert robot.ir("rear").raw == IR["front"].maximum_range
 
 
 def test_driving_into_a_maze_wall_stops_at_it():
@@ -58,7 +62,7 @@ def test_driving_into_a_maze_wall_stops_at_it():
     sim.advance(4.0)  # reaches the wall (1.2 m at 0.6 m/s) and pushes for ~2 s
     face = box_face(sim, "inner_a", 0, -1)
     # 2 mm: the tyre's compliant patch (measured 0.5 mm into the wall).
-    assert robot.pose().x == pytest.approx(face - dim.HALF_WHEELBASE - dim.WHEEL_RADIUS,
+    assert robot.pose().x == pytest.approx(face - SPEC.wheelbase / 2 - SPEC.wheel_radius,
                                            abs=2e-3)
     assert robot.max_tilt_deg() < 5.0  # measured 2 deg: it neither climbs nor flips
     assert abs(robot.pose().z) < 1e-3
@@ -158,7 +162,7 @@ robots:
     sim = Simulation(load_scenario(scenario))
     sim.advance(0.1)
     ir = sim.robot().ir_distances()
-    front, rear = dim.FRONT_IR.position[0], dim.REAR_IR.position[0]
+    front, rear = IR["front"].X_PB.translation[0], IR["rear"].X_PB.translation[0]
     # Centre rays square to the faces: the cylinder's nearest point and the cube's face.
     assert ir["front"] == pytest.approx(0.6 - 0.1 - front, abs=EXACT_IR)
     assert ir["rear"] == pytest.approx(rear - (-0.7 + 0.2), abs=EXACT_IR)
