@@ -1,23 +1,36 @@
 """The tutorials' code runs as written.
 
-Every fenced code block of a tutorial page (and of the README) marked as Python
-(```` ```python ````) or as shell commands (```` ```sh ````) runs here:
+Every fenced code block of a tutorial page (and of the README, and of docs/costs.md's Python)
+marked as Python (```` ```python ````) or as shell commands (```` ```sh ````) runs here, the
+page's blocks in the page's order, in one scratch folder where `scenarios/` is the
+repository's, as a reader pastes them one after the other:
 
-- A page's Python blocks run in order in one namespace, as a reader pastes them one after the
-  other, in a scratch folder where `scenarios/` is the repository's.
-- In a shell block, each `python -m corobot_drake ...` command (also `.venv/bin/python -m
-  ...`; a line, a trailing backslash joining the next) runs in this process through
-  `corobot_drake.cli.main` and must exit 0, in the same scratch folder. A command without
-  `--headless` (Meshcat in a browser) gets it, and one without `--duration` (until Ctrl-C)
-  gets `--duration 1`: the same run, ended. A `--serve` command is started as a server for
-  the page's Python blocks instead (below). Comments and other lines (curl, cat, the tools,
-  whose figures `tools/refresh_docs.py` and their own tests hold) are not run.
+- The Python blocks run in one namespace.
+- Each line of a shell block runs (a trailing backslash joins the next line; `# ...` is a
+  comment) and must succeed; a line no rule below runs fails the test, so none is passed over.
+  `python` may be written `.venv/bin/python`:
+  - `python -m corobot_drake ...` runs in this process through `corobot_drake.cli.main`. A
+    command without `--headless` (Meshcat in a browser) gets it, and one without `--duration`
+    (until Ctrl-C) gets `--duration 1`: the same run, ended. `--foxglove` without a port gets
+    a free one (its 8765 may be taken). A `--serve` command is started as a server (on a free
+    port in place of the page's 50000) for the page's Python blocks and `curl` lines.
+  - `python -m corobot_drake.<module> ...` runs that module's `main` in this process.
+  - `python tools/<tool>.py ...` runs the tool in this process, as `python` would; a long
+    measurement is given the small size its flag allows (`TOOL_CUTS`). A tool in
+    `VERDICT_TOOLS` may also end with its verdict's exit status 1: its cut run decides
+    nothing.
+  - `curl ...` runs against the page's server, with `--fail-with-body` (an HTTP error fails).
+  - `cat FILE` runs as written: FILE must be there.
 - To keep the suite cheap, a run is cut to `MAX_SECONDS` of simulated time: a longer
-  `--duration`, and a longer literal `advance(S)` in a Python block, are cut to it (the
-  code is otherwise as written: the same calls, the same outputs, a shorter run).
+  `--duration` or `--time`, and a longer literal `advance(S)` in a Python block, are cut to
+  it. A study (`python -m corobot_drake.study`, or a tool's) runs only its first run (the
+  first grid point, the first seed), on the session's Ray head (conftest's `ray_head`; a
+  page that runs one is in `ON_RAY`). In a Python block, a literal `seeds=range(N)` (episodes)
+  is cut to `range(1)` and a literal `frames=N` (a measurement's) to `MAX_FRAMES`. The code
+  is otherwise as written: the same calls, the same outputs, a shorter run.
 - A block right after a line `<!-- no-test: REASON -->` (the last non-blank line above its
-  fence) is not run; the reason must be said (a display, a server left running until Ctrl-C,
-  hours of training), and the page shows nothing of the comment.
+  fence) is not run; the reason must be said (a display, a dependency the project does not
+  have, a process that is the suite itself), and the page shows nothing of the comment.
 
 docs/extending.md has its own test (tests/packaging/test_extending_docs.py: its excerpts are
 held to the files), and docs/gallery.md's commands are the generated pictures' own.
@@ -28,7 +41,11 @@ from __future__ import annotations
 import contextlib
 import os
 import re
+import runpy
 import shlex
+import socket
+import subprocess
+import sys
 import textwrap
 
 import pytest
@@ -37,14 +54,27 @@ from conftest import REPO
 
 PAGES = ("README.md", *(f"docs/{p}.md" for p in (
     "install", "usage", "commands", "services", "sensors", "recording", "ros2", "studies", "gym",
-    "looks", "tuning")))
+    "magellan", "looks", "tuning", "costs")))
+ON_RAY = ("docs/commands.md", "docs/studies.md", "docs/gym.md", "docs/tuning.md")
+"""The pages whose blocks run studies or rollouts on Ray."""
 MAX_SECONDS = 2.0
 """s of simulated time a run here lasts at most."""
+MAX_FRAMES = 3
+"""Frames a camera measurement renders here at most."""
+TOOL_CUTS = {
+    "drive_test.py": {"--loops": "1"},                  # 38 s simulated a loop
+    "calibrate_odometry.py": {"--side": "0.25", "--loops": "1",   # 1 m squares: 110 s simulated
+                              "--out": "calibrate_odometry"},    # not a new folder in /tmp
+    "step_limit.py": {"--steps": "0.01"},               # one plant step of eight
+}
+"""tool -> {flag: value} it runs with here (in place of the page's, or added)."""
+VERDICT_TOOLS = ("tune_tire_grip.py",)
+"""Tools whose exit status 1 is their verdict (no effort limit passes), not an error."""
 FENCE = re.compile(r"^(?P<indent> *)```(?P<lang>python|sh)\n(?P<body>.*?)^(?P=indent)```$",
                    re.MULTILINE | re.DOTALL)
 """A fenced block, also one indented under a list item."""
 NO_TEST = re.compile(r"^<!-- no-test: (?P<reason>\S.*?) -->$")
-CLI = re.compile(r"^(?:\.venv/bin/)?python -m corobot_drake ")
+PYTHON = ("python", ".venv/bin/python")
 
 
 def blocks(page: str) -> list[tuple[str, str, int, str | None]]:
@@ -59,11 +89,16 @@ def blocks(page: str) -> list[tuple[str, str, int, str | None]]:
     return out
 
 
+def shell_lines(code: str) -> list[list[str]]:
+    """The commands of a shell block, as argument lists (comments and blank lines gone)."""
+    joined = re.sub(r"\\\n\s*", " ", code)
+    return [argv for line in joined.splitlines() if (argv := shlex.split(line, comments=True))]
+
+
 def cli_commands(code: str) -> list[list[str]]:
     """The `python -m corobot_drake` commands of a shell block, as argument lists."""
-    joined = re.sub(r"\\\n\s*", " ", code)
-    return [shlex.split(line.strip(), comments=True)[3:] for line in joined.splitlines()
-            if CLI.match(line.strip())]
+    return [argv[3:] for argv in shell_lines(code)
+            if argv[0] in PYTHON and argv[1:3] == ["-m", "corobot_drake"]]
 
 
 def cut(argv: list[str]) -> list[str]:
@@ -72,20 +107,59 @@ def cut(argv: list[str]) -> list[str]:
             *(["--duration", "1"] if "--duration" not in argv else [])]
     at = argv.index("--duration") + 1
     argv[at] = str(min(float(argv[at]), MAX_SECONDS))
+    if "--foxglove" in argv:
+        at = argv.index("--foxglove") + 1
+        if at == len(argv) or not argv[at].isdigit():
+            argv.insert(at, str(free_port()))
     return argv
 
 
+def cut_tool(name: str, args: list[str]) -> list[str]:
+    """A tool's arguments as the test runs it: `TOOL_CUTS`' values, `--time` at most
+    MAX_SECONDS."""
+    args = list(args)
+    for flag, value in TOOL_CUTS.get(name, {}).items():
+        if flag in args:
+            at = args.index(flag) + 1
+            end = next((i for i in range(at, len(args)) if args[i].startswith("-")), len(args))
+            args[at:end] = [value]
+        else:
+            args += [flag, value]
+    if "--time" in args:
+        at = args.index("--time") + 1
+        args[at] = str(min(float(args[at]), MAX_SECONDS))
+    return args
+
+
 def shortened(code: str) -> str:
-    """A Python block with each literal `advance(S)` longer than MAX_SECONDS cut to it."""
-    return re.sub(r"\.advance\((\d+(?:\.\d*)?)\)",
+    """A Python block cut as the module's docstring says: `advance(S)`, `seeds=range(N)`,
+    `frames=N`."""
+    code = re.sub(r"\.advance\((\d+(?:\.\d*)?)\)",
                   lambda m: f".advance({min(float(m[1]), MAX_SECONDS)!r})", code)
+    code = re.sub(r"\bseeds=range\(\d+\)", "seeds=range(1)", code)
+    return re.sub(r"\bframes=(\d+)\b", lambda m: f"frames={min(int(m[1]), MAX_FRAMES)}", code)
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
 
 
 @pytest.fixture
 def scratch(tmp_path, monkeypatch):
-    """A folder a reader works in, with the repository's scenarios beside them."""
+    """A folder a reader works in, with the repository's scenarios beside them; a study runs
+    its first run only, and never starts a Ray instance of its own."""
+    from corobot_drake.study import engine
+
     (tmp_path / "scenarios").symlink_to(REPO / "scenarios")
     monkeypatch.chdir(tmp_path)
+    expand = engine.expand
+    monkeypatch.setattr(engine, "expand", lambda study: expand(study)[:1])
+
+    def no_local_ray(workers):
+        raise AssertionError("a study or rollout started Ray: put its page in ON_RAY")
+    monkeypatch.setattr(engine, "_start_local", no_local_ray)
     return tmp_path
 
 
@@ -99,16 +173,81 @@ def test_the_tutorials_have_code_and_every_skip_says_why():
     assert sum(len(cli_commands(code)) for _, code, _, skip in shells if skip is None) >= 5
 
 
+def test_the_cuts_keep_a_command_and_only_shorten_it():
+    assert cut(["--duration", "20", "--mcap", "run.mcap"]) == [
+        "--duration", "2.0", "--mcap", "run.mcap", "--headless"]
+    assert cut(["--foxglove", "--headless"])[1].isdigit()  # a free port
+    assert cut(["--headless", "--foxglove"])[2].isdigit()
+    assert cut(["--foxglove", "9000"])[:2] == ["--foxglove", "9000"]
+    assert cut_tool("step_limit.py", ["--steps", "0.005", "0.01", "--x"]) == [
+        "--steps", "0.01", "--x"]
+    assert cut_tool("drive_test.py", ["--seeds", "20"]) == ["--seeds", "20", "--loops", "1"]
+    assert cut_tool("snapshot.py", ["--time", "3"]) == ["--time", "2.0"]
+    assert shortened("sim.advance(5.0); rollouts(p, seeds=range(100)); f(frames=300)") == (
+        "sim.advance(2.0); rollouts(p, seeds=range(1)); f(frames=3)")
+
+
 def served(page: str) -> list[str] | None:
     """The arguments of the page's `python -m corobot_drake --serve ...` command, if any."""
     return next((argv for lang, code, _, reason in blocks(page) if lang == "sh" and not reason
                  for argv in cli_commands(code) if "--serve" in argv), None)
 
 
-@pytest.mark.parametrize("page", PAGES)
-def test_a_pages_python_blocks_run_in_order(page, scratch):
-    """A page that starts a server for its Python (services.md) has it served here, on a free
-    port in place of the page's 50000."""
+def run_line(argv: list[str], where: str, url: str | None, capsys) -> None:
+    """One shell command of a page, by the rules of the module's docstring."""
+    if argv[0] in PYTHON and argv[1:3] == ["-m", "corobot_drake"]:
+        if "--serve" in argv:  # runs until Ctrl-C: served for the page's blocks instead
+            return
+        run_main("corobot_drake.cli", cut(argv[3:]), where, capsys)
+    elif argv[0] in PYTHON and argv[1] == "-m" and argv[2].startswith("corobot_drake."):
+        run_main(argv[2] + ".__main__", argv[3:], where, capsys)
+    elif argv[0] in PYTHON and re.fullmatch(r"tools/\w+\.py", argv[1]):
+        run_tool(argv[1].removeprefix("tools/"), argv[2:], where, capsys)
+    elif argv[0] == "curl":
+        assert url, f"{where}: curl without the page's server (`--serve`)"
+        argv = [a.replace("http://127.0.0.1:50000", url) for a in argv]
+        done = subprocess.run([argv[0], "--fail-with-body", *argv[1:]], capture_output=True,
+                              text=True, timeout=60)
+        assert done.returncode == 0, f"{where}: {shlex.join(argv)}\n{done.stdout}{done.stderr}"
+    elif argv[0] == "cat":
+        done = subprocess.run(argv, capture_output=True, text=True, timeout=60)
+        assert done.returncode == 0 and done.stdout, f"{where}: {shlex.join(argv)}: {done.stderr}"
+    else:
+        pytest.fail(f"{where}: no rule runs `{shlex.join(argv)}` (tests/packaging/"
+                    "test_tutorials.py): give it one, or mark the block no-test with the "
+                    "reason (e.g. it needs a ROS 2 install)")
+
+
+def run_main(module: str, argv: list[str], where: str, capsys) -> None:
+    import importlib
+
+    try:
+        status = importlib.import_module(module).main(argv)
+    except SystemExit as exit_:
+        status = exit_.code
+    out = capsys.readouterr()
+    assert status in (0, None), f"{where}: {module} {shlex.join(argv)}\n{out.err[-2000:]}"
+
+
+def run_tool(name: str, args: list[str], where: str, capsys) -> None:
+    argv = [str(REPO / "tools" / name), *cut_tool(name, args)]
+    saved = sys.argv
+    sys.argv = argv
+    try:
+        runpy.run_path(argv[0], run_name="__main__")
+        status = 0
+    except SystemExit as exit_:
+        status = exit_.code
+    finally:
+        sys.argv = saved
+    out = capsys.readouterr()
+    allowed = (0, None, 1) if name in VERDICT_TOOLS else (0, None)
+    assert status in allowed, f"{where}: {shlex.join(argv)} exited {status}\n" \
+        f"{out.out[-1000:]}{out.err[-2000:]}"
+
+
+def run_page(page: str, capsys) -> None:
+    """The page's blocks in its order, with its server (if it serves one) on a free port."""
     from corobot_drake.serving.serve import ServerProcess
 
     serve = served(page)
@@ -119,27 +258,34 @@ def test_a_pages_python_blocks_run_in_order(page, scratch):
             url = stack.enter_context(ServerProcess(args)).url
         namespace = {"__name__": "docs_" + re.sub(r"\W", "_", page)}
         for lang, code, line, reason in blocks(page):
-            if lang == "python" and reason is None:
+            if reason is not None:
+                continue
+            if lang == "python":
                 if url:
                     code = code.replace("http://127.0.0.1:50000", url)
                 exec(compile(shortened(code), f"{page}:{line}", "exec"), namespace)
-
-
-@pytest.mark.parametrize("page", PAGES)
-def test_a_pages_commands_run(page, scratch, capsys):
-    from corobot_drake.cli import main
-
-    for lang, code, line, reason in blocks(page):
-        if lang != "sh" or reason is not None:
-            continue
-        for argv in cli_commands(code):
-            if "--serve" in argv:  # runs until Ctrl-C: served for the page's Python blocks
                 continue
-            argv = cut(argv)
-            try:
-                status = main(argv)
-            except SystemExit as exit_:
-                status = exit_.code
-            out = capsys.readouterr()
-            assert status == 0, f"{page}:{line}: {shlex.join(argv)}\n{out.err[-2000:]}"
+            for argv in shell_lines(code):
+                run_line(argv, f"{page}:{line}", url, capsys)
+
+
+@pytest.mark.parametrize("page", [p for p in PAGES if p not in ON_RAY])
+def test_a_pages_blocks_run_in_order(page, scratch, capsys):
+    run_page(page, capsys)
+    assert os.getcwd() == str(scratch)
+
+
+@pytest.fixture
+def on_ray(ray_head):
+    """This process connected to the session's Ray head, and left as it was found."""
+    import ray
+
+    ray.init(address=ray_head.address, log_to_driver=False, configure_logging=False)
+    yield
+    ray.shutdown()
+
+
+@pytest.mark.parametrize("page", ON_RAY)
+def test_a_pages_blocks_run_in_order_on_ray(page, scratch, on_ray, capsys):
+    run_page(page, capsys)
     assert os.getcwd() == str(scratch)
