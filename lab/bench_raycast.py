@@ -1,12 +1,13 @@
 """The IR sensors' ray cast, 2 sensors x 6 rays, in a scene like the default one
 (`tools/bench_raycast.py`).
 
-Scene: the default scenario's proximity geometry, rebuilt here from dimensions.py so that the
-benchmark doesn't depend on the station code: the ground HalfSpace (anchored), the 2 m giant box
-(a free 100 kg body, so it is posed through ``QueryObject.GetPoseInWorld`` at every scan) and the
-robot's chassis and platform boxes and four wheel cylinders, which are excluded as the robot's
-own. The robot sits at the origin facing +x, so the rear sensor sees the box face at 0.62865 m
-and the front sensor sees nothing.
+Scene: the default scenario's proximity geometry, rebuilt here from the scenario file and the
+Corobot's robot file (its measured collision shapes) so that the benchmark doesn't depend on the
+station code: the ground HalfSpace (anchored), the 2 m giant box (a free 100 kg body, so it is
+posed through ``QueryObject.GetPoseInWorld`` at every scan) and the robot's chassis and platform
+boxes and four wheel cylinders, which are excluded as the robot's own. The robot sits at the
+origin facing +x, so the rear sensor sees the box face at 0.62865 m and the front sensor sees
+nothing.
 
 A scan casts the 12 rays as the IR sensors do: per sensor, its ``RayFan`` posed by the chassis
 pose and one ``RayCaster.cast_fan``. :func:`scan_cost_seconds` is the median cost of one scan of
@@ -18,69 +19,56 @@ from __future__ import annotations
 import statistics
 import time
 
-import numpy as np
-from pydrake.geometry import Box, Cylinder, HalfSpace
-from pydrake.math import RigidTransform, RotationMatrix
+from pydrake.geometry import Box, HalfSpace
+from pydrake.math import RigidTransform
 from pydrake.multibody.plant import AddMultibodyPlantSceneGraph, CoulombFriction
 from pydrake.multibody.tree import SpatialInertia
 from pydrake.systems.framework import DiagramBuilder
 
-from corobot_drake.model import dimensions as dim
+from corobot_drake.config.scenario import load_scenario
+from corobot_drake.config.sensors import default_ir_sensors
+from corobot_drake.resources import DEFAULT_SCENARIO
+from corobot_drake.robots import robot_spec
 from corobot_drake.sensors.raycast import RayCaster, RayFan, model_instance_geometry_ids
 
-SAMPLES = 3
-MAXIMUM_RANGE = 30 * dim.INCH
+IR = default_ir_sensors()
+"""The Corobot's IR sensors, as its robot file mounts them."""
+SAMPLES = IR["front"].samples
+MAXIMUM_RANGE = IR["front"].maximum_range
 
 
 def build_scene():
     """Returns (diagram, context, plant, scene_graph, chassis body, robot model instance)."""
+    world_config = load_scenario(DEFAULT_SCENARIO).world
+    giant = world_config.bodies["giant_box"]
     builder = DiagramBuilder()
     plant, scene_graph = AddMultibodyPlantSceneGraph(builder, time_step=0.001)
-    friction = CoulombFriction(dim.GROUND_FRICTION, dim.GROUND_FRICTION)
+    mu = world_config.ground.friction
+    friction = CoulombFriction(mu, mu)
     world = plant.world_body()
     plant.RegisterCollisionGeometry(world, RigidTransform(), HalfSpace(), "ground", friction)
-    size = dim.GIANT_BOX_SIZE
+    size = giant.shape.size
     box_model = plant.AddModelInstance("giant_box")
     giant_box = plant.AddRigidBody(
-        "giant_box",
-        box_model,
-        SpatialInertia.SolidBoxWithMass(dim.GIANT_BOX_MASS, size, size, size),
-    )
-    plant.RegisterCollisionGeometry(
-        giant_box, RigidTransform(), Box(size, size, size), "giant_box", friction
-    )
+        "giant_box", box_model, SpatialInertia.SolidBoxWithMass(giant.mass, *size))
+    plant.RegisterCollisionGeometry(giant_box, RigidTransform(), Box(*size), "giant_box", friction)
+    spec = robot_spec()
     robot = plant.AddModelInstance("corobot")
     chassis = plant.AddRigidBody(
-        "chassis", robot, SpatialInertia.SolidBoxWithMass(dim.TOTAL_BODY_MASS, *dim.CHASSIS.size)
-    )
-    for name, part in (("chassis", dim.CHASSIS), ("platform", dim.PLATFORM)):
-        plant.RegisterCollisionGeometry(
-            chassis, RigidTransform(part.center), Box(*part.size), name, friction
-        )
-    R_axle_y = RotationMatrix.MakeXRotation(np.pi / 2)  # cylinder axis z -> y
-    for wheel in dim.WHEEL_NAMES:
-        plant.RegisterCollisionGeometry(
-            chassis,
-            RigidTransform(R_axle_y, dim.wheel_center(wheel)),
-            Cylinder(dim.WHEEL_RADIUS, dim.WHEEL_WIDTH),
-            wheel,
-            friction,
-        )
+        "chassis", robot, SpatialInertia.SolidBoxWithMass(spec.mass, 0.2, 0.15, 0.06))
+    for name, shape, X_BG in spec.shapes:  # every collision shape, fixed at its start pose
+        plant.RegisterCollisionGeometry(chassis, X_BG, shape, name.replace("/", "_"), friction)
     plant.Finalize()
     diagram = builder.Build()
     context = diagram.CreateDefaultContext()
-    plant.SetFreeBodyPose(
-        plant.GetMyMutableContextFromRoot(context), giant_box, RigidTransform(dim.GIANT_BOX_CENTER)
-    )
+    plant.SetFreeBodyPose(plant.GetMyMutableContextFromRoot(context), giant_box,
+                          giant.pose.GetDeterministicValue())
     return diagram, context, plant, scene_graph, chassis, robot
 
 
 def sensor_poses_in_body():
     """X_BS of the front and rear IR sensors (sensor looks along its +x)."""
-    return [
-        RigidTransform(RotationMatrix.MakeZRotation(m.yaw), m.position)
-        for m in (dim.FRONT_IR, dim.REAR_IR)
-    ]
+    return [IR[name].X_PB.GetDeterministicValue() for name in ("front", "rear")]
 
 
 def sensor_fans() -> list[RayFan]:

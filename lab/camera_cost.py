@@ -19,7 +19,7 @@ import time
 from pathlib import Path
 
 from corobot_drake.config.scenario import load_scenario
-from corobot_drake.model import dimensions as dim
+from corobot_drake.config.sensors import default_camera_config
 from corobot_drake.resources import DEFAULT_SCENARIO
 from corobot_drake.sensors import render
 from corobot_drake.simulation import Simulation, quiet_drake_warnings
@@ -48,8 +48,9 @@ class _Camera:
         X_WC = (render.robot_camera_view(X_WB) if self.view == "robot-camera"
                 else render.chase_view(X_WB))
         start = time.perf_counter()
-        render.render(self.sim, X_WC, dim.CAMERA_WIDTH, dim.CAMERA_HEIGHT,
-                      dim.CAMERA_FOV_Y_DEG, name=self.renderer)
+        camera = default_camera_config()  # the Corobot's, as its robot file says
+        render.render(self.sim, X_WC, camera.width, camera.height,
+                      camera.focal.y, name=self.renderer)
         return time.perf_counter() - start
 
 

@@ -22,9 +22,9 @@ import math
 import numpy as np
 
 from corobot_drake.config.scenario import SAP_PLANT
-from corobot_drake.model import dimensions as dim
 from corobot_drake.model.sdf import WheelContact
 from corobot_drake.resources import DEFAULT_SCENARIO
+from corobot_drake.robots import robot_spec
 
 SETTLE = 1.0
 """s: the robot settles on its tyres (they take its weight in ~0.1 s) before a measurement."""
@@ -36,7 +36,7 @@ def tyre_facets(contact: WheelContact | None = None) -> int:
     """The sides of the polygon Drake's tyre mesh is a prism over (Drake's rule for a
     compliant cylinder, `make_cylinder_mesh.cc`: ceil(2 pi R / resolution_hint), at least 3)."""
     contact = contact or WheelContact()
-    return max(3, math.ceil(2 * math.pi * dim.WHEEL_RADIUS / contact.resolution_hint))
+    return max(3, math.ceil(2 * math.pi * robot_spec().wheel_radius / contact.resolution_hint))
 
 
 def facet_angle(contact: WheelContact | None = None) -> float:

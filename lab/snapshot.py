@@ -14,7 +14,7 @@ import math
 
 import numpy as np
 
-from corobot_drake.model import dimensions as dim
+from corobot_drake.config.sensors import default_camera_config
 from corobot_drake.sensors import render
 
 VIEWS = ("chase", "overview", "robot-camera")
@@ -57,7 +57,7 @@ def take(sim, view: str, width: int, height: int, robot: str | None = None,
         # The fill light would cast the robot's own shadow ahead of it: no shadows here.
         name = render.add_renderer(sim, shadows=False, name="robot_camera_vtk")
         return render.render(sim, render.robot_camera_view(X_WB), width, height,
-                             dim.CAMERA_FOV_Y_DEG, near=0.001, name=name)
+                             default_camera_config().focal.y, near=0.001, name=name)
     render.add_renderer(sim)
     fov = 40.0
     if eye is not None:

@@ -1,10 +1,10 @@
 """Benchmark: the IR sensors' ray cast, 2 sensors x 6 rays, in a scene like the default one.
 
 The scene and the scan are `lab.bench_raycast`'s: the default scenario's
-proximity geometry rebuilt from dimensions.py (ground, the giant box as a free body, the robot's
-own boxes and wheels excluded), the robot at the origin facing +x, so the rear sensor sees the
-box face at 0.62865 m and the front sensor sees nothing. Both sensors cast as
-the IR sensors do: per sensor, its RayFan posed by the chassis pose and one
+proximity geometry rebuilt from the scenario and robot files (ground, the giant box as a free
+body, the robot's own boxes and wheels excluded), the robot at the origin facing +x, so the
+rear sensor sees the box face at 0.62865 m and the front sensor sees nothing. Both sensors
+cast as the IR sensors do: per sensor, its RayFan posed by the chassis pose and one
 ``RayCaster.cast_fan``. Prints the readings, then the cast alone and the full scan (median and
 best batch, wall clock).
 

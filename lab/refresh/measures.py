@@ -73,8 +73,6 @@ def measure_wheel_turn() -> dict:
     distance / R."""
     import math
 
-    from corobot_drake.model import dimensions as dim
-
     sim = _sim()
     robot = sim.robot()
     sim.advance(0.3)
@@ -85,8 +83,9 @@ def measure_wheel_turn() -> dict:
     x, y, _ = robot.position()
     distance = math.hypot(x - x0, y - y0)
     ticks = {k: v - ticks0[k] for k, v in robot.encoders().items()}
-    turned = {k: v * 2 * math.pi / dim.ENCODER_TICKS_PER_REVOLUTION for k, v in ticks.items()}
-    return {"distance": distance, "ratio": {k: t / (distance / dim.WHEEL_RADIUS)
+    spec = robot.spec
+    turned = {k: v * 2 * math.pi / spec.encoder_ticks_per_revolution for k, v in ticks.items()}
+    return {"distance": distance, "ratio": {k: t / (distance / spec.wheel_radius)
                                             for k, t in turned.items()}}
 
 
@@ -246,14 +245,14 @@ def measure_spin_steps(seconds: float = 3.0) -> dict:
     the study metrics over the last second of `seconds`: {"cenic": {step: {"spin": ratio,
     "speed": m/s}}, "sap": ...}."""
     from corobot_drake.config.scenario import CENIC_PLANT, SAP_PLANT, load_scenario
-    from corobot_drake.model import dimensions as dim
+    from corobot_drake.robots import robot_spec
     from corobot_drake.simulation import Simulation, quiet_drake_warnings
     from corobot_drake.study.metrics import METRICS, RobotRun
     from corobot_drake.tuning.tire_grip import predicted_spin_rate
     from lab.bench import physics_only_overrides
 
     quiet_drake_warnings()
-    prediction = predicted_spin_rate(dim.MOTOR_TORQUE_SCALING * dim.WHEEL_RADIUS)
+    prediction = predicted_spin_rate(robot_spec().top_speed())
 
     def steady(plant: str, left: float, metric: str) -> float:
         sim = Simulation(load_scenario(DEFAULT_SCENARIO, overrides=[

@@ -111,17 +111,19 @@ def render_drive_drift(outs) -> str:
 
 
 def render_tune(outs) -> str:
-    from corobot_drake.model import dimensions as dim
+    from corobot_drake.robots import robot_spec
+    from corobot_drake.tuning.drive_tuning import COROBOT_TOP_SPEED
 
     text = outs[0][0].stdout
     lines = [re.sub(r"\s+\[[\d.]+ s\]$", "", line) for line in text.splitlines()
              if not line.startswith(("plot:", "tuning "))]
     tuned = number(r"^motor_torque_scaling: ([\d.]+)", text)
-    no_slip = dim.TARGET_TOP_SPEED / dim.WHEEL_RADIUS
+    radius = robot_spec().wheel_radius
+    no_slip = COROBOT_TOP_SPEED / radius
     shipped, speed = _top_speed(outs[1][0].stdout)
     return ("\n".join(f"    {line}" for line in lines) +
             f"\n\n{tuned:.2f} is {100 * (tuned / no_slip - 1):.1f}% above the no-slip "
-            f"{no_slip:.3f} ({dim.TARGET_TOP_SPEED:g} m/s / {dim.WHEEL_RADIUS:g} m): the tyres "
+            f"{no_slip:.3f} ({COROBOT_TOP_SPEED:g} m/s / {radius:g} m): the tyres "
             f"creep under the servo. The shipped {shipped:g} gives {speed:.4f} m/s "
             f"(`{outs[1][0].command}`).")
 
