@@ -22,6 +22,7 @@ from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.systems.framework import DiagramBuilder
 
 from conftest import REPO, load_tool
+from corobot_drake.config.sensors import default_camera_config
 from corobot_drake.model import dimensions as dim
 from corobot_drake.model import meshes
 from corobot_drake.sensors.camera import make_vtk_engine
@@ -280,6 +281,7 @@ def test_robots_own_camera_does_not_see_the_robot(scene):
     """The camera and IR housings stay out of the camera's view frustum."""
     R_BC = RotationMatrix(np.array([[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]]))
     X_WC = RigidTransform(R_BC, dim.CAMERA.position)
-    image = scene.render(X_WC, dim.CAMERA_WIDTH, dim.CAMERA_HEIGHT, dim.CAMERA_FOV_Y_DEG,
+    camera = default_camera_config()  # its image size and field of view
+    image = scene.render(X_WC, camera.width, camera.height, camera.focal.y,
                          near=0.001)
     assert np.all(image == BACKGROUND)

@@ -108,14 +108,13 @@ def test_default_scene_matches_the_spec():
     from conftest import DEFAULT_SCENARIO
     from corobot_drake.config.scenario import Box as BoxShape
     from corobot_drake.config.scenario import load_scenario
-    from corobot_drake.model import dimensions as dim
 
     scenario = load_scenario(DEFAULT_SCENARIO)
     box = scenario.world.bodies["giant_box"]
     assert isinstance(box.shape, BoxShape) and box.shape.size == [2.0, 2.0, 2.0]
     assert box.mass == 100.0 and not box.fixed
     X_WB = box.pose.GetDeterministicValue()
-    assert X_WB.translation() == pytest.approx(dim.GIANT_BOX_CENTER)
+    assert X_WB.translation() == pytest.approx([-(29 * 0.0254 + 1.0), 0.0, 1.0])
     assert X_WB.rotation().IsExactlyIdentity()
     # The near face 29 in behind the origin, so the rear IR reads 0.62865 m (SPEC).
     assert X_WB.translation()[0] + 1.0 == pytest.approx(-0.7366, abs=1e-12)

@@ -13,7 +13,9 @@ from corobot_drake.robots import LEFT, RIGHT, robot_spec
 from corobot_drake.robots.load import load_spec
 
 
-def test_the_corobots_spec_is_its_dimensions_to_the_bit():
+def test_the_corobots_spec_is_its_cads_to_the_bit():
+    """The Corobot's robot file and generated model, measured, give its CAD's figures
+    (what model generation makes it from) exactly; the drive is the scenario's default."""
     spec = robot_spec("corobot")
     assert spec.wheel_radius == dim.WHEEL_RADIUS
     assert spec.track == dim.TRACK and spec.half_track == dim.HALF_TRACK
@@ -28,7 +30,7 @@ def test_the_corobots_spec_is_its_dimensions_to_the_bit():
     assert spec.generated and spec.base == "chassis"
     assert spec.contact == WheelContact()
     assert spec.drive == sc.Drive()
-    assert spec.encoder_ticks_per_revolution == dim.ENCODER_TICKS_PER_REVOLUTION
+    assert spec.encoder_ticks_per_revolution == 600
 
 
 def test_the_corobots_robot_file_holds_the_scenarios_default_sensors():
