@@ -1,14 +1,15 @@
-"""The Corobot's dimensions, masses and sensor mounts: what its model is generated from.
+"""The Corobot's CAD: its dimensions, masses and sensor mounts, what its model is generated from.
 
-The Corobot is one robot of several (`corobot_drake/robots`): `model/sdf.py` builds its model
-from these figures and its robot file (`models/corobot/robot.yaml`) states them exactly
-(a test keeps the two in step); the station, the systems and the front ends read any robot's
-figures from its `RobotSpec`, the Corobot's included. Only the Corobot's own defaults (its
-sensors' mounts, the chapter's world) still come from here.
+Model generation alone reads this module: `model/sdf.py` builds `models/corobot.sdf` from it,
+`model/meshes.py` the meshes, and `model/robot_file.py` writes the figures the CAD fixes (the
+wheels' radius, track and wheelbase, the IR sensors' and camera's mounts) into the Corobot's
+robot file exactly (`tools/make_model.py`; a test keeps both in step). The simulator reads the
+Corobot from that robot file and the model it names (`robots/corobot.py`, its `RobotSpec`),
+as it reads any robot; the drive, the sensors' settings and the world are not the CAD's.
 
 Every figure is SI (metres, kilograms). The original robot was specified in inches; the
 conversion happens here, once. Positions are in the robot body frame ``chassis``: origin on
-the ground plane midway between the axles, +x forward, +y left, +z up.
+the ground midway between the axles, +x forward, +y left, +z up.
 """
 
 from __future__ import annotations
@@ -97,42 +98,7 @@ CAMERA = SensorMount(position=(4.25 * INCH, 0.0, CHASSIS.center[2] - 0.01), yaw=
 CAMERA_WIDTH = 320
 CAMERA_HEIGHT = 240
 CAMERA_FOV_Y_DEG = 30.0
-CAMERA_FPS = 30.0
-"""Frames per second of the robot camera."""
-CAMERA_OUTPUT_DELAY = 0.03
-"""s from a frame's capture to its output: a USB webcam's latency, just under one frame at
-30 Hz (Drake's RgbdSensorAsync needs less than 1/fps). Rendering happens meanwhile on a worker
-thread, so the simulation goes on during it."""
-
-ENCODER_TICKS_PER_REVOLUTION = 600
-
-IR_MAXIMUM_RANGE = 30 * INCH
-"""m (0.762): an IR sensor's reading when nothing is within range."""
 IR_DISPERSION_CONE_ANGLE_DEG = 8.0
-IR_SAMPLES = 3
-"""Rays per fan of an IR sensor's cross of rays."""
-
-# Drive figures (defaults of the scenario's drive parameters).
-MOTOR_TORQUE_SCALING_UNTUNED = 20.0
-"""The untuned MotorTorqueScaling: axle rad/s at power 1 (~1.2 m/s top speed)."""
-MOTOR_TORQUE_SCALING = 10.16
-"""Tuned so full power gives the real Corobot's 2 ft/s top speed."""
-TARGET_TOP_SPEED = 2 * 12 * INCH  # 0.6096 m/s
 MAX_AXLE_SPEED = 20.0
-"""set_speed clamps axle speed to +-this (rad/s)."""
-SLEW_RATE = 30.0
-"""Axle-speed slew limit, rad/s^2 (0.5 rad/s per 1/60 s frame)."""
-CONTROL_PERIOD = 0.01
-"""Drive controller update period, seconds: the plant's default 10 ms step, so the drive's
-events fall on the plant's steps (the original ran at 60 Hz; its per-frame rules are expressed
-per second: docs/performance.md)."""
-WHEEL_HOLD_GAIN = 10.0
-"""1/s: at zero command the drive pulls each resting wheel back to the angle it stopped at with
-a velocity target of this times the angle error (docs/tuning.md, "At rest"): the velocity servo
-alone only damps, and the tyres' hydroelastic mesh rolls a resting robot up to ~2 mm."""
-
-# The chapter's world.
-GIANT_BOX_SIZE = 2.0
-GIANT_BOX_MASS = 100.0
-GIANT_BOX_CENTER = (-(29 * INCH + GIANT_BOX_SIZE / 2), 0.0, GIANT_BOX_SIZE / 2)
-GROUND_FRICTION = 0.5
+# The five above are the robot file's (its camera, its IR sensors, its drive), kept here only
+# until the last modules outside model generation that read them move to it.

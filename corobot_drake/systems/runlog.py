@@ -12,9 +12,10 @@ simulation's contact telemetry, which no real logger has:
     ir_front,ir_rear,... (its sensors')
 
 - time: s. left_power, right_power: the drive's commanded power per side in [-1, 1].
-- left_ticks, right_ticks: front-left / front-right encoder counts, `ENCODER_TICKS_PER_REVOLUTION`
-  (600) per wheel revolution, floor(600 q / 2 pi) of the integrated wheel angle q (forward
-  rolling counts up): the odometry's encoders (`odometry.add_wheel_encoders`).
+- left_ticks, right_ticks: front-left / front-right encoder counts, the robot's
+  `encoder_ticks_per_revolution` (the Corobot's 600) per wheel revolution, floor(600 q / 2 pi)
+  of the integrated wheel angle q (forward rolling counts up): the odometry's encoders
+  (`odometry.add_wheel_encoders`).
 - x, y: chassis position in the world, m. yaw: chassis heading about world z, rad, in (-pi, pi].
 - load_*, slip_ratio_*, slip_angle_*: per wheel (the Corobot's fl front left, fr, rl, rr;
   any robot's `signals.wheel_short`, in its wheel order: its `Layout`), N,
