@@ -10,6 +10,10 @@ ament_cmake helpers that the configure step asks for are missing from their depe
 files' hash beside its installed share/ directory), so running it again is quick.
 
 Exit status: 0 built or up to date; 2 when something it needs is missing (one line names it).
+
+It imports nothing of the simulator: a ROS 2 user's environment of ROS 2's wheels alone
+(tools/ros2_user_requirements.txt) runs it from the clone's root, `python -m
+corobot_drake.ros2.build`, and gets the same packages (docs/ros2.md).
 """
 
 from __future__ import annotations
@@ -157,7 +161,9 @@ def main(argv: list[str] | None = None) -> int:
     try:
         root = prefix()
         if not (root / "share" / "rosidl_default_generators").is_dir():
-            raise BuildError(f"the [ros2] extra is not installed: {install_hint('ros2')}")
+            raise BuildError(f"ROS 2's build wheels are not installed: {install_hint('ros2')}"
+                             "; or, for a ROS 2 user's environment without the project, pip "
+                             "install -r tools/ros2_user_requirements.txt")
         fix_exported_cmake(root)
         for name in PACKAGES:
             if not args.force and up_to_date(root, name):
