@@ -10,6 +10,7 @@ the simulation thread, by the publishers' events (`publishers`), as serialized m
 
 from __future__ import annotations
 
+import collections
 import concurrent.futures
 import contextlib
 import dataclasses as dc
@@ -62,6 +63,8 @@ YAW = lim.Range(math.radians(lim.YAW_DEG.low), math.radians(lim.YAW_DEG.high), u
 """/set_pose's `yaw` (rad): the scenario command's yaw_deg range."""
 NODE_STOPPED = "the node stopped (the simulation ended) before the goal did"
 """The reason of a goal still running when the node stops (aborted)."""
+ROBOT_GONE = "the robot left the simulation (DeleteEntity, or a reset) before the goal ended"
+"""The reason of a goal whose robot is deleted while it runs (aborted)."""
 RESULT_GRACE = 1.0
 """s (wall clock) the node keeps serving after aborting the goals still running as it
 stops, for their results to reach their clients (an rclpy task sends each)."""
@@ -173,6 +176,8 @@ class Ros2Node:
         self._robot_entities: dict[str, list] = {}  # each robot's subscription, servers
         self._robots_lock = threading.Lock()
         self._goals = 0  # running (`_execute`)
+        self._robot_goals: collections.Counter = collections.Counter()  # running, by robot
+        self._leaving: set[str] = set()  # robots whose goals end as they are removed
         self._goals_changed = threading.Condition()
         self._aborted_at_stop = threading.Event()
         self._namesakes = 1
@@ -249,8 +254,17 @@ class Ros2Node:
         self._robot_entities[robot] = entities
 
     def _remove_robot(self, robot: str) -> None:
-        """Its subscription, action servers and services destroyed (rclpy defers each while
-        the executor uses it); a goal still running ends as its robot is gone (`_run_goal`)."""
+        """Its goals still running aborted (`_run_goal`) and their results sent, then its
+        subscription, action servers and services destroyed (rclpy defers each while the
+        executor uses it)."""
+        self._leaving.add(robot)
+        with self._goals_changed:  # each aborts within a feedback period
+            running = self._robot_goals[robot] > 0
+            self._goals_changed.wait_for(lambda: self._robot_goals[robot] == 0,
+                                         ANSWER_TIMEOUT)
+        if running:
+            time.sleep(RESULT_GRACE)  # their results go out before their servers do
+        self._leaving.discard(robot)
         subscription, *rest = self._robot_entities.pop(robot)
         self._cmd_vel_topics.pop(robot, None)
         self.node.destroy_subscription(subscription)
@@ -363,11 +377,13 @@ class Ros2Node:
         """A goal, counted while it runs (`close` waits for them to be aborted)."""
         with self._goals_changed:
             self._goals += 1
+            self._robot_goals[robot] += 1
         try:
             return self._run_goal(robot, action, goal_handle)
         finally:
             with self._goals_changed:
                 self._goals -= 1
+                self._robot_goals[robot] -= 1
                 self._goals_changed.notify_all()
 
     def _run_goal(self, robot: str, action: ifc.Action, goal_handle):
@@ -396,6 +412,9 @@ class Ros2Node:
                     except KeyError as e:  # the robot deleted (DeleteEntity, a reset)
                         goal_handle.abort()
                         return Result(success=False, reason=e.args[0])
+                if robot in self._leaving:  # (its robot gone before a step told the watch)
+                    goal_handle.abort()
+                    return Result(success=False, reason=f"{robot}: {ROBOT_GONE}")
                 if self._closing.is_set():
                     with contextlib.suppress(SimulationStoppedError, TimeoutError):
                         self._call(partial(stop_if_running, robot, started.seq), RESULT_GRACE)
@@ -489,6 +508,9 @@ class Ros2Node:
                                            ).result(SERVICE_SETTLE_TIMEOUT)
         except (ValueError, SimulationStoppedError, TimeoutError) as e:
             response.success, response.reason = False, str(e) or type(e).__name__
+            return response
+        except KeyError as e:  # the robot deleted meanwhile
+            response.success, response.reason = False, e.args[0]
             return response
         response.success, response.reason = result.succeeded, result.reason
         return response

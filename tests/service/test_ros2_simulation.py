@@ -539,6 +539,8 @@ def _drive_until_odometry_moves(probe, robot: str) -> tuple:
 
 @ONE_GRAPH_AT_A_TIME
 def test_a_spawned_robot_has_its_topics_under_its_name_until_deleted(sim_ros):
+    from action_msgs.msg import GoalStatus
+    from corobot_interfaces.action import DriveDistance
     from geometry_msgs.msg import PoseStamped
     from nav_msgs.msg import Odometry
     from rclpy.qos import QoSProfile, ReliabilityPolicy
@@ -578,6 +580,7 @@ def test_a_spawned_robot_has_its_topics_under_its_name_until_deleted(sim_ros):
               "/burger/drive_distance/_action/send_goal",
               "/burger/rotate_degrees/_action/send_goal"}
     _eventually(lambda: served <= _robot_services(probe, "burger"), "the Burger's services")
+    drive = probe.action_client(DriveDistance, "/burger/drive_distance")  # (before it is used)
     probe.subscribe("/burger/odom", Odometry,
                     QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE))
     first, last = _drive_until_odometry_moves(probe, "burger")
@@ -586,8 +589,15 @@ def test_a_spawned_robot_has_its_topics_under_its_name_until_deleted(sim_ros):
     _, (x, y, *_) = _pose(probe, "burger")
     assert x == pytest.approx(last.pose.pose.position.x, abs=0.02) and x > 0.05
     assert y == pytest.approx(1.0, abs=0.02)
+    # a goal under way when its robot is deleted (paused: it waits for steps) is aborted
+    goal = probe.wait_future(drive.send_goal_async(DriveDistance.Goal(distance=1.0, power=0.5)))
+    assert goal.accepted
+    result = goal.get_result_async()  # asked while its server is there
     deleted = _call(probe, "delete_entity", DeleteEntity, entity="burger")
     assert deleted.result.result == 1, deleted.result.error_message
+    ended = probe.wait_future(result)
+    assert ended.status == GoalStatus.STATUS_ABORTED and not ended.result.success
+    assert "burger" in ended.result.reason, ended.result.reason
     assert "burger" not in _call(probe, "get_entities", GetEntities, retry=10.0).entities
     _await_graph(probe, "/burger/odom", False)
     _await_graph(probe, "/burger/cmd_vel", False, publishers=False)
