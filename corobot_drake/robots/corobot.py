@@ -27,6 +27,29 @@ def figures() -> dict:
     return yaml_load(filename=str(FILE))
 
 
+@functools.cache
+def wheel_names() -> tuple[str, ...]:
+    """The Corobot's wheels' short names in its model's joint order (its `RobotSpec.
+    wheel_names`, `front_left` ...), from its robot file's wheels and its model's joints as
+    Drake's parser orders them: for the tables built at import, before a spec can be measured
+    (measuring needs the scenario schema)."""
+    from pydrake.multibody.plant import MultibodyPlant
+
+    from corobot_drake.resources import make_parser
+    from corobot_drake.robots.spec import short_name
+
+    plant = MultibodyPlant(0.0)
+    (instance,) = make_parser(plant).AddModels(str(model_file()))
+    wheels = {*figures()["wheels"]["left"], *figures()["wheels"]["right"]}
+    joints = [plant.get_joint(i).name() for i in plant.GetJointIndices(instance)]
+    return tuple(short_name(j) for j in joints if j in wheels)
+
+
+def model_file():
+    """The Corobot's model file (the robot file's `model:`, relative to it)."""
+    return (FILE.parent / figures()["model"]).resolve()
+
+
 def spec():
     """The Corobot's RobotSpec (measured once from its robot file and model)."""
     from corobot_drake.robots import robot_spec

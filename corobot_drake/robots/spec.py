@@ -61,10 +61,15 @@ class Wheel:
     @property
     def short(self) -> str:
         """The joint's name without a trailing `_joint` or `_axle` (`front_left`)."""
-        for suffix in ("_joint", "_axle"):
-            if self.joint.endswith(suffix):
-                return self.joint[: -len(suffix)]
-        return self.joint
+        return short_name(self.joint)
+
+
+def short_name(joint: str) -> str:
+    """A wheel joint's name without a trailing `_joint` or `_axle` (`front_left`)."""
+    for suffix in ("_joint", "_axle"):
+        if joint.endswith(suffix):
+            return joint[: -len(suffix)]
+    return joint
 
 
 @dc.dataclass(frozen=True)

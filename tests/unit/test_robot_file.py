@@ -148,3 +148,20 @@ def test_the_shipped_corobot_robot_file_is_its_generators_output():
     from corobot_drake.robots.corobot import FILE
 
     assert FILE.read_text() == robot_file_text()
+
+
+def test_a_default_with_no_robot_at_hand_is_the_corobots_robot_file():
+    """`robots/corobot.py`, what the scenario's defaults and the tables built at import read,
+    gives the Corobot as its robot file and model say: its measured spec's figures."""
+    from corobot_drake.robots import corobot
+
+    spec = robot_spec("corobot")
+    assert corobot.spec() is spec
+    assert corobot.wheel_names() == spec.wheel_names
+    assert corobot.model_file() == spec.model_file
+    drive = sc.Drive()
+    for field in ("motor_torque_scaling", "slew_rate", "max_axle_speed", "control_period"):
+        assert getattr(drive, field) == corobot.drive(field) == getattr(spec.drive, field)
+    assert drive.effective_wheel_radius == corobot.wheels("radius") == spec.wheel_radius
+    assert drive.effective_track_width == corobot.wheels("track") == spec.track
+    assert corobot.drive("encoder_ticks_per_revolution") == spec.encoder_ticks_per_revolution
