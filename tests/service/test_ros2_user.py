@@ -1,0 +1,285 @@
+"""The ROS 2 user's path: a Python with only ROS 2's wheels and the interface packages built
+there from the clone (tools/setup's .venv-ros: `pip install -r tools/ros2_user_requirements.txt`
+then `python -m corobot_drake.ros2.build`, docs/ros2.md), never corobot-drake nor Drake, drives
+the simulation (`python -m corobot_drake --ros2 --headless`, the project's Python), reads every
+topic of the node's table, calls every service and sends every action goal of the command
+table and the Simulation Interfaces.
+
+It subscribes as the docs' recipes do: each display of examples/corobot.rviz with the QoS it
+is saved with (RViz's defaults: reliable, volatile, keep last 5; RobotModel's transient local;
+tf2_ros's listener for the TF display), and every topic as foxglove_bridge does (the
+publishers' offer). The scenario is the RViz recipe's (scenarios/corobot_lidar.yaml) with an
+IMU and a bumper besides: a topic of every sensor kind. All in a private network
+(`ros2_probe`).
+"""
+
+import contextlib
+import json
+import os
+import signal
+import subprocess
+import sys
+import tomllib
+from functools import partial
+from pathlib import Path
+
+import pytest
+
+from conftest import REPO
+from ros2_probe import ONE_GRAPH_AT_A_TIME, domain_id, own_shared_memory, private_network
+
+ROS_USER_ENV = REPO / ".venv-ros"
+REQUIREMENTS = REPO / "tools" / "ros2_user_requirements.txt"
+CLIENT = Path(__file__).with_name("ros2_user_client.py")
+SCENARIO = REPO / "scenarios" / "corobot_lidar.yaml"
+EVERY_KIND = "robots: {corobot: {imus: {imu: {}}, bumpers: {front_bumper: {}}}}"
+"""The lidar scenario has IR sensors, a camera and a lidar: with these, every sensor kind."""
+RVIZ = REPO / "examples" / "corobot.rviz"
+LIVE_ONLY = {"/diagnostics": "diagnostic_msgs/msg/DiagnosticArray"}
+"""What the live node publishes beside the bus's topics (`ros2.node`: a bag has none)."""
+RCL_OWN = {"/rosout", "/parameter_events"}
+"""Every rclpy node's own publishers."""
+WAIT = 20.0
+"""s (wall clock) each of the client's waits may take: discovery takes up to ~5 s."""
+HANG = 120.0
+"""s (wall clock) after which the client is a hang."""
+DRIVE = {"linear": 0.3, "seconds": 1.0, "pose_topic": "/ground_truth"}
+"""/cmd_vel at 0.3 m/s for 1 s of wall clock, measured on the true pose."""
+MOVED = 0.05
+"""m the robot must have gone forwards: 0.3 m/s for 1 s less the wheels' spin-up is ~0.25 m
+at real time; a loaded machine's simulation may run at a third of it."""
+OK = 1
+"""simulation_interfaces/msg/Result's RESULT_OK."""
+
+BOX = "shape: !Box {size: [0.2, 0.2, 0.2]}"
+AT = {"pose": {"position": {"x": -1.0, "y": -1.0, "z": 0.1}, "orientation": {"w": 1.0}}}
+REQUESTS = {
+    # the command table's services and actions
+    "/all_stop": {},
+    "/enable_drive": {"data": True},
+    "/drive_distance": {"distance": 0.05, "power": 1.0},
+    "/rotate_degrees": {"degrees": 10.0, "power": 1.0},
+    "/set_pose": {"x": 0.0, "y": 0.0, "yaw": 0.0},
+    # the Simulation Interfaces, in the order they are made
+    "/get_simulator_features": {},
+    "/get_simulation_state": {},
+    "/get_entities": {},
+    "/get_entity_info": {"entity": "corobot"},
+    "/get_entity_state": {"entity": "corobot"},
+    "/get_entities_states": {},
+    "/get_spawnables": {},
+    "/set_entity_state": {"entity": "crate", "set_pose": True, "state": {"pose": {
+        "position": {"x": 1.5, "y": 0.6, "z": 0.2}, "orientation": {"w": 1.0}}}},
+    "/spawn_entity": {"name": "user_box", "entity_resource": {"resource_string": BOX},
+                      "initial_pose": AT},
+    "/delete_entity": {"entity": "user_box"},
+    "/set_simulation_state": {"state": {"state": 2}},  # paused
+    "/step_simulation": {"steps": 5},
+    "/simulate_steps": {"steps": 5},
+    "/reset_simulation": {},
+}
+"""Each service's request and action's goal (fields by name); the calls go in this order."""
+ONCE = {"/set_pose", "/spawn_entity", "/delete_entity", "/step_simulation"}
+"""Asked once (asked again, they would act again); the others again without an answer."""
+PLAYING = {"name": "/set_simulation_state", "request": {"state": {"state": 1}}}
+"""After the steps: the simulation plays again before it is reset."""
+
+
+def ros_user_python() -> Path:
+    """.venv-ros's Python, with the interface packages built; the test fails (never skips:
+    CI runs tools/setup) when it is not there."""
+    python = ROS_USER_ENV / "bin" / "python"
+    if not python.exists():
+        pytest.fail(f"{python} not found: tools/setup makes the ROS 2 user's environment "
+                    "(ROS 2's wheels alone, docs/ros2.md)", pytrace=False)
+    missing = [p for p in ("tf2_msgs", "simulation_interfaces", "corobot_interfaces")
+               if not (ROS_USER_ENV / "share" / p / "package.xml").exists()]
+    if missing:
+        pytest.fail(f"{', '.join(missing)} not built in {ROS_USER_ENV}: run `{python} -m "
+                    "corobot_drake.ros2.build` from the clone (tools/setup does)", pytrace=False)
+    return python
+
+
+def node_topics() -> dict[str, str]:
+    """{topic: type} the node publishes for the scenario: its table, as the simulation
+    declares it on the bus (`publishers.add_ros2_topics`), and the live node's own."""
+    from corobot_drake.config.scenario import load_scenario
+    from corobot_drake.ros2.bus import Bus
+    from corobot_drake.ros2.publishers import add_ros2_topics
+    from corobot_drake.station import build_station
+
+    bus = Bus()
+    build_station(load_scenario(SCENARIO, overrides=[EVERY_KIND]),
+                  extras=[partial(add_ros2_topics, bus)])
+    return {**{topic: msgtype for topic, (msgtype, _) in bus.topics.items()}, **LIVE_ONLY}
+
+
+def calls() -> list[dict]:
+    """Every service and action of the command table (`interfaces.SERVICES`, `ACTIONS`) and
+    the Simulation Interfaces (`simulation_services.SERVICES`, `ACTION`), in `REQUESTS`' order."""
+    from corobot_drake.ros2 import interfaces as ifc
+    from corobot_drake.ros2 import simulation_services as si
+
+    kinds = {f"/{s.name}": ("service", s.type) for s in ifc.SERVICES}
+    kinds.update((f"/{a.name}", ("action", a.type)) for a in ifc.ACTIONS)
+    kinds.update((f"/{name}", ("service", f"{si.PACKAGE}/srv/{t}"))
+                 for name, t in si.SERVICES.items())
+    kinds[f"/{si.ACTION[0]}"] = ("action", f"{si.PACKAGE}/action/{si.ACTION[1]}")
+    assert set(REQUESTS) == set(kinds), "a service or action without its request here"
+    out = []
+    for name, fields in REQUESTS.items():
+        kind, msgtype = kinds[name]
+        call = {"name": name, "kind": kind, "type": msgtype, "idempotent": name not in ONCE,
+                "goal" if kind == "action" else "request": fields}
+        out.append(call)
+        if name == "/simulate_steps":
+            out.append({**call, **PLAYING, "kind": "service", "idempotent": True,
+                        "type": kinds["/set_simulation_state"][1]})
+    return out
+
+
+@contextlib.contextmanager
+def simulation(args: list[str], log: Path):
+    """`python -m corobot_drake [args]` (this Python: the project's), its output in `log` (a
+    pipe nobody reads would fill), stopped by Ctrl-C (SIGINT) to its PID at the end."""
+    with open(log, "w") as out:
+        process = subprocess.Popen([sys.executable, "-m", "corobot_drake", *args],
+                                   stdout=out, stderr=subprocess.STDOUT)
+    try:
+        yield process
+    finally:
+        process.send_signal(signal.SIGINT)
+        try:
+            process.wait(30)
+        except subprocess.TimeoutExpired:
+            process.kill()
+            process.wait(5)
+
+
+def ros_user_environment(domain: int) -> dict:
+    """The variables a ROS user's shell has: none of the project's Python's (its ROS
+    libraries' path, the wheels' start-up hook's mark), this test's domain."""
+    keep = ("PATH", "HOME", "LANG", "TMPDIR")
+    return {**{k: os.environ[k] for k in keep if k in os.environ},
+            "ROS_DOMAIN_ID": str(domain), "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"}
+
+
+@pytest.fixture(scope="module")
+def report(tmp_path_factory) -> dict:
+    """The client's JSON report of a run against the simulation."""
+    pytest.importorskip("rosbags", reason="the [ros2] extra (tools/setup installs it)")
+    python = ros_user_python()
+    plan = {"node": "corobot_drake", "topics": node_topics(), "rviz": str(RVIZ),
+            "cmd_vel": ["/cmd_vel", "geometry_msgs/msg/Twist"], "drive": DRIVE,
+            "calls": calls(), "timeout": WAIT}
+    work = tmp_path_factory.mktemp("ros2_user")
+    (work / "plan.json").write_text(json.dumps(plan))
+    domain = domain_id()
+    with contextlib.ExitStack() as stack:
+        stack.enter_context(private_network())
+        stack.enter_context(own_shared_memory())
+        patch = stack.enter_context(pytest.MonkeyPatch.context())
+        patch.setenv("ROS_DOMAIN_ID", str(domain))
+        patch.setenv("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+        log = work / "simulation.log"
+        sim = stack.enter_context(simulation([str(SCENARIO), "--headless", "--ros2",
+                                              "--override", EVERY_KIND, "--camera-rate", "10"],
+                                             log))
+        client = subprocess.run([str(python), str(CLIENT), str(work / "plan.json")], cwd=work,
+                                env=ros_user_environment(domain), capture_output=True,
+                                text=True, timeout=HANG)
+        assert sim.poll() is None, f"the simulation ended: {log.read_text()[-3000:]}"
+    assert client.returncode == 0, client.stderr
+    (work / "report.json").write_text(client.stdout)  # what a failure is read from
+    return {**json.loads(client.stdout), "plan": plan}
+
+
+@ONE_GRAPH_AT_A_TIME
+def test_the_client_has_ros_alone(report):
+    """Its rclpy and ROS libraries are .venv-ros's; the project and Drake are out of reach."""
+    env = report["environment"]
+    assert Path(env["python"]) == ROS_USER_ENV
+    assert Path(env["rclpy"]).is_relative_to(ROS_USER_ENV)
+    assert env["librcl"] and all(Path(p).is_relative_to(ROS_USER_ENV) for p in env["librcl"])
+    assert (env["corobot_drake"], env["pydrake"]) == (False, False)
+
+
+@ONE_GRAPH_AT_A_TIME
+def test_the_node_publishes_its_table_and_every_topic_arrives(report):
+    topics = report["plan"]["topics"]
+    published = {topic: types for topic, types in report["published"].items()
+                 if topic not in RCL_OWN and "/_action/" not in topic}
+    assert published == {topic: [msgtype] for topic, msgtype in topics.items()}
+    via = {}
+    for s in report["subscriptions"]:
+        via.setdefault(s["via"], {})[s["topic"]] = s
+    assert set(via["foxglove_bridge"]) == set(topics)
+    silent = [(s["topic"], s["via"]) for s in report["subscriptions"] if s["received"] == 0]
+    assert silent == []
+    # foxglove_bridge asks for what every publisher offers: the latched topics' one message
+    for topic in ("/tf_static", "/robot_description"):
+        assert via["foxglove_bridge"][topic]["qos"] == {
+            "reliability": "reliable", "durability": "transient_local", "depth": 1}
+    assert via["foxglove_bridge"]["/camera/image_raw"]["qos"]["reliability"] == "reliable"
+
+
+@ONE_GRAPH_AT_A_TIME
+def test_the_rviz_recipe_sees_the_robot(report):
+    """Each display of examples/corobot.rviz got its topic with its saved QoS (RViz's
+    defaults: reliable, volatile), and the TF display has the fixed frame's tree."""
+    subscriptions = [s for s in report["subscriptions"] if s["via"].startswith("rviz:")]
+    topics = {s["topic"] for s in subscriptions}
+    rviz = {s["via"]: s for s in subscriptions}
+    assert {"/robot_description", "/tf", "/tf_static", "/odom", "/ir/front", "/ir/rear",
+            "/scan/top", "/camera/image_raw"} <= topics
+    for name in ("rviz:Odometry", "rviz:IR front", "rviz:Lidar", "rviz:Camera"):
+        assert rviz[name]["qos"] == {"reliability": "reliable", "durability": "volatile",
+                                     "depth": 5}, name
+    assert rviz["rviz:RobotModel"]["qos"]["durability"] == "transient_local"
+    frames = {tuple(f) for s in report["subscriptions"] if s["via"] == "rviz:TF"
+              for f in s.get("frames", ())}
+    assert ("odom", "base_link") in frames  # the recipe's fixed frame holds the robot
+    assert ("base_link", "camera_link") in frames  # /tf_static, latched
+
+
+@ONE_GRAPH_AT_A_TIME
+def test_cmd_vel_moves_the_robot(report):
+    (x0, y0), (x1, y1) = report["before"], report["after"]
+    assert x1 - x0 > MOVED and abs(y1 - y0) < 0.02
+
+
+@ONE_GRAPH_AT_A_TIME
+def test_every_service_answers_and_every_action_succeeds(report):
+    done = {}
+    for call in report["calls"]:
+        assert call["answered"], call
+        done.setdefault(call["name"], []).append(call)
+    assert set(done) == set(REQUESTS)
+    for name in ("/all_stop", "/enable_drive", "/set_pose"):
+        assert done[name][0]["response"]["success"], done[name]
+    for name in ("/drive_distance", "/rotate_degrees"):
+        assert done[name][0]["result"]["success"], done[name]
+        assert done[name][0]["feedback_count"] > 0
+    steps = done["/simulate_steps"][0]
+    assert steps["accepted"] and steps["result"]["result"]["result"] == OK
+    assert steps["feedback"][-1]["remaining_steps"] == 0
+    features = done["/get_simulator_features"][0]["response"]["features"]
+    assert "yaml" in features["spawn_formats"]  # (the one call without a Result)
+    for name in set(REQUESTS) - {"/all_stop", "/enable_drive", "/set_pose", "/drive_distance",
+                                 "/rotate_degrees", "/simulate_steps", "/get_simulator_features"}:
+        for call in done[name]:
+            result = call["response"]["result"]
+            assert result["result"] == OK, (name, result["error_message"])
+    entities = done["/get_entities"][0]["response"]["entities"]
+    assert {"corobot", "crate"} <= set(entities)
+    assert done["/spawn_entity"][0]["response"]["entity_name"] == "user_box"
+
+
+def test_the_ros_users_wheels_are_the_extras():
+    """tools/ros2_user_requirements.txt is the `[ros2]` extra's ROS wheels (its other
+    packages are the project's: rosbags writes bags without ROS)."""
+    extra = tomllib.loads((REPO / "pyproject.toml").read_text())["project"][
+        "optional-dependencies"]["ros2"]
+    listed = [line for line in REQUIREMENTS.read_text().splitlines()
+              if line and not line.startswith("#")]
+    assert listed == [r for r in extra if r.startswith(("ros-", "catkin"))]
