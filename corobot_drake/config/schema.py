@@ -275,10 +275,12 @@ class Robot:
     motion: Motion = dc.field(default_factory=Motion)
     velocity: list[float] = bounded(lambda: [0.0] * 6, lim.SPATIAL_VELOCITY, size=6)
     """Initial chassis spatial velocity in the world [wx, wy, wz, vx, vy, vz] (rad/s, m/s)."""
-    wheel_angles: list[float] = bounded(lambda: [0.0] * 4, Range(-1e6, 1e6, unit="rad"))
+    wheel_angles: list[float] = bounded(lambda: [0.0] * corobot.wheel_count(),
+                                        Range(-1e6, 1e6, unit="rad"))
     """Initial axle angles (rad), one per wheel in the robot's wheel order
     (`RobotSpec.wheels`): the encoders start here."""
-    wheel_speeds: list[float] = bounded(lambda: [0.0] * 4, lim.AXLE_SPEED_RANGE)
+    wheel_speeds: list[float] = bounded(lambda: [0.0] * corobot.wheel_count(),
+                                        lim.AXLE_SPEED_RANGE)
     """Initial axle speeds (rad/s, same order); the drive's commanded axle speeds start at the
     encoded wheels' (the first left and right, `RobotSpec.encoded`; the Corobot's front ones: a
     saved scene carries on without a jolt)."""

@@ -105,9 +105,9 @@ class RobotTelemetry:
     def summary(self) -> dict:
         """The robot's figures now: every signal at its `summary` place (`signals.SIGNALS`:
         `wheel_loads_N` (N) and `slip`'s `ratio` and `angle_deg` lists are per wheel in
-        `dimensions.WHEEL_NAMES` order), the largest tilt, the frames saved, the least tip
-        margin over the run (`min_tip_margin_deg`), each sensor's latest reading
-        (`sensor_readings`) and the command log."""
+        the robot's wheel order, `RobotSpec.wheel_names`), the largest tilt, the frames
+        saved, the least tip margin over the run (`min_tip_margin_deg`), each sensor's latest
+        reading (`sensor_readings`) and the command log."""
         out: dict = {"max_tilt_deg": self.max_tilt_deg(),
                      "camera_frames": self.camera_frames_saved()}
         for spec in signals.SIGNALS.values():

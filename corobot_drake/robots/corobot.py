@@ -27,6 +27,12 @@ def figures() -> dict:
     return yaml_load(filename=str(FILE))
 
 
+def wheel_count() -> int:
+    """How many wheels the Corobot drives (its robot file's, both sides)."""
+    wheels = figures()["wheels"]
+    return len(wheels["left"]) + len(wheels["right"])
+
+
 @functools.cache
 def wheel_names() -> tuple[str, ...]:
     """The Corobot's wheels' short names in its model's joint order (its `RobotSpec.
