@@ -130,3 +130,36 @@ def test_the_ros2_build_says_each_quarter_of_a_package(capsys):
     status, output = run_step(["bash", "-c", "echo why; exit 3"], {"PATH": "/usr/bin:/bin"},
                               True, "pkg")
     assert (status, output) == (3, "why\n")
+
+
+FAKE_PYTHON = """#!/usr/bin/env bash
+echo "$* | hook ${_ROS_WHEELS_BOOTSTRAP_COMPLETE-unset} | libraries ${LD_LIBRARY_PATH-unset}" \\
+  >> "$(dirname "$0")/calls"
+"""
+
+
+def test_the_ros_users_environment_runs_without_the_project_pythons_variables(tmp_path):
+    """The ROS 2 user's step calls .venv-ros's Python (here a stand-in that notes how it was
+    called) without the variables of the project's Python (the wheels' start-up hook's mark,
+    its ROS libraries' path), which would otherwise keep .venv's ROS libraries in it; an
+    environment installed since the requirements changed is not installed again."""
+    python = tmp_path / ".venv-ros" / "bin" / "python"
+    python.parent.mkdir(parents=True)
+    python.write_text(FAKE_PYTHON)
+    python.chmod(0o755)
+    (tmp_path / "tools").mkdir()
+    (tmp_path / "tools" / "ros2_user_requirements.txt").write_text("ros-jazzy-rclpy\n")
+    (tmp_path / ".venv-ros" / ".installed").touch()
+    done = subprocess.run(
+        ["bash", "-c", f'source "{SETUP}"; ros_user_environment'], cwd=tmp_path,
+        capture_output=True, text=True, timeout=60,
+        env={"PATH": "/usr/bin:/bin", "_ROS_WHEELS_BOOTSTRAP_COMPLETE": "1",
+             "LD_LIBRARY_PATH": "/project/.venv/lib"})
+    assert done.returncode == 0, done.stderr
+    lines = done.stderr.splitlines()
+    assert lines[0].startswith("[1/5] A ROS 2 user's environment: .venv-ros")
+    assert lines[1:] == ["  installed already (tools/ros2_user_requirements.txt has not "
+                         "changed since)", "  built already, from the same sources"]
+    assert (python.parent / "calls").read_text().splitlines() == [
+        "-c import rclpy | hook unset | libraries unset",
+        "-m corobot_drake.ros2.build | hook unset | libraries unset"]
