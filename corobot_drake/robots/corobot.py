@@ -82,3 +82,13 @@ def mount_of(kind_field: str, name: str) -> tuple[tuple[float, ...], tuple[float
     """(translation m, roll-pitch-yaw deg) of a sensor's `X_PB` in the robot file."""
     X_PB = sensor(kind_field, name)["X_PB"]
     return tuple(X_PB["translation"]), tuple(X_PB["rotation"]["deg"])
+
+
+def box(name: str) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
+    """(size, centre) m of the Corobot's box-shaped collision part `name` (`chassis`,
+    `platform`) in its base frame, as its model has it (its measured spec's shapes)."""
+    for shape_name, shape, X_BG in spec().shapes:
+        if shape_name.split("/")[-1] == name and hasattr(shape, "size"):
+            return tuple(float(v) for v in shape.size()), tuple(
+                float(v) for v in X_BG.translation())
+    raise KeyError(f"the Corobot's model has no box {name!r}")

@@ -165,3 +165,7 @@ def test_a_default_with_no_robot_at_hand_is_the_corobots_robot_file():
     assert drive.effective_wheel_radius == corobot.wheels("radius") == spec.wheel_radius
     assert drive.effective_track_width == corobot.wheels("track") == spec.track
     assert corobot.drive("encoder_ticks_per_revolution") == spec.encoder_ticks_per_revolution
+    for name, part in (("chassis", dim.CHASSIS), ("platform", dim.PLATFORM)):
+        size, centre = corobot.box(name)  # the model's, its CAD's to its SDF's 9 digits
+        assert size == pytest.approx(part.size, abs=1e-12)
+        assert centre == pytest.approx(part.center, abs=1e-12)
