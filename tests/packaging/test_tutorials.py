@@ -29,8 +29,9 @@ repository's, as a reader pastes them one after the other:
   is cut to `range(1)` and a literal `frames=N` (a measurement's) to `MAX_FRAMES`. The code
   is otherwise as written: the same calls, the same outputs, a shorter run.
 - A block right after a line `<!-- no-test: REASON -->` (the last non-blank line above its
-  fence) is not run; the reason must be said (a display, a dependency the project does not
-  have, a process that is the suite itself), and the page shows nothing of the comment.
+  fence) is not run here; the reason must be said (a display, a dependency the project does
+  not have, the set-up or the suite itself; or "run by tests/<tier>/test_x.py, which reads this
+  block", a test that does read the page), and the page shows nothing of the comment.
 
 docs/extending.md has its own test (tests/packaging/test_extending_docs.py: its excerpts are
 held to the files), and docs/gallery.md's commands are the generated pictures' own.
@@ -74,6 +75,7 @@ FENCE = re.compile(r"^(?P<indent> *)```(?P<lang>python|sh)\n(?P<body>.*?)^(?P=in
                    re.MULTILINE | re.DOTALL)
 """A fenced block, also one indented under a list item."""
 NO_TEST = re.compile(r"^<!-- no-test: (?P<reason>\S.*?) -->$")
+RUN_BY = re.compile(r"^run by (?P<test>tests/\w+/test_\w+\.py), which reads this block")
 PYTHON = ("python", ".venv/bin/python")
 
 
@@ -169,6 +171,8 @@ def test_the_tutorials_have_code_and_every_skip_says_why():
     for page, page_blocks in found.items():
         for _, _, line, reason in page_blocks:
             assert reason is None or len(reason) > 10, f"{page}:{line}: say why: {reason!r}"
+            if reason and (by := RUN_BY.match(reason)):
+                assert page in (REPO / by["test"]).read_text(), f"{page}:{line}: {reason}"
     shells = [b for page_blocks in found.values() for b in page_blocks if b[0] == "sh"]
     assert sum(len(cli_commands(code)) for _, code, _, skip in shells if skip is None) >= 5
 

@@ -2,10 +2,16 @@
 (examples/ros2_magellan.py, standard topics only) and the referee (examples/ros2_referee.py,
 the Simulation Interfaces' ground truth) each a process of its own, the simulation headless at
 4x real time, all in a private network. The contestant touches every cone and finishes; the
-referee scores it; the test holds the referee's word to the ground truth it reads itself."""
+referee scores it; the test holds the referee's word to the ground truth it reads itself.
+
+The three commands are docs/magellan.md's ("Run it"), read from the page, so its block runs
+here (the tutorials' test leaves it to this one): the simulation headless, the contestant
+`--verbose`, the referee `--json` with a time limit, for the test to read them."""
 
 import json
 import math
+import re
+import shlex
 import subprocess
 import sys
 
@@ -17,10 +23,7 @@ pytest.importorskip("simulation_interfaces.msg", reason="python -m corobot_drake
 from conftest import REPO
 from ros2_probe import ONE_GRAPH_AT_A_TIME, WAIT, ros2_simulation
 
-COURSE = REPO / "scenarios" / "robo_magellan.yaml"
-RATE = "4"
-"""Simulated s per wall-clock s: the course's ~26 s in ~7 s, with time to spare for the
-contestant's reactions on a loaded machine (at `max` they lag by more simulated time)."""
+PAGE = REPO / "docs" / "magellan.md"
 TIME_LIMIT = 60.0
 """s (simulated): the course takes ~26 (three cones, ~9 m, a barrel gone round)."""
 REACH = 0.305 / 2 + 0.1 + 0.05
@@ -28,8 +31,18 @@ REACH = 0.305 / 2 + 0.1 + 0.05
 wheels, the cone's radius, the touching distance)."""
 
 
-def _run(path, *args):
-    return subprocess.Popen([sys.executable, str(REPO / "examples" / path), *args],
+def page_commands() -> list[list[str]]:
+    """The arguments after `python` of the page's "Run it" block's three commands (`&` gone):
+    the simulation's, the contestant's and the referee's."""
+    text = PAGE.read_text()
+    block = re.search(r"^```sh\n(.*?)^```$", text[text.index("## Run it"):], re.M | re.S)[1]
+    return [[a for a in argv[1:] if a != "&"]
+            for argv in map(lambda line: shlex.split(line, comments=True), block.splitlines())
+            if argv]
+
+
+def _run(argv, *args):
+    return subprocess.Popen([sys.executable, str(REPO / argv[0]), *argv[1:], *args],
                             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
 
 
@@ -38,10 +51,16 @@ def test_the_contestant_finishes_the_course_and_the_referee_scores_it():
     from simulation_interfaces.msg import SimulationState
     from simulation_interfaces.srv import GetEntitiesStates, GetSimulationState
 
-    with ros2_simulation([str(COURSE), "--headless", "--paused", "--rate", RATE],
+    simulation, contestant, referee = page_commands()
+    # At 4x real time the course's ~26 s take ~7 s, with time to spare for the contestant's
+    # reactions on a loaded machine (at `max` they lag by more simulated time).
+    assert simulation == ["-m", "corobot_drake", "robo_magellan.yaml", "--ros2", "--paused",
+                          "--rate", "4"]
+    assert [contestant[0], referee[0]] == ["examples/ros2_magellan.py", "examples/ros2_referee.py"]
+    with ros2_simulation([a for a in simulation[2:] if a != "--ros2"] + ["--headless"],
                          serve=False) as (_, probe):
-        contestant = _run("ros2_magellan.py", "--course", str(COURSE), "--verbose")
-        referee = _run("ros2_referee.py", "--start", "--json", "--time-limit", str(TIME_LIMIT))
+        contestant = _run(contestant, "--verbose")
+        referee = _run(referee, "--json", "--time-limit", str(TIME_LIMIT))
         try:
             said, _ = referee.communicate(timeout=3 * WAIT)
             drove, _ = contestant.communicate(timeout=WAIT)
