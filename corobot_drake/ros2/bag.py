@@ -103,6 +103,10 @@ class _Kept:
     end: int
 
 
+_DECLARE = object()
+"""A `BagSink` queue item's mark: a topic declared while the bag is written."""
+
+
 class BagSink:
     """A `bus.Bus` sink that writes a rosbag2 directory; `close()` finishes it (the messages
     still queued written, then its metadata: a bag not closed has its MCAP file alone).
@@ -155,8 +159,17 @@ class BagSink:
                                 storage.message_end_time))
 
     def declare(self, topic: str, msgtype: str, qos: Qos) -> None:
+        """A topic's connection: added at once before the first message, else by the
+        writing thread in its turn (a robot spawned while recording: the MCAP writer writes
+        a connection into the chunk the messages go to)."""
         if self.failed:
             return
+        if self.messages:
+            self._queue.put((_DECLARE, topic, (msgtype, qos)))
+        else:
+            self._add_connection(topic, msgtype, qos)
+
+    def _add_connection(self, topic: str, msgtype: str, qos: Qos) -> None:
         self._connections[topic] = self._writer.add_connection(
             topic, msgtype, typestore=typestore(), serialization_format="cdr",
             offered_qos_profiles=[_qos(qos)])
@@ -166,14 +179,18 @@ class BagSink:
             raise self._error
         if self.failed:
             return
-        self._queue.put((self._connections[topic], t_ns, data))
+        self._queue.put((topic, t_ns, data))
         self.messages += 1
 
     def _drain(self) -> None:
         while (item := self._queue.get()) is not None:
             if self._error is None and not self.failed:
                 try:
-                    self._writer.write(*item)
+                    if item[0] is _DECLARE:
+                        self._add_connection(item[1], *item[2])
+                    else:
+                        topic, t_ns, data = item
+                        self._writer.write(self._connections[topic], t_ns, data)
                 except OSError as e:  # the disk filled: the bag is finished as it stands
                     self._fail(e)
                 except BaseException as e:  # raised in the simulation thread

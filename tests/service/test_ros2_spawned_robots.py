@@ -110,3 +110,33 @@ def test_a_robot_added_then_deleted_by_rebuilding_has_its_topics_then_none():
     assert sorted(memory.forgotten) == sorted(added)
     assert not any(t.header.frame_id == "world"
                    for t in memory.messages["/tf_static"][-1].transforms)
+
+
+def test_a_bag_takes_a_topic_declared_while_it_is_written(tmp_path):
+    """A robot spawned while `--rosbag` records: its topics' connections are added by the
+    bag's writing thread in turn (the MCAP writer puts them in the chunk it writes to), and
+    the bag reads back whole."""
+    from rosbags.rosbag2 import Reader
+
+    from corobot_drake.ros2.bag import BagSink
+    from corobot_drake.ros2.bus import typestore
+    from corobot_drake.ros2.interfaces import Qos
+
+    store = typestore()
+    Clock = store.types["rosgraph_msgs/msg/Clock"]
+    Time = store.types["builtin_interfaces/msg/Time"]
+    bag = BagSink(tmp_path / "bag")
+    bus = Bus([bag])
+    clock = bus.channel("/clock", "rosgraph_msgs/msg/Clock", Qos.RELIABLE)
+    for k in range(500):
+        sec, nanosec = divmod(k * 10_000_000, 1_000_000_000)
+        clock.publish(k * 10_000_000, Clock(clock=Time(sec=sec, nanosec=nanosec)))
+        if k == 250:
+            late = bus.channel("/burger/clock", "rosgraph_msgs/msg/Clock", Qos.RELIABLE)
+        if k >= 250:
+            late.publish(k * 10_000_000, Clock(clock=Time(sec=0, nanosec=k)))
+    bag.close()
+    with Reader(tmp_path / "bag") as reader:
+        counts = {c.topic: c.msgcount for c in reader.connections}
+        assert counts == {"/clock": 500, "/burger/clock": 250}
+        assert sum(1 for _ in reader.messages()) == 750
