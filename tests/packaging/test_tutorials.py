@@ -15,8 +15,9 @@ repository's, as a reader pastes them one after the other:
     a free one (its 8765 may be taken). A `--serve` command is started as a server (on a free
     port in place of the page's 50000) for the page's Python blocks and `curl` lines.
   - `python -m corobot_drake.<module> ...` runs that module's `main` in this process.
-  - `python tools/<tool>.py ...` runs the tool in this process, as `python` would; a long
-    measurement is given the small size its flag allows (`TOOL_CUTS`). A tool in
+  - `python tools/<tool>.py ...` (or `examples/<example>.py`) runs the script in this
+    process, as `python` would; a long measurement is given the small size its flag allows
+    (`TOOL_CUTS`). A tool in
     `VERDICT_TOOLS` may also end with its verdict's exit status 1: its cut run decides
     nothing.
   - `curl ...` runs against the page's server, with `--fail-with-body` (an HTTP error fails).
@@ -67,8 +68,9 @@ TOOL_CUTS = {
     "calibrate_odometry.py": {"--side": "0.25", "--loops": "1",   # 1 m squares: 110 s simulated
                               "--out": "calibrate_odometry"},    # not a new folder in /tmp
     "step_limit.py": {"--steps": "0.01"},               # one plant step of eight
+    "drive_legs.py": {"--loops": "1"},
 }
-"""tool -> {flag: value} it runs with here (in place of the page's, or added)."""
+"""tool or example -> {flag: value} it runs with here (in place of the page's, or added)."""
 VERDICT_TOOLS = ("tune_tire_grip.py",)
 """Tools whose exit status 1 is their verdict (no effort limit passes), not an error."""
 FENCE = re.compile(r"^(?P<indent> *)```(?P<lang>python|sh)\n(?P<body>.*?)^(?P=indent)```$",
@@ -205,8 +207,8 @@ def run_line(argv: list[str], where: str, url: str | None, capsys) -> None:
         run_main("corobot_drake.cli", cut(argv[3:]), where, capsys)
     elif argv[0] in PYTHON and argv[1] == "-m" and argv[2].startswith("corobot_drake."):
         run_main(argv[2] + ".__main__", argv[3:], where, capsys)
-    elif argv[0] in PYTHON and re.fullmatch(r"tools/\w+\.py", argv[1]):
-        run_tool(argv[1].removeprefix("tools/"), argv[2:], where, capsys)
+    elif argv[0] in PYTHON and re.fullmatch(r"(tools|examples)/\w+\.py", argv[1]):
+        run_tool(argv[1], argv[2:], where, capsys)
     elif argv[0] == "curl":
         assert url, f"{where}: curl without the page's server (`--serve`)"
         argv = [a.replace("http://127.0.0.1:50000", url) for a in argv]
@@ -233,8 +235,10 @@ def run_main(module: str, argv: list[str], where: str, capsys) -> None:
     assert status in (0, None), f"{where}: {module} {shlex.join(argv)}\n{out.err[-2000:]}"
 
 
-def run_tool(name: str, args: list[str], where: str, capsys) -> None:
-    argv = [str(REPO / "tools" / name), *cut_tool(name, args)]
+def run_tool(path: str, args: list[str], where: str, capsys) -> None:
+    """A script of tools/ or examples/ (`path`) run as `python path args` would."""
+    name = path.rsplit("/", 1)[1]
+    argv = [str(REPO / path), *cut_tool(name, args)]
     saved = sys.argv
     sys.argv = argv
     try:
