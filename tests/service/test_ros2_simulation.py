@@ -568,6 +568,7 @@ def test_a_spawned_robot_has_its_topics_under_its_name_until_deleted(sim_ros):
     assert spawned.entity_name == "burger"
     after = _pose(probe)  # the simulation goes on from where it was
     assert after[0] == before[0] and after[1] == pytest.approx(before[1], abs=1e-9)
+    assert probe.http.time == after[0]  # --serve's HTTP state follows the rebuilt simulation
     assert "burger" in _call(probe, "get_entities", GetEntities, retry=10.0).entities
     info = _call(probe, "get_entity_info", GetEntityInfo, retry=10.0, entity="burger")
     assert info.info.category.category == EntityCategory.CATEGORY_ROBOT
