@@ -17,9 +17,8 @@ repository's, as a reader pastes them one after the other:
   - `python -m corobot_drake.<module> ...` runs that module's `main` in this process.
   - `python tools/<tool>.py ...` (or `examples/<example>.py`) runs the script in this
     process, as `python` would; a long measurement is given the small size its flag allows
-    (`TOOL_CUTS`). A tool in
-    `VERDICT_TOOLS` may also end with its verdict's exit status 1: its cut run decides
-    nothing.
+    (`TOOL_CUTS`). A tool in `VERDICT_TOOLS` may also end with its verdict's exit status 1:
+    its cut run decides nothing.
   - `curl ...` runs against the page's server, with `--fail-with-body` (an HTTP error fails).
   - `cat FILE` runs as written: FILE must be there.
 - To keep the suite cheap, a run is cut to `MAX_SECONDS` of simulated time: a longer
@@ -35,7 +34,10 @@ repository's, as a reader pastes them one after the other:
   block", a test that does read the page), and the page shows nothing of the comment.
 
 docs/extending.md has its own test (tests/packaging/test_extending_docs.py: its excerpts are
-held to the files), and docs/gallery.md's commands are the generated pictures' own.
+held to the files). docs/gallery.md's commands are the generated pictures' own
+(tools/refresh_docs.py) and each shipped scenario's run (tests/service/test_cli.py runs every
+one headless). Indented blocks are not code to run: synopses (`[--workers N]`), output, and
+the commands of generated blocks.
 """
 
 from __future__ import annotations
