@@ -1,8 +1,9 @@
-"""Meshcat drawings that ride on a robot's link: a path whose transform follows a sensor frame.
+"""Meshcat drawings that ride on a robot's link, redrawn at a rate Meshcat shows.
 
-A kind draws its sensor's fixed shape once (a camera's view frustum) in the sensor frame's
-coordinates under a Meshcat path; `FollowFrame` then moves that path with the link as the
-robot drives.
+`ThrottledDrawing` is the base of a sensor's drawing: drawn at initialization, then on the
+simulator's steps at most every `MOVE_PERIOD` s. A kind draws its sensor's fixed shape once (a
+camera's view frustum) in the sensor frame's coordinates under a Meshcat path, and
+`FollowFrame` moves that path with the link as the robot drives.
 """
 
 from __future__ import annotations
@@ -22,7 +23,33 @@ FRUSTUM_DEPTH = 0.3
 _FRUSTUM_COLOR = Rgba(1.0, 0.8, 0.1, 0.8)
 
 
-class FollowFrame(LeafSystem):
+class ThrottledDrawing(LeafSystem):
+    """A Meshcat drawing (`draw(context)`, the subclass's) made at initialization and then
+    at most every `MOVE_PERIOD` s: it looks at every step (one comparison of times), with no
+    event of its own, so a continuous plant's steps are not split. `draws` counts them."""
+
+    def __init__(self):
+        super().__init__()
+        self._drawn = -math.inf
+        self.draws = 0
+        """How many times it has drawn (for tests)."""
+        self.DeclareInitializationPublishEvent(self._draw_now)
+        self.DeclarePerStepPublishEvent(self._draw_if_due)
+
+    def draw(self, context) -> None:
+        raise NotImplementedError
+
+    def _draw_if_due(self, context) -> None:
+        if context.get_time() >= self._drawn + MOVE_PERIOD * (1.0 - 1e-9):
+            self._draw_now(context)
+
+    def _draw_now(self, context) -> None:
+        self.draw(context)
+        self._drawn = context.get_time()
+        self.draws += 1
+
+
+class FollowFrame(ThrottledDrawing):
     """Sets the Meshcat transform of `path` to the world pose of a frame S fixed to a body,
     X_WS = X_WB X_BS, at initialization and then at most every `MOVE_PERIOD` s.
 
@@ -32,8 +59,7 @@ class FollowFrame(LeafSystem):
         input_ports:
         - body_poses
 
-    Input: the plant's `body_poses`. It looks at every step (one comparison of times): no
-    event of its own, so a continuous plant's steps are not split.
+    Input: the plant's `body_poses`.
     """
 
     def __init__(self, meshcat, path: str, body_index, X_BS: RigidTransform):
@@ -42,21 +68,10 @@ class FollowFrame(LeafSystem):
         self._body, self._X_BS = int(body_index), X_BS
         self._poses = self.DeclareAbstractInputPort(
             "body_poses", AbstractValue.Make([RigidTransform()]))
-        self._moved = -math.inf
-        self.moves = 0
-        """How many times it has moved the path (for tests)."""
-        self.DeclareInitializationPublishEvent(self._move)
-        self.DeclarePerStepPublishEvent(self._move_if_due)
 
-    def _move_if_due(self, context) -> None:
-        if context.get_time() >= self._moved + MOVE_PERIOD * (1.0 - 1e-9):
-            self._move(context)
-
-    def _move(self, context) -> None:
+    def draw(self, context) -> None:
         X_WB = self._poses.Eval(context)[self._body]
         self._meshcat.SetTransform(self.path, X_WB.multiply(self._X_BS))
-        self._moved = context.get_time()
-        self.moves += 1
 
 
 def frustum_segments(fov_x: float, fov_y: float, depth: float = FRUSTUM_DEPTH

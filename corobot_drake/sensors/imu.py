@@ -43,6 +43,7 @@ from pydrake.systems.framework import EventStatus, LeafSystem
 from corobot_drake.config.poses import mount, mount_frame
 from corobot_drake.limits import RATE, Range, bounded
 from corobot_drake.model import dimensions as dim
+from corobot_drake.sensors.follow import ThrottledDrawing
 from corobot_drake.sensors.ir_sensor import noise_key
 from corobot_drake.sensors.kind import BuiltSensor, SensorKind
 from corobot_drake.sensors.ticks import last_tick, tick_in_step
@@ -340,13 +341,11 @@ FORCE_SCALE = 0.02
 """m drawn per m/s^2 of specific force (at rest, gravity's 9.81 m/s^2 up: 0.196 m)."""
 RATE_SCALE = 0.2
 """m drawn per rad/s of angular velocity."""
-DRAW_PERIOD = 1.0 / 30.0
-"""s: the least time between two drawings (Meshcat shows at most about 30 frames a second)."""
 _FORCE_COLOR = Rgba(0.1, 0.75, 0.2, 1.0)
 _RATE_COLOR = Rgba(0.6, 0.2, 0.9, 1.0)
 
 
-class ImuMeshcat(LeafSystem):
+class ImuMeshcat(ThrottledDrawing):
     """Draws an IMU's latest sample in Meshcat, from the sensor's origin in the world: its
     specific force (green, `FORCE_SCALE` m per m/s^2: upright at rest, leaning back as the
     robot speeds up) and its angular velocity (purple, `RATE_SCALE` m per rad/s: up in a left
@@ -359,9 +358,8 @@ class ImuMeshcat(LeafSystem):
         - sample_state
         - body_poses
 
-    Inputs: the ImuSensor's `sample_state` and the plant's `body_poses`. It looks at every
-    step (one comparison of times) and redraws a new sample at most every `DRAW_PERIOD` s;
-    no event of its own, so a continuous plant's steps are not split.
+    Inputs: the ImuSensor's `sample_state` and the plant's `body_poses`; drawn at most every
+    `follow.MOVE_PERIOD` s.
     """
 
     def __init__(self, meshcat, path: str, imu: ImuSensor):
@@ -370,17 +368,8 @@ class ImuMeshcat(LeafSystem):
         self._sample = self.DeclareVectorInputPort("sample_state", STATE_SIZE)
         self._poses = self.DeclareAbstractInputPort(
             "body_poses", AbstractValue.Make([RigidTransform()]))
-        self._drawn = -math.inf
-        self.draws = 0
-        """How many times it has drawn (for tests)."""
-        self.DeclareInitializationPublishEvent(self._draw)
-        self.DeclarePerStepPublishEvent(self._draw_if_due)
 
-    def _draw_if_due(self, context) -> None:
-        if context.get_time() >= self._drawn + DRAW_PERIOD * (1.0 - 1e-9):
-            self._draw(context)
-
-    def _draw(self, context) -> None:
+    def draw(self, context) -> None:
         x = self._sample.Eval(context)
         X_WB = self._poses.Eval(context)[self._imu.body]
         p_WS = X_WB.multiply(self._imu.p_BS)
@@ -392,8 +381,6 @@ class ImuMeshcat(LeafSystem):
             end = p_WS + scale * (R_WS @ vector)
             self._meshcat.SetLineSegments(f"{self.path}/{name}", p_WS.reshape(3, 1),
                                           end.reshape(3, 1), 3.0, color)
-        self._drawn = context.get_time()
-        self.draws += 1
 
 
 IMU_SCHEMA = {

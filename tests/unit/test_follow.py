@@ -42,8 +42,8 @@ def test_the_path_follows_the_frame_on_its_body_at_most_30_times_a_second():
     np.testing.assert_allclose(X.translation(), (1.0, 2.1, 0.05), atol=1e-12)
     assert X.IsNearlyEqualTo(X_WB.multiply(X_BS), 1e-12)
     # 10 ms steps: a move every 40 ms (the first step at or after 1/30 s), and the first.
-    assert follow.moves == pytest.approx(1.0 / MOVE_PERIOD, abs=6)
-    assert follow.moves < 1.0 / 0.01 / 2
+    assert follow.draws == pytest.approx(1.0 / MOVE_PERIOD, abs=6)
+    assert follow.draws < 1.0 / 0.01 / 2
 
 
 def test_the_frustum_reaches_the_image_corners_at_its_depth():

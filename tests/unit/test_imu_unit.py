@@ -23,8 +23,8 @@ from conftest import Stepper
 from corobot_drake.config.poses import mount
 from corobot_drake.limits import bound_of
 from corobot_drake.ros2.messages import Messages
+from corobot_drake.sensors.follow import MOVE_PERIOD
 from corobot_drake.sensors.imu import (
-    DRAW_PERIOD,
     FORCE_SCALE,
     IMU,
     Imu,
@@ -369,7 +369,7 @@ def test_meshcat_draws_the_specific_force_and_rate_from_the_sensor_in_the_world(
     """An IMU rolled 90 deg on a welded chassis, 0.1 m ahead and 0.05 m up: its specific force
     (gravity's reaction, 9.81 m/s^2 up in the world, +y in its own frame) is drawn from its
     origin straight up, `FORCE_SCALE` m per m/s^2; no rotation: a zero-length rate line. It
-    redraws at most every `DRAW_PERIOD` s, not at the IMU's 100 Hz."""
+    redraws at most every `MOVE_PERIOD` s, not at the IMU's 100 Hz."""
     site = welded_chassis_site()
     sensor = IMU.add(site, "imu", ideal(X_PB=mount((0.1, 0.0, 0.05), (90, 0, 0))))
     meshcat = LineRecorder()
@@ -383,4 +383,4 @@ def test_meshcat_draws_the_specific_force_and_rate_from_the_sensor_in_the_world(
     start, end = meshcat.lines["/imu/bot/imu/angular_velocity"]
     np.testing.assert_array_equal(start, end)
     viz = diagram.GetSubsystemByName("bot.imu.imu.meshcat")
-    assert viz.draws == pytest.approx(0.5 / DRAW_PERIOD, abs=2)  # 51 samples; 13-16 drawn
+    assert viz.draws == pytest.approx(0.5 / MOVE_PERIOD, abs=2)  # 51 samples; 13-16 drawn
