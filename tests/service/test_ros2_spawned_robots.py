@@ -140,3 +140,47 @@ def test_a_bag_takes_a_topic_declared_while_it_is_written(tmp_path):
         counts = {c.topic: c.msgcount for c in reader.connections}
         assert counts == {"/clock": 500, "/burger/clock": 250}
         assert sum(1 for _ in reader.messages()) == 750
+
+
+def test_a_resource_names_a_robot_by_its_name_or_its_file(tmp_path):
+    """SpawnEntity's `robot_resource`: what a scenario's `robots.<name>.robot` would say, or
+    None for a world body or a model file."""
+    pytest.importorskip("simulation_interfaces.msg", reason="python -m corobot_drake.ros2.build")
+    from simulation_interfaces.msg import Resource
+
+    from corobot_drake.robots import ROBOTS
+    from corobot_drake.ros2.simulation_services import RefusedError, robot_resource
+
+    copy = tmp_path / "my_robot.yaml"  # a robot file of the user's (its model beside it)
+    copy.write_text(ROBOTS["burger"].read_text())
+    body = tmp_path / "crate.yaml"
+    body.write_text("shape: !Box {size: [0.2, 0.2, 0.2]}\nmass: 1.0\n")
+    assert robot_resource(Resource(uri="burger")) == "burger"
+    assert robot_resource(Resource(uri="turtlebot")) == "turtlebot"  # the loader says it is none
+    assert robot_resource(Resource(uri=f"file://{copy}")) == str(copy)
+    assert robot_resource(Resource(uri=str(body))) is None
+    assert robot_resource(Resource(uri="/models/crate.sdf")) is None
+    assert robot_resource(Resource(resource_string="shape: !Sphere {radius: 0.1}")) is None
+    with pytest.raises(RefusedError, match="a robot file: give its uri instead"):
+        robot_resource(Resource(resource_string=copy.read_text()))
+
+
+def test_a_robot_file_that_does_not_load_is_refused_with_the_loaders_line(tmp_path):
+    pytest.importorskip("simulation_interfaces.msg", reason="python -m corobot_drake.ros2.build")
+    from simulation_interfaces.srv import SpawnEntity
+
+    from corobot_drake.ros2.simulation_services import robot_refusal
+
+    S = SpawnEntity.Response
+    broken = tmp_path / "robot.yaml"
+    broken.write_text("model: nowhere.sdf\nwheels: {left: [a], right: [b]}\n")
+    saved = sc.load_scenario(DEFAULT_SCENARIO, overrides=[QUIET])
+    cases = ((f"robots: {{b: {{robot: {broken}}}}}", S.RESOURCE_PARSE_ERROR,
+              f"entity_resource.uri: {broken}:1: model: nowhere.sdf: cannot read the file"),
+             ("robots: {b: {robot: burger}}", S.INVALID_POSE,  # at the Corobot's origin
+              "initial_pose: robot 'b' starts "))
+    for layer, code, words in cases:
+        with pytest.raises(sc.ScenarioError) as raised:
+            sc.load_scenario(data=layer, defaults=saved)
+        refused = robot_refusal(raised.value)
+        assert refused.code == code and str(refused).startswith(words), str(refused)
