@@ -740,12 +740,12 @@ class SimulationServices:
 
         Spawnable, Resource = _t("msg", "Spawnable"), _t("msg", "Resource")
         response.spawnables = [
-            *(Spawnable(entity_resource=Resource(uri=name), description=robot_description(
-                name, path)) for name, path in ROBOTS.items()),
             *(Spawnable(entity_resource=Resource(resource_string=text), description=description)
               for description, text in SPAWNABLE_BODIES.items()),
             *(Spawnable(entity_resource=Resource(uri=uri), description=description)
-              for uri, description in SPAWNABLE_MODELS.items())]
+              for uri, description in SPAWNABLE_MODELS.items()),
+            *(Spawnable(entity_resource=Resource(uri=name), description=robot_description(
+                name, path)) for name, path in ROBOTS.items())]
         response.result = result(message="" if not request.sources else
                                  f"sources: not searched here: {', '.join(request.sources)}")
         return response

@@ -459,9 +459,11 @@ def _bad_robots(tmp_path, Resource) -> list:
 @ONE_GRAPH_AT_A_TIME
 def test_spawn_then_delete_then_reset(sim_ros):
     from geometry_msgs.msg import PoseStamped
+    from simulation_interfaces.msg import EntityCategory
     from simulation_interfaces.srv import (
         DeleteEntity,
         GetEntities,
+        GetEntityInfo,
         GetSpawnables,
         ResetSimulation,
         SpawnEntity,
@@ -470,14 +472,17 @@ def test_spawn_then_delete_then_reset(sim_ros):
 
     probe = sim_ros
     spawnables = _call(probe, "get_spawnables", GetSpawnables, retry=10.0).spawnables
+    box = next(s for s in spawnables if "!Box" in s.entity_resource.resource_string)
     at = PoseStamped()
     at.pose.position.x, at.pose.position.z, at.pose.orientation.w = 1.0, 0.15, 1.0
     spawned = _call(probe, "spawn_entity", SpawnEntity, name="crate", initial_pose=at,
-                    entity_resource=spawnables[0].entity_resource)
+                    entity_resource=box.entity_resource)
     assert spawned.result.result == 1, spawned.result.error_message
     assert spawned.entity_name == "crate"
     entities = _call(probe, "get_entities", GetEntities, retry=10.0).entities
     assert "crate" in entities and "corobot" in entities and "giant_box" in entities
+    info = _call(probe, "get_entity_info", GetEntityInfo, retry=10.0, entity="crate")
+    assert info.info.category.category == EntityCategory.CATEGORY_OBJECT  # a free box
     _call(probe, "step_simulation", StepSimulation, steps=20)
     _, crate = _pose(probe, "crate")
     assert crate[0] == pytest.approx(1.0, abs=1e-3) and crate[2] < 0.15  # fell onto the ground
