@@ -233,10 +233,15 @@ class User:
         if not client.wait_for_server(timeout_sec=self.timeout):
             return {"answered": False, "why": "action server not discovered"}
         feedback = []
+
+        def on_feedback(message):
+            with self._changed:
+                feedback.append(as_data(message.feedback))
+                self._changed.notify_all()
+
         goal = fill(ros_type(call["type"]).Goal(), call.get("goal", {}))
-        handle = self._future(client.send_goal_async(
-            goal, feedback_callback=lambda m: feedback.append(as_data(m.feedback))),
-            self.timeout)
+        handle = self._future(client.send_goal_async(goal, feedback_callback=on_feedback),
+                              self.timeout)
         if handle is None:
             return {"answered": False, "why": "no answer to the goal"}
         if not handle.accepted:
@@ -244,8 +249,10 @@ class User:
         result = self._future(handle.get_result_async(), self.timeout)
         if result is None:
             return {"answered": False, "accepted": True, "why": "no result"}
+        # (A feedback handed on after the result is dropped by rclpy's ActionClient, which
+        # forgets the goal's feedback callback with its result: the last ones may be missing.)
         return {"answered": True, "accepted": True, "status": result.status,
-                "result": as_data(result.result), "feedback": feedback[-3:],
+                "result": as_data(result.result), "feedback": feedback[:50],
                 "feedback_count": len(feedback)}
 
     def close(self) -> None:
