@@ -95,11 +95,13 @@ def ros_user_python() -> Path:
     if not python.exists():
         pytest.fail(f"{python} not found: tools/setup makes the ROS 2 user's environment "
                     "(ROS 2's wheels alone, docs/ros2.md)", pytrace=False)
-    missing = [p for p in ("tf2_msgs", "simulation_interfaces", "corobot_interfaces")
-               if not (ROS_USER_ENV / "share" / p / "package.xml").exists()]
-    if missing:
-        pytest.fail(f"{', '.join(missing)} not built in {ROS_USER_ENV}: run `{python} -m "
-                    "corobot_drake.ros2.build` from the clone (tools/setup does)", pytrace=False)
+    from corobot_drake.ros2.build import PACKAGES, up_to_date
+
+    stale = [p for p in PACKAGES if not up_to_date(ROS_USER_ENV, p)]
+    if stale:
+        pytest.fail(f"{', '.join(stale)} not built in {ROS_USER_ENV} from the current sources: "
+                    f"run `{python} -m corobot_drake.ros2.build` in the clone (tools/setup "
+                    "does)", pytrace=False)
     return python
 
 
