@@ -113,7 +113,7 @@ def run_live(front: Ros2Front, make_sim, meshcat: bool, duration: float,
     `finish(sim)`, called in the simulation thread (Meshcat, which a replay is written from,
     answers only the thread that made it). What building it raised is raised; a PhysicsError
 once `finish` has written the run so far."""
-    from corobot_drake.serving.runner import SimulationStoppedError
+    from corobot_drake.serving.runner import SimulationStoppedError, wait_for
     from corobot_drake.serving.serve import sim_runner
     from corobot_drake.simulation import PhysicsError
 
@@ -127,7 +127,7 @@ once `finish` has written the run so far."""
     end = runner.sim.time + duration
     try:
         try:
-            runner.watch(lambda sim: True if sim.time >= end - 1e-9 else None).result()
+            wait_for(runner.watch(lambda sim: True if sim.time >= end - 1e-9 else None))
         except KeyboardInterrupt:
             print("\nstopped", file=sys.stderr)
         if runner.alive:  # (a second Ctrl-C leaves the outputs unwritten)

@@ -37,6 +37,27 @@ BUILD_STOP_TIMEOUT = 60.0
 stops: a few seconds for the default scene."""
 
 
+SIGNAL_WAIT = 0.1
+"""s: the longest the main thread sleeps at once waiting on the simulation (`wait_for`), so
+the longest a stop signal another thread took waits to be acted on."""
+
+
+def wait_for[T](future: concurrent.futures.Future[T], timeout: float | None = None) -> T:
+    """`future.result(timeout)`, waited for in slices of `SIGNAL_WAIT` s, for the main thread
+    of a program that stops on a signal (`cli.ctrl_c_stops`). Python runs a signal's handler
+    in the main thread only, when it next runs Python code; the kernel gives a signal sent to
+    the process to any thread not blocking it (a thread that is starting one takes it, as
+    rclpy's executor does for a goal's callback), and a main thread asleep on an untimed
+    lock is not woken by that: Ctrl-C went unheard until the run ended."""
+    deadline = None if timeout is None else time.monotonic() + timeout
+    while not future.done():
+        left = SIGNAL_WAIT if deadline is None else min(SIGNAL_WAIT, deadline - time.monotonic())
+        if left <= 0:
+            raise TimeoutError(f"no answer in {timeout:g} s")
+        concurrent.futures.wait([future], left)
+    return future.result()
+
+
 class SimulationStoppedError(RuntimeError):
     """A request the simulation will never answer: it has stopped (or was never reached).
     The routes answer it 503."""
@@ -172,12 +193,14 @@ class SimRunner:
         s: it cannot be cut short; the process must not end under it), then goes on."""
         self._thread = threading.Thread(target=self._main, name="corobot-sim", daemon=True)
         self._thread.start()
-        try:
-            ready = self._ready.wait(timeout)
+        deadline = time.monotonic() + timeout
+        try:  # in slices (`wait_for`): a signal another thread took is acted on at once
+            while not self._ready.wait(SIGNAL_WAIT) and time.monotonic() < deadline:
+                pass
         except KeyboardInterrupt:
             self.stop(BUILD_STOP_TIMEOUT)
             raise
-        if not ready:
+        if not self._ready.is_set():
             raise TimeoutError("the simulation was not built in time")
         if self.sim is None:
             raise self.error
