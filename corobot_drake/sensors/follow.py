@@ -71,7 +71,8 @@ class FollowFrame(ThrottledDrawing):
 
     def draw(self, context) -> None:
         X_WB = self._poses.Eval(context)[self._body]
-        self._meshcat.SetTransform(self.path, X_WB.multiply(self._X_BS))
+        # With the time, a recording (`--record`'s replay) animates it too.
+        self._meshcat.SetTransform(self.path, X_WB.multiply(self._X_BS), context.get_time())
 
 
 def frustum_segments(fov_x: float, fov_y: float, depth: float = FRUSTUM_DEPTH

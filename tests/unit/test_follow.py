@@ -23,8 +23,9 @@ class TransformRecorder:
     def __init__(self):
         self.transforms = {}
 
-    def SetTransform(self, path, X):
+    def SetTransform(self, path, X, time_in_recording):
         self.transforms[path] = X
+        self.time = time_in_recording
 
 
 def test_the_path_follows_the_frame_on_its_body_at_most_30_times_a_second():
@@ -41,6 +42,7 @@ def test_the_path_follows_the_frame_on_its_body_at_most_30_times_a_second():
     # Body 1's frame turned 90 deg: S's 0.1 m ahead is +y in the world.
     np.testing.assert_allclose(X.translation(), (1.0, 2.1, 0.05), atol=1e-12)
     assert X.IsNearlyEqualTo(X_WB.multiply(X_BS), 1e-12)
+    assert meshcat.time == pytest.approx(1.0)  # stamped: a recording animates it
     # 10 ms steps: a move every 40 ms (the first step at or after 1/30 s), and the first.
     assert follow.draws == pytest.approx(1.0 / MOVE_PERIOD, abs=6)
     assert follow.draws < 1.0 / 0.01 / 2
