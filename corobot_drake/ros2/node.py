@@ -175,8 +175,8 @@ class Ros2Node:
         self._first: tuple[str, ...] = ()  # the scenario's robots: they name the robots
         self._robot_entities: dict[str, list] = {}  # each robot's subscription, servers
         self._robots_lock = threading.Lock()
-        self._goals = 0  # running (`_execute`)
-        self._robot_goals: collections.Counter = collections.Counter()  # running, by robot
+        self._goals = 0  # accepted and not yet ended (`_check_goal`, `_execute`)
+        self._robot_goals: collections.Counter = collections.Counter()  # the same, by robot
         self._leaving: set[str] = set()  # robots whose goals end as they are removed
         self._goals_changed = threading.Condition()
         self._aborted_at_stop = threading.Event()
@@ -371,13 +371,16 @@ class Ros2Node:
         except (ValueError, TypeError) as e:
             self.log.warning(f"{robot}: {action.name} goal rejected: {e}")
             return GoalResponse.REJECT
-        return GoalResponse.ACCEPT
-
-    def _execute(self, robot: str, action: ifc.Action, goal_handle):
-        """A goal, counted while it runs (`close` waits for them to be aborted)."""
+        # Counted from here, not from `_execute`: rclpy answers "accepted" before its executor
+        # starts the execute callback, and a stop in between must still wait for the goal.
         with self._goals_changed:
             self._goals += 1
             self._robot_goals[robot] += 1
+        return GoalResponse.ACCEPT
+
+    def _execute(self, robot: str, action: ifc.Action, goal_handle):
+        """A goal, counted from its acceptance (`_check_goal`) until it ends (`close` waits
+        for them to be aborted)."""
         try:
             return self._run_goal(robot, action, goal_handle)
         finally:
