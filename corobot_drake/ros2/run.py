@@ -130,8 +130,8 @@ once `finish` has written the run so far."""
             wait_for(runner.watch(lambda sim: True if sim.time >= end - 1e-9 else None))
         except KeyboardInterrupt:
             print("\nstopped", file=sys.stderr)
-        if runner.alive:  # (a second Ctrl-C leaves the outputs unwritten)
-            return runner.call(finish, timeout=None)
+        if runner.alive:
+            return _written(runner, finish)
     except SimulationStoppedError:
         pass  # the simulation thread ended: its error is raised below
     finally:
@@ -139,6 +139,21 @@ once `finish` has written the run so far."""
     if isinstance(runner.error, PhysicsError):  # a step the physics gave up on: the run so
         finish(runner.sim)  # far is written, from here (the simulation's thread has ended)
     raise runner.error or RuntimeError("the simulation stopped")
+
+
+def _written(runner, finish):
+    """`finish(sim)` in the simulation thread, waited for to its end: the outputs are written
+    whole. A stop signal meanwhile (the first, come as the run reached its end: `cli._stop`
+    raises once, then records) sets the exit status `finish` returns and is not acted on
+    here (the process ending under the simulation thread would cut the files short)."""
+    from corobot_drake.serving.runner import wait_for
+
+    done = runner.submit(finish)
+    while True:
+        try:
+            return wait_for(done)
+        except KeyboardInterrupt:
+            continue
 
 
 SWITCH_INTERVAL = 0.001

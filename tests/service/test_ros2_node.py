@@ -10,6 +10,7 @@ import math
 import re
 import subprocess
 import sys
+import threading
 import time
 
 import numpy as np
@@ -472,3 +473,47 @@ def test_a_namesake_is_warned_about_and_a_goal_running_at_the_stop_is_aborted():
             raise AssertionError(f"no result; the simulation said {lines}") from None
         assert (stopped.status, stopped.result.reason) == (6, NODE_STOPPED)  # ABORTED
         assert not stopped.result.success
+
+
+@pytest.mark.skipif(threading.current_thread() is not threading.main_thread(),
+                    reason="signal handlers are set, and run, in the main thread only")
+def test_a_stop_signal_as_a_live_run_ends_lets_its_outputs_finish(monkeypatch):
+    """Ctrl-C as a --ros2 run reaches its end, before its outputs are begun (here `finish`'s
+    first act, in the simulation thread, which takes the signal): the main thread hears it
+    within a slice (`runner.wait_for`), waits on for `finish` to end and returns its status.
+    The KeyboardInterrupt used to leave `run_live` instead (the outputs cut short when the
+    process ended under the simulation thread; "stopped before the run started")."""
+    import signal
+    import types
+
+    from corobot_drake import cli
+    from corobot_drake.config.scenario import load_scenario
+    from corobot_drake.resources import DEFAULT_SCENARIO
+    from corobot_drake.ros2.run import run_live
+    from corobot_drake.serving.runner import SIGNAL_WAIT
+    from corobot_drake.simulation import Simulation
+
+    scenario = load_scenario(DEFAULT_SCENARIO, overrides=[
+        "robots: {corobot: {commands: [], cameras: {front: {rgb: false}}}}"])
+    written = []
+
+    def finish(sim):
+        signal.raise_signal(signal.SIGINT)  # to this thread: its handler runs in the main one
+        time.sleep(3 * SIGNAL_WAIT)  # the outputs being written; the main thread hears it
+        written.append(sim.time)
+        return cli.stopped_status()
+
+    before = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
+    switch = sys.getswitchinterval()
+    monkeypatch.setattr(cli, "STOPPED_BY", None)
+    cli.ctrl_c_stops()
+    try:
+        status = run_live(types.SimpleNamespace(attach=lambda runner: None),
+                          lambda meshcat: Simulation(scenario), meshcat=False, duration=0.2,
+                          run_log_window=None, finish=finish)
+    finally:
+        for signum, handler in before.items():
+            signal.signal(signum, handler)
+        sys.setswitchinterval(switch)
+    assert cli.STOPPED_BY == signal.SIGINT  # heard, while `finish` ran
+    assert status == 130 and len(written) == 1 and written[0] >= 0.2 - 1e-9
