@@ -517,3 +517,29 @@ def test_a_stop_signal_as_a_live_run_ends_lets_its_outputs_finish(monkeypatch):
         sys.setswitchinterval(switch)
     assert cli.STOPPED_BY == signal.SIGINT  # heard, while `finish` ran
     assert status == 130 and len(written) == 1 and written[0] >= 0.2 - 1e-9
+
+
+def test_sigterm_stops_a_ros2_run_and_writes_its_outputs(tmp_path):
+    """SIGTERM (`kill`, a service manager) to a headless --ros2 run once it runs: it stops
+    at once, saying so, writes the summary of the run so far, and exits 128 + 15."""
+    import json
+    import signal
+
+    summary = tmp_path / "summary.json"
+    quiet = "robots: {corobot: {commands: [], cameras: {front: {rgb: false}}}}"
+    with ros2_simulation(["--headless", "--override", quiet, "--summary", str(summary)],
+                         serve=False) as (sim, probe):
+        probe.subscribe("/clock", Clock, RELIABLE)
+        # Under way: 0.1 s simulated (t = 0 is published as the simulation is built, and a
+        # signal then stops it before the run started, with nothing to write).
+        probe.wait_for("/clock", lambda m: stamp(m) >= 0.1)
+        sim.send_signal(signal.SIGTERM)
+        start = time.monotonic()
+        _, err = sim.communicate(timeout=30)
+        stopped_in = time.monotonic() - start
+    assert sim.returncode == 128 + signal.SIGTERM, err
+    assert "\nstopped\n" in err, err
+    assert json.loads(summary.read_text())["time"] > 0
+    # The stop, the summary and the node's shutdown take well under a second on an idle
+    # machine; 10 s leaves room for a loaded one, far below the 30 s of a lost signal.
+    assert stopped_in < 10.0, stopped_in
