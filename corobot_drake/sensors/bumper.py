@@ -53,7 +53,7 @@ from pydrake.systems.framework import EventStatus, LeafSystem
 
 from corobot_drake.config.poses import mount, mount_frame
 from corobot_drake.limits import RATE, Range, bounded
-from corobot_drake.model import dimensions as dim
+from corobot_drake.robots import robot_spec
 from corobot_drake.sensors.kind import BuiltSensor, SensorKind
 from corobot_drake.sensors.ticks import tick_in_step
 from corobot_drake.topics import nanoseconds
@@ -64,24 +64,36 @@ CLEARANCE = 0.005
 """m: the gap between the front tyres' reach and the default bumper's back face."""
 GROUND_CLEARANCE = 0.015
 """m: the default bumper's bottom above the ground."""
-SIZE = (0.02, 2 * (dim.HALF_TRACK + dim.WHEEL_WIDTH / 2), 0.025)
-"""m: the default box (thickness along S's x, width along y, height along z): 2 cm thick,
-0.2794 m wide (the outer faces of the wheels), 2.5 cm high."""
-FRONT = (dim.HALF_WHEELBASE + dim.WHEEL_RADIUS + CLEARANCE + SIZE[0] / 2, 0.0,
-         GROUND_CLEARANCE + SIZE[2] / 2)
-"""m: the default bumper's centre in the chassis frame, (0.1674, 0, 0.0275): ahead of the
-front tyres (x = 0.1524), low: its top (0.04 m) is under the front camera's view (its lower
-edge passes 0.0412 m above the ground over the bumper's face) and the IR sensors' beams."""
+THICKNESS, HEIGHT = 0.02, 0.025
+"""m: the default box's extent along S's x and z."""
+
+
+def default_size() -> tuple[float, float, float]:
+    """m: the default box (thickness along S's x, width along y, height along z): 2 cm
+    thick, as wide as the Corobot's wheels' outer faces (0.2794 m, its robot spec's), 2.5 cm
+    high."""
+    spec = robot_spec()  # the Corobot's, as its robot file and model say
+    return (THICKNESS, 2 * (spec.half_track + spec.wheels[0].width / 2), HEIGHT)
+
+
+def default_front() -> tuple[float, float, float]:
+    """m: the default bumper's centre in the chassis frame, (0.1674, 0, 0.0275): ahead of
+    the Corobot's front tyres (x = 0.1524), low: its top (0.04 m) is under the front
+    camera's view (its lower edge passes 0.0412 m above the ground over the bumper's face)
+    and the IR sensors' beams."""
+    spec = robot_spec()
+    return (spec.wheelbase / 2 + spec.wheel_radius + CLEARANCE + THICKNESS / 2, 0.0,
+            GROUND_CLEARANCE + HEIGHT / 2)
 
 
 @dc.dataclass
 class BumperConfig:
     """One bumper on a robot."""
 
-    X_PB: Transform = dc.field(default_factory=lambda: mount(FRONT, (0.0, 0.0, 0.0)))
+    X_PB: Transform = dc.field(default_factory=lambda: mount(default_front(), (0.0, 0.0, 0.0)))
     """The bumper frame S (at the box's centre, +x out of its face) in `base_frame` (default
     `chassis`: across the front, ahead of the front tyres)."""
-    size: list[float] = bounded(lambda: list(SIZE),
+    size: list[float] = bounded(lambda: list(default_size()),
                                 Range(1e-3, 2.0, unit="m", why="a bumper's box"), size=3)
     """m: the box's extent along S's x (thickness), y (width) and z (height)."""
     force_threshold: float = bounded(1.0, Range(0.0, 1e4, unit="N"))

@@ -12,7 +12,7 @@ from test_recording import read_mcap
 
 from corobot_drake.config.scenario import load_scenario
 from corobot_drake.resources import DEFAULT_SCENARIO
-from corobot_drake.sensors.bumper import FRONT
+from corobot_drake.sensors.bumper import default_front
 from corobot_drake.simulation import Simulation
 
 pytest.importorskip("rosbags", reason="the [ros2] extra (tools/setup installs it)")
@@ -82,7 +82,7 @@ def test_each_sample_is_a_wrench_stamped_in_the_bag_on_its_frame(run):
     (mount,) = [x for x in static.transforms if x.child_frame_id == FRAME]
     assert mount.header.frame_id == "base_link"
     t = mount.transform.translation
-    assert (t.x, t.y, t.z) == pytest.approx(FRONT, abs=1e-12)
+    assert (t.x, t.y, t.z) == pytest.approx(default_front(), abs=1e-12)
 
 
 def test_the_summary_holds_the_last_sample(run):
