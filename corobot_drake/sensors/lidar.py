@@ -40,7 +40,7 @@ from pydrake.systems.framework import EventStatus, LeafSystem
 
 from corobot_drake.config.poses import mount, mount_frame
 from corobot_drake.limits import RATE, Range, bounded
-from corobot_drake.model import dimensions as dim
+from corobot_drake.robots import corobot
 from corobot_drake.sensors.ir_sensor import noise_key
 from corobot_drake.sensors.kind import BuiltSensor, SensorKind
 from corobot_drake.sensors.raycast import CasterCache, RayCaster, model_instance_geometry_ids
@@ -52,10 +52,12 @@ from corobot_drake.topics import nanoseconds
 SCAN_PLANE_ABOVE_BASE = 0.05
 """m: a small 2D lidar's scan plane above the surface it stands on (a 360-degree unit such
 as an RPLidar A1 is about 6 cm tall, its beam about 5 cm up)."""
-DEFAULT_MOUNT = (0.0, 0.0, dim.PLATFORM.center[2] + dim.PLATFORM.size[2] / 2
-                 + SCAN_PLANE_ABOVE_BASE)
-"""m, chassis frame: the default lidar stands on the middle of the platform's top (0.22225 m
-up, the robot's highest part), so its scan clears the whole robot: (0, 0, 0.27225)."""
+def default_mount() -> tuple[float, float, float]:
+    """m, chassis frame: the default lidar stands on the middle of the Corobot's platform's
+    top (0.22225 m up, the robot's highest part, as its model has it), so its scan clears the
+    whole robot: (0, 0, 0.27225)."""
+    size, centre = corobot.box("platform")
+    return (0.0, 0.0, centre[2] + size[2] / 2 + SCAN_PLANE_ABOVE_BASE)
 
 FULL_CIRCLE_TOLERANCE = 1e-3
 """rad: an angle span within this of 2 pi is a full circle (its rays spread over the whole
@@ -73,7 +75,7 @@ class LidarConfig:
     """One planar lidar on a robot (`robots.<robot>.lidars.<name>`); the defaults are a small
     360-degree lidar (RPLidar A1-like) on top of the Corobot, looking forward."""
 
-    X_PB: Transform = dc.field(default_factory=lambda: mount(DEFAULT_MOUNT, (0.0, 0.0, 0.0)))
+    X_PB: Transform = dc.field(default_factory=lambda: mount(default_mount(), (0.0, 0.0, 0.0)))
     """The sensor frame S (+x the scan's zero bearing, the scan in its x-y plane) in
     `base_frame` (default `chassis`: origin on the ground midway between the axles)."""
     angle_min: float = bounded(-math.pi, Range(-2 * math.pi, 2 * math.pi, unit="rad"))

@@ -25,7 +25,6 @@ from pydrake.systems.framework import DiagramBuilder
 
 from corobot_drake.config.poses import mount
 from corobot_drake.sensors.lidar import (
-    DEFAULT_MOUNT,
     NEAREST,
     NEAREST_BEARING,
     RANGES_START,
@@ -36,6 +35,7 @@ from corobot_drake.sensors.lidar import (
     LidarConfig,
     LidarKind,
     check_lidar,
+    default_mount,
     scan_angles,
 )
 from corobot_drake.sensors.raycast import model_instance_geometry_ids
@@ -95,8 +95,8 @@ def test_the_default_is_a_360_ray_full_circle_on_top_of_the_corobot():
     assert increment == pytest.approx(math.radians(1.0), abs=1e-15)
     assert angle_max == pytest.approx(math.pi - math.radians(1.0), abs=1e-14)
     assert c.X_PB.base_frame == "chassis"
-    np.testing.assert_allclose(DEFAULT_MOUNT, (0.0, 0.0, 0.22225 + 0.05), rtol=0, atol=1e-12)
-    assert list(c.X_PB.translation) == list(DEFAULT_MOUNT)
+    np.testing.assert_allclose(default_mount(), (0.0, 0.0, 0.22225 + 0.05), rtol=0, atol=1e-12)
+    assert list(c.X_PB.translation) == list(default_mount())
     assert KIND.defaults() == {} and isinstance(KIND.new_sensor("any"), LidarConfig)
 
 
