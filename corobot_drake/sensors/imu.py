@@ -42,7 +42,7 @@ from pydrake.systems.framework import EventStatus, LeafSystem
 
 from corobot_drake.config.poses import mount, mount_frame
 from corobot_drake.limits import RATE, Range, bounded
-from corobot_drake.model import dimensions as dim
+from corobot_drake.robots import corobot
 from corobot_drake.sensors.follow import ThrottledDrawing
 from corobot_drake.sensors.ir_sensor import noise_key
 from corobot_drake.sensors.kind import BuiltSensor, SensorKind
@@ -57,7 +57,7 @@ class ImuConfig:
     """One IMU on a robot. The default noise figures are those of a MEMS IMU, the Analog
     Devices ADIS16448 of the EuRoC MAV dataset's VI-Sensor (its `imu0/sensor.yaml`)."""
 
-    X_PB: Transform = dc.field(default_factory=lambda: mount(dim.CHASSIS.center, (0, 0, 0)))
+    X_PB: Transform = dc.field(default_factory=lambda: mount(corobot.box("chassis")[1], (0, 0, 0)))
     """The sensor frame S in `base_frame` (default `chassis`, at the chassis box's centre,
     axes the chassis': +x forward, +z up)."""
     rate_hz: float = bounded(100.0, RATE)

@@ -61,12 +61,12 @@ from pydrake.geometry import (
 )
 from pydrake.math import RigidTransform
 
-from corobot_drake.model import dimensions as dim
+from corobot_drake.robots import corobot
 
 _log = logging.getLogger(__name__)
 
-DEFAULT_DISPERSION_CONE_ANGLE = dim.IR_DISPERSION_CONE_ANGLE_DEG
-"""Degrees: the IR sensor's dispersion cone."""
+DEFAULT_DISPERSION_CONE_ANGLE = corobot.sensor("ir_sensors", "front")["dispersion_cone_angle"]
+"""Degrees: the IR sensor's dispersion cone (the Corobot's, its robot file's)."""
 
 
 # --------------------------------------------------------------------------------------------

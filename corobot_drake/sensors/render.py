@@ -30,7 +30,8 @@ from pydrake.math import RigidTransform, RollPitchYaw, RotationMatrix
 from pydrake.systems.sensors import CameraInfo
 
 from corobot_drake.config import scenario as sc
-from corobot_drake.model import dimensions as dim
+from corobot_drake.config.sensors import CAMERA_ROTATION_RPY_DEG, FRONT_CAMERA
+from corobot_drake.robots import corobot
 from corobot_drake.sensors.camera import make_vtk_engine, render_engine_params
 
 RENDERER = "corobot_vtk"
@@ -131,8 +132,9 @@ def chase_view(X_WB: RigidTransform, back: float = 0.95, up: float = 0.5,
 
 
 def robot_camera_view(X_WB: RigidTransform) -> RigidTransform:
-    """The robot's own camera (its mount `dimensions.CAMERA`), in the world."""
-    mount = dim.CAMERA
-    X_BC = RigidTransform(RollPitchYaw(0, 0, mount.yaw).ToRotationMatrix() @ R_BC,
-                          mount.position)
+    """The robot's own camera (the Corobot's front camera where its robot file mounts it),
+    in the world."""
+    position, rpy_deg = corobot.mount_of("cameras", FRONT_CAMERA)
+    yaw = math.radians(rpy_deg[2] - CAMERA_ROTATION_RPY_DEG[2])  # its turn from looking ahead
+    X_BC = RigidTransform(RollPitchYaw(0, 0, yaw).ToRotationMatrix() @ R_BC, position)
     return X_WB @ X_BC
