@@ -42,8 +42,10 @@ import dataclasses as dc
 import functools
 import math
 
-from corobot_drake.model.dimensions import WHEEL_NAMES
+from corobot_drake.robots import corobot
 
+WHEEL_NAMES = corobot.wheel_names()
+"""The Corobot's wheels, in its model's joint order (its robot file's): the signals' keys."""
 WHEEL_SHORT = tuple("".join(word[0] for word in name.split("_")) for name in WHEEL_NAMES)
 """The Corobot's wheels' short names in run-log columns: fl, fr, rl, rr."""
 CODED = ("front_left", "front_right")

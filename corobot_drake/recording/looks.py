@@ -19,7 +19,7 @@ from pydrake.multibody.math import SpatialVelocity
 from pydrake.systems.framework import LeafSystem, PortDataType
 from pydrake.systems.primitives import ZeroOrderHold
 
-from corobot_drake.model import dimensions as dim
+from corobot_drake.robots import corobot
 from corobot_drake.systems.runlog import HELD_PERIOD
 
 STATE_PERIOD = 0.02
@@ -65,7 +65,7 @@ class RobotStateLooks(LeafSystem):
     def __init__(self, chassis_index: int, wheel_joints: tuple[str, ...] | None = None):
         super().__init__()
         self._chassis = int(chassis_index)
-        self.wheel_joints = tuple(wheel_joints or (f"{w}_axle" for w in dim.WHEEL_NAMES))
+        self.wheel_joints = tuple(wheel_joints or corobot.spec().wheel_joints)
         """The wheels' joint names, wheel order (/joint_states names them so)."""
         self._poses = self.DeclareAbstractInputPort("body_poses",
                                                     AbstractValue.Make([RigidTransform()]))
