@@ -169,3 +169,24 @@ def test_a_default_with_no_robot_at_hand_is_the_corobots_robot_file():
         size, centre = corobot.box(name)  # the model's, its CAD's to its SDF's 9 digits
         assert size == pytest.approx(part.size, abs=1e-12)
         assert centre == pytest.approx(part.center, abs=1e-12)
+
+
+MODEL_GENERATION = {"corobot_drake/model/dimensions.py", "corobot_drake/model/sdf.py",
+                    "corobot_drake/model/meshes.py", "corobot_drake/model/robot_file.py"}
+"""The modules that make the Corobot's model and robot file from its CAD."""
+
+
+def test_only_model_generation_reads_the_corobots_cad():
+    """The package, its tools and the lab read the Corobot from its robot file and model
+    (`robots/corobot.py`, its `RobotSpec`); the CAD module is model generation's alone."""
+    import re
+
+    from conftest import REPO
+
+    imports = re.compile(r"^\s*(from corobot_drake\.model(\.dimensions)? import .*\bdimensions\b|"
+                         r"from corobot_drake\.model\.dimensions import|"
+                         r"import corobot_drake\.model\.dimensions)", re.MULTILINE)
+    readers = sorted(str(path.relative_to(REPO)) for folder in ("corobot_drake", "tools", "lab")
+                     for path in (REPO / folder).rglob("*.py")
+                     if imports.search(path.read_text()))
+    assert set(readers) <= MODEL_GENERATION, readers
