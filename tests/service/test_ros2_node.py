@@ -32,7 +32,8 @@ from std_msgs.msg import String
 from std_srvs.srv import SetBool, Trigger
 from tf2_msgs.msg import TFMessage
 
-from corobot_drake.model import dimensions as dim
+from corobot_drake.config.sensors import default_camera_config, default_ir_sensors
+from corobot_drake.robots import robot_spec
 from corobot_drake.serving.client import CorobotClient
 from corobot_drake.serving.runner import SimRunner
 from ros2_probe import ONE_GRAPH_AT_A_TIME, ros2_simulation
@@ -43,6 +44,8 @@ _runner_defaults = inspect.signature(SimRunner).parameters
 SNAPSHOT_LAG = (_runner_defaults["snapshot_period"].default
                 + _runner_defaults["max_step"].default)
 """s: how far the HTTP side's simulated time (its latest snapshot's) may lag the simulation."""
+SPEC, IR, CAMERA = robot_spec("corobot"), default_ir_sensors(), default_camera_config()
+"""The Corobot as its robot file and model say: its spec, IR sensors and camera."""
 POSE_TOLERANCE = 1e-3
 """m: /ground_truth against the simulation's pose (the issue's 1 mm; the same pose, so
 ~1e-12)."""
@@ -130,9 +133,9 @@ def test_odom_is_the_simulated_pose(ros):
     t = {(x.header.frame_id, x.child_frame_id): x.transform for x in tf.transforms}
     base = t[("odom", "base_link")]
     assert (base.translation.x, base.translation.y) == pytest.approx((p.x, p.y), abs=1e-12)
-    for wheel in dim.WHEEL_NAMES:  # the wheels' frames at their axles' places
-        w = t[("base_link", f"{wheel}_wheel")].translation
-        assert (w.x, w.y, w.z) == pytest.approx(dim.wheel_center(wheel), abs=2e-3)
+    for wheel in SPEC.wheels:  # the wheels' frames at their axles' places
+        w = t[("base_link", f"{wheel.short}_wheel")].translation
+        assert (w.x, w.y, w.z) == pytest.approx(wheel.center, abs=2e-3)
 
 
 def test_tf_static_and_robot_description(ros):
@@ -143,11 +146,11 @@ def test_tf_static_and_robot_description(ros):
         "base_link"}
     assert t["camera_optical_frame"].header.frame_id == "camera_link"
     front = t["ir_front"].transform.translation
-    assert (front.x, front.y, front.z) == pytest.approx(dim.FRONT_IR.position, abs=1e-9)
+    assert (front.x, front.y, front.z) == pytest.approx(IR["front"].X_PB.translation, abs=1e-9)
     rear = t["ir_rear"].transform.rotation
     assert abs(abs(yaw_of(rear)) - math.pi) < 1e-9  # it looks backwards
     urdf = probe.wait_for("/robot_description").data
-    assert "<robot" in urdf and all(f'"{w}_axle"' in urdf for w in dim.WHEEL_NAMES)
+    assert "<robot" in urdf and all(f'"{w}_axle"' in urdf for w in SPEC.wheel_names)
 
 
 def test_range_is_the_ir_reading(ros):
@@ -160,7 +163,7 @@ def test_range_is_the_ir_reading(ros):
         assert msg.radiation_type == Range.INFRARED and msg.header.frame_id == f"ir_{sensor}"
         assert msg.max_range == pytest.approx(reading.range, rel=1e-6)
         assert msg.min_range <= msg.range and (nothing or msg.range <= msg.max_range + 1e-6)
-        assert msg.field_of_view == pytest.approx(math.radians(dim.IR_DISPERSION_CONE_ANGLE_DEG))
+        assert msg.field_of_view == pytest.approx(math.radians(IR[sensor].dispersion_cone_angle))
 
 
 def test_camera_image_and_info(ros):
@@ -168,14 +171,14 @@ def test_camera_image_and_info(ros):
     frame = robot.camera_image()  # with its capture time
     image = probe.wait_for("/camera/image_raw",
                            lambda m: abs(stamp(m) - robot._last_frame_time) < 1e-6)
-    assert (image.width, image.height, image.encoding) == (dim.CAMERA_WIDTH, dim.CAMERA_HEIGHT,
+    assert (image.width, image.height, image.encoding) == (CAMERA.width, CAMERA.height,
                                                            "rgb8")
     assert image.step == 3 * image.width and image.header.frame_id == "camera_optical_frame"
     pixels = np.frombuffer(bytes(image.data), np.uint8).reshape(image.height, image.width, 3)
     np.testing.assert_array_equal(pixels, frame[:, :, :3])  # the same frame (PNG: lossless)
     info = probe.wait_for("/camera/camera_info", lambda m: stamp(m) == stamp(image))
     assert (info.width, info.height) == (image.width, image.height)
-    fy = dim.CAMERA_HEIGHT / 2 / math.tan(math.radians(dim.CAMERA_FOV_Y_DEG) / 2)
+    fy = CAMERA.height / 2 / math.tan(math.radians(CAMERA.focal.y) / 2)
     assert info.k[4] == pytest.approx(fy) and info.k[8] == 1.0
 
 

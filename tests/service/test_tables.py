@@ -18,9 +18,9 @@ from test_recording import read_mcap
 
 from corobot_drake import commands, signals
 from corobot_drake.config.scenario import load_scenario
-from corobot_drake.model import dimensions as dim
 from corobot_drake.recording.mcap_log import McapLog
 from corobot_drake.resources import DEFAULT_SCENARIO
+from corobot_drake.robots import robot_spec
 from corobot_drake.serving import snapshots
 from corobot_drake.serving.webapp import create_app
 from corobot_drake.simulation import Simulation, quiet_drake_warnings
@@ -154,13 +154,14 @@ def test_a_scripted_command_logs_the_same_and_ends_near(runs):
     assert [r[4] for r in script["log"]] == pytest.approx(
         [r[4] for r in python["log"]], abs=SCRIPT_LAG + 1e-9)
     assert script["enabled"] == python["enabled"]
-    top_speed = dim.MAX_AXLE_SPEED * dim.WHEEL_RADIUS  # m/s
+    spec = robot_spec("corobot")
+    top_speed = spec.drive.max_axle_speed * spec.wheel_radius  # m/s
     # Over a lag of one control period the robot moves at most top speed x lag; the curve
     # then carries a heading error of top yaw rate x lag (both sides at top speed opposite).
     assert math.dist((script["pose"].x, script["pose"].y),
                      (python["pose"].x, python["pose"].y)) <= top_speed * SCRIPT_LAG
     assert abs(script["pose"].yaw - python["pose"].yaw) <= (
-        2 * top_speed / dim.TRACK * SCRIPT_LAG)
+        2 * top_speed / spec.track * SCRIPT_LAG)
 
 
 def test_a_bad_argument_is_refused_alike_by_python_and_http(sim):
