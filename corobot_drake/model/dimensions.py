@@ -95,10 +95,3 @@ FRONT_IR = SensorMount(position=(4.25 * INCH, 0.0, CHASSIS.center[2]), yaw=0.0)
 REAR_IR = SensorMount(position=(-4.25 * INCH, 0.0, CHASSIS.center[2]), yaw=math.pi)
 CAMERA = SensorMount(position=(4.25 * INCH, 0.0, CHASSIS.center[2] - 0.01), yaw=0.0)
 """1 cm below the IR sensors on the front face: (0.10795, 0, 0.05985)."""
-CAMERA_WIDTH = 320
-CAMERA_HEIGHT = 240
-CAMERA_FOV_Y_DEG = 30.0
-IR_DISPERSION_CONE_ANGLE_DEG = 8.0
-MAX_AXLE_SPEED = 20.0
-# The five above are the robot file's (its camera, its IR sensors, its drive), kept here only
-# until the last modules outside model generation that read them move to it.
