@@ -565,13 +565,15 @@ def _run(args, scenario, duration: float, foxglove, ros2=None) -> int:
     from corobot_drake.simulation import PhysicsError, Simulation
 
     extras = ros2.extras if ros2 is not None else ()
+    started_with = tuple(scenario.robots)  # a rebuild (a robot spawned) keeps their names
     if args.serve:  # Meshcat is made in the simulation thread (it must be used from there)
         from corobot_drake.serving.serve import serve, serve_camera_rate
 
         if args.camera_rate is None:
             serve_camera_rate(scenario)
         return serve(lambda meshcat, scenario=scenario: Simulation(
-                         scenario, meshcat, foxglove=foxglove, extras=extras),
+                         scenario, meshcat, foxglove=foxglove, extras=extras,
+                         started_with=started_with),
                      host=args.host, port=args.port, meshcat=not args.headless,
                      label=args.scenario, token=args.token,
                      attach=ros2.attach if args.ros2 else None,
@@ -582,7 +584,8 @@ def _run(args, scenario, duration: float, foxglove, ros2=None) -> int:
         try:
             return run_live(ros2, lambda meshcat, scenario=scenario: Simulation(
                 scenario, meshcat, save_camera=args.save_camera, record=args.record is not None,
-                foxglove=foxglove, run_log_window=run_log_window(args), extras=extras),
+                foxglove=foxglove, run_log_window=run_log_window(args), extras=extras,
+                started_with=started_with),
                 meshcat=not args.headless, duration=duration,
                 run_log_window=run_log_window(args), finish=lambda sim: _finish(sim, args),
                 rate=args.rate, paused=args.paused)

@@ -99,7 +99,7 @@ class Simulation:
 
     def __init__(self, scenario: sc.Scenario, meshcat=None, save_camera=None, *,
                  record: bool = False, foxglove=None, run_log_window: float | None = None,
-                 check: bool = True, extras=()):
+                 check: bool = True, extras=(), started_with: tuple[str, ...] | None = None):
         """`save_camera`: a directory; each robot's front camera frames go to `<dir>/<robot>/`,
         another camera's to `<dir>/<robot>/<camera>/`.
         `record`: keep a Meshcat replay of the run (`save_recording`; without `meshcat`, an
@@ -111,7 +111,9 @@ class Simulation:
         `check=False` skips them, for a tool that measures beyond the bounds on purpose
         (`lab/step_limit.py`); `reset` then skips them too unless asked. `extras`:
         functions that add systems to the diagram (`station.build_station`'s; the ROS 2
-        topics)."""
+        topics). `started_with`: the robots the run started with, when this simulation is a
+        rebuild of it with robots added or removed (ROS 2's SpawnEntity): the Foxglove topics
+        keep their names (`topics.robot_names`); default: this scenario's robots."""
         if check:
             check_scenario(scenario)
         self._thread_lock = threading.RLock()
@@ -134,7 +136,8 @@ class Simulation:
         if foxglove is not None:  # the run's Foxglove topics, attached as a front end
             from corobot_drake.recording.publishers import add_foxglove_topics
 
-            extras.append(functools.partial(add_foxglove_topics, context=foxglove))
+            extras.append(functools.partial(add_foxglove_topics, context=foxglove,
+                                            first=started_with))
         # Ctrl-drag only where someone watches: an offline recording stays free of it.
         self.station: Station = build_station(scenario, meshcat, save_camera, extras=extras,
                                               mouse_drag=self._record_live is not False)

@@ -269,16 +269,17 @@ def _channel(topic: str, schema, context):
 # --- wiring -------------------------------------------------------------------------------
 
 
-def _body_frames(plant, robots: dict, namespaced: bool) -> dict:
+def _body_frames(plant, robots: dict, first: tuple[str, ...]) -> dict:
     """{body index: (frame name, parent body index or None)}: a robot's chassis and every other
-    body in the world, a robot's other links in its chassis (`topics` names them)."""
+    body in the world, a robot's other links in its chassis (`topics.robot_names` names them,
+    from the robots the run started with, `first`)."""
     robot_of = {int(parts.model_instance): parts for parts in robots.values()}
     frames = {}
     for i in range(1, plant.num_bodies()):
         body = plant.get_body(BodyIndex(i))
         parts = robot_of.get(int(body.model_instance()))
         if parts is not None:
-            names = ros_names.RobotNames(parts.name, namespaced, parts.chassis.name())
+            names = ros_names.robot_names(parts.name, first, parts.chassis.name())
             parent = None if body.index() == parts.chassis.index() else int(parts.chassis.index())
             frames[i] = (names.body_frame(body.name()), parent)
         else:
@@ -374,14 +375,17 @@ def _entity_maker(frame: str, shapes: dict):
     return make
 
 
-def add_foxglove_topics(builder, plant, scene_graph, robots: dict, scenario, context) -> None:
+def add_foxglove_topics(builder, plant, scene_graph, robots: dict, scenario, context,
+                        first: tuple[str, ...] | None = None) -> None:
     """Adds the publishers of every topic (`topics.py`) for a station's plant and robots
-    ({name: station.RobotParts}, built from `scenario`), on the foxglove `context`."""
-    namespaced = len(robots) > 1
-    frames = _body_frames(plant, robots, namespaced)
+    ({name: station.RobotParts}, built from `scenario`), on the foxglove `context`; `first`:
+    the robots the run started with (default: these), whose names a robot keeps when another
+    is added while the run goes on (`topics.robot_names`)."""
+    first = tuple(robots) if first is None else tuple(first)
+    frames = _body_frames(plant, robots, first)
     mounts = []
     for name, parts in robots.items():
-        names = ros_names.RobotNames(name, namespaced, parts.chassis.name())
+        names = ros_names.robot_names(name, first, parts.chassis.name())
         state = builder.AddNamedSystem(f"{name}.foxglove_state", RobotStatePublisher(
             context, names, parts.chassis.index(),
             wheel_joints=tuple(j.name() for j in parts.wheel_joints)))

@@ -674,3 +674,23 @@ def test_several_robots_are_namespaced(tmp_path):
             "corobot/ir_rear")} <= {(x.parent_frame_id, x.child_frame_id) for x in tf}
     assert topics["/second/odom"][-1][2].body_frame_id == "second/base_link"
 
+
+
+def test_a_robot_added_by_a_rebuild_is_recorded_under_its_name_and_the_first_keeps_its_own(
+        tmp_path):
+    """A run that started with the Corobot alone, rebuilt with a Burger beside it (ROS 2's
+    SpawnEntity does this): the Corobot's topics and frames stay bare (/odom, base_link), the
+    Burger's go under its name (/burger/odom, burger/base_link), as on ROS 2 (here each
+    base_link hangs from world)."""
+    first = load_scenario(DEFAULT_SCENARIO, overrides=[NO_CAMERA])
+    both = load_scenario(data="robots: {burger: {robot: burger, pose: {translation: "
+                         "[0.0, 1.0, 0.0]}}}", defaults=first)
+    with McapLog(tmp_path / "run.mcap") as log:
+        sim = Simulation(both, foxglove=log.context, started_with=tuple(first.robots))
+        sim.advance_to(0.1)
+    topics = read_mcap(tmp_path / "run.mcap")
+    assert {"/odom", "/burger/odom", "/joint_states", "/burger/joint_states"} <= set(topics)
+    assert not any(t.startswith("/corobot/") for t in topics)
+    frames = {(t.parent_frame_id, t.child_frame_id)
+              for _, _, m in topics["/tf"] for t in m.transforms}
+    assert {("world", "base_link"), ("world", "burger/base_link")} <= frames
