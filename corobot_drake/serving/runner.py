@@ -58,6 +58,11 @@ def wait_for[T](future: concurrent.futures.Future[T], timeout: float | None = No
     return future.result()
 
 
+def robot_infos(sim) -> dict[str, RobotInfo]:
+    """Each of `sim`'s robots' `RobotInfo`, by name, in its scenario's order."""
+    return {name: RobotInfo.of(r) for name, r in sim.robots.items()}
+
+
 class SimulationStoppedError(RuntimeError):
     """A request the simulation will never answer: it has stopped (or was never reached).
     The routes answer it 503."""
@@ -70,7 +75,9 @@ class Runner(Protocol):
 
     @property
     def robots(self) -> Mapping[str, RobotInfo]:
-        """Each robot's fixed services, by name, in the scenario's order."""
+        """Each robot's fixed services, by name, in the scenario's order: those of the
+        simulation run now (a rebuilt one's robots may differ: a robot spawned or deleted);
+        replaced whole, never mutated. A robot's state may lag it by one snapshot."""
 
     @property
     def snapshot(self) -> dict:
@@ -240,9 +247,13 @@ class SimRunner:
         return job
 
     def replace(self, sim) -> None:
-        """In the simulation thread: runs `sim` from now on (built by `rebuild`, with the same
-        robots); the one it replaces is dropped here, in this thread."""
+        """In the simulation thread: runs `sim` from now on (built by `rebuild`); `robots`
+        becomes its robots' when they differ (a robot spawned or deleted), then its first
+        snapshot is published. The one it replaces is dropped here, in this thread."""
         self.sim = sim
+        robots = robot_infos(sim)
+        if list(robots.items()) != list(self.robots.items()):
+            self.robots = robots  # (a new dict: the transport sees the change by identity)
         self._publish()
 
     def call(self, fn: Callable[[Any], T], timeout: float = 10.0) -> T:
@@ -291,7 +302,7 @@ class SimRunner:
                 except BaseException as e:
                     self.error = e
                     return
-            self.robots = {name: RobotInfo.of(r) for name, r in self.sim.robots.items()}
+            self.robots = robot_infos(self.sim)
             self._publish()
             self._ready.set()
             self._loop()

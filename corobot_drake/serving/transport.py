@@ -2,14 +2,16 @@
 
 - `SimSide` (simulation process): receives calls and watches from the pipe, hands them to the
   `SimRunner`, and sends back their results and each new snapshot (the latest only, never
-  queued up). The simulation thread never blocks on the pipe: a sender thread does the
-  pickling and writing, a receiver thread the reading.
+  queued up), with the runner's robots when they changed (a robot spawned or deleted). The
+  simulation thread never blocks on the pipe: a sender thread does the pickling and writing,
+  a receiver thread the reading.
 - `RemoteRunner` (HTTP process): the `runner.Runner` protocol over the pipe; its receiver
-  thread resolves the futures and replaces the snapshot.
+  thread resolves the futures and replaces the snapshot (and the robots).
 
 Messages: ("hello", {...}) once, then HTTP -> simulation ("call" | "watch", id, fn),
 ("cancel", id), ("stop",); simulation -> HTTP ("result", id, ok, value or exception),
-("snapshot", snapshot, stats).
+("snapshot", snapshot, stats), ("robots", robots, snapshot, stats): the robot set changed,
+and this snapshot is the first of it.
 """
 
 from __future__ import annotations
@@ -49,12 +51,17 @@ class SimSide:
         self._cond = threading.Condition()
         self._messages: deque = deque()
         self._snapshot: dict | None = None
+        self._robots = runner.robots
+        """The runner's robots as they were when `_snapshot` was published."""
         self._watches: dict[int, concurrent.futures.Future] = {}
         self._sending = False
         """A batch taken from `_messages` is being written to the pipe."""
         self.closed = threading.Event()
+        self._robots_sent = runner.robots
+        """The robots the HTTP side knows (the simulation thread replaces the runner's dict
+        whole when they change, so identity tells)."""
         runner.on_publish.append(self._on_snapshot)
-        self._post(("hello", {"robots": runner.robots, "snapshot": runner.snapshot,
+        self._post(("hello", {"robots": self._robots_sent, "snapshot": runner.snapshot,
                               "stats": runner.stats(), "meshcat_url": runner.meshcat_url}))
         threading.Thread(target=self._send_loop, name="bridge-send", daemon=True).start()
         threading.Thread(target=self._receive_loop, name="bridge-receive", daemon=True).start()
@@ -65,12 +72,13 @@ class SimSide:
             self._cond.notify()
 
     def _on_snapshot(self, snapshot: dict) -> None:
-        with self._cond:
-            self._snapshot = snapshot
+        with self._cond:  # (the simulation thread: the robots are those of the snapshot)
+            self._snapshot, self._robots = snapshot, self.runner.robots
             self._cond.notify()
 
-    def _next_batch(self) -> tuple[list, dict | None] | None:
-        """The messages and the snapshot to send, once there are any; None once closed."""
+    def _next_batch(self) -> tuple[list, dict | None, dict] | None:
+        """The messages, the snapshot and its robots to send, once there are any; None once
+        closed."""
         with self._cond:
             while not self._messages and self._snapshot is None:
                 self._cond.wait(0.5)
@@ -78,9 +86,9 @@ class SimSide:
                     return None
             messages = list(self._messages)
             self._messages.clear()
-            snapshot, self._snapshot = self._snapshot, None
+            snapshot, robots, self._snapshot = self._snapshot, self._robots, None
             self._sending = True
-        return messages, snapshot
+        return messages, snapshot, robots
 
     def _send_loop(self) -> None:
         try:
@@ -88,10 +96,13 @@ class SimSide:
                 batch = self._next_batch()
                 if batch is None:
                     return
-                messages, snapshot = batch
+                messages, snapshot, robots = batch
                 for message in messages:
                     self.conn.send(message)
-                if snapshot is not None:
+                if snapshot is not None and robots is not self._robots_sent:
+                    self.conn.send(("robots", robots, snapshot, self.runner.stats()))
+                    self._robots_sent = robots
+                elif snapshot is not None:
                     self.conn.send(("snapshot", snapshot, self.runner.stats()))
                 with self._cond:
                     self._sending = False
@@ -227,6 +238,9 @@ class RemoteRunner:
                 message = self.conn.recv()
                 if message[0] == "snapshot":
                     self.snapshot, self._stats = message[1], message[2]
+                elif message[0] == "robots":  # (`Backend` takes either half first)
+                    self.snapshot, self._stats = message[2], message[3]
+                    self.robots = message[1]
                 elif message[0] == "result":
                     self._on_result(*message[1:])
         except (OSError, EOFError):

@@ -44,7 +44,8 @@ def json_response(content: Any, status_code: int = 200,
 
 class Backend:
     """The routes' view of a started runner, plus the app's own memory: the operations
-    started over HTTP and the camera's latest frames."""
+    started over HTTP and the camera's latest frames. The robots are the runner's as they
+    are now (a robot spawned or deleted while serving comes or goes)."""
 
     def __init__(self, runner: Runner):
         if not runner.robots:
@@ -65,9 +66,13 @@ class Backend:
         return info
 
     def snapshot_of(self, robot: str) -> dict:
-        """The robot's latest published state (404 for an unknown robot)."""
+        """The robot's latest published state (404 for an unknown robot, and for one the
+        runner's robots and its snapshot do not both hold yet: spawned or deleted just now)."""
         self.robot(robot)
-        return self.runner.snapshot["robots"][robot]
+        states = self.runner.snapshot["robots"]
+        if robot not in states:
+            raise HTTPException(404, unknown_robot(robot, states))
+        return states[robot]
 
     def camera(self, robot: str, camera: str = FRONT_CAMERA) -> RobotInfo:
         """The robot's info; 404 for an unknown robot, 501 if it lacks its front camera (the

@@ -118,7 +118,9 @@ async def _events(backend: Backend, robot: str, extractors: dict[str, Callable[[
     started = time.monotonic()
     yield {"retry": 1000}
     while True:
-        snap = backend.runner.snapshot["robots"][robot]
+        snap = backend.runner.snapshot["robots"].get(robot)
+        if snap is None:  # the robot was deleted: the stream ends (a reconnection gets 404)
+            return
         now = time.monotonic()
         for name, extract in extractors.items():
             state = extract(snap)
