@@ -62,8 +62,20 @@ class CorobotClient:
         self.url = url.rstrip("/").removesuffix("/dashboard")
         headers = {"Authorization": f"Bearer {token}"} if token else {}
         self._http = httpx.Client(base_url=self.url, timeout=timeout, headers=headers)
-        self.robots = {name: RemoteRobot(self, name)
-                       for name in self._get("/robots")["robots"]}
+        self._robots: dict[str, RemoteRobot] = {}
+        self._ask_robots()  # (now: a wrong URL fails here)
+
+    @property
+    def robots(self) -> dict[str, RemoteRobot]:
+        """The server's robots by name, as it has them now: each use asks it (a robot spawned
+        or deleted while it serves comes or goes; a robot kept keeps its `RemoteRobot`)."""
+        return self._ask_robots()
+
+    def _ask_robots(self) -> dict[str, RemoteRobot]:
+        names = self._get("/robots")["robots"]
+        self._robots = {name: self._robots.get(name) or RemoteRobot(self, name)
+                        for name in names}
+        return dict(self._robots)
 
     # --- plumbing ---
     def _check(self, response: httpx.Response) -> Any:
@@ -96,15 +108,16 @@ class CorobotClient:
     # --- the Simulation's methods ---
     def robot(self, name: str | None = None) -> RemoteRobot:
         """The named robot; without a name, the only one."""
+        robots = self.robots
         if name is None:
-            if len(self.robots) != 1:
-                raise ValueError(f"the server has {len(self.robots)} robots "
-                                 f"({', '.join(self.robots)}): name one")
-            return next(iter(self.robots.values()))
+            if len(robots) != 1:
+                raise ValueError(f"the server has {len(robots)} robots "
+                                 f"({', '.join(robots)}): name one")
+            return next(iter(robots.values()))
         try:
-            return self.robots[name]
+            return robots[name]
         except KeyError:
-            raise KeyError(unknown_robot(name, self.robots)) from None
+            raise KeyError(unknown_robot(name, robots)) from None
 
     @property
     def time(self) -> float:

@@ -58,7 +58,7 @@ def test_the_http_client_names_the_closest_robot():
     from corobot_drake.serving.client import CorobotClient
 
     client = CorobotClient.__new__(CorobotClient)  # its robot lookup alone: no server
-    client.__dict__["robots"] = {"corobot": object()}
+    client._robots, client._get = {}, lambda path: {"robots": ["corobot"]}  # GET /robots
     with pytest.raises(KeyError, match=r"did you mean 'corobot'\?"):
         client.robot("corobt")
 
