@@ -575,6 +575,7 @@ def test_a_spawned_robot_has_its_topics_under_its_name_until_deleted(sim_ros):
     after = _pose(probe)  # the simulation goes on from where it was
     assert after[0] == before[0] and after[1] == pytest.approx(before[1], abs=1e-9)
     assert probe.http.time == after[0]  # --serve's HTTP state follows the rebuilt simulation
+    _served_over_http(probe)
     assert "burger" in _call(probe, "get_entities", GetEntities, retry=10.0).entities
     info = _call(probe, "get_entity_info", GetEntityInfo, retry=10.0, entity="burger")
     assert info.info.category.category == EntityCategory.CATEGORY_ROBOT
@@ -610,6 +611,7 @@ def test_a_spawned_robot_has_its_topics_under_its_name_until_deleted(sim_ros):
     _await_graph(probe, "/burger/cmd_vel", False, publishers=False)
     assert _graph_has(probe, "/odom") and _graph_has(probe, "/cmd_vel", publishers=False)
     _eventually(lambda: not _robot_services(probe, "burger"), "the Burger's services left")
+    _gone_over_http(probe, "burger")
     # spawned again, then a reset: back to the scenario's start, the Burger gone
     again = _call(probe, "spawn_entity", SpawnEntity, name="", allow_renaming=True,
                   initial_pose=at, entity_resource=Resource(uri="burger"))
@@ -621,6 +623,46 @@ def test_a_spawned_robot_has_its_topics_under_its_name_until_deleted(sim_ros):
     assert "burger_1" not in _call(probe, "get_entities", GetEntities, retry=10.0).entities
     _await_graph(probe, "/burger_1/odom", False)
     _await_graph(probe, "/burger_1/cmd_vel", False, publishers=False)
+    _gone_over_http(probe, "burger_1")
+
+
+def _served_over_http(probe) -> None:
+    """The spawned Burger on --serve's HTTP server: listed, its state and sensors served,
+    driven by a SetVelocity over HTTP (0.2 m/s for 50 steps of 10 ms), then stopped."""
+    from simulation_interfaces.srv import StepSimulation
+
+    http = probe.http
+    _eventually(lambda: list(http.robots) == ["corobot", "burger"], "GET /robots")
+    burger = http.robot("burger")
+    x0, y0, _ = burger.position()
+    assert y0 == pytest.approx(1.0, abs=0.01)
+    assert list(burger.sensor_readings()["lidars"]) == ["scan"]
+    burger.set_velocity(0.2, 0.0)
+    t = http.time + 0.5
+    step = _call(probe, "step_simulation", StepSimulation, steps=50)
+    assert step.result.result == step.result.RESULT_OK, step.result.error_message
+    _eventually(lambda: http.time >= t - 1e-9, "no snapshot of the steps")
+    drive = burger.drive_state()
+    # measured alone (the runner's replace test): 0.079 m, 0.198 m/s
+    assert 0.06 < drive["position"]["x"] - x0 < 0.1
+    assert drive["velocity"]["forward"] == pytest.approx(0.2, rel=0.02)
+    burger.all_stop()
+
+
+def _gone_over_http(probe, robot: str) -> None:
+    """A deleted robot left --serve's HTTP server: not listed, its routes answer 404 with the
+    one line naming it and the robots there."""
+    import httpx
+
+    _eventually(lambda: robot not in probe.http.robots, f"GET /robots still lists {robot}")
+    line = f"no robot named {robot!r}; robots: corobot"
+    base = f"/robots/{robot}"
+    with httpx.Client(base_url=probe.http.url, timeout=30) as http:
+        for path in (base, f"{base}/drive", f"{base}/gps", f"{base}/sensors"):
+            r = http.get(path)
+            assert (r.status_code, r.json()) == (404, {"detail": line}), path
+        r = http.post(f"{base}/drive/set_velocity", json={"linear": 0.2, "angular": 0.0})
+        assert (r.status_code, r.json()) == (404, {"detail": line})
 
 
 CRATE_SDF = """<?xml version="1.0"?>
