@@ -317,6 +317,7 @@ async function nextFrame() {
 async function refreshStats() {
   try {
     const s = await api("/simulation");
+    await showRobots(s.robots);
     $("rtf").textContent = s.recent_realtime_factor === null ? "-" : fmt(s.recent_realtime_factor, 2);
     if (s.meshcat_url) {
       $("meshcat-link").href = s.meshcat_url;
@@ -343,12 +344,21 @@ async function selectRobot(name) {
   subscribe();
 }
 
+// The robot list follows the server's (a robot spawned or deleted while it serves, over
+// ROS 2, comes or goes at the next poll of /simulation); the robot shown stays while it is
+// there, else the first is shown.
+async function showRobots(robots) {
+  const select = $("robot");
+  if ([...select.options].map((o) => o.value).join("\n") === robots.join("\n")) return;
+  select.replaceChildren(...robots.map((r) => new Option(r, r)));
+  if (robots.includes(state.robot)) select.value = state.robot;
+  else if (robots.length) await selectRobot(robots[0]);
+}
+
 async function main() {
   const { robots } = await api("/robots");
-  const select = $("robot");
-  for (const r of robots) select.add(new Option(r, r));
-  select.addEventListener("change", () => selectRobot(select.value));
-  await selectRobot(robots[0]);
+  $("robot").addEventListener("change", () => selectRobot($("robot").value));
+  await showRobots(robots);
   refreshStats();
   setInterval(refreshStats, 2000);
   setInterval(refreshSensors, 500);
