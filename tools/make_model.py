@@ -19,7 +19,7 @@ from corobot_drake.robots.corobot import FILE as ROBOT_FILE
 
 
 def main() -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0],
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                      formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     parser.add_argument("--out", type=Path, default=None,
                         help="file to write (None: ./corobot.sdf; with --check, the shipped "
