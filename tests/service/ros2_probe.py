@@ -249,13 +249,10 @@ def _simulation_process(args: list[str]):
 
 
 @contextlib.contextmanager
-def ros2_simulation(args: list[str], serve: bool = True):
-    """`python -m corobot_drake [args] --ros2` and a `Probe`, both in a private network in a
-    domain of their own: yields (server, probe). With `serve`, `--serve --port 0` too (the
-    HTTP services are the tests' window on the simulation: `robot.pose()` ...; `server` is
-    its `ServerProcess`), else `server` is the process."""
-    from corobot_drake.serving.serve import ServerProcess
-
+def private_domain():
+    """A private network (`private_network`), shared memory of its own (`own_shared_memory`)
+    and a ROS domain of its own, discovery on this host only (the environment variables set
+    while inside): yields the domain id."""
     domain = domain_id()
     with contextlib.ExitStack() as stack:
         stack.enter_context(private_network())
@@ -263,6 +260,19 @@ def ros2_simulation(args: list[str], serve: bool = True):
         patch = stack.enter_context(pytest.MonkeyPatch.context())
         patch.setenv("ROS_DOMAIN_ID", str(domain))
         patch.setenv("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+        yield domain
+
+
+@contextlib.contextmanager
+def ros2_simulation(args: list[str], serve: bool = True):
+    """`python -m corobot_drake [args] --ros2` and a `Probe`, both in a private network in a
+    domain of their own: yields (server, probe). With `serve`, `--serve --port 0` too (the
+    HTTP services are the tests' window on the simulation: `robot.pose()` ...; `server` is
+    its `ServerProcess`), else `server` is the process."""
+    from corobot_drake.serving.serve import ServerProcess
+
+    with contextlib.ExitStack() as stack:
+        domain = stack.enter_context(private_domain())
         server = stack.enter_context(ServerProcess([*args, "--ros2"]) if serve
                                      else _simulation_process([*args, "--ros2"]))
         probe = Probe(domain)

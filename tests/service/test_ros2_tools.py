@@ -3,7 +3,6 @@ tool (`python -m corobot_drake.ros2`) and the examples (examples/ros2_square.py,
 ros2_teleop.py) end at their `--timeout` with a line that says what they waited for. In a
 private network (`ros2_probe`), against no simulation or a stand-in that never finishes."""
 
-import contextlib
 import os
 import pty
 import re
@@ -17,7 +16,7 @@ pytest.importorskip("rclpy", reason="the [ros2] extra (tools/setup installs it)"
 pytest.importorskip("corobot_interfaces.msg", reason="python -m corobot_drake.ros2.build")
 
 from conftest import REPO
-from ros2_probe import ONE_GRAPH_AT_A_TIME, Probe, domain_id, own_shared_memory, private_network
+from ros2_probe import ONE_GRAPH_AT_A_TIME, Probe, private_domain
 
 pytestmark = ONE_GRAPH_AT_A_TIME
 
@@ -28,13 +27,7 @@ HANG = 120
 @pytest.fixture(scope="module")
 def graph():
     """A private network and a domain of the module's own: yields the domain id."""
-    domain = domain_id()
-    with contextlib.ExitStack() as stack:
-        stack.enter_context(private_network())
-        stack.enter_context(own_shared_memory())
-        patch = stack.enter_context(pytest.MonkeyPatch.context())
-        patch.setenv("ROS_DOMAIN_ID", str(domain))
-        patch.setenv("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+    with private_domain() as domain:
         yield domain
 
 

@@ -26,7 +26,7 @@ from pathlib import Path
 import pytest
 
 from conftest import REPO
-from ros2_probe import ONE_GRAPH_AT_A_TIME, domain_id, own_shared_memory, private_network
+from ros2_probe import ONE_GRAPH_AT_A_TIME, private_domain
 
 ROS_USER_ENV = REPO / ".venv-ros"
 REQUIREMENTS = REPO / "tools" / "ros2_user_requirements.txt"
@@ -179,13 +179,8 @@ def report(tmp_path_factory) -> dict:
             "calls": calls(), "timeout": WAIT}
     work = tmp_path_factory.mktemp("ros2_user")
     (work / "plan.json").write_text(json.dumps(plan))
-    domain = domain_id()
     with contextlib.ExitStack() as stack:
-        stack.enter_context(private_network())
-        stack.enter_context(own_shared_memory())
-        patch = stack.enter_context(pytest.MonkeyPatch.context())
-        patch.setenv("ROS_DOMAIN_ID", str(domain))
-        patch.setenv("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+        domain = stack.enter_context(private_domain())
         log = work / "simulation.log"
         sim = stack.enter_context(simulation([str(SCENARIO), "--headless", "--ros2",
                                               "--override", EVERY_KIND, "--camera-rate", "10"],
