@@ -134,6 +134,18 @@ def entity_names(sim) -> list[str]:
     return [*sim.robots, *sim.bodies()]
 
 
+def level(X, code: int, field: str):
+    """The RollPitchYaw of a robot's pose `X`; RefusedError `code` naming `field` when it is
+    not level (a robot stands on the ground: only a yaw, within `LEVEL_TOLERANCE`)."""
+    from pydrake.math import RollPitchYaw
+
+    rpy = RollPitchYaw(X.rotation())
+    if max(abs(rpy.roll_angle()), abs(rpy.pitch_angle())) > LEVEL_TOLERANCE:
+        raise RefusedError(code, f"{field}: a robot stands on the ground: only a yaw (roll "
+                           f"{rpy.roll_angle():.3g} rad, pitch {rpy.pitch_angle():.3g} rad)")
+    return rpy
+
+
 def entity_body(sim, name: str):
     """(the body an entity's state is that of: a robot's chassis, else the body; whether it is
     a robot); RefusedError NOT_FOUND naming the entity and those there are."""
@@ -489,7 +501,6 @@ class SimulationServices:
     def _set_state(self, request, sim):
         """In the simulation thread: the new state applied (a robot's teleport issued: its
         CommandResult; None for a body)."""
-        from pydrake.math import RollPitchYaw
         from pydrake.multibody.math import SpatialVelocity
 
         from corobot_drake.serving import calls
@@ -518,12 +529,7 @@ class SimulationServices:
                                    "teleport leaves it at rest")
             if X is None:
                 return None
-            rpy = RollPitchYaw(X.rotation())
-            if max(abs(rpy.roll_angle()), abs(rpy.pitch_angle())) > LEVEL_TOLERANCE:
-                raise RefusedError(Srv.INVALID_POSE,
-                                   "state.pose.orientation: a robot stands on the ground: only "
-                                   f"a yaw (roll {rpy.roll_angle():.3g} rad, pitch "
-                                   f"{rpy.pitch_angle():.3g} rad)")
+            rpy = level(X, Srv.INVALID_POSE, "state.pose.orientation")
             p = X.translation()
             try:
                 return calls.start_operation(request.entity, "set_pose", {
@@ -619,7 +625,6 @@ class SimulationServices:
         """A robot (`robot`: a scenario's `robots.<name>.robot`) added to the scenario at `X`
         as a robot starts (on the ground: its x, y and yaw; z is the robot's own), its drive,
         tyres and sensors its robot file's. Returns its name."""
-        from pydrake.math import RollPitchYaw
 
         from corobot_drake.config import scenario as sc
 
@@ -633,12 +638,7 @@ class SimulationServices:
             raise RefusedError(Result.RESULT_OPERATION_FAILED,
                                f"name: {name!r}: the node takes at most "
                                f"{self._node.robot_capacity} robots at once; delete one first")
-        rpy = RollPitchYaw(X.rotation())
-        if max(abs(rpy.roll_angle()), abs(rpy.pitch_angle())) > LEVEL_TOLERANCE:
-            raise RefusedError(Srv.INVALID_POSE,
-                               "initial_pose.pose.orientation: a robot stands on the ground: "
-                               f"only a yaw (roll {rpy.roll_angle():.3g} rad, pitch "
-                               f"{rpy.pitch_angle():.3g} rad)")
+        rpy = level(X, Srv.INVALID_POSE, "initial_pose.pose.orientation")
         x, y = (float(v) for v in X.translation()[:2])
         layer = (f"robots:\n  {name}:\n    robot: {json.dumps(robot)}\n    pose: {{translation: "
                  f"[{x!r}, {y!r}, 0.0], rotation: !Rpy {{deg: [0.0, 0.0, "
