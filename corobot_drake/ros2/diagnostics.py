@@ -12,6 +12,9 @@ from __future__ import annotations
 
 import dataclasses as dc
 
+TOPIC = ("diagnostics", "diagnostic_msgs/msg/DiagnosticArray")
+"""Published (shared, reliable, keep last 10), once a second of wall clock while the node runs
+live: the real-time factor and slips, and each robot's stalls, wheel slip and tip margin."""
 PERIOD = 1.0
 """s (wall clock) between /diagnostics messages: the 1 Hz the ROS tools expect."""
 SLIP_WARN = 0.5

@@ -204,7 +204,7 @@ class Ros2Node:
         self.set_robots(robots)
         runner.hooks.append(self._check_deadman)
         self._diagnostics = self.node.create_publisher(
-            ros_type("diagnostic_msgs/msg/DiagnosticArray"), "/diagnostics", 10)
+            ros_type(diagnostics.TOPIC[1]), f"/{diagnostics.TOPIC[0]}", 10)
         self.node.create_timer(diagnostics.PERIOD, self._publish_diagnostics,
                                callback_group=self._group)
         from corobot_drake.ros2.simulation_services import SimulationServices

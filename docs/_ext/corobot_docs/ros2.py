@@ -1,6 +1,7 @@
 """The ROS 2 interface from the node's own tables: every module-level table of
 `ros2.interfaces` (a tuple of its dataclasses: topics, actions, services, ...), the subscribed
-topics it declares, and each sensor kind's topics (`SensorKind.ros2_channels`)."""
+topics it declares, /diagnostics (`ros2.diagnostics.TOPIC`), each sensor kind's topics
+(`SensorKind.ros2_channels`) and the node's parameters (`ros2.parameters.PARAMETERS`)."""
 
 from __future__ import annotations
 
@@ -70,15 +71,35 @@ def page() -> str:
                    + (f"{doc}\n\n" if doc else "") + _dataclass_table(rows))
     out.append("## Sensor topics\n\nOne per sensor, by kind (`sensors.registry.KINDS`); QoS "
                "names are `Qos`'s.\n\n" + _sensor_topics())
-    pairs = _pairs(interfaces)
+    from corobot_drake.ros2 import diagnostics
+
+    pairs = _pairs(interfaces) + _pairs(diagnostics)
     if pairs:
         out.append("## Other topics\n\n" + table(("topic", "type", "what"), pairs))
     qos = [[f"`{q.value}`", cell(_doc_of_member(interfaces.Qos, q.name))]
            for q in interfaces.Qos] if hasattr(interfaces, "Qos") else []
     if qos:
         out.append("## QoS profiles\n\n" + table(("QoS", "what"), qos))
+    out.append(_parameters())
     out.append(_simulation_interfaces())
     return "\n\n".join(out) + "\n"
+
+
+def _parameters() -> str:
+    """The node's ROS 2 parameters (`ros2.parameters.PARAMETERS`), as it declares them."""
+    from corobot_drake.ros2 import parameters
+
+    rows = []
+    for p in parameters.PARAMETERS:
+        if p.low is not None:
+            allowed = f"{p.low:g} to {p.high:g} {p.unit}".rstrip()
+        else:
+            allowed = ", ".join(f"`{c}`" for c in p.choices) or f"a `{type(p.default).__name__}`"
+        default = str(p.default).lower() if isinstance(p.default, bool) else f"{p.default}"
+        rows.append([f"`{p.name}`", f"`{type(p.default).__name__}`", f"`{default}`", allowed,
+                     "at start-up" if p.read_only else "any time", cell(p.what)])
+    return ("## Parameters\n\n" + cell(parameters.__doc__.split("\n\n")[0]) + "\n\n"
+            + table(("parameter", "type", "default", "allowed", "set", "what"), rows))
 
 
 def _simulation_interfaces() -> str:
