@@ -240,6 +240,9 @@ class GoToGoalEnv(gym.Env):
             body.Lock(plant_context)
 
     def step(self, action):
+        """One control period (`control_period` s of simulated time) at `action`'s left and
+        right power: (observation, reward, terminated: the goal reached or the robot flipped,
+        truncated: `time_limit` reached, info)."""
         self._check_open()
         if self.layout is None:
             raise gym.error.ResetNeeded("call reset() before step()")

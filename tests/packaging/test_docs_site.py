@@ -138,20 +138,52 @@ def test_the_ros2_reference_has_every_topic_action_and_service(site):
         + [s.name for s in interfaces.SERVICES]
     names += [kind.topic_name("<sensor>") + (f"/{sub}" if sub else "")
               for kind in KINDS for sub in kind.ros2_channels()]
-    from corobot_drake.ros2 import simulation_services
+    from corobot_drake.ros2 import diagnostics, simulation_services
 
-    names += [*simulation_services.SERVICES, simulation_services.ACTION[0]]
+    names += [*simulation_services.SERVICES, simulation_services.ACTION[0], diagnostics.TOPIC[0]]
     assert [n for n in names if f" {n} " not in page] == []
+    assert f" {diagnostics.TOPIC[1]} " in page
+
+
+def test_the_ros2_reference_has_every_parameter_with_its_range(site):
+    """Each parameter the node declares, with its type, default and allowed values."""
+    from corobot_drake.ros2.parameters import PARAMETERS
+
+    section = text(site, "reference/ros2.html", "parameters")
+    rows = {p.name: section.split(f" {p.name} ", 1)[-1][:400] for p in PARAMETERS}
+    for p in PARAMETERS:
+        assert f" {p.name} " in section, p.name
+        row = rows[p.name]
+        default = str(p.default).lower() if isinstance(p.default, bool) else str(p.default)
+        assert row.startswith(f"{type(p.default).__name__} {default} "), (p.name, row[:80])
+        allowed = [f"{p.low:g} to {p.high:g}"] if p.low is not None else list(p.choices)
+        assert all(a in row for a in allowed), (p.name, allowed)
+        assert p.what.split(" (")[0][:40] in row, p.name
 
 
 def test_the_python_reference_documents_the_api(site):
-    """autodoc's entries (their anchors: the objects' full names), each kind's reading too."""
+    """autodoc's entries (their anchors: the objects' full names), each kind's reading too,
+    every field of the robot file and every method a sensor kind may override."""
+    from corobot_drake.sensors.kind import SensorKind
     from corobot_drake.sensors.registry import KINDS
 
     page = (site[0] / "reference" / "python.html").read_text()
     names = ["corobot_drake.simulation.Simulation", "corobot_drake.simulation.Robot",
              "corobot_drake.simulation.Robot.drive_distance",
              "corobot_drake.commands.SetVelocity", "corobot_drake.serving.client.CorobotClient",
-             "corobot_drake.config.scenario.load_scenario"]
+             "corobot_drake.config.scenario.load_scenario",
+             "corobot_drake.gym.env.GoToGoalEnv", "corobot_drake.gym.env.GoToGoalEnv.step",
+             "corobot_drake.gym.rollouts.rollouts", "corobot_drake.gym.load_policy",
+             "corobot_drake.recording.mcap_log.McapLog", "corobot_drake.robots.robot_spec",
+             "corobot_drake.robots.spec.RobotSpec", "corobot_drake.robots.file.RobotFile",
+             "corobot_drake.sensors.kind.SensorKind", "corobot_drake.sensors.kind.BuiltSensor",
+             "corobot_drake.sensors.registry.KINDS"]
+    import corobot_drake.robots.file as robot_file
+
+    names += [f"corobot_drake.robots.file.RobotFile.{f.name}"
+              for f in dc.fields(robot_file.RobotFile)]
+    names += [f"corobot_drake.sensors.kind.SensorKind.{name}"
+              for name, value in vars(SensorKind).items()
+              if not name.startswith("_") and (callable(value) or isinstance(value, property))]
     names += [f"{k.reading_type.__module__}.{k.reading_type.__qualname__}" for k in KINDS]
     assert [n for n in names if f'id="{n}"' not in page] == []
