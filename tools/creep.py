@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """How far a robot left at rest creeps, with the drive's hold and without it, and why
-(`lab/creep.py`; docs/tuning.md, "At rest").
+(`lab/creep.py`; docs/physics.md, "At rest").
 
     python tools/creep.py [--seconds 30] [--points 13] [--minutes 30]
     python tools/creep.py --isolate

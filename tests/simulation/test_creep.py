@@ -1,4 +1,4 @@
-"""A robot at rest stays where it stopped (`lab.creep`; docs/tuning.md,
+"""A robot at rest stays where it stopped (`lab.creep`; docs/physics.md,
 "At rest"). Without the drive's hold its wheels roll into a stable facet of the tyres'
 hydroelastic mesh; with it they stay."""
 
@@ -12,7 +12,7 @@ from corobot_drake.model.sdf import WheelContact
 from lab import creep
 
 # A quarter facet: the wheels start near the unheld roll's fastest angle (the map in
-# docs/tuning.md: 1.59 um/s at 1.18 deg), where the hold has the most to hold.
+# docs/physics.md: 1.59 um/s at 1.18 deg), where the hold has the most to hold.
 QUARTER_FACET = 0.25 * creep.facet_angle()
 SECONDS = 10.0
 
