@@ -908,6 +908,7 @@ def load_layer(source: str, text: str, schema, defaults=None, base: Path | None 
     `base`: the directory a scenario layer's relative robot files are relative to."""
     checks = LayerChecks(source, text, schema)
     if schema is sc.Scenario:
+        before = list((defaults or sc.Scenario()).robots)
         defaults = _with_new_robots(checks, defaults or sc.Scenario(), base or Path.cwd())
         defaults = _with_new_sensors(checks.robots_node, defaults)
     try:
@@ -917,7 +918,22 @@ def load_layer(source: str, text: str, schema, defaults=None, base: Path | None 
         raise _yaml_error(source, text, e) from None
     except Exception as e:  # the pre-check missed it: still one clear line
         raise sc.ScenarioError(source, "", sc.one_line(e)) from None
+    if schema is sc.Scenario:
+        _keep_robot_order(value, before, checks.robots_node)
     return value, checks
+
+
+def _keep_robot_order(scenario: sc.Scenario, before: list[str], robots_node) -> None:
+    """Puts `scenario.robots` in the scenario's order: the layers below's robots as they
+    were, then the ones this layer adds as it lists them. The typed load puts the defaults'
+    entries first, and `_with_new_robots` makes a robot with a `robot:` a default, so the
+    Corobot listed first would otherwise come after a Burger listed second (the first robot
+    is the one the teleop and the dashboard open on)."""
+    listed = [key.value for key, _ in getattr(robots_node, "value", ())]
+    order = before + [name for name in listed if name not in before]
+    order += [name for name in scenario.robots if name not in order]
+    scenario.robots = {name: scenario.robots[name] for name in order
+                       if name in scenario.robots}
 
 
 def _field_node(node, name: str):

@@ -68,6 +68,20 @@ def test_a_scenario_names_a_robot_file_and_starts_from_its_figures(tmp_path):
     assert a.ir_sensors == {} and set(b.ir_sensors) == {"front", "rear"}
 
 
+def test_the_robots_keep_the_scenarios_order():
+    """A robot with a `robot:` of its own is loaded before the layer's fields apply: it must
+    still come where the scenario lists it (the teleop and the dashboard open on the first),
+    and an override's new robot after the ones below it."""
+    from corobot_drake.resources import scenario_path
+
+    scenario = load_scenario(scenario_path("three_robots.yaml"))
+    assert list(scenario.robots) == ["corobot", "burger", "pioneer"]
+    scenario = load_scenario(data="robots: {z: {robot: burger}, a: {pose: {translation: "
+                             "[0, 1, 0]}}}", overrides=["robots: {p: {robot: burger, pose: "
+                                                         "{translation: [0, -1, 0]}}, z: {}}"])
+    assert list(scenario.robots) == ["z", "a", "p"]
+
+
 @pytest.mark.parametrize(("yaml", "field", "words"), [
     ("base: base_link\nwheels: {left: [left_joint], right: [right_joint]}\n", "model",
      "names the robot's"),
