@@ -115,7 +115,7 @@ def _model_and_command_specs(c: SimpleNamespace) -> list[Spec]:
 def _front_end_specs(c: SimpleNamespace) -> list[Spec]:
     """The services, sensors, recording, gym and studies."""
     return [
-        Spec("drive-legs-server", "docs/services.md",
+        Spec("drive-legs-server", "docs/costs.md",
              (Command("python examples/drive_legs.py --loops 1 --seed 1"),), r.render_drive_legs,
              TIMING, 45),
         Spec("server-flood", "docs/costs.md",
@@ -131,7 +131,7 @@ def _front_end_specs(c: SimpleNamespace) -> list[Spec]:
         Spec("bench-ir", "docs/costs.md", (c.bench_ir,), r.render_bench_ir, TIMING, 50),
         Spec("bench-recording", "docs/costs.md",
              (Command("python tools/bench_recording.py"),), r.render_table_with_load, TIMING, 300),
-        Spec("bench-ros2", "docs/ros2.md", (Command("python tools/bench_ros2.py"),),
+        Spec("bench-ros2", "docs/costs.md", (Command("python tools/bench_ros2.py"),),
              r.render_tables_with_load, TIMING, 400),
         Spec("gym-evaluation", "docs/gym.md",
              (Command("python tools/train_policy.py --evaluate"),), r.render_gym_evaluation,
@@ -163,7 +163,7 @@ def _performance_specs(c: SimpleNamespace) -> list[Spec]:
              r.render_tire_grip, DETERMINISTIC, 2500),
         Spec("default-column-runs", "docs/performance.md", (c.default_column,),
              r.render_default_runs, TIMING, 110),
-        Spec("readme-hostile-inputs", "docs/usage.md",
+        Spec("readme-hostile-inputs", "docs/costs.md",
              (Command("python tools/hostile_inputs.py", ok=(0, 1)),), r.render_hostile_inputs,
              TIMING, 90),
         Spec("bench-robots", "docs/performance.md",
