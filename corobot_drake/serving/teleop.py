@@ -30,6 +30,9 @@ _ENABLE = "Enable/disable (E)"
 _FOLLOW = "Follow camera (F)"
 _POWER = "Power"
 _ROBOT = "Robot #"
+_DRIVING = "Driving: {}"
+"""A button whose label names the robot the "Robot #" slider picks (Meshcat's slider shows
+only its number; a control's label cannot change, so the button is replaced when it does)."""
 
 HOLD_FIRST = 0.7
 """s a move lasts after a first press: past the longest usual key-repeat delay (X11's 660 ms),
@@ -65,8 +68,10 @@ class MeshcatTeleop:
         meshcat.AddButton(_ENABLE, "KeyE")
         meshcat.AddButton(_FOLLOW, "KeyF")
         meshcat.AddSlider(_POWER, 0.0, 1.0, 0.05, 0.5)
+        self._shown = None
         if len(self._names) > 1:
             meshcat.AddSlider(_ROBOT, 0, len(self._names) - 1, 1, 0)
+            self._show_robot()
         self._clicks = {label: 0 for label in (*_MOVES, _STOP, _ENABLE, _FOLLOW)}
         self._held: _Held | None = None
         self.camera = FollowCamera(meshcat, sim, self._robot().position())
@@ -75,10 +80,22 @@ class MeshcatTeleop:
         index = int(self._meshcat.GetSliderValue(_ROBOT)) if len(self._names) > 1 else 0
         return self._sim.robot(self._names[index])
 
+    def _show_robot(self) -> None:
+        """Names the selected robot on the "Driving: ..." button (if it changed)."""
+        name = self._robot().name
+        if name == self._shown:
+            return
+        if self._shown is not None:
+            self._meshcat.DeleteButton(_DRIVING.format(self._shown), strict=False)
+        self._meshcat.AddButton(_DRIVING.format(name))
+        self._shown = name
+
     def poll(self) -> None:
         """Issues a command for each button pressed since the last poll, stops a move whose
         key is no longer held, and carries the follow camera along."""
         now = self._clock()
+        if self._shown is not None:
+            self._show_robot()
         for label in self._clicks:
             clicks = self._meshcat.GetButtonClicks(label)
             if clicks == self._clicks[label]:

@@ -110,6 +110,24 @@ def test_a_held_key_drives_and_its_release_stops(meshcat):
     meshcat.DeleteAddedControls()
 
 
+def test_the_robot_slider_picks_a_robot_and_a_button_names_it(meshcat):
+    """three_robots.yaml lists the Corobot first: the teleop opens on it; the slider's next
+    value drives the Burger (listed second), and the "Driving: ..." button says so."""
+    from corobot_drake.resources import scenario_path
+
+    sim, clock = make_sim(scenario=scenario_path("three_robots.yaml")), Clock()
+    teleop = MeshcatTeleop(meshcat, sim, clock=clock)
+    assert "Driving: corobot" in meshcat.GetButtonNames()
+    meshcat.SetSliderValue("Robot #", 1)
+    press(meshcat, "Forward (Up)")
+    teleop.poll()
+    names = meshcat.GetButtonNames()
+    assert "Driving: burger" in names and "Driving: corobot" not in names
+    assert sim.robot("burger").command_log()[-1].command == "SetPower"
+    assert not any(entry.command == "SetPower" for entry in sim.robot("corobot").command_log())
+    meshcat.DeleteAddedControls()
+
+
 def test_the_view_frames_the_robot_and_the_box_and_follows(meshcat):
     import numpy as np
 
