@@ -112,8 +112,10 @@ def test_the_scenario_reference_has_drakes_structs_with_their_bounds(site):
 def test_every_command_has_its_help(site):
     page = text(site, "reference/cli.html")
     commands = ["python -m corobot_drake", "python -m corobot_drake.study",
-                "python -m corobot_drake.ros2", "python -m corobot_drake.ros2.build"]
-    commands += [f"python tools/{p.name}" for p in sorted((REPO / "tools").glob("*.py"))]
+                "python -m corobot_drake.ros2", "python -m corobot_drake.ros2.build",
+                "python -m corobot_drake.robot"]
+    commands += [f"python {folder}/{p.name}" for folder in ("tools", "examples")
+                 for p in sorted((REPO / folder).glob("*.py"))]
     for command in commands:
         assert f"usage: {command} " in page, command
     assert "--headless" in page and "--workers" in page

@@ -1,4 +1,5 @@
-"""Every command's `--help`, as its argparse parser prints it, caught in this process.
+"""Every command's `--help` (the package's, tools/*.py's and examples/*.py's), as its argparse
+parser prints it, caught in this process.
 
 Each program's `main()` is called with `ArgumentParser.parse_args` replaced by a catch: the
 parser it built is kept, and nothing else of the program runs (as
@@ -24,6 +25,7 @@ MODULES = (
     ("python -m corobot_drake.study", "corobot_drake.study.__main__"),
     ("python -m corobot_drake.ros2", "corobot_drake.ros2.inspection"),
     ("python -m corobot_drake.ros2.build", "corobot_drake.ros2.build"),
+    ("python -m corobot_drake.robot", "corobot_drake.robot"),
 )
 """(command, the module whose `main()` parses its arguments)."""
 WIDTH = "100"
@@ -101,11 +103,13 @@ def _width():
 
 
 def programs():
-    """(command, its main()) of the package's commands and every tool."""
+    """(command, its main()) of the package's commands, every tool and every example (each
+    takes --help: tests/packaging/test_tools_help.py)."""
     for command, module in MODULES:
         yield command, importlib.import_module(module).main
-    for path in sorted((REPO / "tools").glob("*.py")):
-        yield f"python tools/{path.name}", _tool_main(path)
+    for folder in ("tools", "examples"):
+        for path in sorted((REPO / folder).glob("*.py")):
+            yield f"python {folder}/{path.name}", _tool_main(path)
 
 
 def page() -> str:
