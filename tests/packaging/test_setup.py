@@ -54,6 +54,40 @@ def test_sourcing_runs_nothing():
     assert (done.returncode, done.stdout, done.stderr) == (0, "sourced\n", "")
 
 
+def run_setup(tmp_path, *args: str):
+    """tools/setup `args`, copied into an empty clone at tmp_path whose PATH has no Python (so
+    were the arguments not refused it could install nothing, but fail at its first step)."""
+    import shutil
+
+    (tmp_path / "tools").mkdir()
+    shutil.copy(SETUP, tmp_path / "tools" / "setup")
+    bin_dir = tmp_path / "bin"
+    bin_dir.mkdir()
+    for tool in ("bash", "sed", "dirname", "du", "cut", "rm"):
+        (bin_dir / tool).symlink_to(shutil.which(tool))
+    return subprocess.run([str(bin_dir / "bash"), str(tmp_path / "tools" / "setup"), *args],
+                          capture_output=True, text=True, timeout=60, cwd=tmp_path,
+                          env={"PATH": str(bin_dir), "PYTHON": str(tmp_path / "none")})
+
+
+@pytest.mark.parametrize("flag", ["-h", "--help"])
+def test_help_prints_the_header_comment_and_installs_nothing(tmp_path, flag):
+    done = run_setup(tmp_path, flag)
+    lines = SETUP.read_text().splitlines()[1:]
+    header = lines[:next(i for i, line in enumerate(lines) if not line.startswith("#"))]
+    assert (done.returncode, done.stderr) == (0, "")
+    assert done.stdout.splitlines() == [line[2:] for line in header]
+    assert "Sets up corobot-drake" in done.stdout and "--help" in done.stdout
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bin", "tools"]
+
+
+def test_an_unknown_argument_is_one_line_and_status_2(tmp_path):
+    done = run_setup(tmp_path, "--yes")
+    assert (done.returncode, done.stdout) == (2, "")
+    assert done.stderr == "error: tools/setup takes no arguments but -h or --help (given: --yes)\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bin", "tools"]
+
+
 def test_the_apt_step_waits_for_a_held_lock_and_goes_on(held_lock):
     path, hold = held_lock
     holder = hold(3.0)
