@@ -224,7 +224,7 @@ class DriveDistance:
 
     distance: float = bounded(0.0, lim.DISTANCE)
     power: float = bounded(0.5, lim.DRIVE_POWER)
-    start: list[float] = dc.field(default_factory=list)
+    start: list[float] = bounded(list, lim.START_POSE)
     """[x, y, yaw_deg] (m, m, deg): the pose the distance counts from (and, closed loop, the
     heading held); empty: where the robot is when the command starts. A saved scene resumes
     a running drive so (`Simulation.saved_scenario`)."""
@@ -247,7 +247,7 @@ class RotateDegrees:
 
     degrees: float = bounded(0.0, lim.DEGREES)
     power: float = bounded(0.5, lim.DRIVE_POWER)
-    start: list[float] = dc.field(default_factory=list)
+    start: list[float] = bounded(list, lim.START_POSE)
     """[x, y, yaw_deg] (m, m, deg): the heading the turn counts from, as if read at the
     control update before it starts (within +-180 deg of the heading then; x and y are not
     used); empty: the heading when the command starts. A saved scene resumes a running turn

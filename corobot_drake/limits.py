@@ -148,6 +148,9 @@ POSITION_LIMIT = 1.0e4
 place)."""
 POSITION = Range(-POSITION_LIMIT, POSITION_LIMIT, unit="m")
 """A position coordinate: a scenario's, SetPose's x and y."""
+START_POSE = (POSITION, POSITION, YAW_DEG)
+"""[x, y, yaw_deg] (m, m, deg): the pose a resumed DriveDistance or RotateDegrees counts from
+(its `start`, which a saved scene writes)."""
 
 LINEAR_SPEED_LIMIT = 50.0
 """m/s: a body's initial speed (80 times the robot's top speed; beyond, a body crosses a

@@ -448,6 +448,10 @@ OVERRIDES = [
     _robot("wheel speed 1e9", "{wheel_speeds: [1e9, 0, 0, 0]}", "wheel_speeds[0]",
            "[-200, 200] rad/s"),
     _robot("wheel speeds short", "{wheel_speeds: [0, 0]}", "wheel_speeds", "needs 4 numbers"),
+    _robot("axle command 1e300", "{axle_speed_command: [1e300, -1e300]}",
+           "axle_speed_command[0]", "[-200, 200] rad/s; got 1e+300"),
+    _robot("resumed drive's start far", "{commands: [!DriveDistance {distance: 1, "
+           "start: [0, 0, 1e9]}]}", "commands[0].start[2]", "[-3600, 3600] deg"),
     _robot("wheel angle inf", "{wheel_angles: [.inf, 0, 0, 0]}", "wheel_angles[0]", "got inf"),
     _robot("robot at 1e6 m/s", "{velocity: [0, 0, 0, 1e6, 0, 0]}", "velocity[3]",
            "[-50, 50] m/s"),

@@ -4,6 +4,12 @@ Every other range, and the `bounded` fields that declare theirs, is in `corobot_
 (Drake-free, so the HTTP process reads it too); this is the part that needs Drake's types.
 """
 
+from pydrake.geometry import (
+    LightParameter,
+    RenderEngineGlParams,
+    RenderEngineVtkParams,
+    SsaoParameter,
+)
 from pydrake.multibody.contact_solvers import IcfSolverParameters
 from pydrake.multibody.plant import MultibodyPlantConfig
 from pydrake.systems.analysis import GetIntegrationSchemes, SimulatorConfig
@@ -17,6 +23,9 @@ from corobot_drake.limits import (
     OneOf,
     Range,
 )
+
+SHADOW_MAP_SIZE = Range(1, CAMERA_MAX_PIXELS, unit="pixels",
+                        why="a shadow map's side (Drake's default 256)")
 
 DRAKE_BOUNDS: dict[type, dict[str, object]] = {
     MultibodyPlantConfig: {
@@ -69,6 +78,24 @@ DRAKE_BOUNDS: dict[type, dict[str, object]] = {
     CameraConfig.FocalLength: {
         "x": Range(0.0, 1e6, low_open=True, unit="pixels"),
         "y": Range(0.0, 1e6, low_open=True, unit="pixels"),
+    },
+    # A camera's `renderer_class` may be a renderer's parameters (`sensors/camera.py`).
+    RenderEngineVtkParams: {
+        "exposure": Range(0.0, 100.0, low_open=True,
+                          why="the environment map's tone-mapping exposure"),
+        "shadow_map_size": SHADOW_MAP_SIZE,
+    },
+    RenderEngineGlParams: {"shadow_map_size": SHADOW_MAP_SIZE},
+    LightParameter: {
+        "intensity": Range(0.0, 1e3, why="a light's brightness (1: Drake's default)"),
+        "cone_angle": Range(0.0, 90.0, unit="deg", why="a spot light's half angle"),
+    },
+    SsaoParameter: {
+        "radius": Range(0.0, 100.0, low_open=True, unit="m"),
+        "bias": Range(0.0, 1.0, unit="m"),
+        "sample_count": Range(1, 1024, why="samples a pixel"),
+        "intensity_scale": Range(0.0, 100.0),
+        "intensity_shift": Range(-1.0, 1.0, why="added to an occlusion factor in [0, 1]"),
     },
 }
 """Bounds of the fields of Drake's config structs that the scenario holds."""

@@ -284,7 +284,7 @@ class Robot:
     """Initial axle speeds (rad/s, same order); the drive's commanded axle speeds start at the
     encoded wheels' (the first left and right, `RobotSpec.encoded`; the Corobot's front ones: a
     saved scene carries on without a jolt)."""
-    axle_speed_command: list[float] = dc.field(default_factory=list)
+    axle_speed_command: list[float] = bounded(list, lim.AXLE_SPEED_RANGE)
     """The drive's initial commanded (slewed) axle speeds [left, right], rad/s; empty: the
     encoded wheels' `wheel_speeds`. A saved scene records them (they differ from the wheels'
     while the drive accelerates or brakes)."""

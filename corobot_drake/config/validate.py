@@ -509,8 +509,10 @@ class LayerChecks:
             if size is not None and len(value) != size:
                 self.fail(path, f"needs {size} numbers, got {len(value)}")
             for i, item in enumerate(value):
-                self._value(item, f"{path}[{i}]",
-                            bound[i] if isinstance(bound, tuple) else bound)
+                # One bound per element: an element past them is finite (the field's own
+                # check says how many it takes).
+                self._value(item, f"{path}[{i}]", (bound[i] if i < len(bound) else None)
+                            if isinstance(bound, tuple) else bound)
         elif isinstance(value, bool) or value is None:
             return
         elif isinstance(bound, Range) and not isinstance(value, int | float | np.number):

@@ -278,3 +278,80 @@ def test_a_new_camera_starts_as_the_spec_camera():
     assert (rear.fps, rear.width, rear.height) == (10.0, 64, spec.height)
     assert (top.fps, top.width, top.renderer_name) == (spec.fps, spec.width, spec.renderer_name)
     assert s.robots["corobot"].cameras["front"].fps == spec.fps
+
+
+UNBOUNDED = {
+    "Scenario.random_seed": "a seed: any of Drake's ints (DRAKE_INT, the bound of an int "
+                            "that declares none) is one",
+    "IrSensorConfig.noise_seed": "a seed, as random_seed",
+    "LidarConfig.noise_seed": "a seed, as random_seed",
+    "ImuConfig.noise_seed": "a seed, as random_seed",
+}
+"""The number fields of the scenario without a bound of their own, and why."""
+
+
+def _number_fields(tp, path: str, seen: frozenset, out: dict) -> None:
+    """{`Class.field`: its bound or None} of every float or int `tp` holds (through lists,
+    maps, unions, dataclasses and Drake's structs); a pose (`Transform`) is checked as a pose
+    (translations by POSITION, angles by ANGLE: config/validate.py), so not walked."""
+    import typing
+
+    from pydrake.common.schema import Transform
+
+    from corobot_drake.config.bounds import DRAKE_BOUNDS
+    from corobot_drake.limits import bound_of
+
+    if typing.get_args(tp):
+        for arg in typing.get_args(tp):
+            _number_fields(arg, path, seen, out)
+        return
+    if tp in (float, int):
+        out.setdefault(path, None)
+        return
+    if not isinstance(tp, type) or tp in seen or tp is Transform:
+        return
+    if dc.is_dataclass(tp):
+        fields = [(f.name, typing.get_type_hints(tp)[f.name], bound_of(f)) for f in dc.fields(tp)]
+    elif hasattr(tp, "__fields__"):  # Drake's struct
+        fields = [(f.name, f.type, DRAKE_BOUNDS.get(tp, {}).get(f.name)) for f in tp.__fields__]
+    else:
+        return
+    for name, hint, bound in fields:
+        found = {}
+        _number_fields(hint, f"{tp.__name__}.{name}", seen | {tp}, found)
+        for field, inner in found.items():
+            out[field] = out.get(field) or inner or (
+                bound if field == f"{tp.__name__}.{name}" else None)
+
+
+def test_every_number_of_the_scenario_has_a_bound():
+    """Each float and int field a scenario may set declares its range (`limits.bounded`,
+    `config.bounds.DRAKE_BOUNDS`), but for the few `UNBOUNDED` says why."""
+    fields = {}
+    _number_fields(sc.Scenario, "Scenario", frozenset(), fields)
+    assert len(fields) > 100  # the robots, their drive, tyres, commands, sensors; Drake's
+    assert {"Robot.axle_speed_command", "DriveDistance.start", "RotateDegrees.start",
+            "SimulatorConfig.max_step_size", "LightParameter.cone_angle"} <= set(fields)
+    unbounded = {field for field, bound in fields.items() if bound is None}
+    assert unbounded == set(UNBOUNDED)
+
+
+@pytest.mark.parametrize("override, field, words", [
+    ("robots: {corobot: {axle_speed_command: [1e300, -1e300]}}",
+     "robots.corobot.axle_speed_command[0]", "must be in [-200, 200] rad/s; got 1e+300"),
+    (_command("!DriveDistance {distance: 1, start: [2e4, 0, 0]}"),
+     "robots.corobot.commands[0].start[0]", "must be in [-10000, 10000] m; got 20000"),
+    (_command("!RotateDegrees {degrees: 9, start: [0, 0, 1e9]}"),
+     "robots.corobot.commands[0].start[2]", "must be in [-3600, 3600] deg; got 1e+09"),
+    ("robots: {corobot: {cameras: {front: {renderer_class: !RenderEngineVtkParams {lights: "
+     "[{type: spot, cone_angle: 120}]}}}}}",
+     "robots.corobot.cameras.front.renderer_class.lights[0].cone_angle",
+     "must be in [0, 90] deg"),
+    # a list longer than its per-element bounds: its length is what is wrong
+    ("robots: {corobot: {odometry: [0, 0, 0, 1, 2, 3]}}", "robots.corobot.odometry",
+     "needs [], [x, y, yaw] or [x, y, yaw, left ticks, right ticks]"),
+    (_command("!DriveDistance {distance: 1, start: [0, 0, 0, 1]}"),
+     "robots.corobot.commands[0].start", "expected [] or [x, y, yaw_deg], got 4 numbers"),
+])
+def test_a_resumed_drive_and_a_renderers_numbers_are_bounded(override, field, words):
+    _loads_or_names(override, field, words, one_line=True)
