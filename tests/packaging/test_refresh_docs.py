@@ -122,3 +122,35 @@ def test_a_cheap_deterministic_block_is_what_its_command_prints(name):
     today (timings are not checked). On failure: python tools/refresh_docs.py --only NAME."""
     run = _tool("--check", "--only", name)
     assert run.returncode == 0, run.stdout + run.stderr[-3000:]
+
+
+def test_the_gallery_pictures_every_scenario_and_every_shipped_robot():
+    """lab/refresh/gallery.py's PICTURES (hand-kept: each picture's camera) against what ships:
+    a picture of each scenarios/*.yaml, and one of each robot of `robots.ROBOTS` (`gallery-<robot>`,
+    in a scenario that has that robot), each picture's PNG committed and its block in the page."""
+    import shlex
+
+    from corobot_drake.config.scenario import load_scenario
+    from corobot_drake.resources import DEFAULT_SCENARIO
+    from corobot_drake.robots import ROBOTS
+    from lab.refresh.gallery import GALLERY, PICTURES
+
+    def scenario_of(arguments: str) -> str:
+        words = shlex.split(arguments)
+        return words[words.index("--scenario") + 1] if "--scenario" in words \
+            else str(DEFAULT_SCENARIO.relative_to(REPO))
+
+    pictured = {scenario_of(arguments) for name, _, _, arguments in PICTURES
+                if name.startswith("gallery-scenario-")}
+    shipped = {str(p.relative_to(REPO)) for p in sorted((REPO / "scenarios").glob("*.yaml"))}
+    assert pictured == shipped
+    by_name = {name: scenario_of(arguments) for name, _, _, arguments in PICTURES}
+    for robot in ROBOTS:
+        scenario = by_name.get(f"gallery-{robot}")
+        assert scenario is not None, f"no picture of the {robot}"
+        robots = {r.robot for r in load_scenario(REPO / scenario).robots.values()}
+        assert robot in robots, (robot, scenario, robots)
+    page = (REPO / GALLERY).read_text()
+    for name, _, png, _ in PICTURES:
+        assert (REPO / "docs" / "images" / png).is_file(), png
+        assert f"<!-- BEGIN generated: {name} (" in page, name
