@@ -189,3 +189,62 @@ def test_the_python_reference_documents_the_api(site):
               if not name.startswith("_") and (callable(value) or isinstance(value, property))]
     names += [f"{k.reading_type.__module__}.{k.reading_type.__qualname__}" for k in KINDS]
     assert [n for n in names if f'id="{n}"' not in page] == []
+
+
+def github_anchors(markdown: str) -> set[str]:
+    """The anchors GitHub (and MyST's `myst_heading_anchors`) gives a page's headings: the
+    heading's text lower-cased, punctuation dropped, spaces made hyphens, a repeat suffixed -1,
+    -2, ... (headings inside fenced code are not headings)."""
+    anchors, seen = set(), {}
+    for line in re.sub(r"^(```+|~~~+).*?^\1", "", markdown, flags=re.M | re.S).splitlines():
+        heading = re.match(r"#{1,6}\s+(.*?)\s*#*\s*$", line)
+        if heading:
+            words = re.sub(r"[`*]|\[([^\]]*)\]\([^)]*\)", r"\1", heading[1]).strip().lower()
+            slug = re.sub(r"[^\w\- ]", "", words).replace(" ", "-")
+            n = seen.get(slug, 0)
+            seen[slug] = n + 1
+            anchors.add(slug if n == 0 else f"{slug}-{n}")
+    return anchors
+
+
+def broken_links(readme, root) -> list[str]:
+    """Each relative link of a Markdown file (Markdown or HTML, outside code) that names no file
+    under `root`, or an #anchor that is no heading of the page it points to."""
+    source = re.sub(r"^(```+|~~~+).*?^\1|`[^`\n]*`", "", readme.read_text(), flags=re.M | re.S)
+    targets = re.findall(r"\]\(\s*<?([^)\s>]+)>?(?:\s+\"[^\"]*\")?\s*\)", source)
+    targets += re.findall(r"""\b(?:href|src)=["']([^"']+)["']""", source)
+    assert targets, f"no links found in {readme}"
+    broken = []
+    for target in targets:
+        if re.match(r"[a-z][a-z0-9+.-]*:", target):
+            continue  # https:, mailto: ...: another site
+        path, _, anchor = target.partition("#")
+        page = (readme.parent / path).resolve() if path else readme
+        if not page.is_file() or root.resolve() not in page.parents:
+            broken.append(f"{target}: no such file")
+        elif anchor and anchor not in github_anchors(page.read_text()):
+            broken.append(f"{target}: no heading #{anchor} in {page.name}")
+    return broken
+
+
+def test_every_relative_link_in_the_readme_resolves():
+    """README.md is outside the site's build, so Sphinx does not check it: each relative link
+    names a file of the repository, and each #anchor a heading of its page (GitHub's anchors)."""
+    assert broken_links(REPO / "README.md", REPO) == []
+
+
+def test_the_readme_link_check_finds_a_broken_link_and_anchor(tmp_path):
+    """The check on a README of the test's: a missing file, a missing anchor and a heading that
+    is only inside code are found; GitHub's anchors (punctuation dropped, repeats numbered)."""
+    anchors = github_anchors("# Corobot-drake\n## What it does: `x` & y\n## Notes\n## Notes\n"
+                             "```\n# not a heading\n```\n")
+    assert anchors == {"corobot-drake", "what-it-does-x--y", "notes", "notes-1"}
+    (tmp_path / "docs").mkdir()
+    (tmp_path / "docs" / "a.md").write_text("# A\n\n## Set up\n\n```\n# Code\n```\n")
+    readme = tmp_path / "README.md"
+    readme.write_text("# R\n\n[a](docs/a.md#set-up) [b](docs/b.md) [c](docs/a.md#code) "
+                      "[d](#r) [e](#nowhere) [f](https://example.org/x.md) `[g](no.md)`\n"
+                      '<img src="docs/none.png">\n')
+    assert broken_links(readme, tmp_path) == [
+        "docs/b.md: no such file", "docs/a.md#code: no heading #code in a.md",
+        "#nowhere: no heading #nowhere in README.md", "docs/none.png: no such file"]
