@@ -60,3 +60,23 @@ def test_the_pioneers_four_wheels(page):
     wait_for(lambda: _rows(page) == ["FL", "RL", "FR", "RR"], 10, "a row per wheel")
     wait_for(lambda: number(page, "#load-rr") > 10.0, 10, "the wheel loads")
     assert page.locator("#camera-panel").is_hidden()
+
+
+def _ir_gauges(page) -> list[str]:
+    return page.eval_on_selector_all("#ir-gauges .gauge", "gauges => gauges.map(g => g.id)")
+
+
+def test_the_ir_panel_follows_the_robot_shown(page):
+    """The Pioneer's sonars are IR-kind sensors, the Burger has none: switching back and forth
+    shows each robot's own gauges, never the previous robot's."""
+    page.locator("#robot").select_option("pioneer")
+    wait_for(lambda: len(_ir_gauges(page)) == 8, 10, "a gauge per sonar")
+    assert page.locator("#ir-none").count() == 0
+    page.locator("#robot").select_option("burger")
+    wait_for(lambda: _ir_gauges(page) == [], 10, "the Pioneer's gauges to go")
+    assert page.locator("#ir-none").is_visible()
+    page.wait_for_timeout(500)  # a reading still on its way from the Pioneer's stream adds none
+    assert _ir_gauges(page) == [] and page.locator("#ir-none").is_visible()
+    page.locator("#robot").select_option("pioneer")
+    wait_for(lambda: len(_ir_gauges(page)) == 8, 10, "the Pioneer's gauges again")
+    assert page.locator("#ir-none").count() == 0

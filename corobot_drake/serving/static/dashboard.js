@@ -204,6 +204,13 @@ function showContact(d) {
   $("tip-margin").textContent = fmt(d.tip_margin_deg, 1);
 }
 
+// The IR panel as the page starts: no gauges; each robot shown adds its own.
+function clearIr() {
+  const none = document.createElement("span");
+  Object.assign(none, { id: "ir-none", className: "muted", textContent: "no IR sensors" });
+  $("ir-gauges").replaceChildren(none);
+}
+
 function showIr(name, s) {
   let gauge = $(`ir-${name}`);
   if (!gauge) {
@@ -329,9 +336,12 @@ async function refreshStats() {
 
 async function selectRobot(name) {
   state.robot = name;
+  // The previous robot's stream stops first: an IR reading of it must not add its gauge back.
+  if (state.events) state.events.abort();
   const info = await api(base());
   state.services = info.services;
   showDrive(info.state.drive);
+  clearIr();
   for (const [n, s] of Object.entries(info.state.ir)) showIr(n, s);
   showSensors(info.state.sensors);
   $("completing").hidden = !(info.capabilities.drive_distance && info.capabilities.rotate_degrees);
