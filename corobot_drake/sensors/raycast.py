@@ -11,6 +11,12 @@ Supported shapes (all intersections are exact, closed form):
   (``SceneGraphInspector.GetConvexHull``, scale included). For ``Convex`` this is the shape;
   for a concave ``Mesh`` it is the same approximation Drake's own point-contact and
   signed-distance queries make, and it is logged (INFO) once per geometry.
+- A ``Mesh`` that touches with its own surface (rigid hydroelastic proximity properties: the
+  loader's ``collision: mesh``): the triangles of SceneGraph's rigid hydroelastic surface for
+  it (``SceneGraphInspector.maybe_get_hydroelastic_mesh``), exactly, concave or not,
+  in a planar cast (:meth:`RayCaster.cast_plane` with a ``normal``, the lidar's), which slices
+  them by the scan plane into segments; other casts (``cast_fan``, the IR sensors') see its
+  convex hull.
 
 Anything else (e.g. ``MeshcatCone``, deformable geometries, a mesh whose hull can't be built) is
 reported once, when the :class:`RayCaster` is built, with a ``logging`` WARNING naming the
@@ -39,6 +45,7 @@ against a batch caster on the same kernels, ``tests/reference_raycast.py``.)
 from __future__ import annotations
 
 import copy
+import dataclasses
 import logging
 import math
 from collections.abc import Callable, Iterable, Sequence
@@ -58,6 +65,7 @@ from pydrake.geometry import (
     Role,
     SceneGraphInspector,
     Sphere,
+    TriangleSurfaceMesh,
 )
 from pydrake.math import RigidTransform
 
@@ -189,6 +197,110 @@ def _hit_capsule(o, d, p, max_range):
     return t
 
 
+# --------------------------------------------------------------------------------------------
+# Meshes that touch with their own surface, in a planar scan: the triangles are sliced by the
+# scan plane into segments (O(triangles)), then every ray meets every segment (O(rays x
+# segments)), all in the plane's 2D coordinates, in numpy.
+#
+# A vertex is "above" when its signed distance s to the plane is > 0, else below (on the plane
+# counts as below): each triangle with vertices on both sides crosses the plane along one
+# segment between its two crossing edges, and a triangle lying in the plane gives none (its
+# neighbours' edges bound it). An edge from a (s_a) to b (s_b) crosses at a + w (b - a),
+# w = s_a / (s_a - s_b), never 0 / 0 since s_a and s_b lie on either side of 0.
+# --------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class _Surface:
+    """A triangle mesh in its geometry frame G."""
+
+    vertices: np.ndarray
+    """(V, 3) m."""
+    triangles: np.ndarray
+    """(T, 3) vertex indices, counter-clockwise seen from outside (the solid's)."""
+    normals: np.ndarray
+    """(T, 3) the triangles' outward normals (not normalised)."""
+    box_center: np.ndarray
+    """(3,) m, the centre of the vertices' axis-aligned bounding box."""
+    box_half: np.ndarray
+    """(3,) m, its half sizes."""
+
+
+def _surface_of(inspector: SceneGraphInspector, gid: GeometryId) -> _Surface | None:
+    """A Mesh's triangles when it touches with its own surface: the rigid hydroelastic
+    surface SceneGraph built from it (Drake's contact then uses that surface, not the hull);
+    None for any other geometry."""
+    mesh = inspector.maybe_get_hydroelastic_mesh(gid)
+    if not isinstance(mesh, TriangleSurfaceMesh) or mesh.num_triangles() == 0:
+        return None
+    vertices = np.array(mesh.vertices(), dtype=float).reshape(-1, 3)
+    triangles = np.array([[t.vertex(i) for i in range(3)] for t in mesh.triangles()],
+                         dtype=np.intp).reshape(-1, 3)
+    a, b, c = (vertices[triangles[:, i]] for i in range(3))
+    low, high = vertices.min(axis=0), vertices.max(axis=0)
+    return _Surface(vertices, triangles, np.cross(b - a, c - a), 0.5 * (low + high),
+                    0.5 * (high - low))
+
+
+def _plane_segments(surface: _Surface, Q: np.ndarray):
+    """The segments where the scan plane cuts the surface: (A, E, M), each (S, 2) in the
+    plane's coordinates, a segment running from A to A + E, M its outward normal there.
+    Q (V, 3): every vertex in the plane's coordinates (x, y, signed distance)."""
+    above = Q[:, 2] > 0.0
+    up = above[surface.triangles]
+    crossing = up != up[:, [1, 2, 0]]  # edges (0, 1), (1, 2), (2, 0)
+    keep = crossing.any(axis=1)
+    triangles, crossing = surface.triangles[keep], crossing[keep]
+    rows = np.arange(len(triangles))
+    ends = []
+    for edge in (np.argmax(crossing, axis=1), 2 - np.argmax(crossing[:, ::-1], axis=1)):
+        a = Q[triangles[rows, edge]]
+        b = Q[triangles[rows, (edge + 1) % 3]]
+        w = a[:, 2] / (a[:, 2] - b[:, 2])
+        ends.append(a[:, :2] + w[:, None] * (b[:, :2] - a[:, :2]))
+    return ends[0], ends[1] - ends[0], keep
+
+
+def _surface_distances(surface: _Surface, X_WG: np.ndarray, origin: np.ndarray,
+                       basis: np.ndarray, D: np.ndarray, max_range: float) -> np.ndarray | None:
+    """(N,) first-hit distance of rays in a plane against a surface posed at X_WG, inf for a
+    miss; None when the plane misses the surface's bounding box. origin (3,) world; basis (3,
+    3) world columns u, v (the plane's axes) and its normal n; D (N, 2): the unit rays in u, v.
+    A ray whose first hit leaves the solid (the origin is inside) reads 0."""
+    R = X_WG[:, :3]
+    o_G = (origin - X_WG[:, 3]) @ R
+    B_G = R.T @ basis  # the plane's axes and normal in G
+    n_G = B_G[:, 2]
+    if abs((surface.box_center - o_G) @ n_G) > np.abs(n_G) @ surface.box_half:
+        return None
+    A, E, keep = _plane_segments(surface, (surface.vertices - o_G) @ B_G)
+    if not len(A):
+        return None
+    M = (surface.normals[keep] @ B_G)[:, :2]
+    # Ray t D meets segment A + s E where t D x E = A x E and s D x E = A x D.
+    den = np.outer(D[:, 0], E[:, 1]) - np.outer(D[:, 1], E[:, 0])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = (A[:, 0] * E[:, 1] - A[:, 1] * E[:, 0]) / den
+        s = (np.outer(D[:, 1], A[:, 0]) - np.outer(D[:, 0], A[:, 1])) / den
+    t = np.where((den != 0.0) & (s >= 0.0) & (s <= 1.0) & (t >= 0.0), t, np.inf)
+    first = t.min(axis=1)
+    # Leaving the solid at the first hit: the origin is inside. Where segments meet at the
+    # hit (a corner), only if it leaves through all of them: a ray grazing a corner from
+    # outside meets one face it enters and one it would leave.
+    leaving = np.where(t == first[:, None], D @ M.T > 0.0, True).all(axis=1)
+    first = np.where(leaving & (first < np.inf), 0.0, first)
+    return np.where(first <= max_range, first, np.inf)
+
+
+def _plane_basis(normal: np.ndarray) -> np.ndarray:
+    """(3, 3) columns u, v, n: a right-handed orthonormal frame with n the plane's unit normal."""
+    n = np.asarray(normal, dtype=float)
+    helper = np.eye(3)[int(np.argmin(np.abs(n)))]
+    u = np.cross(n, helper)
+    u /= np.linalg.norm(u)
+    return np.column_stack([u, np.cross(n, u), n])
+
+
 _CurvedHit = Callable[[np.ndarray, np.ndarray, dict, float], np.ndarray]
 
 
@@ -210,6 +322,8 @@ class _Target:
     hit: _CurvedHit | None = None
     """Curved shapes: first-hit distances of rays expressed in G."""
     params: dict | None = None
+    surface: _Surface | None = None
+    """A mesh touching with its own surface: its triangles (planar casts read them)."""
 
 
 def _make_target(inspector: SceneGraphInspector, gid: GeometryId) -> _Target | str:
@@ -261,13 +375,16 @@ def _make_target(inspector: SceneGraphInspector, gid: GeometryId) -> _Target | s
         )
         center = 0.5 * (vertices.min(axis=0) + vertices.max(axis=0))
         radius = float(np.linalg.norm(vertices - center, axis=1).max())
+        made = polytope(normals, offsets, center, radius)
+        surface = _surface_of(inspector, gid) if isinstance(shape, Mesh) else None
         if isinstance(shape, Mesh):
             _log.info(
                 "RayCaster: geometry '%s' (id %s, Mesh %s) is ray cast as its convex hull "
-                "(%d faces), as Drake's point-contact queries treat it.",
-                name, gid, shape.source().description(), hull.num_faces(),
+                "(%d faces)%s.", name, gid, shape.source().description(), hull.num_faces(),
+                ", as Drake's point-contact queries treat it" if surface is None else
+                f" by fans, and by planar scans as its {len(surface.triangles)} triangles",
             )  # fmt: skip
-        return polytope(normals, offsets, center, radius)
+        return made if surface is None else dataclasses.replace(made, surface=surface)
     return "there is no ray intersection for this shape type"
 
 
@@ -567,7 +684,8 @@ class RayCaster:
         origin (3,) and unit directions (N, 3) in the world frame. normal: the unit normal of
         a plane through origin holding every ray (a planar scan), or None; a geometry whose
         bounding sphere misses that plane, or is farther than max_range, is skipped before
-        any exact test.
+        any exact test. With a normal, a mesh that touches with its own surface is cast
+        exactly, its triangles sliced by the plane; without, as its convex hull.
         """
         if not max_range >= 0.0:
             raise ValueError(f"max_range must be >= 0, got {max_range}")
@@ -578,6 +696,7 @@ class RayCaster:
             return best  # no hit from an undefined origin
         frame_poses: dict = {}
         polytopes = []  # (world normals (3, F), offsets (F,)) of each polytope not skipped
+        basis = d2 = None  # the scan plane's axes and the rays in them, once a surface needs them
         for ft, target, X_FG, planes in zip(self._fan, self._targets, self._X_FG,
                                             self._anchored_planes, strict=True):
             if ft.frame is None:
@@ -594,7 +713,14 @@ class RayCaster:
                 if float(np.linalg.norm(v)) - ft.radius > max_range or (
                         normal is not None and abs(float(v @ normal)) > ft.radius):
                     continue
-            if target.normals is not None:
+            if target.surface is not None and normal is not None:
+                if basis is None:
+                    basis = _plane_basis(normal)
+                    d2 = d @ basis[:, :2]
+                t = _surface_distances(target.surface, X_WG, o[0], basis, d2, max_range)
+                if t is not None:
+                    np.minimum(best, t, out=best)
+            elif target.normals is not None:
                 polytopes.append(planes or _posed_planes(target, X_WG))
             else:
                 R_WG = X_WG[:, :3]
