@@ -6,12 +6,20 @@ that file as it is, in order, and the block runs in a copy of that module's name
 definitions compile and execute with the module's imports). Every other block is an
 example, run in order in one namespace, from the repository's root, as a reader would paste
 them. A YAML or XML block that opens with a file's path (the robot chapter's robot file and
-URDF, which its examples load) is an excerpt of that file in the same way."""
+URDF, which its examples load) is an excerpt of that file in the same way.
+
+Its shell blocks (```` ```sh ````) run line by line by the tutorials' rules
+(tests/packaging/test_tutorials.py: `python -m corobot_drake ...` headless and cut short,
+`python -m corobot_drake.<module> ...` through the module's `main`), in a scratch folder with
+the repository's scenarios and examples beside it."""
 
 import importlib
+import json
 import re
 
 import pytest
+from test_tutorials import blocks as page_blocks
+from test_tutorials import run_line, shell_lines
 
 from conftest import REPO
 
@@ -93,3 +101,21 @@ def test_the_examples_run_in_order(monkeypatch):
     for index, block in enumerate(blocks()):
         if not excerpt_of(block):
             exec(compile(block, f"{DOC.name} block {index}", "exec"), namespace)
+
+
+def test_the_shell_commands_run(tmp_path, monkeypatch, capsys):
+    """The bumper override with its summary, `robot check` of the example robot (its URDF
+    written beside), and the example robot driven beside the Corobot."""
+    for folder in ("scenarios", "examples"):
+        (tmp_path / folder).symlink_to(REPO / folder)
+    monkeypatch.chdir(tmp_path)
+    page = str(DOC.relative_to(REPO))
+    shells = [(code, line) for lang, code, line, reason in page_blocks(page)
+              if lang == "sh" and reason is None]
+    assert len(shells) >= 3
+    for code, line in shells:
+        for argv in shell_lines(code):
+            run_line(argv, f"{page}:{line}", None, capsys)
+    summary = json.loads((tmp_path / "s.json").read_text())
+    assert "front_bumper" in json.dumps(summary)  # the override's bumper is in the summary
+    assert "<robot" in (tmp_path / "my_robot.urdf").read_text()

@@ -14,7 +14,8 @@ repository's, as a reader pastes them one after the other:
     (until Ctrl-C) gets `--duration 1`: the same run, ended. `--foxglove` without a port gets
     a free one (its 8765 may be taken). A `--serve` command is started as a server (on a free
     port in place of the page's 50000) for the page's Python blocks and `curl` lines.
-  - `python -m corobot_drake.<module> ...` runs that module's `main` in this process.
+  - `python -m corobot_drake.<module> ...` runs that module's (or package's `__main__`'s)
+    `main` in this process.
   - `python tools/<tool>.py ...` (or `examples/<example>.py`) runs the script in this
     process, as `python` would; a long measurement is given the small size its flag allows
     (`TOOL_CUTS`). A tool in `VERDICT_TOOLS` may also end with its verdict's exit status 1:
@@ -43,6 +44,7 @@ the commands of generated blocks.
 from __future__ import annotations
 
 import contextlib
+import importlib.util
 import os
 import re
 import runpy
@@ -208,7 +210,8 @@ def run_line(argv: list[str], where: str, url: str | None, capsys) -> None:
             return
         run_main("corobot_drake.cli", cut(argv[3:]), where, capsys)
     elif argv[0] in PYTHON and argv[1] == "-m" and argv[2].startswith("corobot_drake."):
-        run_main(argv[2] + ".__main__", argv[3:], where, capsys)
+        package = importlib.util.find_spec(argv[2]).submodule_search_locations is not None
+        run_main(argv[2] + (".__main__" if package else ""), argv[3:], where, capsys)
     elif argv[0] in PYTHON and re.fullmatch(r"(tools|examples)/\w+\.py", argv[1]):
         run_tool(argv[1], argv[2:], where, capsys)
     elif argv[0] == "curl":
