@@ -24,7 +24,9 @@ from functools import partial
 import rclpy
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
 from rclpy.callback_groups import ReentrantCallbackGroup
+from rclpy.clock import Clock, ClockType
 from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
+from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
 from corobot_drake import commands
@@ -155,7 +157,10 @@ class Ros2Node:
         self.context = rclpy.Context()
         args = [ifc.NODE_NAME, "--ros-args", *ros_args] if ros_args else None
         rclpy.init(context=self.context, domain_id=domain_id, args=args)
-        self.node = rclpy.create_node(ifc.NODE_NAME, context=self.context)
+        # Its clock is the simulation's (/clock, which it publishes): an action goal's stamp,
+        # a log's, a result's expiry. `use_sim_time` true whatever the arguments say.
+        self.node = parameters.make_node(ifc.NODE_NAME, self.context,
+                                         [Parameter("use_sim_time", value=True)])
         try:
             self.settings = parameters.declare(self.node)
         except parameters.ParameterError:
@@ -184,7 +189,7 @@ class Ros2Node:
         self._slips = 0  # the runner's, at the last /diagnostics
         self._cmd_vel_topics: dict[str, str] = {}  # robot: its /cmd_vel's full name
         self._other_types: set = set()  # (topic, type) reported
-        self.node.create_timer(GRAPH_CHECK_PERIOD, self._check_graph)
+        self.node.create_timer(GRAPH_CHECK_PERIOD, self._check_graph, clock=wall_clock())
 
     @property
     def log(self):
@@ -206,7 +211,7 @@ class Ros2Node:
         self._diagnostics = self.node.create_publisher(
             ros_type(diagnostics.TOPIC[1]), f"/{diagnostics.TOPIC[0]}", 10)
         self.node.create_timer(diagnostics.PERIOD, self._publish_diagnostics,
-                               callback_group=self._group)
+                               callback_group=self._group, clock=wall_clock())
         from corobot_drake.ros2.simulation_services import SimulationServices
 
         self.simulation = SimulationServices(self, runner)
@@ -560,6 +565,12 @@ class Ros2Node:
         self.node.destroy_node()
         if self.context.ok():
             rclpy.shutdown(context=self.context)
+
+
+def wall_clock() -> Clock:
+    """The clock of the node's timers that must run while the simulation is paused or runs
+    as fast as it can (the node's own clock is the simulation's: it stops with it)."""
+    return Clock(clock_type=ClockType.STEADY_TIME)
 
 
 def cmd_vel_type(stamped: bool) -> str:

@@ -76,19 +76,51 @@ class ParameterError(ValueError):
 
 
 def descriptor(param: Param):
-    """rcl_interfaces/ParameterDescriptor of `param` (a number takes an integer too)."""
-    from rcl_interfaces.msg import ParameterDescriptor
+    """rcl_interfaces/ParameterDescriptor of `param`: a number's range as both a
+    floating_point_range and an integer_range (it takes an integer too: `-p
+    cmd_vel_timeout:=2`), `ros2 param describe` shows them."""
+    from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 
     d = ParameterDescriptor(name=param.name, description=param.what,
                             read_only=param.read_only)
-    # Typed and bounded by `problem` (an int is a number of s too), refusing in its one line:
-    # a floating_point_range would have rclpy refuse first, in its own words.
+    # Typed by `problem` (an int is a number of s too): rclpy then applies the range of the
+    # value's type, and `make_node`'s node refuses in `problem`'s line, not rclpy's words.
     d.dynamic_typing = True
     if param.low is not None:
         d.additional_constraints = f"a number of {param.unit} in [{param.low:g}, {param.high:g}]"
+        d.floating_point_range = [FloatingPointRange(from_value=float(param.low),
+                                                     to_value=float(param.high))]
+        d.integer_range = [IntegerRange(from_value=math.ceil(param.low),
+                                        to_value=math.floor(param.high))]
     elif param.choices:
         d.additional_constraints = f"one of {', '.join(param.choices)}"
     return d
+
+
+def make_node(name: str, context, overrides: list = ()):
+    """An rclpy node whose parameters' descriptors refuse a value in `Param.problem`'s one
+    line: rclpy applies a descriptor's range before the on-set callbacks, in its own words
+    ("Parameter cmd_vel_timeout out of range Min: ..."), and that is what `ros2 param set`
+    would print. `overrides`: rclpy Parameters that take precedence over `--ros-args`."""
+    from rclpy.node import Node
+
+    class CheckedNode(Node):
+        def __init__(self, *args, **kwargs):
+            self.refusals: list[str] = []  # (`declare` reports the last)
+            super().__init__(*args, **kwargs)
+
+        def _apply_descriptor(self, parameter, descriptor=None, check_read_only=True):
+            result = super()._apply_descriptor(parameter, descriptor, check_read_only)
+            spec = PARAMETER.get(parameter.name)
+            if result.successful or spec is None or (check_read_only and spec.read_only):
+                return result  # (a read-only one set while running: rclpy's line says so)
+            problem = spec.problem(parameter.value)
+            if problem:
+                self.refusals.append(problem)
+                result.reason = problem
+            return result
+
+    return CheckedNode(name, context=context, parameter_overrides=list(overrides))
 
 
 def declare(node) -> Settings:
@@ -96,7 +128,7 @@ def declare(node) -> Settings:
     refusing a bad value: ParameterError, one line; returns the read-only ones' values."""
     from rcl_interfaces.msg import SetParametersResult
 
-    refused: list[str] = []
+    refused: list[str] = getattr(node, "refusals", [])
 
     def check(parameters):
         for p in parameters:

@@ -77,7 +77,17 @@ def test_ros_args_remap_the_namespace_and_set_parameters_checked_in_one_line(sim
     assert refused.reason == "cmd_vel_timeout: -1.0 is not a number of s in [0, 3600]"
     described = probe.call(f"{NS}/corobot_drake/describe_parameters", DescribeParameters,
                            DescribeParameters.Request(names=["cmd_vel_timeout"]))
-    assert described.descriptors[0].additional_constraints == "a number of s in [0, 3600]"
+    described = described.descriptors[0]
+    assert described.additional_constraints == "a number of s in [0, 3600]"
+    # the range in the descriptor's own fields too (`ros2 param describe`, rqt_reconfigure's
+    # sliders), and still refused in the node's line, not rclpy's "out of range" words
+    assert [(r.from_value, r.to_value) for r in described.floating_point_range] == [(0, 3600)]
+    assert [(r.from_value, r.to_value) for r in described.integer_range] == [(0, 3600)]
+    refused = set_parameter(probe, "cmd_vel_timeout", ParameterValue(
+        type=ParameterType.PARAMETER_INTEGER, integer_value=4000))
+    assert refused.reason == "cmd_vel_timeout: 4000 is not a number of s in [0, 3600]"
+    # the node's clock is the simulation's /clock
+    assert parameter(probe, "use_sim_time").bool_value is True
     taken = set_parameter(probe, "cmd_vel_timeout", ParameterValue(
         type=ParameterType.PARAMETER_INTEGER, integer_value=1))
     assert taken.successful, taken.reason
@@ -145,15 +155,17 @@ def test_twist_stamped_drives_and_a_twist_publisher_is_reported_once(sim):
         assert sum(wanted in line for line in lines) == 1  # once, not at every look
 
 
-def test_a_bad_parameter_at_start_is_one_line_and_exit_2():
+@pytest.mark.parametrize(("parameter", "line"), [
+    ("odom_source:=gps", "odom_source: 'gps' is not one of wheel, ground_truth"),
+    # out of the descriptor's integer_range: the node's line, not rclpy's
+    ("cmd_vel_timeout:=-1", "cmd_vel_timeout: -1 is not a number of s in [0, 3600]")])
+def test_a_bad_parameter_at_start_is_one_line_and_exit_2(parameter, line):
     with private_network():
         run = subprocess.run(
             [sys.executable, "-m", "corobot_drake", "--headless", "--ros2", "--duration", "1",
-             "--ros-args", "-p", "odom_source:=gps"], capture_output=True, text=True,
-            timeout=120)
+             "--ros-args", "-p", parameter], capture_output=True, text=True, timeout=120)
     assert run.returncode == 2
-    assert run.stderr.strip().splitlines() == [
-        "error: --ros-args: odom_source: 'gps' is not one of wheel, ground_truth"]
+    assert run.stderr.strip().splitlines() == [f"error: --ros-args: {line}"]
 
 
 def test_action_feedback_comes_every_tenth_of_a_simulated_second_at_any_rate():

@@ -343,6 +343,10 @@ def test_play_pause_stop_and_the_action(sim_ros):
     assert _pose(probe)[0] == pytest.approx(0.07, abs=1e-9)
     # cancelled: stops, paused, fewer steps
     handle = probe.wait_future(client.send_goal_async(SimulateSteps.Goal(steps=100_000)))
+    # the node's clock is the simulation's: the goal is stamped at its simulated time (the
+    # last /clock, 10 ms apart, the node had taken when it accepted it), not the wall clock's
+    stamp = handle.stamp.sec + 1e-9 * handle.stamp.nanosec
+    assert 0.07 - 0.01 - 1e-9 <= stamp <= 0.07 + 1e-9, stamp
     time.sleep(0.3)
     probe.wait_future(handle.cancel_goal_async())
     probe.wait_future(handle.get_result_async())
