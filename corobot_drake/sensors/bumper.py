@@ -1,35 +1,43 @@
-"""The bumper: a contact switch on a link of the robot, pressed when its box touches anything
-but the ground, reporting the contact force.
+"""The bumper: a contact switch on a link of the robot, pressed when its collision geometry
+touches anything but the ground, reporting the contact force.
 
-The bumper is a box of its own (`BumperConfig.size`), fixed to a link by its `X_PB`: the
-bumper frame S at the box's centre, +x out of its face. By default it spans the Corobot's
-front, 5 mm ahead of the front tyres (which stick out 44 mm past the chassis), as wide as the
-outer faces of the wheels, from 1.5 to 4 cm above the ground: under the front camera's view
-and the IR sensors' beams. It adds no mass.
+By default (`BumperConfig.geometry: box`) the bumper is a box of its own
+(`BumperConfig.size`), fixed to a link by its `X_PB`: the bumper frame S at the box's centre,
++x out of its face. By default it spans the Corobot's front, 5 mm ahead of the front tyres
+(which stick out 44 mm past the chassis), as wide as the outer faces of the wheels, from 1.5
+to 4 cm above the ground: under the front camera's view and the IR sensors' beams. It adds no
+mass. With `geometry: link` the bumper is the link itself: the collision geometry the link's
+model gives it (a robot whose front link is its bumper, or the Corobot's chassis), no box
+added; `X_PB` then only places S, the frame of the force and of its messages.
 
-Its geometry is added before the plant is finalized (`BumperKind.add_geometry`): a collision
-box (compliant hydroelastic rubber, low friction, so that it meets the compliant world
-bodies, rigid meshes and the rigid ground hydroelastically under `hydroelastic_with_fallback`,
-and slides along a wall rather than grabbing it) and a visual box of the same size.
+A box is added before the plant is finalized (`BumperKind.add_geometry`): a collision box
+(compliant hydroelastic rubber, low friction, so that it meets the compliant world bodies,
+rigid meshes and the rigid ground hydroelastically under `hydroelastic_with_fallback`, and
+slides along a wall rather than grabbing it) and a visual box of the same size.
 
 The `Bumper` system samples the plant's contact results at its rate (a periodic discrete
-update, and one at initialization), never at every physics step: the force on the bumper's
-box is the sum of the contact forces (hydroelastic surfaces and point pairs) between it and
-every geometry but the ground's (the world's half-spaces), expressed in S. It is pressed when
+update, and one at initialization), never at every physics step: the force on the bumper is
+the sum of the contact forces (hydroelastic surfaces and point pairs) between its geometry
+and every geometry but the ground's (the world's half-spaces), expressed in S. It is pressed when
 that force's magnitude exceeds `force_threshold`. On SAP's discrete plant the contact results
 are the forces of the last step; on a continuous plant (CENIC) the compliant law at the
 current state, computed afresh when asked: a sample asks for them only when SceneGraph's
-broad phase finds something but the ground near the box (`Bumper.near_anything`).
+broad phase finds something but the ground near the bumper (`Bumper.near_anything`).
 
 Wire formats: HTTP JSON (the reading's fields); Foxglove/MCAP as JSON (`BUMPER_SCHEMA`:
 foxglove-sdk has no contact message); ROS 2 as `geometry_msgs/msg/WrenchStamped`: ROS 2 has
 no standard contact or bumper message (Gazebo's, the Create 3's and the Kobuki's are their
 own packages), and a WrenchStamped is the standard message of a measured force: stamped, in
-the bumper's frame (on /tf_static), the force in N (torque 0). A subscriber reads pressed as
-|force| > the bumper's force_threshold; `std_msgs/Bool` would have kept pressed alone, with
-neither the force nor the time of the sample.
+the bumper's frame (on /tf_static), the force in N (torque 0). Beside it,
+`bumper/<sensor>/pressed` is a `std_msgs/msg/Bool` (reliable), so that a subscriber need not
+know the force threshold: it is published with every sample, as the WrenchStamped (same
+time, in the bag too), not only when it changes: a level, like a driver's state topics, so a
+subscriber that joins late (or a bag read from the middle) has it within one sample, with no
+transient-local QoS, and an edge is two consecutive messages that differ.
 
-Meshcat: the bumper's visual box turns red while pressed (`BumperMeshcat`).
+Meshcat: the bumper's visual box turns red while pressed, in the live page and the `--record`
+replay (`BumperMeshcat`); a `geometry: link` bumper has no box of its own to colour and draws
+nothing.
 """
 
 import dataclasses as dc
@@ -52,7 +60,7 @@ from pydrake.multibody.plant import ContactResults, CoulombFriction
 from pydrake.systems.framework import EventStatus, LeafSystem
 
 from corobot_drake.config.poses import mount, mount_frame
-from corobot_drake.limits import RATE, Range, bounded
+from corobot_drake.limits import RATE, OneOf, Range, bounded
 from corobot_drake.robots import robot_spec
 from corobot_drake.sensors.kind import BuiltSensor, SensorKind
 from corobot_drake.sensors.ticks import tick_in_step
@@ -66,6 +74,8 @@ GROUND_CLEARANCE = 0.015
 """m: the default bumper's bottom above the ground."""
 THICKNESS, HEIGHT = 0.02, 0.025
 """m: the default box's extent along S's x and z."""
+GEOMETRIES = ("box", "link")
+"""`BumperConfig.geometry`: a box of the bumper's own, or its link's own collision geometry."""
 
 
 def default_size() -> tuple[float, float, float]:
@@ -95,7 +105,12 @@ class BumperConfig:
     `chassis`: across the front, ahead of the front tyres)."""
     size: list[float] = bounded(lambda: list(default_size()),
                                 Range(1e-3, 2.0, unit="m", why="a bumper's box"), size=3)
-    """m: the box's extent along S's x (thickness), y (width) and z (height)."""
+    """m: the box's extent along S's x (thickness), y (width) and z (height) (`geometry:
+    box` only)."""
+    geometry: str = bounded("box", OneOf(GEOMETRIES))
+    """What touches: `box`, a box of its own (`size`) at S; `link`, the collision geometry
+    the link of `X_PB` already has (its model's: the link is the bumper; no box is added and
+    S is only the frame the force is expressed in)."""
     force_threshold: float = bounded(1.0, Range(0.0, 1e4, unit="N"))
     """N: pressed while the contact force's magnitude exceeds this."""
     rate_hz: float = bounded(50.0, RATE)
@@ -136,7 +151,10 @@ def contact_properties(size) -> ProximityProperties:
 
 def add_bumper_geometry(plant, model_instance, name: str, config: BumperConfig) -> None:
     """Registers the bumper's collision and visual boxes on the link `config.X_PB` names (a
-    link of `model_instance`); the plant must not be finalized yet."""
+    link of `model_instance`); the plant must not be finalized yet. With `geometry: link`,
+    nothing: the link's own collision geometry is the bumper."""
+    if config.geometry == "link":
+        return
     body, X_BS = mount_frame(plant, model_instance, config.X_PB)
     box = Box(*config.size)
     plant.RegisterCollisionGeometry(body, X_BS, box, geometry_name(name),
@@ -156,6 +174,15 @@ def bumper_geometries(plant, scene_graph, body, name: str) -> tuple:
 
     return (find(plant.GetCollisionGeometriesForBody(body)),
             find(plant.GetVisualGeometriesForBody(body)))
+
+
+def link_geometries(plant, body) -> frozenset:
+    """The collision GeometryIds of `body` (a `geometry: link` bumper's: its model's)."""
+    geometries = frozenset(plant.GetCollisionGeometriesForBody(body))
+    if not geometries:
+        raise ValueError(f"a bumper with geometry: link on {body.name()}: the link has no "
+                         "collision geometry")
+    return geometries
 
 
 def ground_geometries(plant, scene_graph) -> frozenset:
@@ -195,7 +222,8 @@ STATE_SIZE = 7
 
 
 class Bumper(LeafSystem):
-    """One bumper (module docstring): the contact force on its box, sampled at its rate.
+    """One bumper (module docstring): the contact force on its geometry (its box, or its
+    link's own geometry), sampled at its rate.
 
     .. pydrake_system::
 
@@ -223,14 +251,15 @@ class Bumper(LeafSystem):
     at the first at or after its time (as the IR sensor's scans: an event between CENIC's
     steps would split one).
 
-    geometry: the bumper's collision GeometryId; ground: the GeometryIds that do not press
-    it; body_index: the link it is on; X_BS: S in that link's frame.
+    geometries: the bumper's collision GeometryIds (its box's, or its link's); ground: the
+    GeometryIds that do not press it; body_index: the link it is on; X_BS: S in that link's
+    frame.
     """
 
-    def __init__(self, config: BumperConfig, geometry, ground, body_index, X_BS: RigidTransform,
-                 step: float = 0.0):
+    def __init__(self, config: BumperConfig, geometries, ground, body_index,
+                 X_BS: RigidTransform, step: float = 0.0):
         super().__init__()
-        self._geometry = geometry
+        self._geometries = frozenset(geometries)
         self._ground = frozenset(ground)
         self._body = int(body_index)
         self._R_BS = X_BS.rotation()
@@ -277,20 +306,20 @@ class Bumper(LeafSystem):
         return BumperState(bool(x[PRESSED] > 0.5), float(x[FORCE]), (fx, fy, fz), float(x[TIME]))
 
     def near_anything(self, query_object) -> bool:
-        """Whether anything but the ground may touch the box: SceneGraph's broad phase pairs
-        it with something (their bounding boxes overlap). On a continuous plant the contact
-        results are computed afresh when asked (every tyre's contact surface): a sample
-        asks for them only then."""
-        g, ground = self._geometry, self._ground
+        """Whether anything but the ground may touch the bumper: SceneGraph's broad phase
+        pairs one of its geometries with something (their bounding boxes overlap). On a
+        continuous plant the contact results are computed afresh when asked (every tyre's
+        contact surface): a sample asks for them only then."""
+        g, ground = self._geometries, self._ground
         for a, b in query_object.FindCollisionCandidates():
-            if (a == g and b not in ground) or (b == g and a not in ground):
+            if (a in g and b not in ground) or (b in g and a not in ground):
                 return True
         return False
 
     def force_in_world(self, results) -> tuple[float, float, float] | None:
-        """N: the sum of the contact forces on the bumper's box from every geometry but the
-        ground's, in the world; None when nothing but the ground touches it."""
-        g, ground = self._geometry, self._ground
+        """N: the sum of the contact forces on the bumper's geometry from every geometry but
+        the ground's, in the world; None when nothing but the ground touches it."""
+        g, ground = self._geometries, self._ground
         f = [0.0, 0.0, 0.0]
         touched = False
         for i in range(results.num_hydroelastic_contacts()):
@@ -298,9 +327,9 @@ class Bumper(LeafSystem):
             surface = info.contact_surface()
             # F_Ac_W acts on the body of geometry M; the body of N gets its opposite.
             m, n = surface.id_M(), surface.id_N()
-            if (m != g and n != g) or (n if m == g else m) in ground:
+            if (m not in g and n not in g) or (n if m in g else m) in ground:
                 continue
-            sign = 1.0 if m == g else -1.0
+            sign = 1.0 if m in g else -1.0
             for k, v in enumerate(info.F_Ac_W().translational()):
                 f[k] += sign * float(v)
             touched = True
@@ -309,9 +338,9 @@ class Bumper(LeafSystem):
             pair = info.point_pair()
             # contact_force acts on body B (geometry id_B); body A gets its opposite.
             a, b = pair.id_A, pair.id_B
-            if (a != g and b != g) or (a if b == g else b) in ground:
+            if (a not in g and b not in g) or (a if b in g else b) in ground:
                 continue
-            sign = 1.0 if b == g else -1.0
+            sign = 1.0 if b in g else -1.0
             for k, v in enumerate(info.contact_force()):
                 f[k] += sign * float(v)
             touched = True
@@ -377,6 +406,15 @@ class BumperMeshcat(LeafSystem):
     (the box as Drake's visualizer draws it, `meshcat_path`) when `pressed` has changed since
     it last set it: one Meshcat message per press and per release. (Not at initialization:
     Drake's visualizer sends its objects then, and would put the box's own colour back.)
+
+    Each change is also keyed in Meshcat's recording at the simulation time, so that the
+    `--record` replay (`recording.meshcat_html`) shows the presses: as the slip markers',
+    the keys are `material.color` of the box's `<object>` (three.js animates a property of
+    the object itself; a "color" track names one the scene node lacks), two a change: the
+    colour before it one frame earlier, and the new one (a track interpolates between its
+    keys: without the first, the box would fade from one press to the next release). With no
+    recording going, the keys go to an animation nobody publishes and the next
+    `StartRecording` drops.
     """
 
     def __init__(self, meshcat, path: str):
@@ -394,6 +432,13 @@ class BumperMeshcat(LeafSystem):
             return
         c = PRESSED_COLOR if pressed else COLOR
         self._meshcat.SetProperty(self.path, "color", [c.r(), c.g(), c.b(), c.a()])
+        animation = self._meshcat.get_mutable_recording()
+        frame, target = animation.frame(context.get_time()), f"{self.path}/<object>"
+        if frame > 0:
+            before = COLOR if pressed else PRESSED_COLOR
+            animation.SetProperty(frame - 1, target, "material.color",
+                                  [before.r(), before.g(), before.b()])
+        animation.SetProperty(frame, target, "material.color", [c.r(), c.g(), c.b()])
         self.shown = pressed
 
 
@@ -430,6 +475,8 @@ class BumperKind(SensorKind):
     ros2_type = "geometry_msgs/msg/WrenchStamped"
     ros2_qos = "reliable"  # a press is an event a controller acts on: none may be dropped
     foxglove_schema = BUMPER_SCHEMA
+    PRESSED_TOPIC = "pressed"
+    """The subtopic of `std_msgs/msg/Bool` pressed, beside the WrenchStamped."""
 
     def new_sensor(self, name: str) -> BumperConfig:
         return BumperConfig()
@@ -454,9 +501,14 @@ class BumperKind(SensorKind):
             return None
         plant, builder, robot = site.plant, site.builder, site.robot
         body, X_BS = mount_frame(plant, site.model_instance, config.X_PB)
-        collision, visual = bumper_geometries(plant, site.scene_graph, body, name)
+        if config.geometry == "link":
+            geometries, extra = link_geometries(plant, body), {}
+        else:
+            collision, visual = bumper_geometries(plant, site.scene_graph, body, name)
+            geometries = {collision}
+            extra = {"meshcat_path": meshcat_path(site.scene_graph, visual)}
         sensor = builder.AddNamedSystem(f"{robot}.bumper.{name}", Bumper(
-            config, collision, ground_geometries(plant, site.scene_graph), body.index(), X_BS,
+            config, geometries, ground_geometries(plant, site.scene_graph), body.index(), X_BS,
             site.continuous_step))
         builder.Connect(site.scene_graph.get_query_output_port(),
                         sensor.GetInputPort("query_object"))
@@ -467,10 +519,11 @@ class BumperKind(SensorKind):
             port = sensor.get_output_port(i)
             builder.ExportOutput(port, f"{robot}.bumper.{name}.{port.get_name()}")
         return BuiltSensor(self, robot, name, config, sensor, sensor.GetOutputPort("reading"),
-                           sensor.rate, config.X_PB,
-                           {"meshcat_path": meshcat_path(site.scene_graph, visual)})
+                           sensor.rate, config.X_PB, extra)
 
     def add_meshcat(self, builder, meshcat, sensor: BuiltSensor) -> None:
+        if "meshcat_path" not in sensor.extra:  # `geometry: link`: no box of its own
+            return
         viz = builder.AddNamedSystem(f"{sensor.robot}.bumper.{sensor.name}.meshcat",
                                      BumperMeshcat(meshcat, sensor.extra["meshcat_path"]))
         builder.Connect(sensor.system.GetOutputPort("pressed"), viz.get_input_port())
@@ -485,12 +538,20 @@ class BumperKind(SensorKind):
                 "frame_id": frame, "pressed": reading.pressed, "force": reading.force,
                 "force_vector": dict(zip("xyz", reading.force_vector, strict=True))}
 
-    def ros2_message(self, messages, reading: BumperState, frame: str):
+    def ros2_channels(self) -> dict:
+        """`bumper/<sensor>` (the WrenchStamped) and `bumper/<sensor>/pressed` (Bool), both
+        reliable, both with every sample (module docstring)."""
+        return {"": (self.ros2_type, self.ros2_qos),
+                self.PRESSED_TOPIC: ("std_msgs/msg/Bool", self.ros2_qos)}
+
+    def ros2_message(self, messages, reading: BumperState, frame: str) -> dict:
         T = messages.T
-        return T["geometry_msgs/msg/WrenchStamped"](
-            header=messages.header(reading.time, frame),
-            wrench=T["geometry_msgs/msg/Wrench"](force=messages.vector3(reading.force_vector),
-                                                 torque=messages.vector3((0.0, 0.0, 0.0))))
+        return {"": T["geometry_msgs/msg/WrenchStamped"](
+                    header=messages.header(reading.time, frame),
+                    wrench=T["geometry_msgs/msg/Wrench"](
+                        force=messages.vector3(reading.force_vector),
+                        torque=messages.vector3((0.0, 0.0, 0.0)))),
+                self.PRESSED_TOPIC: T["std_msgs/msg/Bool"](data=reading.pressed)}
 
 
 BUMPER = BumperKind()

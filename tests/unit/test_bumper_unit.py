@@ -174,7 +174,7 @@ def standalone(config: BumperConfig, settled, step: float = 0.0):
     plant_context = plant.GetMyContextFromRoot(context)
     original = top.system
     body = plant.GetBodyByName("chassis", plant.GetModelInstanceByName("bot"))
-    bumper = Bumper(config, original._geometry, original._ground, body.index(),
+    bumper = Bumper(config, original._geometries, original._ground, body.index(),
                     config.X_PB.GetDeterministicValue(), step)
     simulator = Simulator(bumper)
     own = simulator.get_mutable_context()
@@ -258,11 +258,18 @@ def test_wire_formats():
     assert fox["timestamp"] == {"sec": 1, "nsec": 250_000_000}
     assert fox["force_vector"] == {"x": -3.0, "y": 4.0, "z": 0.0}
     assert set(fox) == set(BUMPER.foxglove_schema["properties"])
-    msg = BUMPER.ros2_message(Messages(), reading, "bumper_front_bumper")
-    assert msg.__msgtype__ == BUMPER.ros2_type
+    messages = BUMPER.ros2_message(Messages(), reading, "bumper_front_bumper")
+    assert BUMPER.ros2_channels() == {"": ("geometry_msgs/msg/WrenchStamped", "reliable"),
+                                      "pressed": ("std_msgs/msg/Bool", "reliable")}
+    assert {sub: m.__msgtype__ for sub, m in messages.items()} == {
+        sub: msgtype for sub, (msgtype, _) in BUMPER.ros2_channels().items()}
+    msg = messages[""]
     assert (msg.header.frame_id, msg.header.stamp.sec, msg.header.stamp.nanosec) == (
         "bumper_front_bumper", 1, 250_000_000)
     assert (msg.wrench.force.x, msg.wrench.force.y, msg.wrench.torque.z) == (-3.0, 4.0, 0.0)
+    assert messages["pressed"].data is True
+    assert BUMPER.ros2_message(Messages(), BumperState(False, 0.5, (-0.5, 0.0, 0.0), 1.25),
+                               "bumper_front_bumper")["pressed"].data is False
     assert (BUMPER.topic_name("front_bumper"), BUMPER.frame_name("front_bumper")) == (
         "bumper/front_bumper", "bumper_front_bumper")
     assert repr(reading) == ("BumperState(pressed=True, force=5.000 N, "
