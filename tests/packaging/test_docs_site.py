@@ -109,6 +109,30 @@ def test_the_scenario_reference_has_drakes_structs_with_their_bounds(site):
                 assert bound.text() in section, f"{cls.__qualname__}.{name}"
 
 
+def test_the_scenario_reference_has_the_robot_files_fields_with_their_ranges(site):
+    """The robot file (`robots.file.RobotFile` and its structs), after the scenario's tables,
+    every field with its range in words; its sensor maps link to the scenario's configs."""
+    from corobot_drake.limits import Range
+    from corobot_drake.robots.file import RobotFile
+
+    top = text(site, "reference/scenario.html", "robotfile")
+    for f in dc.fields(RobotFile):
+        assert f" {f.name} " in top, f.name
+    structs = [f for f in dc.fields(RobotFile) if f.name in ("wheels", "drive", "tyres",
+                                                             "casters")]
+    assert len(structs) == 4
+    for f in structs:
+        cls = type(getattr(RobotFile(), f.name))
+        section = text(site, "reference/scenario.html", cls.__name__.lower())
+        for inner in dc.fields(cls):
+            assert f" {inner.name} " in section, f"{cls.__name__}.{inner.name}"
+            bound = inner.metadata.get("bound")
+            if isinstance(bound, Range):
+                assert bound.text() in section, f"{cls.__name__}.{inner.name}: {bound.text()}"
+    page = (site[0] / "reference" / "scenario.html").read_text()
+    assert page.index('id="the-robot-file"') > page.index('id="bumperconfig"')
+
+
 def test_every_command_has_its_help(site):
     page = text(site, "reference/cli.html")
     commands = ["python -m corobot_drake", "python -m corobot_drake.study",

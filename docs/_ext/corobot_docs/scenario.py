@@ -1,4 +1,5 @@
-"""The scenario's schema as Markdown: one table per struct, from `config.scenario.Scenario` down.
+"""The scenario's schema as Markdown: one table per struct, from `config.scenario.Scenario` down,
+then the robot file's (`robots.file.RobotFile`).
 
 Read from the code at build time: the dataclasses' fields (types, defaults), their bounds
 (`limits.bounded` metadata; `config.bounds.DRAKE_BOUNDS` for Drake's config structs), their
@@ -38,13 +39,31 @@ class Section:
 
 def page() -> str:
     from corobot_drake.config import scenario as sc
+    from corobot_drake.robots.file import RobotFile
     from corobot_drake.sensors.registry import KINDS
 
     sections = _walk(sc.Scenario)
     out = [_intro(KINDS)]
     for s in sections.values():
         out.append(_section(s, sections))
+    # The robot file's own structs; its sensors' configs are the scenario's, linked to.
+    robot_file = {cls: s for cls, s in _walk(RobotFile).items() if cls not in sections}
+    out.append(ROBOT_FILE_INTRO)
+    for s in robot_file.values():
+        out.append(_section(s, {**sections, **robot_file}, top="The robot file's top level."))
     return "\n\n".join(out) + "\n"
+
+
+ROBOT_FILE_INTRO = textwrap.dedent("""\
+    ## The robot file
+
+    A robot file (`robot:` in a scenario: a shipped robot's name or a file's path;
+    `models/corobot/robot.yaml` is the Corobot's) is a YAML file read into
+    `robots.file.RobotFile`: the robot's model, the link its pose places, its wheels, drive,
+    tyres, casters and its own sensors (each kind's map, with the scenario's fields above).
+    What it leaves out is measured from the model or scaled from the Corobot's; a value
+    outside its range stops the loader with one line naming the robot file, the line and the
+    field. The guide: [Add your own robot](../extending.md#add-your-own-robot).""")
 
 
 def _intro(kinds) -> str:
@@ -127,9 +146,9 @@ def _dict_default(path: str, tp):
 # --- one table --------------------------------------------------------------------------
 
 
-def _section(s: Section, sections) -> str:
+def _section(s: Section, sections, top: str = "The file's top level.") -> str:
     where = ", ".join(f"`{p.lstrip('.')}`" for p in s.paths[:4])
-    where = f"At {where}." if where != "``" else "The file's top level."
+    where = f"At {where}." if where != "``" else top
     if s.cls.__module__.startswith("pydrake"):
         where += (f" Drake's [`{s.cls.__module__}.{s.cls.__qualname__}`]"
                   f"({_drake_url(s.cls)}).")
