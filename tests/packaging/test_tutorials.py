@@ -59,8 +59,8 @@ import pytest
 from conftest import REPO
 
 PAGES = ("README.md", *(f"docs/{p}.md" for p in (
-    "install", "first_drive", "usage", "commands", "services", "sensors", "recording", "ros2", "studies", "gym",
-    "magellan", "looks", "tuning", "costs")))
+    "install", "first_drive", "usage", "commands", "services", "sensors", "recording", "ros2",
+    "studies", "gym", "magellan", "looks", "tuning", "costs")))
 ON_RAY = ("docs/commands.md", "docs/studies.md", "docs/gym.md", "docs/tuning.md")
 """The pages whose blocks run studies or rollouts on Ray."""
 MAX_SECONDS = 2.0
@@ -302,3 +302,38 @@ def on_ray(ray_head):
 def test_a_pages_blocks_run_in_order_on_ray(page, scratch, on_ray, capsys):
     run_page(page, capsys)
     assert os.getcwd() == str(scratch)
+
+
+YAML_FENCE = re.compile(r"^```yaml\n(?P<body>.*?)^```$", re.MULTILINE | re.DOTALL)
+
+
+def scenario_blocks(page: str) -> list[tuple[str, int]]:
+    """(text, line) of each YAML block of the page that is a scenario (its top-level keys
+    are all the Scenario's fields; a study's or a robot file's are not)."""
+    import dataclasses as dc
+
+    from corobot_drake.config.scenario import Scenario
+
+    fields = {f.name for f in dc.fields(Scenario)}
+    text = (REPO / page).read_text()
+    out = []
+    for m in YAML_FENCE.finditer(text):
+        keys = set(re.findall(r"^(\w+):", m["body"], re.MULTILINE))
+        if keys and keys <= fields:
+            out.append((m["body"], text.count("\n", 0, m.start()) + 1))
+    return out
+
+
+def test_a_pages_scenario_blocks_load(scratch):
+    """A scenario a page shows (usage.md's world and robot, with a maze) loads as written:
+    what a reader pastes into a file is a scenario the loader takes."""
+    from corobot_drake.config.scenario import load_scenario
+
+    found = {page: scenario_blocks(page) for page in PAGES}
+    assert len(found["docs/usage.md"]) >= 2
+    for page, page_blocks in found.items():
+        for text, line in page_blocks:
+            try:
+                load_scenario(data=text)
+            except Exception as e:
+                pytest.fail(f"{page}:{line}: {e}")
