@@ -609,15 +609,15 @@ class SimulationServices:
         rpy = RollPitchYaw(X.rotation()).vector()
         pose = (f"pose: {{translation: [{', '.join(repr(float(v)) for v in X.translation())}], "
                 f"rotation: !Rpy {{deg: [{', '.join(repr(math.degrees(v)) for v in rpy)}]}}}}")
-        layer = f"world:\n  bodies:\n    {name}:\n" + "\n".join(
-            "      " + line for line in [pose, *text.splitlines()])
+        head = ["world:", "  bodies:", f"    {name}:", f"      {pose}"]
+        layer = "\n".join([*head, *("      " + line for line in text.splitlines())])
         try:
             scenario = sc.load_scenario(data=layer, defaults=sim.saved_scenario())
         except sc.ScenarioError as e:
             if e.field.endswith(".pose"):  # it would overlap a robot, a body or the ground
                 raise RefusedError(Srv.INVALID_POSE, f"initial_pose: {e.field}: {e.message}"
                                    ) from None
-            raise RefusedError(Srv.RESOURCE_PARSE_ERROR, f"{field}: {e}") from None
+            raise body_refusal(e, field, name, len(head), len(text.splitlines())) from None
         self._rebuild(sim, scenario, Srv.RESOURCE_PARSE_ERROR, Srv.INVALID_POSE)
         return name
 
@@ -770,12 +770,18 @@ def model_format(uri: str) -> str | None:
     return MODEL_FORMATS.get(Path(uri.split("?")[0]).suffix.lower())
 
 
+MISSING_ASSET = re.compile(r"which does not exist|unknown package|[Uu]nable to (find|resolve)")
+"""Drake's parser's words for a file a model refers to (a mesh, an include) not found."""
+
+
 def model_base(uri: str) -> tuple[str, bool]:
     """(the name of the first body of the one model a model file holds, whether none of its
-    bodies has mass), read into a scratch plant; RefusedError RESOURCE_PARSE_ERROR naming
-    what is wrong (a file that is missing, too large, does not parse, holds no model or
-    several, or welds its base to the world)."""
-    from pydrake.multibody.plant import MultibodyPlant
+    bodies has mass), read into a scratch plant and scene graph (its geometry's files looked
+    up); RefusedError naming what is wrong: MISSING_ASSETS for a mesh (or an included file)
+    that is not found, RESOURCE_PARSE_ERROR for the rest (a file that is missing, too large,
+    does not parse, holds no model or several, or welds its base to the world)."""
+    from pydrake.multibody.plant import AddMultibodyPlantSceneGraph
+    from pydrake.systems.framework import DiagramBuilder
 
     from corobot_drake.config.directives import MAX_MODEL_BYTES
     from corobot_drake.config.scenario import one_line
@@ -791,12 +797,14 @@ def model_base(uri: str) -> tuple[str, bool]:
     if not path.is_file() or size > MAX_MODEL_BYTES:
         raise RefusedError(Srv.RESOURCE_PARSE_ERROR, f"{field}: not a regular file of at most "
                            f"{MAX_MODEL_BYTES} bytes")
-    plant = MultibodyPlant(0.0)
+    plant, _ = AddMultibodyPlantSceneGraph(DiagramBuilder(), 0.0)
     try:
         models = make_parser(plant).AddModels(str(path))
         plant.Finalize()
     except (RuntimeError, ValueError) as e:
-        raise RefusedError(Srv.RESOURCE_PARSE_ERROR, f"{field}: {one_line(e)}") from None
+        code = (Srv.MISSING_ASSETS if MISSING_ASSET.search(str(e))
+                else Srv.RESOURCE_PARSE_ERROR)
+        raise RefusedError(code, f"{field}: {one_line(e)}") from None
     if len(models) != 1 or not plant.GetBodyIndices(models[0]):
         raise RefusedError(Srv.RESOURCE_PARSE_ERROR, f"{field}: holds {len(models)} models: "
                            "spawn a file of one model with a body")
@@ -859,16 +867,38 @@ def resource_text(resource) -> tuple[str, str]:
                                f"entity_resource.uri: {resource.uri!r}: spawn formats are "
                                "yaml (a world body), sdf, urdf and mjcf (.xml: a model file)")
         try:
-            field, text = "entity_resource.uri", Path(uri).read_text()
+            field, text = f"entity_resource.uri: {uri}", Path(uri).read_text()
         except (OSError, UnicodeDecodeError) as e:
             raise RefusedError(Srv.RESOURCE_PARSE_ERROR,
                                f"entity_resource.uri: {resource.uri!r}: {e}") from None
     elif not resource.resource_string.strip():
         raise RefusedError(Srv.NO_RESOURCE, "entity_resource: both uri and resource_string "
                            "are empty")
+    elif resource.resource_string.lstrip().startswith("<"):
+        raise RefusedError(Srv.UNSUPPORTED_FORMAT,
+                           "entity_resource.resource_string: XML (a model's SDFormat, URDF or "
+                           "MJCF?): a resource_string is yaml (a world body); give a model "
+                           "file by its uri")
     else:
         field, text = "entity_resource.resource_string", resource.resource_string
     return field, text
+
+
+def body_refusal(error, field: str, name: str, head: int, lines: int) -> RefusedError:
+    """A world body's ScenarioError as SpawnEntity's answer, at the line of the user's text
+    (`field`: the file or the resource_string it came from, `lines` long), not of the
+    scenario text it was wrapped in (`head` lines before it, under world.bodies.<name>): a
+    mesh file that cannot be read MISSING_ASSETS, the rest RESOURCE_PARSE_ERROR."""
+    Srv = _t("srv", "SpawnEntity").Response
+    where = field
+    if error.line is not None and error.line > head:  # (YAML's end of text: its last line)
+        line = min(error.line - head, max(lines, 1))
+        where = (f"{field}:{line}" if field.startswith("entity_resource.uri")
+                 else f"{field}: line {line}")
+    inner = error.field.removeprefix(f"world.bodies.{name}").lstrip(".") or "(top level)"
+    code = (Srv.MISSING_ASSETS if error.field.endswith(".filename")
+            else Srv.RESOURCE_PARSE_ERROR)
+    return RefusedError(code, f"{where}: {inner}: {error.message}")
 
 
 def robot_resource(resource) -> str | None:

@@ -408,7 +408,7 @@ def test_bad_requests_get_their_codes_and_one_line(sim_ros, tmp_path):
              S.RESOURCE_PARSE_ERROR, "entity_resource.resource_string: "),
             ({"name": "b", "entity_resource": Resource(uri="/nowhere/x.sdf")},
              S.RESOURCE_PARSE_ERROR, "entity_resource.uri: '/nowhere/x.sdf': "),
-            *_bad_robots(tmp_path, Resource)):
+            *_bad_bodies(tmp_path, Resource), *_bad_robots(tmp_path, Resource)):
         check(_call(probe, "spawn_entity", SpawnEntity, retry=10.0, initial_pose=at, **fields),
               code, words)
     tilted = PoseStamped()
@@ -428,6 +428,49 @@ def test_bad_requests_get_their_codes_and_one_line(sim_ros, tmp_path):
     features = _call(probe, "get_simulator_features", GetSimulatorFeatures, retry=10.0)
     assert features.features.spawn_formats == ["yaml", "sdf", "urdf", "mjcf"]
     assert "robots (a robot file's uri" in features.features.custom_info
+
+
+MESH_MISSING = """<?xml version="1.0"?>
+<sdf version="1.7">
+  <model name="thing">
+    <link name="base">
+      <inertial><mass>1.0</mass></inertial>
+      <visual name="look"><geometry><mesh><uri>missing_part.obj</uri></mesh></geometry></visual>
+    </link>
+  </model>
+</sdf>
+"""
+
+
+def _bad_bodies(tmp_path, Resource) -> list:
+    """SpawnEntity requests of world bodies and models that cannot be spawned: (fields,
+    code, words); a YAML's problem at the line of the user's own text."""
+    from simulation_interfaces.srv import SpawnEntity
+
+    S = SpawnEntity.Response
+    model = tmp_path / "thing.sdf"
+    model.write_text(MESH_MISSING)
+    body = tmp_path / "body.yaml"
+    body.write_text("# a box too light\nshape: !Box {size: [0.2, 0.2, 0.2]}\nmass: -1\n")
+    return [
+        ({"name": "b", "entity_resource": Resource(uri=str(model))}, S.MISSING_ASSETS,
+         f"resolved to '{tmp_path}/missing_part.obj' which does not exist"),
+        ({"name": "b", "entity_resource": Resource(resource_string=MESH_MISSING)},
+         S.UNSUPPORTED_FORMAT, "entity_resource.resource_string: XML (a model's SDFormat"),
+        ({"name": "b", "entity_resource": Resource(uri=f"file://{body}")},
+         S.RESOURCE_PARSE_ERROR, f"entity_resource.uri: {body}:3: mass: must be in "),
+        ({"name": "b", "entity_resource": Resource(
+            resource_string="shape: !Box {size: [0.2, 0.2, 0.2]}\n\ncolour: red")},
+         S.RESOURCE_PARSE_ERROR, "entity_resource.resource_string: line 3: colour: unknown "),
+        ({"name": "b", "entity_resource": Resource(
+            resource_string="shape: !Box {size: [0.2, 0.2, 0.2]}\nmass: [1")},
+         S.RESOURCE_PARSE_ERROR, "entity_resource.resource_string: line 2: (top level): not "
+                                 "valid YAML"),
+        ({"name": "b", "entity_resource": Resource(
+            resource_string="shape: !Mesh {filename: /nowhere/part.obj}\nfixed: true")},
+         S.MISSING_ASSETS, "entity_resource.resource_string: line 1: shape.filename: "
+                           "/nowhere/part.obj: cannot read the file"),
+    ]
 
 
 def _bad_robots(tmp_path, Resource) -> list:
