@@ -358,9 +358,10 @@ def render_step_counts(outs) -> str:
 
 
 def render_hot_reads(outs) -> str:
+    """Inline, in a sentence: the two reads' costs and the day they were measured."""
     m = json_output(outs)
     return (f"an abstract input costs {m['request_input']:.2f} us and a discrete state number "
-            f"{m['state_number']:.2f} us")
+            f"{m['state_number']:.2f} us (measured {outs[0][0].started:%Y-%m-%d})")
 
 
 def render_bench_ir(outs) -> str:
@@ -379,6 +380,13 @@ def render_command_table(outs) -> str:
     """The command and the table it printed (a deterministic block: no load, no date)."""
     o = outs[0][0]
     return f"`{o.command}`:\n\n{table(o.stdout)}"
+
+
+def render_counted_table(outs) -> str:
+    """The day, the command and the table it printed: counts (not times, so no load), which
+    still move with Drake's version and the code."""
+    o = outs[0][0]
+    return f"Counted {o.started:%Y-%m-%d} (`{o.command}`):\n\n{table(o.stdout)}"
 
 
 def render_gym_evaluation(outs) -> str:
@@ -436,7 +444,8 @@ def render_drive_legs(outs) -> str:
     loops = int(find(r"^(\d+) loops: final drift", o.stdout))
     drift = number(r"final drift ([\d.]+) mm", o.stdout)
     return (f"seed 1, {loops} loop through the server: {drift:.1f} mm; {o.seconds:.0f} s of wall "
-            f"time, the server's start included, at load average {load_line([o])}")
+            f"time, the server's start included, measured {o.started:%Y-%m-%d} at load average "
+            f"{load_line([o])}")
 
 
 def render_server_flood(outs) -> str:

@@ -187,7 +187,7 @@ def _performance_specs(c: SimpleNamespace) -> list[Spec]:
                       '--override "robots: {corobot: {contact: {resolution_hint: 0.007}}}" '
                       '--override "world: {bodies: {giant_box: {fixed: true}}}" '
                       '--override "robots: {corobot: {drive: {control_period: 0.02}}}"'),),
-             r.render_command_table, TIMING, 450),
+             r.render_counted_table, TIMING, 450),
         Spec("bench-compare", "docs/performance.md",
              (Command(f"python tools/bench_compare.py --old {OLD_CHECKOUT} --rounds 15"),),
              r.render_bench_robots, TIMING, 600),
