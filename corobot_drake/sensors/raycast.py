@@ -262,10 +262,10 @@ def _plane_segments(surface: _Surface, Q: np.ndarray):
 
 
 def _surface_distances(surface: _Surface, X_WG: np.ndarray, origin: np.ndarray,
-                       basis: np.ndarray, D: np.ndarray, max_range: float) -> np.ndarray | None:
+                       basis: np.ndarray, rays: _PlaneRays, max_range: float) -> np.ndarray | None:
     """(N,) first-hit distance of rays in a plane against a surface posed at X_WG, inf for a
     miss; None when the plane misses the surface's bounding box. origin (3,) world; basis (3,
-    3) world columns u, v (the plane's axes) and its normal n; D (N, 2): the unit rays in u, v.
+    3) world columns u, v (the plane's axes) and its normal n; rays: the unit rays in u, v.
     A ray whose first hit leaves the solid (the origin is inside) reads 0."""
     R = X_WG[:, :3]
     o_G = (origin - X_WG[:, 3]) @ R
@@ -276,20 +276,66 @@ def _surface_distances(surface: _Surface, X_WG: np.ndarray, origin: np.ndarray,
     A, E, keep = _plane_segments(surface, (surface.vertices - o_G) @ B_G)
     if not len(A):
         return None
-    M = (surface.normals[keep] @ B_G)[:, :2]
+    ray, seg = rays.pairs(A, A + E)
+    D, A, E = rays.D[ray], A[seg], E[seg]
     # Ray t D meets segment A + s E where t D x E = A x E and s D x E = A x D.
-    den = np.outer(D[:, 0], E[:, 1]) - np.outer(D[:, 1], E[:, 0])
+    den = D[:, 0] * E[:, 1] - D[:, 1] * E[:, 0]
     with np.errstate(divide="ignore", invalid="ignore"):
         t = (A[:, 0] * E[:, 1] - A[:, 1] * E[:, 0]) / den
-        s = (np.outer(D[:, 1], A[:, 0]) - np.outer(D[:, 0], A[:, 1])) / den
+        s = (A[:, 0] * D[:, 1] - A[:, 1] * D[:, 0]) / den
     t = np.where((den != 0.0) & (s >= 0.0) & (s <= 1.0) & (t >= 0.0), t, np.inf)
-    first = t.min(axis=1)
+    first = np.full(len(rays.D), np.inf)
+    np.minimum.at(first, ray, t)
     # Leaving the solid at the first hit: the origin is inside. Where segments meet at the
     # hit (a corner), only if it leaves through all of them: a ray grazing a corner from
     # outside meets one face it enters and one it would leave.
-    leaving = np.where(t == first[:, None], D @ M.T > 0.0, True).all(axis=1)
-    first = np.where(leaving & (first < np.inf), 0.0, first)
+    M = (surface.normals[keep][seg] @ B_G)[:, :2]
+    entering = (t == first[ray]) & ((D * M).sum(axis=1) <= 0.0)
+    leaving = np.isfinite(first)
+    leaving[ray[entering]] = False
+    first[leaving] = 0.0
     return np.where(first <= max_range, first, np.inf)
+
+
+class _PlaneRays:
+    """A planar scan's rays in the plane's axes u, v, sorted by bearing, to pair each segment
+    with the rays whose bearings it spans (a ray can meet no other): a scan costs O(rays x
+    the segments each ray's bearing crosses), not O(rays x segments)."""
+
+    _MARGIN = 1e-9
+    """rad: added to each segment's span, so that rounding never drops a ray that meets it."""
+
+    def __init__(self, D: np.ndarray):
+        self.D = D
+        """(N, 2) the unit rays in u, v."""
+        bearing = np.arctan2(D[:, 1], D[:, 0])
+        self.order = np.argsort(bearing)
+        sorted_bearing = bearing[self.order]
+        self.bearings = np.concatenate([sorted_bearing, sorted_bearing + 2 * np.pi])
+        """The sorted bearings (rad, in [-pi, pi]), then once more a turn later: a span that
+        wraps past pi is one slice of it."""
+
+    def pairs(self, a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(ray, segment) indices of every ray whose bearing lies within a segment's span as
+        seen from the origin (segments from a to b, (S, 2) each, relative to the origin)."""
+        n = len(self.D)
+        start = np.arctan2(a[:, 1], a[:, 0])
+        width = np.arctan2(b[:, 1], b[:, 0]) - start
+        width = np.where(width > np.pi, width - 2 * np.pi,
+                         np.where(width < -np.pi, width + 2 * np.pi, width))
+        start = np.where(width < 0.0, start + width, start) - self._MARGIN
+        width = np.abs(width) + 2 * self._MARGIN
+        # A segment through the origin, or nearly: every ray.
+        everything = (width >= np.pi - self._MARGIN) | ~(
+            (np.abs(a) > 1e-12).any(axis=1) & (np.abs(b) > 1e-12).any(axis=1))
+        start = np.where(start < -np.pi, start + 2 * np.pi, start)
+        first = np.searchsorted(self.bearings, start, side="left")
+        count = np.searchsorted(self.bearings, start + width, side="right") - first
+        first = np.where(everything, 0, first)
+        count = np.where(everything, n, np.minimum(count, n))
+        segment = np.repeat(np.arange(len(a)), count)
+        offset = np.arange(len(segment)) - np.repeat(np.cumsum(count) - count, count)
+        return self.order[(np.repeat(first, count) + offset) % n], segment
 
 
 def _plane_basis(normal: np.ndarray) -> np.ndarray:
@@ -696,7 +742,7 @@ class RayCaster:
             return best  # no hit from an undefined origin
         frame_poses: dict = {}
         polytopes = []  # (world normals (3, F), offsets (F,)) of each polytope not skipped
-        basis = d2 = None  # the scan plane's axes and the rays in them, once a surface needs them
+        basis = rays = None  # the scan plane's axes and the rays in them, once needed
         for ft, target, X_FG, planes in zip(self._fan, self._targets, self._X_FG,
                                             self._anchored_planes, strict=True):
             if ft.frame is None:
@@ -716,8 +762,8 @@ class RayCaster:
             if target.surface is not None and normal is not None:
                 if basis is None:
                     basis = _plane_basis(normal)
-                    d2 = d @ basis[:, :2]
-                t = _surface_distances(target.surface, X_WG, o[0], basis, d2, max_range)
+                    rays = _PlaneRays(d @ basis[:, :2])
+                t = _surface_distances(target.surface, X_WG, o[0], basis, rays, max_range)
                 if t is not None:
                     np.minimum(best, t, out=best)
             elif target.normals is not None:

@@ -15,7 +15,7 @@ from pydrake.geometry import (
     Mesh,
     ProximityProperties,
 )
-from pydrake.math import RigidTransform
+from pydrake.math import RigidTransform, RollPitchYaw
 from pydrake.multibody.plant import AddMultibodyPlantSceneGraph
 from pydrake.multibody.tree import SpatialInertia
 from pydrake.systems.framework import DiagramBuilder
@@ -225,3 +225,17 @@ def test_a_lidar_inside_the_solid_reads_0_on_every_ray(tmp_path):
     u = prism_obj(tmp_path / "u.obj", U_OUTLINE, U_CAPS)
     ranges, _ = lidar_among((Mesh(u), RigidTransform(), rigid()), at=(1.6, 0.9))
     assert (ranges == 0.0).all()
+
+
+def test_a_turned_and_moved_u_reads_as_its_posed_outline(tmp_path):
+    """The U posed at (0.3, -0.4) turned 30 degrees about z: the scan reads the posed
+    outline's closed forms (the slicing works in the geometry's frame)."""
+    u = prism_obj(tmp_path / "u.obj", U_OUTLINE, U_CAPS)
+    X_WG = RigidTransform(RollPitchYaw(0.0, 0.0, math.radians(30.0)), [0.3, -0.4, 0.0])
+    ranges, a = lidar_among((Mesh(u), X_WG, rigid()))
+    posed = [tuple((X_WG @ np.array([x, y, 0.0]))[:2]) for x, y in U_OUTLINE]
+    expected = outline_range(a, (0.0, 0.0), posed)
+    assert np.array_equal(np.isinf(ranges), np.isinf(expected))
+    assert np.isfinite(expected).sum() > 100
+    np.testing.assert_allclose(ranges[np.isfinite(expected)], expected[np.isfinite(expected)],
+                               rtol=0, atol=EXACT)
