@@ -50,15 +50,23 @@ def sample(robots: list[str], sim) -> dict:
     return out
 
 
+PAUSED = "paused: simulated time stands still (StepSimulation, SimulateSteps or playing moves it)"
+"""The simulation's status message while the runner is paused (its real-time factor is of
+the time before the pause: not reported)."""
+
+
 def statuses(stats: dict, values: dict, slips_before: int) -> list[Status]:
-    """The statuses of a `sample` and the runner's `stats`; `slips_before`: its slips at the
-    last report (new ones are a WARN)."""
+    """The statuses of a `sample` and the runner's `stats` (`paused` too: the runner's);
+    `slips_before`: its slips at the last report (new ones are a WARN)."""
     factor = stats.get("recent_realtime_factor") or stats.get("realtime_factor")
     slips = int(stats.get("slips") or 0)
-    out = [Status(WARN if slips > slips_before else OK, PREFIX + "simulation",
-                  f"real-time factor {factor:.2f}" if factor else "starting",
-                  {"realtime_factor": factor, "rate": stats.get("rate"), "slips": slips,
-                   "time": values["time"]})]
+    common = {"rate": stats.get("rate"), "slips": slips, "time": values["time"]}
+    if stats.get("paused"):
+        out = [Status(OK, PREFIX + "simulation", PAUSED, {"paused": True, **common})]
+    else:
+        out = [Status(WARN if slips > slips_before else OK, PREFIX + "simulation",
+                      f"real-time factor {factor:.2f}" if factor else "starting",
+                      {"realtime_factor": factor, **common})]
     for robot, v in values["robots"].items():
         worst = max(v["slip"].values(), key=abs, default=0.0)
         margin = v["tip_margin_deg"]

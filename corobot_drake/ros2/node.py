@@ -349,7 +349,7 @@ class Ros2Node:
             values = self._call(lambda sim: diagnostics.sample(list(sim.robots), sim))
         except (SimulationStoppedError, TimeoutError):
             return  # stopping, or too busy to answer: the next look reports
-        stats = self.runner.stats()
+        stats = {**self.runner.stats(), "paused": getattr(self.runner, "paused", False)}
         items = diagnostics.statuses(stats, values, self._slips)
         self._slips = int(stats.get("slips") or 0)
         self._diagnostics.publish(diagnostics.message(values["time"], items))

@@ -296,12 +296,14 @@ def test_rl_loop_gets_the_same_trajectory_after_every_reset(sim_ros):
 
 @ONE_GRAPH_AT_A_TIME
 def test_play_pause_stop_and_the_action(sim_ros):
+    from diagnostic_msgs.msg import DiagnosticArray
     from rclpy.action import ActionClient  # noqa: F401 (the probe's)
     from simulation_interfaces.action import SimulateSteps
     from simulation_interfaces.msg import SimulationState
     from simulation_interfaces.srv import SetSimulationState
 
     probe = sim_ros
+    probe.subscribe("/diagnostics", DiagnosticArray)
 
     def set_state(state):
         return _call(probe, "set_simulation_state", SetSimulationState, retry=10.0,
@@ -316,6 +318,10 @@ def test_play_pause_stop_and_the_action(sim_ros):
     t2, _ = _pose(probe)
     time.sleep(0.3)
     assert _pose(probe)[0] == t2
+    # /diagnostics goes on (a wall-clock timer) and says so, not the factor before the pause
+    report = probe.wait_for("/diagnostics", lambda m: m.status[0].message.startswith(
+        "paused"), start=probe.count("/diagnostics"))
+    assert report.status[0].level == bytes([0])  # OK
     again = set_state(SimulationState.STATE_PAUSED)
     assert again.result == SetSimulationState.Response.ALREADY_IN_TARGET_STATE
     assert set_state(SimulationState.STATE_STOPPED).result == 1

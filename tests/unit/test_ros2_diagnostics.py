@@ -1,6 +1,6 @@
 """/diagnostics' statuses from a sample (`ros2.diagnostics.statuses`): their levels."""
 
-from corobot_drake.ros2.diagnostics import ERROR, OK, WARN, statuses
+from corobot_drake.ros2.diagnostics import ERROR, OK, PAUSED, WARN, statuses
 
 
 def sample(slip: float, margin: float) -> dict:
@@ -21,3 +21,12 @@ def test_statuses_warn_on_new_slips_a_sliding_wheel_and_a_small_tip_margin():
                      "corobot_drake: bot tip margin": WARN}
     tipped = statuses(stats, sample(0.0, -1.0), slips_before=3)[-1]
     assert tipped.level == ERROR and tipped.message == "-1.0 deg"
+
+
+def test_paused_says_so_not_the_factor_of_the_time_before():
+    stats = {"realtime_factor": 0.97, "recent_realtime_factor": 0.95, "slips": 4, "rate": 1.0,
+             "paused": True}
+    simulation = statuses(stats, sample(0.1, 40.0), slips_before=3)[0]
+    assert (simulation.level, simulation.message) == (OK, PAUSED)
+    assert simulation.message.startswith("paused")
+    assert simulation.values == {"paused": True, "rate": 1.0, "slips": 4, "time": 2.0}
