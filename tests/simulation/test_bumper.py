@@ -1,6 +1,10 @@
 """The bumper through the whole station: the Corobot rams the default scene's giant box (2 m,
 100 kg) with a front bumper (`bumpers: {front_bumper: {}}`), while a second Corobot stands
-beside it on a skid, a bumper under its chassis that the ground alone touches."""
+beside it on a skid, a bumper under its chassis that the ground alone touches. Then bumpers of
+`geometry: link`: two Burgers whose base link (its body box and the caster it stands on) is
+the bumper, one driving its body into the box."""
+
+import math
 
 import pytest
 
@@ -99,3 +103,82 @@ def test_a_reset_replays_the_readings_bit_for_bit(ram):
     sim, trace, skid = ram
     sim.reset()
     assert drive(sim) == (trace, skid)
+
+
+# --- a bumper of `geometry: link`: the link's own collision geometry -----------------------
+
+BURGER_FRONT = 0.037
+"""m: the Burger's body box's front face, ahead of its base origin (burger.sdf: a 0.138 m box
+at x = -0.032), 4 mm ahead of its tyres: the body is what meets a wall."""
+LINK_BUMPER = ("{front: {geometry: link, X_PB: {base_frame: base, "
+               f"translation: [{BURGER_FRONT}, 0, 0.082]}}}}}}")
+GAP = 0.01  # m: the rammer's body starts this far from the giant box's face
+RAM_LINK = f"""
+robots:
+  rammer:
+    robot: burger
+    pose: {{translation: [{BOX_FACE + BURGER_FRONT + GAP}, 0, 0],
+            rotation: !Rpy {{deg: [0, 0, 180]}}}}
+    lidars: {{scan: {{enabled: false}}}}
+    bumpers: {LINK_BUMPER}
+  still:
+    robot: burger
+    pose: {{translation: [0, 1.0, 0]}}
+    lidars: {{scan: {{enabled: false}}}}
+    bumpers: {LINK_BUMPER}
+"""
+"""Two Burgers whose base link is their bumper (its body box and the caster ball it stands
+on): one drives its body into the giant box at half power, the other stands."""
+LINK_DURATION = 0.5  # s: the body meets the box between the samples of 0.14 and 0.16 s
+SHORT = 0.5e-3
+"""m: a sample with the body's front further than this from the box's face is not pressed
+(the pose's x alone: the pushing Burger pitches by a fraction of a degree)."""
+
+
+@pytest.fixture(scope="module")
+def link_ram():
+    """(sim, {sample time: rammer's base x}, [rammer's readings], [still one's readings])."""
+    sim = make_sim(RAM_LINK)
+    rammer, still = sim.robot("rammer"), sim.robot("still")
+    rammer.set_power(0.5, 0.5)  # at full power its hard shell bounces off: released at times
+    x_at, readings, standing = {}, [], []
+    while sim.time < LINK_DURATION - 1e-9:
+        x_at[round(sim.time, 2)] = rammer.pose().x
+        readings.append(rammer.reading("front"))
+        standing.append(still.reading("front"))
+        sim.advance(0.02)
+    return sim, x_at, readings, standing
+
+
+def test_a_link_bumper_is_the_links_own_geometry(link_ram):
+    sim, *_ = link_ram
+    plant = sim.station.plant
+    base = plant.GetBodyByName("base", plant.GetModelInstanceByName("rammer"))
+    inspector = sim.station.scene_graph.model_inspector()
+    names = sorted(inspector.GetName(g).split("::")[-1]
+                   for g in plant.GetCollisionGeometriesForBody(base))
+    assert names == ["body", "caster"]  # the model's: no box added
+
+
+def test_a_link_bumper_is_pressed_when_its_body_meets_the_box(link_ram):
+    _, x_at, readings, _ = link_ram
+    samples = {round(r.time, 2): r for r in readings if not math.isnan(r.time)}
+    assert len(samples) == round(LINK_DURATION / 0.02) - 1
+    # The box's face against the body's front (the rammer faces -x).
+    depth = {t: BOX_FACE - (x_at[t] - BURGER_FRONT) for t in samples}
+    assert not any(r.pressed for t, r in samples.items() if depth[t] < -SHORT)
+    first = min(t for t, r in samples.items() if r.pressed)
+    assert first == min(t for t in samples if depth[t] > 0)  # the first sample past the face
+    assert 0.1 < first < 0.2
+    assert all(r.pressed for t, r in samples.items() if t >= first)  # pushing on, it stays
+    # The box pushes the body back: along S's -x (S faces the base's +x, forwards).
+    fx, _, _ = samples[max(samples)].force_vector
+    assert fx < -0.5 * samples[max(samples)].force
+
+
+def test_the_ground_never_presses_a_link_bumper_it_stands_on(link_ram):
+    sim, _, _, standing = link_ram
+    assert all(not r.pressed and r.force == 0.0 for r in standing)
+    # Yet the link touches the ground: its caster carries what the wheels do not.
+    weight = robot_spec("burger").mass * 9.81
+    assert sum(sim.robot("still").wheel_loads().values()) < 0.95 * weight
