@@ -251,6 +251,16 @@ ROBOT_FILES = [
     _robot_file("no mass", "model", "no mass", 1, urdf=_urdf(base_mass=0.0, base_inertia=0.0)),
     _robot_file("degenerate inertia", "model", "degenerate inertia", 1,
                 urdf=_urdf(base_inertia=-1.0)),
+    _robot_file("no mass but an inertia", "model", "a link has no mass", 1,
+                urdf=_urdf(base_mass=0.0)),
+    _robot_file("point-mass base", "model", "no rotational inertia", 1,
+                urdf=_urdf(base_inertia=0.0)),
+    _robot_file("chassis 1 cm into the ground", "model", "goes 10 mm into the ground", 1,
+                urdf=_urdf(extra='<collision><origin xyz="0 0 0.02"/><geometry>'
+                                 '<box size="0.1 0.1 0.06"/></geometry></collision>')),
+    _robot_file("a 1e9 m box", "model", "into the ground", 1,
+                urdf=_urdf(extra='<collision><geometry><box size="1e9 1e9 1e9"/></geometry>'
+                                 "</collision>")),
     _robot_file("sensor on an unknown link", "lidars.scan.X_PB.base_frame", "not a link", 5,
                 _ROBOT_YAML + "lidars: {scan: {X_PB: {base_frame: mast}}}\n"),
     _robot_file("no drive speed", "drive", "needs one of top_speed", 4,
@@ -261,6 +271,11 @@ ROBOT_FILES = [
                 urdf=_urdf(extra='<visual><geometry><mesh filename="huge.obj"/></geometry>'
                                  "</visual>"),
                 files=(("huge.obj", 40 << 20),)),
+    _robot_file("mesh just over the limit", "model", "is 32.1 MiB; a robot's mesh may be at "
+                "most 32 MiB", 1,
+                urdf=_urdf(extra='<visual><geometry><mesh filename="big.obj"/></geometry>'
+                                 "</visual>"),
+                files=(("big.obj", (32 << 20) + 1),)),
     _robot_file("unknown field", "wheels.lefty", "", 3,
                 _with("wheels:", "wheels: {lefty: [left_joint], right: [right_joint]}")),
     Case("robot file: missing", "robots.r.robot", "neither a shipped robot", line=2,

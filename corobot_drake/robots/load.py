@@ -16,7 +16,7 @@ from corobot_drake.config import schema as sc
 from corobot_drake.config.validate import load_layer
 from corobot_drake.robots import spec as sp
 from corobot_drake.robots.file import RobotFile
-from corobot_drake.robots.model_files import model_problem
+from corobot_drake.robots.model_files import mib, model_problem
 from corobot_drake.sensors.registry import KINDS
 
 MODEL_SUFFIXES = (".urdf", ".sdf", ".xml")
@@ -75,11 +75,31 @@ def _parse(model: Path, checks):
         if "inertia" in warning.lower():  # Drake replaced it: refuse what the file says
             lines = warning.splitlines()
             where = lines[0].split(": warning:")[0]
+            if "'mass > 0'" in warning:  # Drake's own words are an internal assertion's
+                checks.fail("model", f"{where}: {_link_at(where)} has no mass (0 kg or less) "
+                            "but an inertia")
             checks.fail("model", f"{where}: a degenerate inertia (not physical: "
                         f"{lines[-1].strip().rstrip('.')})")
     if len(instances) != 1:
         checks.fail("model", f"{model.name} holds {len(instances)} models; a robot is one")
     return plant, scene_graph, instances[0]
+
+
+def _link_at(where: str) -> str:
+    """"link 'name'" for the link whose element holds the model file's line `where`
+    (`file:line`, as Drake's warnings say), or "a link" when that is not clear (several
+    links on the line)."""
+    import re
+
+    file, _, line = where.rpartition(":")
+    try:
+        rows = Path(file).read_text(errors="replace").splitlines()[:int(line)]
+    except (OSError, ValueError):
+        return "a link"
+    if len(re.findall(r"<link\b", rows[-1] if rows else "")) > 1:
+        return "a link"
+    names = re.findall(r"<link\s+name\s*=\s*[\"']([^\"']*)", "\n".join(rows))
+    return f"link {names[-1]!r}" if names else "a link"
 
 
 class _DrakeWarnings(logging.Handler):
@@ -142,7 +162,7 @@ def _shape_problem(shape) -> str | None:
         if source.is_path():
             size = os.path.getsize(source.path()) if os.path.isfile(source.path()) else 0
             if size > sp.MAX_MESH_BYTES:
-                return (f"the mesh {Path(source.path()).name} is {size >> 20} MiB; a robot's "
+                return (f"the mesh {Path(source.path()).name} is {mib(size)}; a robot's "
                         f"collision mesh may be at most {sp.MAX_MESH_BYTES >> 20} MiB")
     return None
 
@@ -236,6 +256,23 @@ def _geometry_figures(robot_file, wheels, checks) -> tuple[float, float, float]:
             _agree(checks, "wheels.wheelbase", robot_file.wheels.wheelbase, wheelbase))
 
 
+def _touching(geometries, wheel_bodies: set, inspector, checks) -> list:
+    """[(body, geometry id, X_BG)] of the shapes other than the wheels' that touch the ground
+    at the start pose (the casters); one that goes into it by more than `GROUND_TOLERANCE`
+    (as a wheel may not either) is refused: it is a body in the ground, not a caster."""
+    touching = []
+    for body, gid, _, X_BG, low in geometries:
+        if body.index() in wheel_bodies or low > sp.GROUND_TOLERANCE:
+            continue
+        if low < -sp.GROUND_TOLERANCE:
+            checks.fail("model", f"{body.name()}/{inspector.GetName(gid).split('::')[-1]} "
+                        f"goes {-low * 1000:.4g} mm into the ground at the start pose (at "
+                        f"most {sp.GROUND_TOLERANCE * 1000:g} mm, as a caster touching it; "
+                        "the base link's origin is on the ground)")
+        touching.append((body, gid, X_BG))
+    return touching
+
+
 def _base(robot_file: RobotFile, plant, instance, checks):
     bodies = [plant.get_body(i) for i in plant.GetBodyIndices(instance)]
     if not robot_file.base:
@@ -272,9 +309,25 @@ def _mass(plant, instance, base, checks) -> tuple[float, tuple]:
         checks.fail("model", f"the robot has no mass (links: {sum(masses):g} kg, the base "
                     f"and what is fixed to it: {composite:g} kg)")
     context = plant.CreateDefaultContext()
+    _check_base_inertia(plant, context, base, checks)
     com_W = plant.CalcCenterOfMassPositionInWorld(context, [instance])
     X_BW = plant.EvalBodyPoseInWorld(context, base).inverse()
     return float(sum(masses)), tuple(float(v) for v in X_BW @ com_W)
+
+
+def _check_base_inertia(plant, context, base, checks) -> None:
+    """Refuses a base (with what is fixed to it) whose rotational inertia about its centre of
+    mass is nil about an axis (a point mass or a rod): the free body the scenario's pose
+    places would turn without resistance about it."""
+    bodies = [b.index() for b in plant.GetBodiesWeldedTo(base)]
+    M = plant.CalcSpatialInertia(context, base.body_frame(), bodies)
+    central = M.Shift(M.get_com()).CalcRotationalInertia().CopyToFullMatrix3()
+    moments = np.linalg.eigvalsh(central)
+    # A 1 kg ball of radius 0.1 mm has 4e-9 kg m^2: anything less is no extent at all.
+    if not moments.min() > 1e-9 * M.get_mass():
+        checks.fail("model", f"the base link {base.name()!r} (with what is fixed to it) has "
+                    f"no rotational inertia about an axis (a point mass; its principal "
+                    f"moments {np.round(moments, 9).tolist()} kg m^2)")
 
 
 def _sensors(robot_file: RobotFile, links, checks) -> dict:
@@ -346,8 +399,7 @@ def load_spec(path: str | Path, kind: str | None = None) -> sp.RobotSpec:
     mass, com = _mass(plant, instance, base, checks)
     wheel_bodies = {plant.GetJointByName(n, instance).child_body().index() for n in sides}
     inspector = scene_graph.model_inspector()
-    touching = [(body, gid, X_BG) for body, gid, _, X_BG, low in geometries
-                if body.index() not in wheel_bodies and low <= sp.GROUND_TOLERANCE]
+    touching = _touching(geometries, wheel_bodies, inspector, checks)
     casters = tuple(f"{body.name()}/{inspector.GetName(gid).split('::')[-1]}"
                     for body, gid, _ in touching)
     caster_points = tuple((float(X_BG.translation()[0]), float(X_BG.translation()[1]))

@@ -6,6 +6,7 @@ mesh of gigabytes takes minutes. `model_problem` walks the model's text first an
 either in one line, so that nothing crashes or hangs.
 """
 
+import math
 import os
 import re
 from pathlib import Path
@@ -40,6 +41,12 @@ def _local(reference: str, directory: Path) -> Path | None:
     return path if path.is_absolute() else directory / path
 
 
+def mib(size: int) -> str:
+    """`size` bytes in MiB to one decimal, rounded up (a file one byte over a limit of 32 MiB
+    reads "32.1 MiB", never "32 MiB")."""
+    return f"{math.ceil(size * 10 / (1 << 20)) / 10:.1f} MiB"
+
+
 def model_problem(model: Path) -> str | None:
     """A one-line problem with the files `model` reaches (an include cycle, too many
     includes, an included model or a mesh too large), or None."""
@@ -57,7 +64,7 @@ def _walk(chain: list[Path], seen: set) -> str | None:
     except OSError:
         return None  # Drake's parser names a missing file
     if size > MAX_MODEL_BYTES:
-        return (f"{path.name} is {size >> 20} MiB; a model file may be at most "
+        return (f"{path.name} is {mib(size)}; a model file may be at most "
                 f"{MAX_MODEL_BYTES >> 20} MiB")
     text = path.read_text(errors="replace")
     for match in _FILE_REFERENCE.finditer(text):
@@ -66,7 +73,7 @@ def _walk(chain: list[Path], seen: set) -> str | None:
             continue
         mesh_size = os.path.getsize(target) if target.is_file() else 0
         if mesh_size > MAX_MESH_BYTES:
-            return (f"the mesh {target.name} is {mesh_size >> 20} MiB; a robot's mesh may be "
+            return (f"the mesh {target.name} is {mib(mesh_size)}; a robot's mesh may be "
                     f"at most {MAX_MESH_BYTES >> 20} MiB")
     for match in (*_INCLUDE_SDF.finditer(text), *_INCLUDE_MJCF.finditer(text)):
         target = _local(match.group(1), path.parent)

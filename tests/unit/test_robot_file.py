@@ -117,6 +117,38 @@ def test_a_fixed_wheel_joint_is_named(tmp_path):
         load_spec(_robot(tmp_path, joint_type="fixed"))
 
 
+_CHASSIS = '<box size="0.14 0.12 0.06"/>'
+
+
+@pytest.mark.parametrize(("old", "new", "words"), [
+    # The chassis box (centre 8 cm up) 1 cm into the ground: a body, not a caster.
+    ('<origin xyz="0 0 0.08"/>', '<origin xyz="0 0 0.02"/>', "base_link/Box goes 10 mm "
+     "into the ground at the start pose (at most 2 mm"),
+    (_CHASSIS, '<box size="1e9 1e9 1e9"/>', "base_link/Box goes 5e+11 mm into the ground"),
+    # Drake's parser replaces such an inertia, saying only that an assertion failed.
+    ('<mass value="0.05"/>', '<mass value="0"/>', "twowheel.urdf:12: link 'left_wheel' has "
+     "no mass (0 kg or less) but an inertia"),
+    ('ixx="0.01" iyy="0.01" izz="0.01"', 'ixx="0" iyy="0" izz="0"', "the base link "
+     "'base_link' (with what is fixed to it) has no rotational inertia about an axis (a "
+     "point mass; its principal moments [0.0, 0.0, 0.0] kg m^2)"),
+])
+def test_a_model_the_robot_cannot_be_is_one_line(tmp_path, old, new, words):
+    path = _robot(tmp_path)
+    model = tmp_path / "twowheel.urdf"
+    model.write_text(model.read_text().replace(old, new, 1))
+    with pytest.raises(ScenarioError) as e:
+        load_spec(path)
+    assert e.value.field == "model" and words in e.value.message, str(e.value)
+    assert "bazel" not in str(e.value) and "\n" not in str(e.value)
+
+
+def test_a_mesh_over_the_limit_says_by_how_much(tmp_path):
+    from corobot_drake.robots.model_files import mib
+
+    assert mib(32 << 20) == "32.0 MiB" and mib((32 << 20) + 1) == "32.1 MiB"
+    assert mib(int(32.96 * (1 << 20))) == "33.0 MiB"
+
+
 def test_robot_check_says_what_it_understood_and_writes_the_urdf(tmp_path, capsys):
     from corobot_drake.robot import main
 
