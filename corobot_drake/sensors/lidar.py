@@ -5,7 +5,9 @@ at the scan's centre: +x forward, the scan in S's x-y plane, angles counter-cloc
 from +x (sensor_msgs/LaserScan's and REP 103's conventions). Ray i leaves at
 `angle_min + i angle_increment`. A scan casts every ray exactly against every proximity
 geometry but its own robot's (`raycast.RayCaster.cast_plane`: robots, world bodies, directive
-models, meshes as their convex hulls), all at one instant (so `time_increment` is 0).
+models; a mesh that touches with its own surface, `collision: mesh`, as its triangles, concave
+or not, any other mesh as its convex hull, as the robot touches them), all at one instant (so
+`time_increment` is 0).
 
 Each range follows REP 117: the measured distance (m) when it is in [range_min, range_max];
 +inf when nothing is there within range_max; -inf when the hit is nearer than range_min (too

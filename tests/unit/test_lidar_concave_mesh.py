@@ -22,7 +22,7 @@ from pydrake.systems.framework import DiagramBuilder
 
 from corobot_drake.config.poses import mount
 from corobot_drake.sensors.lidar import Lidar, LidarConfig
-from corobot_drake.sensors.raycast import model_instance_geometry_ids
+from corobot_drake.sensors.raycast import RayCaster, RayFan, model_instance_geometry_ids
 
 EXACT = 1e-9
 """m: a ray's closed-form intersection in doubles, a few ulps of metres."""
@@ -239,3 +239,25 @@ def test_a_turned_and_moved_u_reads_as_its_posed_outline(tmp_path):
     assert np.isfinite(expected).sum() > 100
     np.testing.assert_allclose(ranges[np.isfinite(expected)], expected[np.isfinite(expected)],
                                rtol=0, atol=EXACT)
+
+
+def test_the_ir_fan_still_reads_a_concave_surface_mesh_as_its_hull(tmp_path):
+    """The IR sensors' cast (`RayCaster.cast_fan`, 3D fans) keeps the hull for every mesh
+    (docs/sensors.md says so): a fan from the origin into the U's open end reads the hull's
+    face at 0.5 m where the lidar reads the back wall at 2.5 m."""
+    u = prism_obj(tmp_path / "u.obj", U_OUTLINE, U_CAPS)
+    builder = DiagramBuilder()
+    plant, scene_graph = AddMultibodyPlantSceneGraph(builder, time_step=0.01)
+    plant.RegisterCollisionGeometry(plant.world_body(), RigidTransform(), Mesh(u), "u", rigid())
+    plant.Finalize()
+    diagram = builder.Build()
+    query = scene_graph.get_query_output_port().Eval(
+        scene_graph.GetMyContextFromRoot(diagram.CreateDefaultContext()))
+    caster = RayCaster(query.inspector())
+    fan = RayFan.cross_of_rays(RigidTransform([0.0, 0.0, HEIGHT]))
+    origin, directions, cone = fan.in_world(np.eye(3, 4).tolist())
+    ranges = caster.cast_fan(query, origin, directions, 6.0, cone)
+    assert min(ranges) == pytest.approx(0.5, abs=EXACT)
+    planar = caster.cast_plane(query, np.array(origin), np.array([[1.0, 0.0, 0.0]]), 6.0,
+                               np.array([0.0, 0.0, 1.0]))
+    assert planar[0] == pytest.approx(2.5, abs=EXACT)
