@@ -1,18 +1,20 @@
 """The bumper on the wires: one CLI run of the Corobot driving its front bumper into the giant
 box (0.9 cm away at the start) writing MCAP, a rosbag and the summary; every sample is on
 /bumper/front_bumper in both, in frame bumper_front_bumper, the same as the Python `Robot`
-reads, and /tf_static places the frame at the mount."""
+reads, pressed on /bumper/front_bumper/pressed in the bag, and /tf_static places the frame at
+the mount. The same run recorded for Meshcat's replay shows the press."""
 
 import json
 import subprocess
 import sys
 
 import pytest
-from test_recording import read_mcap
+from test_recording import _meshcat_messages, _track, read_mcap
 
 from corobot_drake.config.scenario import load_scenario
+from corobot_drake.recording.meshcat_html import RECORDING_FPS
 from corobot_drake.resources import DEFAULT_SCENARIO
-from corobot_drake.sensors.bumper import default_front
+from corobot_drake.sensors.bumper import COLOR, PRESSED_COLOR, default_front
 from corobot_drake.simulation import Simulation
 
 pytest.importorskip("rosbags", reason="the [ros2] extra (tools/setup installs it)")
@@ -24,6 +26,7 @@ DURATION = 0.3  # s: it meets the box between the samples of 0.08 and 0.1 s
 TIMES = [round(0.02 * k, 2) for k in range(15)]
 """s: the samples of the run (the one due at 0.3 s is taken leaving 0.3: after the run)."""
 TOPIC, FRAME = "/bumper/front_bumper", "bumper_front_bumper"
+PRESSED_TOPIC = f"{TOPIC}/pressed"
 
 
 @pytest.fixture(scope="module")
@@ -83,6 +86,35 @@ def test_each_sample_is_a_wrench_stamped_in_the_bag_on_its_frame(run):
     assert mount.header.frame_id == "base_link"
     t = mount.transform.translation
     assert (t.x, t.y, t.z) == pytest.approx(default_front(), abs=1e-12)
+
+
+def test_each_sample_is_a_bool_pressed_in_the_bag_beside_its_wrench(run):
+    """A subscriber need not know the threshold: pressed with every sample, at its time."""
+    topics = _bag(run["dir"] / "bag", TOPIC, PRESSED_TOPIC)
+    pressed = topics[PRESSED_TOPIC]
+    assert [t for t, _ in pressed] == [t for t, _ in topics[TOPIC]]
+    mcap = read_mcap(run["dir"] / "run.mcap")[TOPIC]
+    assert [m.data for _, m in pressed] == [f["pressed"] for _, _, f in mcap]
+    assert [m.data for _, m in pressed] == [t >= 0.1 for t in TIMES]
+
+
+def test_the_replay_shows_the_press(tmp_path):
+    """The recording keys the box's colour at the press (the colour before it one frame
+    earlier, so the replay switches rather than fades), and nothing else: never released."""
+    sim = Simulation(load_scenario(DEFAULT_SCENARIO, overrides=[RAM]), record=True)
+    sim.advance(0.2)
+    sim.save_recording(tmp_path / "run.html")
+    (animation,) = [m for m in _meshcat_messages((tmp_path / "run.html").read_text())
+                    if m["type"] == "set_animation"]
+    path = sim.station.robots["corobot"].sensors["bumpers"]["front_bumper"].extra[
+        "meshcat_path"]
+    keys = _track(animation, f"{path}/<object>", ".material.color")
+    rgb = [[c.r(), c.g(), c.b()] for c in (COLOR, PRESSED_COLOR)]
+    assert [k["value"] for k in keys] == rgb
+    # Drawn at the end of the step that took the sample of 0.1 s (the continuous plant's 10
+    # ms steps): in the frame of 0.11 s (64 frames a second), the black one frame before.
+    assert [k["time"] for k in keys] == [int(0.11 * RECORDING_FPS) - 1,
+                                         int(0.11 * RECORDING_FPS)]
 
 
 def test_the_summary_holds_the_last_sample(run):
