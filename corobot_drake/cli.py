@@ -587,7 +587,8 @@ def _run(args, scenario, duration: float, foxglove, ros2=None) -> int:
                 foxglove=foxglove, run_log_window=run_log_window(args), extras=extras,
                 started_with=started_with),
                 meshcat=not args.headless, duration=duration,
-                run_log_window=run_log_window(args), finish=lambda sim: _finish(sim, args),
+                run_log_window=run_log_window(args),
+                finish=lambda sim: _finish(sim, args, ros2.realtime_factor(sim)),
                 rate=args.rate, paused=args.paused)
         except (ValueError, RendererUnavailableError) as e:
             print(f"error: {args.scenario}: (top level): {e}", file=sys.stderr)
@@ -642,16 +643,17 @@ def simulated_line(end: float, start: float) -> str:
     return line + (f" (t = {start:.2f} to {end:.2f} s)" if start != 0 else "")
 
 
-def _finish(sim: Simulation, args) -> int:
+def _finish(sim: Simulation, args, paced: float | None = None) -> int:
     """The run's closing line and its outputs (`_write_results`), written whole even if a
-    stop signal comes meanwhile (it sets the exit status)."""
+    stop signal comes meanwhile (it sets the exit status). `paced`: a live run's measured
+    real-time factor (`Ros2Front.realtime_factor`), said instead of the compute time's."""
     import signal
 
     global _WRITING_OUTPUTS
     _WRITING_OUTPUTS, stopped_before = True, STOPPED_BY
     try:
         summary = sim.summary()
-        rate = summary["realtime_factor"]  # NaN when no step was taken
+        rate = summary["realtime_factor"] if paced is None else paced  # NaN: no step taken
         print(simulated_line(summary["time"], sim.scenario.simulator_config.start_time)
               + (f" at {rate:.1f}x real time" if math.isfinite(rate) else ""))
         status = _write_results(sim, args, summary)

@@ -57,6 +57,7 @@ class Ros2Front(contextlib.ExitStack):
         self.robots = robots
         self.node = None
         self.bag = None
+        self.runner = None
         sinks = []
         if args.rosbag is not None:
             from corobot_drake.ros2.bag import BagSink
@@ -87,9 +88,23 @@ class Ros2Front(contextlib.ExitStack):
 
     def attach(self, runner) -> None:
         """Joins the node to `runner` (before it starts) and starts it spinning."""
+        self.runner = runner
         self.node.attach(runner, self.robots)
         self.node.start()
         self.announce()
+
+    def realtime_factor(self, sim) -> float | None:
+        """In the simulation thread: the simulated over the wall-clock seconds the runner has
+        run `sim` (its pacing and pauses included: the rate the run went at, not the compute
+        time's `Simulation.realtime_factor`); None before it runs."""
+        import math
+        import time
+
+        runner = self.runner
+        if runner is None or not math.isfinite(runner.started_wall):
+            return None
+        wall = time.perf_counter() - runner.started_wall  # (the runner's clock)
+        return (sim.time - runner.started_sim) / wall if wall > 0 else None
 
     def announce(self) -> None:
         """The line that says where the node is (stderr: --serve's first stdout line is its

@@ -22,7 +22,14 @@ from rcl_interfaces.srv import DescribeParameters, GetParameters, SetParameters
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import Range
 
-from ros2_probe import ONE_GRAPH_AT_A_TIME, WAIT, Probe, private_network, ros2_simulation
+from ros2_probe import (
+    ONE_GRAPH_AT_A_TIME,
+    WAIT,
+    Probe,
+    private_domain,
+    private_network,
+    ros2_simulation,
+)
 
 pytestmark = ONE_GRAPH_AT_A_TIME
 
@@ -166,6 +173,22 @@ def test_a_bad_parameter_at_start_is_one_line_and_exit_2(parameter, line):
              "--ros-args", "-p", parameter], capture_output=True, text=True, timeout=120)
     assert run.returncode == 2
     assert run.stderr.strip().splitlines() == [f"error: --ros-args: {line}"]
+
+
+def test_a_live_runs_closing_line_says_the_rate_it_went_at():
+    """The closing line of a --ros2 run gives the measured rate (simulated over wall-clock s,
+    paced at 1x real time), not the compute time's factor (this quiet scene headless: ~9x)."""
+    import re
+
+    with private_domain():
+        run = subprocess.run(
+            [sys.executable, "-m", "corobot_drake", "--headless", "--override", QUIET,
+             "--ros2", "--duration", "1"], capture_output=True, text=True, timeout=120)
+    assert run.returncode == 0, run.stderr
+    line = run.stdout.strip().splitlines()[-1]
+    factor = re.fullmatch(r"simulated 1\.00 s at ([0-9.]+)x real time", line)
+    assert factor, line
+    assert 0.7 <= float(factor[1]) <= 1.05, line  # paced: at most a slip's worth off 1x
 
 
 def test_action_feedback_comes_every_tenth_of_a_simulated_second_at_any_rate():
