@@ -11,11 +11,18 @@ tf2_ros's listener for the TF display), and every topic as foxglove_bridge does 
 publishers' offer). The scenario is the RViz recipe's (scenarios/corobot_lidar.yaml) with an
 IMU and a bumper besides: a topic of every sensor kind. All in a private network
 (`ros2_probe`).
+
+The commands are docs/ros2.md's own, read from its blocks marked as run here: the ROS user's
+environment (what tools/setup makes, and the build run again from the clone), the node's
+command, the inspection tool's lines (run against the node once the client is done) and the
+RViz recipe's file.
 """
 
 import contextlib
 import json
 import os
+import re
+import shlex
 import signal
 import subprocess
 import sys
@@ -24,6 +31,7 @@ from functools import partial
 from pathlib import Path
 
 import pytest
+import yaml
 
 from conftest import REPO
 from ros2_probe import ONE_GRAPH_AT_A_TIME, private_domain
@@ -34,7 +42,9 @@ CLIENT = Path(__file__).with_name("ros2_user_client.py")
 SCENARIO = REPO / "scenarios" / "corobot_lidar.yaml"
 EVERY_KIND = "robots: {corobot: {imus: {imu: {}}, bumpers: {front_bumper: {}}}}"
 """The lidar scenario has IR sensors, a camera and a lidar: with these, every sensor kind."""
-RVIZ = REPO / "examples" / "corobot.rviz"
+PAGE = REPO / "docs" / "ros2.md"
+BLOCK = re.compile(r"^<!-- no-test: (?P<reason>[^\n]*) -->\n```sh\n(?P<body>.*?)^```$",
+                   re.MULTILINE | re.DOTALL)
 LIVE_ONLY = {"/diagnostics": "diagnostic_msgs/msg/DiagnosticArray"}
 """What the live node publishes beside the bus's topics (`ros2.node`: a bag has none)."""
 RCL_OWN = {"/rosout", "/parameter_events"}
@@ -88,6 +98,22 @@ PLAYING = {"name": "/set_simulation_state", "request": {"state": {"state": 1}}}
 """After the steps: the simulation plays again before it is reset."""
 
 
+def page_lines(*start: str) -> list[list[str]]:
+    """The command lines (argument lists) starting with `start` of docs/ros2.md's shell blocks
+    whose no-test comment names this test: the page's commands this test runs or reads."""
+    found = [shlex.split(line) for m in BLOCK.finditer(PAGE.read_text())
+             if "tests/service/test_ros2_user.py" in m["reason"]
+             for line in m["body"].splitlines() if line.strip()]
+    lines = [argv for argv in found if argv[:len(start)] == list(start)]
+    assert lines, f"docs/ros2.md has no block this test reads with a line `{shlex.join(start)}`"
+    return lines
+
+
+def page_line(*start: str) -> list[str]:
+    (line,) = page_lines(*start)
+    return line
+
+
 def ros_user_python() -> Path:
     """.venv-ros's Python, with the interface packages built; the test fails (never skips:
     CI runs tools/setup) when it is not there."""
@@ -99,9 +125,9 @@ def ros_user_python() -> Path:
 
     stale = [p for p in PACKAGES if not up_to_date(ROS_USER_ENV, p)]
     if stale:
+        build = shlex.join(page_line(f"{ROS_USER_ENV.name}/bin/python", "-m"))
         pytest.fail(f"{', '.join(stale)} not built in {ROS_USER_ENV} from the current sources: "
-                    f"run `{python} -m corobot_drake.ros2.build` in the clone (tools/setup "
-                    "does)", pytrace=False)
+                    f"run `{build}` in the clone (tools/setup does)", pytrace=False)
     return python
 
 
@@ -174,7 +200,8 @@ def report(tmp_path_factory) -> dict:
     """The client's JSON report of a run against the simulation."""
     pytest.importorskip("rosbags", reason="the [ros2] extra (tools/setup installs it)")
     python = ros_user_python()
-    plan = {"node": "corobot_drake", "topics": node_topics(), "rviz": str(RVIZ),
+    rviz = REPO / page_line("rviz2", "-d")[2]  # the RViz recipe's file
+    plan = {"node": "corobot_drake", "topics": node_topics(), "rviz": str(rviz),
             "cmd_vel": ["/cmd_vel", "geometry_msgs/msg/Twist"], "drive": DRIVE,
             "calls": calls(), "timeout": WAIT}
     work = tmp_path_factory.mktemp("ros2_user")
@@ -182,16 +209,43 @@ def report(tmp_path_factory) -> dict:
     with contextlib.ExitStack() as stack:
         domain = stack.enter_context(private_domain())
         log = work / "simulation.log"
-        sim = stack.enter_context(simulation([str(SCENARIO), "--headless", "--ros2",
-                                              "--override", EVERY_KIND, "--camera-rate", "10"],
-                                             log))
+        sim = stack.enter_context(simulation([*node_arguments(), "--override", EVERY_KIND,
+                                              "--camera-rate", "10"], log))
         client = subprocess.run([str(python), str(CLIENT), str(work / "plan.json")], cwd=work,
                                 env=ros_user_environment(domain), capture_output=True,
                                 text=True, timeout=HANG)
+        looked = inspection() if client.returncode == 0 else []
         assert sim.poll() is None, f"the simulation ended: {log.read_text()[-3000:]}"
     assert client.returncode == 0, client.stderr
     (work / "report.json").write_text(client.stdout)  # what a failure is read from
-    return {**json.loads(client.stdout), "plan": plan}
+    return {**json.loads(client.stdout), "plan": plan, "inspection": looked}
+
+
+def node_arguments() -> list[str]:
+    """The page's node command's arguments (`python -m corobot_drake ARGS`), its scenario
+    the one `node_topics` builds."""
+    args = page_line("python", "-m", "corobot_drake")[3:]
+    assert REPO / args[0] == SCENARIO and "--ros2" in args, args
+    return [str(SCENARIO), *args[1:]]
+
+
+def inspection() -> list[dict]:
+    """The page's `python -m corobot_drake.ros2 ...` lines, each a process of its own (this
+    Python: the project's) run at once against the node, bounded by `--timeout`."""
+    lines = page_lines("python", "-m", "corobot_drake.ros2")
+    processes = [subprocess.Popen([sys.executable, *argv[1:], "--timeout", "60"],
+                                  stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                 for argv in lines]
+    done = []
+    for argv, process in zip(lines, processes, strict=True):
+        try:
+            out, err = process.communicate(timeout=HANG)
+        except subprocess.TimeoutExpired:
+            process.kill()
+            out, err = process.communicate()
+        done.append({"command": argv[3], "returncode": process.returncode, "stdout": out,
+                     "stderr": err})
+    return done
 
 
 @ONE_GRAPH_AT_A_TIME
@@ -274,6 +328,46 @@ def test_every_service_answers_and_every_action_succeeds(report):
     entities = done["/get_entities"][0]["response"]["entities"]
     assert {"corobot", "crate"} <= set(entities)
     assert done["/spawn_entity"][0]["response"]["entity_name"] == "user_box"
+
+
+@ONE_GRAPH_AT_A_TIME
+def test_the_pages_inspection_commands_answer(report):
+    """docs/ros2.md's list, echo and hz lines, against the node the client drove."""
+    done = {run["command"]: run for run in report["inspection"]}
+    assert set(done) == {"list", "echo", "hz"}
+    for run in done.values():
+        assert run["returncode"] == 0, run
+    assert "  /odom [nav_msgs/msg/Odometry]" in done["list"]["stdout"]
+    assert "  /simulate_steps\n" in done["list"]["stdout"]
+    odom = yaml.safe_load(done["echo"]["stdout"].split("---")[0])
+    assert (odom["header"]["frame_id"], odom["child_frame_id"]) == ("odom", "base_link")
+    # the camera at the node's --camera-rate 10: its stamps 100 ms apart
+    assert done["hz"]["stdout"].splitlines()[-1].endswith(
+        "over 10 messages, stamps 100.0 ms apart at the closest")
+
+
+def test_the_pages_ros_user_environment_is_the_one_setup_makes():
+    """docs/ros2.md's venv, pip and build lines are tools/setup's: the same folder, the same
+    requirements file, the same build module run with that environment's Python."""
+    venv = page_line("python3", "-m", "venv")[3]
+    requirements = page_line(f"{venv}/bin/pip", "install", "-r")[3]
+    assert (REPO / venv, REPO / requirements) == (ROS_USER_ENV, REQUIREMENTS)
+    assert page_line(f"{venv}/bin/python", "-m")[2:] == ["corobot_drake.ros2.build"]
+    setup = (REPO / "tools" / "setup").read_text()
+    assert f"ROS_USER_ENV={venv}\n" in setup
+    assert f"local requirements={requirements}\n" in setup
+    assert '"$ROS_USER_ENV/bin/python" -m pip install -r "$requirements"' in setup
+    assert '"$ROS_USER_ENV/bin/python" -m corobot_drake.ros2.build' in setup
+
+
+def test_the_pages_build_command_runs_in_the_ros_users_environment():
+    """The page's build line, from the clone's root in a ROS user's shell: with the packages
+    built from these sources (`ros_user_python`), it finds nothing to build."""
+    ros_user_python()
+    build = page_line(f"{ROS_USER_ENV.name}/bin/python", "-m")
+    done = subprocess.run(build, cwd=REPO, env=ros_user_environment(0), capture_output=True,
+                          text=True, timeout=HANG)
+    assert (done.returncode, done.stdout, done.stderr) == (0, "", "")
 
 
 def test_the_ros_users_wheels_are_the_extras():
