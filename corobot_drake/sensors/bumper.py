@@ -176,9 +176,10 @@ def bumper_geometries(plant, scene_graph, body, name: str) -> tuple:
             find(plant.GetVisualGeometriesForBody(body)))
 
 
-def link_geometries(plant, body) -> frozenset:
-    """The collision GeometryIds of `body` (a `geometry: link` bumper's: its model's)."""
-    geometries = frozenset(plant.GetCollisionGeometriesForBody(body))
+def link_geometries(plant, body, ground) -> frozenset:
+    """The collision GeometryIds of `body` (a `geometry: link` bumper's: its model's) but the
+    `ground`'s."""
+    geometries = frozenset(plant.GetCollisionGeometriesForBody(body)) - frozenset(ground)
     if not geometries:
         raise ValueError(f"a bumper with geometry: link on {body.name()}: the link has no "
                          "collision geometry")
@@ -481,6 +482,15 @@ class BumperKind(SensorKind):
     def new_sensor(self, name: str) -> BumperConfig:
         return BumperConfig()
 
+    def check(self, config: BumperConfig) -> list[tuple[str, str]]:
+        """A `geometry: link` bumper is a link of its robot: not the world (whose geometry
+        is the ground and what is welded to it)."""
+        frame = config.X_PB.base_frame
+        if config.geometry == "link" and (not frame or frame == "world"):
+            return [("geometry", "link needs X_PB.base_frame to be a link of the robot; got "
+                                 f"{frame or 'none (the world)'}")]
+        return []
+
     def add_geometry(self, plant, model_instance, robot: str, name: str,
                      config: BumperConfig) -> None:
         add_bumper_geometry(plant, model_instance, name, config)
@@ -501,15 +511,15 @@ class BumperKind(SensorKind):
             return None
         plant, builder, robot = site.plant, site.builder, site.robot
         body, X_BS = mount_frame(plant, site.model_instance, config.X_PB)
+        ground = ground_geometries(plant, site.scene_graph)
         if config.geometry == "link":
-            geometries, extra = link_geometries(plant, body), {}
+            geometries, extra = link_geometries(plant, body, ground), {}
         else:
             collision, visual = bumper_geometries(plant, site.scene_graph, body, name)
             geometries = {collision}
             extra = {"meshcat_path": meshcat_path(site.scene_graph, visual)}
         sensor = builder.AddNamedSystem(f"{robot}.bumper.{name}", Bumper(
-            config, geometries, ground_geometries(plant, site.scene_graph), body.index(), X_BS,
-            site.continuous_step))
+            config, geometries, ground, body.index(), X_BS, site.continuous_step))
         builder.Connect(site.scene_graph.get_query_output_port(),
                         sensor.GetInputPort("query_object"))
         builder.Connect(plant.get_contact_results_output_port(),

@@ -26,7 +26,9 @@ from pydrake.systems.framework import DiagramBuilder
 from pydrake.visualization import ApplyVisualizationConfig
 
 from corobot_drake.config.poses import mount
+from corobot_drake.config.scenario import ScenarioError, load_scenario
 from corobot_drake.config.sensors import default_camera_config
+from corobot_drake.resources import DEFAULT_SCENARIO
 from corobot_drake.robots import robot_spec
 from corobot_drake.ros2.messages import Messages
 from corobot_drake.sensors.bumper import (
@@ -285,3 +287,15 @@ def test_meshcat_draws_the_pressed_bumper_red():
         assert meshcat.HasPath(sensor.extra["meshcat_path"])  # the box Drake's visualizer drew
     assert diagram.GetSubsystemByName("bot.bumper.top.meshcat").shown is True
     assert diagram.GetSubsystemByName("cart.bumper.bottom.meshcat").shown is None  # never
+
+
+@pytest.mark.parametrize(("bumper", "problem"), [
+    ("{geometry: wheel}", "geometry: 'wheel' is not one of box, link"),
+    ("{geometry: link, X_PB: {base_frame: world}}",
+     "geometry: link needs X_PB.base_frame to be a link of the robot; got world"),
+])
+def test_a_bad_geometry_is_one_line(bumper, problem):
+    with pytest.raises(ScenarioError) as e:
+        load_scenario(DEFAULT_SCENARIO,
+                      overrides=[f"robots: {{corobot: {{bumpers: {{b: {bumper}}}}}}}"])
+    assert str(e.value) == f"--override:1: robots.corobot.bumpers.b.{problem}"
