@@ -746,8 +746,10 @@ class SimulationServices:
               for uri, description in SPAWNABLE_MODELS.items()),
             *(Spawnable(entity_resource=Resource(uri=name), description=robot_description(
                 name, path)) for name, path in ROBOTS.items())]
-        response.result = result(message="" if not request.sources else
-                                 f"sources: not searched here: {', '.join(request.sources)}")
+        notes = [] if SPAWNABLE_MODELS else [NO_SHIPPED_MODELS]
+        if request.sources:
+            notes.append(f"sources: not searched here: {', '.join(request.sources)}")
+        response.result = result(message="; ".join(notes))
         return response
 
 
@@ -836,6 +838,14 @@ SPAWNABLE_MODELS: dict[str, str] = {}
 """Shipped model files that spawn (uri -> description): none yet. The maze's walls
 (`maze.sdf`) are rigid boxes with SDFormat's default 1 kg: free, they would sink through the
 ground (the loader refuses them); its scenario welds them."""
+
+
+NO_SHIPPED_MODELS = (
+    "no shipped model file is listed: the maze (models/maze.sdf) has walls of SDFormat's "
+    "default 1 kg, so it would spawn free, not as the fixed walls its scenario welds; spawn a "
+    "model file of your own by its uri (free, or fixed when none of its bodies has mass), or "
+    "a world body or robot listed here")
+"""GetSpawnables' message while `SPAWNABLE_MODELS` is empty."""
 
 
 def spawn_name(sim, name: str, allow_renaming: bool, default: str = "body") -> str:

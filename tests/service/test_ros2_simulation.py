@@ -744,6 +744,7 @@ def test_model_files_spawn_free_or_fixed(sim_ros, tmp_path):
         DeleteEntity,
         GetEntities,
         GetEntityInfo,
+        GetSpawnables,
         SpawnEntity,
         StepSimulation,
     )
@@ -776,6 +777,10 @@ def test_model_files_spawn_free_or_fixed(sim_ros, tmp_path):
     assert "wall::slab" in entities and "crate::body" not in entities
     _call(probe, "step_simulation", StepSimulation, steps=10)
     assert _pose(probe, "wall::slab")[1][:3] == pytest.approx((20.0, 1.0, 0.25), abs=1e-12)
+    # GetSpawnables lists no shipped model file, and says why
+    listed = _call(probe, "get_spawnables", GetSpawnables, retry=10.0)
+    assert not [s for s in listed.spawnables if s.entity_resource.uri.endswith(".sdf")]
+    assert listed.result.error_message.startswith("no shipped model file is listed: the maze")
 
 
 @ONE_GRAPH_AT_A_TIME
