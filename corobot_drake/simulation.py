@@ -63,14 +63,16 @@ the time never moved and `run` never ended)."""
 _log = logging.getLogger(__name__)
 
 
-class Robot(RobotCommands, RobotDrive, RobotTelemetry, RobotSensors, IrSensors, Cameras):
+class Robot(RobotCommands, RobotDrive, RobotTelemetry, RobotSensors):
     """One robot of a running simulation: its commands and measurements. A view: it keeps
     its Simulation alive and holds nothing of its own (`Simulation.robots` makes them).
 
     Its core is here (its Simulation, its station parts, its `spec`); each part's accessors
     come from `robot_api`: the commands (`RobotCommands`), the drive and motion
-    (`RobotDrive`), the monitors and run log (`RobotTelemetry`), the sensors of every kind
-    (`RobotSensors`) and the IR sensors' and cameras' own (`IrSensors`, `Cameras`)."""
+    (`RobotDrive`), the monitors and run log (`RobotTelemetry`) and the sensors of every
+    kind (`RobotSensors`). A robot with IR sensors also has their own accessors
+    (`IrSensors`: `ir`, `ir_distances`), one with a camera the cameras' (`Cameras`:
+    `camera_image`, ...); one without them has none of those (`robot_type`)."""
 
     def __init__(self, sim: "Simulation", parts: RobotParts):
         self._sim = sim
@@ -84,6 +86,19 @@ class Robot(RobotCommands, RobotDrive, RobotTelemetry, RobotSensors, IrSensors, 
 
     def _plant_context(self):
         return self._sim.station.plant.GetMyContextFromRoot(self._sim.context)
+
+
+@functools.cache
+def _robot_type(ir: bool, cameras: bool) -> type:
+    parts = (*((IrSensors,) if ir else ()), *((Cameras,) if cameras else ()))
+    return type("Robot", (Robot, *parts), {"__doc__": Robot.__doc__,
+                                           "__module__": Robot.__module__}) if parts else Robot
+
+
+def robot_type(parts: RobotParts) -> type:
+    """The class of the `Robot` of a robot with these parts: `Robot` with the IR sensors'
+    accessors if it has IR sensors and the cameras' if it has a camera (turned on)."""
+    return _robot_type(bool(parts.ir_sensors), bool(parts.cameras))
 
 
 def _teleport_monitor(sources, root_context) -> EventStatus:
@@ -266,7 +281,8 @@ class Simulation:
         last reference goes, in that thread, not by the cycle collector in whichever thread
         runs it next (its renderers' GL contexts must not be torn down beside another
         thread's)."""
-        return {name: Robot(self, parts) for name, parts in self.station.robots.items()}
+        return {name: robot_type(parts)(self, parts)
+                for name, parts in self.station.robots.items()}
 
     def robot(self, name: str | None = None) -> Robot:
         """The named robot; without a name, the only one."""

@@ -1,6 +1,7 @@
-"""A robot's sensors: every kind's readings by name (`RobotSensors`), and the kinds' own
-accessors (`IrSensors`, `Cameras`); `Robot` has all three. A robot without a kind's sensors
-has none of its names (`ir_names`, `camera_names` are empty).
+"""A robot's sensors: every kind's readings by name (`RobotSensors`, every `Robot`'s), and the
+IR sensors' and cameras' own accessors (`IrSensors`, `Cameras`), which only a robot with such a
+part has (`simulation.robot_type`). A robot without a kind's sensors has none of its names
+(`ir_names`, `camera_names` are empty).
 """
 
 
@@ -21,17 +22,55 @@ class RobotSensors:
         return {kind.field: {name: kind for name in self._parts.sensors.get(kind.field, {})}
                 for kind in KINDS}
 
+    @property
+    def ir_names(self) -> tuple[str, ...]:
+        """The IR sensors' names (`front`, `rear`, ...), in the scenario's order."""
+        return tuple(self._parts.ir_sensors)
+
+    def ir_distances(self) -> dict[str, float]:
+        """The latest raw reading of every IR sensor, metres, by name ({} without any: the
+        `ir_distances` signal of every robot)."""
+        context = self._sim.context
+        return {name: sensor.reading(sensor.GetMyContextFromRoot(context)).raw
+                for name, sensor in self._parts.ir_sensors.items()}
+
+    @property
+    def camera_names(self) -> tuple[str, ...]:
+        """The cameras' names (`front`, ...), in the scenario's order; those turned off
+        (`rgb: false`) left out."""
+        return tuple(self._parts.cameras)
+
+    @property
+    def has_camera(self) -> bool:
+        """Whether the robot has its front camera (`config.sensors.FRONT_CAMERA`), the one
+        `camera_image()` reads without a name."""
+        return FRONT_CAMERA in self._parts.cameras
+
+    def camera_frames_saved(self) -> int:
+        """How many frames the robot's cameras wrote as PNG (0 unless saving,
+        `--save-camera`)."""
+        return sum(c.saver.frames_saved for c in self._parts.cameras.values()
+                   if c.saver is not None)
+
+    def camera_save_problems(self) -> list[str]:
+        """One line for each of the robot's cameras whose frames could not all be written
+        where asked (a full disk): the file, why, and where they went instead
+        (`CameraFrameSaver.problem`); the run goes on either way."""
+        return [problem for c in self._parts.cameras.values()
+                if c.saver is not None and (problem := c.saver.problem()) is not None]
+
     def _sensor(self, name: str, kind: str | None = None) -> BuiltSensor:
-        """The sensor `name` (of the kind whose field or topic stem is `kind`, needed when
-        sensors of several kinds share the name); KeyError naming those the robot has."""
-        found = [s for field, sensors in self._parts.sensors.items() for n, s in sensors.items()
-                 if n == name and kind in (None, field, s.kind.topic)]
-        if len(found) == 1:
-            return found[0]
+        """The sensor `name` (of the kind whose field or topic stem is `kind`; without it, a
+        name sensors of several kinds share is the first kind's in `KINDS`' order: the
+        Corobot's `front` is its IR sensor, `kind="cameras"` its camera); KeyError naming
+        those the robot has."""
+        order = {k.field: i for i, k in enumerate(KINDS)}
+        found = sorted((s for field, sensors in self._parts.sensors.items()
+                        for n, s in sensors.items()
+                        if n == name and kind in (None, field, s.kind.topic)),
+                       key=lambda s: order.get(s.kind.field, len(order)))
         if found:
-            raise KeyError(f"robot {self.name!r} has sensors {name!r} of several kinds ("
-                           f"{', '.join(s.kind.field for s in found)}); say which: "
-                           f"reading({name!r}, kind={found[0].kind.field!r})")
+            return found[0]
         have = [f"{field}.{n}" for field, sensors in self._parts.sensors.items() for n in sensors]
         raise KeyError(f"robot {self.name!r} has no sensor {name!r}"
                        + (f" of kind {kind!r}" if kind else "")
@@ -41,8 +80,10 @@ class RobotSensors:
         """The latest reading of the sensor `name`, of any kind: its kind's reading type
         (`IrReading`, `CameraImage`, ...; the kind's module states its units and frame).
         `kind` (a kind's field, e.g. `cameras`, or topic stem, `camera`) picks among sensors
-        of several kinds that share the name (the Corobot's IR sensor and camera are both
-        `front`). KeyError naming the robot's sensors for one it lacks."""
+        of several kinds that share the name; without it, the first kind's in the registry's
+        order (`sensors.registry.KINDS`: IR sensors first, so the Corobot's `front`, which
+        its IR sensor and its camera share, is the IR sensor's). KeyError naming the robot's
+        sensors for one it lacks."""
         return self._sensor(name, kind).read(self._sim.context)
 
     def sensor_json(self, name: str, kind: str | None = None) -> dict:
@@ -61,7 +102,8 @@ class RobotSensors:
 
 
 class IrSensors:
-    """The IR sensors' own accessors (distances by sensor name)."""
+    """The IR sensors' own accessors (distances by sensor name): a robot with IR sensors
+    has them (`Simulation.robots`), one without has none of them."""
 
     def ir(self, name: str) -> IrReading:
         """The latest scan of the named IR sensor (`front`, `rear`, ...): raw distance (m),
@@ -78,30 +120,10 @@ class IrSensors:
         `change_threshold`)."""
         return self._parts.ir_sensors[name].change_threshold
 
-    @property
-    def ir_names(self) -> tuple[str, ...]:
-        """The IR sensors' names (`front`, `rear`, ...), in the scenario's order."""
-        return tuple(self._parts.ir_sensors)
-
-    def ir_distances(self) -> dict[str, float]:
-        """The latest raw reading of every IR sensor, metres, by name."""
-        return {name: self.ir(name).raw for name in self._parts.ir_sensors}
-
 
 class Cameras:
-    """The cameras' own accessors (images by camera name)."""
-
-    @property
-    def camera_names(self) -> tuple[str, ...]:
-        """The cameras' names (`front`, ...), in the scenario's order; those turned off
-        (`rgb: false`) left out."""
-        return tuple(self._parts.cameras)
-
-    @property
-    def has_camera(self) -> bool:
-        """Whether the robot has its front camera (`config.sensors.FRONT_CAMERA`), the one
-        `camera_image()` reads without a name."""
-        return FRONT_CAMERA in self._parts.cameras
+    """The cameras' own accessors (images by camera name): a robot with a camera has them
+    (`Simulation.robots`), one without has none of them."""
 
     def _camera(self, name: str | None):
         name = FRONT_CAMERA if name is None else name
@@ -130,16 +152,3 @@ class Cameras:
         camera = self._camera(name)
         return float(camera.image_time.Eval(
             camera.system.GetMyContextFromRoot(self._sim.context))[0])
-
-    def camera_frames_saved(self) -> int:
-        """How many frames the robot's cameras wrote as PNG (0 unless saving,
-        `--save-camera`)."""
-        return sum(c.saver.frames_saved for c in self._parts.cameras.values()
-                   if c.saver is not None)
-
-    def camera_save_problems(self) -> list[str]:
-        """One line for each of the robot's cameras whose frames could not all be written
-        where asked (a full disk): the file, why, and where they went instead
-        (`CameraFrameSaver.problem`); the run goes on either way."""
-        return [problem for c in self._parts.cameras.values()
-                if c.saver is not None and (problem := c.saver.problem()) is not None]

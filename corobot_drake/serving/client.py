@@ -311,12 +311,12 @@ class RemoteRobot:
 
     def sensor_json(self, name: str, kind: str | None = None) -> dict:
         """The latest reading of the sensor `name` as JSON, as `Robot.sensor_json` gives it
-        (`kind`, a kind's field, picks among sensors of several kinds sharing the name)."""
-        if kind is None:
+        (`kind`, a kind's field, picks among sensors of several kinds sharing the name; without
+        it, the first kind's in the registry's order, IR sensors first)."""
+        if kind is None:  # the first kind's in the registry's order, as Robot.sensor_json
             kinds = [k for k, named in self.sensor_readings().items() if name in named]
-            if len(kinds) != 1:
-                raise KeyError(f"robot {self.name!r} has {len(kinds) or 'no'} sensors {name!r}"
-                               + (f" ({', '.join(kinds)}); say which kind" if kinds else ""))
+            if not kinds:
+                raise KeyError(f"robot {self.name!r} has no sensor {name!r}")
             kind = kinds[0]
         return self._client._get(f"{self._base}/sensors/{kind}/{name}")
 
