@@ -21,8 +21,11 @@ from pydrake.multibody.tree import SpatialInertia
 from pydrake.systems.framework import DiagramBuilder
 
 from corobot_drake.config.poses import mount
-from corobot_drake.sensors.lidar import Lidar, LidarConfig
+from corobot_drake.config.scenario import load_scenario
+from corobot_drake.resources import DEFAULT_SCENARIO
+from corobot_drake.sensors.lidar import POSE, Lidar, LidarConfig
 from corobot_drake.sensors.raycast import RayCaster, RayFan, model_instance_geometry_ids
+from corobot_drake.simulation import Simulation
 
 EXACT = 1e-9
 """m: a ray's closed-form intersection in doubles, a few ulps of metres."""
@@ -44,20 +47,24 @@ OCTAGON = [(1.0 + 0.5 * math.cos(k * math.pi / 4), 0.5 * math.sin(k * math.pi / 
 OCTAGON_CAPS = [(0, k, k + 1) for k in range(1, 7)]
 
 
-def prism_obj(path, outline, caps, height: float = 1.0, inward: bool = False) -> str:
+def prism_obj(path, outline, caps, height: float = 1.0) -> str:
     """Writes the closed prism over a CCW floor plan `outline` (z from 0 to height), its caps
-    triangulated as `caps`, to `path`; faces outward, or into the outline (a room's walls seen
-    from inside, `inward`). Returns the path."""
+    triangulated as `caps`, to `path`, faces counter-clockwise from outside, a normal each (the
+    loader's cameras need them). Returns the path."""
     n = len(outline)
-    lines = [f"v {x!r} {y!r} {z!r}" for z in (0.0, height) for x, y in outline]
+    vertices = np.array([(x, y, z) for z in (0.0, height) for x, y in outline])
     faces = []
     for i in range(n):  # the walls: bottom i, i+1 and top i+1, i
         j = (i + 1) % n
         faces += [(i, j, n + j), (i, n + j, n + i)]
     faces += [(a, c, b) for a, b, c in caps] + [(n + a, n + b, n + c) for a, b, c in caps]
-    if inward:
-        faces = [(a, c, b) for a, b, c in faces]
-    lines += [f"f {a + 1} {b + 1} {c + 1}" for a, b, c in faces]
+    f = np.array(faces)
+    normals = np.cross(vertices[f[:, 1]] - vertices[f[:, 0]], vertices[f[:, 2]] - vertices[f[:, 0]])
+    normals /= np.linalg.norm(normals, axis=1)[:, None]
+    lines = [f"v {x!r} {y!r} {z!r}" for x, y, z in vertices.tolist()]
+    lines += [f"vn {x!r} {y!r} {z!r}" for x, y, z in normals.tolist()]
+    lines += [f"f {a + 1}//{k} {b + 1}//{k} {c + 1}//{k}"
+              for k, (a, b, c) in enumerate(faces, start=1)]
     path.write_text("\n".join(lines) + "\n")
     return str(path)
 
@@ -261,3 +268,21 @@ def test_the_ir_fan_still_reads_a_concave_surface_mesh_as_its_hull(tmp_path):
     planar = caster.cast_plane(query, np.array(origin), np.array([[1.0, 0.0, 0.0]]), 6.0,
                                np.array([0.0, 0.0, 1.0]))
     assert planar[0] == pytest.approx(2.5, abs=EXACT)
+
+
+def test_a_scenario_s_collision_mesh_u_reads_its_back_wall_end_to_end(tmp_path):
+    """Through the loader and the station: the default scene (the Corobot at the origin facing
+    +x) with the U as a fixed world body `!Mesh {collision: mesh}` ahead and a lidar on top:
+    the ray straight ahead reads the back wall, 2.5 m from the lidar's axis."""
+    u = prism_obj(tmp_path / "u.obj", U_OUTLINE, U_CAPS)
+    sim = Simulation(load_scenario(DEFAULT_SCENARIO, overrides=[
+        "robots: {corobot: {cameras: {front: {rgb: false}}, lidars: {top: {}}}}",
+        f"world: {{bodies: {{u: {{shape: !Mesh {{filename: {u}, collision: mesh}}, "
+        "fixed: true, hydroelastic_modulus: 0}}}"]))
+    lidar = sim.station.robots["corobot"].sensors["lidars"]["top"].system
+    reading = lidar.GetOutputPort("reading").Eval(lidar.GetMyContextFromRoot(sim.context))
+    X_WS = np.asarray(lidar.GetOutputPort("scan_state").Eval(
+        lidar.GetMyContextFromRoot(sim.context))[POSE]).reshape(3, 4)
+    ahead = int(np.argmin(np.abs(reading.bearings())))
+    assert abs(X_WS[1, 3]) < 1e-3 and X_WS[0, 0] > 1 - 1e-6  # at y = 0, facing +x
+    assert reading.ranges[ahead] == pytest.approx(2.5 - X_WS[0, 3], abs=1e-6)
