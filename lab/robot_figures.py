@@ -5,9 +5,10 @@ scenario's world bodies and directives left out, the robot's sensors off) from i
   study's `steady_speed`), against the robot file's top speed (axle speed at power 1 x radius);
 - spin rate: power -1 left, +1 right, the mean yaw rate over the last second, at CENIC steps 1, 2, 5
   and 10 ms, against the analytic rates: the wheels' speed difference over the track,
-  2 u / track (rolling without slip), and a skid steer's b u / (a^2 + b^2) (every wheel
-  slipping as isotropic friction has it; half wheelbase a, half track b; the same as the
-  first for a differential drive, a = 0);
+  2 u / track (rolling without slip), and a skid steer's `spec.spin_yaw_per_rim_speed` u
+  (every wheel slipping as isotropic friction has it, from each wheel's lever arm: b u /
+  (a^2 + b^2) for four wheels at half wheelbase a, half track b; the same as the first for
+  a differential drive, a = 0);
 - DriveDistance 1 m and RotateDegrees 90 deg at power 0.5 and 1, in both motion profiles: the
   landing error 1 s after the command ends (the robot at rest), as `lab.landing` measures it;
 - the physics-only real-time factor (`realtime_factor`): lab.bench's figure of eight, 8 s,

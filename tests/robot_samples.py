@@ -43,3 +43,39 @@ def two_wheel_robot(tmp_path, yaml: str = "", radius=0.033, z=0.033,
         drive: {top_speed: 0.22}
         """))
     return path
+
+
+SIX_WHEELS = """<?xml version="1.0"?>
+<robot name="sixwheel">
+  <link name="base_link">
+    <inertial><origin xyz="0 0 0.08"/><mass value="4.0"/>
+      <inertia ixx="0.03" iyy="0.05" izz="0.06" ixy="0" ixz="0" iyz="0"/></inertial>
+    <collision><origin xyz="0 0 0.11"/><geometry><box size="0.36 0.18 0.08"/></geometry></collision>
+  </link>
+  {wheels}
+</robot>
+"""
+SIX_WHEEL_XS = (0.13, 0.0, -0.13)
+"""m: each side's wheels along the robot, front to back (a third axle at the middle)."""
+SIX_WHEEL_Y = 0.14
+"""m: the wheels' centres either side (a track of 28 cm)."""
+
+
+def six_wheel_robot(tmp_path):
+    """A robot file and URDF model in `tmp_path`: a 4.3 kg skid steer with three 5 cm wheels
+    a side, equally spaced (`SIX_WHEEL_XS`), its mass centred over the middle axle."""
+    wheels = "".join(
+        WHEEL.format(side=f"{name}_{side}", y=y, z=0.05, type="continuous",
+                     shape=CYL.format(r=0.05)).replace('<origin xyz="0 ', f'<origin xyz="{x} ')
+        for side, y in (("left", SIX_WHEEL_Y), ("right", -SIX_WHEEL_Y))
+        for name, x in zip(("front", "middle", "rear"), SIX_WHEEL_XS, strict=True))
+    (tmp_path / "sixwheel.urdf").write_text(SIX_WHEELS.format(wheels=wheels))
+    path = tmp_path / "robot.yaml"
+    path.write_text(textwrap.dedent("""\
+        model: sixwheel.urdf
+        base: base_link
+        wheels: {left: [front_left_joint, middle_left_joint, rear_left_joint],
+                 right: [front_right_joint, middle_right_joint, rear_right_joint]}
+        drive: {top_speed: 0.5}
+        """))
+    return path

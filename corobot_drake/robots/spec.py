@@ -144,12 +144,23 @@ class RobotSpec:
 
     @property
     def spin_yaw_per_rim_speed(self) -> float:
-        """rad/s of yaw per m/s of rim speed (left back, right forward) on the spot: a skid
-        steer's wheels slip sideways as much as lengthways, so the yaw rate is
-        b / (a^2 + b^2) of its half track b and half wheelbase a (a = 0: differential
-        drive, 1 / b)."""
+        """rad/s of yaw per m/s of rim speed (left back, right forward) on the spot, every
+        wheel slipping on isotropic Coulomb friction under an equal load (`spin_yaw_rate`).
+        Wheels all at +-a along and +-b across (the Corobot's, the Pioneer's four; a = 0: a
+        differential drive) give b / (a^2 + b^2), computed so."""
         a, b = self.wheelbase / 2, self.track / 2
-        return b / (a**2 + b**2)
+        if all(math.isclose(abs(x), a, rel_tol=1e-9, abs_tol=1e-12)
+               and math.isclose(abs(y), b, rel_tol=1e-9) for x, y in self._lever_arms()):
+            return b / (a**2 + b**2)
+        return spin_yaw_rate(self._lever_arms(), self.sides)
+
+    def _lever_arms(self) -> list[tuple[float, float]]:
+        """m: each wheel's contact point (x, y) from the wheels' centre (the mean x; midway
+        between the sides' mean y), about which a symmetric robot spins."""
+        x0 = math.fsum(w.center[0] for w in self.wheels) / len(self.wheels)
+        y0 = 0.5 * sum(math.fsum(w.center[1] for w in self.wheels if w.side == side)
+                       / sum(w.side == side for w in self.wheels) for side in (LEFT, RIGHT))
+        return [(w.center[0] - x0, w.center[1] - y0) for w in self.wheels]
 
     def top_speed(self) -> float:
         """m/s of the rims at power 1."""
@@ -157,6 +168,37 @@ class RobotSpec:
 
     def wheel_center(self, index: int) -> tuple[float, float, float]:
         return self.wheels[index].center
+
+
+def spin_yaw_rate(arms, sides) -> float:
+    """rad/s of yaw per m/s of rim speed of a robot spinning on the spot, its wheels at
+    `arms` ((x, y), m, from the point it turns about) on `sides` (LEFT, RIGHT) each slipping
+    on isotropic Coulomb friction under one load N.
+
+    Rims at -u (left) and +u (right) and a yaw rate w = k u: wheel i's contact point slides
+    at s_i = u (-k y_i - r_i, k x_i) (r_i = +1 right, -1 left), so the ground pushes it with
+    mu N along -s_i / |s_i|, whose moment about the turning point is
+    mu N (-k (x_i^2 + y_i^2) - r_i y_i) / |s_i / u|. The spin is steady where the moments sum
+    to nothing. That sum is minus the derivative in k of the friction's power, mu N sum |s_i|,
+    which is convex in k: one root, between the smallest and the largest of the wheels' own
+    k_i = -r_i y_i / (x_i^2 + y_i^2), found by bisection. Four wheels at +-a, +-b (each |s_i|
+    alike): b / (a^2 + b^2); two wheels on the axle (x = 0): 1 / b. Wheels also at the middle
+    (x = 0) drag the turn back toward 1 / b: three a side, equally spaced, spin faster than
+    b / (a^2 + b^2) of their RMS half wheelbase a."""
+    arms = [(float(x), float(y), -float(side)) for (x, y), side in zip(arms, sides, strict=True)]
+    own = [-r * y / (x * x + y * y) for x, y, r in arms if x or y]
+    low, high = min(own), max(own)
+
+    def moment(k: float) -> float:  # a wheel on the axle not sliding (0 / 0) pushes nothing
+        return math.fsum((-k * (x * x + y * y) - r * y) / (math.hypot(k * y + r, k * x) or 1.0)
+                         for x, y, r in arms)
+
+    for _ in range(200):  # to the last bit of a double, at most ~60 halvings
+        middle = 0.5 * (low + high)
+        if not low < middle < high:
+            break
+        low, high = (middle, high) if moment(middle) > 0 else (low, middle)
+    return 0.5 * (low + high)
 
 
 def default_contact(radius: float, mass: float, wheels: int, tyres, drive) -> WheelContact:
