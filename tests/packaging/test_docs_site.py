@@ -203,7 +203,9 @@ def test_the_python_reference_documents_the_api(site):
              "corobot_drake.recording.mcap_log.McapLog", "corobot_drake.robots.robot_spec",
              "corobot_drake.robots.spec.RobotSpec", "corobot_drake.robots.file.RobotFile",
              "corobot_drake.sensors.kind.SensorKind", "corobot_drake.sensors.kind.BuiltSensor",
-             "corobot_drake.sensors.registry.KINDS"]
+             "corobot_drake.sensors.registry.KINDS",
+             "corobot_drake.robot_api.sensors.IrSensors.ir",
+             "corobot_drake.robot_api.sensors.Cameras.camera_image"]
     import corobot_drake.robots.file as robot_file
 
     names += [f"corobot_drake.robots.file.RobotFile.{f.name}"
