@@ -5,7 +5,8 @@ and a frame of its own added before the plant is finalized) appended to
 `sensors.registry.KINDS` before the scenario is imported, as one line in registry.py adds a
 kind; then what every front end of one short run makes of it, printed as JSON: the scenario's
 schema and loader (good and bad input), the station's plant, the Python `Robot`, the HTTP
-routes, the dashboard's snapshot and the summary, and the wires: the MCAP file (as live
+routes, the dashboard's snapshot and the summary, a study's `sensors` metric, Meshcat's
+drawing, and the wires: the MCAP file (as live
 Foxglove gets it) and the ROS 2 bag (as the live node's topics), read back.
 
 Nothing here touches a front end: they find the kind through the registry alone.
@@ -21,6 +22,7 @@ from pathlib import Path
 
 from pydrake.common.schema import Transform
 from pydrake.common.value import Value
+from pydrake.geometry import Meshcat
 from pydrake.math import RigidTransform
 from pydrake.multibody.tree import FixedOffsetFrame
 from pydrake.systems.framework import LeafSystem
@@ -126,6 +128,13 @@ class LightSensorKind(SensorKind):
         plant.AddFrame(FixedOffsetFrame(f"light_{name}", parent,
                                         RigidTransform(config.X_PB.translation)))
 
+    def add_meshcat(self, builder, meshcat, sensor: BuiltSensor) -> None:
+        """A small yellow sphere at the sensor, drawn once (a toy's drawing)."""
+        from pydrake.geometry import Rgba, Sphere
+
+        meshcat.SetObject(f"/light/{sensor.robot}/{sensor.name}", Sphere(0.02),
+                          Rgba(1.0, 0.9, 0.2, 1.0))
+
     def add(self, site, name: str, config: LightSensorConfig) -> BuiltSensor | None:
         if not config.enabled:
             return None
@@ -149,6 +158,7 @@ from corobot_drake.ros2.publishers import add_ros2_topics  # noqa: E402
 from corobot_drake.serving import snapshots  # noqa: E402
 from corobot_drake.serving.webapp import create_app  # noqa: E402
 from corobot_drake.simulation import Simulation, quiet_drake_warnings  # noqa: E402
+from corobot_drake.study.metrics import measure  # noqa: E402
 
 BAD = {
     "inverted": "{top: {low: 50, high: 5}}",
@@ -257,6 +267,12 @@ def main() -> None:
     http = TestClient(create_app(StepRunner(sim)), base_url="http://127.0.0.1")
     out["http"] = http.get("/robots/corobot/sensors/light_sensors/top").json()
     out["http_all"] = http.get("/robots/corobot/sensors").json()["light_sensors"]
+    start = (robot.pose(), 0.0)
+    out["study"] = {column: value for column, value in
+                    measure(sim, {"corobot": start}, ["sensors"]).items() if "light" in column}
+    meshcat = Meshcat()
+    Simulation(scenario, meshcat)
+    out["meshcat"] = {name: meshcat.HasPath(f"/light/corobot/{name}") for name in ("top", "side")}
     json.dump(out, sys.stdout)
 
 

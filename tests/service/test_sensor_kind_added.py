@@ -92,3 +92,14 @@ def test_the_added_kinds_readings_are_on_its_topics_in_the_mcap_and_the_ros2_bag
             parent, xyz = added[wire][tf][f"light_{name}"]
             assert parent == "base_link"
             assert xyz == pytest.approx([0.05, 0.0, 0.3], abs=1e-12), (wire, name)
+
+
+def test_a_studys_sensors_metric_and_meshcat_carry_the_added_kind(added):
+    """A study's `sensors` metric has a column per number of each light sensor's summary JSON
+    (the sample at 0.2 s), and Meshcat shows the kind's drawing of each sensor."""
+    assert added["study"] == {
+        "corobot.sensors.light_sensors.top.illuminance": added["expected"]["illuminance"],
+        "corobot.sensors.light_sensors.top.time": 0.2,
+        "corobot.sensors.light_sensors.side.illuminance": added["expected"]["illuminance"],
+        "corobot.sensors.light_sensors.side.time": 0.2}
+    assert added["meshcat"] == {"top": True, "side": True}
