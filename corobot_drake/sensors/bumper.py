@@ -36,8 +36,8 @@ subscriber that joins late (or a bag read from the middle) has it within one sam
 transient-local QoS, and an edge is two consecutive messages that differ.
 
 Meshcat: the bumper's visual box turns red while pressed, in the live page and the `--record`
-replay (`BumperMeshcat`); a `geometry: link` bumper has no box of its own to colour and draws
-nothing.
+replay (`BumperMeshcat`); a `geometry: link` bumper, with no box of its own to colour, shows a
+translucent red shell of its link's collision shapes while pressed (`draw_shell`).
 """
 
 import dataclasses as dc
@@ -62,6 +62,7 @@ from pydrake.systems.framework import EventStatus, LeafSystem
 from corobot_drake.config.poses import mount, mount_frame
 from corobot_drake.limits import RATE, OneOf, Range, bounded
 from corobot_drake.robots import robot_spec
+from corobot_drake.sensors.follow import FollowFrame
 from corobot_drake.sensors.kind import BuiltSensor, SensorKind
 from corobot_drake.sensors.ticks import tick_in_step
 from corobot_drake.topics import nanoseconds
@@ -394,8 +395,27 @@ def meshcat_path(scene_graph, visual) -> str:
                      inspector.GetName(visual).replace("::", "/")))
 
 
+SHELL_COLOR = Rgba(0.9, 0.1, 0.1, 0.5)
+"""The look of a `geometry: link` bumper's shell in Meshcat while pressed (translucent red)."""
+
+
+def draw_shell(meshcat, path: str, scene_graph, geometries) -> None:
+    """A `geometry: link` bumper's shell under `path`: a copy of each of its link's collision
+    shapes (`geometries`) in `SHELL_COLOR`, in the link's frame (`path` follows the link),
+    hidden until pressed. A shape Meshcat cannot draw is left out."""
+    inspector = scene_graph.model_inspector()
+    for k, gid in enumerate(sorted(geometries, key=lambda g: g.get_value())):
+        try:
+            meshcat.SetObject(f"{path}/{k}", inspector.GetShape(gid), SHELL_COLOR)
+        except RuntimeError:  # e.g. a half-space: nothing to outline
+            continue
+        meshcat.SetTransform(f"{path}/{k}", inspector.GetPoseInFrame(gid))
+    meshcat.SetProperty(path, "visible", False)
+
+
 class BumperMeshcat(LeafSystem):
-    """Colours the bumper's box in Meshcat: red while pressed, black rubber otherwise.
+    """Shows a press in Meshcat: the bumper's box red while pressed, black rubber otherwise;
+    a `geometry: link` bumper's shell (`draw_shell`) shown while pressed, hidden otherwise.
 
     .. pydrake_system::
 
@@ -404,24 +424,26 @@ class BumperMeshcat(LeafSystem):
         - pressed
 
     Its input is a Bumper's `pressed`. At the end of every step it sets the colour of `path`
-    (the box as Drake's visualizer draws it, `meshcat_path`) when `pressed` has changed since
-    it last set it: one Meshcat message per press and per release. (Not at initialization:
-    Drake's visualizer sends its objects then, and would put the box's own colour back.)
+    (the box as Drake's visualizer draws it, `meshcat_path`), or with `shell` whether `path`
+    (the shell) is visible, when `pressed` has changed since it last set it: one Meshcat
+    message per press and per release. (Not at initialization: Drake's visualizer sends its
+    objects then, and would put the box's own colour back.)
 
     Each change is also keyed in Meshcat's recording at the simulation time, so that the
     `--record` replay (`recording.meshcat_html`) shows the presses: as the slip markers',
     the keys are `material.color` of the box's `<object>` (three.js animates a property of
-    the object itself; a "color" track names one the scene node lacks), two a change: the
-    colour before it one frame earlier, and the new one (a track interpolates between its
-    keys: without the first, the box would fade from one press to the next release). With no
-    recording going, the keys go to an animation nobody publishes and the next
-    `StartRecording` drops.
+    the object itself; a "color" track names one the scene node lacks; a shell's are its
+    `visible`), two a change: the look before it one frame earlier, and the new one (a track
+    interpolates between its keys: without the first, the box would fade from one press to
+    the next release). With no recording going, the keys go to an animation nobody publishes
+    and the next `StartRecording` drops.
     """
 
-    def __init__(self, meshcat, path: str):
+    def __init__(self, meshcat, path: str, shell: bool = False):
         super().__init__()
         self._meshcat = meshcat
         self.path = path
+        self.shell = shell
         self._pressed = self.DeclareVectorInputPort("pressed", 1)
         self.shown = None
         """Whether the box was last coloured pressed (None: not yet; for tests)."""
@@ -431,16 +453,23 @@ class BumperMeshcat(LeafSystem):
         pressed = bool(self._pressed.Eval(context)[0] > 0.5)
         if pressed == self.shown or (self.shown is None and not pressed):
             return
-        c = PRESSED_COLOR if pressed else COLOR
-        self._meshcat.SetProperty(self.path, "color", [c.r(), c.g(), c.b(), c.a()])
+        live, value, target, recorded, keyed = self.looks(pressed)
+        self._meshcat.SetProperty(self.path, live, value)
         animation = self._meshcat.get_mutable_recording()
-        frame, target = animation.frame(context.get_time()), f"{self.path}/<object>"
+        frame = animation.frame(context.get_time())
         if frame > 0:
-            before = COLOR if pressed else PRESSED_COLOR
-            animation.SetProperty(frame - 1, target, "material.color",
-                                  [before.r(), before.g(), before.b()])
-        animation.SetProperty(frame, target, "material.color", [c.r(), c.g(), c.b()])
+            animation.SetProperty(frame - 1, target, recorded, self.looks(not pressed)[4])
+        animation.SetProperty(frame, target, recorded, keyed)
         self.shown = pressed
+
+    def looks(self, pressed: bool) -> tuple:
+        """(live property, its value, recorded path, recorded property, its value) of the
+        look of `pressed`."""
+        if self.shell:
+            return "visible", pressed, self.path, "visible", pressed
+        c = PRESSED_COLOR if pressed else COLOR
+        return ("color", [c.r(), c.g(), c.b(), c.a()], f"{self.path}/<object>",
+                "material.color", [c.r(), c.g(), c.b()])
 
 
 # --- the kind ------------------------------------------------------------------------------
@@ -513,7 +542,10 @@ class BumperKind(SensorKind):
         body, X_BS = mount_frame(plant, site.model_instance, config.X_PB)
         ground = ground_geometries(plant, site.scene_graph)
         if config.geometry == "link":
-            geometries, extra = link_geometries(plant, body, ground), {}
+            geometries = link_geometries(plant, body, ground)
+            extra = {"geometries": geometries, "body": body.index(),
+                     "body_poses": plant.get_body_poses_output_port(),
+                     "scene_graph": site.scene_graph}
         else:
             collision, visual = bumper_geometries(plant, site.scene_graph, body, name)
             geometries = {collision}
@@ -532,10 +564,19 @@ class BumperKind(SensorKind):
                            sensor.rate, config.X_PB, extra)
 
     def add_meshcat(self, builder, meshcat, sensor: BuiltSensor) -> None:
-        if "meshcat_path" not in sensor.extra:  # `geometry: link`: no box of its own
-            return
-        viz = builder.AddNamedSystem(f"{sensor.robot}.bumper.{sensor.name}.meshcat",
-                                     BumperMeshcat(meshcat, sensor.extra["meshcat_path"]))
+        """Its box red while pressed; a `geometry: link` bumper's shell under
+        `/bumper/<robot>/<bumper>` (`draw_shell`), moved with its link, shown while pressed."""
+        extra, name = sensor.extra, f"{sensor.robot}.bumper.{sensor.name}"
+        if "geometries" in extra:
+            path = f"/bumper/{sensor.robot}/{sensor.name}"
+            draw_shell(meshcat, path, extra["scene_graph"], extra["geometries"])
+            follow = builder.AddNamedSystem(f"{name}.follow", FollowFrame(
+                meshcat, path, extra["body"], RigidTransform()))
+            builder.Connect(extra["body_poses"], follow.get_input_port())
+            viz = builder.AddNamedSystem(f"{name}.meshcat", BumperMeshcat(meshcat, path, True))
+        else:
+            viz = builder.AddNamedSystem(f"{name}.meshcat",
+                                         BumperMeshcat(meshcat, extra["meshcat_path"]))
         builder.Connect(sensor.system.GetOutputPort("pressed"), viz.get_input_port())
 
     def looks(self, sensor: BuiltSensor) -> tuple[float, float]:

@@ -125,3 +125,30 @@ def test_the_summary_holds_the_last_sample(run):
                        "force_vector": pytest.approx(list(last.force_vector), rel=1e-9,
                                                      abs=1e-9),
                        "time": pytest.approx(TIMES[-1])}
+
+
+def test_the_replay_shows_a_link_bumpers_shell_while_pressed(tmp_path):
+    """A Burger whose base link is its bumper drives its body into the giant box: its shell
+    (the link's two collision shapes, `/bumper/<robot>/<bumper>`) hidden, then shown from the
+    press on; in the replay, its `visible` keyed likewise."""
+    burger = ("{robot: burger, pose: {translation: [-0.6896, 0, 0], rotation: !Rpy {deg: [0, 0, "
+              "180]}}, lidars: {scan: {enabled: false}}, bumpers: {front: {geometry: link, "
+              "X_PB: {base_frame: base, translation: [0.037, 0, 0.082]}}}}")
+    sim = Simulation(load_scenario(DEFAULT_SCENARIO, overrides=[
+        f"robots: {{corobot: {{cameras: {{front: {{rgb: false}}}}}}, rammer: {burger}}}"]),
+        record=True)
+    path = "/bumper/rammer/front"
+    meshcat = sim.station.meshcat
+    assert meshcat.HasPath(f"{path}/0") and meshcat.HasPath(f"{path}/1")
+    assert not meshcat.HasPath(f"{path}/2")
+    sim.robot("rammer").set_power(0.5, 0.5)
+    sim.advance(0.2)  # its body meets the box between the samples of 0.14 and 0.16 s
+    assert sim.robot("rammer").reading("front").pressed
+    assert sim.station.diagram.GetSubsystemByName("rammer.bumper.front.meshcat").shown is True
+    sim.save_recording(tmp_path / "run.html")
+    (animation,) = [m for m in _meshcat_messages((tmp_path / "run.html").read_text())
+                    if m["type"] == "set_animation"]
+    keys = _track(animation, path, ".visible")
+    # Drawn at the end of the CENIC step that took the sample of 0.16 s.
+    assert [(k["time"], k["value"]) for k in keys] == [
+        (int(0.17 * RECORDING_FPS) - 1, False), (int(0.17 * RECORDING_FPS), True)]
