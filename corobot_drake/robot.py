@@ -3,7 +3,8 @@
 Loads the robot file and its model as the simulation will (`robots.load`), prints what it
 understood (the wheels per side, radius, track, wheelbase, mass, the drive's kind and top
 speed, the casters, the sensors) and writes the robot's URDF for RViz and
-robot_state_publisher (`--urdf`, default `<robot>.urdf`). A bad robot file is one line naming
+robot_state_publisher (`--urdf`, default `<robot>.urdf` in the current folder; never over the
+robot's own model or robot file), saying where. A bad robot file is one line naming
 file:line:field, exit status 2. `FILE` may also name a shipped robot (`corobot`).
 """
 
@@ -80,9 +81,14 @@ def main(argv: list[str] | None = None) -> int:
     if not args.no_urdf:
         from corobot_drake.ros2.urdf import robot_urdf
 
-        out = args.urdf or Path(f"{spec.kind}.urdf")
+        out = (args.urdf or Path(f"{spec.kind}.urdf")).resolve()
+        own = {Path(spec.model_file).resolve(): "model", Path(spec.file).resolve(): "robot file"}
+        if out in own:  # run beside its my_robot.urdf, the default would replace the model
+            print(f"error: {out} is the robot's own {own[out]}: not written over (--urdf FILE "
+                  "names another, --no-urdf writes none)", file=sys.stderr)
+            return 2
         out.write_text(robot_urdf(spec))
-        print(f"wrote {out} (URDF for RViz and robot_state_publisher)")
+        print(f"wrote {out} (the robot's URDF, for RViz and robot_state_publisher)")
     return 0
 
 

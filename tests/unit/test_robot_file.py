@@ -170,6 +170,25 @@ def test_robot_check_of_a_bad_robot_file_is_one_line_and_exit_2(tmp_path, capsys
     assert err.count("\n") == 1 and err.startswith(f"error: {path}:3: wheels.left[0]: ")
 
 
+def test_robot_check_says_where_its_urdf_went_and_never_over_the_model(tmp_path, capsys,
+                                                                          monkeypatch):
+    from corobot_drake.robot import main
+
+    (tmp_path / "mine").mkdir()
+    path = _robot(tmp_path / "mine")
+    monkeypatch.chdir(tmp_path)
+    assert main(["check", str(path)]) == 0  # by default into the current folder, as <robot>
+    assert capsys.readouterr().out.endswith(f"wrote {tmp_path / 'mine.urdf'} (the robot's "
+                                            "URDF, for RViz and robot_state_publisher)\n")
+    model = tmp_path / "mine" / "twowheel.urdf"
+    before = model.read_text()
+    assert main(["check", str(path), "--urdf", str(model)]) == 2
+    err = capsys.readouterr().err
+    assert err == (f"error: {model} is the robot's own model: not written over (--urdf FILE "
+                   "names another, --no-urdf writes none)\n")
+    assert model.read_text() == before
+
+
 def test_a_sensor_a_scenario_adds_to_a_robot_rides_on_its_base_link(tmp_path):
     path = _robot(tmp_path)
     scenario = load_scenario(data=f"robots: {{u: {{robot: {path}, ir_sensors: {{side: {{}}}}}}}}")
