@@ -7,6 +7,9 @@ anything is built: `HAND_WRITTEN` (YAML text or bytes -> the field and a fragmen
 message) and, generated, hostile values put into every numeric field of the shipped scenarios
 (`mutated_override`) and edits of their text (`mutated_file`). A mutation's choices come from
 a `draw`: `RandomDraw` (seeded) in the tool, hypothesis in the test (a dev dependency).
+
+`ros_requests`: the ROS 2 node's bad Simulation Interfaces requests, each with the result code
+and the words of the one line it must get (tests/service/test_ros2_simulation.py asks them).
 """
 
 from __future__ import annotations
@@ -1109,3 +1112,128 @@ def run_studies_and_tools(directory: Path, progress=None) -> list[Tally]:
         if progress:
             progress()
     return [studies, tools]
+
+
+# --- the ROS 2 node's Simulation Interfaces: bad requests (tests/service/test_ros2_simulation.py)
+
+
+@dc.dataclass(frozen=True)
+class RosRequest:
+    """A bad request to the node's Simulation Interfaces: the `service` (its name) and `srv`
+    (its simulation_interfaces type), the request's `fields` (nested dicts for messages; in a
+    string, `{dir}` is the directory the `files` (name, text) are written to), the `code` it
+    must get (a name of the service's Response, or of simulation_interfaces/Result) and
+    `words` its one-line message must hold. The node keeps serving after each."""
+
+    name: str
+    service: str
+    srv: str
+    fields: dict
+    code: str
+    words: str
+    files: tuple = ()
+
+
+_AT = {"pose": {"position": {"x": 1.0, "z": 0.1}, "orientation": {"w": 1.0}}}
+"""A spawn's initial_pose: free ground beside the default scenario's Corobot."""
+_BOX = {"resource_string": "shape: !Box {size: [0.2, 0.2, 0.2]}"}
+_MESH_MISSING = """<?xml version="1.0"?>
+<sdf version="1.7">
+  <model name="thing">
+    <link name="base">
+      <inertial><mass>1.0</mass></inertial>
+      <visual name="look"><geometry><mesh><uri>missing_part.obj</uri></mesh></geometry></visual>
+    </link>
+  </model>
+</sdf>
+"""
+
+
+def _spawn(case: str, resource: dict, code: str, words: str, files: tuple = (),
+           **fields) -> RosRequest:
+    """A SpawnEntity request named `case` (`fields`: the request's, over a body "b" at
+    `_AT`)."""
+    return RosRequest(case, "spawn_entity", "SpawnEntity", {
+        "name": "b", "initial_pose": _AT, "entity_resource": resource, **fields}, code, words,
+        files)
+
+
+def _broken_burger() -> tuple[str, int]:
+    """The Burger's robot file with a negative wheel radius, and that line's number."""
+    from corobot_drake.robots import ROBOTS
+
+    text = ROBOTS["burger"].read_text().replace("radius: 0.033 ", "radius: -1 ")
+    return text, 1 + next(i for i, line in enumerate(text.splitlines()) if "radius: -1" in line)
+
+
+def ros_requests() -> list[RosRequest]:
+    """The corpus of bad Simulation Interfaces requests (the default scenario's node)."""
+    burger, line = _broken_burger()
+    return [
+        *(RosRequest(f"steps {n}", "step_simulation", "StepSimulation", {"steps": n},
+                     "RESULT_OPERATION_FAILED", "steps: must be in [1, 1000000]")
+          for n in (0, 10**12)),
+        RosRequest("state of nobody", "get_entity_state", "GetEntityState",
+                   {"entity": "nobody"}, "RESULT_NOT_FOUND", "no entity named 'nobody'"),
+        RosRequest("NaN pose", "set_entity_state", "SetEntityState", {
+            "entity": "corobot", "set_pose": True,
+            "state": {"pose": {"position": {"x": math.nan}}}},
+            "INVALID_POSE", "state.pose.position.x: must be a finite"),
+        RosRequest("half a quaternion", "set_entity_state", "SetEntityState", {
+            "entity": "corobot", "set_pose": True,
+            "state": {"pose": {"orientation": {"w": 0.5}}}},
+            "INVALID_POSE", "state.pose.orientation: must be a unit quaternion"),
+        _spawn("a name taken", _BOX, "NAME_NOT_UNIQUE", "is taken", name="giant_box"),
+        _spawn("not a name", _BOX, "NAME_INVALID", "is not a name", name="9 lives"),
+        _spawn("no resource", {}, "NO_RESOURCE", "both uri"),
+        _spawn("a USD file", {"uri": "/x/robot.usd"}, "UNSUPPORTED_FORMAT",
+               "spawn formats are yaml"),
+        _spawn("an unknown shape", {"resource_string": "shape: !Cone {}"},
+               "RESOURCE_PARSE_ERROR", "entity_resource.resource_string: "),
+        _spawn("no such model file", {"uri": "/nowhere/x.sdf"}, "RESOURCE_PARSE_ERROR",
+               "entity_resource.uri: '/nowhere/x.sdf': "),
+        _spawn("a model's mesh missing", {"uri": "{dir}/thing.sdf"}, "MISSING_ASSETS",
+               "resolved to '{dir}/missing_part.obj' which does not exist",
+               (("thing.sdf", _MESH_MISSING),)),
+        _spawn("SDFormat as a string", {"resource_string": _MESH_MISSING},
+               "UNSUPPORTED_FORMAT", "entity_resource.resource_string: XML (a model's"),
+        _spawn("a body file's bad mass", {"uri": "file://{dir}/body.yaml"},
+               "RESOURCE_PARSE_ERROR", "entity_resource.uri: {dir}/body.yaml:3: mass: must be in ",
+               (("body.yaml", "# a box too light\nshape: !Box {size: [0.2, 0.2, 0.2]}\n"
+                              "mass: -1\n"),)),
+        _spawn("a body string's unknown field",
+               {"resource_string": "shape: !Box {size: [0.2, 0.2, 0.2]}\n\ncolour: red"},
+               "RESOURCE_PARSE_ERROR", "entity_resource.resource_string: line 3: colour: "
+                                       "unknown "),
+        _spawn("a body string's broken YAML",
+               {"resource_string": "shape: !Box {size: [0.2, 0.2, 0.2]}\nmass: [1"},
+               "RESOURCE_PARSE_ERROR", "entity_resource.resource_string: line 2: (top level): "
+                                       "not valid YAML"),
+        _spawn("a body's mesh missing",
+               {"resource_string": "shape: !Mesh {filename: /nowhere/part.obj}\nfixed: true"},
+               "MISSING_ASSETS", "entity_resource.resource_string: line 1: shape.filename: "
+                                 "/nowhere/part.obj: cannot read the file"),
+        _spawn("no such robot", {"uri": "turtlebot"}, "RESOURCE_PARSE_ERROR",
+               "entity_resource.uri: 'turtlebot' is neither a shipped robot (corobot, burger, "
+               "pioneer) nor a robot file"),
+        _spawn("a robot file's bad wheel", {"uri": "file://{dir}/broken.yaml"},
+               "RESOURCE_PARSE_ERROR",
+               f"entity_resource.uri: {{dir}}/broken.yaml:{line}: wheels.radius: must be in "
+               "(0, 100] m", (("broken.yaml", burger),)),
+        _spawn("a robot's name taken", {"uri": "burger"}, "NAME_NOT_UNIQUE", "is taken",
+               name="corobot"),
+        _spawn("a body's name for a robot", {"uri": "burger"}, "NAME_NOT_UNIQUE", "is taken",
+               name="giant_box"),
+        _spawn("a robot elsewhere", {"uri": "burger"}, "RESULT_FEATURE_UNSUPPORTED",
+               "entity_namespace: a robot's topics and frames are under its name (/b/...)",
+               entity_namespace="/elsewhere"),
+        _spawn("a robot file as a string",
+               {"resource_string": "model: burger.sdf\nwheels: {left: [l], right: [r]}"},
+               "RESULT_FEATURE_UNSUPPORTED",
+               "entity_resource.resource_string: a robot file: give its uri instead"),
+        RosRequest("delete nobody", "delete_entity", "DeleteEntity", {"entity": "nobody"},
+                   "RESULT_NOT_FOUND", "no entity named"),
+        RosRequest("delete the only robot", "delete_entity", "DeleteEntity",
+                   {"entity": "corobot"}, "RESULT_OPERATION_FAILED",
+                   "entity: 'corobot' is the only robot"),
+    ]

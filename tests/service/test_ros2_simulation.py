@@ -17,7 +17,6 @@ import pytest
 pytest.importorskip("rclpy", reason="the [ros2] extra (tools/setup installs it)")
 pytest.importorskip("simulation_interfaces.msg", reason="python -m corobot_drake.ros2.build")
 
-from corobot_drake.ros2 import simulation_services as ss
 from corobot_drake.ros2.build import INTERFACES_DIR
 from corobot_drake.serving.runner import MAX_RATE, SimRunner, StepJob
 
@@ -368,55 +367,30 @@ def test_play_pause_stop_and_the_action(sim_ros):
 
 @ONE_GRAPH_AT_A_TIME
 def test_bad_requests_get_their_codes_and_one_line(sim_ros, tmp_path):
-    from geometry_msgs.msg import Pose, PoseStamped
-    from simulation_interfaces.msg import EntityState, Resource
-    from simulation_interfaces.srv import (
-        DeleteEntity,
-        GetEntityState,
-        GetSimulatorFeatures,
-        SetEntityState,
-        SpawnEntity,
-        StepSimulation,
-    )
+    """The hostile corpus's requests (`hostile_inputs.ros_requests`), then poses a robot
+    cannot start at; the node keeps serving."""
+    import simulation_interfaces.srv as srvs
+    from geometry_msgs.msg import PoseStamped
+    from simulation_interfaces.msg import Resource, Result
+    from simulation_interfaces.srv import GetSimulatorFeatures, SpawnEntity
+
+    from lab.hostile_inputs import ros_requests
 
     probe = sim_ros
-    R = ss.result().__class__
 
     def check(response, code, words):
         r = response.result
         assert r.result == code and words in r.error_message and "\n" not in r.error_message, r
 
-    for steps in (0, 10**12):
-        check(_call(probe, "step_simulation", StepSimulation, retry=10.0, steps=steps),
-              R.RESULT_OPERATION_FAILED, "steps: must be in [1, 1000000]")
-    check(_call(probe, "get_entity_state", GetEntityState, retry=10.0, entity="nobody"),
-          R.RESULT_NOT_FOUND, "no entity named 'nobody'")
-    nan = Pose()
-    nan.position.x = math.nan
-    half = Pose()
-    half.orientation.w = 0.5
-    for pose, words in ((nan, "state.pose.position.x: must be a finite"),
-                        (half, "state.pose.orientation: must be a unit quaternion")):
-        check(_call(probe, "set_entity_state", SetEntityState, retry=10.0, entity="corobot",
-                    state=EntityState(pose=pose), set_pose=True),
-              SetEntityState.Response.INVALID_POSE, words)
-    box = Resource(resource_string="shape: !Box {size: [0.2, 0.2, 0.2]}")
-    at = PoseStamped()
-    at.pose.position.x, at.pose.position.z, at.pose.orientation.w = 1.0, 0.1, 1.0
-    S = SpawnEntity.Response
-    for fields, code, words in (
-            ({"name": "giant_box", "entity_resource": box}, S.NAME_NOT_UNIQUE, "is taken"),
-            ({"name": "9 lives", "entity_resource": box}, S.NAME_INVALID, "is not a name"),
-            ({"name": "b", "entity_resource": Resource()}, S.NO_RESOURCE, "both uri"),
-            ({"name": "b", "entity_resource": Resource(uri="/x/robot.usd")},
-             S.UNSUPPORTED_FORMAT, "spawn formats are yaml"),
-            ({"name": "b", "entity_resource": Resource(resource_string="shape: !Cone {}")},
-             S.RESOURCE_PARSE_ERROR, "entity_resource.resource_string: "),
-            ({"name": "b", "entity_resource": Resource(uri="/nowhere/x.sdf")},
-             S.RESOURCE_PARSE_ERROR, "entity_resource.uri: '/nowhere/x.sdf': "),
-            *_bad_bodies(tmp_path, Resource), *_bad_robots(tmp_path, Resource)):
-        check(_call(probe, "spawn_entity", SpawnEntity, retry=10.0, initial_pose=at, **fields),
-              code, words)
+    for case in ros_requests():
+        for name, text in case.files:
+            (tmp_path / name).write_text(text)
+        srv = getattr(srvs, case.srv)
+        code = getattr(srv.Response, case.code, None)
+        request = _message(srv.Request, case.fields, str(tmp_path))
+        answer = probe.call(f"/{case.service}", srv, request, retry=10.0)
+        check(answer, getattr(Result, case.code) if code is None else code,
+              case.words.replace("{dir}", str(tmp_path)))
     tilted = PoseStamped()
     tilted.pose.position.y, tilted.pose.orientation.w = 1.0, 0.0
     tilted.pose.orientation.x = 1.0  # upside down
@@ -425,89 +399,25 @@ def test_bad_requests_get_their_codes_and_one_line(sim_ros, tmp_path):
     for pose, words in ((tilted, "initial_pose.pose.orientation: a robot stands on the ground"),
                         (origin, "initial_pose: robot 'b' starts ")):
         check(_call(probe, "spawn_entity", SpawnEntity, retry=10.0, name="b", initial_pose=pose,
-                    entity_resource=Resource(uri="burger")), S.INVALID_POSE, words)
-    check(_call(probe, "delete_entity", DeleteEntity, retry=10.0, entity="nobody"),
-          R.RESULT_NOT_FOUND, "no entity named")
-    check(_call(probe, "delete_entity", DeleteEntity, retry=10.0, entity="corobot"),
-          R.RESULT_OPERATION_FAILED, "entity: 'corobot' is the only robot")
+                    entity_resource=Resource(uri="burger")), SpawnEntity.Response.INVALID_POSE,
+              words)
     # still serving
     features = _call(probe, "get_simulator_features", GetSimulatorFeatures, retry=10.0)
     assert features.features.spawn_formats == ["yaml", "sdf", "urdf", "mjcf"]
     assert "robots (a robot file's uri" in features.features.custom_info
 
 
-MESH_MISSING = """<?xml version="1.0"?>
-<sdf version="1.7">
-  <model name="thing">
-    <link name="base">
-      <inertial><mass>1.0</mass></inertial>
-      <visual name="look"><geometry><mesh><uri>missing_part.obj</uri></mesh></geometry></visual>
-    </link>
-  </model>
-</sdf>
-"""
-
-
-def _bad_bodies(tmp_path, Resource) -> list:
-    """SpawnEntity requests of world bodies and models that cannot be spawned: (fields,
-    code, words); a YAML's problem at the line of the user's own text."""
-    from simulation_interfaces.srv import SpawnEntity
-
-    S = SpawnEntity.Response
-    model = tmp_path / "thing.sdf"
-    model.write_text(MESH_MISSING)
-    body = tmp_path / "body.yaml"
-    body.write_text("# a box too light\nshape: !Box {size: [0.2, 0.2, 0.2]}\nmass: -1\n")
-    return [
-        ({"name": "b", "entity_resource": Resource(uri=str(model))}, S.MISSING_ASSETS,
-         f"resolved to '{tmp_path}/missing_part.obj' which does not exist"),
-        ({"name": "b", "entity_resource": Resource(resource_string=MESH_MISSING)},
-         S.UNSUPPORTED_FORMAT, "entity_resource.resource_string: XML (a model's SDFormat"),
-        ({"name": "b", "entity_resource": Resource(uri=f"file://{body}")},
-         S.RESOURCE_PARSE_ERROR, f"entity_resource.uri: {body}:3: mass: must be in "),
-        ({"name": "b", "entity_resource": Resource(
-            resource_string="shape: !Box {size: [0.2, 0.2, 0.2]}\n\ncolour: red")},
-         S.RESOURCE_PARSE_ERROR, "entity_resource.resource_string: line 3: colour: unknown "),
-        ({"name": "b", "entity_resource": Resource(
-            resource_string="shape: !Box {size: [0.2, 0.2, 0.2]}\nmass: [1")},
-         S.RESOURCE_PARSE_ERROR, "entity_resource.resource_string: line 2: (top level): not "
-                                 "valid YAML"),
-        ({"name": "b", "entity_resource": Resource(
-            resource_string="shape: !Mesh {filename: /nowhere/part.obj}\nfixed: true")},
-         S.MISSING_ASSETS, "entity_resource.resource_string: line 1: shape.filename: "
-                           "/nowhere/part.obj: cannot read the file"),
-    ]
-
-
-def _bad_robots(tmp_path, Resource) -> list:
-    """SpawnEntity requests of robots that cannot be spawned: (fields, code, words)."""
-    from simulation_interfaces.msg import Result
-    from simulation_interfaces.srv import SpawnEntity
-
-    from corobot_drake.robots import ROBOTS
-
-    S = SpawnEntity.Response
-    broken = tmp_path / "broken.yaml"  # the Burger's robot file with a negative wheel radius
-    broken.write_text(ROBOTS["burger"].read_text().replace("radius: 0.033 ", "radius: -1 "))
-    line = 1 + next(i for i, text in enumerate(broken.read_text().splitlines())
-                    if "radius: -1" in text)
-    burger = Resource(uri="burger")
-    return [
-        ({"name": "b", "entity_resource": Resource(uri="turtlebot")}, S.RESOURCE_PARSE_ERROR,
-         "entity_resource.uri: 'turtlebot' is neither a shipped robot (corobot, burger, "
-         "pioneer) nor a robot file"),
-        ({"name": "b", "entity_resource": Resource(uri=f"file://{broken}")},
-         S.RESOURCE_PARSE_ERROR,
-         f"entity_resource.uri: {broken}:{line}: wheels.radius: must be in (0, 100] m"),
-        ({"name": "corobot", "entity_resource": burger}, S.NAME_NOT_UNIQUE, "is taken"),
-        ({"name": "giant_box", "entity_resource": burger}, S.NAME_NOT_UNIQUE, "is taken"),
-        ({"name": "b", "entity_resource": burger, "entity_namespace": "/elsewhere"},
-         Result.RESULT_FEATURE_UNSUPPORTED, "entity_namespace: a robot's topics and frames are "
-         "under its name (/b/...)"),
-        ({"name": "b", "entity_resource": Resource(
-            resource_string="model: burger.sdf\nwheels: {left: [l], right: [r]}")},
-         Result.RESULT_FEATURE_UNSUPPORTED,
-         "entity_resource.resource_string: a robot file: give its uri instead")]
+def _message(cls, fields: dict, directory: str):
+    """A `cls` message of `fields` (nested dicts for its messages; `{dir}` in a string:
+    `directory`)."""
+    msg = cls()
+    for name, value in fields.items():
+        if isinstance(value, dict):
+            value = _message(type(getattr(msg, name)), value, directory)
+        elif isinstance(value, str):
+            value = value.replace("{dir}", directory)
+        setattr(msg, name, value)
+    return msg
 
 
 @ONE_GRAPH_AT_A_TIME
