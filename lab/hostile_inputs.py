@@ -599,6 +599,10 @@ OVERRIDES = [
     _bumper("bumper box of two", "{size: [0.02, 0.2]}", "size", "needs 3 numbers"),
     _bumper("bumper on no link", "{X_PB: {base_frame: bonnet}}", "X_PB.base_frame",
             "'bonnet' is not a link"),
+    _bumper("bumper geometry unknown", "{geometry: wheel}", "geometry",
+            "'wheel' is not one of box, link"),
+    _bumper("bumper link on the world", "{geometry: link, X_PB: {base_frame: world}}",
+            "geometry", "a link of the robot; got world"),
     # the IMU
     _imu("imu rate 0", "{rate_hz: 0}", "rate_hz", "(0, 1000] Hz"),
     _imu("imu rate 1e6", "{rate_hz: 1e6}", "rate_hz", "got 1e+06"),
