@@ -103,6 +103,15 @@ def existing_file(text: str) -> Path:
     return path
 
 
+def scenario_file(text: str) -> str:
+    """An argparse `type`: a scenario file to read, or a shipped scenario's name
+    (`pioneer.yaml`) from any folder, as the main command line takes it
+    (`resources.scenario_path`; a file that is neither: the load's one line)."""
+    from corobot_drake.resources import scenario_path
+
+    return str(scenario_path(text))
+
+
 def one_line_errors(main):
     """`main` with a bad input file (ScenarioError, LogError) or an unwritable output
     (OSError) as its one line, exit status 2."""

@@ -36,6 +36,7 @@ from corobot_drake.arguments import (
     one_line_errors,
     output_directory,
     output_file,
+    scenario_file,
 )
 from corobot_drake.limits import DRAKE_INT, Range
 from corobot_drake.resources import DEFAULT_SCENARIO
@@ -54,8 +55,9 @@ def _parser() -> ToolParser:
                    help="drive UMBmark's squares in --scenario and fit their log")
     p.add_argument("--side", type=bounded(SIDE), default=oc.SQUARE_SIDE,
                    help="--simulate: the squares' side, m")
-    p.add_argument("--scenario", default=str(DEFAULT_SCENARIO),
-                   help="scenario to simulate in; its --robot is the robot a LOG is from")
+    p.add_argument("--scenario", type=scenario_file, default=str(DEFAULT_SCENARIO),
+                   help="scenario to simulate in, or a shipped scenario's name (pioneer.yaml) "
+                   "from any folder; its --robot is the robot a LOG is from")
     p.add_argument("--robot", default=None,
                    help="robot of --scenario (None: its only robot): its nominal radius and "
                    "track, its encoders")

@@ -26,6 +26,7 @@ from corobot_drake.arguments import (
     existing_file,
     one_line_errors,
     output_file,
+    scenario_file,
 )
 from corobot_drake.config.scenario import Drive
 from corobot_drake.limits import bound_of
@@ -71,9 +72,10 @@ def main(argv=None) -> int:
                    default=None, help="encoder counts (None: the robot's)")
     p.add_argument("--write", metavar="SCENARIO", type=existing_file,
                    help="put the fitted motor_torque_scaling and slew_rate in this scenario file")
-    p.add_argument("--scenario", type=existing_file, default=None,
-                   help="the scenario whose --robot the log is from and --simulate drives "
-                   "(None: --write's, else the shipped default scene)")
+    p.add_argument("--scenario", type=scenario_file, default=None,
+                   help="the scenario whose --robot the log is from and --simulate drives, "
+                   "or a shipped scenario's name (pioneer.yaml) from any folder (None: "
+                   "--write's, else the shipped default scene)")
     p.add_argument("--robot", default=None,
                    help="robot of --scenario to --write (None: its only robot)")
     args = p.parse_args(argv)

@@ -28,6 +28,7 @@ from corobot_drake.arguments import (
     bounded,
     one_line_errors,
     output_file,
+    scenario_file,
 )
 from corobot_drake.config.bounds import DRAKE_BOUNDS
 from corobot_drake.config.poses import ground_pose
@@ -56,7 +57,9 @@ def _pair(text: str, n: int, what: str) -> list[float]:
 
 def _parser() -> argparse.ArgumentParser:
     parser = ToolParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--scenario", type=Path, default=DEFAULT_SCENARIO, help="scenario file")
+    parser.add_argument("--scenario", type=scenario_file, default=str(DEFAULT_SCENARIO),
+                        help="scenario file, or a shipped scenario's name (maze.yaml) from "
+                        "any folder")
     parser.add_argument("--output", type=output_file, default=Path("snapshot.png"),
                         help="PNG to write")
     parser.add_argument("--view", choices=VIEWS, default="chase", help="camera to render")

@@ -39,7 +39,7 @@ def test_the_top_speed_tuning_starts_from_the_robots_own(tmp_path, capsys):
     assert measured == pytest.approx(0.22, rel=0.02)
 
 
-def test_the_odometry_calibration_reads_the_robots_encoders(tmp_path, capsys):
+def test_the_odometry_calibration_reads_the_robots_encoders(tmp_path, capsys, monkeypatch):
     sim = Simulation(load_scenario(SCENARIO))
     robot = sim.robot("burger")
     for left, right in ((0.8, 0.8), (-0.6, 0.6), (0.8, 0.8), (0.6, -0.6)):
@@ -48,7 +48,8 @@ def test_the_odometry_calibration_reads_the_robots_encoders(tmp_path, capsys):
     log = tmp_path / "burger.csv"
     robot.write_log(log)
     main = load_tool("calibrate_odometry").main
-    assert main([str(log), "--scenario", SCENARIO, "--out", str(tmp_path)]) == 0
+    monkeypatch.chdir(tmp_path)  # a shipped scenario by its name, from any folder
+    assert main([str(log), "--scenario", "burger.yaml", "--out", str(tmp_path)]) == 0
     out = capsys.readouterr().out
     assert "(nominal 0.033000)" in out and "(geometric 0.16000)" in out
     radius = float(out.split("effective_wheel_radius: ")[1].split()[0])
