@@ -5,6 +5,7 @@ on its own, its inputs fixed to that plant's contact results, and its wire forma
 
 import math
 
+import msgpack  # Meshcat's wire format (installed with Ray)
 import numpy as np
 import pytest
 from pydrake.common.yaml import yaml_dump_typed, yaml_load_typed
@@ -35,6 +36,7 @@ from corobot_drake.sensors.bumper import (
     BUMPER,
     Bumper,
     BumperConfig,
+    BumperMeshcat,
     BumperState,
     ground_geometries,
 )
@@ -299,3 +301,22 @@ def test_a_bad_geometry_is_one_line(bumper, problem):
         load_scenario(DEFAULT_SCENARIO,
                       overrides=[f"robots: {{corobot: {{bumpers: {{b: {bumper}}}}}}}"])
     assert str(e.value) == f"--override:1: robots.corobot.bumpers.b.{problem}"
+
+
+@pytest.mark.parametrize("shell", [False, True])
+def test_bumper_meshcat_alone_shows_a_press_and_its_release(shell):
+    """Its input fixed: pressed at the end of the first step shows the press (the box red, or
+    the shell visible), released the release; unchanged, it sends nothing more."""
+    meshcat = Meshcat()
+    viz = BumperMeshcat(meshcat, "/bumper/bot/top", shell)
+    simulator = Simulator(viz)
+    context = simulator.get_mutable_context()
+    prop = "visible" if shell else "color"
+    for pressed, t in ((1.0, 0.1), (1.0, 0.2), (0.0, 0.3)):
+        viz.get_input_port().FixValue(context, [pressed])
+        before = meshcat._GetPackedProperty(viz.path, prop)
+        simulator.AdvanceTo(t)
+        assert viz.shown is bool(pressed)
+        sent = meshcat._GetPackedProperty(viz.path, prop)
+        assert (sent != before) is (t != 0.2)  # nothing sent while it stays pressed
+        assert msgpack.unpackb(sent)["value"] == viz.looks(bool(pressed))[1]
