@@ -21,8 +21,14 @@ from corobot_drake.arguments import ToolParser, bounded
 from corobot_drake.commands import RotateDegrees
 from corobot_drake.limits import DRAKE_INT, DRIVE_POWER
 from corobot_drake.resources import DEFAULT_SCENARIO
-from corobot_drake.serving.client import CorobotClient
 from corobot_drake.study.programs import COMMANDS_PER_LOOP, LOOPS, DriveTest
+
+try:  # without the [serve] extra: one line naming it, not a traceback
+    from corobot_drake.serving.client import CorobotClient
+except ImportError:
+    from corobot_drake.extras import exit_without
+
+    exit_without("examples/drive_legs.py", "serve")
 
 
 def legs(robot, loops: int, seed: int, power: float = 0.2, out=print) -> list[float]:

@@ -31,6 +31,14 @@ from pathlib import Path
 import numpy as np
 import yaml
 
+try:  # corobot_drake's one-line check of ROS 2's environment variables
+    from corobot_drake.ros2.graph import refuse_unusable
+except ImportError:  # a ROS 2 install without corobot_drake: rcl's own errors
+
+    def refuse_unusable(program: str) -> None:
+        """(corobot_drake is not installed here)"""
+
+
 COURSE = Path(__file__).resolve().parent.parent / "scenarios" / "robo_magellan.yaml"
 SPEED = 0.5
 """m/s cruising (the Corobot's top speed is 0.61)."""
@@ -330,8 +338,13 @@ class Contestant:
 
 
 def main(argv=None) -> int:
-    import rclpy
-    from rclpy.utilities import remove_ros_args
+    try:  # without the [ros2] extra: one line naming it, not a traceback
+        import rclpy
+        from rclpy.utilities import remove_ros_args
+    except ImportError:
+        from corobot_drake.extras import exit_without
+
+        exit_without("examples/ros2_magellan.py", "ros2")
 
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--course", type=Path, default=COURSE,
@@ -352,6 +365,7 @@ def main(argv=None) -> int:
     except (OSError, ValueError, KeyError, TypeError, yaml.YAMLError) as e:
         print(f"error: --course: {e}", file=sys.stderr)
         return 2
+    refuse_unusable("examples/ros2_magellan.py")  # before any DDS
     rclpy.init(args=sys.argv if argv is None else ["", *argv])
     node = rclpy.create_node("magellan_contestant")
     prefix = f"/{args.robot}" if args.robot else ""

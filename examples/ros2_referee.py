@@ -35,6 +35,14 @@ import sys
 import time
 from dataclasses import dataclass, field
 
+try:  # corobot_drake's one-line check of ROS 2's environment variables
+    from corobot_drake.ros2.graph import refuse_unusable
+except ImportError:  # a ROS 2 install without corobot_drake: rcl's own errors
+
+    def refuse_unusable(program: str) -> None:
+        """(corobot_drake is not installed here)"""
+
+
 FOOTPRINT = (0.305, 0.279)
 """m: the Corobot in plan, its wheels included (length x width), centred on base_link."""
 TIMEOUT = 60.0
@@ -190,8 +198,13 @@ def referee_run(referee: Referee, card: Scorecard, args) -> None:
 
 
 def main(argv=None) -> int:
-    import rclpy
-    from rclpy.utilities import remove_ros_args
+    try:  # without the [ros2] extra: one line naming it, not a traceback
+        import rclpy
+        from rclpy.utilities import remove_ros_args
+    except ImportError:
+        from corobot_drake.extras import exit_without
+
+        exit_without("examples/ros2_referee.py", "ros2")
 
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--robot", default="corobot", help="the robot's entity name (default corobot)")
@@ -218,6 +231,7 @@ def main(argv=None) -> int:
             p.error(f"--{name.replace('_', '-')}: a number > 0; got {value}")
     if not 0.0 < args.bonus_factor <= 1.0:
         p.error(f"--bonus-factor: in (0, 1]; got {args.bonus_factor}")
+    refuse_unusable("examples/ros2_referee.py")  # before any DDS
     rclpy.init(args=sys.argv if argv is None else ["", *argv])
     node = rclpy.create_node("magellan_referee")
     card = Scorecard(args.bonus_factor)

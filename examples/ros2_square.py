@@ -18,9 +18,22 @@ import math
 import sys
 import time
 
-import rclpy
-from corobot_interfaces.action import DriveDistance, RotateDegrees
-from rclpy.action import ActionClient
+try:  # without the [ros2] extra: one line naming it, not a traceback
+    import rclpy
+    from corobot_interfaces.action import DriveDistance, RotateDegrees
+    from rclpy.action import ActionClient
+except ImportError:
+    from corobot_drake.extras import exit_without
+
+    exit_without("examples/ros2_square.py", "ros2")
+
+try:  # corobot_drake's one-line check of ROS 2's environment variables
+    from corobot_drake.ros2.graph import refuse_unusable
+except ImportError:  # a ROS 2 install without corobot_drake: rcl's own errors
+
+    def refuse_unusable(program: str) -> None:
+        """(corobot_drake is not installed here)"""
+
 
 TIMEOUT = 60.0
 """s (wall clock) to wait for the simulation: its action servers (discovery takes a few
@@ -72,6 +85,7 @@ def main(argv=None) -> int:
     if not (math.isfinite(args.timeout) and args.timeout > 0):
         p.error(f"--timeout: a number of s > 0; got {args.timeout}")
     prefix = f"/{args.robot}" if args.robot else ""
+    refuse_unusable("examples/ros2_square.py")  # before any DDS
     rclpy.init()
     node = rclpy.create_node("corobot_square")
     drive = ActionClient(node, DriveDistance, f"{prefix}/drive_distance")

@@ -24,8 +24,21 @@ import termios
 import time
 import tty
 
-import rclpy
-from geometry_msgs.msg import Twist
+try:  # without the [ros2] extra: one line naming it, not a traceback
+    import rclpy
+    from geometry_msgs.msg import Twist
+except ImportError:
+    from corobot_drake.extras import exit_without
+
+    exit_without("examples/ros2_teleop.py", "ros2")
+
+try:  # corobot_drake's one-line check of ROS 2's environment variables
+    from corobot_drake.ros2.graph import refuse_unusable
+except ImportError:  # a ROS 2 install without corobot_drake: rcl's own errors
+
+    def refuse_unusable(program: str) -> None:
+        """(corobot_drake is not installed here)"""
+
 
 MOVES = {"i": (1, 0), ",": (-1, 0), "j": (0, 1), "l": (0, -1), "u": (1, 1), "o": (1, -1),
          "m": (-1, -1), ".": (-1, 1), "k": (0, 0), " ": (0, 0)}
@@ -54,6 +67,7 @@ def main(argv=None) -> int:
     args = p.parse_args(argv)
     if not (math.isfinite(args.timeout) and args.timeout > 0):
         p.error(f"--timeout: a number of s > 0; got {args.timeout}")
+    refuse_unusable("examples/ros2_teleop.py")  # before any DDS
     if not sys.stdin.isatty():
         print("error: ros2_teleop.py reads keys from a terminal", file=sys.stderr)
         return 2

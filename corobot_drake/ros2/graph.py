@@ -7,6 +7,7 @@ import contextlib
 import importlib
 import os
 import subprocess
+import sys
 
 DISCOVERY_VARIABLE = "ROS_AUTOMATIC_DISCOVERY_RANGE"
 DISCOVERY_RANGES = ("LOCALHOST", "SUBNET", "OFF", "SYSTEM_DEFAULT")
@@ -45,6 +46,17 @@ def environment_problem(environ=os.environ) -> str | None:
         return (f"{DISCOVERY_VARIABLE}={discovery}: must be one of {', '.join(DISCOVERY_RANGES)}"
                 " (or unset: LOCALHOST)")
     return None
+
+
+def refuse_unusable(program: str, environ=os.environ) -> None:
+    """For a ROS 2 program of the project's (an example), before rclpy.init: when
+    `environment_problem` has a line, "error: `program`: <it>" on stderr and exit status 2,
+    before any DDS starts (rclpy would raise, or Fast DDS log an error per port); else
+    nothing."""
+    problem = environment_problem(environ)
+    if problem:
+        print(f"error: {program}: {problem}", file=sys.stderr)
+        raise SystemExit(2)
 
 
 def ros_type(name: str):

@@ -166,17 +166,19 @@ print(json.dumps(results))
 
 
 def test_a_tool_without_its_extra_says_which_in_one_line():
-    """Every tool's --help with no extra installed: its help, or one line naming the extras
-    it needs (exit status 2), never a traceback. One process runs them all (each import of
-    a missing module fails again)."""
+    """Every tool's and example's --help with no extra installed: its help, or one line
+    naming the extras it needs (exit status 2), never a traceback. One process runs them all
+    (each import of a missing module fails again)."""
     import json
     import re
     import subprocess
 
-    run = subprocess.run([sys.executable, "-c", WITHOUT_EXTRAS, *map(str, TOOLS)], cwd=REPO,
+    programs = [*TOOLS, *sorted((REPO / "examples").glob("*.py"))]
+    run = subprocess.run([sys.executable, "-c", WITHOUT_EXTRAS, *map(str, programs)], cwd=REPO,
                          capture_output=True, text=True, timeout=600)
     assert run.returncode == 0, run.stderr
-    needs = re.compile(r"error: tools/(\w+)\.py needs the \[(\w+)\]( and \[(\w+)\] extras| extra)"
+    needs = re.compile(r"error: (?:tools|examples)/(\w+)\.py needs the \[(\w+)\]"
+                       r"( and \[(\w+)\] extras| extra)"
                        r": pip install '\.\[[\w,]+\]' in corobot-drake's clone or unpacked "
                        r"sdist \(it is not on PyPI; tools/setup installs every extra\)\n")
     wrong, said = [], set()
@@ -190,7 +192,8 @@ def test_a_tool_without_its_extra_says_which_in_one_line():
             continue
         wrong.append(f"{name}: exit {status}: {(err or out)[-300:]}")
     assert not wrong, "\n".join(wrong)
-    assert {"train_policy", "bench", "bench_server_flood", "bench_recording"} <= said
+    assert {"train_policy", "bench", "bench_server_flood", "bench_recording", "drive_legs",
+            "ros2_square", "ros2_teleop", "ros2_magellan", "ros2_referee"} <= said
 
 
 EXAMPLES = sorted((REPO / "examples").glob("*.py"))

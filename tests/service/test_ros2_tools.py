@@ -96,3 +96,23 @@ def test_ros2_teleop_says_nobody_listens(graph):
     assert (teleop.returncode, teleop.stderr) == (1, (
         "error: no subscriber on /cmd_vel in 2 s (is `python -m corobot_drake --ros2` "
         "running in this ROS_DOMAIN_ID?)\n"))
+
+
+EXAMPLES = ["ros2_square", "ros2_teleop", "ros2_magellan", "ros2_referee"]
+
+
+def test_the_examples_refuse_a_ros2_environment_in_one_line(graph):
+    """A domain id or a discovery range rcl would not take: the example's line and exit 2,
+    before any DDS (a domain id of `abc` was an RCLError traceback and 300 Fast DDS errors;
+    BOGUS, a wait of the whole timeout blaming the simulation)."""
+    wrong = {"ROS_DOMAIN_ID": ("abc", "ROS_DOMAIN_ID=abc: must be a whole number in [0, 232] "
+                                      "(0-101 are clear of the ephemeral ports)"),
+             "ROS_AUTOMATIC_DISCOVERY_RANGE": (
+                 "BOGUS", "ROS_AUTOMATIC_DISCOVERY_RANGE=BOGUS: must be one of LOCALHOST, "
+                 "SUBNET, OFF, SYSTEM_DEFAULT (or unset: LOCALHOST)")}
+    for variable, (value, line) in wrong.items():
+        for example in EXAMPLES:
+            ended = run([str(REPO / "examples" / f"{example}.py"), "--timeout", "30"],
+                        env={**os.environ, variable: value}, stdin=subprocess.DEVNULL)
+            assert (ended.returncode, ended.stderr, ended.stdout) == (
+                2, f"error: examples/{example}.py: {line}\n", ""), (example, variable)
