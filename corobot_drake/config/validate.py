@@ -526,6 +526,9 @@ class LayerChecks:
             problem = bound.problem(value) if bound else None
             if problem:
                 self.fail(path, problem)
+        elif isinstance(value, np.ndarray):  # a vector of Drake's struct (a light's position)
+            for i, item in enumerate(value.ravel().tolist()):
+                self._value(item, f"{path}[{i}]", bound)
         elif isinstance(value, Rgba):
             for channel in "rgba":
                 problem = COLOR.problem(getattr(value, channel)())

@@ -347,6 +347,11 @@ def test_every_number_of_the_scenario_has_a_bound():
      "[{type: spot, cone_angle: 120}]}}}}}",
      "robots.corobot.cameras.front.renderer_class.lights[0].cone_angle",
      "must be in [0, 90] deg"),
+    # a vector of Drake's struct: each number finite
+    ("robots: {corobot: {cameras: {front: {renderer_class: !RenderEngineVtkParams {lights: "
+     "[{type: point, position: [0, 0, .nan]}]}}}}}",
+     "robots.corobot.cameras.front.renderer_class.lights[0].position[2]",
+     "must be a finite number; got nan"),
     # a list longer than its per-element bounds: its length is what is wrong
     ("robots: {corobot: {odometry: [0, 0, 0, 1, 2, 3]}}", "robots.corobot.odometry",
      "needs [], [x, y, yaw] or [x, y, yaw, left ticks, right ticks]"),
