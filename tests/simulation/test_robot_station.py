@@ -93,6 +93,38 @@ def test_a_six_wheel_skid_steer_spins_at_the_rate_of_its_wheels_lever_arms(tmp_p
     assert rate > 1.1 * u * b / (a**2 + b**2)
 
 
+@pytest.mark.parametrize(("step", "measured"), [(0.001, 0.976), (None, 0.982)])
+def test_the_extending_guides_robot_spins_within_2_5_percent_of_its_rolling_rate(step,
+                                                                                 measured):
+    """docs/extending.md's tolerance for a differential drive at the default caster friction
+    (0.05): the example robot's spin in place over 2u/track, at CENIC 1 ms and at the
+    default step (10 ms), as measured (the caster's drag and the tyres' patches)."""
+    import numpy as np
+
+    from conftest import REPO
+    from corobot_drake.config.scenario import CENIC_PLANT
+    from corobot_drake.robots.load import load_spec
+    from corobot_drake.simulation import Simulation
+
+    path = REPO / "examples" / "my_robot" / "robot.yaml"
+    spec = load_spec(path)
+    assert spec.caster_friction == 0.05
+    scenario = load_scenario(data=f"robots: {{me: {{robot: {path}, lidars: {{}}}}}}",
+                             overrides=[CENIC_PLANT % step] if step else [])
+    sim = Simulation(scenario)
+    robot = sim.robot()
+    robot.set_power(-1.0, 1.0)
+    sim.advance_to(1.0)  # steady: the slew took 0.25 s
+    start = robot.pose().yaw
+    yaws = [start]
+    for k in range(1, 11):
+        sim.advance_to(1.0 + 0.1 * k)
+        yaws.append(robot.pose().yaw)
+    ratio = float(np.diff(np.unwrap(yaws)).sum()) / (2 * spec.top_speed() / spec.track)
+    assert ratio == pytest.approx(measured, abs=0.002)
+    assert 0.975 < ratio < 1.0
+
+
 def test_visual_boxes_draws_a_user_robots_collision_shapes_instead_of_its_visuals(tmp_path):
     path = two_wheel_robot(tmp_path)
     looks = {}
