@@ -32,3 +32,12 @@ def unknown_robot(name: str, known: Iterable[str]) -> str:
     known = list(known)
     return (f"no robot named {name!r}{did_you_mean(name, known)}; robots: "
             f"{', '.join(known) or '(none)'}")
+
+
+def unknown_robot_kind(name: str, shipped: Iterable[str]) -> str:
+    """The one line for a robot's kind (a scenario's `robot:`) that is neither a shipped
+    robot nor a robot file: "'burgr' is neither a shipped robot (corobot, burger, pioneer) nor
+    a robot file (did you mean 'burger'?)"."""
+    shipped = list(shipped)
+    return (f"{name!r} is neither a shipped robot ({', '.join(shipped)}) nor a robot "
+            f"file{did_you_mean(name, shipped)}")

@@ -34,6 +34,7 @@ from corobot_drake.config.bounds import DRAKE_BOUNDS
 from corobot_drake.config.poses import ground_pose
 from corobot_drake.config.scenario import SetPower, load_scenario
 from corobot_drake.limits import DURATION
+from corobot_drake.names import unknown_robot
 from corobot_drake.resources import DEFAULT_SCENARIO
 from corobot_drake.robots import corobot
 from corobot_drake.sensors import render
@@ -91,8 +92,10 @@ def _scenario(args, parser: argparse.ArgumentParser):
     """(scenario, robot name) with the command line's changes; raises ScenarioError."""
     scenario = load_scenario(args.scenario, overrides=args.override)
     name = args.robot or (next(iter(scenario.robots)) if len(scenario.robots) == 1 else None)
-    if name not in scenario.robots:
+    if name is None:
         parser.error(f"--robot: name one of {', '.join(scenario.robots)}")
+    if name not in scenario.robots:
+        parser.error(f"--robot: {unknown_robot(name, scenario.robots)}")
     robot = scenario.robots[name]
     if args.pose:
         robot.pose = ground_pose(*args.pose)

@@ -90,6 +90,11 @@ def _robot(config):
     if not isinstance(config.robot, str) or not config.robot:
         raise ValueError("GoToGoalConfig.robot: must be a shipped robot's name or a robot "
                          f"file's path; got {reprlib.repr(config.robot)}")
+    from corobot_drake.names import unknown_robot_kind
+    from corobot_drake.robots import ROBOTS
+
+    if config.robot not in ROBOTS and not Path(config.robot).is_file():
+        raise ValueError(f"GoToGoalConfig.robot: {unknown_robot_kind(config.robot, ROBOTS)}")
     try:
         spec = robot_spec(robot_path(config.robot))
     except ScenarioError as e:

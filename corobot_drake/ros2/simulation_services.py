@@ -31,6 +31,7 @@ from pathlib import Path
 
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
 
+from corobot_drake.names import did_you_mean
 from corobot_drake.ros2.graph import ros_type
 from corobot_drake.ros2.node import ANSWER_TIMEOUT, SERVICE_QOS
 from corobot_drake.serving.runner import SimulationStoppedError, StepJob
@@ -155,7 +156,8 @@ def entity_body(sim, name: str):
     if body is None:
         names = entity_names(sim)
         raise RefusedError(result().RESULT_NOT_FOUND,
-                      f"entity: no entity named {name!r} (there are: {', '.join(names)})")
+                      f"entity: no entity named {name!r}{did_you_mean(name, names)} (there are: "
+                      f"{', '.join(names)})")
     return body, False
 
 

@@ -21,6 +21,7 @@ from corobot_drake.config.bounds import DRAKE_BOUNDS
 from corobot_drake.config.scenario import ScenarioError, load_scenario, one_line
 from corobot_drake.config.validate import LayerChecks
 from corobot_drake.limits import Range, bound_of
+from corobot_drake.names import did_you_mean
 from corobot_drake.study.programs import PROGRAMS
 from corobot_drake.study.spec import (
     Choice,
@@ -122,7 +123,8 @@ def _check_program_robots(study: Study, base, checks: LayerChecks) -> None:
                       for i, v in enumerate(study.random[path].values)]
         for where, robot in named:
             if robot not in base.robots:  # at the program's line when `robot` is its default
-                checks.fail(where, f"the scenario has no robot {robot!r}; it has: "
+                checks.fail(where, f"the scenario has no robot {robot!r}"
+                            f"{did_you_mean(robot, base.robots)}; it has: "
                             + (", ".join(base.robots) or "none"))
 
 
@@ -169,14 +171,14 @@ def _child(node, key: str, parent: str, bound):
         return item, type(item), bound[int(key)] if isinstance(bound, tuple) else bound
     if isinstance(node, dict):
         if key not in node:
-            raise ValueError(f"{parent} has no {key!r}; it has: "
+            raise ValueError(f"{parent} has no {key!r}{did_you_mean(key, node)}; it has: "
                              + (", ".join(map(str, node)) or "nothing"))
         return node[key], type(node[key]), None
     if dc.is_dataclass(node):
         fields = {f.name: f for f in dc.fields(node)}
         if key not in fields:
-            raise ValueError(f"{parent} ({type(node).__name__}) has no field {key!r}; "
-                             f"fields: {', '.join(fields)}")
+            raise ValueError(f"{parent} ({type(node).__name__}) has no field {key!r}"
+                             f"{did_you_mean(key, fields)}; fields: {', '.join(fields)}")
         hints = typing.get_type_hints(type(node))
         return getattr(node, key), hints[key], bound_of(fields[key])
     names = {f.name: f.type for f in getattr(type(node), "__fields__", ())}
@@ -184,8 +186,8 @@ def _child(node, key: str, parent: str, bound):
         raise ValueError(f"{parent} is {_a(node)}: a study reaches only fields, mapping keys "
                          "and list items")
     if key not in names:
-        raise ValueError(f"{parent} ({type(node).__name__}) has no field {key!r}; fields: "
-                         + ", ".join(names))
+        raise ValueError(f"{parent} ({type(node).__name__}) has no field {key!r}"
+                         f"{did_you_mean(key, names)}; fields: " + ", ".join(names))
     return getattr(node, key), names[key], DRAKE_BOUNDS.get(type(node), {}).get(key)
 
 

@@ -101,9 +101,10 @@ S = f"scenario: {DEFAULT_SCENARIO}\n"
     # every grid and random path resolved against the scenario, each value typed and bounded
     (S + "grid: {robots.corobot.drive.slew_rtae: [1]}\n",
      r":2: grid.robots.corobot.drive.slew_rtae: robots.corobot.drive \(Drive\) has no field "
-     r"'slew_rtae'; fields: motor_torque_scaling, slew_rate"),
+     r"'slew_rtae' \(did you mean 'slew_rate'\?\); fields: motor_torque_scaling, slew_rate"),
     (S + "random: {robots.corbot.contact.friction: !Uniform {}}\n",
-     r":2: random.robots.corbot.contact.friction: robots has no 'corbot'; it has: corobot"),
+     r":2: random.robots.corbot.contact.friction: robots has no 'corbot' \(did you mean "
+     r"'corobot'\?\); it has: corobot"),
     (S + "grid: {robots.corobot.commands.0.power: [0.5]}\n",
      r"grid.robots.corobot.commands.0.power: robots.corobot.commands: the list has 0 items"),
     (S + "grid:\n  robots.corobot.drive.slew_rate:\n    - 5\n    - true\n",

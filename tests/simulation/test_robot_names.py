@@ -77,3 +77,66 @@ def test_the_http_api_answers_404_naming_the_closest_robot():
     assert e.value.status_code == 404
     assert e.value.detail == (
         "no robot named 'corobt' (did you mean 'corobot'?); robots: corobot, rover")
+
+
+def test_a_study_names_the_closest_robot_and_field(tmp_path):
+    """A program's `robot` and a grid path's robot or field, each at its line."""
+    from corobot_drake.study.spec import load_study
+
+    study = f"scenario: {DEFAULT_SCENARIO}\nduration: 0.3\n"
+    cases = {
+        "drive_test: {robot: corobt}\n":
+            ":3: drive_test.robot: the scenario has no robot 'corobt' (did you mean "
+            "'corobot'?); it has: corobot",
+        "grid: {robots.corobt.drive.slew_rate: [5]}\n":
+            ":3: grid.robots.corobt.drive.slew_rate: robots has no 'corobt' (did you mean "
+            "'corobot'?); it has: corobot",
+        "grid: {robots.corobot.drive.slew_rtae: [5]}\n":
+            ":3: grid.robots.corobot.drive.slew_rtae: robots.corobot.drive (Drive) has no field "
+            "'slew_rtae' (did you mean 'slew_rate'?); fields: motor_torque_scaling, slew_rate, ",
+    }
+    for text, expected in cases.items():
+        path = tmp_path / "study.yaml"
+        path.write_text(study + text)
+        with pytest.raises(ScenarioError) as e:
+            load_study(path)
+        assert str(e.value).startswith(f"{path}{expected}"), e.value
+
+
+def test_the_snapshot_tool_names_the_closest_robot(capsys):
+    from conftest import load_tool
+
+    snapshot = load_tool("snapshot")
+    parser = snapshot._parser()
+    with pytest.raises(SystemExit) as stop:
+        snapshot._scenario(parser.parse_args(["--robot", "corobt"]), parser)
+    assert stop.value.code == 2
+    assert capsys.readouterr().err.splitlines()[-1].endswith(
+        "error: --robot: no robot named 'corobt' (did you mean 'corobot'?); robots: corobot")
+
+
+def test_the_ros2_entity_services_name_the_closest_entity():
+    """GetEntityState and the other entity services' NOT_FOUND (no DDS: the lookup alone)."""
+    from types import SimpleNamespace
+
+    pytest.importorskip("rclpy", reason="the [ros2] extra (tools/setup installs it)")
+    pytest.importorskip("simulation_interfaces.msg", reason="python -m corobot_drake.ros2.build")
+    from corobot_drake.ros2.simulation_services import RefusedError, entity_body
+
+    sim = SimpleNamespace(station=SimpleNamespace(robots={}), robots=["corobot"],
+                          bodies=lambda: {"cone_goal": None, "cone_bonus_1": None})
+    with pytest.raises(RefusedError) as e:
+        entity_body(sim, "cone_gaol")
+    assert str(e.value) == ("entity: no entity named 'cone_gaol' (did you mean 'cone_goal'?) "
+                            "(there are: corobot, cone_goal, cone_bonus_1)")
+
+
+def test_a_gym_robot_names_the_closest_shipped_robot():
+    """It was "cannot read the file .../burgr", with no list nor suggestion."""
+    gymnasium = pytest.importorskip("gymnasium", reason="the [gym] extra")
+    from corobot_drake.gym import ENV_ID
+
+    with pytest.raises(ValueError) as e:
+        gymnasium.make(ENV_ID, robot="burgr")
+    assert str(e.value) == ("GoToGoalConfig.robot: 'burgr' is neither a shipped robot (corobot, "
+                            "burger, pioneer) nor a robot file (did you mean 'burger'?)")
