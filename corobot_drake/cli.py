@@ -436,7 +436,7 @@ class _FoxgloveSinks(contextlib.ExitStack):
 
         from corobot_drake.recording.foxglove_live import FoxgloveLive
         from corobot_drake.recording.mcap_log import McapLog
-        from corobot_drake.serving.security import is_loopback
+        from corobot_drake.serving.security import is_loopback, other_machines_line
 
         self.context = foxglove.Context()
         if args.foxglove is not None:  # first: a taken port leaves no file behind
@@ -445,6 +445,9 @@ class _FoxgloveSinks(contextlib.ExitStack):
             # stderr: --serve's first stdout line is its URL (scripts read it)
             print(f"Foxglove: {live.url}  (Foxglove: Open connection > Foxglove WebSocket)",
                   file=sys.stderr, flush=True)
+            others = other_machines_line(live.access, live.url_on)  # on 0.0.0.0, as --serve
+            if others:
+                print(others, file=sys.stderr, flush=True)
             if not is_loopback(args.host):
                 print(f"warning: Foxglove on {args.host}: anyone who can reach it and has the "
                       "token sees every topic", file=sys.stderr, flush=True)

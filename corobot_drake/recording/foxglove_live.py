@@ -73,8 +73,12 @@ class FoxgloveLive:
     def url(self) -> str:
         """The URL to open, with the token when there is one (on every address, 0.0.0.0:
         its loopback address)."""
-        return (f"ws://{reachable_host(self.host)}:{self.port}"
-                + (f"/?token={self.token}" if self.token else ""))
+        return self.url_on(reachable_host(self.host))
+
+    def url_on(self, name: str) -> str:
+        """The URL to open on the host `name` (this machine's name, for other machines), with
+        the token when there is one."""
+        return f"ws://{name}:{self.port}" + (f"/?token={self.token}" if self.token else "")
 
     def stop(self) -> None:
         """Stops the server (idempotent): its clients are disconnected, its port freed."""

@@ -114,6 +114,16 @@ def reachable_host(host: str) -> str:
     return f"[{host}]" if ":" in host else host
 
 
+
+def other_machines_line(access: Access, url_on) -> str | None:
+    """For a server on every address (0.0.0.0, ::): the line naming its URL on this machine's
+    name (`url_on(name)`, the token in it), which other machines may reach it by, as any of
+    its addresses; None on one address (its printed URL is the one to use)."""
+    if not access.wildcard:
+        return None
+    return (f"  from other machines {url_on(socket.gethostname())}  (or any of this machine's "
+            "addresses)")
+
 def _is_address(name: str) -> bool:
     try:
         ipaddress.ip_address(name)

@@ -24,7 +24,7 @@ import sys
 import threading
 
 from corobot_drake.limits import LIVE_RUN_LOG_WINDOW
-from corobot_drake.serving.security import is_loopback, reachable_host
+from corobot_drake.serving.security import is_loopback, other_machines_line, reachable_host
 
 SWITCH_INTERVAL = 0.001
 """s. Python's GIL hand-over interval in the simulation process while serving. The
@@ -197,14 +197,12 @@ def _announce(shown: str, host: str, port: int, access, runner) -> None:
     """The lines that say where the server is (and, beyond loopback, the warning). A server
     on every address (0.0.0.0) is shown on loopback, and also by this machine's name, which
     other machines may reach it by (any of its addresses does too)."""
-    import socket
-
     print(f"serving {shown}", flush=True)
     print(f"  dashboard {access.page_url(shown)}  services {shown}/services  API {shown}/docs"
           + (f"  Meshcat {runner.meshcat_url}" if runner.meshcat_url else ""), flush=True)
-    if access.wildcard:
-        print(f"  from other machines {access.page_url(f'http://{socket.gethostname()}:{port}')}"
-              "  (or any of this machine's addresses)", flush=True)
+    others = other_machines_line(access, lambda name: access.page_url(f"http://{name}:{port}"))
+    if others:
+        print(others, flush=True)
     if access.token:
         print(f"  token {access.token}  (send 'Authorization: Bearer <token>'; the dashboard "
               "link carries it)", flush=True)

@@ -556,6 +556,18 @@ def test_cli_foxglove_with_a_token_prints_the_url_carrying_it(capsys):
     assert re.fullmatch(r"ws://127\.0\.0\.1:\d+/\?token=s3cret", url)
 
 
+def test_cli_foxglove_on_every_address_names_it_for_other_machines(capsys):
+    """As --serve's line: no client connects to 0.0.0.0, so this machine's name is given too."""
+    import socket
+
+    assert main(["--headless", "--duration", "0.05", "--override", NO_CAMERA, "--foxglove",
+                 "0", "--host", "0.0.0.0", "--token", "s3cret"]) == 0
+    err = capsys.readouterr().err
+    port = re.search(r"Foxglove: ws://127\.0\.0\.1:(\d+)/\?token=s3cret ", err)[1]
+    assert (f"  from other machines ws://{socket.gethostname()}:{port}/?token=s3cret  (or any of "
+            "this machine's addresses)\n") in err
+
+
 # --- the command line ------------------------------------------------------------------------
 
 
