@@ -15,21 +15,16 @@ from corobot_drake.signals import put_value
 UNUSED_VARIANCE = 1e6
 """A covariance's diagonal for what a planar odometry does not measure (z, roll, pitch):
 large, so a fusing filter (robot_localization) ignores it, as ROS drivers of wheeled bases do."""
-WHEEL_ODOM_POSE_STDDEV = (0.05, 0.05, 0.1)
-"""m, m, rad: /wheel_odom's nominal pose uncertainty (x, y, yaw). Dead reckoning drifts
-without bound (a skid-steer base's turns most: docs/tuning.md, the odometry calibration), so
-these are a filter's starting weights, not measured bounds."""
-WHEEL_ODOM_TWIST_STDDEV = (0.05, 0.1)
-"""m/s, rad/s: /wheel_odom's twist uncertainty (forward, yaw rate): the encoders' speeds
-through the calibrated radius and track."""
 
-def _covariance(stddevs: tuple) -> list[float]:
-    """A 6 x 6 row-major covariance (x, y, z, roll, pitch, yaw) from the planar stddevs (x, y,
-    yaw), or (forward, yaw rate) for a twist."""
-    diag = ([stddevs[0] ** 2, stddevs[1] ** 2, UNUSED_VARIANCE, UNUSED_VARIANCE,
-             UNUSED_VARIANCE, stddevs[2] ** 2] if len(stddevs) == 3 else
-            [stddevs[0] ** 2, UNUSED_VARIANCE, UNUSED_VARIANCE, UNUSED_VARIANCE,
-             UNUSED_VARIANCE, stddevs[1] ** 2])
+
+def covariance(variances: tuple) -> np.ndarray:
+    """A 6 x 6 row-major covariance (x, y, z, roll, pitch, yaw) from the planar variances
+    (x m^2, y m^2, yaw rad^2), or (forward (m/s)^2, yaw rate (rad/s)^2) for a twist
+    (`systems.odometry_error.OdometryErrorModel`'s)."""
+    diag = ([variances[0], variances[1], UNUSED_VARIANCE, UNUSED_VARIANCE,
+             UNUSED_VARIANCE, variances[2]] if len(variances) == 3 else
+            [variances[0], UNUSED_VARIANCE, UNUSED_VARIANCE, UNUSED_VARIANCE,
+             UNUSED_VARIANCE, variances[1]])
     return np.diag(diag).flatten()
 
 
@@ -38,8 +33,6 @@ class Messages:
 
     def __init__(self, store=None):
         self.T = (store or typestore()).types
-        self._pose_covariance = _covariance(WHEEL_ODOM_POSE_STDDEV)
-        self._twist_covariance = _covariance(WHEEL_ODOM_TWIST_STDDEV)
         self._zero_covariance = np.zeros(36)
 
     def msg(self, name: str):
@@ -84,12 +77,13 @@ class Messages:
         return self.T["tf2_msgs/msg/TFMessage"](transforms=transforms)
 
     def odometry(self, t: float, frame: str, child: str, X: RigidTransform, linear, angular,
-                 estimated: bool = False):
+                 variances: tuple | None = None):
         """nav_msgs/Odometry: pose `X` in `frame`, twist (`linear` m/s, `angular` rad/s) in
-        `child`; `estimated` (dead reckoning) carries the nominal covariances."""
+        `child`; `variances` (an estimate's: (pose's, twist's), as `covariance` takes them)
+        or none (ground truth: exact, all zero)."""
         T = self.T
-        pose_cov = self._pose_covariance if estimated else self._zero_covariance
-        twist_cov = self._twist_covariance if estimated else self._zero_covariance
+        pose_cov, twist_cov = ((self._zero_covariance,) * 2 if variances is None else
+                               (covariance(variances[0]), covariance(variances[1])))
         return T["nav_msgs/msg/Odometry"](
             header=self.header(t, frame), child_frame_id=child,
             pose=T["geometry_msgs/msg/PoseWithCovariance"](pose=self.pose(X),

@@ -140,24 +140,33 @@ class RobotStatePublisher(RobotStateLooks):
         - wheel_state
         - drive_state
         - odometry
+        - travel
 
     Inputs: `recording.looks.RobotStateLooks`' and `odometry` (3: the dead-reckoned x, y m,
-    yaw rad). /wheel_odom: the dead reckoning, its twist from the front axles' measured speeds
-    through the drive's effective wheel radius and track width (`drive`: the robot's
-    `config.scenario.Drive`), with its error model's covariances; /ground_truth: the chassis
+    yaw rad) and `travel` (2: the distance rolled m and turning rad since its last reset,
+    `systems.dead_reckoning.DeadReckoning`'s). /wheel_odom: the dead reckoning, its twist from
+    the front axles' measured speeds through the drive's effective wheel radius and track
+    width (`drive`: the robot's `config.scenario.Drive`), with the covariances of its
+    `error_model` (`systems.odometry_error`; default the Corobot's with `drive`) after that
+    travel; /ground_truth: the chassis
     pose in the world and its velocity in base_link; /odom: the first (or with
     `ground_truth`, the second, in odom)."""
 
     def __init__(self, bus, names: tp.RobotNames, chassis_index: int, drive,
                  period: float = STATE_PERIOD, ground_truth: bool = False,
-                 wheel_joints: tuple[str, ...] | None = None):
+                 wheel_joints: tuple[str, ...] | None = None, error_model=None):
         """`wheel_joints`: the robot's wheels' joint names (the Corobot's by default)."""
+        from corobot_drake.robots import robot_spec
+        from corobot_drake.systems.odometry_error import error_model as model_of
+
         super().__init__(chassis_index, wheel_joints)
+        self._error = error_model or model_of(robot_spec("corobot"), drive)
         self._m = Messages(bus.store)
         self._odom, self._base = names.frame(ODOM_FRAME), names.base_frame()
         self._radius, self._track = drive.effective_wheel_radius, drive.effective_track_width
         self._ground_truth = ground_truth
         self._odometry = self.DeclareVectorInputPort("odometry", 3)
+        self._travel = self.DeclareVectorInputPort("travel", 2)
         self._joint_names = list(self.wheel_joints)
         self._channels = {name: _channel(bus, names, ifc.TOPIC[name]) for name in (
             "odom", "wheel_odom", "ground_truth", "joint_states", "drive_state")}
@@ -187,14 +196,16 @@ class RobotStatePublisher(RobotStateLooks):
             c["drive_state"].publish(ns, m.drive_state(t, self._odom, self.drive_state(context)))
 
     def wheel_odometry(self, context):
-        """The dead reckoning as nav_msgs/Odometry, with its nominal covariances."""
+        """The dead reckoning as nav_msgs/Odometry, with its error model's covariances."""
         t = context.get_time()
         x, y, yaw = self._odometry.Eval(context)
         left, right = self.wheel_state(context)[1][:2]  # front axles
         forward = 0.5 * self._radius * (left + right)
         yaw_rate = self._radius * (right - left) / self._track
+        variances = (self._error.pose_variances(*self._travel.Eval(context)),
+                     self._error.twist_variances())
         return self._m.odometry(t, self._odom, self._base, _planar((x, y, yaw)),
-                                (forward, 0.0, 0.0), (0.0, 0.0, yaw_rate), estimated=True)
+                                (forward, 0.0, 0.0), (0.0, 0.0, yaw_rate), variances)
 
 
 def _planar(pose) -> RigidTransform:
@@ -296,6 +307,7 @@ def _add_ros2_topics(bus, builder, plant, robots: dict, scenario, settings) -> N
     from corobot_drake.robots import robot_spec
     from corobot_drake.ros2.parameters import Settings
     from corobot_drake.ros2.urdf import robot_urdf
+    from corobot_drake.systems.odometry_error import error_model
 
     ground_truth = (settings or Settings()).odom_source == "ground_truth"
     mounts, descriptions, tf_robots, odometries = [], {}, [], []
@@ -305,10 +317,13 @@ def _add_ros2_topics(bus, builder, plant, robots: dict, scenario, settings) -> N
         robot = robot_spec(scenario.robots[name].robot)
         state = builder.AddNamedSystem(f"{name}.ros2_state", RobotStatePublisher(
             bus, names, parts.chassis.index(), scenario.robots[name].drive,
-            ground_truth=ground_truth, wheel_joints=tuple(j.name() for j in parts.wheel_joints)))
+            ground_truth=ground_truth, wheel_joints=tuple(j.name() for j in parts.wheel_joints),
+            error_model=error_model(robot, scenario.robots[name].drive)))
         RobotStateLooks.connect(builder, plant, name, state)
-        odometry = builder.GetSubsystemByName(f"{name}.dead_reckoning").GetOutputPort("pose")
+        dead_reckoning = builder.GetSubsystemByName(f"{name}.dead_reckoning")
+        odometry = dead_reckoning.GetOutputPort("pose")
         builder.Connect(odometry, state.GetInputPort("odometry"))
+        builder.Connect(dead_reckoning.GetOutputPort("travel"), state.GetInputPort("travel"))
         odometries.append((name, odometry))
         _add_telemetry(builder, bus, names, tp.telemetry_topics(robot))
         tf_robots.append((names, parts.chassis.index(),

@@ -30,9 +30,11 @@ HISTORY = 8
 """Encoder samples the history holds; the pose is folded every `HISTORY` control periods. A
 power of two: k x (8 period) and 8k x period are then the same double, so the fold happens at
 the very instants of the history's samples (and adds no step of its own to the Simulator)."""
-_X, _Y, _YAW, _LEFT, _RIGHT, _TAKEN = range(6)
-"""The integrator's state: pose (m, m, rad unwrapped), the encoder counts it last used, and the
-history's sample count it has folded up to."""
+_X, _Y, _YAW, _LEFT, _RIGHT, _TAKEN, _ROLLED, _TURNED = range(8)
+"""The integrator's state: pose (m, m, rad unwrapped), the encoder counts it last used, the
+history's sample count it has folded up to, and the travel since the last reset: the distance
+rolled (m, forward and back alike) and the turning (rad, either way) the odometry's error grows
+with (`systems.odometry_error`)."""
 _GIVEN = 5
 """The `start` parameter: the state's first five values, then how many of them are given (0:
 none, 3: the pose, 5: the pose and the counts)."""
@@ -77,6 +79,7 @@ class PoseIntegrator(LeafSystem):
         - chassis_pose
         output_ports:
         - pose
+        - travel
 
     Input `encoder_history` (1 + 2 `length`, `encoder_history`'s output). Inputs
     `encoder_ticks` (2: front left, front right counts, 600 per revolution, forward rolling
@@ -84,8 +87,11 @@ class PoseIntegrator(LeafSystem):
     initialization: the counts and the start pose (x, y, yaw) the odometry integrates from,
     unless `SetStart` gave them (a saved scene's). Output `pose` (3): x, y (m, the chassis
     origin in the world frame) and yaw (rad in (-pi, pi]), with every sample taken so far.
-    Discrete state [x, y, yaw (unwrapped), left ticks, right ticks, samples folded], folded
-    every `fold_period` s and at initialization. Numeric parameter `start` (6): what
+    Output `travel` (2): the distance rolled (m, the sum of each sample's |mean wheel
+    distance|) and the turning (rad, the sum of each sample's |turn|) since initialization or
+    the last `Teleport`. Discrete state [x, y, yaw (unwrapped), left ticks, right ticks,
+    samples folded, distance rolled, turning], folded every `fold_period` s and at
+    initialization. Numeric parameter `start` (6): what
     `SetStart` gave.
     """
 
@@ -98,13 +104,14 @@ class PoseIntegrator(LeafSystem):
         self._ticks = self.DeclareVectorInputPort("encoder_ticks", 2)
         self._pose = self.DeclareAbstractInputPort("chassis_pose",
                                                    AbstractValue.Make(RigidTransform()))
-        self._state = self.DeclareDiscreteState(6)
+        self._state = self.DeclareDiscreteState(8)
         self._start = self.DeclareNumericParameter(BasicVector(np.zeros(6)))
         self.DeclareInitializationDiscreteUpdateEvent(self._initialize)
         self.DeclarePeriodicDiscreteUpdateEvent(fold_period, 0.0, self._fold)
+        folded = {self.discrete_state_ticket(self._state), self._history.ticket()}
+        self.DeclareVectorOutputPort("pose", 3, self._calc, folded)
         self.DeclareVectorOutputPort(
-            "pose", 3, self._calc,
-            {self.discrete_state_ticket(self._state), self._history.ticket()})
+            "travel", 2, lambda c, o: o.SetFromVector(self._folded(c)[_ROLLED:]), folded)
 
     def SetStart(self, context, values) -> None:
         """See `DeadReckoning.SetStart`; `context` is this system's."""
@@ -122,6 +129,7 @@ class PoseIntegrator(LeafSystem):
         """See `DeadReckoning.Teleport`; `context` is this system's."""
         folded = list(self._folded(context))
         folded[:_LEFT] = x, y, yaw
+        folded[_ROLLED:] = 0.0, 0.0  # a reset pose is known: its error starts afresh
         context.SetDiscreteState(np.array(folded, dtype=float))
 
     def _initialize(self, context, discrete_state):
@@ -130,7 +138,7 @@ class PoseIntegrator(LeafSystem):
         X_WB = self._pose.Eval(context)
         x, y, _ = X_WB.translation()
         state = [x, y, heading_of(X_WB), *np.rint(self._ticks.Eval(context)),
-                 self._history.EvalBasicVector(context)[0]]
+                 self._history.EvalBasicVector(context)[0], 0.0, 0.0]
         state[:given] = start[:given]
         discrete_state.set_value(self._state, state)
 
@@ -139,7 +147,7 @@ class PoseIntegrator(LeafSystem):
         sample's increments since the one before, oldest first (plain floats; round: half to
         even, as np.rint)."""
         history = self._history.EvalBasicVector(context)
-        x, y, yaw, left, right, taken = context.get_discrete_state(
+        x, y, yaw, left, right, taken, rolled, turned = context.get_discrete_state(
             self._state).get_value().tolist()
         count = history[0]
         pending = round(count - taken)
@@ -151,10 +159,12 @@ class PoseIntegrator(LeafSystem):
             sample_left, sample_right = round(history[2 * i - 1]), round(history[2 * i])
             if sample_left == left and sample_right == right:
                 continue  # at rest: no motion
-            x, y, yaw = advance_pose(x, y, yaw, k * (sample_left - left),
-                                     k * (sample_right - right), self._track)
+            rolled_left, rolled_right = k * (sample_left - left), k * (sample_right - right)
+            x, y, yaw = advance_pose(x, y, yaw, rolled_left, rolled_right, self._track)
+            rolled += abs(0.5 * (rolled_left + rolled_right))
+            turned += abs(rolled_right - rolled_left) / self._track
             left, right = sample_left, sample_right
-        return x, y, yaw, float(left), float(right), count
+        return x, y, yaw, float(left), float(right), count, rolled, turned
 
     def _fold(self, context, discrete_state):
         discrete_state.set_value(self._state, np.array(self._folded(context), dtype=float))
@@ -176,13 +186,16 @@ class DeadReckoning(Diagram):
         - chassis_pose
         output_ports:
         - pose
+        - travel
 
     Input `encoder_ticks` (2: front left, front right counts, 600 per revolution, forward
     rolling counts up), sampled every `period` s from 0. Input `chassis_pose` (abstract
     RigidTransform X_WB) is read once, at initialization: the start pose (x, y, yaw) the
     odometry integrates from, unless `SetStart` gave one (a saved scene's). Output `pose` (3):
     x, y (m, the chassis origin in the world frame) and yaw (rad in (-pi, pi]) as dead
-    reckoned through the latest sample.
+    reckoned through the latest sample. Output `travel` (2): the distance rolled (m) and the
+    turning (rad) since the start or the last `Teleport`, which the odometry's error grows
+    with (`systems.odometry_error`).
     """
 
     def __init__(self, drive: Drive, period: float,
@@ -198,6 +211,7 @@ class DeadReckoning(Diagram):
         builder.ConnectInput("encoder_ticks", self._integrator.GetInputPort("encoder_ticks"))
         builder.ExportInput(self._integrator.GetInputPort("chassis_pose"), "chassis_pose")
         builder.ExportOutput(self._integrator.GetOutputPort("pose"), "pose")
+        builder.ExportOutput(self._integrator.GetOutputPort("travel"), "travel")
         builder.BuildInto(self)
 
     def SetStart(self, context, values) -> None:
@@ -215,6 +229,7 @@ class DeadReckoning(Diagram):
     def Teleport(self, context, x: float, y: float, yaw: float) -> None:
         """Puts the dead reckoning at the pose a teleport put the robot (x, y m, yaw rad), the
         encoder samples taken so far folded in first: it integrates on from there, as a
-        driver's odometry reset does. `context` is this system's."""
+        driver's odometry reset does; its travel (and so its error) starts again from 0.
+        `context` is this system's."""
         self._integrator.Teleport(
             self.GetMutableSubsystemContext(self._integrator, context), x, y, yaw)

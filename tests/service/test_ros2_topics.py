@@ -35,7 +35,6 @@ from corobot_drake.robots import robot_spec
 from corobot_drake.ros2 import interfaces as ifc
 from corobot_drake.ros2.bus import Bus
 from corobot_drake.ros2.graph import configure_discovery, ros_type
-from corobot_drake.ros2.messages import WHEEL_ODOM_POSE_STDDEV
 from corobot_drake.ros2.publishers import (
     ClockPublisher,
     RobotStatePublisher,
@@ -46,6 +45,7 @@ from corobot_drake.ros2.publishers import (
 from corobot_drake.ros2.urdf import corobot_urdf
 from corobot_drake.sensors.ir_sensor import DISTANCE, SCAN_TIME, scan_state_layout
 from corobot_drake.systems.odometry import DriveState, WheelState
+from corobot_drake.systems.odometry_error import error_model
 
 SPEC = robot_spec("corobot")
 """The Corobot as its robot file and model say."""
@@ -190,6 +190,7 @@ def robot_state_publisher(memory, ground_truth: bool = False):
         w: WheelState(0.1, 2.0, 7 if w.startswith("front") else None)
         for w in SPEC.wheel_names}, (1.0, 2.0, 0.0), 0.5))
     stepper.fix("odometry", [0.9, 2.1, 0.4])
+    stepper.fix("travel", [3.0, 2.0])  # m rolled, rad turned since the last reset
     stepper.tick()
 
 
@@ -213,8 +214,11 @@ def test_robot_state_publisher_odom_wheel_odom_and_ground_truth():
     r, track = drive.effective_wheel_radius, drive.effective_track_width
     assert wheel.twist.twist.linear.x == pytest.approx(r * 3.0)  # front axles 2 and 4 rad/s
     assert wheel.twist.twist.angular.z == pytest.approx(r * 2.0 / track)
-    x, y, yaw = WHEEL_ODOM_POSE_STDDEV
-    assert [wheel.pose.covariance[i] for i in (0, 7, 35)] == pytest.approx([x**2, y**2, yaw**2])
+    model = error_model(SPEC, drive)  # the Corobot's, after the travel fixed
+    assert [wheel.pose.covariance[i] for i in (0, 7, 35)] == pytest.approx(
+        model.pose_variances(3.0, 2.0), rel=1e-12)
+    assert [wheel.twist.covariance[i] for i in (0, 35)] == pytest.approx(
+        model.twist_variances(), rel=1e-12)
     (_, odom), = memory.messages["/bot/odom"]
     assert odom.pose == wheel.pose and odom.twist == wheel.twist
     ground = Memory()
