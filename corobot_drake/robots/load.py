@@ -265,8 +265,9 @@ def _touching(geometries, wheel_bodies: set, inspector, checks) -> list:
         if body.index() in wheel_bodies or low > sp.GROUND_TOLERANCE:
             continue
         if low < -sp.GROUND_TOLERANCE:
+            depth = f"{-low * 1000:.4g} mm" if low > -1.0 else f"{-low:.4g} m"
             checks.fail("model", f"{body.name()}/{inspector.GetName(gid).split('::')[-1]} "
-                        f"goes {-low * 1000:.4g} mm into the ground at the start pose (at "
+                        f"goes {depth} into the ground at the start pose (at "
                         f"most {sp.GROUND_TOLERANCE * 1000:g} mm, as a caster touching it; "
                         "the base link's origin is on the ground)")
         touching.append((body, gid, X_BG))

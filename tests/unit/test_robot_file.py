@@ -124,7 +124,7 @@ _CHASSIS = '<box size="0.14 0.12 0.06"/>'
     # The chassis box (centre 8 cm up) 1 cm into the ground: a body, not a caster.
     ('<origin xyz="0 0 0.08"/>', '<origin xyz="0 0 0.02"/>', "base_link/Box goes 10 mm "
      "into the ground at the start pose (at most 2 mm"),
-    (_CHASSIS, '<box size="1e9 1e9 1e9"/>', "base_link/Box goes 5e+11 mm into the ground"),
+    (_CHASSIS, '<box size="1e9 1e9 1e9"/>', "base_link/Box goes 5e+08 m into the ground"),
     # Drake's parser replaces such an inertia, saying only that an assertion failed.
     ('<mass value="0.05"/>', '<mass value="0"/>', "twowheel.urdf:12: link 'left_wheel' has "
      "no mass (0 kg or less) but an inertia"),
