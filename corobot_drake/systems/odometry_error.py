@@ -21,7 +21,11 @@ Three sources, each a robot's own:
 So after rolling s m and turning phi rad since the last reset (`DeadReckoning`'s `travel`):
 x and y each (the odom frame's axes; the error's direction turns with the path) have
 tick^2 / 24 + end_error^2 / path_length s + (e s)^2 m^2, yaw tick^2 / (6 B^2) +
-heading_error^2 / turning phi + (f phi)^2 rad^2.
+heading_error^2 / turning phi + (f phi)^2 rad^2. A robot without a measured drive test gets
+the worst measured robot's figures (its nominal radius and track taken as far off as theirs
+were). Not modelled: the lever arm of a heading error on the position beyond what the drive
+test's end error holds (an uncalibrated track shows in the yaw's variance, not in x and y's),
+and the travel before a saved scene was saved (its odometry restarts from the floor).
 
 The twist comes from the encoders' speeds over one control period T (the odometry's rate): a
 wheel's speed is the difference of two counts over T, variance 2 tick^2 / 12 / T^2; forward
