@@ -54,6 +54,7 @@ from corobot_drake.limits import (
     Range,
     bound_of,
 )
+from corobot_drake.names import unknown_robot_kind
 from corobot_drake.resources import resolve_file
 from corobot_drake.robots import ROBOTS, robot_defaults, robot_spec
 from corobot_drake.sensors.registry import KINDS
@@ -255,6 +256,8 @@ class _SchemaWalk:
             if isinstance(node, yaml.ScalarNode) and node.value in ("", "null", "~"):
                 return
             return self.check(node, options[0], path)
+        if type(None) in args and node.tag == "tag:yaml.org,2002:null":
+            return  # one of the variants (a study's grid value, typed later by its field)
         if str in options and node.tag in _NOT_A_SCALAR:  # not one of bool, int, float, str
             self.fail(node, path, f"expected {_variants_text(options)}, got {_plain(node)}")
         tag = node.tag[1:] if node.tag.startswith("!") else None
@@ -672,8 +675,7 @@ class LayerChecks:
         """The robot file its `robot:` names, loaded (its own problems name its own lines),
         and the drive's effective radius and track near the robot's own."""
         if robot.robot not in ROBOTS and not Path(robot.robot).is_file():
-            self.fail(f"{path}.robot", f"{robot.robot!r} is neither a shipped robot "
-                      f"({', '.join(ROBOTS)}) nor a robot file")
+            self.fail(f"{path}.robot", unknown_robot_kind(robot.robot, ROBOTS))
         spec = robot_spec(robot.robot)
         d = robot.drive
         if not 0.5 * spec.wheel_radius <= d.effective_wheel_radius <= 1.5 * spec.wheel_radius:
@@ -964,8 +966,7 @@ def _with_new_robots(checks: LayerChecks, defaults: sc.Scenario, base: Path) -> 
                             "added (a later layer cannot change it)")
             continue
         if value not in ROBOTS and not Path(value).is_file():
-            checks.fail(f"robots.{key.value}.robot", f"{node.value!r} is neither a shipped "
-                        f"robot ({', '.join(ROBOTS)}) nor a robot file")
+            checks.fail(f"robots.{key.value}.robot", unknown_robot_kind(node.value, ROBOTS))
         new.append((key.value, value))
     if not new:
         return defaults

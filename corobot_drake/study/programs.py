@@ -26,7 +26,8 @@ def check_fields(program) -> str | None:
         value = getattr(program, field.name)
         wanted = int | float if field.type is float else field.type  # an int is a float
         if isinstance(value, bool) or not isinstance(value, wanted):
-            return f"{field.name}: expected {_TYPES[field.type]}, got {value!r}"
+            shown = "null" if value is None else repr(value)  # (a study's grid value)
+            return f"{field.name}: expected {_TYPES[field.type]}, got {shown}"
         bound = bound_of(field)
         if bound is not None and (problem := bound.problem(value)):
             return f"{field.name}: {problem}"

@@ -122,6 +122,8 @@ def _check_program_robots(study: Study, base, checks: LayerChecks) -> None:
             named += [(f"random.{path}.values[{i}]", v)
                       for i, v in enumerate(study.random[path].values)]
         for where, robot in named:
+            if problem := value_problem(robot, str, None):
+                checks.fail(where, problem)
             if robot not in base.robots:  # at the program's line when `robot` is its default
                 checks.fail(where, f"the scenario has no robot {robot!r}"
                             f"{did_you_mean(robot, base.robots)}; it has: "
@@ -213,7 +215,7 @@ def value_problem(value, tp: type, bound) -> str | None:
             not isinstance(value, bool) and isinstance(value, int | float if tp is float
                                                        else tp))
     if not fits:
-        return f"expected {TYPE_NAMES[tp]}, got {value!r}"
+        return f"expected {TYPE_NAMES[tp]}, got {'null' if value is None else repr(value)}"
     if isinstance(bound, Range) and tp in (int, float):
         return bound.problem(value)
     if bound is not None and tp is str and hasattr(bound, "problem"):

@@ -62,11 +62,17 @@ class Normal:
     sd: float = bounded(1.0, Range(0.0, 1e300, why="a standard deviation"))
 
 
+GridValue = bool | int | float | str | None
+"""A grid or `!Choice` value as the file has it. null loads too, so that each value is checked
+in order against its field's own type (`resolve.value_problem`): the first wrong one is named,
+not a null further on as no scalar at all."""
+
+
 @dc.dataclass
 class Choice:
     """One of `values`, equally likely."""
 
-    values: list[bool | int | float | str] = dc.field(default_factory=list)
+    values: list[GridValue] = dc.field(default_factory=list)
 
 
 Distribution = Uniform | Normal | Choice
@@ -88,7 +94,7 @@ class Study:
     """s simulated after the last command ends (`until: commands`), so the robot is at rest."""
     seeds: list[int] | int = 1
     """Runs per grid point: N gives random_seed 1..N; a list gives those seeds."""
-    grid: dict[str, list[Scalar]] = dc.field(default_factory=dict)
+    grid: dict[str, list[GridValue]] = dc.field(default_factory=dict)
     """Dotted scenario path -> values; every combination is a grid point."""
     random: dict[str, Distribution] = dc.field(default_factory=dict)
     """Dotted scenario path -> distribution, drawn per run from its seed."""
@@ -239,9 +245,9 @@ def _check_program_path(study: Study, checks: LayerChecks, where: str, path: str
     names = [f.name for f in dc.fields(program)]
     if field not in names:
         checks.fail(where, f"{name} has no field {field!r}; fields: {', '.join(names)}")
-    for value in study.grid.get(path, []):
+    for i, value in enumerate(study.grid.get(path, [])):  # in order, each at its line
         if problem := dc.replace(program, **{field: value}).check():
-            checks.fail(where, problem)
+            checks.fail(f"{where}[{i}]", problem)
 
 
 def scenario_path(study: Study, study_file: str | Path) -> Path:

@@ -130,7 +130,7 @@ S = f"scenario: {DEFAULT_SCENARIO}\n"
     # programs: bounded and typed fields, one at a time
     (S + "drive_test: {loops: 1000000}\n", r":2: drive_test.loops: must be in \[1, 100\]"),
     (S + "drive_test: {}\ngrid: {drive_test.loops: [1, 2.5]}\n",
-     r"grid.drive_test.loops: loops: expected an integer, got 2.5"),
+     r":3: grid.drive_test.loops\[1\]: loops: expected an integer, got 2.5"),
     (S + "drive_test: {}\nbox_approach: {}\n", r":3: box_approach: a study has a drive_test or "
      r"a box_approach, not both"),
     # a program's robot, and each grid value of it, is one of the scenario's
@@ -138,10 +138,17 @@ S = f"scenario: {DEFAULT_SCENARIO}\n"
      r":2: drive_test.robot: the scenario has no robot 'nobody'; it has: corobot"),
     (S + "box_approach: {}\ngrid:\n  box_approach.robot:\n    - corobot\n    - nobody\n",
      r":6: grid.box_approach.robot\[1\]: the scenario has no robot 'nobody'"),
-    # a grid value YAML reads as null or a date (no scalar a field takes), at its line
+    # mixed grid values: each against the field's own type, in order (the first wrong one;
+    # a null further on was named first, as no scalar at all)
     (S + "grid:\n  robots.corobot.drive.motor_torque_scaling: [10.0, fast, null, true]\n",
-     r":3: grid.robots.corobot.drive.motor_torque_scaling\[2\]: expected true or false, an "
-     r"integer, a number or text, got null$"),
+     r":3: grid.robots.corobot.drive.motor_torque_scaling\[1\]: expected a number, got 'fast'$"),
+    (S + "grid:\n  robots.corobot.drive.motor_torque_scaling: [10.0, null, fast]\n",
+     r":3: grid.robots.corobot.drive.motor_torque_scaling\[1\]: expected a number, got null$"),
+    (S + "random: {robots.corobot.drive.slew_rate: !Choice {values: [5, null]}}\n",
+     r":2: random.robots.corobot.drive.slew_rate.values\[1\]: expected a number, got null$"),
+    (S + "drive_test: {}\ngrid: {drive_test.robot: [corobot, null]}\n",
+     r":3: grid.drive_test.robot\[1\]: robot: expected text, got null$"),
+    # a date (no scalar a field takes), at its line
     (S + "grid:\n  robots.corobot.drive.motor_torque_scaling:\n    - 10.0\n    - 2026-01-01\n",
      r":5: grid.robots.corobot.drive.motor_torque_scaling\[1\]: .* got a date \('2026-01-01'\)"),
     # a metric a run of the study's duration cannot give

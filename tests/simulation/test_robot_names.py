@@ -140,3 +140,12 @@ def test_a_gym_robot_names_the_closest_shipped_robot():
         gymnasium.make(ENV_ID, robot="burgr")
     assert str(e.value) == ("GoToGoalConfig.robot: 'burgr' is neither a shipped robot (corobot, "
                             "burger, pioneer) nor a robot file (did you mean 'burger'?)")
+
+
+def test_a_robot_kind_names_the_closest_shipped_robot():
+    with pytest.raises(ScenarioError) as e:
+        load_scenario(DEFAULT_SCENARIO, overrides=[
+            "robots: {rover: {robot: burgr, pose: {translation: [0.0, 1.0, 0.0]}}}"])
+    assert str(e.value) == ("--override:1: robots.rover.robot: 'burgr' is neither a shipped "
+                            "robot (corobot, burger, pioneer) nor a robot file (did you mean "
+                            "'burger'?)")
