@@ -5,6 +5,7 @@ so that waiting for it stays short; every wait is on an event (a closed socket, 
 with a bound."""
 
 import contextlib
+import re
 import socket
 import threading
 import time
@@ -258,3 +259,35 @@ def test_at_the_connection_cap_a_waiting_client_gives_way_and_a_served_one_does_
                 streams.enter_context(client.stream("GET", f"{ROBOT}/gps/subscribe?limit=5"))
             busy = _answer(_connect(address))
             assert busy.startswith(b"HTTP/1.1 503 ") and b'"detail"' in busy, busy
+
+
+def test_what_the_guard_reads_of_uvicorn_is_still_there():
+    """`http_config` takes uvicorn's h11 protocol by its name in `uvicorn.config.HTTP_PROTOCOLS`
+    (no documented name) and makes it with the arguments uvicorn's server gives the protocol
+    class: an upgrade that changes either fails here by name, not as a server that does not
+    start. (No upper bound on uvicorn in pyproject: this checks what is used, any version.)"""
+    import asyncio
+    import inspect
+
+    import uvicorn
+    import uvicorn.server
+    from uvicorn.config import HTTP_PROTOCOLS
+    from uvicorn.importer import import_from_string
+
+    assert "h11" in HTTP_PROTOCOLS, f"uvicorn {uvicorn.__version__}: no 'h11' in HTTP_PROTOCOLS"
+    inner = import_from_string(HTTP_PROTOCOLS["h11"])
+    assert issubclass(inner, asyncio.Protocol), f"uvicorn {uvicorn.__version__}: {inner}"
+    for method in ("connection_made", "data_received", "eof_received", "connection_lost",
+                   "pause_writing", "resume_writing"):  # what GuardedProtocol forwards
+        assert callable(getattr(inner, method, None)), f"{inner.__name__}.{method} is gone"
+    # The keywords uvicorn's server makes the protocol class with, as its source says them.
+    source = inspect.getsource(uvicorn.server.Server)
+    call = source[source.index("config.http_protocol_class("):]
+    given = set(re.findall(r"(\w+)=", call[:call.index(")")]))
+    assert given == {"config", "server_state", "app_state", "_loop"}, \
+        f"uvicorn {uvicorn.__version__} makes its protocol with {sorted(given)}"
+    accepted = inspect.signature(inner.__init__).parameters
+    assert given <= set(accepted), \
+        f"uvicorn {uvicorn.__version__}: {inner.__name__}({', '.join(accepted)})"
+    config = http_config(lambda scope, receive, send: None)
+    assert config.http.inner_class is inner and issubclass(config.http, asyncio.Protocol)
