@@ -12,6 +12,8 @@ import sys
 DISCOVERY_VARIABLE = "ROS_AUTOMATIC_DISCOVERY_RANGE"
 DISCOVERY_RANGES = ("LOCALHOST", "SUBNET", "OFF", "SYSTEM_DEFAULT")
 """The values rcl takes (exactly: another is warned about and taken as SUBNET)."""
+STATIC_PEERS_VARIABLE = "ROS_STATIC_PEERS"
+"""Addresses (`;`-separated) discovered beyond the range, under LOCALHOST too (not OFF)."""
 DOMAIN_VARIABLE = "ROS_DOMAIN_ID"
 MAX_DOMAIN_ID = 232
 """Fast DDS's highest domain id (its ports, 7400 + 250 per domain, must stay below 65536)."""
@@ -30,6 +32,27 @@ def configure_discovery(network: bool = False, environ=os.environ) -> str:
         environ[DISCOVERY_VARIABLE] = "LOCALHOST"
     return environ[DISCOVERY_VARIABLE]
 
+
+
+def discovery_reach(discovery: str, environ=os.environ) -> tuple[str, list[str]]:
+    """(where a node's discovery reaches, in words for its line; the warnings, one line each)
+    for the range in force and ROS_STATIC_PEERS. Static peers are discovered over the network
+    under LOCALHOST as under SUBNET (ROS 2's "Improved Dynamic Discovery" table); OFF
+    discovers no node, static peers included."""
+    peers = [p.strip() for p in environ.get(STATIC_PEERS_VARIABLE, "").split(";") if p.strip()]
+    warnings = []
+    if discovery in ("SUBNET", "SYSTEM_DEFAULT"):
+        warnings.append(f"warning: ROS 2 discovery {discovery}: any ROS 2 node on the network "
+                        "with this domain id can read the topics and drive the robot")
+    if not peers:
+        return discovery, warnings
+    named = ", ".join(peers)
+    if discovery == "OFF":
+        return f"OFF ({STATIC_PEERS_VARIABLE} {named} unused: OFF discovers no node)", warnings
+    warnings.append(f"warning: ROS 2 static peers {named} ({STATIC_PEERS_VARIABLE}) are reached "
+                    "over the network: a ROS 2 node there with this domain id can read the "
+                    "topics and drive the robot")
+    return f"{discovery} and the static peers {named}", warnings
 
 def environment_problem(environ=os.environ) -> str | None:
     """Why ROS 2's environment cannot be used as it stands (one line), else None: a

@@ -109,14 +109,14 @@ class Ros2Front(contextlib.ExitStack):
     def announce(self) -> None:
         """The line that says where the node is (stderr: --serve's first stdout line is its
         URL)."""
+        from corobot_drake.ros2.graph import discovery_reach
+
         domain = self.node.context.get_domain_id()  # rcl's, as it took it
+        reach, warnings = discovery_reach(self.node.discovery)
         print(f"ROS 2: node /{self.node.node.get_name()}, ROS_DOMAIN_ID {domain}, discovery "
-              f"{self.node.discovery} (python -m corobot_drake.ros2 list)", file=sys.stderr,
-              flush=True)
-        if self.node.discovery in ("SUBNET", "SYSTEM_DEFAULT"):  # (OFF: static peers only)
-            print(f"warning: ROS 2 discovery {self.node.discovery}: any ROS 2 node on the "
-                  "network with this domain id can read the topics and drive the robot",
-                  file=sys.stderr, flush=True)
+              f"{reach} (python -m corobot_drake.ros2 list)", file=sys.stderr, flush=True)
+        for warning in warnings:
+            print(warning, file=sys.stderr, flush=True)
 
 
 def run_live(front: Ros2Front, make_sim, meshcat: bool, duration: float,
