@@ -109,6 +109,8 @@ def make_node(name: str, context, overrides: list = ()):
             self.refusals: list[str] = []  # (`declare` reports the last)
             super().__init__(*args, **kwargs)
 
+        # rclpy's (private) check of a value against its descriptor: the one place it
+        # refuses by range, at declaration (`-p`, a params file) and at a set alike.
         def _apply_descriptor(self, parameter, descriptor=None, check_read_only=True):
             result = super()._apply_descriptor(parameter, descriptor, check_read_only)
             spec = PARAMETER.get(parameter.name)
