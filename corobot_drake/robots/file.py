@@ -84,6 +84,24 @@ class Casters:
     friction: float = bounded(0.05, lim.FRICTION)
 
 
+@dc.dataclass
+class OdometryTest:
+    """The robot's measured odometry error: what `tools/calibrate_odometry.py --simulate
+    --drive-test` prints for it (the same legs for every robot: 3 loops of seed 1, at power
+    0.2), with the odometry at the calibrated radius and track. The ROS 2 node's odometry
+    covariances grow from it (`systems.odometry_error`); left out, the worst of the shipped
+    robots' is taken."""
+
+    effective_wheel_radius: float | None = bounded(None, LENGTH)
+    """m: the calibrated wheel radius the test's odometry ran with."""
+    effective_track_width: float | None = bounded(None, LENGTH)
+    """m: the calibrated track width the test's odometry ran with."""
+    end_error: float | None = bounded(None, Range(0.0, 100.0, unit="m"))
+    """m: the dead-reckoned position's distance from the true one at the test's end."""
+    heading_error_deg: float | None = bounded(None, Range(0.0, 180.0, unit="deg"))
+    """deg: the dead-reckoned heading's error at the test's end (its magnitude)."""
+
+
 def with_robot_sensor_maps(cls):
     """One field per registered kind of sensor (`sensors.registry.KINDS`), as the scenario's
     robots have, but empty by default: a robot file lists its own sensors."""
@@ -107,3 +125,4 @@ class RobotFile:
     drive: RobotDrive = dc.field(default_factory=RobotDrive)
     tyres: Tyres = dc.field(default_factory=Tyres)
     casters: Casters = dc.field(default_factory=Casters)
+    odometry: OdometryTest = dc.field(default_factory=OdometryTest)

@@ -360,6 +360,23 @@ def _drive(robot_file: RobotFile, radius: float, track: float, checks):
                     effective_track_width=track)
 
 
+def _odometry_test(robot_file: RobotFile, radius: float, track: float, checks):
+    """The robot file's measured odometry error as a `DriveTest` (its nominal radius and track
+    the measured ones), None when it states none; all four figures or none."""
+    from corobot_drake.systems.odometry_error import DRIVE_TEST_PATH, DriveTest
+
+    o = robot_file.odometry
+    figures = (o.effective_wheel_radius, o.effective_track_width, o.end_error,
+               o.heading_error_deg)
+    if all(f is None for f in figures):
+        return None
+    if any(f is None for f in figures):
+        checks.fail("odometry", "needs all of effective_wheel_radius, effective_track_width, "
+                    "end_error and heading_error_deg (a drive test's result), or none")
+    return DriveTest(o.effective_wheel_radius, o.effective_track_width, *DRIVE_TEST_PATH,
+                     o.end_error, math.radians(o.heading_error_deg), radius, track)
+
+
 def _links(plant, instance) -> tuple[str, ...]:
     """The model's links, then its own frames (not those Drake makes for its joints)."""
     joint_frames = set()
@@ -423,4 +440,5 @@ def load_spec(path: str | Path, kind: str | None = None) -> sp.RobotSpec:
         caster_friction=robot_file.casters.friction,
         drive=drive, contact=contact,
         encoder_ticks_per_revolution=robot_file.drive.encoder_ticks_per_revolution,
+        odometry_test=_odometry_test(robot_file, radius, track, checks),
         sensors=_sensors(robot_file, links, checks), generated=model in GENERATED_MODELS)

@@ -112,6 +112,9 @@ class RobotSpec:
     contact: WheelContact
     """Its tyres and motors (the scenario's `contact:` starts from it)."""
     encoder_ticks_per_revolution: int
+    odometry_test: object = dc.field(default=None, compare=False)
+    """Its measured odometry error (`systems.odometry_error.DriveTest`, from the robot file's
+    `odometry:`), None when its file states none."""
     sensors: dict = dc.field(default_factory=dict, compare=False)
     """{kind field: {name: config}}: the robot file's own sensors."""
     generated: bool = False

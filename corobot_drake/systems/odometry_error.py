@@ -10,9 +10,10 @@ Three sources, each a robot's own:
 - **What the calibration leaves** (`tuning.odometry_calibration`): the drive test run with
   the calibrated radius and track ends `end_error` m from the true position and
   `heading_error` rad off the true heading after `path_length` m of driving and `turning` rad
-  of turns (`DRIVE_TESTS`, measured). Taken as a random walk whose standard deviation over the
-  test's path is its end error: a position variance of end_error^2 / path_length m^2 per metre
-  rolled, a heading variance of heading_error^2 / turning rad^2 per radian turned.
+  of turns (measured: the robot file's `odometry:`, `RobotSpec.odometry_test`). Taken as a
+  random walk whose standard deviation over the test's path is its end error: a position
+  variance of end_error^2 / path_length m^2 per metre rolled, a heading variance of
+  heading_error^2 / turning rad^2 per radian turned.
 - **A radius or track other than the calibrated ones** (the scenario's drive fields): a
   radius off by a fraction e scales every distance by 1 + e, a ratio R / B off by f every
   turn by 1 + f. Systematic, so the standard deviation grows with the travel itself: (e s)^2
@@ -76,18 +77,6 @@ DRIVE_TEST_PATH = (7.64488, math.radians(1177.92))
 """The 3-loop drive test of seed 1 (`study.programs.DriveTest(3).commands(1)`): m driven,
 rad turned."""
 
-DRIVE_TESTS = {
-    # docs/tuning.md, section 5: 970 mm uncalibrated.
-    "corobot": DriveTest(0.059815, 0.37728, *DRIVE_TEST_PATH, 0.0015, math.radians(0.21),
-                         0.060325, 0.22352),
-    # In scenarios/burger.yaml's robot and world without its walls and pillars (the squares
-    # and the test's legs would run into them): 219.7 mm uncalibrated.
-    "burger": DriveTest(0.032700, 0.16149, *DRIVE_TEST_PATH, 0.0007, math.radians(0.09),
-                        0.033, 0.160),
-}
-"""By robot file name (`RobotSpec.kind`): each robot's measured drive test, at the default
-power 0.2 (the same legs for every robot)."""
-
 
 @dc.dataclass(frozen=True)
 class OdometryErrorModel:
@@ -109,9 +98,10 @@ class OdometryErrorModel:
     """R / B's fractional error against the calibrated one."""
 
     @classmethod
-    def of(cls, ticks_per_revolution: int, drive, test: DriveTest | None) -> OdometryErrorModel:
+    def of(cls, ticks_per_revolution: int, drive, test: DriveTest | None,
+           measured: tuple[DriveTest, ...] = ()) -> OdometryErrorModel:
         """A robot's: its encoders' `ticks_per_revolution`, its `config.scenario.Drive`, its
-        drive test (None: unmeasured; then the worst of the measured robots': their random
+        drive test (None: unmeasured; then the worst of the `measured` robots': their random
         walks, and their nominal figures' errors as its radius' and track's)."""
         radius, track = drive.effective_wheel_radius, drive.effective_track_width
         tick = 2 * math.pi * radius / ticks_per_revolution
@@ -120,7 +110,7 @@ class OdometryErrorModel:
                        test.end_error ** 2 / test.path_length,
                        test.heading_error ** 2 / test.turning,
                        test.scale_error(radius), test.turn_error(radius, track))
-        tests = DRIVE_TESTS.values()
+        tests = measured
         return cls(tick, track, drive.control_period,
                    max(t.end_error ** 2 / t.path_length for t in tests),
                    max(t.heading_error ** 2 / t.turning for t in tests),
@@ -142,6 +132,12 @@ class OdometryErrorModel:
 
 
 def error_model(spec, drive) -> OdometryErrorModel:
-    """The error model of a robot (`RobotSpec`) with its scenario's `drive`."""
-    return OdometryErrorModel.of(spec.encoder_ticks_per_revolution, drive,
-                                 DRIVE_TESTS.get(spec.kind))
+    """The error model of a robot (`RobotSpec`, its `odometry_test` from its robot file) with
+    its scenario's `drive`; a robot file without one gets the worst of the shipped robots'."""
+    if spec.odometry_test is not None:
+        return OdometryErrorModel.of(spec.encoder_ticks_per_revolution, drive, spec.odometry_test)
+    from corobot_drake.robots import ROBOTS, robot_spec
+
+    measured = tuple(t for t in (robot_spec(name).odometry_test for name in ROBOTS)
+                     if t is not None)
+    return OdometryErrorModel.of(spec.encoder_ticks_per_revolution, drive, None, measured)

@@ -13,7 +13,6 @@ from corobot_drake.robots import robot_spec
 from corobot_drake.systems.dead_reckoning import DeadReckoning
 from corobot_drake.systems.odometry_error import (
     DRIVE_TEST_PATH,
-    DRIVE_TESTS,
     OdometryErrorModel,
     error_model,
 )
@@ -91,7 +90,8 @@ def test_the_variances_grow_with_the_distance_and_the_turning():
 def test_after_the_drive_test_the_calibrated_deviation_is_its_measured_error():
     """The stated derivation: a random walk whose deviation over the drive test's path is the
     end error it measured (the quantization floor and the calibration's rounding aside)."""
-    for robot, test in DRIVE_TESTS.items():
+    for robot in ("corobot", "burger"):  # the shipped robots whose files state a drive test
+        test = robot_spec(robot).odometry_test
         drive = Drive(effective_wheel_radius=test.radius, effective_track_width=test.track)
         model = error_model(robot_spec(robot), drive)
         position, _, heading = model.pose_variances(*DRIVE_TEST_PATH)
@@ -121,7 +121,7 @@ def test_a_robot_not_measured_gets_the_worst_measured_errors():
     measured robots' were (the Corobot's skid steer: 70% in radius over track)."""
     model = error_model(robot_spec("pioneer"), Drive(effective_wheel_radius=0.1075,
                                                      effective_track_width=0.4))
-    corobot = DRIVE_TESTS["corobot"]
+    corobot = robot_spec("corobot").odometry_test
     assert model.turn_error == pytest.approx(
         corobot.turn_error(corobot.nominal_radius, corobot.nominal_track), rel=1e-12)
     assert model.turn_error > 0.5
@@ -130,7 +130,8 @@ def test_a_robot_not_measured_gets_the_worst_measured_errors():
 def test_the_twist_variances_are_the_encoder_speeds_quantization():
     model = OdometryErrorModel.of(TICKS, Drive(effective_wheel_radius=RADIUS,
                                                effective_track_width=TRACK,
-                                               control_period=PERIOD), None)
+                                               control_period=PERIOD),
+                                  robot_spec("corobot").odometry_test)
     speed = (METRES_PER_TICK / PERIOD) ** 2  # one count per period, (m/s)^2
     assert model.twist_variances() == pytest.approx((speed / 12, speed / (3 * TRACK ** 2)),
                                                     rel=1e-12)

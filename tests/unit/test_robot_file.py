@@ -98,6 +98,11 @@ def test_the_robots_keep_the_scenarios_order():
     ("model: twowheel.urdf\nbase: base_link\nwheels: {left: [left_joint], right: [right_joint]}"
      "\ndrive: {top_speed: 0.2}\nlidars: {scan: {X_PB: {base_frame: mast}}}\n",
      "lidars.scan.X_PB.base_frame", "not a link"),
+    ("model: twowheel.urdf\nbase: base_link\nwheels: {left: [left_joint], right: [right_joint]}"
+     "\ndrive: {top_speed: 0.2}\nodometry: {end_error: 0.001}\n", "odometry", "needs all of"),
+    ("model: twowheel.urdf\nbase: base_link\nwheels: {left: [left_joint], right: [right_joint]}"
+     "\ndrive: {top_speed: 0.2}\nodometry: {heading_error_deg: 400}\n",
+     "odometry.heading_error_deg", "must be in"),
 ])
 def test_a_wrong_robot_file_is_one_line_at_its_field(tmp_path, yaml, field, words):
     path = _robot(tmp_path, yaml)
