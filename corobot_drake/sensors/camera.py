@@ -652,6 +652,7 @@ class CameraKind(SensorKind):
 
     field = "cameras"
     off: ClassVar[dict] = {"rgb": False}
+    renders = True
     config_type = CameraConfig
     reading_type = CameraImage
     topic = "camera"

@@ -90,6 +90,9 @@ class SensorKind:
     """The config fields that turn a sensor of the kind off (no systems built), for a run that
     reads no sensor (the tools' physics-only runs, a study whose metrics read none); None: it
     stays on (its own geometry is part of the robot's physics)."""
+    renders: ClassVar[bool] = False
+    """Whether it renders images (a camera): a study keeps it on only when its `cameras:`
+    says so, whatever its metrics read (no metric reads an image)."""
     foxglove_schema: ClassVar[str | dict | None] = None
     """The foxglove-sdk message class name (`foxglove.messages.<name>`), or a JSON schema (a
     dict with a `title`) for a message Foxglove has no schema for; None: not recorded."""

@@ -59,8 +59,8 @@ def run_scenario(study: Study, scenario_file: Path, run: Run, base=None, user=No
     reads = reads_ir(study.metrics, user)
     for robot in scenario.robots.values():
         for kind in KINDS:
-            # The cameras render as the study says; the other kinds, for a metric that reads.
-            if kind.off is None or (study.cameras if kind.field == "cameras" else reads):
+            # An image kind renders as the study says; the others, for a metric that reads.
+            if kind.off is None or (study.cameras if kind.renders else reads):
                 continue
             for sensor in getattr(robot, kind.field).values():
                 for field, value in kind.off.items():
