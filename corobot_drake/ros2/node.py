@@ -400,6 +400,28 @@ class Ros2Node:
             self._robot_goals[robot] += 1
         return GoalResponse.ACCEPT
 
+    @contextlib.contextmanager
+    def goal_running(self):
+        """Counts a goal of another action server of the node's (the Simulation Interfaces'
+        SimulateSteps) from its acceptance until the block ends, so that `close` waits for
+        it as for the robots' goals; `aborted_at_stop` says its end was the node's stop."""
+        try:
+            yield
+        finally:
+            with self._goals_changed:
+                self._goals -= 1
+                self._goals_changed.notify_all()
+
+    def goal_accepted(self) -> None:
+        """A goal of another action server of the node's accepted (`goal_running` ends it)."""
+        with self._goals_changed:
+            self._goals += 1
+
+    def aborted_at_stop(self) -> None:
+        """A goal the node's stop ended was aborted: `close` serves a moment longer, for its
+        result to go out."""
+        self._aborted_at_stop.set()
+
     def _execute(self, robot: str, action: ifc.Action, goal_handle):
         """A goal, counted from its acceptance (`_check_goal`) until it ends (`close` waits
         for them to be aborted)."""

@@ -400,11 +400,19 @@ class SimulationServices:
         if problem:
             self._node.log.warning(f"{ACTION[0]}: goal rejected: {problem}")
             return GoalResponse.REJECT
+        # Counted from here: rclpy answers "accepted" before its executor starts the execute
+        # callback, and a stop in between must still wait for the goal's abort.
+        self._node.goal_accepted()
         return GoalResponse.ACCEPT
 
     def _simulate_steps(self, goal_handle):
         """Takes the goal's steps (the simulation paused), feedback after each; a cancel
-        stops after the step under way, the simulation staying paused."""
+        stops after the step under way, the simulation staying paused; the node's stop aborts
+        it, and the node waits for its result to go out (`Ros2Node.goal_running`)."""
+        with self._node.goal_running():
+            return self._take_steps(goal_handle)
+
+    def _take_steps(self, goal_handle):
         Action = _t("action", ACTION[1])
         steps = goal_handle.request.steps
         refused = self._step_problem(steps)
@@ -423,12 +431,14 @@ class SimulationServices:
                 if goal_handle.is_cancel_requested or self._node._closing.is_set():
                     job.cancel()
             except SimulationStoppedError as e:
+                self._node.aborted_at_stop()
                 goal_handle.abort()
                 return Action.Result(result=result(Action.Result().result.RESULT_OPERATION_FAILED,
                                                    str(e)))
         if job.done < steps:
             said = f"cancelled after {job.done} of {steps} steps"
             if not goal_handle.is_cancel_requested:  # the node stopping
+                self._node.aborted_at_stop()
                 goal_handle.abort()
                 return Action.Result(result=result(Action.Result().result.RESULT_OPERATION_FAILED,
                                                    f"{said}: the node stopped"))

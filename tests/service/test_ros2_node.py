@@ -548,3 +548,36 @@ def test_sigterm_stops_a_ros2_run_and_writes_its_outputs(tmp_path):
     # The stop, the summary and the node's shutdown take well under a second on an idle
     # machine; 10 s leaves room for a loaded one, far below the 30 s of a lost signal.
     assert stopped_in < 10.0, stopped_in
+
+
+def test_a_simulate_steps_goal_running_at_the_stop_is_aborted_with_the_reason():
+    """Paused, then a SimulateSteps goal of a million steps under way when the simulation is
+    stopped (Ctrl-C): its result still goes out, aborted, saying the simulation or the node
+    stopped (the node waits for it as for a robot's goal, counted from its acceptance)."""
+    import signal
+
+    from simulation_interfaces.action import SimulateSteps
+    from simulation_interfaces.msg import SimulationState
+    from simulation_interfaces.srv import SetSimulationState
+
+    from ros2_probe import WAIT
+
+    quiet = "robots: {corobot: {commands: [], cameras: {front: {rgb: false}}}}"
+    with ros2_simulation(["--headless", "--override", quiet], serve=False) as (sim, probe):
+        pause = probe.node.create_client(SetSimulationState, "/set_simulation_state")
+        assert pause.wait_for_service(timeout_sec=WAIT)
+        paused = probe.wait_future(pause.call_async(SetSimulationState.Request(
+            state=SimulationState(state=SimulationState.STATE_PAUSED))))
+        assert paused.result.result == 1
+        client = probe.action_client(SimulateSteps, "/simulate_steps")
+        handle = probe.wait_future(client.send_goal_async(SimulateSteps.Goal(steps=1_000_000)))
+        assert handle.accepted
+        result = handle.get_result_async()
+        sim.send_signal(signal.SIGINT)
+        stopped = probe.wait_future(result)
+        said = stopped.result.result.error_message
+        assert stopped.status == 6  # ABORTED
+        # The simulation stops first (its thread ends, or has ended) or the node does: it says.
+        assert any(words in said for words in ("the simulation stopped",
+                                               "the simulation is not running",
+                                               "the node stopped")), said
