@@ -58,3 +58,41 @@ def test_the_odometry_calibration_reads_the_robots_encoders(tmp_path, capsys, mo
     # compression and scrub: within 3% and 10%.
     assert radius == pytest.approx(0.033, rel=0.03)
     assert track == pytest.approx(0.160, rel=0.10)
+
+
+PIONEER = str(SCENARIOS_DIR / "pioneer.yaml")
+"""The Pioneer: a skid steer of four 0.1075 m wheels, track 0.40 m, 600 ticks, 0.7 m/s."""
+
+
+def test_the_top_speed_tuning_starts_from_a_skid_steers_own(tmp_path, capsys):
+    """The same tool on the four-wheel Pioneer: it starts from its own 0.7 m/s and measures
+    it within 2% (its four tyres roll without slip on the straight)."""
+    main = load_tool("tune_motor_torque_scaling").main
+    main(["--scenario", PIONEER, "--settle", "0.6", "--measure", "0.3",
+          "--max-iterations", "1", "--plot", str(tmp_path / "t.png")])
+    out = capsys.readouterr().out
+    assert "tuning pioneer: target 0.7000 m/s, start scaling 6.51163" in out  # 0.7 / 0.1075
+    measured = float(out.split("top speed ")[1].split()[0])
+    assert measured == pytest.approx(0.7, rel=0.02)
+
+
+def test_the_odometry_calibration_reads_a_skid_steers_encoders(tmp_path, capsys, monkeypatch):
+    """On the Pioneer the calibration compares with its own radius and track; a skid steer
+    turns about a wider effective track than its wheels' (they scrub sideways: the
+    Corobot's is 1.7x its own), so only the radius is held close."""
+    sim = Simulation(load_scenario(PIONEER))
+    robot = sim.robot("pioneer")
+    for left, right in ((0.5, 0.5), (-0.5, 0.5), (0.5, 0.5), (0.5, -0.5)):
+        robot.set_power(left, right)
+        sim.advance(1.0)
+    log = tmp_path / "pioneer.csv"
+    robot.write_log(log)
+    main = load_tool("calibrate_odometry").main
+    monkeypatch.chdir(tmp_path)
+    assert main([str(log), "--scenario", "pioneer.yaml", "--out", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    assert "(nominal 0.107500)" in out and "(geometric 0.40000)" in out
+    radius = float(out.split("effective_wheel_radius: ")[1].split()[0])
+    track = float(out.split("effective_track_width: ")[1].split()[0])
+    assert radius == pytest.approx(0.1075, rel=0.03)
+    assert track > 0.40
