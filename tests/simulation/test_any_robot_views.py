@@ -44,3 +44,18 @@ def test_the_framing_holds_a_robot_by_its_own_shapes():
     # (its centre at 0.184 m).
     near = points[np.hypot(points[:, 0] - 3, points[:, 1]) < 0.5]
     assert len(near) == len(points) and near[:, 2].max() >= 0.19
+
+
+def test_slip_markers_of_a_four_wheel_skid_steer_are_a_ball_per_wheel():
+    """The Pioneer: four balls, one beside each tyre, coloured by its own wheel's slip."""
+    spec = robot_spec("pioneer")
+    meshcat = Meshcat()
+    s = Stepper(SlipMarkers(meshcat, "/slip/p", spec=spec), MARKER_PERIOD)
+    s.fix("chassis_pose", RigidTransform())
+    s.fix("wheel_slip_ratio", [0.0, -1.0, 0.0, -1.0])
+    s.fix("wheel_slip_angle", [0.0] * 4)
+    s.tick()
+    assert len(spec.wheel_names) == 4
+    colour = [msgpack.unpackb(meshcat._GetPackedProperty(f"/slip/p/{w}", "color"))["value"]
+              for w in spec.wheel_names]
+    assert colour == [[0.0, 0.8, 0.0, 1.0], [1.0, 0.0, 0.0, 1.0]] * 2
