@@ -229,13 +229,20 @@ class Probe:
 
 
 @contextlib.contextmanager
-def _simulation_process(args: list[str]):
-    """`python -m corobot_drake [args]`, stopped at the end by Ctrl-C (SIGINT) to its PID."""
+def simulation_process(args: list[str], log=None):
+    """`python -m corobot_drake [args]` (this Python: the project's), stopped at the end by
+    Ctrl-C (SIGINT) to its PID. Its stderr is a pipe the test reads; with `log` (a path),
+    its output goes there instead (a pipe nobody reads would fill)."""
     import signal
     import sys
 
-    process = subprocess.Popen([sys.executable, "-m", "corobot_drake", *args],
-                               stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    if log is None:
+        process = subprocess.Popen([sys.executable, "-m", "corobot_drake", *args],
+                                   stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    else:
+        with open(log, "w") as out:
+            process = subprocess.Popen([sys.executable, "-m", "corobot_drake", *args],
+                                       stdout=out, stderr=subprocess.STDOUT)
     try:
         yield process
     finally:
@@ -274,7 +281,7 @@ def ros2_simulation(args: list[str], serve: bool = True):
     with contextlib.ExitStack() as stack:
         domain = stack.enter_context(private_domain())
         server = stack.enter_context(ServerProcess([*args, "--ros2"]) if serve
-                                     else _simulation_process([*args, "--ros2"]))
+                                     else simulation_process([*args, "--ros2"]))
         probe = Probe(domain)
         stack.callback(probe.close)
         yield server, probe

@@ -2,6 +2,7 @@
 by Playwright; `tools/setup` installs both). Screenshots go to `out/` (git-ignored).
 """
 
+import contextlib
 import itertools
 import os
 import shutil
@@ -46,6 +47,22 @@ def page(browser):
     page.on("pageerror", lambda e: errors.append(str(e)))
     yield page
     context.close()
+    assert not errors, errors
+
+
+@contextlib.contextmanager
+def dashboard_page(url: str):
+    """A Chromium of its own on `url`'s dashboard, once it is ready; on leaving, closed, and
+    no error raised on the page meanwhile."""
+    with playwright_api.sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=CHROMIUM, args=FLAGS, headless=True)
+        page = browser.new_page(viewport={"width": 1280, "height": 900})
+        errors = []
+        page.on("pageerror", lambda e: errors.append(str(e)))
+        page.goto(f"{url}/dashboard")
+        page.wait_for_selector("body[data-ready='1']", timeout=30000)
+        yield page
+        browser.close()
     assert not errors, errors
 
 

@@ -3,7 +3,7 @@ Pioneer side by side): a contact row per wheel of the robot shown, its encoders 
 side, the pad drives it, and no camera panel for a robot without a camera."""
 
 import pytest
-from test_browser import CHROMIUM, FLAGS, number, playwright_api, wait_for
+from test_browser import dashboard_page, number, wait_for
 
 from corobot_drake.serving.serve import ServerProcess
 
@@ -25,16 +25,8 @@ def server(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def page(server):
-    with playwright_api.sync_playwright() as p:
-        browser = p.chromium.launch(executable_path=CHROMIUM, args=FLAGS, headless=True)
-        page = browser.new_page(viewport={"width": 1280, "height": 900})
-        errors = []
-        page.on("pageerror", lambda e: errors.append(str(e)))
-        page.goto(f"{server.url}/dashboard")
-        page.wait_for_selector("body[data-ready='1']", timeout=30000)
+    with dashboard_page(server.url) as page:
         yield page
-        browser.close()
-        assert not errors, errors
 
 
 def _rows(page) -> list[str]:

@@ -8,7 +8,7 @@ import multiprocessing
 import threading
 
 import pytest
-from test_browser import CHROMIUM, FLAGS, playwright_api, wait_for
+from test_browser import dashboard_page, wait_for
 from test_robots_come_and_go import _replace, _with_burger, _without_burger
 
 from conftest import make_sim
@@ -48,13 +48,7 @@ def _options(page) -> list[str]:
 
 def test_the_dashboards_robot_list_follows_the_server(served):
     runner, url = served
-    with playwright_api.sync_playwright() as p:
-        browser = p.chromium.launch(executable_path=CHROMIUM, args=FLAGS, headless=True)
-        page = browser.new_page(viewport={"width": 1280, "height": 900})
-        errors = []
-        page.on("pageerror", lambda e: errors.append(str(e)))
-        page.goto(f"{url}/dashboard")
-        page.wait_for_selector("body[data-ready='1']", timeout=30000)
+    with dashboard_page(url) as page:
         assert _options(page) == ["corobot"]
         _replace(runner, _with_burger)
         wait_for(lambda: _options(page) == ["corobot", "burger"], 3 * POLL + 5,
@@ -69,5 +63,3 @@ def test_the_dashboards_robot_list_follows_the_server(served):
         wait_for(lambda: page.evaluate("window.dashboard.robot") == "corobot"
                  and page.locator("#robot").input_value() == "corobot", 10,
                  "the Corobot shown in the Burger's place")
-        browser.close()
-    assert not errors, errors

@@ -23,7 +23,6 @@ import json
 import os
 import re
 import shlex
-import signal
 import subprocess
 import sys
 import tomllib
@@ -34,7 +33,7 @@ import pytest
 import yaml
 
 from conftest import REPO
-from ros2_probe import ONE_GRAPH_AT_A_TIME, private_domain
+from ros2_probe import ONE_GRAPH_AT_A_TIME, private_domain, simulation_process
 
 ROS_USER_ENV = REPO / ".venv-ros"
 REQUIREMENTS = REPO / "tools" / "ros2_user_requirements.txt"
@@ -169,24 +168,6 @@ def calls() -> list[dict]:
     return out
 
 
-@contextlib.contextmanager
-def simulation(args: list[str], log: Path):
-    """`python -m corobot_drake [args]` (this Python: the project's), its output in `log` (a
-    pipe nobody reads would fill), stopped by Ctrl-C (SIGINT) to its PID at the end."""
-    with open(log, "w") as out:
-        process = subprocess.Popen([sys.executable, "-m", "corobot_drake", *args],
-                                   stdout=out, stderr=subprocess.STDOUT)
-    try:
-        yield process
-    finally:
-        process.send_signal(signal.SIGINT)
-        try:
-            process.wait(30)
-        except subprocess.TimeoutExpired:
-            process.kill()
-            process.wait(5)
-
-
 def ros_user_environment(domain: int) -> dict:
     """The variables a ROS user's shell has: none of the project's Python's (its ROS
     libraries' path, the wheels' start-up hook's mark), this test's domain."""
@@ -209,7 +190,7 @@ def report(tmp_path_factory) -> dict:
     with contextlib.ExitStack() as stack:
         domain = stack.enter_context(private_domain())
         log = work / "simulation.log"
-        sim = stack.enter_context(simulation([*node_arguments(), "--override", EVERY_KIND,
+        sim = stack.enter_context(simulation_process([*node_arguments(), "--override", EVERY_KIND,
                                               "--camera-rate", "10"], log))
         client = subprocess.run([str(python), str(CLIENT), str(work / "plan.json")], cwd=work,
                                 env=ros_user_environment(domain), capture_output=True,

@@ -12,6 +12,8 @@ from corobot_drake.resources import SCENARIOS_DIR
 from corobot_drake.simulation import Simulation
 
 SCENARIO = str(SCENARIOS_DIR / "burger.yaml")
+PIONEER = str(SCENARIOS_DIR / "pioneer.yaml")
+"""The Pioneer: a skid steer of four 0.1075 m wheels, track 0.40 m, 600 ticks, 0.7 m/s."""
 
 
 def test_the_drive_log_fit_finds_the_burgers_drive_again(tmp_path, capsys):
@@ -28,28 +30,44 @@ def test_the_drive_log_fit_finds_the_burgers_drive_again(tmp_path, capsys):
     assert slew == pytest.approx(15.0, rel=0.01)
 
 
-def test_the_top_speed_tuning_starts_from_the_robots_own(tmp_path, capsys):
+@pytest.mark.parametrize(("scenario", "started", "top_speed"), [
+    # 0.22 / 0.033 rad/s at power 1: rolling without slip gives the top speed.
+    (SCENARIO, "tuning burger: target 0.2200 m/s, start scaling 6.66667", 0.22),
+    # The four-wheel Pioneer: its own 0.7 m/s (0.7 / 0.1075), its four tyres rolling
+    # without slip on the straight.
+    (PIONEER,
+     "tuning pioneer: target 0.7000 m/s, start scaling 6.51163", 0.7),
+], ids=["burger", "pioneer"])
+def test_the_top_speed_tuning_starts_from_the_robots_own(tmp_path, capsys, scenario, started,
+                                                         top_speed):
     main = load_tool("tune_motor_torque_scaling").main
-    main(["--scenario", SCENARIO, "--settle", "0.6", "--measure", "0.3",
+    main(["--scenario", scenario, "--settle", "0.6", "--measure", "0.3",
           "--max-iterations", "1", "--plot", str(tmp_path / "t.png")])
     out = capsys.readouterr().out
-    # 0.22 / 0.033 rad/s at power 1: rolling without slip gives the top speed.
-    assert "tuning burger: target 0.2200 m/s, start scaling 6.66667" in out
+    assert started in out
     measured = float(out.split("top speed ")[1].split()[0])
-    assert measured == pytest.approx(0.22, rel=0.02)
+    assert measured == pytest.approx(top_speed, rel=0.02)
+
+
+def drive_log(scenario: str, robot_name: str, powers, folder) -> str:
+    """The run log (a CSV in `folder`) of `robot_name` in `scenario` driven 1 s at each of
+    `powers` ((left, right) pairs)."""
+    sim = Simulation(load_scenario(scenario))
+    robot = sim.robot(robot_name)
+    for left, right in powers:
+        robot.set_power(left, right)
+        sim.advance(1.0)
+    log = folder / f"{robot_name}.csv"
+    robot.write_log(log)
+    return str(log)
 
 
 def test_the_odometry_calibration_reads_the_robots_encoders(tmp_path, capsys, monkeypatch):
-    sim = Simulation(load_scenario(SCENARIO))
-    robot = sim.robot("burger")
-    for left, right in ((0.8, 0.8), (-0.6, 0.6), (0.8, 0.8), (0.6, -0.6)):
-        robot.set_power(left, right)
-        sim.advance(1.0)
-    log = tmp_path / "burger.csv"
-    robot.write_log(log)
+    log = drive_log(SCENARIO, "burger", ((0.8, 0.8), (-0.6, 0.6), (0.8, 0.8), (0.6, -0.6)),
+                    tmp_path)
     main = load_tool("calibrate_odometry").main
     monkeypatch.chdir(tmp_path)  # a shipped scenario by its name, from any folder
-    assert main([str(log), "--scenario", "burger.yaml", "--out", str(tmp_path)]) == 0
+    assert main([log, "--scenario", "burger.yaml", "--out", str(tmp_path)]) == 0
     out = capsys.readouterr().out
     assert "(nominal 0.033000)" in out and "(geometric 0.16000)" in out
     radius = float(out.split("effective_wheel_radius: ")[1].split()[0])
@@ -60,36 +78,15 @@ def test_the_odometry_calibration_reads_the_robots_encoders(tmp_path, capsys, mo
     assert track == pytest.approx(0.160, rel=0.10)
 
 
-PIONEER = str(SCENARIOS_DIR / "pioneer.yaml")
-"""The Pioneer: a skid steer of four 0.1075 m wheels, track 0.40 m, 600 ticks, 0.7 m/s."""
-
-
-def test_the_top_speed_tuning_starts_from_a_skid_steers_own(tmp_path, capsys):
-    """The same tool on the four-wheel Pioneer: it starts from its own 0.7 m/s and measures
-    it within 2% (its four tyres roll without slip on the straight)."""
-    main = load_tool("tune_motor_torque_scaling").main
-    main(["--scenario", PIONEER, "--settle", "0.6", "--measure", "0.3",
-          "--max-iterations", "1", "--plot", str(tmp_path / "t.png")])
-    out = capsys.readouterr().out
-    assert "tuning pioneer: target 0.7000 m/s, start scaling 6.51163" in out  # 0.7 / 0.1075
-    measured = float(out.split("top speed ")[1].split()[0])
-    assert measured == pytest.approx(0.7, rel=0.02)
-
-
 def test_the_odometry_calibration_reads_a_skid_steers_encoders(tmp_path, capsys, monkeypatch):
     """On the Pioneer the calibration compares with its own radius and track; a skid steer
     turns about a wider effective track than its wheels' (they scrub sideways: the
     Corobot's is 1.7x its own), so only the radius is held close."""
-    sim = Simulation(load_scenario(PIONEER))
-    robot = sim.robot("pioneer")
-    for left, right in ((0.5, 0.5), (-0.5, 0.5), (0.5, 0.5), (0.5, -0.5)):
-        robot.set_power(left, right)
-        sim.advance(1.0)
-    log = tmp_path / "pioneer.csv"
-    robot.write_log(log)
+    log = drive_log(PIONEER, "pioneer", ((0.5, 0.5), (-0.5, 0.5), (0.5, 0.5), (0.5, -0.5)),
+                    tmp_path)
     main = load_tool("calibrate_odometry").main
     monkeypatch.chdir(tmp_path)
-    assert main([str(log), "--scenario", "pioneer.yaml", "--out", str(tmp_path)]) == 0
+    assert main([log, "--scenario", "pioneer.yaml", "--out", str(tmp_path)]) == 0
     out = capsys.readouterr().out
     assert "(nominal 0.107500)" in out and "(geometric 0.40000)" in out
     radius = float(out.split("effective_wheel_radius: ")[1].split()[0])
