@@ -73,8 +73,8 @@ def _parser() -> argparse.ArgumentParser:
                    help="YAML merged over the scenario (repeatable)")
     p.add_argument("--summary", metavar="PATH", help="write the run's summary JSON here")
     p.add_argument("--serve", action="store_true",
-                   help="run in real time with the HTTP services, dashboard and webcam page "
-                   "(Meshcat too unless --headless); Ctrl-C stops")
+                   help="run in real time (or at --rate) with the HTTP services, dashboard and "
+                   "webcam page (Meshcat too unless --headless); Ctrl-C stops")
     p.add_argument("--port", type=int, default=50000,
                    help="--serve: TCP port (default 50000; 0 picks a free one)")
     p.add_argument("--host", default="127.0.0.1",
@@ -83,6 +83,10 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--token", default=None,
                    help="--serve, --foxglove: the token clients must send (default: none on "
                    "loopback; off loopback one is generated and printed; both servers share it)")
+    p.add_argument("--rate", metavar="X", default=1.0,
+                   help="--serve, --ros2: simulated s per wall-clock s (default 1: real time; "
+                   "e.g. 0.5, 4), or `max`: as fast as the machine can; with --ros2 /clock is the "
+                   "only time, Meshcat and --serve follow it")
     p.add_argument("--save-camera", metavar="DIR",
                    help="write the robots' camera frames as PNG: "
                    "DIR/<robot>/frame_000000.png, ... (another camera than front: "
@@ -124,9 +128,6 @@ def _add_ros2_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--ros2-network", action="store_true",
                    help="--ros2: discovery on the local network (SUBNET): any ROS 2 node there "
                    "with the same ROS_DOMAIN_ID can read the topics and drive the robot")
-    p.add_argument("--rate", metavar="X", default=1.0,
-                   help="--ros2: simulated s per wall-clock s (e.g. 0.5, 4), or `max`: as fast "
-                   "as it can; /clock is the only time, Meshcat and --serve follow it")
     p.add_argument("--paused", action="store_true",
                    help="--ros2: start paused (play, step and reset with the ROS 2 Simulation "
                    "Interfaces: docs/ros2.md)")
@@ -136,12 +137,11 @@ def _add_ros2_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def check_ros2_arguments(args) -> None:
-    """--ros2 and --rosbag: the extra installed (one line naming it), the bag's directory new."""
-    args.rate = ros2_rate(args.rate)
+    """--ros2 and --rosbag: the extra installed (one line naming it), the bag's directory new;
+    --paused only with --ros2 (only the ROS 2 node can play: the HTTP API has no such call)."""
     if not args.ros2:
-        for flag, given in (("--rate", args.rate != 1.0), ("--paused", args.paused)):
-            if given:
-                raise ArgumentError(f"{flag}: only with --ros2")
+        if args.paused:
+            raise ArgumentError("--paused: only with --ros2")
         if args.ros2_network:
             raise ArgumentError("--ros2-network: only with --ros2")
         if getattr(args, "ros_args", None):
@@ -161,11 +161,11 @@ def check_ros2_arguments(args) -> None:
                                 else f"--rosbag: {args.rosbag}: {problem}")
 
 
-ROS2_RATE = Range(0.0, 1000.0, low_open=True, why="simulated s per wall-clock s; or max")
+RATE = Range(0.0, 1000.0, low_open=True, why="simulated s per wall-clock s; or max")
 
 
-def ros2_rate(text) -> float:
-    """--rate: a number in `ROS2_RATE`, or `max` (`serving.runner.MAX_RATE`: as fast as it
+def run_rate(text) -> float:
+    """--rate: a number in `RATE`, or `max` (`serving.runner.MAX_RATE`: as fast as it
     can); ArgumentError naming the flag otherwise."""
     if isinstance(text, float):
         return text
@@ -175,7 +175,7 @@ def ros2_rate(text) -> float:
         value = float(text)
     except ValueError:
         raise ArgumentError(f"--rate: expected a number or max, got {text!r}") from None
-    _check("--rate", value, ROS2_RATE)
+    _check("--rate", value, RATE)
     return value
 
 
@@ -344,6 +344,9 @@ def check_arguments(args) -> None:
         _check("--camera-rate", args.camera_rate, DRAKE_BOUNDS[CameraConfig]["fps"])
     if args.serve:
         _check("--port", args.port, PORT)
+    args.rate = run_rate(args.rate)
+    if args.rate != 1.0 and not (args.serve or args.ros2):  # a run's pace: a live one's only
+        raise ArgumentError("--rate: only with --serve or --ros2")
     if args.foxglove is not None:
         _check("--foxglove", args.foxglove, PORT)
     if args.record and args.serve:

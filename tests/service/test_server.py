@@ -561,6 +561,25 @@ def test_serve_reports_a_taken_port(server):
     assert f"error: cannot listen on 127.0.0.1:{port}" in run.stderr
 
 
+def test_serve_at_a_rate_runs_faster_than_the_wall_clock(tmp_path):
+    """`--serve --rate 4`: simulated time goes 4 s a wall-clock second, as measured from
+    outside (two `/simulation` answers 1 s apart) and as the server says
+    (`recent_realtime_factor`). The tolerance: at most 10% over (the runner paces to 4x the
+    wall clock; the snapshots' 1/30 s and the requests' milliseconds are ~1% of the 4 s), at
+    most 25% under (this machine keeps ~10x headless; a busy core may slow it, and a
+    real-time server's 1.0 stays far outside)."""
+    with ServerProcess(["--headless", "--rate", "4"],
+                       stderr_path=str(tmp_path / "stderr.log")) as server, \
+            httpx.Client(base_url=server.url, timeout=60) as client:
+        first, wall0 = client.get("/simulation").json(), time.monotonic()
+        time.sleep(1.0)
+        last, wall1 = client.get("/simulation").json(), time.monotonic()
+    assert last["rate"] == 4.0
+    measured = (last["time"] - first["time"]) / (wall1 - wall0)
+    assert 3.0 < measured < 4.4, (measured, last)
+    assert 3.0 < last["recent_realtime_factor"] < 4.4, last
+
+
 @pytest.mark.filterwarnings("ignore:Using `httpx` with `starlette.testclient`")
 def test_in_process_runner_serves_from_a_thread():
     """`create_app(SimRunner(...))`: the same app in one process (for embedding)."""
