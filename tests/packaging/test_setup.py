@@ -249,3 +249,69 @@ def test_the_ros_users_environment_runs_without_the_project_pythons_variables(tm
     assert (python.parent / "calls").read_text().splitlines() == [
         "-c import rclpy | hook unset | libraries unset",
         "-m corobot_drake.ros2.build | hook unset | libraries unset"]
+
+
+DEBIAN_PYTHON = """#!/bin/bash
+# A Debian Python without its -venv package until apt-get (below) "installs" it.
+here="$(dirname "$0")"
+if [ "$1" = -m ] && [ "$2" = venv ]; then
+  mkdir -p "$3/bin" && touch "$3/bin/python"
+  [ -e "$here/installed" ] && exit 0
+  echo "The virtual environment was not created successfully because ensurepip is not" \\
+       "available." >&2
+  exit 1
+elif [ "$2" = "import ensurepip" ]; then
+  [ -e "$here/installed" ]
+else
+  echo 3.12
+fi
+"""
+FAKE_APT_GET = """#!/bin/bash
+echo "$@" >> "$(dirname "$0")/apt-get.args"
+touch "$(dirname "$0")/installed"
+"""
+
+
+@pytest.fixture
+def debian_python(tmp_path):
+    """(bin folder with a fake python3.12 lacking ensurepip and a fake apt-get, a function
+    setting the user id `id -u` gives)."""
+    bin_dir = tmp_path / "bin"
+    bin_dir.mkdir()
+    for name, text in (("python3.12", DEBIAN_PYTHON), ("apt-get", FAKE_APT_GET)):
+        (bin_dir / name).write_text(text)
+        (bin_dir / name).chmod(0o755)
+
+    def as_user(uid: int):
+        (bin_dir / "id").write_text(f"#!/bin/bash\necho {uid}\n")
+        (bin_dir / "id").chmod(0o755)
+    return bin_dir, as_user
+
+
+def make_venv_with(bin_dir, venv):
+    return run_function(f'make_venv_with "{bin_dir}/python3.12" "{venv}"; echo made',
+                        env={"PATH": f"{bin_dir}:/usr/bin:/bin", "APT_LOCKS": "/nonexistent"})
+
+
+def test_a_python_without_ensurepip_gets_its_venv_package_as_root(debian_python, tmp_path):
+    bin_dir, as_user = debian_python
+    as_user(0)
+    done = make_venv_with(bin_dir, tmp_path / "venv")
+    assert done.returncode == 0 and done.stdout == "made\n", done.stderr
+    assert (bin_dir / "apt-get.args").read_text().split()[-1] == "python3.12-venv"
+    assert "installing Debian's python3.12-venv" in done.stderr
+    assert (tmp_path / "venv" / "bin" / "python").exists()
+
+
+def test_without_root_it_names_the_package_in_one_line_and_leaves_no_half_venv(
+        debian_python, tmp_path):
+    bin_dir, as_user = debian_python
+    as_user(1000)
+    done = make_venv_with(bin_dir, tmp_path / "venv")
+    assert done.returncode == 1 and done.stdout == ""
+    errors = [line for line in done.stderr.splitlines() if line.startswith("error:")]
+    assert errors == [f"error: {bin_dir}/python3.12 makes no virtual environment without "
+                      "Debian's python3.12-venv: sudo apt-get install python3.12-venv, then "
+                      "tools/setup again"]
+    assert not (tmp_path / "venv").exists()  # a rerun must not take it for a made .venv
+    assert not (bin_dir / "apt-get.args").exists()
