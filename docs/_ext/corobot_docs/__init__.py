@@ -13,10 +13,11 @@ MARKER = re.compile(r"^<!-- reference: (\w+) -->$", re.MULTILINE)
 
 
 def _generators():
-    from corobot_docs import benchmarks, cli, http, python, ros2, scenario
+    from corobot_docs import benchmarks, cli, http, python, ros2, scenario, study
 
     return {"scenario": scenario.page, "cli": cli.page, "http": http.page, "ros2": ros2.page,
-            "sensor_readings": python.sensor_readings, "benchmarks": benchmarks.page}
+            "sensor_readings": python.sensor_readings, "benchmarks": benchmarks.page,
+            "study_metrics": study.metrics}
 
 
 def _fill(app, docname: str, source: list[str]) -> None:
