@@ -19,6 +19,15 @@ import dataclasses as dc
 import sys
 from pathlib import Path
 
+try:  # without the [study] extra: one line naming it, before any work
+    # (the fit needs SciPy, the plot Matplotlib)
+    import matplotlib  # noqa: F401
+    import scipy  # noqa: F401
+except ImportError:
+    from corobot_drake.extras import exit_without
+
+    exit_without("tools/fit_drive_log.py", "study")
+
 from corobot_drake.arguments import (
     TICKS_PER_REVOLUTION,
     ToolParser,

@@ -120,10 +120,10 @@ def main(argv: list[str] | None = None) -> int:
     height = args.height or (CAMERA["height"] if small else 600)
     image = take(sim, args.view, width, height, name, args.eye, args.target)
 
-    import matplotlib.image
+    from PIL import Image  # the core's (Matplotlib is the [study] extra's)
 
     args.output.parent.mkdir(parents=True, exist_ok=True)
-    matplotlib.image.imsave(args.output, image)
+    Image.fromarray(image).save(args.output)
     X = render.chassis_pose(sim, name)
     x, y, _ = X.translation()
     yaw = math.degrees(render.RollPitchYaw(X.rotation()).yaw_angle())

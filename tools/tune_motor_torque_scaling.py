@@ -19,6 +19,14 @@ import sys
 import time
 from pathlib import Path
 
+try:  # without the [study] extra: one line naming it, before any work
+    # (the plot needs Matplotlib, --sweep Ray: the same extra)
+    import matplotlib  # noqa: F401
+except ImportError:
+    from corobot_drake.extras import exit_without
+
+    exit_without("tools/tune_motor_torque_scaling.py", "study")
+
 from corobot_drake.arguments import (
     WORKERS,
     ToolParser,

@@ -193,7 +193,32 @@ def test_a_tool_without_its_extra_says_which_in_one_line():
         wrong.append(f"{name}: exit {status}: {(err or out)[-300:]}")
     assert not wrong, "\n".join(wrong)
     assert {"train_policy", "bench", "bench_server_flood", "bench_recording", "drive_legs",
-            "ros2_square", "ros2_teleop", "ros2_magellan", "ros2_referee"} <= said
+            "ros2_square", "ros2_teleop", "ros2_magellan", "ros2_referee", "fit_drive_log",
+            "tune_motor_torque_scaling"} <= said
+
+
+def test_a_tool_without_the_guard_imports_no_extra_later():
+    """A tool that starts without an extra (no `exit_without`) imports none of an extra's
+    modules in its functions either: else it would stop with a traceback after its work (as
+    tools/snapshot.py once did, writing its PNG with Matplotlib after the render)."""
+    import ast
+
+    from corobot_drake.extras import EXTRAS
+
+    extra_modules = {m for modules in EXTRAS.values() for m in modules}
+    late = []
+    for tool in TOOLS:
+        text = tool.read_text()
+        if "exit_without(" in text:
+            continue
+        functions = [f for f in ast.walk(ast.parse(text))
+                     if isinstance(f, ast.FunctionDef | ast.AsyncFunctionDef)]
+        for node in (n for f in functions for n in ast.walk(f)):
+            names = [a.name for a in node.names] if isinstance(node, ast.Import) else \
+                [node.module] if isinstance(node, ast.ImportFrom) and node.level == 0 else []
+            late += [f"{tool.name}:{node.lineno}: {n}" for n in names
+                     if n.split(".")[0] in extra_modules]
+    assert late == []
 
 
 EXAMPLES = sorted((REPO / "examples").glob("*.py"))
