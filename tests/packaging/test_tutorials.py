@@ -59,8 +59,8 @@ import pytest
 from conftest import REPO
 
 PAGES = ("README.md", *(f"docs/{p}.md" for p in (
-    "install", "first_drive", "usage", "commands", "services", "sensors", "recording", "ros2",
-    "studies", "gym", "magellan", "looks", "tuning", "costs")))
+    "install", "first_drive", "scripting", "usage", "commands", "services", "sensors",
+    "recording", "ros2", "studies", "gym", "magellan", "looks", "tuning", "costs")))
 ON_RAY = ("docs/commands.md", "docs/studies.md", "docs/gym.md", "docs/tuning.md")
 """The pages whose blocks run studies or rollouts on Ray."""
 MAX_SECONDS = 2.0
