@@ -96,7 +96,12 @@ TOPICS = (
           "the wheel odometry (parameter odom_source: wheel, with its covariance) or the "
           "ground truth (ground_truth): pose in odom, twist in base_link, at 50 Hz"),
     Topic("wheel_odom", "nav_msgs/msg/Odometry", Qos.RELIABLE,
-          "the encoders' dead reckoning, with a covariance, at 50 Hz"),
+          "the encoders' dead reckoning, at 50 Hz, its covariances from the robot's odometry "
+          "error model (`systems/odometry_error.py`: the encoders' quantization, the error its "
+          "drive test leaves per metre driven and per radian turned, a radius or track other "
+          "than the calibrated ones), growing with the distance and turning since the last "
+          "reset; a teleport (set_pose) or a reset puts it at the true pose and its "
+          "covariances back at the quantization's"),
     Topic("ground_truth", "nav_msgs/msg/Odometry", Qos.RELIABLE,
           "the simulation's true pose in world (odom's origin and axes), twist in base_link, "
           "at 50 Hz"),

@@ -17,7 +17,8 @@ def _generators():
 
     return {"scenario": scenario.page, "cli": cli.page, "http": http.page, "ros2": ros2.page,
             "sensor_readings": python.sensor_readings, "benchmarks": benchmarks.page,
-            "study_metrics": study.metrics}
+            "study_metrics": study.metrics,
+            "ros2_default_robot": ros2.default_robot}
 
 
 def _fill(app, docname: str, source: list[str]) -> None:

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import dataclasses as dc
 import enum
+import inspect
 
 from corobot_docs.markdown import cell, docs_below, table
 
@@ -48,14 +49,18 @@ def _sensor_topics() -> str:
     return table(("sensors", "topic", "type", "QoS", "frame"), rows)
 
 
+def _pairs_of(module):
+    """(name, (topic, ROS type)) of each module-level topic pair (a subscribed topic, the
+    diagnostics')."""
+    return [(name, value) for name, value in vars(module).items()
+            if name.isupper() and isinstance(value, tuple) and len(value) == 2
+            and all(isinstance(v, str) for v in value) and "/" in value[1]]
+
+
 def _pairs(module) -> list[list[str]]:
     """Module-level (topic, ROS type) pairs (the subscribed topics) with their docstrings."""
-    rows = []
-    for name, value in vars(module).items():
-        if name.isupper() and isinstance(value, tuple) and len(value) == 2 \
-                and all(isinstance(v, str) for v in value) and "/" in value[1]:
-            rows.append([f"`{value[0]}`", f"`{value[1]}`", cell(_doc_of(module, name))])
-    return rows
+    return [[f"`{value[0]}`", f"`{value[1]}`", cell(_doc_of(module, name))]
+            for name, value in _pairs_of(module)]
 
 
 def page() -> str:
@@ -119,3 +124,38 @@ def _doc_of(module, name: str) -> str:
 
 def _doc_of_member(cls, name: str) -> str:
     return docs_below(cls).get(name, "")
+
+
+def default_robot() -> str:
+    """The default scenario's node as its user sees it: every topic, action and service with
+    its full name (the robot alone in its scenario: no namespace), from the same tables as
+    `page` and the robot's own sensors."""
+    from corobot_drake.config.scenario import load_scenario
+    from corobot_drake.resources import DEFAULT_SCENARIO
+    from corobot_drake.ros2 import diagnostics, interfaces
+    from corobot_drake.sensors.registry import KINDS
+
+    robot = next(iter(load_scenario(DEFAULT_SCENARIO).robots.values()))
+    rows = [[f"`/{t.name}`", t.type, f"`{t.qos.value}`", cell(t.what)]
+            for t in interfaces.TOPICS]
+    for kind in KINDS:
+        for name in getattr(robot, kind.field):
+            topic = kind.topic_name(name)
+            for sub, (ros_type, qos) in kind.ros2_channels().items():
+                rows.append([f"`/{topic}/{sub}`" if sub else f"`/{topic}`", ros_type,
+                             f"`{qos}`", cell(_sensor_topic_what(kind, name))])
+    rows += [[f"`/{topic[0]}`", topic[1], "`reliable`", cell(_doc_of(diagnostics, name))]
+             for name, topic in _pairs_of(diagnostics)]
+    # The commands' rows (/cmd_vel among them) as the command table writes them.
+    rows += [[c.strip() for c in row.strip("|").split(" | ")]
+             for row in interfaces.command_rows()]
+    return table(("name", "type", "QoS", "what"), rows)
+
+
+def _sensor_topic_what(kind, sensor: str) -> str:
+    """The kind's own words on its ROS 2 message (its `ros2_message`'s docstring where the kind
+    writes one), and the frame the reading is in."""
+    method = vars(type(kind)).get("ros2_message")
+    words = inspect.getdoc(method) if method else inspect.getdoc(type(kind)).split(". ")[0]
+    return f"the `{sensor}` {kind.field.rstrip('s').replace('_', ' ')}: {words} Frame " \
+           f"`{kind.frame_name(sensor)}`."
