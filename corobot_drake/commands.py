@@ -69,10 +69,12 @@ class Arg:
 
     @property
     def required(self) -> bool:
+        """Whether the Python API needs it (it has no default)."""
         return self.default is dc.MISSING
 
     @property
     def unit(self) -> str:
+        """Its range's unit (`m`, `m/s`, ...; '' for a bool or a unitless number)."""
         return self.range.unit if self.range is not None else ""
 
 

@@ -82,6 +82,7 @@ class CommandResult:
 
     @property
     def succeeded(self) -> bool:
+        """Whether the command has ended and succeeded."""
         return self.status == "succeeded"
 
     def __repr__(self) -> str:

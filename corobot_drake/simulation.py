@@ -70,9 +70,10 @@ class Robot(RobotCommands, RobotDrive, RobotTelemetry, RobotSensors):
     Its core is here (its Simulation, its station parts, its `spec`); each part's accessors
     come from `robot_api`: the commands (`RobotCommands`), the drive and motion
     (`RobotDrive`), the monitors and run log (`RobotTelemetry`) and the sensors of every
-    kind (`RobotSensors`). A robot with IR sensors also has their own accessors
-    (`IrSensors`: `ir`, `ir_distances`), one with a camera the cameras' (`Cameras`:
-    `camera_image`, ...); one without them has none of those (`robot_type`)."""
+    kind (`RobotSensors`: `reading`, `ir_distances`, which is {} without IR sensors, ...).
+    A robot with IR sensors also has their own accessors (`IrSensors`: `ir`, ...), one with
+    a camera the cameras' (`Cameras`: `camera_image`, ...); one without them has none of
+    those (`robot_type`)."""
 
     def __init__(self, sim: "Simulation", parts: RobotParts):
         self._sim = sim
@@ -264,6 +265,7 @@ class Simulation:
 
     @property
     def time(self) -> float:
+        """Simulated time now, s (the Context's; the scenario's `start_time` at the start)."""
         return self.context.get_time()
 
     def output_port(self, name: str):

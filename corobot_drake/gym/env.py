@@ -154,6 +154,8 @@ class GoToGoalEnv(gym.Env):
 
     metadata: ClassVar[dict] = {"render_modes": list(RENDER_MODES),
                                 "render_fps": round(1.0 / GoToGoalConfig.control_period)}
+    """Gymnasium's: the render modes (`render_mode`: `rgb_array`, `human`) and the frames per
+    second of a rendered episode (one a default control period)."""
 
     def __init__(self, config: GoToGoalConfig | None = None, render_mode: str | None = None,
                  **overrides):

@@ -25,13 +25,19 @@ class Episode:
     """How one episode went."""
 
     seed: int
+    """The seed the episode's layout (and random actions) were drawn from."""
     success: bool
+    """The robot came within `GoToGoalConfig.goal_radius` of the goal, ending the episode."""
     flipped: bool
+    """The robot tilted past `GoToGoalConfig.flip_tilt_deg`, ending the episode."""
     episode_return: float
+    """The sum of the episode's rewards."""
     steps: int
+    """Control steps taken (`GoToGoalConfig.control_period` s each)."""
     collision_steps: int
     """Steps that ended with the robot touching a box."""
     stall_steps: int
+    """Steps that ended stalled: wheels commanded to move, the chassis hardly moving."""
     final_distance: float
     """m from the goal at the end."""
 

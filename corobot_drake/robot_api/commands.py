@@ -59,12 +59,16 @@ class CommandHandle:
         return f"{head}: {r.describe()}>"
 
     def result(self) -> CommandResult:
+        """How the command has gone so far (`Robot.command_result`; KeyError once the
+        command log has dropped it)."""
         return self.robot.command_result(self.seq)
 
     def status(self) -> str:
+        """`running`, `succeeded` or `failed` (the reason: `result().reason`)."""
         return self.result().status
 
     def done(self) -> bool:
+        """Whether the command has ended (succeeded or failed)."""
         return self.result().end_time is not None
 
     def wait(self, timeout: float | None = 300.0) -> CommandResult:
@@ -131,10 +135,15 @@ class RobotCommands:
         return self.command("set_velocity", linear, angular)
 
     def all_stop(self) -> int:
+        """Commands both sides to zero speed (the drive slews down to it); a running
+        drive_distance, rotate_degrees or set_pose fails, `superseded` (as with any new
+        command). Returns its sequence number."""
         return self.command("all_stop")
 
     def enable(self, enabled: bool = True) -> int:
-        """Enables (True) or disables (False) the drive."""
+        """Enables (True) or disables (False) the drive (disabled: the wheels held at zero
+        speed, motion commands ignored); a running drive_distance, rotate_degrees or set_pose
+        fails, `disabled` (`superseded` when enabling). Returns its sequence number."""
         return self.command("enable", enabled)
 
     def drive_distance_async(self, distance: float, power: float = 0.5) -> CommandHandle:

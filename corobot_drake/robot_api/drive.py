@@ -13,9 +13,13 @@ class RobotDrive:
     """The drive and the robot's motion: pose, velocity, axles, encoders, odometry, enable."""
 
     def pose(self) -> BodyPose:
+        """The chassis frame's pose in the world frame now: x, y, z (m), roll, pitch, yaw
+        (rad, extrinsic x-y-z), the truth (`odometry()` is the robot's own estimate)."""
         return self._sim.body_pose(self._parts.chassis)
 
     def velocity(self) -> BodyVelocity:
+        """The chassis origin's velocity now in its heading frame (the world's, turned by
+        the yaw): forward and lateral (+ left) m/s, yaw rate about world z rad/s (+ left)."""
         plant = self._sim.station.plant
         V = plant.EvalBodySpatialVelocityInWorld(self._plant_context(), self._parts.chassis)
         yaw = self.pose().yaw
@@ -34,7 +38,8 @@ class RobotDrive:
             self._sim.context)
 
     def encoders(self) -> dict[str, int]:
-        """Front-wheel encoder counts, 600 ticks per revolution, by wheel name."""
+        """Encoder counts of the encoded wheels (`RobotSpec.encoded`: the Corobot's front
+        pair), `spec.encoder_ticks_per_revolution` a turn (the Corobot's 600), by wheel name."""
         return self.signal("encoders")
 
     def heading(self) -> float:
@@ -61,6 +66,8 @@ class RobotDrive:
         return source.get_state(source.GetMyContextFromRoot(self._sim.context)).request.enabled
 
     def is_enabled(self) -> bool:
+        """Whether the drive is enabled now, as its controller has it since its last control
+        tick (`enable_requested()`: the level last commanded)."""
         status = self._sim.station.diagram.GetOutputPort(f"{self.name}.drive_status").Eval(
             self._sim.context)
         return bool(DriveStatus(status).enabled)

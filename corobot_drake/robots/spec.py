@@ -128,6 +128,7 @@ class RobotSpec:
 
     @property
     def wheel_joints(self) -> tuple[str, ...]:
+        """The wheels' revolute joints' names, in `wheels` order."""
         return tuple(w.joint for w in self.wheels)
 
     @property
@@ -143,6 +144,7 @@ class RobotSpec:
 
     @property
     def half_track(self) -> float:
+        """m: half the track (the left wheels' mean y minus the right wheels', base frame)."""
         return self.track / 2
 
     @property
@@ -170,6 +172,8 @@ class RobotSpec:
         return self.drive.motor_torque_scaling * self.wheel_radius
 
     def wheel_center(self, index: int) -> tuple[float, float, float]:
+        """m: the centre of wheel `index` (in `wheels` order) in the base frame at the start
+        pose."""
         return self.wheels[index].center
 
 

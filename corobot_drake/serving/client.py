@@ -97,6 +97,8 @@ class CorobotClient:
         return self._check(self._http.post(path, json=body or {}, **kwargs))
 
     def close(self) -> None:
+        """Closes the client's HTTP connections (the server runs on); leaving a `with
+        CorobotClient(...)` block closes them too."""
         self._http.close()
 
     def __enter__(self) -> CorobotClient:
@@ -126,6 +128,8 @@ class CorobotClient:
 
     @property
     def realtime_factor(self) -> float:
+        """Simulated seconds per wall-clock second since the server started simulating (its
+        `/simulation`'s); NaN when it reports none (its simulation not running)."""
         value = self._get("/simulation")["realtime_factor"]
         return math.nan if value is None else float(value)
 
@@ -143,6 +147,9 @@ class CorobotClient:
         return self._get("/services")["services"]
 
     def summary(self) -> dict:
+        """The run's figures as the server has them now: `time` (s), `realtime_factor`,
+        `wall_seconds` (s), and each robot's `RemoteRobot.summary()` by name (a subset of
+        `Simulation.summary`)."""
         stats = self._get("/simulation")
         return {
             "time": stats["time"],
@@ -169,14 +176,18 @@ class RemoteCommandHandle:
                 f"as last fetched>")
 
     def result(self) -> CommandResult:
+        """How the command has gone so far (asks the server again while it runs; an ended
+        command's result is kept)."""
         if self._op["status"] == "running":
             self._op = self._client._get(self.status_url)
         return _result(self._op)
 
     def status(self) -> str:
+        """`running`, `succeeded` or `failed` (the reason: `result().reason`)."""
         return self.result().status
 
     def done(self) -> bool:
+        """Whether the command has ended (succeeded or failed)."""
         return self.result().end_time is not None
 
     def wait(self, timeout: float | None = 300.0, poll: float = 0.05) -> CommandResult:
@@ -220,9 +231,12 @@ class RemoteRobot:
                                               "angular": float(angular)})
 
     def all_stop(self) -> int | None:
+        """Commands both sides to zero speed (the drive slews down to it); returns its sequence
+        number."""
         return self._command("all_stop")
 
     def enable(self, enabled: bool = True) -> int | None:
+        """Enables (True) or disables (False) the drive; returns its sequence number."""
         return self._command("enable", {"enabled": bool(enabled)})
 
     def _start(self, command: str, body: dict) -> RemoteCommandHandle:
@@ -242,6 +256,8 @@ class RemoteRobot:
         return RemoteCommandHandle(self._client, op).wait(timeout)
 
     def drive_distance_async(self, distance: float, power: float = 0.5) -> RemoteCommandHandle:
+        """Starts driving straight |distance| m (negative: backwards) at `power` in (0, 1];
+        returns its handle at once."""
         return self._start("drive_distance", {"distance": float(distance), "power": float(power)})
 
     def drive_distance(self, distance: float, power: float = 0.5,
@@ -251,6 +267,8 @@ class RemoteRobot:
                          timeout)
 
     def rotate_degrees_async(self, degrees: float, power: float = 0.5) -> RemoteCommandHandle:
+        """Starts turning in place by `degrees` (positive: counter-clockwise, left) at `power` in
+        (0, 1]; returns its handle at once."""
         return self._start("rotate_degrees", {"degrees": float(degrees), "power": float(power)})
 
     def rotate_degrees(self, degrees: float, power: float = 0.5,
@@ -269,30 +287,43 @@ class RemoteRobot:
         return self._client._get(f"{self._base}/drive")
 
     def two_wheel(self) -> dict:
+        """The drive contract's two-wheel view (JSON): the first left and first right wheel (the
+        Corobot's front pair, the encoded ones) as `left` and `right`, the enable level, the
+        track (m), position (m), heading (rad) and the latest command."""
         return self._client._get(f"{self._base}/drive/two_wheel")
 
     def pose(self) -> BodyPose:
+        """The chassis frame's pose in the world frame: x, y, z (m), roll, pitch, yaw (rad), as
+        `Robot.pose` (from the server's latest snapshot)."""
         return BodyPose(**self.drive_state()["pose"])
 
     def velocity(self) -> BodyVelocity:
+        """The chassis' velocity in its heading frame: forward and lateral (+ left) m/s, yaw rate
+        rad/s (+ left), as `Robot.velocity`."""
         return BodyVelocity(**self.drive_state()["velocity"])
 
     def axle_speeds(self) -> dict[str, float]:
+        """Measured axle speeds, rad/s, by wheel name."""
         return {w: s["axle_speed"] for w, s in self.drive_state()["wheels"].items()}
 
     def encoders(self) -> dict[str, int]:
+        """Encoder counts of the encoded wheels (the first left and right: the Corobot's front
+        pair), by wheel name; `/encoders`' `ticks_per_revolution` a turn."""
         e = self._client._get(f"{self._base}/encoders")
         return {w: ticks for w, ticks in e.items()
                 if w not in ("time_stamp", "ticks_per_revolution")}
 
     def heading(self) -> float:
+        """Compass: the chassis' yaw about world z, rad in (-pi, pi]."""
         return float(self._client._get(f"{self._base}/compass")["heading"])
 
     def position(self) -> tuple[float, float, float]:
+        """GPS: the chassis frame's origin in the world frame, (x, y, z) m."""
         g = self._client._get(f"{self._base}/gps")
         return (g["x"], g["y"], g["z"])
 
     def is_enabled(self) -> bool:
+        """Whether the drive is enabled (as its controller has it)."""
         return bool(self.drive_state()["is_enabled"])
 
     def ir(self, name: str) -> IrReading:
@@ -301,6 +332,8 @@ class RemoteRobot:
         return IrReading(r["raw"], r["range"], r["normalized"], r["time_stamp"])
 
     def ir_distances(self) -> dict[str, float]:
+        """The latest raw reading of every IR sensor, m, by name ({} without any), as
+        `Robot.ir_distances`."""
         snapshot = self._client._get(self._base)["state"]["ir"]
         return {name.removesuffix("_ir"): s["raw"] for name, s in snapshot.items()}
 
@@ -347,6 +380,8 @@ class RemoteRobot:
         return [] if command is None else [command]
 
     def summary(self) -> dict:
+        """The robot's figures now, a subset of `Robot.summary`: `pose`, `velocity`, `wheels`
+        (axle speeds, rad/s), `encoders` (ticks), `heading` (rad), `position` (m)."""
         state = self.drive_state()
         return {"pose": state["pose"], "velocity": state["velocity"],
                 "wheels": {w: s["axle_speed"] for w, s in state["wheels"].items()},
