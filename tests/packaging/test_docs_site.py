@@ -8,6 +8,8 @@ build's process: docs/_ext/corobot_docs)."""
 
 import dataclasses as dc
 import html
+import importlib
+import inspect
 import re
 import subprocess
 import sys
@@ -143,6 +145,9 @@ def test_every_command_has_its_help(site):
     for command in commands:
         assert f"usage: {command} " in page, command
     assert "--headless" in page and "--workers" in page
+    setup = subprocess.run(["bash", "tools/setup", "--help"], capture_output=True, text=True,
+                           cwd=REPO, timeout=60, check=True).stdout
+    assert "Usage: tools/setup" in setup and " ".join(setup.split()) in page
 
 
 def test_the_http_reference_has_every_path_and_method(site, monkeypatch):
@@ -188,18 +193,23 @@ def test_the_ros2_reference_has_every_parameter_with_its_range(site):
 
 
 def test_the_python_reference_documents_the_api(site):
-    """autodoc's entries (their anchors: the objects' full names), each kind's reading too,
-    every field of the robot file and every method a sensor kind may override."""
+    """autodoc's entries (their anchors: the objects' full names): the API's classes and
+    functions, each kind's reading too, every field of the robot file and every method a
+    sensor kind may override."""
     from corobot_drake.sensors.kind import SensorKind
     from corobot_drake.sensors.registry import KINDS
 
     page = (site[0] / "reference" / "python.html").read_text()
     names = ["corobot_drake.simulation.Simulation", "corobot_drake.simulation.Robot",
              "corobot_drake.simulation.Robot.drive_distance",
+             "corobot_drake.robot_api.commands.CommandHandle",
              "corobot_drake.commands.SetVelocity", "corobot_drake.serving.client.CorobotClient",
+             "corobot_drake.serving.client.RemoteRobot",
+             "corobot_drake.serving.client.RemoteCommandHandle",
              "corobot_drake.config.scenario.load_scenario",
              "corobot_drake.gym.env.GoToGoalEnv", "corobot_drake.gym.env.GoToGoalEnv.step",
-             "corobot_drake.gym.rollouts.rollouts", "corobot_drake.gym.load_policy",
+             "corobot_drake.gym.rollouts.rollouts", "corobot_drake.gym.rollouts.summary",
+             "corobot_drake.gym.load_policy",
              "corobot_drake.recording.mcap_log.McapLog", "corobot_drake.robots.robot_spec",
              "corobot_drake.robots.spec.RobotSpec", "corobot_drake.robots.file.RobotFile",
              "corobot_drake.sensors.kind.SensorKind", "corobot_drake.sensors.kind.BuiltSensor",
@@ -215,6 +225,91 @@ def test_the_python_reference_documents_the_api(site):
               if not name.startswith("_") and (callable(value) or isinstance(value, property))]
     names += [f"{k.reading_type.__module__}.{k.reading_type.__qualname__}" for k in KINDS]
     assert [n for n in names if f'id="{n}"' not in page] == []
+
+
+def _documented(name: str):
+    """The object whose full name is `name` (a module's, or an attribute's of one), or None
+    (a dataclass field without a default is no attribute of its class)."""
+    parts = name.split(".")
+    for i in range(len(parts), 0, -1):
+        try:
+            obj = importlib.import_module(".".join(parts[:i]))
+        except ImportError:
+            continue
+        for part in parts[i:]:
+            obj = getattr(obj, part, None)
+        return obj
+    return None
+
+
+def undocumented_members(page: str, source: str) -> list[str]:
+    """What the built Python reference (`page`, its HTML) leaves out of what it documents:
+    each public member (inspect) of each class it documents, from the class and its bases in
+    the package (`Robot`'s parts; not `object`'s, Gymnasium's), a dataclass' fields in its
+    signature; and each public class and function of a module that `source` (the page's
+    Markdown) documents whole (`automodule` with every `:members:`)."""
+    missing = []
+    ids = set(re.findall(r'id="(corobot_drake\.[\w.]+)"', page))
+    for name in sorted(ids):
+        cls = _documented(name)
+        if not inspect.isclass(cls) or not cls.__module__.startswith("corobot_drake"):
+            continue
+        start = page.index(f'id="{name}"')
+        signature = page[start:page.index("</dt>", start)]
+        fields = {f.name for f in dc.fields(cls)} if dc.is_dataclass(cls) else set()
+        members = fields | {m for base in cls.__mro__
+                            if base.__module__.startswith("corobot_drake") for m in vars(base)}
+        for member in sorted(members):
+            if member.startswith("_") or f"{name}.{member}" in ids:
+                continue
+            if member in fields and f'<span class="pre">{member}</span>' in signature:
+                continue
+            missing.append(f"{name}.{member}")
+    for module in re.findall(r"^\.\. automodule:: (\S+)\n {3}:members:\n", source, re.M):
+        missing += [f"{module}.{n}" for n, v in vars(importlib.import_module(module)).items()
+                    if not n.startswith("_") and (inspect.isclass(v) or inspect.isfunction(v))
+                    and v.__module__ == module and f"{module}.{n}" not in ids]
+    return sorted(set(missing))
+
+
+def test_the_python_reference_has_every_public_member_of_what_it_documents(site):
+    """Every method, property and attribute of each class on the page (walked with inspect:
+    a member without a docstring is dropped by autodoc, so this fails), and every class and
+    function of the modules it documents whole (the HTTP client, the rollouts)."""
+    page = (site[0] / "reference" / "python.html").read_text()
+    source = (DOCS / "reference" / "python.md").read_text()
+    assert undocumented_members(page, source) == []
+    from corobot_drake.gym import rollouts
+    from corobot_drake.serving import client
+    from corobot_drake.simulation import Robot
+
+    whole = re.findall(r"^\.\. automodule:: (\S+)\n {3}:members:\n", source, re.M)
+    assert {client.__name__, rollouts.__name__} <= set(whole)
+    assert "pose" in dir(Robot) and 'id="corobot_drake.simulation.Robot.pose"' in page
+
+
+def test_the_member_check_finds_what_a_page_leaves_out():
+    """The check on pages of the test's: the Robot documented without `pose` (a method of
+    one of its parts), a dataclass without a field in its signature, and a module documented
+    whole without one of its functions."""
+    from corobot_drake.simulation import Robot
+
+    robot = "corobot_drake.simulation.Robot"
+    members = {m for base in Robot.__mro__ if base.__module__.startswith("corobot_drake")
+               for m in vars(base) if not m.startswith("_")}
+    assert "pose" in members and "ir_distances" in members
+    page = (f'<dt id="{robot}">Robot</dt>'
+            + "".join(f'<dt id="{robot}.{m}"></dt>' for m in members if m != "pose")
+            + '<dt id="corobot_drake.readings.OdometryPose"><em class="sig-param"><span '
+              'class="n"><span class="pre">x</span></span></em> y</dt>'
+            + '<dt id="corobot_drake.gym.rollouts.rollouts"></dt>')
+    source = ".. automodule:: corobot_drake.gym.rollouts\n   :members:\n"
+    missing = undocumented_members(page, source)
+    assert f"{robot}.pose" in missing
+    assert "corobot_drake.readings.OdometryPose.y" in missing
+    assert "corobot_drake.readings.OdometryPose.x" not in missing
+    assert "corobot_drake.gym.rollouts.summary" in missing
+    assert "corobot_drake.gym.rollouts.rollouts" not in missing
 
 
 def github_anchors(markdown: str) -> set[str]:

@@ -1,5 +1,6 @@
-"""Every command's `--help` (the package's, tools/*.py's and examples/*.py's), as its argparse
-parser prints it, caught in this process.
+"""Every command's `--help`: the set-up script's (`tools/setup`, bash), as it prints it, run at
+each build; the package's, tools/*.py's and examples/*.py's as its argparse parser prints it,
+caught in this process.
 
 Each program's `main()` is called with `ArgumentParser.parse_args` replaced by a catch: the
 parser it built is kept, and nothing else of the program runs (as
@@ -13,6 +14,7 @@ import contextlib
 import importlib
 import importlib.util
 import os
+import subprocess
 import sys
 import warnings
 from pathlib import Path
@@ -28,6 +30,9 @@ MODULES = (
     ("python -m corobot_drake.robot", "corobot_drake.robot"),
 )
 """(command, the module whose `main()` parses its arguments)."""
+SCRIPTS = ("tools/setup",)
+"""Shell scripts whose `--help` prints their usage and does nothing else (tools/setup's:
+tests/packaging/test_setup.py), by path from the repository's root."""
 WIDTH = "100"
 """Columns argparse wraps the help to (it reads $COLUMNS): the same on every machine."""
 
@@ -102,6 +107,15 @@ def _width():
             os.environ["COLUMNS"] = saved
 
 
+def script_help(script: str) -> str:
+    """What `bash <script> --help` prints (run in the repository's root)."""
+    done = subprocess.run(["bash", script, "--help"], capture_output=True, text=True,
+                          cwd=REPO, timeout=60, check=False)
+    if done.returncode != 0 or not done.stdout.strip():
+        raise RuntimeError(f"{script} --help: status {done.returncode}: {done.stderr.strip()}")
+    return done.stdout
+
+
 def programs():
     """(command, its main()) of the package's commands, every tool and every example (each
     takes --help: tests/packaging/test_tools_help.py)."""
@@ -113,8 +127,9 @@ def programs():
 
 
 def page() -> str:
-    out = ["Each command's `--help`, caught from its own parser at each build "
-           "(`docs/_ext/corobot_docs/cli.py`)."]
+    out = ["Each command's `--help` at each build (`docs/_ext/corobot_docs/cli.py`): the "
+           "set-up script's as it prints it, the others' caught from their own parser."]
+    out += [f"## `{script}`\n\n{fenced(script_help(script))}" for script in SCRIPTS]
     for command, main in programs():
         parser = parser_of(main, command)
         parser.prog = command
