@@ -240,7 +240,8 @@ STATE = (
            log=(("left_power", "front_left"), ("right_power", "front_right")), wheels=ALL,
            mcap={"drive_state": "wheels.*.commanded_power"},
            ros2={"drive_state": "wheels.#.commanded_power"}),
-    Signal("encoders", "ticks", "the front wheels' encoder counts, 600 per revolution",
+    Signal("encoders", "ticks", "the encoded wheels' counts, the robot file's "
+           "encoder_ticks_per_revolution a turn",
            port="encoder_ticks", keys=CODED, wheels=ENCODED, integer=True,
            fields={"encoder_ticks": 0.0}, summary="encoders",
            http=("drive.wheels.*.encoder_ticks", "encoders"),
