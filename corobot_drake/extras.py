@@ -18,6 +18,7 @@ EXTRAS = {
               "sse_starlette"),
     "study": ("ray", "tqdm", "matplotlib", "scipy"),
     "gym": ("gymnasium", "ray", "tqdm", "matplotlib"),
+    "train": ("stable_baselines3", "ray"),  # and RLlib, in ray; both bring torch
     "record": ("foxglove", "websockets"),
     "ros2": ("rclpy", "rosbags"),
 }
