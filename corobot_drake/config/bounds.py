@@ -1,8 +1,14 @@
-"""The bounds of the fields of Drake's own config structs that the scenario holds.
+"""The bounds of the fields of Drake's own config structs that the scenario holds, and the
+rules of fields whose allowed values depend on another field of their struct.
 
 Every other range, and the `bounded` fields that declare theirs, is in `corobot_drake.limits`
 (Drake-free, so the HTTP process reads it too); this is the part that needs Drake's types.
+The loader (`config/validate.py`) checks these, and the scenario reference
+(`docs/_ext/corobot_docs/scenario.py`) shows them: each rule's `text` and `problem` are one
+declaration.
 """
+
+import dataclasses as dc
 
 from pydrake.geometry import (
     LightParameter,
@@ -20,9 +26,13 @@ from corobot_drake.limits import (
     CAMERA_MAX_PIXELS,
     DURATION,
     PLANT_TIME_STEP,
+    TIME_STEP,
     OneOf,
     Range,
 )
+
+CENIC = "cenic"
+"""`SimulatorConfig.integration_scheme` of Drake's CENIC integrator."""
 
 SHADOW_MAP_SIZE = Range(1, CAMERA_MAX_PIXELS, unit="pixels",
                         why="a shadow map's side (Drake's default 256)")
@@ -40,7 +50,10 @@ DRAKE_BOUNDS: dict[type, dict[str, object]] = {
         "contact_surface_representation": OneOf(("polygon", "triangle")),
     },
     SimulatorConfig: {
-        "integration_scheme": OneOf(tuple(GetIntegrationSchemes())),
+        "integration_scheme": OneOf(
+            tuple(GetIntegrationSchemes()),
+            f"{CENIC} with a continuous plant (plant_config.time_step 0), another with a "
+            "discrete one"),
         "max_step_size": Range(0.0, 1.0, low_open=True, unit="s"),
         "accuracy": Range(0.0, 1.0, low_open=True),
         "start_time": Range(0.0, DURATION.high, unit="s",
@@ -99,3 +112,81 @@ DRAKE_BOUNDS: dict[type, dict[str, object]] = {
     },
 }
 """Bounds of the fields of Drake's config structs that the scenario holds."""
+
+
+# --- rules that read another field of the struct -------------------------------------------
+
+
+@dc.dataclass(frozen=True)
+class When:
+    """`bound` holds while the struct's field `field` is `equals` (besides the field's own
+    bound); `why` is said after a problem."""
+
+    field: str
+    equals: object
+    bound: Range
+    why: str
+
+    def text(self) -> str:
+        return f"with {self.field} `{self.equals}`: {self.bound.text()}"
+
+    def problem(self, struct, name: str) -> str | None:
+        if getattr(struct, self.field) != self.equals:
+            return None
+        problem = self.bound.problem(getattr(struct, name))
+        return f"{problem} ({self.why})" if problem else None
+
+
+@dc.dataclass(frozen=True)
+class WithinPeriod:
+    """Less than one period of the struct's rate `rate` (Hz): a delay within a frame."""
+
+    rate: str
+    period: str
+
+    def text(self) -> str:
+        return f"less than one {self.period} (1/{self.rate})"
+
+    def problem(self, struct, name: str) -> str | None:
+        value, period = getattr(struct, name), 1.0 / getattr(struct, self.rate)
+        if value < period:
+            return None
+        return (f"must be >= 0 and less than one {self.period} (1/{self.rate} = {period:.4g} s);"
+                f" got {value:g}")
+
+
+@dc.dataclass(frozen=True)
+class FalseOnly:
+    """A switch of Drake's that this project does not simulate: false only."""
+
+    why: str
+
+    def text(self) -> str:
+        return f"`false` only ({self.why})"
+
+    def problem(self, struct, name: str) -> str | None:
+        return f"{self.why}; set it false" if getattr(struct, name) else None
+
+
+COLOUR_ONLY = FalseOnly("only the colour image is simulated")
+
+DRAKE_RULES: dict[type, dict[str, When | WithinPeriod | FalseOnly]] = {
+    # Checked with the integrator (`validate.LayerChecks._integrator`): a later layer may
+    # still switch the scheme.
+    SimulatorConfig: {"max_step_size": When("integration_scheme", CENIC, TIME_STEP,
+                                            "cenic's step")},
+    # Checked on a camera that is on (`rgb: true`), in this order, before its kind's own
+    # checks (`validate.LayerChecks._sensor`).
+    CameraConfig: {"depth": COLOUR_ONLY, "label": COLOUR_ONLY,
+                   "output_delay": WithinPeriod("fps", "frame")},
+}
+"""The fields of Drake's config structs whose allowed values depend on another field."""
+
+
+def rule_problem(struct) -> tuple[str, str] | None:
+    """(field, problem) of the first of the struct's `DRAKE_RULES` it breaks, or None."""
+    for name, rule in DRAKE_RULES.get(type(struct), {}).items():
+        problem = rule.problem(struct, name)
+        if problem:
+            return name, problem
+    return None

@@ -38,7 +38,7 @@ from pydrake.geometry import Rgba
 
 from corobot_drake.config import placement
 from corobot_drake.config import schema as sc
-from corobot_drake.config.bounds import DRAKE_BOUNDS
+from corobot_drake.config.bounds import DRAKE_BOUNDS, rule_problem
 from corobot_drake.config.directives import DirectiveError, check_directives
 from corobot_drake.config.mesh_files import MeshFileError, check_mesh_file, scale_problem
 from corobot_drake.config.sensors import FRONT_CAMERA
@@ -50,7 +50,6 @@ from corobot_drake.limits import (
     FINITE,
     MESH_SCALE,
     POSITION,
-    TIME_STEP,
     Range,
     bound_of,
 )
@@ -577,11 +576,10 @@ class LayerChecks:
             self.fail("plant_config.time_step", "cenic needs a continuous plant (0); got "
                       f"{s.plant_config.time_step:g} (a discrete plant steps with SAP: set "
                       "simulator_config.integration_scheme: runge_kutta3)")
-        if cenic:
-            problem = TIME_STEP.problem(s.simulator_config.max_step_size)
-            if problem:
-                self.fail("simulator_config.max_step_size", f"{problem} (cenic's step)")
-        elif _dumped(s.cenic_solver) != _dumped(sc.Scenario().cenic_solver):
+        broken = rule_problem(s.simulator_config)  # cenic's step (`DRAKE_RULES`)
+        if broken:
+            self.fail(f"simulator_config.{broken[0]}", broken[1])
+        if not cenic and _dumped(s.cenic_solver) != _dumped(sc.Scenario().cenic_solver):
             self.fail("cenic_solver", "sets the solver of cenic's steps; the plant steps with "
                       f"{s.simulator_config.integration_scheme} (set it only with "
                       "integration_scheme: cenic)")
@@ -787,6 +785,9 @@ class LayerChecks:
         self._mount(f"{path}.X_PB", config.X_PB, robot, s)
         if not kind.enabled(config):
             return
+        broken = rule_problem(config)  # a Drake struct's rules (`DRAKE_RULES`: the camera's)
+        if broken:
+            self.fail(f"{path}.{broken[0]}", broken[1])
         for field, problem in kind.check(config):
             self.fail(f"{path}.{field}" if field else path, problem)
 

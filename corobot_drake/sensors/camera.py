@@ -668,14 +668,9 @@ class CameraKind(SensorKind):
         return bool(config.rgb)
 
     def check(self, config: CameraConfig) -> list[tuple[str, str]]:
-        """A camera this project can build: colour only, a delay within a frame, a renderer
-        it makes, each far plane beyond its near one, and what Drake's `MakeCameras` takes."""
-        if config.depth or config.label:
-            return [("depth" if config.depth else "label",
-                     "only the colour image is simulated; set it false")]
-        if not config.output_delay < 1.0 / config.fps:
-            return [("output_delay", f"must be >= 0 and less than one frame (1/fps = "
-                     f"{1.0 / config.fps:.4g} s); got {config.output_delay:g}")]
+        """A camera this project can build (after its rules, `config.bounds.DRAKE_RULES`:
+        colour only, a delay within a frame): a renderer it makes, each far plane beyond its
+        near one, and what Drake's `MakeCameras` takes."""
         rc = config.renderer_class
         if not (isinstance(rc, RenderEngineVtkParams | RenderEngineGlParams) or rc in RENDERERS):
             return [("renderer_class", "must be RenderEngineGl, RenderEngineVtk or empty (the "
