@@ -200,7 +200,8 @@ class Enable:
 
 
 @command(method="wait", summary="Let the previous command run this long", issuable=False,
-         optional=("seconds",))
+         optional=("seconds",),
+         docs={"seconds": "how long the previous command runs on before the next is issued"})
 class Wait:
     """Let the previous command run for this long (s) before the next one. 0 s: the next one
     is issued at the next control update (not with the commands before it when the

@@ -36,6 +36,7 @@ from corobot_drake.commands import (  # noqa: F401 (the scenario's commands, `sc
     SetVelocity,
     Wait,
 )
+from corobot_drake.config.bounds import CENIC
 from corobot_drake.limits import OneOf, Range, bounded
 from corobot_drake.model.sdf import VISUALS, WheelContact
 from corobot_drake.robots import ROBOTS, corobot
@@ -49,11 +50,13 @@ class Box:
     """Box with edge lengths (x, y, z), metres."""
 
     size: list[float] = bounded(lambda: [1.0, 1.0, 1.0], lim.SHAPE_SIZE, size=3)
+    """m: the edge lengths along the body frame's x, y and z (the box centred on its origin)."""
 
 
 @dc.dataclass
 class Sphere:
     radius: float = bounded(0.5, lim.SHAPE_SIZE)
+    """m: the sphere's radius (centred on the body frame's origin)."""
 
 
 @dc.dataclass
@@ -61,7 +64,9 @@ class Cylinder:
     """Cylinder along its z axis."""
 
     radius: float = bounded(0.5, lim.SHAPE_SIZE)
+    """m: the radius about the body frame's z axis."""
     length: float = bounded(1.0, lim.SHAPE_SIZE)
+    """m: the length along z, centred on the origin."""
 
 
 @dc.dataclass
@@ -69,7 +74,9 @@ class Capsule:
     """Capsule along its z axis (length excludes the end caps)."""
 
     radius: float = bounded(0.5, lim.SHAPE_SIZE)
+    """m: the radius of the cylinder and of its two hemispherical caps."""
     length: float = bounded(1.0, lim.SHAPE_SIZE)
+    """m: the cylinder's length along z, between the caps' centres."""
 
 
 @dc.dataclass
@@ -77,8 +84,11 @@ class Ellipsoid:
     """Ellipsoid with semi-axes a, b, c along x, y, z."""
 
     a: float = bounded(0.5, lim.SHAPE_SIZE)
+    """m: the semi-axis along the body frame's x."""
     b: float = bounded(0.5, lim.SHAPE_SIZE)
+    """m: the semi-axis along y."""
     c: float = bounded(0.5, lim.SHAPE_SIZE)
+    """m: the semi-axis along z."""
 
 
 @dc.dataclass
@@ -118,7 +128,10 @@ class Ground:
     """The ground: a rigid hydroelastic half-space at z = 0."""
 
     friction: float = bounded(GROUND_FRICTION, lim.FRICTION)
+    """Coulomb friction (static = dynamic); a tyre's or a body's is combined with it
+    (`World.model_friction`)."""
     color: list[float] = bounded(lambda: [0.45, 0.5, 0.4, 1.0], lim.COLOR, size=4)
+    """RGBA in [0, 1], as the camera and Meshcat draw it."""
 
 
 @dc.dataclass
@@ -126,6 +139,8 @@ class WorldBody:
     """A body of the world: free (it has mass and moves) or fixed (welded to the world)."""
 
     shape: Shape = dc.field(default_factory=Box)
+    """Its geometry, one tag of `!Box`, `!Sphere`, `!Cylinder`, `!Capsule`, `!Ellipsoid`,
+    `!Mesh`, in its frame B: drawn and touching alike."""
     mass: float = bounded(1.0, lim.MASS)
     """kg; ignored when fixed."""
     pose: Transform = dc.field(default_factory=Transform)
@@ -133,12 +148,15 @@ class WorldBody:
     velocity: list[float] = bounded(lambda: [0.0] * 6, lim.SPATIAL_VELOCITY, size=6)
     """Initial spatial velocity in the world [wx, wy, wz, vx, vy, vz] (rad/s, m/s)."""
     fixed: bool = False
+    """true: welded to the world at `pose` (it never moves); false: free."""
     friction: float = bounded(0.5, lim.FRICTION)
+    """Coulomb friction (static = dynamic) of its surface."""
     hydroelastic_modulus: float = bounded(1.0e7, lim.HYDROELASTIC_MODULUS)
     """Pa: the body is compliant-hydroelastic (a cheap contact patch on the ground and with
     the tyres); 0 makes it rigid, touching everything by point contact: for a fixed body, or a
     free sphere (point contact holds a free body on the ground at one point: a face sinks)."""
     color: list[float] = bounded(lambda: [0.75, 0.55, 0.3, 1.0], lim.COLOR, size=4)
+    """RGBA in [0, 1] (a mesh file with materials of its own is drawn in those)."""
 
 
 def from_mrds_frame(v) -> list[float]:
@@ -162,13 +180,19 @@ class Sun:
                                      size=3)
     """Not zero (checked with the scene)."""
     intensity: float = bounded(1.0, Range(0.0, 100.0))
+    """1: brightness, relative to full sunlight (0: no sun)."""
 
 
 @dc.dataclass
 class World:
+    """What the robots drive in: the ground, bodies, light and sky."""
+
     ground: Ground = dc.field(default_factory=Ground)
+    """The ground plane z = 0."""
     bodies: dict[str, WorldBody] = dc.field(default_factory=dict)
+    """Boxes, balls, meshes and such, by name (a name is also the body's model name)."""
     sun: Sun = dc.field(default_factory=Sun)
+    """The directional light of the camera images and of Meshcat."""
     sky_color: list[float] = bounded(lambda: [0.53, 0.73, 0.92], lim.COLOR, size=3)
     """RGB in [0, 1]: the background of the camera images and of Meshcat."""
     model_friction: float | None = bounded(None, lim.FRICTION)
@@ -268,11 +292,16 @@ class Robot:
     ground midway between the axles, +x forward): `{translation: [x, y, 0], rotation:
     !Rpy {deg: [0, 0, yaw]}}` stands it on the ground facing `yaw`."""
     drive: Drive = dc.field(default_factory=Drive)
+    """The motors, their controller and the odometry's figures."""
     contact: WheelContact = dc.field(default_factory=WheelContact)
+    """The tyres' contact and the motors' torque and servo gain."""
     visual: str = bounded("meshes", OneOf(VISUALS))
     """How the robot looks: `meshes` (the detailed model) or `boxes` (its collision shapes)."""
     commands: list[Command] = dc.field(default_factory=list)
+    """The robot's script: commands run in order from the start (`!Wait` lets one run on),
+    as the Python API's `Robot` methods issue them."""
     motion: Motion = dc.field(default_factory=Motion)
+    """How the completing commands (DriveDistance, RotateDegrees) slow down and give up."""
     velocity: list[float] = bounded(lambda: [0.0] * 6, lim.SPATIAL_VELOCITY, size=6)
     """Initial chassis spatial velocity in the world [wx, wy, wz, vx, vy, vz] (rad/s, m/s)."""
     wheel_angles: list[float] = bounded(lambda: [0.0] * corobot.wheel_count(),
@@ -299,10 +328,6 @@ class Robot:
     last integrated
     (default: the counts at the start); empty: the true start pose. A saved scene records all
     five (the odometry has drifted from the true pose, and carries on from its last update)."""
-
-
-CENIC = "cenic"
-"""`SimulatorConfig.integration_scheme` of Drake's CENIC integrator."""
 
 
 def _default_plant_config() -> MultibodyPlantConfig:
@@ -365,22 +390,30 @@ class Scenario:
     """Everything needed to build and run one simulation."""
 
     random_seed: int = 0
+    """The seed every random source (sensor noise) mixes its own seed with: a run is
+    repeated exactly from it."""
     simulation_duration: float = bounded(math.inf, lim.SIMULATION_DURATION)
     """s; the CLI's --duration overrides it (.inf: until stopped)."""
     plant_config: MultibodyPlantConfig = dc.field(default_factory=_default_plant_config)
+    """The physics: a continuous plant by default (`time_step: 0`), hydroelastic contact
+    with point contact for the rest."""
     simulator_config: SimulatorConfig = dc.field(default_factory=_default_simulator_config)
+    """The integrator: CENIC at fixed 10 ms steps by default."""
     cenic_solver: IcfSolverParameters = dc.field(default_factory=_default_cenic_solver)
     """The solver of CENIC's steps (Drake's `IcfSolverParameters`; with `integration_scheme:
     cenic` only): Drake's, its line search stopped sooner (`_default_cenic_solver`). With
     `use_error_control: false` each step converges to `min_tolerance` (docs/performance.md,
     "CENIC's solver": what the tolerances cost and move, and why the bounds)."""
     world: World = dc.field(default_factory=World)
+    """The ground, the bodies, the sun and the sky."""
     directives: list[ModelDirective] = dc.field(default_factory=list)
     """Models from SDFormat, URDF or MJCF files, as Drake's `ModelDirectives` (`add_model`,
     `add_weld`, `add_frame`, ...; `ProcessModelDirectives`). `file` is a `package://` URI
     (`package://corobot_drake/...`: the project's `models/`), an absolute `file:///` URI, or a
     `file://` URI relative to the scenario file."""
     robots: dict[str, Robot] = dc.field(default_factory=dict)
+    """The robots, by name (a URL path segment, `/robots/<name>`, and the robot's model
+    name in the plant)."""
 
 
 # --- loading ----------------------------------------------------------------------------

@@ -31,7 +31,10 @@ class Wheels:
     a robot's figures to the bit when its model's numbers are rounded)."""
 
     left: list[str] = dc.field(default_factory=list)
+    """The left side's driven wheels (+y of the right ones): their revolute joints' names in
+    the model; the first one's encoder is the odometry's (`RobotSpec.encoded`)."""
     right: list[str] = dc.field(default_factory=list)
+    """The right side's driven wheels (-y), as `left`."""
     radius: float | None = bounded(None, LENGTH)
     """m: the wheels' radius (all of them)."""
     track: float | None = bounded(None, LENGTH)
@@ -53,10 +56,12 @@ class RobotDrive:
     max_axle_speed: float | None = bounded(None, lim.AXLE_SPEED)
     """rad/s a set-speed command is clamped to; default twice the axle speed at power 1."""
     slew_rate: float = bounded(30.0, Range(0.0, 1e4, low_open=True, unit="rad/s^2"))
+    """rad/s^2: how fast the commanded axle speed may change (the motors' acceleration)."""
     torque_limit: float | None = bounded(None, Range(0.0, 1000.0, low_open=True, unit="N m"))
     """N m per axle: the motor's stall torque; default just above the wheels' traction limit
     (`spec.TRACTION_MARGIN`)."""
     encoder_ticks_per_revolution: int = bounded(600, Range(1, 1 << 24))
+    """1: the wheel encoders' counts per turn of the wheel (the Corobot's 600)."""
     control_period: float = bounded(0.01, lim.PERIOD)
     """s: the drive controller's update period."""
     servo_damping: float | None = bounded(None, Range(0.0, 1000.0, low_open=True,
@@ -70,9 +75,14 @@ class Tyres:
     field left out is the project's tyre scaled to the wheel (`spec.default_contact`)."""
 
     friction: float | None = bounded(None, lim.FRICTION)
+    """Coulomb friction (static = dynamic) of the tyres; the ground's is combined with it."""
     hydroelastic_modulus: float | None = bounded(None, lim.TYRE_MODULUS)
+    """Pa: the tyres' stiffness: softer sinks further into the ground, with a larger contact
+    patch."""
     resolution_hint: float | None = bounded(None, lim.RESOLUTION_HINT)
+    """m: the size of the tyres' tetrahedral mesh: coarser makes a wheel a polygon."""
     hunt_crossley_dissipation: float | None = bounded(None, lim.DISSIPATION)
+    """s/m: damps a tyre's bounce on the ground (Hunt-Crossley)."""
 
 
 @dc.dataclass
@@ -82,6 +92,7 @@ class Casters:
     place as the wheels say)."""
 
     friction: float = bounded(0.05, lim.FRICTION)
+    """Coulomb friction (static = dynamic) of every caster."""
 
 
 @dc.dataclass
@@ -122,7 +133,12 @@ class RobotFile:
     base: str = ""
     """The link the scenario's pose places: its origin on the ground, +x forward, +z up."""
     wheels: Wheels = dc.field(default_factory=Wheels)
+    """The driven wheels' joints, and their radius, track and wheelbase if stated."""
     drive: RobotDrive = dc.field(default_factory=RobotDrive)
+    """The motors and encoders: the scenario's `drive:` and `contact:` start from them."""
     tyres: Tyres = dc.field(default_factory=Tyres)
+    """The tyres' contact, put on every driven wheel."""
     casters: Casters = dc.field(default_factory=Casters)
+    """What else touches the ground at the start pose, sliding."""
     odometry: OdometryTest = dc.field(default_factory=OdometryTest)
+    """The robot's measured odometry error (`tools/calibrate_odometry.py`)."""

@@ -39,5 +39,6 @@ def setup(app):
 
     app.connect("source-read", _fill)
     app.connect("autodoc-process-docstring", docstrings.process)
+    app.connect("object-description-transform", docstrings.describe_fields)
     app.add_directive("pydrake_system", pydrake_system.PydrakeSystem)
     return {"parallel_read_safe": True, "parallel_write_safe": True, "version": "1"}

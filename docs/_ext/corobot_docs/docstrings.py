@@ -66,3 +66,37 @@ def rst(lines: list[str]) -> list[str]:
 def process(app, what, name, obj, options, lines: list[str]) -> None:
     """autodoc-process-docstring: `lines` made reStructuredText in place."""
     lines[:] = [*rst(lines), ""]
+
+
+def describe_fields(app, domain: str, objtype: str, content) -> None:
+    """object-description-transform: a dataclass field autodoc lists without a docstring (a
+    sensor map a decorator adds: autodoc fires no docstring event for it) gets the scenario
+    reference's description (`scenario.field_doc`), its `code` as literals."""
+    from docutils import nodes
+
+    if domain != "py" or objtype != "attribute" or content.children:
+        return
+    signature = content.parent.children[0]
+    doc = field_doc(f"{signature.get('module', '')}.{signature.get('fullname', '')}")
+    if doc:
+        parts = doc.split("`")
+        content += nodes.paragraph("", "", *[
+            nodes.literal(part, part) if i % 2 else nodes.Text(part)
+            for i, part in enumerate(parts) if part])
+
+
+def field_doc(name: str) -> str:
+    """The scenario reference's description of the dataclass field `module.Class.field`; ""
+    for anything else."""
+    import dataclasses as dc
+    import importlib
+
+    from corobot_docs import scenario
+
+    owner, _, field = name.rpartition(".")
+    module, _, cls_name = owner.rpartition(".")
+    try:
+        cls = getattr(importlib.import_module(module), cls_name)
+    except (ImportError, AttributeError, ValueError):
+        return ""
+    return scenario.field_doc(cls, field) if dc.is_dataclass(cls) else ""

@@ -2,10 +2,15 @@
 then the robot file's (`robots.file.RobotFile`).
 
 Read from the code at build time: the dataclasses' fields (types, defaults), their bounds
-(`limits.bounded` metadata; `config.bounds.DRAKE_BOUNDS` for Drake's config structs), their
-attribute docstrings (the string below each field, read with `ast`) and Drake's own field
-docs. Each sensor kind's config comes in through `Robot`'s per-kind maps
-(`sensors.registry.KINDS`).
+(`limits.bounded` metadata; `config.bounds.DRAKE_BOUNDS` for Drake's config structs) and the
+rules that read another field (`config.bounds.DRAKE_RULES`), their attribute docstrings (the
+string below each field, read with `ast`) and, for Drake's structs, the project's words
+(`config.drake_docs.DRAKE_DOCS`; Drake's own docstrings speak of LCM and C++). Each sensor
+kind's config comes in through `Robot`'s per-kind maps (`sensors.registry.KINDS`).
+
+Every field has a description and a unit: a unit from its bound or its description's opening
+(`kg; ...`, `1: ...`), else `1` for a number (its bound names no unit: dimensionless) and `—`
+for anything else; a field without a description stops the build (`UndocumentedFieldsError`).
 """
 
 from __future__ import annotations
@@ -20,9 +25,17 @@ import typing
 
 from corobot_docs.markdown import cell, docs_below, table
 
-UNITS = ("m", "s", "kg", "Pa", "rad", "deg", "Hz", "N", "N m", "rad/s", "m/s", "rad/s^2",
-         "m/s^2", "1/s", "s/m", "pixels", "ticks")
-"""Units a field's docstring may open with (`kg; ignored when fixed`) when its range has none."""
+UNITS = ("1", "m", "s", "kg", "Pa", "rad", "deg", "Hz", "N", "N m", "rad/s", "m/s", "rad/s^2",
+         "m/s^2", "1/s", "s/m", "pixels", "ticks", "1, 1/m, 1/m^2")
+"""Units a field's docstring may open with (`kg; ignored when fixed`, `1: ...` for a
+dimensionless number) when its range has none."""
+
+NO_UNIT = "—"
+"""The unit cell of a field that is not a number (a name, a switch, a struct, a pose)."""
+
+
+class UndocumentedFieldsError(ValueError):
+    """Fields the reference would list without a description."""
 
 
 KEYS = {"robots": "<robot>", "bodies": "<body>"}
@@ -51,6 +64,12 @@ def page() -> str:
     out.append(ROBOT_FILE_INTRO)
     for s in robot_file.values():
         out.append(_section(s, {**sections, **robot_file}, top="The robot file's top level."))
+    missing = [f"{_title(s.cls)}.{name}" for s in [*sections.values(), *robot_file.values()]
+               for name, _ in _struct_fields(s.cls) if not field_doc(s.cls, name)]
+    if missing:
+        raise UndocumentedFieldsError(
+            "fields without a description (a docstring below the field, or "
+            "config.drake_docs.DRAKE_DOCS for Drake's): " + ", ".join(missing))
     return "\n\n".join(out) + "\n"
 
 
@@ -164,18 +183,31 @@ def _title(cls) -> str:
 
 
 def _class_doc(cls) -> str:
+    if cls.__module__.startswith("pydrake"):
+        return cell(_drake_docs(cls).get("", ""))
     doc = inspect.getdoc(cls) or ""
-    if cls.__module__.startswith("pydrake") or doc.startswith(cls.__name__ + "("):
-        doc = doc.split("\n\n")[0] if not doc.startswith(cls.__name__ + "(") else ""
+    if doc.startswith(cls.__name__ + "("):  # a dataclass's generated signature
+        return ""
     return cell(doc.split("\n\n")[0])
 
 
 def _row(s: Section, name: str, tp, sections) -> list[str]:
     bound, size = _bound(s.cls, name)
-    doc = _field_doc(s.cls, name) or _sensor_map_doc(s.cls, name)
-    unit = _unit(bound, doc)
+    doc = field_doc(s.cls, name)
     return [f"`{name}`", _type_text(tp, sections), _default_text(getattr(s.default, name, None)),
-            unit, _allowed(bound, size, tp), cell(doc)]
+            _unit(bound, doc, tp), _allowed(bound, size, tp, _rule(s.cls, name)),
+            cell(_without_one(doc))]
+
+
+def _without_one(doc: str) -> str:
+    """The description without its opening `1: ` (the mark of a number without a unit)."""
+    return doc[3:4].upper() + doc[4:] if re.match(r"1[:;] ", doc) else doc
+
+
+def _rule(cls, name: str):
+    from corobot_drake.config.bounds import DRAKE_RULES
+
+    return DRAKE_RULES.get(cls, {}).get(name)
 
 
 def _bound(cls, name):
@@ -187,16 +219,32 @@ def _bound(cls, name):
     return DRAKE_BOUNDS.get(cls, {}).get(name), None
 
 
-def _unit(bound, doc: str) -> str:
+def _unit(bound, doc: str, tp) -> str:
+    """The bound's unit, else the description's opening one (`UNITS`), else `1` for a number
+    and `NO_UNIT` for anything else (a field that is not read has none)."""
+    from corobot_drake.config.drake_docs import NOT_READ
+
     bounds = bound if isinstance(bound, tuple) else (bound,)
     units = [getattr(b, "unit", "") for b in bounds if getattr(b, "unit", "")]
     if units:
         return ", ".join(dict.fromkeys(units))
-    m = re.match(r"([\w/^ ]{1,8})[:;] ", doc)
-    return m.group(1) if m and m.group(1) in UNITS else ""
+    m = re.match(r"(.+?)[:;] ", doc)
+    if m and m.group(1) in UNITS:
+        return m.group(1)
+    return "1" if _numeric(tp) and not doc.startswith(NOT_READ) else NO_UNIT
 
 
-def _allowed(bound, size, tp) -> str:
+def _numeric(tp) -> bool:
+    """Whether `tp` holds numbers: an int or a float (or None), a list or an array of them."""
+    import numpy as np
+
+    tp = _scalar(tp)
+    if typing.get_origin(tp) is list:
+        tp = typing.get_args(tp)[0]
+    return tp in (int, float, np.ndarray)
+
+
+def _allowed(bound, size, tp, rule=None) -> str:
     from corobot_drake.limits import DRAKE_INT, FINITE, OneOf, Range
 
     def one(b):
@@ -220,6 +268,8 @@ def _allowed(bound, size, tp) -> str:
         text = ""
     if size is not None:
         text = f"{size} numbers" + (f", {text}" if text else "")
+    if rule is not None:  # a rule that reads another field (`config.bounds.DRAKE_RULES`)
+        text = f"{text}; {rule.text()}" if text else rule.text()
     return cell(text)
 
 
@@ -294,26 +344,34 @@ def _default_text(value) -> str:
 # --- docstrings -------------------------------------------------------------------------
 
 
-def _field_doc(cls, name: str) -> str:
-    if dc.is_dataclass(cls):
-        doc = docs_below(cls).get(name, "")
-        if not doc:
-            doc = _command_arg_doc(cls, name)
-        return doc
-    doc = getattr(getattr(cls, name, None), "__doc__", None) or ""
-    if doc.startswith("(self)"):
-        return ""
-    return doc.split("\n\n")[0]
+def field_doc(cls, name: str) -> str:
+    """A field's description: its docstring (a dataclass's), a command argument's, a sensor
+    map's, or the project's words for a field of Drake's (`DRAKE_DOCS`); "" when it has none.
+    The Python reference's autodoc reads it too (`docstrings.process`)."""
+    if not dc.is_dataclass(cls):
+        return _drake_docs(cls).get(name, "")
+    return docs_below(cls).get(name, "") or _command_arg_doc(cls, name) \
+        or _sensor_map_doc(cls, name)
+
+
+def _drake_docs(cls) -> dict[str, str]:
+    from corobot_drake.config.drake_docs import DRAKE_DOCS
+
+    return DRAKE_DOCS.get(cls, {})
 
 
 def _sensor_map_doc(cls, name: str) -> str:
-    """What a robot's map of a kind of sensor is (`sensors.registry.KINDS`)."""
+    """What a robot's (or a robot file's) map of a kind of sensor is
+    (`sensors.registry.KINDS`)."""
     from corobot_drake.sensors.registry import KINDS
 
-    kind = next((k for k in KINDS if k.field == name and cls.__name__ == "Robot"), None)
-    if kind is None:
+    kind = next((k for k in KINDS if k.field == name), None)
+    if kind is None or cls.__name__ not in ("Robot", "RobotFile"):
         return ""
     doc = f"The robot's sensors of this kind, by name (`{name}: {{<name>: {{...}}}}`)"
+    if cls.__name__ == "RobotFile":
+        return doc + "; none by default, and a field a sensor leaves out takes its config " \
+            "type's own default."
     if kind.defaults():
         off = ", ".join(f"{k}: {str(v).lower()}" for k, v in (kind.off or {}).items())
         doc += f"; a default one is removed by `{{{off}}}`" if off else ""
