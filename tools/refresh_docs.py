@@ -19,10 +19,15 @@ lab/refresh/ (lab/docs_blocks.py reads the markers).
                                                  # --only 'gallery-*')
     python tools/refresh_docs.py --list          # the blocks, their commands and costs
     python tools/refresh_docs.py --check         # the cheap deterministic blocks: exit 1 on drift
+    python tools/refresh_docs.py --date-from-git --only NAME  # date an undated block, no run
 
 Simulation results are deterministic (same numbers on every run), so `--check` can hold them to
 the text; timings (real-time factors, per-frame and per-scan costs) are not: their blocks note
-the machine's load average while they were measured, and only a refresh rewrites them.
+the machine's load average while they were measured, and only a refresh rewrites them. Every
+block says the day it was made: a timing in its "Measured" line, any other block in a last line
+"Produced DAY by COMMAND" that `--check` leaves out of its comparison. `--date-from-git` dates an
+undated block without running its command: the day of the last commit that changed its lines
+(or its picture), which its date line says.
 """
 
 import argparse
@@ -31,7 +36,7 @@ import json
 import sys
 
 from lab.refresh.measures import MEASUREMENTS
-from lab.refresh.rewrite import check_markers, list_blocks, refresh
+from lab.refresh.rewrite import check_markers, list_blocks, refresh, stamp_from_git
 from lab.refresh.runner import DETERMINISTIC
 from lab.refresh.specs import blocks
 
@@ -45,6 +50,9 @@ def main(argv=None) -> int:
     p.add_argument("--check", action="store_true",
                    help="re-render deterministic blocks (without --only: the cheap ones) and "
                         "exit 1 if any differs from the file; writes nothing")
+    p.add_argument("--date-from-git", action="store_true",
+                   help="date the undated blocks (of --only) by git's last change to their "
+                        "lines, without running their commands")
     p.add_argument("--measure", choices=sorted(MEASUREMENTS),
                    help="make one of this tool's own measurements and print it (JSON; None: "
                    "refresh instead)")
@@ -67,6 +75,8 @@ def main(argv=None) -> int:
     if args.list:
         list_blocks(specs)
         return 0
+    if args.date_from_git:
+        return stamp_from_git(specs)
     if args.check:
         chosen = [s for s in specs if s.kind == DETERMINISTIC and (args.only or s.cheap)]
         skipped = [s.name for s in specs if s not in chosen]

@@ -68,3 +68,32 @@ def picture(alt: str, path: str, command: str) -> Callable:
     return render
 
 
+
+
+DATE = re.compile(r"\b20\d\d-\d\d-\d\d\b")
+"""A date in a block: a timing's day, or the day a deterministic block or picture was made."""
+PRODUCED = re.compile(r"(?:\n\n\*Produced 20\d\d-\d\d-\d\d\b(?:(?!\n\n).)*\*"
+                      r"| \(produced 20\d\d-\d\d-\d\d\b[^()]*\))\Z",
+                      re.DOTALL)
+"""The date line `stamp` ends an undated block with (a multi-line block's last paragraph, an
+inline block's last parenthesis)."""
+FROM_GIT = "from git: the last commit that changed it"
+
+
+def stamp(content: str, day: str, commands: list[str], multiline: bool,
+          from_git: bool = False) -> str:
+    """`content` ending with the day it was made and the command(s) that made it (unless the
+    content shows them already); `from_git`: the day is not a run's but git's (`FROM_GIT`)."""
+    shown = [c for c in commands if c not in content]
+    by = " by " + "; ".join(f"`{c}`" for c in shown) if shown else " by the command above"
+    if multiline:
+        why = f" ({FROM_GIT})" if from_git else ""
+        return f"{content.rstrip()}\n\n*Produced {day}{why}{by}.*"
+    why = f", {FROM_GIT}," if from_git else ""
+    return f"{content} (produced {day}{why}{by if shown else ''})"
+
+
+def unstamped(content: str) -> str:
+    """`content` without `stamp`'s date line: what `--check` compares (the figures, not when
+    they were made)."""
+    return PRODUCED.sub("", content)

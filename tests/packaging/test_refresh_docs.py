@@ -97,6 +97,25 @@ def test_wrap_markdown_fills_prose_and_keeps_tables_and_code():
     assert item[0].startswith("- item") and all(line.startswith("  ") for line in item[1:])
 
 
+def test_a_blocks_date_line_is_left_out_of_the_check():
+    """`stamp` ends an undated block with the day it was made and its command; `unstamped`
+    takes exactly that line off, so a block made on another day still checks equal."""
+    from lab.refresh.text import stamp, unstamped
+
+    table = "| a |\n|---|\n| 1 |"
+    made = stamp(table, "2026-01-02", ["python tools/a.py"], multiline=True)
+    assert made == table + "\n\n*Produced 2026-01-02 by `python tools/a.py`.*"
+    again = wrap_markdown(stamp(table, "2026-03-04", ["python tools/a.py --long " + "x " * 60],
+                                multiline=True, from_git=True))
+    assert unstamped(made) == unstamped(again) == table
+    shown = stamp("`python tools/a.py`:\n\n" + table, "2026-01-02", ["python tools/a.py"], True)
+    assert shown.endswith("*Produced 2026-01-02 by the command above.*")
+    inline = stamp("0.6 m/s", "2026-01-02", ["python tools/a.py"], multiline=False)
+    assert inline == "0.6 m/s (produced 2026-01-02 by `python tools/a.py`)"
+    assert unstamped(inline) == "0.6 m/s" and unstamped("0.6 m/s (at rest)") == "0.6 m/s (at rest)"
+    assert unstamped(table + "\n\n*Produced by hand.*") == table + "\n\n*Produced by hand.*"
+
+
 def _tool(*args: str) -> subprocess.CompletedProcess:
     return subprocess.run([sys.executable, str(TOOL), *args], cwd=REPO, capture_output=True,
                           text=True, timeout=900)
