@@ -11,13 +11,16 @@ simulation (`--local`).
     python -m corobot_drake --serve &                 # then:
     python examples/drive_legs.py --url http://127.0.0.1:50000 --loops 3 --seed 1
     python examples/drive_legs.py --loops 2           # starts a headless server of its own
+    python examples/drive_legs.py --rate max          # ... that runs as fast as it can
     python examples/drive_legs.py --local --loops 2   # the same legs, in-process
 """
 
+import argparse
 import math
 import sys
 
 from corobot_drake.arguments import ToolParser, bounded
+from corobot_drake.cli import ArgumentError, run_rate
 from corobot_drake.commands import RotateDegrees
 from corobot_drake.limits import DRAKE_INT, DRIVE_POWER
 from corobot_drake.resources import DEFAULT_SCENARIO
@@ -56,6 +59,14 @@ def legs(robot, loops: int, seed: int, power: float = 0.2, out=print) -> list[fl
     return drift
 
 
+def rate(text: str) -> float:
+    """An argparse `type`: `python -m corobot_drake --rate`'s value (a number, or max)."""
+    try:
+        return run_rate(text)
+    except ArgumentError as e:
+        raise argparse.ArgumentTypeError(str(e).removeprefix("--rate: ")) from None
+
+
 def main(argv=None) -> int:
     p = ToolParser(description=__doc__.splitlines()[0])
     p.add_argument("--url", help="a running server (default: start a headless one)")
@@ -65,7 +76,12 @@ def main(argv=None) -> int:
     p.add_argument("--seed", type=bounded(DRAKE_INT, int), default=1, help="the legs' seed")
     p.add_argument("--power", type=bounded(DRIVE_POWER), default=0.2,
                    help="power of every command")
+    p.add_argument("--rate", type=rate, default=1.0, metavar="X",
+                   help="the started server's pace: simulated s per wall-clock s, or max: as "
+                   "fast as it can (the same legs, sooner)")
     args = p.parse_args(argv)
+    if args.rate != 1.0 and (args.url or args.local):
+        p.error("--rate: only for the server this example starts (not with --url or --local)")
     if args.local:
         from corobot_drake.simulation import Simulation, quiet_drake_warnings
 
@@ -78,7 +94,8 @@ def main(argv=None) -> int:
     else:
         from corobot_drake.serving.serve import ServerProcess
 
-        with ServerProcess(["--headless"]) as server:
+        pace = "max" if math.isinf(args.rate) else repr(args.rate)
+        with ServerProcess(["--headless", "--rate", pace]) as server:
             print(f"started {server.url}")
             with CorobotClient(server.url) as sim:
                 drift = legs(sim.robot(), args.loops, args.seed, args.power)

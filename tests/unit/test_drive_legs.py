@@ -57,9 +57,21 @@ def test_the_examples_flags_are_the_drive_tests_bounds(capsys):
     before any server starts."""
     main = _example().main
     for argv, flag in ((["--loops", "0"], "--loops"), (["--power", "2"], "--power"),
-                       (["--seed", "x"], "--seed")):
+                       (["--seed", "x"], "--seed"), (["--rate", "0"], "--rate"),
+                       (["--rate", "fast"], "--rate")):
         with pytest.raises(SystemExit) as stop:
             main(["--local", *argv])
         assert stop.value.code == 2
         err = capsys.readouterr().err.strip()
         assert err.startswith(f"error: argument {flag}:") and "\n" not in err
+
+
+@pytest.mark.parametrize("where", [["--local"], ["--url", "http://127.0.0.1:9"]])
+def test_a_rate_is_for_the_examples_own_server_only(where, capsys):
+    """--rate paces the server the example starts: with a server it does not start (or none),
+    one line, exit 2, before anything runs."""
+    with pytest.raises(SystemExit) as stop:
+        _example().main([*where, "--rate", "max"])
+    assert stop.value.code == 2
+    assert capsys.readouterr().err == ("error: --rate: only for the server this example "
+                                       "starts (not with --url or --local)\n")
