@@ -13,13 +13,16 @@ repository's, as a reader pastes them one after the other:
     command without `--headless` (Meshcat in a browser) gets it, and one without `--duration`
     (until Ctrl-C) gets `--duration 1`: the same run, ended. `--foxglove` without a port gets
     a free one (its 8765 may be taken). A `--serve` command is started as a server (on a free
-    port in place of the page's 50000) for the page's Python blocks and `curl` lines.
+    port in place of the page's 50000) for the page's Python blocks, `curl` lines and tools'
+    `--url`s, at `--rate max` unless it gives its rate (`SERVER_RATE`: the same calls,
+    answered sooner), until the last block that names its URL.
   - `python -m corobot_drake.<module> ...` runs that module's (or package's `__main__`'s)
     `main` in this process.
   - `python tools/<tool>.py ...` (or `examples/<example>.py`) runs the script in this
     process, as `python` would; a long measurement is given the small size its flag allows
-    (`TOOL_CUTS`). A tool in `VERDICT_TOOLS` may also end with its verdict's exit status 1:
-    its cut run decides nothing.
+    (`TOOL_CUTS`). A tool in `SERVING_TOOLS` that starts a server of its own (no `--url`, no
+    `--local`) starts it at `--rate max` (`SERVER_RATE`). A tool in `VERDICT_TOOLS` may also
+    end with its verdict's exit status 1: its cut run decides nothing.
   - `curl ...` runs against the page's server, with `--fail-with-body` (an HTTP error fails).
   - `cat FILE` runs as written: FILE must be there.
 - To keep the suite cheap, a run is cut to `MAX_SECONDS` of simulated time: a longer
@@ -72,9 +75,18 @@ TOOL_CUTS = {
     "calibrate_odometry.py": {"--side": "0.25", "--loops": "1",   # 1 m squares: 110 s simulated
                               "--out": "calibrate_odometry"},    # not a new folder in /tmp
     "step_limit.py": {"--steps": "0.01"},               # one plant step of eight
-    "drive_legs.py": {"--loops": "1"},
+    "drive_legs.py": {"--loops": "1"},                 # 38 s simulated a loop
 }
 """tool or example -> {flag: value} it runs with here (in place of the page's, or added)."""
+PAGE_URL = "http://127.0.0.1:50000"
+"""The page's server as the page names it."""
+SERVER_RATE = "max"
+"""--rate of a server here (the page's `--serve`, a tool's own): the same calls and the same
+legs, at the machine's pace instead of the wall clock's (in real time a drive_legs loop takes
+tens of seconds)."""
+SERVING_TOOLS = ("drive_legs.py",)
+"""Tools that start a server of their own unless given `--url` (or `--local`), and take its
+`--rate`."""
 VERDICT_TOOLS = ("tune_tire_grip.py",)
 """Tools whose exit status 1 is their verdict (no effort limit passes), not an error."""
 FENCE = re.compile(r"^(?P<indent> *)```(?P<lang>python|sh)\n(?P<body>.*?)^(?P=indent)```$",
@@ -124,8 +136,10 @@ def cut(argv: list[str]) -> list[str]:
 
 def cut_tool(name: str, args: list[str]) -> list[str]:
     """A tool's arguments as the test runs it: `TOOL_CUTS`' values, `--time` at most
-    MAX_SECONDS."""
+    MAX_SECONDS, `SERVER_RATE` for a server of its own."""
     args = list(args)
+    if name in SERVING_TOOLS and not {"--url", "--local", "--rate"} & set(args):
+        args += ["--rate", SERVER_RATE]
     for flag, value in TOOL_CUTS.get(name, {}).items():
         if flag in args:
             at = args.index(flag) + 1
@@ -193,6 +207,9 @@ def test_the_cuts_keep_a_command_and_only_shorten_it():
         "--steps", "0.01", "--x"]
     assert cut_tool("drive_test.py", ["--seeds", "20"]) == ["--seeds", "20", "--loops", "1"]
     assert cut_tool("snapshot.py", ["--time", "3"]) == ["--time", "2.0"]
+    assert cut_tool("drive_legs.py", ["--seed", "1"]) == [
+        "--seed", "1", "--rate", "max", "--loops", "1"]
+    assert cut_tool("drive_legs.py", ["--url", "U"]) == ["--url", "U", "--loops", "1"]
     assert shortened("sim.advance(5.0); rollouts(p, seeds=range(100)); f(frames=300)") == (
         "sim.advance(2.0); rollouts(p, seeds=range(1)); f(frames=3)")
 
@@ -213,10 +230,13 @@ def run_line(argv: list[str], where: str, url: str | None, capsys) -> None:
         package = importlib.util.find_spec(argv[2]).submodule_search_locations is not None
         run_main(argv[2] + (".__main__" if package else ""), argv[3:], where, capsys)
     elif argv[0] in PYTHON and re.fullmatch(r"(tools|examples)/\w+\.py", argv[1]):
+        if "--url" in argv:
+            assert url, f"{where}: --url without the page's server (`--serve`)"
+            argv = [a.replace(PAGE_URL, url) for a in argv]
         run_tool(argv[1], argv[2:], where, capsys)
     elif argv[0] == "curl":
         assert url, f"{where}: curl without the page's server (`--serve`)"
-        argv = [a.replace("http://127.0.0.1:50000", url) for a in argv]
+        argv = [a.replace(PAGE_URL, url) for a in argv]
         done = subprocess.run([argv[0], "--fail-with-body", *argv[1:]], capture_output=True,
                               text=True, timeout=60)
         assert done.returncode == 0, f"{where}: {shlex.join(argv)}\n{done.stdout}{done.stderr}"
@@ -260,22 +280,27 @@ def run_tool(path: str, args: list[str], where: str, capsys) -> None:
 
 
 def run_page(page: str, capsys) -> None:
-    """The page's blocks in its order, with its server (if it serves one) on a free port."""
+    """The page's blocks in its order, with its server (if it serves one) on a free port
+    until the last block that names the server's URL (a server at `--rate max` costs a core)."""
     from corobot_drake.serving.serve import ServerProcess
 
     serve = served(page)
+    runs = [b for b in blocks(page) if b[3] is None]
+    last_use = max((i for i, b in enumerate(runs) if PAGE_URL in b[1]), default=-1)
     with contextlib.ExitStack() as stack:
         url = None
         if serve:
-            args = [a for a in serve if a != "--serve"]
+            args = [*(a for a in serve if a != "--serve"),
+                    *(["--rate", SERVER_RATE] if "--rate" not in serve else [])]
             url = stack.enter_context(ServerProcess(args)).url
         namespace = {"__name__": "docs_" + re.sub(r"\W", "_", page)}
-        for lang, code, line, reason in blocks(page):
-            if reason is not None:
-                continue
+        for i, (lang, code, line, _) in enumerate(runs):
+            if i > last_use:
+                stack.close()
+                url = None
             if lang == "python":
                 if url:
-                    code = code.replace("http://127.0.0.1:50000", url)
+                    code = code.replace(PAGE_URL, url)
                 exec(compile(shortened(code), f"{page}:{line}", "exec"), namespace)
                 continue
             for argv in shell_lines(code):
