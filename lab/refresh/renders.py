@@ -361,7 +361,8 @@ def render_hot_reads(outs) -> str:
     """Inline, in a sentence: the two reads' costs and the day they were measured."""
     m = json_output(outs)
     return (f"an abstract input costs {m['request_input']:.2f} us and a discrete state number "
-            f"{m['state_number']:.2f} us (measured {outs[0][0].started:%Y-%m-%d})")
+            f"{m['state_number']:.2f} us (measured {outs[0][0].started:%Y-%m-%d} at load "
+            f"average {load_line(flat(outs))}, `{outs[0][0].command}`)")
 
 
 def render_bench_ir(outs) -> str:
