@@ -150,7 +150,7 @@ def llvmpipe_threads(environ=os.environ, cores: int | None = None) -> None:
     is loaded) the cores beyond `SIMULATION_THREADS` (of `cores`, default this process's):
     sets `LP_NUM_THREADS` in `environ` unless it is set (0: a frame is rasterized in the thread
     that renders it). With threads of its own beside the physics and the worker on a 2-core
-    machine, a reader of every frame runs ~20% slower (docs/sensors.md); a frame rendered in
+    machine, a reader of every frame runs ~20% slower (docs/costs.md); a frame rendered in
     the simulation's thread, or by Drake's `RgbdSensorAsync` under SAP, is faster with them, so
     only a camera that is to render on a worker asks for this (`add_camera`). Mesa reads it when
     the process makes its first GL screen; a GPU driver ignores it."""
