@@ -277,21 +277,28 @@ def ray_head():
     """A Ray head (2 CPUs, no dashboard, its own processes) for the session's tests on Ray
     (tests/service/test_study.py, tests/simulation/test_gym.py: one worker runs both). Its
     users join it by address, or connect this process, and leave it as they found it: not
-    connected. Shut down through its handle at the session's end."""
+    connected. Shut down through its handle at the session's end. On loopback only, as the
+    study engine's own instances (`loopback_ray`, held for the session: joining it by its
+    address needs it too)."""
     ray = pytest.importorskip("ray")
     from ray.cluster_utils import Cluster
 
+    from corobot_drake.study.engine import loopback_ray
+
     assert not ray.is_initialized()
-    before = set(_children())
-    cluster = Cluster(initialize_head=True, head_node_args={
-        "num_cpus": 2, "include_dashboard": False})
-    started = set(_children()) - before
-    SESSION_PROCESSES.update(started)
-    yield cluster
-    if ray.is_initialized():
-        ray.shutdown()
-    cluster.shutdown()
-    SESSION_PROCESSES.difference_update(started)
+    # A head that ray.init did not start reports to Ray's usage server even that reports are
+    # off: here to a loopback port nothing can listen on (the connection is refused).
+    with loopback_ray(RAY_USAGE_STATS_REPORT_URL="http://127.0.0.1:0/"):
+        before = set(_children())
+        cluster = Cluster(initialize_head=True, head_node_args={
+            "num_cpus": 2, "include_dashboard": False})
+        started = set(_children()) - before
+        SESSION_PROCESSES.update(started)
+        yield cluster
+        if ray.is_initialized():
+            ray.shutdown()
+        cluster.shutdown()
+        SESSION_PROCESSES.difference_update(started)
 
 
 SAP = SAP_PLANT % 0.01

@@ -134,14 +134,42 @@ class RayStartError(RuntimeError):
     than Ray waits for them); the message is the one line to show."""
 
 
+LOOPBACK_RAY_ENV = {
+    # Ray's non-cluster mode (its default on macOS and Windows): the node's address, which
+    # every Ray server binds and advertises, is 127.0.0.1. On Linux Ray otherwise takes the
+    # interface's address and binds its gRPC servers on all interfaces.
+    "RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER": "0",
+    # No usage reports to usage-stats.ray.io (an instance ray.init starts then sends none).
+    "RAY_USAGE_STATS_ENABLED": "0",
+}
+"""The environment of the Ray instances this project starts: loopback only."""
+
+
+@contextlib.contextmanager
+def loopback_ray(**env: str) -> Iterator[None]:
+    """Ray instances started in this block listen on and connect to 127.0.0.1 only: their
+    processes get LOOPBACK_RAY_ENV (and `env`), and this process Ray's non-cluster mode too
+    (Ray reads that variable once, when imported). Joining such an instance by its address
+    needs the block as well: Ray otherwise turns 127.0.0.1 into the interface's address."""
+    from unittest import mock
+
+    from ray._private import ray_constants
+
+    with (mock.patch.dict(os.environ, {**LOOPBACK_RAY_ENV, **env}),
+          mock.patch.object(ray_constants, "ENABLE_RAY_CLUSTER", False)):
+        yield
+
+
 def _start_local(workers: int | None) -> None:
-    """ray.init of a new local instance; RayStartError (one line) when it does not start."""
+    """ray.init of a new local instance on loopback (`loopback_ray`); RayStartError (one line)
+    when it does not start."""
     import ray
 
     try:
         # "local": a new instance even when RAY_ADDRESS or a running cluster would be joined.
-        ray.init(address="local", num_cpus=workers or os.cpu_count(),
-                 include_dashboard=False, log_to_driver=False, configure_logging=False)
+        with loopback_ray():
+            ray.init(address="local", num_cpus=workers or os.cpu_count(),
+                     include_dashboard=False, log_to_driver=False, configure_logging=False)
     except Exception as e:  # Ray raises bare Exceptions and TimeoutErrors starting up
         raise RayStartError(
             f"Ray's local instance did not start ({one_line(e)}); Ray waits a fixed time for "
