@@ -129,6 +129,12 @@ def _front_end_specs(c: SimpleNamespace) -> list[Spec]:
         Spec("bench-camera", "docs/costs.md", (c.bench_camera,), r.render_table_with_load,
              TIMING, 90),
         Spec("bench-ir", "docs/costs.md", (c.bench_ir,), r.render_bench_ir, TIMING, 50),
+        Spec("bench-lidar", "docs/costs.md", (Command("python tools/bench_lidar.py"),),
+             r.render_bench_ir, TIMING, 60),
+        Spec("bumper-instructions", "docs/costs.md",
+             (Command('python tools/count_instructions.py --seconds 0.2 --override "robots: '
+                      '{corobot: {bumpers: {front_bumper: {}}}}"'),),
+             r.render_counted_table, TIMING, 300),
         Spec("bench-recording", "docs/costs.md",
              (Command("python tools/bench_recording.py"),), r.render_table_with_load, TIMING, 300),
         Spec("bench-ros2", "docs/costs.md", (Command("python tools/bench_ros2.py"),),
