@@ -31,11 +31,12 @@ repository's, as a reader pastes them one after the other:
   first grid point, the first seed), on the session's Ray head (conftest's `ray_head`; a
   page that runs one is in `ON_RAY`). In a Python block, a literal `seeds=range(N)` (episodes)
   is cut to `range(1)` and a literal `frames=N` (a measurement's) to `MAX_FRAMES`; a training
-  (PPO's) to one short iteration: `total_timesteps=N` to 1 (Stable-Baselines3 collects one
-  rollout and updates once) with `n_steps=N` and `batch_size=N` at most `MAX_STEPS`, and
-  `for _ in range(N):` (RLlib's iterations, its env runners actors on the Ray head) to
-  `range(1)` with `train_batch_size_per_learner=N` at most `MAX_BATCH`. The code is otherwise
-  as written: the same calls, the same outputs, a shorter run.
+  (PPO's) to one short iteration in one worker: `total_timesteps=N` to 1 (Stable-Baselines3
+  collects one rollout and updates once) with `n_steps=N` and `batch_size=N` at most
+  `MAX_STEPS` and `n_envs=N` (its worker processes) to 1, and `for _ in range(N):` (RLlib's
+  iterations) to `range(1)` with `train_batch_size_per_learner=N` at most `MAX_BATCH` and
+  `num_env_runners=N` (its actors, on the Ray head) to 1: each worker imports PyTorch. The code
+  is otherwise as written: the same calls, the same outputs, a shorter run.
 - A block right after a line `<!-- no-test: REASON -->` (the last non-blank line above its
   fence) is not run here; the reason must be said (a display, a dependency the project does
   not have, the set-up or the suite itself; or "run by tests/<tier>/test_x.py, which reads this
@@ -77,8 +78,8 @@ MAX_FRAMES = 3
 MAX_STEPS = 16
 """Env steps per env of a Stable-Baselines3 rollout (and of its minibatch) here at most."""
 MAX_BATCH = 128
-"""Env steps of an RLlib training batch here at most: its PPO's default minibatch, and 64 per
-env runner, so that an episode (60 steps at most) ends: RLlib reports a return only then."""
+"""Env steps of an RLlib training batch here at most: its PPO's default minibatch, and more than
+an episode (60 steps at most), so that one ends: RLlib reports a return only then."""
 TOOL_CUTS = {
     "drive_test.py": {"--loops": "1"},                  # 38 s simulated a loop
     "calibrate_odometry.py": {"--side": "0.25", "--loops": "1",   # 1 m squares: 110 s simulated
@@ -170,6 +171,7 @@ def shortened(code: str) -> str:
     code = re.sub(r"\bseeds=range\(\d+\)", "seeds=range(1)", code)
     code = re.sub(r"\bframes=(\d+)\b", lambda m: f"frames={min(int(m[1]), MAX_FRAMES)}", code)
     code = re.sub(r"\btotal_timesteps=[\d_]+", "total_timesteps=1", code)
+    code = re.sub(r"\b(n_envs|num_env_runners)=\d+", r"\1=1", code)
     code = re.sub(r"^(\s*)for _ in range\([\d_]+\):", r"\1for _ in range(1):", code,
                   flags=re.MULTILINE)
     code = re.sub(r"\b(n_steps|batch_size)=([\d_]+)",
@@ -228,11 +230,12 @@ def test_the_cuts_keep_a_command_and_only_shorten_it():
     assert cut_tool("drive_legs.py", ["--url", "U"]) == ["--url", "U", "--loops", "1"]
     assert shortened("sim.advance(5.0); rollouts(p, seeds=range(100)); f(frames=300)") == (
         "sim.advance(2.0); rollouts(p, seeds=range(1)); f(frames=3)")
-    assert shortened("PPO(e, n_steps=512, batch_size=8)\nm.learn(total_timesteps=200_000)\n"
-                     "c.training(train_batch_size_per_learner=4_000)\n"
+    assert shortened("v(n_envs=2); PPO(e, n_steps=512, batch_size=8)\n"
+                     "m.learn(total_timesteps=200_000)\n"
+                     "c.env_runners(num_env_runners=2).training(train_batch_size_per_learner=4_000)\n"
                      "for _ in range(20):\n    a.train()\nfor i in range(20): f(i)") == (
-        "PPO(e, n_steps=16, batch_size=8)\nm.learn(total_timesteps=1)\n"
-        "c.training(train_batch_size_per_learner=128)\n"
+        "v(n_envs=1); PPO(e, n_steps=16, batch_size=8)\nm.learn(total_timesteps=1)\n"
+        "c.env_runners(num_env_runners=1).training(train_batch_size_per_learner=128)\n"
         "for _ in range(1):\n    a.train()\nfor i in range(20): f(i)")
 
 
