@@ -48,8 +48,10 @@ from __future__ import annotations
 import copy
 import dataclasses as dc
 import functools
+import importlib.util
 import math
 import os
+import sys
 import warnings
 from pathlib import Path
 from typing import ClassVar
@@ -158,12 +160,24 @@ def llvmpipe_threads(environ=os.environ, cores: int | None = None) -> None:
     environ.setdefault("LP_NUM_THREADS", str(max(0, cores - SIMULATION_THREADS)))
 
 
+def load_triton_before_mesa() -> None:
+    """Imports PyTorch's compiler, triton, if it is installed and not yet imported. Mesa's
+    software GL (llvmpipe, under both engines here) loads its LLVM into this process with its
+    symbols global; a triton loaded after it binds its own LLVM's symbols to Mesa's and
+    crashes in its static initializers (a segfault: a camera's frame, then PyTorch's
+    optimizers, as a Stable-Baselines3 PPO builds them). Loaded first, each LLVM keeps its own
+    symbols. Costs about 0.2 s, once, and only where triton is installed (`[train]`)."""
+    if "triton" not in sys.modules and importlib.util.find_spec("triton") is not None:
+        import triton  # noqa: F401
+
+
 def make_render_engine(renderer_class, sun_direction, sun_intensity: float, sky_color):
     """(engine, class name) for a `CameraConfig.renderer_class`: "RenderEngineGl" (or its
     params) needs an X display (`xdisplay.x_display`: the user's or a private Xvfb) and
     raises RendererUnavailableError without one; "RenderEngineVtk" (or its params): VTK
     (`make_vtk_engine`); "" (the default) picks GL when a display is available, else VTK with a
     warning (a frame costs ~2x as much: see docs/performance.md)."""
+    load_triton_before_mesa()
     if isinstance(renderer_class, RenderEngineVtkParams):
         return make_vtk_engine(renderer_class), "RenderEngineVtk"
     if renderer_class == "RenderEngineVtk":
