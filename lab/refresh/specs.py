@@ -142,7 +142,7 @@ def _front_end_specs(c: SimpleNamespace) -> list[Spec]:
         Spec("gym-evaluation", "docs/gym.md",
              (Command("python tools/train_policy.py --evaluate"),), r.render_gym_evaluation,
              DETERMINISTIC, 500),
-        Spec("gym-training", "docs/gym.md", (Command("python tools/train_policy.py --ship"),),
+        Spec("gym-training", "docs/costs.md", (Command("python tools/train_policy.py --ship"),),
              r.render_gym_training, PICTURE, 1700),
         Spec("bench-gym", "docs/costs.md", (Command("python tools/bench_gym.py"),),
              r.render_bench_study, TIMING, 150),
