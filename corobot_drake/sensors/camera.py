@@ -160,15 +160,22 @@ def llvmpipe_threads(environ=os.environ, cores: int | None = None) -> None:
     environ.setdefault("LP_NUM_THREADS", str(max(0, cores - SIMULATION_THREADS)))
 
 
-def load_triton_before_mesa() -> None:
-    """Imports PyTorch's compiler, triton, if it is installed and not yet imported. Mesa's
-    software GL (llvmpipe, under both engines here) loads its LLVM into this process with its
-    symbols global; a triton loaded after it binds its own LLVM's symbols to Mesa's and
-    crashes in its static initializers (a segfault: a camera's frame, then PyTorch's
-    optimizers, as a Stable-Baselines3 PPO builds them). Loaded first, each LLVM keeps its own
-    symbols. Costs about 0.2 s, once, and only where triton is installed (`[train]`)."""
-    if "triton" not in sys.modules and importlib.util.find_spec("triton") is not None:
+def load_triton_apart() -> None:
+    """Imports PyTorch's compiler, triton, where it is installed, binding its symbols to its
+    own first (RTLD_DEEPBIND). Mesa's software GL (llvmpipe, under both engines here) loads its
+    LLVM into the process with global symbols; a triton imported plainly after that binds its
+    own LLVM's symbols to Mesa's and dies in its static initializers (a segfault: a camera's
+    frame, then PyTorch's optimizers, which import triton as Stable-Baselines3's PPO builds
+    them). Called as a render engine is made, before or after Mesa is loaded; about 0.2 s,
+    once."""
+    if "triton" in sys.modules or importlib.util.find_spec("triton") is None:
+        return
+    flags = sys.getdlopenflags()
+    sys.setdlopenflags(os.RTLD_NOW | os.RTLD_DEEPBIND)
+    try:
         import triton  # noqa: F401
+    finally:
+        sys.setdlopenflags(flags)
 
 
 def make_render_engine(renderer_class, sun_direction, sun_intensity: float, sky_color):
@@ -177,7 +184,7 @@ def make_render_engine(renderer_class, sun_direction, sun_intensity: float, sky_
     raises RendererUnavailableError without one; "RenderEngineVtk" (or its params): VTK
     (`make_vtk_engine`); "" (the default) picks GL when a display is available, else VTK with a
     warning (a frame costs ~2x as much: see docs/performance.md)."""
-    load_triton_before_mesa()
+    load_triton_apart()
     if isinstance(renderer_class, RenderEngineVtkParams):
         return make_vtk_engine(renderer_class), "RenderEngineVtk"
     if renderer_class == "RenderEngineVtk":
