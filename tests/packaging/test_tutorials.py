@@ -13,16 +13,18 @@ repository's, as a reader pastes them one after the other:
     command without `--headless` (Meshcat in a browser) gets it, and one without `--duration`
     (until Ctrl-C) gets `--duration 1`: the same run, ended. `--foxglove` without a port gets
     a free one (its 8765 may be taken). A `--serve` command is started as a server (on a free
-    port in place of the page's 50000) for the page's Python blocks, `curl` lines and tools'
-    `--url`s, at `--rate max` unless it gives its rate (`SERVER_RATE`: the same calls,
-    answered sooner), until the last block that names its URL.
+    port in place of the page's 50000) for the page's Python blocks and `curl` lines, at the
+    page's pace (real time), until the last block that names its URL.
   - `python -m corobot_drake.<module> ...` runs that module's (or package's `__main__`'s)
     `main` in this process.
   - `python tools/<tool>.py ...` (or `examples/<example>.py`) runs the script in this
     process, as `python` would; a long measurement is given the small size its flag allows
     (`TOOL_CUTS`). A tool in `SERVING_TOOLS` that starts a server of its own (no `--url`, no
-    `--local`) starts it at `--rate max` (`SERVER_RATE`). A tool in `VERDICT_TOOLS` may also
-    end with its verdict's exit status 1: its cut run decides nothing.
+    `--local`) starts it at `--rate max` (`SERVER_RATE`); given the page's server (`--url`),
+    it drives a server of its own started as the page's is but at `--rate max`, for that line
+    only (a real-time server would take tens of seconds a loop; one at max burns a core while
+    it runs). A tool in `VERDICT_TOOLS` may also end with its verdict's exit status 1: its cut
+    run decides nothing.
   - `curl ...` runs against the page's server, with `--fail-with-body` (an HTTP error fails).
   - `cat FILE` runs as written: FILE must be there.
 - To keep the suite cheap, a run is cut to `MAX_SECONDS` of simulated time: a longer
@@ -91,9 +93,9 @@ TOOL_CUTS = {
 PAGE_URL = "http://127.0.0.1:50000"
 """The page's server as the page names it."""
 SERVER_RATE = "max"
-"""--rate of a server here (the page's `--serve`, a tool's own): the same calls and the same
-legs, at the machine's pace instead of the wall clock's (in real time a drive_legs loop takes
-tens of seconds)."""
+"""--rate of a server a serving tool drives here (its own, or one in place of the page's): the
+same legs, at the machine's pace instead of the wall clock's (in real time a drive_legs loop
+takes tens of seconds)."""
 SERVING_TOOLS = ("drive_legs.py",)
 """Tools that start a server of their own unless given `--url` (or `--local`), and take its
 `--rate`."""
@@ -245,8 +247,10 @@ def served(page: str) -> list[str] | None:
                  for argv in cli_commands(code) if "--serve" in argv), None)
 
 
-def run_line(argv: list[str], where: str, url: str | None, capsys) -> None:
-    """One shell command of a page, by the rules of the module's docstring."""
+def run_line(argv: list[str], where: str, url: str | None, capsys,
+             serve: list[str] | None = None) -> None:
+    """One shell command of a page, by the rules of the module's docstring (`serve`: the
+    arguments of the page's server, `url`)."""
     if argv[0] in PYTHON and argv[1:3] == ["-m", "corobot_drake"]:
         if "--serve" in argv:  # runs until Ctrl-C: served for the page's blocks instead
             return
@@ -257,6 +261,12 @@ def run_line(argv: list[str], where: str, url: str | None, capsys) -> None:
     elif argv[0] in PYTHON and re.fullmatch(r"(tools|examples)/\w+\.py", argv[1]):
         if "--url" in argv:
             assert url, f"{where}: --url without the page's server (`--serve`)"
+            if argv[1].rsplit("/", 1)[1] in SERVING_TOOLS:
+                from corobot_drake.serving.serve import ServerProcess
+
+                with ServerProcess([*serve, "--rate", SERVER_RATE]) as fast:
+                    argv = [a.replace(PAGE_URL, fast.url) for a in argv]
+                    return run_tool(argv[1], argv[2:], where, capsys)
             argv = [a.replace(PAGE_URL, url) for a in argv]
         run_tool(argv[1], argv[2:], where, capsys)
     elif argv[0] == "curl":
@@ -306,7 +316,7 @@ def run_tool(path: str, args: list[str], where: str, capsys) -> None:
 
 def run_page(page: str, capsys) -> None:
     """The page's blocks in its order, with its server (if it serves one) on a free port
-    until the last block that names the server's URL (a server at `--rate max` costs a core)."""
+    until the last block that names the server's URL."""
     from corobot_drake.serving.serve import ServerProcess
 
     serve = served(page)
@@ -314,9 +324,8 @@ def run_page(page: str, capsys) -> None:
     last_use = max((i for i, b in enumerate(runs) if PAGE_URL in b[1]), default=-1)
     with contextlib.ExitStack() as stack:
         url = None
+        args = [a for a in serve or () if a != "--serve"]
         if serve:
-            args = [*(a for a in serve if a != "--serve"),
-                    *(["--rate", SERVER_RATE] if "--rate" not in serve else [])]
             url = stack.enter_context(ServerProcess(args)).url
         namespace = {"__name__": "docs_" + re.sub(r"\W", "_", page)}
         for i, (lang, code, line, _) in enumerate(runs):
@@ -329,7 +338,7 @@ def run_page(page: str, capsys) -> None:
                 exec(compile(shortened(code), f"{page}:{line}", "exec"), namespace)
                 continue
             for argv in shell_lines(code):
-                run_line(argv, f"{page}:{line}", url, capsys)
+                run_line(argv, f"{page}:{line}", url, capsys, args)
 
 
 @pytest.mark.parametrize("page", [p for p in PAGES if p not in ON_RAY])
