@@ -143,7 +143,7 @@ def _front_end_specs(c: SimpleNamespace) -> list[Spec]:
              (Command("python tools/train_policy.py --evaluate"),), r.render_gym_evaluation,
              DETERMINISTIC, 500),
         Spec("gym-training", "docs/costs.md", (Command("python tools/train_policy.py --ship"),),
-             r.render_gym_training, PICTURE, 1700),
+             r.render_gym_training, TIMING, 1700),
         Spec("bench-gym", "docs/costs.md", (Command("python tools/bench_gym.py"),),
              r.render_bench_study, TIMING, 150),
         Spec("bench-study", "docs/costs.md",
