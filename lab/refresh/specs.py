@@ -129,6 +129,8 @@ def _front_end_specs(c: SimpleNamespace) -> list[Spec]:
         Spec("bench-camera", "docs/costs.md", (c.bench_camera,), r.render_table_with_load,
              TIMING, 90),
         Spec("bench-ir", "docs/costs.md", (c.bench_ir,), r.render_bench_ir, TIMING, 50),
+        Spec("setup-cost", "docs/install.md", (Command("python tools/measure_setup.py"),),
+             r.render_bench_ir, TIMING, 500),
         Spec("bench-lidar", "docs/costs.md", (Command("python tools/bench_lidar.py"),),
              r.render_bench_ir, TIMING, 60),
         Spec("bumper-instructions", "docs/costs.md",
