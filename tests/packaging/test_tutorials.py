@@ -5,7 +5,10 @@ marked as Python (```` ```python ````) or as shell commands (```` ```sh ````) ru
 page's blocks in the page's order, in one scratch folder where `scenarios/` is the
 repository's, as a reader pastes them one after the other:
 
-- The Python blocks run in one namespace.
+- The Python blocks run in one namespace. What a block shows it prints (the `# ...` lines
+  right after a top-level `print(` line) it must print, in that order, each line as shown
+  (other prints may print more between them); a block a cut below changes is not held to its
+  output (its run is shorter).
 - Each line of a shell block runs (a trailing backslash joins the next line; `# ...` is a
   comment) and must succeed; a line no rule below runs fails the test, so none is passed over.
   `python` may be written `.venv/bin/python`:
@@ -56,6 +59,7 @@ from __future__ import annotations
 
 import contextlib
 import importlib.util
+import io
 import os
 import re
 import runpy
@@ -184,6 +188,34 @@ def shortened(code: str) -> str:
                   lambda m: f"train_batch_size_per_learner={min(int(m[1]), MAX_BATCH)}", code)
 
 
+def shown_output(code: str) -> list[str]:
+    """The lines a Python block shows it prints: the `# ...` comment lines right after each
+    top-level `print(` line (up to the next line that is not a comment), trailing spaces gone."""
+    shown, after_print = [], False
+    for line in code.splitlines():
+        if line.startswith("print("):
+            after_print = True
+        elif after_print and line.startswith("#"):
+            shown.append(line[1:].removeprefix(" ").rstrip())
+        else:
+            after_print = False
+    return shown
+
+
+def run_python(code: str, where: str, namespace: dict) -> None:
+    """A Python block run in the page's `namespace` (cut as `shortened` says); an uncut one
+    prints what it shows (`shown_output`), in order, among what it prints."""
+    run = shortened(code)
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        exec(compile(run, where, "exec"), namespace)
+    if run != code:
+        return
+    printed = iter([line.rstrip() for line in out.getvalue().splitlines()])
+    for line in shown_output(code):
+        assert line in printed, f"{where}: shows `# {line}`, but it printed:\n{out.getvalue()}"
+
+
 def free_port() -> int:
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
@@ -241,6 +273,13 @@ def test_the_cuts_keep_a_command_and_only_shorten_it():
         "v(n_envs=1); PPO(e, n_steps=16, batch_size=8)\nm.learn(total_timesteps=1)\n"
         "c.env_runners(num_env_runners=0).training(train_batch_size_per_learner=128)\n"
         "for _ in range(1):\n    a.train()\nfor i in range(20): f(i)")
+
+
+def test_a_blocks_shown_output_is_the_comments_right_after_its_prints():
+    code = ("x = 1\n# a comment after a line that prints nothing\nprint(x)\n# 1  \n"
+            "#second line\ny = x  # not output\n# nor this\nprint(x, y)\n# 1 1\n"
+            "    print(y)\n    # indented: not top-level\n")
+    assert shown_output(code) == ["1", "second line", "1 1"]
 
 
 def served(page: str) -> list[str] | None:
@@ -337,7 +376,7 @@ def run_page(page: str, capsys) -> None:
             if lang == "python":
                 if url:
                     code = code.replace(PAGE_URL, url)
-                exec(compile(shortened(code), f"{page}:{line}", "exec"), namespace)
+                run_python(code, f"{page}:{line}", namespace)
                 continue
             for argv in shell_lines(code):
                 run_line(argv, f"{page}:{line}", url, capsys, args)
