@@ -63,10 +63,12 @@ class FoxgloveLive:
 
     @property
     def token(self) -> str | None:
+        """The token clients must send, or None (none needed)."""
         return self.access.token
 
     @property
     def port(self) -> int:
+        """The port clients connect to (the one picked, when asked for port 0)."""
         return self._gateway.port
 
     @property

@@ -214,19 +214,26 @@ class SimRunner:
         return self
 
     def stop(self, timeout: float = 5.0) -> None:
+        """Stops the simulation thread and waits for it at most `timeout` s; a request
+        queued or made after this fails with `SimulationStoppedError`."""
         self._stop.set()
         if self._thread is not None:
             self._thread.join(timeout)
 
     @property
     def alive(self) -> bool:
+        """Whether the simulation thread runs (and takes requests)."""
         return self._thread is not None and self._thread.is_alive()
 
     # --- requests from other threads ---
     def submit(self, fn: Callable[[Any], T]) -> concurrent.futures.Future[T]:
+        """Calls `fn(sim)` in the simulation thread between steps; the future gets its result
+        or its exception (`SimulationStoppedError` once the runner has stopped)."""
         return self._put(fn, watch=False)
 
     def watch(self, fn: Callable[[Any], T | None]) -> concurrent.futures.Future[T]:
+        """Calls `fn(sim)` now and after every step until it returns something other than
+        None; the future gets that. Cancel the future to stop watching."""
         return self._put(fn, watch=True)
 
     @property
@@ -271,6 +278,10 @@ class SimRunner:
 
     # --- measurements ---
     def stats(self) -> dict:
+        """JSON: simulated `time` (s), `running`, `rate`, `wall_seconds` since the start,
+        `realtime_factor` and `recent_realtime_factor` (simulated over wall s: since the
+        start; over the last few hundred loop turns), `steps`, `slips`, `requests_served`,
+        `error` (its repr, or None)."""
         elapsed = time.perf_counter() - self.started_wall if self.alive else math.nan
         sim_elapsed = self.snapshot.get("time", self.started_sim) - self.started_sim
         return jsonable({

@@ -30,13 +30,17 @@ METRICS: dict[str, Callable[[RobotRun], Value | dict[str, Value]]] = {}
 
 @dc.dataclass
 class RobotRun:
-    """One robot after a run: the simulation, the robot and where it started."""
+    """One robot after a run, the argument of every metric: the simulation (at the run's
+    end), the robot and where it started."""
 
     sim: Simulation
+    """The simulation, at the run's end (`sim.time`, s)."""
     robot: Robot
+    """The robot measured (one of `sim.robots`)."""
     start: BodyPose
+    """The chassis pose at the start (`Robot.pose()`: world frame, m and rad)."""
     start_heading: float
-    """Compass heading at the start, rad."""
+    """Compass heading at the start (`Robot.heading()`), rad."""
 
 
 READS_IR: set[str] = set()

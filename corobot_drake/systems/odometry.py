@@ -235,7 +235,9 @@ class WheelState:
 
 @dc.dataclass(frozen=True)
 class TwoWheelDriveState:
-    """The generic differential-drive view: left = front left, right = front right."""
+    """The generic differential-drive view (`DriveState.two_wheel()`): `left` and `right` are
+    the encoded wheels (the Corobot's front left and front right); time stamp: simulation
+    time (s); `distance_between_wheels`: the track (m)."""
 
     time_stamp: float
     is_enabled: bool
@@ -246,8 +248,10 @@ class TwoWheelDriveState:
 
 @dc.dataclass(frozen=True)
 class DriveState:
-    """MRDS's four-wheel drive state in SI units. Position (m) and heading (rad) come from
-    the GPS and the compass; time stamp is simulation time (s)."""
+    """MRDS's four-wheel drive state in SI units (`Robot.drive_state()`). Time stamp:
+    simulation time (s); `distance_between_wheels`: the track (m); `wheels`: each wheel's
+    state by wheel name (`RobotSpec.wheel_names`); `position` (x, y, z; m, world frame) and
+    `heading` (rad) come from the GPS and the compass."""
 
     time_stamp: float
     is_enabled: bool
@@ -262,12 +266,14 @@ class DriveState:
     """The wheels [left, right] with an encoder: the differential-drive view's."""
 
     def two_wheel(self) -> TwoWheelDriveState:
+        """The differential-drive view: the `encoded` wheels as left and right."""
         left, right = self.encoded
         return TwoWheelDriveState(self.time_stamp, self.is_enabled,
                                   self.distance_between_wheels, self.wheels[left],
                                   self.wheels[right])
 
     def as_dict(self) -> dict:
+        """The state as plain dicts, lists and numbers (`dataclasses.asdict`)."""
         return dc.asdict(self)
 
 

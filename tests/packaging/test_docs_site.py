@@ -215,7 +215,14 @@ def test_the_python_reference_documents_the_api(site):
              "corobot_drake.sensors.kind.SensorKind", "corobot_drake.sensors.kind.BuiltSensor",
              "corobot_drake.sensors.registry.KINDS",
              "corobot_drake.robot_api.sensors.IrSensors.ir",
-             "corobot_drake.robot_api.sensors.Cameras.camera_image"]
+             "corobot_drake.robot_api.sensors.Cameras.camera_image",
+             "corobot_drake.systems.odometry.DriveState",
+             "corobot_drake.systems.odometry.TwoWheelDriveState",
+             "corobot_drake.resources.scenario_path", "corobot_drake.study.engine.run_study",
+             "corobot_drake.study.engine.ray_session", "corobot_drake.study.metrics.RobotRun",
+             "corobot_drake.gym.layout.Layout",
+             "corobot_drake.recording.foxglove_live.FoxgloveLive",
+             "corobot_drake.serving.runner.SimRunner", "corobot_drake.serving.webapp.create_app"]
     import corobot_drake.robots.file as robot_file
 
     names += [f"corobot_drake.robots.file.RobotFile.{f.name}"
@@ -254,6 +261,9 @@ def undocumented_members(page: str, source: str) -> list[str]:
         cls = _documented(name)
         if not inspect.isclass(cls) or not cls.__module__.startswith("corobot_drake"):
             continue
+        if (inspect.isclass(_documented(name.rpartition(".")[0]))
+                and f"{cls.__module__}.{cls.__qualname__}" != name):
+            continue  # a class attribute naming another class (`config_type`): its own entry
         start = page.index(f'id="{name}"')
         signature = page[start:page.index("</dt>", start)]
         fields = {f.name for f in dc.fields(cls)} if dc.is_dataclass(cls) else set()
@@ -310,6 +320,96 @@ def test_the_member_check_finds_what_a_page_leaves_out():
     assert "corobot_drake.readings.OdometryPose.x" not in missing
     assert "corobot_drake.gym.rollouts.summary" in missing
     assert "corobot_drake.gym.rollouts.rollouts" not in missing
+
+
+def api_names(markdown: str) -> set[str]:
+    """The package's names a page writes in its code (fenced blocks and inline code): each
+    `corobot_drake.<module>.<Name>[.<member>]` and each name a `from corobot_drake.<module>
+    import ...` line imports, as its full name; not a module (`python -m corobot_drake.ros2`),
+    not a private name (a part with a leading underscore)."""
+    fence = r"^(```+|~~~+)[^\n]*\n(.*?)^\1"
+    code = [block for _, block in re.findall(fence, markdown, flags=re.M | re.S)]
+    prose = re.sub(fence, "", markdown, flags=re.M | re.S)
+    code += [span for _, span in re.findall(r"(`+)(.+?)\1", prose, flags=re.S)]
+    names = set()
+    for snippet in code:
+        names.update(re.findall(r"\bcorobot_drake(?:\.\w+)+", snippet))
+        for module, imported in re.findall(r"^\s*from\s+(corobot_drake[\w.]*)\s+import\s+"
+                                           r"(\([^)]*\)|[^\n#]+)", snippet, flags=re.M):
+            for item in imported.strip("() \\").split(","):
+                name = item.split(" as ")[0].strip(" \\\n")
+                names |= {f"{module}.{name}"} if name else set()
+    source = REPO.joinpath
+    return {n for n in names if not any(part.startswith("_") for part in n.split("."))
+            and not source(*n.split(".")).with_suffix(".py").is_file()
+            and not source(*n.split("."), "__init__.py").is_file()}
+
+
+def unreferenced(names, page: str) -> list[str]:
+    """Those of `names` the built Python reference (`page`, its HTML) has no entry for,
+    under the name as written or the object's own (`__module__`.`__qualname__`)."""
+    missing = []
+    for name in sorted(names):
+        obj = _documented(name)
+        own = f"{getattr(obj, '__module__', '')}.{getattr(obj, '__qualname__', '')}"
+        if f'id="{name}"' not in page and f'id="{own}"' not in page:
+            missing.append(name)
+    return missing
+
+
+def test_every_name_a_page_writes_is_in_the_python_reference(site):
+    """Every package name a page of the site (not the reference's own) writes in its code,
+    `corobot_drake.<module>.<Name>` or imported from one, has its entry in the reference."""
+    page = (site[0] / "reference" / "python.html").read_text()
+    named = {p.name: api_names(p.read_text()) for p in sorted(DOCS.glob("*.md"))}
+    assert "corobot_drake.simulation.Simulation" in named["first_drive.md"]
+    assert {f"{p}: {n}" for p in named for n in unreferenced(named[p], page)} == set()
+
+
+def test_the_name_check_finds_a_name_the_reference_lacks():
+    """The check on a page of the test's: names in imports (also parenthesised, renamed) and
+    in inline code are found, modules and private names are not; a name is documented under
+    its own name or its object's."""
+    markdown = ("Run `python -m corobot_drake.ros2.build`; `corobot_drake.resources.scenario_path`"
+                "\nnames a file, `corobot_drake.simulation._private` does not count.\n\n"
+                "```python\nfrom corobot_drake.simulation import Simulation, Robot as R\n"
+                "from corobot_drake.gym.layout import (\n    Layout,\n    draw_layout,\n)\n"
+                "import corobot_drake.gym\n```\n")
+    names = api_names(markdown)
+    assert names == {"corobot_drake.resources.scenario_path",
+                     "corobot_drake.simulation.Simulation", "corobot_drake.simulation.Robot",
+                     "corobot_drake.gym.layout.Layout", "corobot_drake.gym.layout.draw_layout"}
+    page = ('<dt id="corobot_drake.simulation.Simulation"></dt>'
+            '<dt id="corobot_drake.gym.layout.Layout"></dt>')
+    assert unreferenced(names | {"corobot_drake.gym.env.Layout"}, page) == [
+        "corobot_drake.gym.layout.draw_layout", "corobot_drake.resources.scenario_path",
+        "corobot_drake.simulation.Robot"]
+
+
+OWN_TESTS = {"extending": "tests/packaging/test_extending_docs.py",
+             "gallery": "tests/packaging/test_refresh_docs.py"}
+"""Tutorials whose code another test runs, not test_tutorials.py: extending.md's blocks and
+excerpts (held to the files), the gallery's generated pictures (tools/refresh_docs.py; each
+shipped scenario's run headless: tests/service/test_cli.py)."""
+
+
+def tutorials(index: str) -> list[str]:
+    """The pages of docs/index.md's "Tutorials" toctree (`index`: its Markdown)."""
+    tree = re.search(r"^```\{toctree\}\n:caption: Tutorials\n(.*?)^```", index, re.M | re.S)
+    return [line.strip() for line in tree[1].splitlines()
+            if line.strip() and not line.startswith(":")]
+
+
+def test_every_tutorial_is_run_by_a_test():
+    """Each page of the site's Tutorials is one test_tutorials.py runs (its `PAGES`), or one
+    of `OWN_TESTS`, whose test names the page: a new tutorial cannot go untested silently."""
+    from test_tutorials import PAGES
+
+    pages = tutorials((DOCS / "index.md").read_text())
+    assert {"install", "first_drive", "extending", "gallery"} <= set(pages)
+    assert [p for p in pages if f"docs/{p}.md" not in PAGES and p not in OWN_TESTS] == []
+    assert [page for page, test in OWN_TESTS.items() if page not in (REPO / test).read_text()
+            ] == []
 
 
 def github_anchors(markdown: str) -> set[str]:
