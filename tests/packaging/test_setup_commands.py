@@ -93,3 +93,20 @@ def test_a_pages_pytest_lines_name_folders_of_tests_and_options_pytest_has():
                     f"{where}: pytest has no option {arg}"
             elif not arg.isdigit():
                 assert any((REPO / arg).glob("test_*.py")), f"{where}: {arg} holds no tests"
+
+
+def test_the_readmes_set_up_figures_are_the_measured_blocks_rounded():
+    """README.md rounds the set-up's time and size; install.md's generated block
+    (`tools/measure_setup.py`) holds them: a refresh that moves them fails here until the
+    README follows."""
+    readme = (REPO / "README.md").read_text()
+    said = re.search(r"about (\d+) minutes and (\d+(?:\.\d+)?) GB", readme)
+    assert said, "README.md says no 'about N minutes and M GB' for the set-up"
+    install = (REPO / "docs" / "install.md").read_text()
+    block = install[install.index("<!-- BEGIN generated: setup-cost"):
+                    install.index("<!-- END generated: setup-cost")]
+    measured = re.search(r"in all: (\d+) min (\d+) s; \.venv (\d+(?:\.\d+)?)GB", block)
+    assert measured, "install.md's setup-cost block has no 'in all' line"
+    minutes = int(measured[1]) + int(measured[2]) / 60
+    assert abs(int(said[1]) - minutes) <= 1.0, (said[0], measured[0])
+    assert abs(float(said[2]) - float(measured[3])) <= 0.6, (said[0], measured[0])
