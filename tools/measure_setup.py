@@ -1,5 +1,4 @@
-"""Benchmark: what `tools/setup` takes on a fresh clone, its steps' times and the environments'
-sizes.
+"""Benchmark: what `tools/setup` takes on a fresh clone, step by step, and its sizes.
 
 Clones this checkout (its committed tree, as CI does) into a temporary folder, runs
 `tools/setup` there with its output in a log, prints when each step started, the total time
