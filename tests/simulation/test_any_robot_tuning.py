@@ -62,16 +62,23 @@ def drive_log(scenario: str, robot_name: str, powers, folder) -> str:
     return str(log)
 
 
+def calibrated(log: str, scenario: str, tmp_path, capsys, monkeypatch):
+    """(what calibrate_odometry printed, its effective wheel radius m, its effective track m)
+    for `log` with a shipped `scenario` named from another folder."""
+    main = load_tool("calibrate_odometry").main
+    monkeypatch.chdir(tmp_path)  # a shipped scenario by its name, from any folder
+    assert main([log, "--scenario", scenario, "--out", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    radius = float(out.split("effective_wheel_radius: ")[1].split()[0])
+    track = float(out.split("effective_track_width: ")[1].split()[0])
+    return out, radius, track
+
+
 def test_the_odometry_calibration_reads_the_robots_encoders(tmp_path, capsys, monkeypatch):
     log = drive_log(SCENARIO, "burger", ((0.8, 0.8), (-0.6, 0.6), (0.8, 0.8), (0.6, -0.6)),
                     tmp_path)
-    main = load_tool("calibrate_odometry").main
-    monkeypatch.chdir(tmp_path)  # a shipped scenario by its name, from any folder
-    assert main([log, "--scenario", "burger.yaml", "--out", str(tmp_path)]) == 0
-    out = capsys.readouterr().out
+    out, radius, track = calibrated(log, "burger.yaml", tmp_path, capsys, monkeypatch)
     assert "(nominal 0.033000)" in out and "(geometric 0.16000)" in out
-    radius = float(out.split("effective_wheel_radius: ")[1].split()[0])
-    track = float(out.split("effective_track_width: ")[1].split()[0])
     # A two-wheel robot rolls at its radius and turns about its track, less the tyres'
     # compression and scrub: within 3% and 10%.
     assert radius == pytest.approx(0.033, rel=0.03)
@@ -84,12 +91,7 @@ def test_the_odometry_calibration_reads_a_skid_steers_encoders(tmp_path, capsys,
     Corobot's is 1.7x its own), so only the radius is held close."""
     log = drive_log(PIONEER, "pioneer", ((0.5, 0.5), (-0.5, 0.5), (0.5, 0.5), (0.5, -0.5)),
                     tmp_path)
-    main = load_tool("calibrate_odometry").main
-    monkeypatch.chdir(tmp_path)
-    assert main([log, "--scenario", "pioneer.yaml", "--out", str(tmp_path)]) == 0
-    out = capsys.readouterr().out
+    out, radius, track = calibrated(log, "pioneer.yaml", tmp_path, capsys, monkeypatch)
     assert "(nominal 0.107500)" in out and "(geometric 0.40000)" in out
-    radius = float(out.split("effective_wheel_radius: ")[1].split()[0])
-    track = float(out.split("effective_track_width: ")[1].split()[0])
     assert radius == pytest.approx(0.1075, rel=0.03)
     assert track > 0.40
